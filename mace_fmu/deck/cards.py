@@ -1,0 +1,260 @@
+"""Plain data records for the NASTRAN bulk-data cards mace-fmu understands.
+
+No numerics live here: every record is a frozen dataclass that keeps the values as the deck
+states them (SI units for the MACE deck, but the reader does not convert anything) and the
+source line it came from, so that every later error can point back to ``file:line``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Mapping
+
+Vec3 = tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class Source:
+    """Where a card starts in a deck file."""
+
+    file: str  #: path of the deck file as given to the reader
+    line: int  #: 1-based line number of the card's first line
+
+    def __str__(self) -> str:
+        return f"{self.file}:{self.line}"
+
+
+@dataclass(frozen=True)
+class Grid:
+    """GRID: a node with position in coordinate system ``cp`` and displacement system ``cd``."""
+
+    id: int  #: grid ID (> 0)
+    cp: int  #: coordinate system of ``xyz`` (0 = basic)
+    xyz: Vec3  #: position [m] in system ``cp``
+    cd: int  #: coordinate system in which the 6 displacement components are measured
+    ps: str  #: permanent single-point constraints, digits 1-6, "" for none
+    source: Source
+
+
+@dataclass(frozen=True)
+class Cord2R:
+    """CORD2R: rectangular system from origin A, point B on the z-axis, point C in the x-z plane."""
+
+    id: int
+    rid: int  #: system in which A, B, C are given (0 = basic)
+    a: Vec3
+    b: Vec3
+    c: Vec3
+    source: Source
+
+
+@dataclass(frozen=True)
+class CBar:
+    """CBAR: two-node beam; orientation by vector ``v`` (in GA's CD system) or by grid ``g0``."""
+
+    id: int
+    pid: int  #: PBAR property ID
+    ga: int
+    gb: int
+    v: Vec3 | None  #: orientation vector, None when ``g0`` is used
+    g0: int | None  #: orientation grid, None when ``v`` is used
+    source: Source
+
+
+@dataclass(frozen=True)
+class PBar:
+    """PBAR: bar section; ``k1``/``k2`` are shear area factors (None = rigid in shear)."""
+
+    id: int
+    mid: int  #: MAT1 ID
+    area: float  #: A [m^2]
+    i1: float  #: I1, bending in plane 1 (element x-y plane) [m^4]
+    i2: float  #: I2, bending in plane 2 (element x-z plane) [m^4]
+    j: float  #: torsion constant [m^4]
+    nsm: float  #: non-structural mass per length [kg/m]
+    stress_points: tuple[float | None, ...]  #: C1 C2 D1 D2 E1 E2 F1 F2 (stress recovery only)
+    k1: float | None  #: shear area factor, plane 1; None = blank = no shear flexibility
+    k2: float | None  #: shear area factor, plane 2
+    i12: float  #: product of inertia [m^4]
+    source: Source
+
+
+@dataclass(frozen=True)
+class Mat1:
+    """MAT1: isotropic material exactly as written (blank G or NU stays None)."""
+
+    id: int
+    e: float | None  #: Young's modulus [Pa]
+    g: float | None  #: shear modulus [Pa]
+    nu: float | None  #: Poisson's ratio
+    rho: float  #: density [kg/m^3]
+    source: Source
+
+    @property
+    def shear_modulus(self) -> float:
+        """G [Pa] by NASTRAN's MAT1 rules (G = E / (2 (1 + nu)) when G is blank)."""
+        if self.g is not None:
+            return self.g
+        if self.e is not None and self.nu is not None:
+            return self.e / (2.0 * (1.0 + self.nu))
+        return 0.0
+
+    @property
+    def youngs_modulus(self) -> float:
+        """E [Pa] by NASTRAN's MAT1 rules (E = 2 (1 + nu) G when E is blank)."""
+        if self.e is not None:
+            return self.e
+        if self.g is not None and self.nu is not None:
+            return 2.0 * (1.0 + self.nu) * self.g
+        return 0.0
+
+
+@dataclass(frozen=True)
+class Conm2:
+    """CONM2: lumped mass with offset and inertia about its centre of gravity.
+
+    NASTRAN's sign convention: the inertia matrix is
+    [[I11, -I21, -I31], [-I21, I22, -I32], [-I31, -I32, I33]].
+    """
+
+    id: int
+    grid: int
+    cid: int  #: system of offset and inertia (-1 = offset is the absolute c.g. position)
+    mass: float  #: [kg]
+    offset: Vec3  #: [m]
+    inertia: tuple[float, float, float, float, float, float]  #: I11 I21 I22 I31 I32 I33 [kg m^2]
+    source: Source
+
+
+@dataclass(frozen=True)
+class Celas2:
+    """CELAS2: scalar spring between two DOFs, or to ground when ``g2`` is None."""
+
+    id: int
+    k: float  #: stiffness [N/m] or [N m/rad]
+    g1: int
+    c1: int  #: component 1-6 (0 for a scalar point)
+    g2: int | None
+    c2: int | None
+    source: Source
+
+
+@dataclass(frozen=True)
+class MpcTerm:
+    grid: int
+    component: int  #: 1-6 in the grid's CD system
+    coefficient: float
+
+
+@dataclass(frozen=True)
+class Mpc:
+    """MPC: sum(coefficient * u) = 0; the first term is the dependent DOF."""
+
+    sid: int
+    terms: tuple[MpcTerm, ...]
+    source: Source
+
+
+@dataclass(frozen=True)
+class Spc1:
+    """SPC1: the listed components are fixed at every listed grid."""
+
+    sid: int
+    components: str  #: digits 1-6, sorted, no repeats
+    grids: tuple[int, ...]
+    source: Source
+
+
+@dataclass(frozen=True)
+class Grav:
+    """GRAV: acceleration vector scale * n in system ``cid`` [m/s^2]."""
+
+    sid: int
+    cid: int
+    scale: float
+    direction: Vec3
+    source: Source
+
+
+@dataclass(frozen=True)
+class Load:
+    """LOAD: combination scale * sum(s_i * L_i)."""
+
+    sid: int
+    scale: float
+    terms: tuple[tuple[float, int], ...]  #: (s_i, load set ID)
+    source: Source
+
+
+@dataclass(frozen=True)
+class Eigrl:
+    """EIGRL: Lanczos request for modes with frequencies in [v1, v2] Hz, at most ``nd`` of them."""
+
+    sid: int
+    v1: float | None  #: [Hz]
+    v2: float | None  #: [Hz]
+    nd: int | None
+    msglvl: int
+    source: Source
+
+
+@dataclass(frozen=True)
+class Nlparm:
+    """NLPARM: nonlinear static controls (only the fields mace-fmu uses are typed)."""
+
+    id: int
+    ninc: int  #: number of load increments (default 10)
+    kmethod: str  #: AUTO, SEMI or ITER
+    kstep: int | None
+    max_iter: int  #: default 25
+    conv: str  #: convergence flags, e.g. "PW", "UPW", "W"
+    eps_u: float  #: default 0.01
+    eps_p: float  #: default 0.01
+    eps_w: float  #: default 0.01
+    source: Source
+
+
+@dataclass(frozen=True)
+class Param:
+    """PARAM: a named parameter with its raw values (int, float or str)."""
+
+    name: str  #: upper case
+    values: tuple[int | float | str, ...]
+    source: Source
+
+
+@dataclass(frozen=True)
+class Subcase:
+    """One SUBCASE of the case control, with the set selections mace-fmu uses."""
+
+    id: int
+    spc: int | None
+    mpc: int | None
+    load: int | None
+    nlparm: int | None
+    method: int | None
+    label: str
+    source: Source
+
+
+@dataclass(frozen=True)
+class Deck:
+    """A whole deck: bulk data keyed by ID, plus the case-control subcases."""
+
+    path: str
+    grids: Mapping[int, Grid]
+    coords: Mapping[int, Cord2R]
+    bars: Mapping[int, CBar]
+    pbars: Mapping[int, PBar]
+    mat1s: Mapping[int, Mat1]
+    conm2s: Mapping[int, Conm2]
+    celas2s: Mapping[int, Celas2]
+    mpcs: Mapping[int, tuple[Mpc, ...]]  #: set ID -> equations, in deck order
+    spc1s: Mapping[int, tuple[Spc1, ...]]  #: set ID -> cards, in deck order
+    gravs: Mapping[int, Grav]
+    loads: Mapping[int, Load]
+    eigrls: Mapping[int, Eigrl]
+    nlparms: Mapping[int, Nlparm]
+    params: Mapping[str, Param]
+    subcases: Mapping[int, Subcase]  #: empty when the file has no case control
+    global_case: Subcase | None = field(default=None)  #: selections above the first SUBCASE

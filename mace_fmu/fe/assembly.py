@@ -1,0 +1,116 @@
+"""Global linear stiffness, mass and gravity load of a deck, in basic coordinates (SI)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from mace_fmu.deck.cards import Deck
+from mace_fmu.deck.geometry import bar_orientation, coordinate_frames, grid_positions
+from mace_fmu.errors import MaceError
+from mace_fmu.fe.beam import BeamSection, MassKind, local_frame, local_mass, local_stiffness, natural_stiffness, to_basic
+from mace_fmu.fe.dofs import DofMap
+
+
+@dataclass(frozen=True)
+class Bars:
+    """All CBARs as arrays (one row per bar) for vectorised geometric work."""
+
+    ids: np.ndarray  #: element IDs
+    node_a: np.ndarray  #: grid row of GA
+    node_b: np.ndarray  #: grid row of GB
+    frames0: np.ndarray  #: (n, 3, 3) undeformed element axes, rows x, y, z in basic
+    lengths0: np.ndarray  #: undeformed lengths [m]
+    k_natural: np.ndarray  #: (n, 7, 7) natural stiffness (see fe.beam.natural_stiffness)
+
+
+@dataclass(frozen=True)
+class FEModel:
+    """Linear FE matrices of one structure in basic coordinates; DOFs named by DofMap."""
+
+    dofs: DofMap
+    positions: np.ndarray  #: (n_grid, 3) undeformed grid positions [m]
+    cd_frames: np.ndarray  #: (n_grid, 3, 3) columns = displacement-system axes in basic
+    stiffness: np.ndarray  #: linear K [N/m, N, N m/rad]
+    mass: np.ndarray  #: M [kg, kg m, kg m^2]
+    bars: Bars
+    spring_stiffness: np.ndarray  #: the CELAS2 part of ``stiffness``
+
+
+def bar_section(deck: Deck, pid: int) -> BeamSection:
+    """BeamSection of PBAR ``pid`` with its MAT1 (G from E and NU when blank)."""
+    p = deck.pbars[pid]
+    mat = deck.mat1s[p.mid]
+    return BeamSection(area=p.area, i1=p.i1, i2=p.i2, j=p.j, e=mat.youngs_modulus, g=mat.shear_modulus,
+                       rho=mat.rho, nsm=p.nsm, k1=p.k1, k2=p.k2)
+
+
+def _conm2_matrix(mass: float, offset: np.ndarray, inertia_cg: np.ndarray) -> np.ndarray:
+    """6x6 grid mass of a point mass at ``offset`` from the grid with inertia about its c.g."""
+    s = np.array([[0.0, -offset[2], offset[1]], [offset[2], 0.0, -offset[0]], [-offset[1], offset[0], 0.0]])
+    m = np.zeros((6, 6))
+    m[:3, :3] = mass * np.eye(3)
+    m[:3, 3:] = -mass * s
+    m[3:, :3] = mass * s
+    m[3:, 3:] = inertia_cg + mass * s.T @ s
+    return m
+
+
+def cd_component_vector(dofs: DofMap, cd_frames: np.ndarray, grid: int, component: int) -> np.ndarray:
+    """Row vector that picks component 1-6 of ``grid``, measured in its CD system, from basic DOFs."""
+    vec = np.zeros(dofs.size)
+    row = dofs.grid_index(grid)
+    block = 6 * row + (0 if component <= 3 else 3)
+    vec[block:block + 3] = cd_frames[row][:, (component - 1) % 3]
+    return vec
+
+
+def assemble(deck: Deck, *, mass: MassKind = "lumped") -> FEModel:
+    """Assemble K and M of every CBAR, CONM2 and CELAS2 of ``deck`` (no constraints applied)."""
+    frames = coordinate_frames(deck)
+    pos = grid_positions(deck)
+    dofs = DofMap(tuple(sorted(deck.grids)))
+    n = dofs.size
+    positions = np.array([pos[g] for g in dofs.grid_ids])
+    cd_frames = np.array([frames[deck.grids[g].cd][1] for g in dofs.grid_ids])
+    k_glob = np.zeros((n, n))
+    m_glob = np.zeros((n, n))
+
+    ids, na, nb, fr, ln, kn = [], [], [], [], [], []
+    for bar in sorted(deck.bars.values(), key=lambda b: b.id):
+        axis = pos[bar.gb] - pos[bar.ga]
+        length = float(np.linalg.norm(axis))
+        frame = local_frame(axis, bar_orientation(deck, bar, pos, frames))
+        sec = bar_section(deck, bar.pid)
+        idx = np.concatenate([dofs.indices(bar.ga), dofs.indices(bar.gb)])
+        k_glob[np.ix_(idx, idx)] += to_basic(local_stiffness(sec, length), frame)
+        m_glob[np.ix_(idx, idx)] += to_basic(local_mass(sec, length, mass), frame)
+        ids.append(bar.id)
+        na.append(dofs.grid_index(bar.ga))
+        nb.append(dofs.grid_index(bar.gb))
+        fr.append(frame)
+        ln.append(length)
+        kn.append(natural_stiffness(sec, length))
+
+    for cm in deck.conm2s.values():
+        if cm.cid == -1:
+            raise MaceError(f"{cm.source}: CONM2 {cm.id}: CID = -1 (absolute c.g.) is not supported")
+        rot = frames[cm.cid][1]
+        i11, i21, i22, i31, i32, i33 = cm.inertia
+        inertia = np.array([[i11, -i21, -i31], [-i21, i22, -i32], [-i31, -i32, i33]])
+        idx = dofs.indices(cm.grid)
+        m_glob[np.ix_(idx, idx)] += _conm2_matrix(cm.mass, rot @ np.array(cm.offset), rot @ inertia @ rot.T)
+
+    k_spring = np.zeros((n, n))
+    for sp in deck.celas2s.values():
+        vec = cd_component_vector(dofs, cd_frames, sp.g1, sp.c1)
+        if sp.g2 is not None:
+            vec = vec - cd_component_vector(dofs, cd_frames, sp.g2, sp.c2)
+        k_spring += sp.k * np.outer(vec, vec)
+    k_glob += k_spring
+
+    bars = Bars(ids=np.array(ids), node_a=np.array(na), node_b=np.array(nb), frames0=np.array(fr),
+                lengths0=np.array(ln), k_natural=np.array(kn))
+    return FEModel(dofs=dofs, positions=positions, cd_frames=cd_frames, stiffness=k_glob, mass=m_glob,
+                   bars=bars, spring_stiffness=k_spring)

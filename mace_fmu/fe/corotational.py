@@ -1,0 +1,171 @@
+"""Corotational 3-D beam: internal forces and tangent stiffness about a deformed state.
+
+Each bar's strain energy is U = 1/2 d^T K_n d, where d are its natural deformations (stretch,
+local rotations of both ends relative to a frame that follows the bar, Battini & Pacoste 2002).
+U is exactly invariant under rigid motions, so the Hessian of the total potential about a
+preloaded state contains every gravity effect of a hanging structure: string stiffness of the
+cables, pendulum stiffness of hanging stages (whatever the orientation of the loaded members),
+and stress stiffening of the bus.
+
+Generalised coordinates are nodal translations and nodal spins (R -> expm(skew(dtheta)) R) in
+basic axes, the same as the linear model's rotational DOFs. Derivatives of d are computed to
+machine precision by complex step; second derivatives by central differences of complex-step
+first derivatives, both vectorised over all bars.
+
+Reference: J.-M. Battini, C. Pacoste, "Co-rotational beam elements with warping effects in
+instability problems", Comput. Methods Appl. Mech. Engrg. 191 (2002) 1755-1789.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from mace_fmu.errors import MaceError
+from mace_fmu.fe.assembly import Bars
+
+_CS_STEP = 1e-30  # complex step: no cancellation, so any tiny step is exact to round-off
+_FD_RELATIVE_STEP = 1e-4  # central differences of exact first derivatives: error ~1e-9
+_MAX_LOCAL_ROTATION = 0.5  # rad; beyond this the bar is far outside small-strain beam theory
+
+
+def skew(v: np.ndarray) -> np.ndarray:
+    """(..., 3) -> (..., 3, 3) cross-product matrices."""
+    z = np.zeros_like(v[..., 0])
+    return np.stack([np.stack([z, -v[..., 2], v[..., 1]], -1),
+                     np.stack([v[..., 2], z, -v[..., 0]], -1),
+                     np.stack([-v[..., 1], v[..., 0], z], -1)], -2)
+
+
+def rotation_matrix(theta: np.ndarray) -> np.ndarray:
+    """Rodrigues' formula for rotation vectors (..., 3); complex-safe for small complex parts."""
+    phi2 = np.sum(theta * theta, axis=-1)[..., None, None]
+    small = np.abs(phi2) < 1e-6
+    phi = np.sqrt(np.where(small, 1.0, phi2))
+    # Series below 1e-3 rad keep complex-step derivatives analytic and accurate.
+    a = np.where(small, 1 - phi2 / 6 + phi2**2 / 120, np.sin(phi) / phi)
+    b = np.where(small, 0.5 - phi2 / 24 + phi2**2 / 720, (1 - np.cos(phi)) / np.where(small, 1.0, phi2))
+    k = skew(theta)
+    return np.eye(3) + a * k + b * (k @ k)
+
+
+def rotation_vector_small(r: np.ndarray) -> np.ndarray:
+    """Rotation vector of rotation matrices near the identity (angle < 0.5 rad), complex-safe."""
+    w = 0.5 * np.stack([r[..., 2, 1] - r[..., 1, 2], r[..., 0, 2] - r[..., 2, 0], r[..., 1, 0] - r[..., 0, 1]], -1)
+    s2 = np.sum(w * w, axis=-1)
+    if np.max(np.abs(s2.real)) > np.sin(_MAX_LOCAL_ROTATION) ** 2:
+        raise MaceError(f"a bar's local rotation exceeds {_MAX_LOCAL_ROTATION} rad: the preload deforms the "
+                        f"structure beyond small-strain beam theory (or the solution diverged)")
+    # asin(s)/s as a series in s^2 (no square root, so complex-step stays analytic)
+    ratio = 1 + s2 * (1 / 6 + s2 * (3 / 40 + s2 * (5 / 112 + s2 * (35 / 1152 + s2 * 63 / 2816))))
+    return w * ratio[..., None]
+
+
+def natural_deformations(xa, xb, ra, rb, frames0, lengths0):
+    """Stretch and local end rotations (..., 7) of bars with current ends (xa, ra), (xb, rb)."""
+    chord = xb - xa
+    length = np.sqrt(np.sum(chord * chord, axis=-1))
+    e1 = chord / length[..., None]
+    y0 = frames0[..., 1, :]
+    q = 0.5 * (np.einsum("...ij,...j->...i", ra, y0) + np.einsum("...ij,...j->...i", rb, y0))
+    e3 = np.cross(e1, q)
+    e3 = e3 / np.sqrt(np.sum(e3 * e3, axis=-1))[..., None]
+    e2 = np.cross(e3, e1)
+    rows = np.stack([e1, e2, e3], -2)  # corotated frame, rows = axes in basic
+    triad0 = np.swapaxes(frames0, -1, -2)  # columns = undeformed element axes
+    theta_a = rotation_vector_small(rows @ ra @ triad0)
+    theta_b = rotation_vector_small(rows @ rb @ triad0)
+    # Stretch of the chord plus the shortening of the bowed axis (Hermite shape between the local
+    # end rotations): with it the geometric stiffness is the consistent beam-column matrix
+    # P/(30L) [36, 3L, -36, 3L; ...] rather than the string term P/L alone.
+    bow = sum(4 * theta_a[..., i] ** 2 - 2 * theta_a[..., i] * theta_b[..., i] + 4 * theta_b[..., i] ** 2 for i in (1, 2))
+    stretch = length - lengths0 + lengths0 / 60.0 * bow
+    return np.concatenate([stretch[..., None], theta_a, theta_b], -1)
+
+
+@dataclass(frozen=True)
+class BarState:
+    """Current configuration: grid positions [m] and nodal rotation matrices."""
+
+    positions: np.ndarray  #: (n_grid, 3)
+    rotations: np.ndarray  #: (n_grid, 3, 3), relative to the undeformed state
+
+
+def _deformations(bars: Bars, state: BarState, dz: np.ndarray) -> np.ndarray:
+    """Natural deformations for perturbations dz (n_bar, P, 9) of (chord, spin A, spin B)."""
+    xa = state.positions[bars.node_a][:, None, :]
+    xb = state.positions[bars.node_b][:, None, :] + dz[..., 0:3]
+    ra = rotation_matrix(dz[..., 3:6]) @ state.rotations[bars.node_a][:, None]
+    rb = rotation_matrix(dz[..., 6:9]) @ state.rotations[bars.node_b][:, None]
+    return natural_deformations(xa, xb, ra, rb, bars.frames0[:, None], bars.lengths0[:, None])
+
+
+# The 12 nodal coordinates q enter d only through 9 reduced ones z = (xb - xa, spin A, spin B):
+# q-coordinate a is +/- z-coordinate _ZMAP[a] with sign _ZSIGN[a].
+_ZMAP = np.array([0, 1, 2, 3, 4, 5, 0, 1, 2, 6, 7, 8])
+_ZSIGN = np.array([-1.0, -1.0, -1.0, 1, 1, 1, 1, 1, 1, 1, 1, 1])
+_PAIRS = np.array([(i, j) for i in range(9) for j in range(i, 9)])
+
+
+def _nodal_vector(v_z: np.ndarray) -> np.ndarray:
+    """(..., 9) derivative in z -> (..., 12) derivative in nodal coordinates."""
+    return v_z[..., _ZMAP] * _ZSIGN
+
+
+def _nodal_matrix(m_z: np.ndarray) -> np.ndarray:
+    """(..., 9, 9) second derivative in z -> (..., 12, 12) in nodal coordinates."""
+    return m_z[..., _ZMAP[:, None], _ZMAP[None, :]] * np.outer(_ZSIGN, _ZSIGN)
+
+
+def _reduced_derivatives(bars: Bars, state: BarState) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(d, dd/dz, d2d/dz2): shapes (n, 7), (n, 7, 9), (n, 7, 9, 9)."""
+    n = len(bars.ids)
+    h = np.full((n, 9), _FD_RELATIVE_STEP)
+    h[:, 0:3] *= bars.lengths0[:, None]
+    eye = np.eye(9)
+    # Batch: 9 complex steps, then for each pair i <= j: (+/- h_i e_i) + complex step e_j.
+    cs = 1j * _CS_STEP * eye
+    i, j = _PAIRS[:, 0], _PAIRS[:, 1]
+    shift = h[:, i, None] * eye[i][None]
+    batch = np.concatenate([np.broadcast_to(cs, (n, 9, 9)), shift + cs[j], -shift + cs[j]], 1)
+    d_all = _deformations(bars, state, batch)
+    m = len(_PAIRS)
+    bz = np.swapaxes(d_all[:, :9].imag, 1, 2) / _CS_STEP
+    diff = (d_all[:, 9:9 + m].imag - d_all[:, 9 + m:].imag) / (_CS_STEP * 2.0 * h[:, i, None])
+    d2z = np.zeros((n, 7, 9, 9))
+    d2z[:, :, i, j] = np.swapaxes(diff, 1, 2)
+    d2z[:, :, j, i] = np.swapaxes(diff, 1, 2)
+    return d_all[:, 0].real, bz, d2z
+
+
+def deformation_derivatives(bars: Bars, state: BarState) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(d, B = dd/dq, D2 = d2d/dq2) per bar: shapes (n, 7), (n, 7, 12), (n, 7, 12, 12)."""
+    d, bz, d2z = _reduced_derivatives(bars, state)
+    return d, _nodal_vector(bz), _nodal_matrix(d2z)
+
+
+def bar_dof_indices(bars: Bars) -> np.ndarray:
+    """(n_bar, 12) global DOF indices (translations and spins of GA then GB)."""
+    six = np.arange(6)
+    return np.concatenate([6 * bars.node_a[:, None] + six, 6 * bars.node_b[:, None] + six], 1)
+
+
+def tangent(bars: Bars, state: BarState, n_dof: int, *, natural_forces: np.ndarray | None = None
+            ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(internal force [n_dof], tangent stiffness [n_dof, n_dof], natural forces [n_bar, 7]) of all bars.
+
+    The natural forces default to K_n d at ``state``; pass them to build a linear-prestress
+    stiffness (stresses from a linear solution, geometry of ``state``).
+    """
+    d, bz, d2z = _reduced_derivatives(bars, state)
+    g = np.einsum("nij,nj->ni", bars.k_natural, d) if natural_forces is None else natural_forces
+    f_e = _nodal_vector(np.einsum("nki,nk->ni", bz, g))
+    k_z = np.swapaxes(bz, 1, 2) @ bars.k_natural @ bz + np.einsum("nk,nkij->nij", g, d2z)
+    k_e = _nodal_matrix(k_z)
+    idx = bar_dof_indices(bars)
+    f = np.zeros(n_dof)
+    np.add.at(f, idx, f_e)
+    k = np.zeros((n_dof, n_dof))
+    np.add.at(k, (idx[:, :, None], idx[:, None, :]), k_e)
+    return f, 0.5 * (k + k.T), g

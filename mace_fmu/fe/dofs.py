@@ -1,0 +1,46 @@
+"""Degrees of freedom named by (grid, component): the only way code addresses a DOF."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+COMPONENT_NAMES = ("T1", "T2", "T3", "R1", "R2", "R3")
+
+
+@dataclass(frozen=True)
+class DofMap:
+    """Six DOFs per grid, grids in ascending ID order; components 1-6 as in NASTRAN."""
+
+    grid_ids: tuple[int, ...]
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "_row", {g: i for i, g in enumerate(self.grid_ids)})
+
+    @property
+    def size(self) -> int:
+        """Number of DOFs (6 per grid)."""
+        return 6 * len(self.grid_ids)
+
+    def grid_index(self, grid: int) -> int:
+        """Row of ``grid`` in per-grid arrays; KeyError names the grid when it is not in the model."""
+        try:
+            return self._row[grid]  # type: ignore[attr-defined]
+        except KeyError:
+            raise KeyError(f"grid {grid} is not in this model") from None
+
+    def index(self, grid: int, component: int) -> int:
+        """Global index of component 1-6 of ``grid``."""
+        if not 1 <= component <= 6:
+            raise ValueError(f"component must be 1-6, got {component}")
+        return 6 * self.grid_index(grid) + component - 1
+
+    def indices(self, grid: int) -> np.ndarray:
+        """The six global indices of ``grid``."""
+        start = 6 * self.grid_index(grid)
+        return np.arange(start, start + 6)
+
+    def label(self, index: int) -> tuple[int, int]:
+        """(grid, component) of a global index."""
+        return self.grid_ids[index // 6], index % 6 + 1

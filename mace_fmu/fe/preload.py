@@ -1,0 +1,111 @@
+"""Gravity preload of the suspended structure and the tangent stiffness about it.
+
+Two options, as offered by NASTRAN:
+- ``"large"`` (SOL 106 with PARAM,LGDISP,1): the load is applied in NLPARM increments with full
+  Newton iterations on the updated geometry; the tangent of the final state is the Hessian of
+  the total potential (material + geometric stiffness at the deformed geometry).
+- ``"linear"``: one linear static solution; the geometric stiffness comes from its bar forces,
+  evaluated on the undeformed geometry (classic linear prestress).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable, Literal
+
+import numpy as np
+import scipy.linalg as sla
+
+from mace_fmu.errors import MaceError
+from mace_fmu.fe.assembly import FEModel
+from mace_fmu.fe.constraints import Constraints
+from mace_fmu.fe.corotational import BarState, bar_dof_indices, deformation_derivatives, rotation_matrix, tangent
+
+PreloadKind = Literal["large", "linear"]
+Progress = Callable[[str], None]
+
+
+@dataclass(frozen=True)
+class Preload:
+    """Result of a gravity preload: the deformed state and the stiffness about it."""
+
+    kind: PreloadKind
+    displacements: np.ndarray  #: (n_dof,) translations [m] and rotation vectors [rad], basic
+    tangent_stiffness: np.ndarray  #: K_T = K_material + K_geometric (+ springs), basic
+    bar_forces: np.ndarray  #: (n_bar, 7) natural forces: axial [N], end moments [N m] (local)
+    increments: int
+    iterations: int  #: total Newton iterations
+    residual_ratio: float  #: final |r| / |F| on the independent DOFs
+
+
+def _solve(k: np.ndarray, r: np.ndarray) -> np.ndarray:
+    """Solve the reduced static system (positive definite about a stable state), or explain."""
+    try:
+        return sla.cho_solve(sla.cho_factor(k), r)
+    except (sla.LinAlgError, np.linalg.LinAlgError):
+        raise MaceError("the preload stiffness is singular: the static subcase leaves a mechanism or rigid-body "
+                        "motion free (check its SPC and MPC sets)") from None
+
+
+def _state(model: FEModel, u: np.ndarray) -> BarState:
+    """BarState for displacements u (rotation vectors applied to the undeformed triads)."""
+    u6 = u.reshape(-1, 6)
+    return BarState(positions=model.positions + u6[:, :3], rotations=rotation_matrix(u6[:, 3:]))
+
+
+def linear_preload(model: FEModel, constraints: Constraints, load: np.ndarray) -> Preload:
+    """Linear static solution, then K + K_sigma from its bar forces on the undeformed geometry."""
+    t = constraints.transform
+    u = t @ _solve(constraints.reduce(model.stiffness), t.T @ load)
+    n = model.dofs.size
+    undeformed = _state(model, np.zeros(n))
+    _, b, _ = deformation_derivatives(model.bars, undeformed)
+    idx = bar_dof_indices(model.bars)
+    d_lin = np.einsum("nki,ni->nk", b, u[idx])
+    forces = np.einsum("nij,nj->ni", model.bars.k_natural, d_lin)
+    _, k_bars, _ = tangent(model.bars, undeformed, n, natural_forces=forces)
+    residual = np.linalg.norm(t.T @ (load - model.stiffness @ u)) / np.linalg.norm(t.T @ load)
+    return Preload(kind="linear", displacements=u, tangent_stiffness=k_bars + model.spring_stiffness,
+                   bar_forces=forces, increments=1, iterations=1, residual_ratio=float(residual))
+
+
+def large_displacement_preload(model: FEModel, constraints: Constraints, load: np.ndarray, *, increments: int = 10,
+                               max_iterations: int = 25, path_tolerance: float = 1e-3,
+                               final_tolerance: float = 1e-14, progress: Progress | None = None) -> Preload:
+    """Incremental Newton solution on the updated geometry (dead load), tangent of the final state.
+
+    Intermediate increments only have to stay on the load path, so they stop at NLPARM's work
+    tolerance ``path_tolerance`` (EPSW); the last one, whose tangent is the product, is
+    converged to ``final_tolerance``.
+    """
+    t = constraints.transform
+    n = model.dofs.size
+    u = np.zeros(n)  # translations and accumulated spins, for the springs and the report
+    positions = model.positions.copy()
+    rotations = np.broadcast_to(np.eye(3), (len(positions), 3, 3)).copy()
+    total_iterations = 0
+    for step in range(1, increments + 1):
+        target = load * step / increments
+        for it in range(1, max_iterations + 1):
+            f_int, k_bars, forces = tangent(model.bars, BarState(positions, rotations), n)
+            residual = t.T @ (target - f_int - model.spring_stiffness @ u)
+            delta = t @ _solve(constraints.reduce(k_bars + model.spring_stiffness), residual)
+            total_iterations += 1
+            d6 = delta.reshape(-1, 6)
+            positions = positions + d6[:, :3]
+            rotations = rotation_matrix(d6[:, 3:]) @ rotations
+            u = u + delta
+            # NASTRAN's work criterion (CONV=W): the residual itself stalls at round-off because
+            # the short aluminium links are ~1e10 N/m stiff.
+            work_ratio = abs(delta @ (t @ residual)) / max(abs(u @ target), 1e-300)
+            if work_ratio <= (final_tolerance if step == increments else path_tolerance):
+                break
+        else:
+            raise MaceError(f"gravity preload did not converge: increment {step}/{increments}, work ratio "
+                            f"{work_ratio:.2e} after {max_iterations} Newton iterations")
+        if progress is not None:
+            progress(f"preload increment {step}/{increments}: {it} Newton iterations, work ratio {work_ratio:.1e}")
+    f_int, k_bars, forces = tangent(model.bars, BarState(positions, rotations), n)
+    ratio = np.linalg.norm(t.T @ (load - f_int - model.spring_stiffness @ u)) / np.linalg.norm(t.T @ load)
+    return Preload(kind="large", displacements=u, tangent_stiffness=k_bars + model.spring_stiffness,
+                   bar_forces=forces, increments=increments, iterations=total_iterations, residual_ratio=float(ratio))

@@ -1,0 +1,165 @@
+"""The 1-g (suspended) and 0-g (suspension removed) structures of one deck.
+
+Which cards form the suspension, which grids form each named component and which MPC pairs are
+mechanisms is data (``mace_em.toml`` next to the deck), not code.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import tomllib
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+from typing import Any, Literal, Mapping
+
+from mace_fmu.deck.cards import Deck, Subcase
+from mace_fmu.errors import MaceError
+
+StructureKind = Literal["1g", "0g"]
+
+_CARD_TABLES = {"GRID": "grids", "CBAR": "bars", "PBAR": "pbars", "MAT1": "mat1s", "CONM2": "conm2s",
+                "CELAS2": "celas2s", "CORD2R": "coords", "GRAV": "gravs"}
+
+
+def bundled_deck_path() -> Path:
+    """Path of the bundled MACE deck (Appendix B of the thesis)."""
+    return Path(str(resources.files("mace_fmu") / "data" / "mace_em.bdf"))
+
+
+@dataclass(frozen=True)
+class Mechanism:
+    """A hinge: two coincident grids whose relative motion is free in one CD component."""
+
+    name: str
+    dependent: int
+    independent: int
+    component: int
+
+
+@dataclass(frozen=True)
+class StructureSpec:
+    """Non-deck data about the structure: suspension membership, components, mechanisms."""
+
+    suspension_grids: frozenset[int]
+    suspension_elements: frozenset[int]  #: CBAR, CONM2 and CELAS2 IDs (one NASTRAN namespace)
+    components: Mapping[str, frozenset[int]]  #: name -> grid IDs
+    mechanisms: tuple[Mechanism, ...]
+    centre_grid: int  #: reference point of the mass properties
+    source: str
+
+    def component_of(self, grid: int) -> str | None:
+        """Name of the component that contains ``grid`` (None when it is in none)."""
+        for name, grids in self.components.items():
+            if grid in grids:
+                return name
+        return None
+
+
+def _id_set(values: list[Any], where: str) -> frozenset[int]:
+    """IDs from a list of ints and "first-last" ranges."""
+    ids: set[int] = set()
+    for v in values:
+        if isinstance(v, int):
+            ids.add(v)
+        elif isinstance(v, str) and v.count("-") == 1 and all(p.strip().isdigit() for p in v.split("-")):
+            lo, hi = (int(p) for p in v.split("-"))
+            ids.update(range(lo, hi + 1))
+        else:
+            raise MaceError(f"{where}: expected an ID or a 'first-last' range, got {v!r}")
+    return frozenset(ids)
+
+
+def load_spec(path: str | Path | None = None) -> StructureSpec:
+    """Read the structure data file (default: the bundled ``mace_em.toml``)."""
+    path = Path(path) if path is not None else Path(str(resources.files("mace_fmu") / "data" / "mace_em.toml"))
+    try:
+        data = tomllib.loads(path.read_text())
+    except (OSError, tomllib.TOMLDecodeError) as exc:
+        raise MaceError(f"{path}: cannot read the structure data file: {exc}") from None
+    try:
+        susp = data["suspension"]
+        spec = StructureSpec(
+            suspension_grids=_id_set(susp["grids"], f"{path} [suspension] grids"),
+            suspension_elements=_id_set(susp["elements"], f"{path} [suspension] elements"),
+            components={name: _id_set(v, f"{path} [components] {name}") for name, v in data["components"].items()},
+            mechanisms=tuple(Mechanism(name=name, dependent=int(v[0]), independent=int(v[1]), component=int(v[2]))
+                             for name, v in data["mechanisms"].items()),
+            centre_grid=int(data["mass_properties"]["reference_grid"]),
+            source=str(path),
+        )
+    except KeyError as exc:
+        raise MaceError(f"{path}: missing table or key {exc}") from None
+    return spec
+
+
+@dataclass(frozen=True)
+class Structure:
+    """One analysable structure: its deck, its preload subcase (1-g only) and its modal subcase."""
+
+    kind: StructureKind
+    deck: Deck
+    preload: Subcase | None  #: SPC/MPC/LOAD/NLPARM of the static preload; None for 0-g
+    modal: Subcase  #: SPC/MPC of the eigen-solution
+    spec: StructureSpec
+
+
+def apply_overrides(deck: Deck, overrides: Mapping[tuple[str, int], Mapping[str, Any]]) -> Deck:
+    """Deck with card fields replaced, e.g. {("MAT1", 2): {"e": 2.4e9}, ("PBAR", 1): {"k1": 0.55}}."""
+    tables = {name: dict(getattr(deck, attr)) for name, attr in _CARD_TABLES.items()}
+    for (card, cid), fields in overrides.items():
+        if card not in tables:
+            raise ValueError(f"override of unknown card type {card!r}; allowed: {sorted(tables)}")
+        if cid not in tables[card]:
+            raise ValueError(f"override of {card} {cid}: no such card in {deck.path}")
+        allowed = {f.name for f in dataclasses.fields(tables[card][cid])} - {"id", "source"}
+        unknown = set(fields) - allowed
+        if unknown:
+            raise ValueError(f"override of {card} {cid}: unknown field(s) {sorted(unknown)}; allowed: {sorted(allowed)}")
+        tables[card][cid] = dataclasses.replace(tables[card][cid], **fields)
+    return dataclasses.replace(deck, **{attr: tables[name] for name, attr in _CARD_TABLES.items()})
+
+
+def remove_suspension(deck: Deck, spec: StructureSpec) -> Deck:
+    """The deck without the suspension: its grids, elements, MPC equations and SPC entries."""
+    gone_g, gone_e = spec.suspension_grids, spec.suspension_elements
+    bars = {i: b for i, b in deck.bars.items() if i not in gone_e}
+    conm2s = {i: m for i, m in deck.conm2s.items() if i not in gone_e}
+    celas2s = {i: s for i, s in deck.celas2s.items() if i not in gone_e}
+    for what, cards, grids_of in (("CBAR", bars, lambda c: (c.ga, c.gb)), ("CONM2", conm2s, lambda c: (c.grid,)),
+                                  ("CELAS2", celas2s, lambda c: (c.g1, c.g2))):
+        for card in cards.values():
+            dangling = [g for g in grids_of(card) if g in gone_g]
+            if dangling:
+                raise MaceError(f"{card.source}: {what} {card.id} connects suspension grid(s) {dangling} but is not "
+                                f"listed as a suspension element in {spec.source}")
+    mpcs = {sid: tuple(e for e in eqs if not any(t.grid in gone_g for t in e.terms)) for sid, eqs in deck.mpcs.items()}
+    spc1s = {sid: tuple(dataclasses.replace(c, grids=tuple(g for g in c.grids if g not in gone_g)) for c in cards)
+             for sid, cards in deck.spc1s.items()}
+    return dataclasses.replace(
+        deck, grids={i: g for i, g in deck.grids.items() if i not in gone_g}, bars=bars, conm2s=conm2s,
+        celas2s=celas2s, mpcs=mpcs, spc1s={sid: tuple(c for c in cards if c.grids) for sid, cards in spc1s.items()})
+
+
+def _subcases(deck: Deck) -> tuple[Subcase | None, Subcase]:
+    """(preload subcase = first with a LOAD, modal subcase = last) from the deck's case control."""
+    cases = [deck.subcases[k] for k in sorted(deck.subcases)] or ([deck.global_case] if deck.global_case else [])
+    if not cases:
+        raise MaceError(f"{deck.path}: no case control: cannot tell which SPC/MPC sets to use")
+    preload = next((c for c in cases if c.load is not None), None)
+    return preload, cases[-1]
+
+
+def build_structure(deck: Deck, *, kind: StructureKind, spec: StructureSpec | None = None,
+                    overrides: Mapping[tuple[str, int], Mapping[str, Any]] | None = None) -> Structure:
+    """The 1-g structure (deck as is, preload subcase + modal subcase) or the 0-g structure."""
+    if kind not in ("1g", "0g"):
+        raise ValueError(f"kind must be '1g' or '0g', got {kind!r}")
+    spec = spec if spec is not None else load_spec()
+    deck = apply_overrides(deck, overrides or {})
+    preload, modal = _subcases(deck)
+    if kind == "1g":
+        if preload is None:
+            raise MaceError(f"{deck.path}: the 1-g structure needs a subcase with a LOAD (gravity preload)")
+        return Structure(kind=kind, deck=deck, preload=preload, modal=modal, spec=spec)
+    return Structure(kind=kind, deck=remove_suspension(deck, spec), preload=None, modal=modal, spec=spec)
