@@ -45,7 +45,6 @@ class StructureSpec:
     suspension_elements: frozenset[int]  #: CBAR, CONM2 and CELAS2 IDs (one NASTRAN namespace)
     components: Mapping[str, frozenset[int]]  #: name -> grid IDs
     mechanisms: tuple[Mechanism, ...]
-    centre_grid: int  #: reference point of the mass properties
     source: str
 
     def component_of(self, grid: int) -> str | None:
@@ -85,7 +84,6 @@ def load_spec(path: str | Path | None = None) -> StructureSpec:
             components={name: _id_set(v, f"{path} [components] {name}") for name, v in data["components"].items()},
             mechanisms=tuple(Mechanism(name=name, dependent=int(v[0]), independent=int(v[1]), component=int(v[2]))
                              for name, v in data["mechanisms"].items()),
-            centre_grid=int(data["mass_properties"]["reference_grid"]),
             source=str(path),
         )
     except KeyError as exc:

@@ -36,6 +36,9 @@ class FEModel:
     mass: np.ndarray  #: M [kg, kg m, kg m^2]
     bars: Bars
     spring_stiffness: np.ndarray  #: the CELAS2 part of ``stiffness``
+    spring_ids: tuple[int, ...]  #: CELAS2 IDs
+    spring_vectors: np.ndarray  #: (n_spring, n_dof) spring elongation per unit DOF
+    spring_constants: np.ndarray  #: (n_spring,) [N/m or N m/rad]
 
 
 def bar_section(deck: Deck, pid: int) -> BeamSection:
@@ -102,15 +105,18 @@ def assemble(deck: Deck, *, mass: MassKind = "lumped") -> FEModel:
         idx = dofs.indices(cm.grid)
         m_glob[np.ix_(idx, idx)] += _conm2_matrix(cm.mass, rot @ np.array(cm.offset), rot @ inertia @ rot.T)
 
-    k_spring = np.zeros((n, n))
-    for sp in deck.celas2s.values():
-        vec = cd_component_vector(dofs, cd_frames, sp.g1, sp.c1)
+    springs = sorted(deck.celas2s.values(), key=lambda sp: sp.id)
+    vectors = np.zeros((len(springs), n))
+    for row, sp in enumerate(springs):
+        vectors[row] = cd_component_vector(dofs, cd_frames, sp.g1, sp.c1)
         if sp.g2 is not None:
-            vec = vec - cd_component_vector(dofs, cd_frames, sp.g2, sp.c2)
-        k_spring += sp.k * np.outer(vec, vec)
+            vectors[row] -= cd_component_vector(dofs, cd_frames, sp.g2, sp.c2)
+    constants = np.array([sp.k for sp in springs])
+    k_spring = vectors.T @ (constants[:, None] * vectors)
     k_glob += k_spring
 
     bars = Bars(ids=np.array(ids), node_a=np.array(na), node_b=np.array(nb), frames0=np.array(fr),
                 lengths0=np.array(ln), k_natural=np.array(kn))
     return FEModel(dofs=dofs, positions=positions, cd_frames=cd_frames, stiffness=k_glob, mass=m_glob,
-                   bars=bars, spring_stiffness=k_spring)
+                   bars=bars, spring_stiffness=k_spring, spring_ids=tuple(sp.id for sp in springs),
+                   spring_vectors=vectors, spring_constants=constants)

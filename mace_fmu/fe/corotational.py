@@ -145,6 +145,14 @@ def deformation_derivatives(bars: Bars, state: BarState) -> tuple[np.ndarray, np
     return d, _nodal_vector(bz), _nodal_matrix(d2z)
 
 
+def bar_energies(bars: Bars, state: BarState, natural_forces: np.ndarray, vectors: np.ndarray) -> np.ndarray:
+    """(n_bar, n_vec) potential energy 1/2 v_e^T K_T,e v_e of each bar for global vectors (n_dof, n_vec)."""
+    _, bz, d2z = _reduced_derivatives(bars, state)
+    k_z = np.swapaxes(bz, 1, 2) @ bars.k_natural @ bz + np.einsum("nk,nkij->nij", natural_forces, d2z)
+    v = vectors[bar_dof_indices(bars)]
+    return 0.5 * np.einsum("nim,nij,njm->nm", v, _nodal_matrix(k_z), v)
+
+
 def bar_dof_indices(bars: Bars) -> np.ndarray:
     """(n_bar, 12) global DOF indices (translations and spins of GA then GB)."""
     six = np.arange(6)

@@ -36,6 +36,7 @@ class Preload:
     increments: int
     iterations: int  #: total Newton iterations
     residual_ratio: float  #: final |r| / |F| on the independent DOFs
+    state: BarState  #: configuration the tangent is about (undeformed for the linear preload)
 
 
 def _solve(k: np.ndarray, r: np.ndarray) -> np.ndarray:
@@ -66,7 +67,8 @@ def linear_preload(model: FEModel, constraints: Constraints, load: np.ndarray) -
     _, k_bars, _ = tangent(model.bars, undeformed, n, natural_forces=forces)
     residual = np.linalg.norm(t.T @ (load - model.stiffness @ u)) / np.linalg.norm(t.T @ load)
     return Preload(kind="linear", displacements=u, tangent_stiffness=k_bars + model.spring_stiffness,
-                   bar_forces=forces, increments=1, iterations=1, residual_ratio=float(residual))
+                   bar_forces=forces, increments=1, iterations=1, residual_ratio=float(residual),
+                   state=undeformed)
 
 
 def large_displacement_preload(model: FEModel, constraints: Constraints, load: np.ndarray, *, increments: int = 10,
@@ -108,4 +110,5 @@ def large_displacement_preload(model: FEModel, constraints: Constraints, load: n
     f_int, k_bars, forces = tangent(model.bars, BarState(positions, rotations), n)
     ratio = np.linalg.norm(t.T @ (load - f_int - model.spring_stiffness @ u)) / np.linalg.norm(t.T @ load)
     return Preload(kind="large", displacements=u, tangent_stiffness=k_bars + model.spring_stiffness,
-                   bar_forces=forces, increments=increments, iterations=total_iterations, residual_ratio=float(ratio))
+                   bar_forces=forces, increments=increments, iterations=total_iterations, residual_ratio=float(ratio),
+                   state=BarState(positions, rotations))

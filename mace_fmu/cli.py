@@ -1,0 +1,130 @@
+"""The ``mace-fmu`` command: modes of the bundled (or any) deck and the thesis comparison."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from typing import Sequence
+
+import numpy as np
+
+from mace_fmu.deck.reader import read_deck
+from mace_fmu.errors import MaceError
+from mace_fmu.pipeline import StructureModes, compute_modes
+from mace_fmu.structure import bundled_deck_path
+
+
+def _progress(message: str) -> None:
+    print(f"  {message}", file=sys.stderr, flush=True)
+
+
+def _modes_json(result: StructureModes) -> dict:
+    props = result.mass_properties
+    return {
+        "structure": result.structure.kind,
+        "deck": result.structure.deck.path,
+        "preload": result.preload.kind if result.preload else None,
+        "modes": [{"index": i + 1, "frequency_hz": float(f), "label": lab}
+                  for i, (f, lab) in enumerate(zip(result.modes.frequencies_hz, result.modes.labels))],
+        "mass_properties": {
+            "mass_kg": props.mass_kg,
+            "center_of_mass_m": [float(x) for x in props.center_of_mass_m],
+            "reference_grid": props.reference_grid,
+            "inertia_about_center_node_kgm2": [[float(x) for x in row] for row in props.inertia_about_reference_kgm2],
+        },
+    }
+
+
+def _print_modes(result: StructureModes) -> None:
+    pre = f", {result.preload.kind} preload" if result.preload else ""
+    print(f"{result.structure.kind} modes of {result.structure.deck.path}{pre}")
+    print(f"{'mode':>4s} {'frequency Hz':>13s}  label")
+    for i, (f, lab) in enumerate(zip(result.modes.frequencies_hz, result.modes.labels)):
+        print(f"{i + 1:4d} {f:13.4f}  {lab}")
+    p = result.mass_properties
+    j = np.diag(p.inertia_about_reference_kgm2)
+    print(f"mass {p.mass_kg:.4f} kg, centre of mass {np.round(p.center_of_mass_m, 5).tolist()} m, inertia about "
+          f"grid {p.reference_grid}: Jxx {j[0]:.4f}, Jyy {j[1]:.4f}, Jzz {j[2]:.4f} kg m^2")
+
+
+def cmd_modes(args: argparse.Namespace) -> int:
+    deck = read_deck(args.deck)
+    result = compute_modes(deck, structure=args.structure, preload=args.preload, mass=args.mass, max_hz=args.max_hz,
+                           progress=None if args.json else _progress)
+    if args.json:
+        json.dump(_modes_json(result), sys.stdout, indent=1)
+        print()
+    else:
+        _print_modes(result)
+    return 0
+
+
+def cmd_build(args: argparse.Namespace) -> int:
+    from mace_fmu.thesis import format_rows, table_5_1_0g, table_5_1_1g, thesis_data
+
+    deck = read_deck(args.deck)
+    _progress("0-g modes (suspension removed, linear)")
+    m0 = compute_modes(deck, structure="0g")
+    results = {}
+    for kind in ("large", "linear"):
+        _progress(f"1-g modes ({kind} gravity preload)")
+        results[kind] = compute_modes(deck, structure="1g", preload=kind, progress=_progress if kind == "large" else None)
+    print(format_rows(table_5_1_0g(m0), title="Table 5.1, 0-g column (flexible modes)"))
+    for kind, m1 in results.items():
+        print()
+        print(format_rows(table_5_1_1g(m1, m0), title=f"Table 5.1, 1-g column, {kind} preload (paired by MAC)"))
+    ref = thesis_data()["table_3_15"]
+    p = m0.mass_properties
+    j = np.diag(p.inertia_about_reference_kgm2)
+    print()
+    print("Table 3.15, free-free mass properties about the centre node")
+    for name, ours, theirs in (("mass kg", p.mass_kg, ref["mass_kg"]), ("Jxx kg m^2", j[0], ref["jxx"]),
+                               ("Jyy kg m^2", j[1], ref["jyy"]), ("Jzz kg m^2", j[2], ref["jzz"])):
+        print(f"{name:12s} thesis {theirs:8.3f}  ours {ours:8.4f}  error {100 * (ours - theirs) / theirs:6.2f} %")
+    print()
+    print("1-g modes below 25 Hz (large-displacement preload | linear preload)")
+    large, linear = results["large"].modes, results["linear"].modes
+    for i in range(len(large)):
+        if large.frequencies_hz[i] > 25.0:
+            break
+        print(f"{i + 1:3d} {large.frequencies_hz[i]:9.3f}  {large.labels[i]:40s} | "
+              f"{linear.frequencies_hz[i]:9.3f}  {linear.labels[i]}")
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="mace-fmu", description=__doc__)
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    def deck_option(p: argparse.ArgumentParser) -> None:
+        p.add_argument("--deck", default=str(bundled_deck_path()), help="NASTRAN bulk deck (default: bundled MACE deck)")
+
+    p = sub.add_parser("modes", help="natural frequencies [Hz] and labels of the 1-g or 0-g structure")
+    p.add_argument("structure", choices=["1g", "0g"])
+    deck_option(p)
+    p.add_argument("--max-hz", type=float, default=None, help="upper frequency [Hz] (default: the deck's EIGRL)")
+    p.add_argument("--preload", choices=["large", "linear"], default="large",
+                   help="1-g gravity preload: large displacement (SOL 106, default) or linear")
+    p.add_argument("--mass", choices=["lumped", "consistent"], default="lumped", help="bar mass matrix")
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.set_defaults(func=cmd_modes)
+
+    p = sub.add_parser("build", help="the main job: 1-g and 0-g modes of the deck next to the thesis tables")
+    deck_option(p)
+    p.set_defaults(func=cmd_build)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the console script; errors in the input end with one message and status 2."""
+    args = build_parser().parse_args(argv)
+    try:
+        return args.func(args)
+    except MaceError as exc:
+        print(f"mace-fmu: error: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,240 @@
+"""Mode labels from each mode's kinetic- and strain-energy distribution, as in Tables 3.10 and 5.1.
+
+Conventions of the structure data file: the flexible backbone is the component ``bus``;
+suspension cables are components named ``cable_<n>``; mechanism names read
+``"<stage> <axis>"`` (e.g. ``"primary gimbal X"``).
+
+Rules, in order:
+1. |f| below ``zero_hz``: the cluster is rotated into rigid-body motions (those that lie in it)
+   and mechanisms (unit relative rotation at one hinge, none at the others).
+2. >= 50 % of the kinetic energy in cables: violin mode, order = number of half waves, in- or
+   out-of-plane with respect to the plane of the cables.
+3. < 50 % of the potential energy as bus strain: gravity-stiffened mode. When the gimbal bars
+   store more potential energy than the suspension elements (cables, springs, attachment
+   plates), a pendulum of the gimbal stage that rotates most; otherwise a suspension mode named
+   after the dominant rigid motion of the test article (all but the cables), e.g. "Z tilt".
+4. Otherwise bus bending about Y or Z, or torsion, whichever holds most bus strain energy;
+   bending modes are numbered by frequency within their family, torsion modes by the end
+   (primary at low x, secondary at high x) holding most of the torsional strain energy.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from mace_fmu.fe.assembly import FEModel
+from mace_fmu.fe.corotational import BarState, bar_dof_indices, bar_energies, deformation_derivatives
+from mace_fmu.fe.modal import Modes
+from mace_fmu.structure import StructureSpec
+
+ZERO_HZ = 0.01
+_AXES = "XYZ"
+_RIGID_NAMES = ("X translation", "Y translation", "Z translation", "X rotation", "Y rotation", "Z rotation")
+_SUSPENSION_NAMES = ("X suspension pendulum (X translation)", "bounce (Y translation)",
+                     "Z suspension pendulum (Z translation)", "X twist (X rotation)",
+                     "Y suspension twist (Y rotation)", "Z tilt (Z rotation)")
+
+
+def ordinal(n: int) -> str:
+    """1 -> '1st', 2 -> '2nd', 11 -> '11th'."""
+    suffix = "th" if 10 <= n % 100 <= 20 else {1: "st", 2: "nd", 3: "rd"}.get(n % 10, "th")
+    return f"{n}{suffix}"
+
+
+def rigid_body_vectors(model: FEModel, reference: np.ndarray) -> np.ndarray:
+    """(n_dof, 6) unit rigid translations and rotations about ``reference`` [m], basic axes."""
+    n_grid = len(model.positions)
+    d = np.zeros((n_grid, 6, 6))
+    r = model.positions - reference
+    d[:, 0:3, 0:3] = np.eye(3)
+    d[:, 3:6, 3:6] = np.eye(3)
+    # u = theta x r = -skew(r) theta
+    d[:, 0, 4], d[:, 0, 5] = r[:, 2], -r[:, 1]
+    d[:, 1, 3], d[:, 1, 5] = -r[:, 2], r[:, 0]
+    d[:, 2, 3], d[:, 2, 4] = r[:, 1], -r[:, 0]
+    return d.reshape(6 * n_grid, 6)
+
+
+def _grid_mask(model: FEModel, grids: frozenset[int]) -> np.ndarray:
+    return np.array([g in grids for g in model.dofs.grid_ids])
+
+
+class _Energies:
+    """Per-mode energy bookkeeping shared by the rules."""
+
+    def __init__(self, model: FEModel, modes: Modes, spec: StructureSpec, state: BarState):
+        self.model, self.modes, self.spec = model, modes, spec
+        phi = modes.shapes
+        n_grid = len(model.positions)
+        self.ke = (phi * (model.mass @ phi)).reshape(n_grid, 6, -1)  # sums to 1 per mode
+        bus = spec.components.get("bus", frozenset())
+        bus_bar = np.array([model.dofs.grid_ids[a] in bus and model.dofs.grid_ids[b] in bus
+                            for a, b in zip(model.bars.node_a, model.bars.node_b)])
+        _, b, _ = deformation_derivatives(model.bars, state)
+        d = np.einsum("nki,nim->nkm", b, phi[bar_dof_indices(model.bars)])[bus_bar]
+        kn = model.bars.k_natural[bus_bar]
+
+        def part(idx: list[int]) -> np.ndarray:
+            sub = kn[:, idx][:, :, idx]
+            return 0.5 * np.einsum("nim,nij,njm->nm", d[:, idx], sub, d[:, idx])
+
+        # natural DOFs: 0 stretch, 1/4 torsion, 2/5 rotation about element y, 3/6 about element z
+        self.bus_torsion = part([1, 4])
+        plane_z = part([3, 6])  # bending in the element x-y plane
+        plane_y = part([2, 5])
+        frames = model.bars.frames0[bus_bar]
+        # Assign each bar's plane energy to the basic axis it bends about.
+        about_y = np.zeros(phi.shape[1])
+        about_z = np.zeros(phi.shape[1])
+        for k in range(len(frames)):
+            for energy, axis in ((plane_z[k], frames[k][2]), (plane_y[k], frames[k][1])):
+                if abs(axis[1]) >= abs(axis[2]):
+                    about_y += energy
+                else:
+                    about_z += energy
+        self.bus_bending = {"Y": about_y, "Z": about_z}
+        self.bus_strain = self.bus_torsion.sum(0) + about_y + about_z + part([0]).sum(0)
+        xa = model.positions[model.bars.node_a[bus_bar], 0]
+        self.torsion_x = (self.bus_torsion * xa[:, None]).sum(0) / np.maximum(self.bus_torsion.sum(0), 1e-300)
+
+    def component_ke(self, name_filter) -> np.ndarray:
+        """Kinetic-energy fraction of all components whose name passes ``name_filter``."""
+        grids = frozenset().union(*(g for n, g in self.spec.components.items() if name_filter(n)))
+        return self.ke[_grid_mask(self.model, grids)].sum(axis=(0, 1))
+
+
+def _mechanism_rotations(modes: Modes, spec: StructureSpec) -> np.ndarray:
+    """(n_mech, n_modes) relative rotation at each mechanism in its released component."""
+    out = []
+    for m in spec.mechanisms:
+        if m.dependent in modes.dofs.grid_ids and m.independent in modes.dofs.grid_ids:
+            out.append(modes.shape(m.dependent, m.component, system="cd")
+                       - modes.shape(m.independent, m.component, system="cd"))
+        else:
+            out.append(np.zeros(len(modes)))
+    return np.array(out).reshape(len(spec.mechanisms), len(modes))
+
+
+def _zero_cluster(model: FEModel, modes: Modes, spec: StructureSpec, zero: np.ndarray, reference: np.ndarray
+                  ) -> tuple[np.ndarray, list[str]]:
+    """Rotate the zero-frequency shapes into rigid-body and single-mechanism motions."""
+    z = modes.shapes[:, zero]
+    rigid = rigid_body_vectors(model, reference)
+    coeffs, names = [], []
+    for r in range(6):
+        a = z.T @ (model.mass @ rigid[:, r])
+        norm2 = rigid[:, r] @ model.mass @ rigid[:, r]
+        if norm2 > 0 and a @ a >= 0.999 * norm2:
+            coeffs.append(a)
+            names.append(f"rigid body: {_RIGID_NAMES[r]}")
+    sub = replace(modes, frequencies_hz=modes.frequencies_hz[zero], shapes=z)
+    jac = _mechanism_rotations(sub, spec)
+    moving = np.linalg.norm(jac, axis=1) > 1e-6 * max(np.abs(jac).max(), 1e-300)
+    pinv = np.linalg.pinv(jac[moving])
+    for col, m in zip(pinv.T, [m for m, mv in zip(spec.mechanisms, moving) if mv]):
+        coeffs.append(col)
+        names.append(f"mechanism: {m.name}")
+    k = z.shape[1]
+    if len(coeffs) != k:
+        return z, [f"zero-frequency mode {i + 1}" for i in range(k)]
+    q, _ = np.linalg.qr(np.array(coeffs).T)
+    q *= np.sign(np.sum(q * np.array(coeffs).T, axis=0))
+    return z @ q, names
+
+
+def _cable_label(model: FEModel, modes: Modes, spec: StructureSpec, m: int, ke_cables: dict[str, float]) -> str:
+    """'2nd in-plane violin, cable 3' (or 'cables 1 and 3' when two share the energy)."""
+    cables = sorted(n for n, e in ke_cables.items() if e >= 0.25) or [max(ke_cables, key=ke_cables.get)]
+    main = max(cables, key=lambda n: ke_cables[n])
+    all_cable = np.array([model.positions[model.dofs.grid_index(g)] for n in ke_cables
+                          for g in spec.components[n] if g in model.dofs.grid_ids])
+    _, _, vt = np.linalg.svd(all_cable - all_cable.mean(axis=0))
+    normal = vt[2]
+    grids = sorted((g for g in spec.components[main] if g in model.dofs.grid_ids),
+                   key=lambda g: model.positions[model.dofs.grid_index(g)] @ vt[0])
+    pts = np.array([model.positions[model.dofs.grid_index(g)] for g in grids])
+    axis = (pts[-1] - pts[0]) / np.linalg.norm(pts[-1] - pts[0])
+    in_plane = np.cross(normal, axis)
+    disp = np.array([modes.shapes[model.dofs.indices(g)[:3], m] for g in grids])
+    disp = disp - np.linspace(disp[0], disp[-1], len(disp))  # relative to the moving chord
+    w_in, w_out = disp @ in_plane, disp @ normal
+    plane, w = ("in-plane", w_in) if np.sum(w_in**2) >= np.sum(w_out**2) else ("out-of-plane", w_out)
+    significant = w[1:-1][np.abs(w[1:-1]) > 0.05 * np.abs(w).max()]
+    order = 1 + int(np.sum(np.diff(np.sign(significant)) != 0))
+    numbers = " and ".join(n.split("_", 1)[1] for n in cables)
+    return f"{ordinal(order)} {plane} violin, {'cables' if len(cables) > 1 else 'cable'} {numbers}"
+
+
+def label_modes(model: FEModel, modes: Modes, spec: StructureSpec, *, reference: np.ndarray,
+                state: BarState | None = None, bar_forces: np.ndarray | None = None,
+                zero_hz: float = ZERO_HZ) -> Modes:
+    """Modes with labels (zero-frequency cluster rotated into named motions).
+
+    ``reference`` [m] is the point for rigid rotations and the end split of torsion modes (the
+    centre node); ``state`` is the configuration the modes are about (preloaded state for the
+    large-displacement 1-g model, undeformed when None): bus strain is measured about it.
+    ``bar_forces`` are the preload's natural bar forces (none: unstressed).
+    """
+    zero = np.abs(modes.frequencies_hz) < zero_hz
+    shapes = modes.shapes.copy()
+    labels = [""] * len(modes)
+    if zero.any():
+        rotated, names = _zero_cluster(model, modes, spec, zero, reference)
+        shapes[:, zero] = rotated
+        for i, name in zip(np.flatnonzero(zero), names):
+            labels[i] = name
+    modes = replace(modes, shapes=shapes)
+    if state is None:
+        state = BarState(model.positions, np.broadcast_to(np.eye(3), (len(model.positions), 3, 3)))
+    en = _Energies(model, modes, spec, state)
+    cable_names = sorted(n for n in spec.components if n.startswith("cable_"))
+    ke_cable = {n: en.component_ke(lambda c, n=n: c == n) for n in cable_names}
+    forces = bar_forces if bar_forces is not None else np.zeros((len(model.bars.ids), 7))
+    pe_bar = bar_energies(model.bars, state, forces, modes.shapes)
+    pe_spring = 0.5 * model.spring_constants[:, None] * (model.spring_vectors @ modes.shapes) ** 2
+    in_suspension = np.array([i in spec.suspension_elements for i in model.bars.ids])
+    gimbal_grids = frozenset().union(*(g for n, g in spec.components.items() if "gimbal" in n))
+    touches_gimbal = np.array([model.dofs.grid_ids[a] in gimbal_grids or model.dofs.grid_ids[b] in gimbal_grids
+                               for a, b in zip(model.bars.node_a, model.bars.node_b)]) & ~in_suspension
+    pe_suspension = pe_bar[in_suspension].sum(0) + pe_spring[[i in spec.suspension_elements
+                                                               for i in model.spring_ids]].sum(0)
+    pe_gimbal = pe_bar[touches_gimbal].sum(0)
+    mech = _mechanism_rotations(modes, spec)
+    omega2 = (2.0 * np.pi * modes.frequencies_hz) ** 2
+    rigid = rigid_body_vectors(model, reference)
+    article = ~_grid_mask(model, frozenset().union(*(spec.components[n] for n in cable_names))) \
+        if cable_names else np.ones(len(model.positions), dtype=bool)
+    rows = np.repeat(article, 6)
+    m_art = model.mass[np.ix_(rows, rows)]
+    d_art = rigid[rows]
+    m_rigid = d_art.T @ m_art @ d_art
+    fit = np.linalg.solve(m_rigid, d_art.T @ m_art @ modes.shapes[rows])
+    rigid_ke = np.diag(m_rigid)[:, None] * fit**2
+    counters = {"Y": 0, "Z": 0}
+    for m in np.argsort(modes.frequencies_hz):
+        if zero[m]:
+            continue
+        cable_total = sum(e[m] for e in ke_cable.values())
+        if cable_total >= 0.5:
+            labels[m] = _cable_label(model, modes, spec, m, {n: e[m] for n, e in ke_cable.items()})
+        elif en.bus_strain[m] < 0.25 * omega2[m]:  # less than half of the potential energy w^2/2
+            if pe_gimbal[m] > pe_suspension[m]:
+                gimbals = [(abs(mech[i, m]), mm) for i, mm in enumerate(spec.mechanisms) if "gimbal" in mm.name]
+                best = max(gimbals, key=lambda t: t[0])[1]
+                stage, axis = best.name.rsplit(" ", 1)
+                labels[m] = f"{axis} gimbal pendulum, {stage.replace(' gimbal', '')}"
+            else:
+                labels[m] = _SUSPENSION_NAMES[int(np.argmax(rigid_ke[:, m]))]
+        else:
+            tor = en.bus_torsion[:, m].sum()
+            family = max((("Y", en.bus_bending["Y"][m]), ("Z", en.bus_bending["Z"][m]), ("T", tor)),
+                         key=lambda t: t[1])[0]
+            if family == "T":
+                end = "primary" if en.torsion_x[m] < reference[0] else "secondary"
+                labels[m] = f"torsion, {end} end"
+            else:
+                counters[family] += 1
+                labels[m] = f"{ordinal(counters[family])} {family} bending"
+    return replace(modes, labels=tuple(labels))

@@ -1,0 +1,39 @@
+"""Pair the modes of two structures by shape: mass-weighted modal assurance criterion (MAC)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from mace_fmu.fe.assembly import FEModel
+from mace_fmu.fe.modal import Modes
+
+
+def mac_matrix(reference: Modes, reference_model: FEModel, other: Modes) -> np.ndarray:
+    """(n_ref, n_other) MAC on the grids both structures share, weighted by the reference mass."""
+    common = [g for g in reference.dofs.grid_ids if g in set(other.dofs.grid_ids)]
+    rows_ref = np.concatenate([reference.dofs.indices(g) for g in common])
+    rows_other = np.concatenate([other.dofs.indices(g) for g in common])
+    w = reference_model.mass[np.ix_(rows_ref, rows_ref)]
+    a = reference.shapes[rows_ref]
+    b = other.shapes[rows_other]
+    cross = a.T @ w @ b
+    norm_a = np.einsum("im,ij,jm->m", a, w, a)
+    norm_b = np.einsum("im,ij,jm->m", b, w, b)
+    return cross**2 / np.maximum(np.outer(norm_a, norm_b), 1e-300)
+
+
+def pair_by_mac(reference: Modes, reference_model: FEModel, other: Modes, indices: list[int]
+                ) -> list[tuple[int, int, float]]:
+    """For each reference mode index, the other structure's mode with the largest MAC.
+
+    Returns (reference index, other index, MAC); an other mode is used at most once, taken by
+    the reference mode that matches it best.
+    """
+    mac = mac_matrix(reference, reference_model, other)
+    pairs: dict[int, tuple[int, float]] = {}
+    taken: set[int] = set()
+    for i in sorted(indices, key=lambda i: -mac[i].max()):
+        j = next(int(k) for k in np.argsort(-mac[i]) if int(k) not in taken)
+        taken.add(j)
+        pairs[i] = (j, float(mac[i, j]))
+    return [(i, *pairs[i]) for i in indices]

@@ -1,0 +1,127 @@
+"""Deck -> structure -> (gravity preload) -> modes with labels and mass properties: one route."""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from typing import Any, Callable, Literal, Mapping
+
+import numpy as np
+
+from mace_fmu.deck.cards import Deck
+from mace_fmu.deck.geometry import coordinate_frames
+from mace_fmu.deck.reader import read_deck
+from mace_fmu.errors import MaceError
+from mace_fmu.fe.assembly import FEModel, assemble
+from mace_fmu.fe.beam import MassKind
+from mace_fmu.fe.constraints import build_constraints
+from mace_fmu.fe.labels import label_modes, rigid_body_vectors
+from mace_fmu.fe.modal import Modes, solve_modes
+from mace_fmu.fe.preload import Preload, PreloadKind, large_displacement_preload, linear_preload
+from mace_fmu.structure import Structure, StructureKind, StructureSpec, build_structure, bundled_deck_path
+
+DEFAULT_MAX_HZ = 250.0
+
+
+@dataclass(frozen=True)
+class MassProperties:
+    """Rigid-body mass properties of a structure (NASTRAN's grid point weight generator)."""
+
+    mass_kg: float
+    center_of_mass_m: np.ndarray  #: (3,) in basic
+    inertia_about_reference_kgm2: np.ndarray  #: (3, 3) about ``reference_point_m``, basic axes
+    reference_grid: int | None  #: PARAM,GRDPNT grid (None: basic origin)
+    reference_point_m: np.ndarray
+
+
+@dataclass(frozen=True)
+class StructureModes:
+    """Everything one modal analysis produces, for tables, state-space models and the viewer."""
+
+    structure: Structure
+    model: FEModel
+    modes: Modes
+    mass_properties: MassProperties
+    preload: Preload | None
+
+
+def mass_properties(model: FEModel, deck: Deck) -> MassProperties:
+    """Mass, centre of mass and inertia about PARAM,GRDPNT (basic origin when absent)."""
+    grdpnt = deck.params.get("GRDPNT")
+    ref_grid = int(grdpnt.values[0]) if grdpnt is not None and int(grdpnt.values[0]) > 0 else None
+    ref = model.positions[model.dofs.grid_index(ref_grid)] if ref_grid is not None else np.zeros(3)
+    d = rigid_body_vectors(model, ref)
+    m6 = d.T @ model.mass @ d
+    mass = m6[0, 0]
+    # m6[0:3, 3:6] = -m skew(c - ref): read the centre of mass off its off-diagonal terms
+    offset = np.array([m6[1, 5], m6[2, 3], m6[0, 4]]) / mass if mass > 0 else np.zeros(3)
+    return MassProperties(mass_kg=float(mass), center_of_mass_m=ref + offset, inertia_about_reference_kgm2=m6[3:, 3:],
+                          reference_grid=ref_grid, reference_point_m=ref)
+
+
+def gravity_load(deck: Deck, model: FEModel, load_id: int) -> np.ndarray:
+    """Load vector [N, N m] of a LOAD (or a GRAV) set: M times the uniform acceleration field."""
+    if load_id in deck.loads:
+        card = deck.loads[load_id]
+        terms = [(card.scale * s, sid) for s, sid in card.terms]
+    else:
+        terms = [(1.0, load_id)]
+    frames = coordinate_frames(deck)
+    accel = np.zeros(3)
+    for scale, sid in terms:
+        if sid not in deck.gravs:
+            raise MaceError(f"load set {load_id}: set {sid} is not a GRAV card (only gravity loads are supported)")
+        grav = deck.gravs[sid]
+        accel += scale * grav.scale * (frames[grav.cid][1] @ np.array(grav.direction))
+    field = np.zeros((len(model.positions), 6))
+    field[:, :3] = accel
+    return model.mass @ field.ravel()
+
+
+def _max_hz(deck: Deck, structure: Structure) -> float:
+    """Upper frequency of the modal subcase's EIGRL (the deck's own request), else 250 Hz."""
+    method = structure.modal.method
+    if method is not None and method in deck.eigrls and deck.eigrls[method].v2 is not None:
+        return float(deck.eigrls[method].v2)
+    return DEFAULT_MAX_HZ
+
+
+def compute_modes(deck: Deck | str | os.PathLike | None = None, *, structure: StructureKind = "1g",
+                  preload: PreloadKind = "large", mass: MassKind = "lumped", max_hz: float | None = None,
+                  overrides: Mapping[tuple[str, int], Mapping[str, Any]] | None = None,
+                  spec: StructureSpec | None = None, progress: Callable[[str], None] | None = None) -> StructureModes:
+    """Modes [Hz] of the 1-g or 0-g structure of a deck (default: the bundled MACE deck).
+
+    ``max_hz`` defaults to the deck's EIGRL upper frequency. ``overrides`` replaces card fields
+    (see :func:`mace_fmu.structure.apply_overrides`).
+    """
+    if preload not in ("large", "linear"):
+        raise ValueError(f"preload must be 'large' or 'linear', got {preload!r}")
+    if mass not in ("lumped", "consistent"):
+        raise ValueError(f"mass must be 'lumped' or 'consistent', got {mass!r}")
+    if not isinstance(deck, Deck):
+        deck = read_deck(deck if deck is not None else bundled_deck_path())
+    struct = build_structure(deck, kind=structure, spec=spec, overrides=overrides)
+    model = assemble(struct.deck, mass=mass)
+    props = mass_properties(model, struct.deck)
+    stiffness, pre = model.stiffness, None
+    if struct.preload is not None:
+        static = build_constraints(struct.deck, model.dofs, model.cd_frames, spc_set=struct.preload.spc,
+                                   mpc_set=struct.preload.mpc)
+        load = gravity_load(struct.deck, model, struct.preload.load)
+        if preload == "linear":
+            pre = linear_preload(model, static, load)
+        else:
+            nl = struct.deck.nlparms.get(struct.preload.nlparm) if struct.preload.nlparm is not None else None
+            pre = large_displacement_preload(model, static, load, increments=nl.ninc if nl else 10,
+                                             max_iterations=nl.max_iter if nl else 25,
+                                             path_tolerance=nl.eps_w if nl else 1e-3, progress=progress)
+        stiffness = pre.tangent_stiffness
+    modal = build_constraints(struct.deck, model.dofs, model.cd_frames, spc_set=struct.modal.spc,
+                              mpc_set=struct.modal.mpc)
+    modes = solve_modes(stiffness, model.mass, modal, model.dofs, model.cd_frames,
+                        max_hz=max_hz if max_hz is not None else _max_hz(struct.deck, struct))
+    modes = label_modes(model, modes, struct.spec, reference=props.reference_point_m,
+                        state=pre.state if pre is not None else None,
+                        bar_forces=pre.bar_forces if pre is not None else None)
+    return StructureModes(structure=struct, model=model, modes=modes, mass_properties=props, preload=pre)
