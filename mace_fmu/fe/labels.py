@@ -210,7 +210,8 @@ def label_modes(model: FEModel, modes: Modes, spec: StructureSpec, *, reference:
     m_art = model.mass[np.ix_(rows, rows)]
     d_art = rigid[rows]
     m_rigid = d_art.T @ m_art @ d_art
-    fit = np.linalg.solve(m_rigid, d_art.T @ m_art @ modes.shapes[rows])
+    # lstsq: a line of point masses has no inertia about its own axis
+    fit = np.linalg.lstsq(m_rigid, d_art.T @ m_art @ modes.shapes[rows], rcond=1e-12)[0]
     rigid_ke = np.diag(m_rigid)[:, None] * fit**2
     counters = {"Y": 0, "Z": 0}
     for m in np.argsort(modes.frequencies_hz):

@@ -62,9 +62,11 @@ def solve_modes(stiffness: np.ndarray, mass: np.ndarray, constraints: Constraint
     massless = diag <= MASSLESS_RELATIVE_TOLERANCE * diag.max()
     a, o = np.flatnonzero(~massless), np.flatnonzero(massless)
     k_oo = k[np.ix_(o, o)]
+    if len(o) == 0:
+        k_oo = np.eye(0)
     try:
         lu = sla.lu_factor(k_oo, check_finite=True)
-        if np.min(np.abs(np.diag(lu[0]))) <= 1e-12 * np.max(np.abs(np.diag(k_oo))):
+        if len(o) and np.min(np.abs(np.diag(lu[0]))) <= 1e-12 * np.max(np.abs(np.diag(k_oo))):
             raise np.linalg.LinAlgError
     except (np.linalg.LinAlgError, ValueError):
         raise MaceError(_unrestrained_message(k_oo, o, constraints)) from None

@@ -112,3 +112,11 @@ def large_displacement_preload(model: FEModel, constraints: Constraints, load: n
     return Preload(kind="large", displacements=u, tangent_stiffness=k_bars + model.spring_stiffness,
                    bar_forces=forces, increments=increments, iterations=total_iterations, residual_ratio=float(ratio),
                    state=BarState(positions, rotations))
+
+
+def geometric_stiffness(model: FEModel, constraints: Constraints, load: np.ndarray) -> np.ndarray:
+    """K_sigma of the linear static solution under ``load`` (undeformed geometry), basic DOFs.
+
+    Buckling load factors lambda solve (K + lambda K_sigma) phi = 0.
+    """
+    return linear_preload(model, constraints, load).tangent_stiffness - model.stiffness
