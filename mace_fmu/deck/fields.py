@@ -1,0 +1,272 @@
+"""Text layer of a deck: sections, case-control selections, bulk lines to cards, typed fields.
+
+Data fields are numbered from 1 in NASTRAN's positional sense: fields 2-9 of a card's first line
+are data fields 1-8, fields 2-9 of its first continuation are data fields 9-16, and so on. A
+large-field line carries 4 data fields, so two large-field lines make one such logical line.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass, field
+from typing import Any, Iterable
+
+from mace_fmu.deck.cards import Source, Subcase
+from mace_fmu.errors import DeckError
+
+Lines = list[tuple[int, str]]
+REQUIRED: Any = object()  #: default meaning "a blank field is an error"
+
+_INT = re.compile(r"[+-]?\d+")
+# NASTRAN reals need a decimal point; the exponent may be E/D or implicit ("4.99-12").
+_REAL = re.compile(r"([+-]?(?:\d+\.\d*|\.\d+))(?:[EeDd]([+-]?\d+)|([+-]\d+))?")
+_WORD = re.compile(r"[A-Z][A-Z0-9]*")
+
+
+def parse_int(text: str) -> int | None:
+    """The integer written in ``text``, or None when it is not a NASTRAN integer."""
+    return int(text) if _INT.fullmatch(text) else None
+
+
+def parse_real(text: str) -> float | None:
+    """The real written in ``text`` (decimal point required), or None when it is not one."""
+    m = _REAL.fullmatch(text)
+    if m is None:
+        return None
+    return float(f"{m.group(1)}e{m.group(2) or m.group(3) or '0'}")
+
+
+def describe(d: int, name: str, last: int | None = None) -> str:
+    """Position of data field ``d`` (to ``last``) in NASTRAN's numbering, e.g. 'field 5 (GB)'."""
+    line, col = divmod(d - 1, 8)
+    where = (f"continuation {line} " if line else "") + f"field {col + 2}"
+    if last is not None:
+        line2, col2 = divmod(last - 1, 8)
+        where = (where.replace("field", "fields") + f"-{col2 + 2}" if line2 == line
+                 else f"{where} to continuation {line2} field {col2 + 2}")
+    return f"{where} ({name})"
+
+
+def _code(text: str) -> str:
+    return text.split("$", 1)[0].strip()
+
+
+def split_sections(lines: Lines, file: str) -> tuple[Lines | None, Lines]:
+    """(case-control lines or None, bulk-data lines up to ENDDATA)."""
+    begin = next((i for i, (_, t) in enumerate(lines) if re.fullmatch(r"BEGIN\s*BULK", _code(t), re.I)), None)
+    if begin is None:
+        case, bulk = None, lines
+    else:
+        cend = next((i for i, (_, t) in enumerate(lines[:begin]) if _code(t).upper() == "CEND"), -1)
+        case, bulk = lines[cend + 1:begin], lines[begin + 1:]
+    end = next((i for i, (_, t) in enumerate(bulk) if re.match(r"ENDDATA\b", _code(t), re.I)), None)
+    if end is None and begin is not None:
+        raise DeckError(f"BEGIN BULK at line {lines[begin][0]} has no ENDDATA (expected ENDDATA after the "
+                        "bulk data)", file=file, line=lines[-1][0])
+    return case, bulk[:end]
+
+
+SELECTIONS = ("SPC", "MPC", "LOAD", "NLPARM", "METHOD")
+Selections = dict[int, dict[str, tuple[Any, int]]]  #: case ID -> key -> (value, line written)
+
+
+def case_control(lines: Lines, file: str) -> tuple[Subcase, dict[int, Subcase], Selections]:
+    """Global case, subcases with inherited selections resolved, and where each selection is written."""
+    start = lines[0][0] - 1 if lines else 1
+    blocks: dict[int, tuple[int, dict[str, tuple[Any, int]]]] = {0: (max(start, 1), {})}
+    current = 0
+    for number, text in lines:
+        code = _code(text)
+        label = f"SUBCASE {current}" if current else "global case control"
+        if m := re.match(r"SUBCASE\b\s*(.*)", code, re.I):
+            sid = parse_int(m.group(1))
+            if sid is None or sid < 1:
+                raise DeckError(f"expected a positive subcase ID, got {m.group(1)!r}", file=file, line=number,
+                                card="SUBCASE")
+            if sid in blocks:
+                raise DeckError(f"SUBCASE {sid} defined twice: line {blocks[sid][0]} and line {number}",
+                                file=file, line=number, card=f"SUBCASE {sid}")
+            blocks[sid] = (number, {})
+            current = sid
+        elif m := re.match(r"(SUBCOM|SUBSEQ|SYMCOM|SYMSEQ|SYM|REPCASE)\b", code, re.I):
+            raise DeckError(f"{m.group(1).upper()} is not supported by mace-fmu (expected SUBCASE)",
+                            file=file, line=number, card=label)
+        elif (m := re.fullmatch(r"([A-Za-z]+)\s*=\s*(.*)", code)) and m.group(1).upper() in (*SELECTIONS, "LABEL"):
+            key, raw = m.group(1).upper(), m.group(2).strip()
+            value: Any = raw if key == "LABEL" else parse_int(raw)
+            if key != "LABEL" and (value is None or value < 1):
+                raise DeckError(f"expected a set ID (positive integer), got {raw!r}", file=file, line=number,
+                                card=label, field=key)
+            own = blocks[current][1]
+            if key in own:
+                raise DeckError(f"{key} selected twice: line {own[key][1]} and line {number}", file=file,
+                                line=number, card=label, field=key)
+            own[key] = (value, number)
+    selections: Selections = {}
+    cases: dict[int, Subcase] = {}
+    for cid, (line, own) in blocks.items():
+        values = {**blocks[0][1], **own}
+        selections[cid] = values
+        get = {k: values.get(k, (None, 0))[0] for k in SELECTIONS}
+        cases[cid] = Subcase(id=cid, spc=get["SPC"], mpc=get["MPC"], load=get["LOAD"], nlparm=get["NLPARM"],
+                             method=get["METHOD"], label=values.get("LABEL", ("", 0))[0], source=Source(file, line))
+    global_case = cases.pop(0)
+    return global_case, cases, selections
+
+
+@dataclass
+class RawCard:
+    """One bulk-data card as text: its name and its data fields across all its lines."""
+
+    name: str  #: upper case, without the large-field '*'
+    line: int  #: 1-based line of the card's first physical line
+    fields: list[str] = field(default_factory=list)  #: stripped text of data fields 1, 2, ...
+    lines: list[int] = field(default_factory=list)  #: physical line of each data field
+
+
+def _physical(text: str) -> tuple[str, list[str], bool]:
+    """(field 1, data fields, free field?) of one non-blank line without its comment."""
+    if "," in text:
+        items = [item.strip() for item in text.split(",")]
+        return items[0], items[1:], True
+    text = text.expandtabs(8)
+    head = text[:8].strip()
+    width = 16 if head.startswith("*") or head.endswith("*") else 8
+    # Columns 73-80 hold the continuation marker, which modern NASTRAN does not need.
+    return head, [text[col:col + width].strip() for col in range(8, 72, width)], False
+
+
+def split_cards(lines: Iterable[tuple[int, str]], file: str) -> list[RawCard]:
+    """Group numbered bulk-data lines into cards (comments and blank lines dropped)."""
+    cards: list[RawCard] = []
+    for number, text in lines:
+        text = text.split("$", 1)[0].rstrip()
+        if not text.strip():
+            continue
+        head, data, free = _physical(text)
+        continuation = head == "" or head[0] in "+*"
+        if continuation and not cards:
+            raise DeckError(f"continuation line {head or '(blank field 1)'!r} has no card before it "
+                            "(expected a card name in field 1)", file=file, line=number)
+        large = head.startswith("*") if continuation else head.endswith("*")
+        card = cards[-1] if continuation else RawCard(head.rstrip("*").upper(), number)
+        capacity = 4 if large else 8
+        if not large and len(card.fields) % 8:
+            raise DeckError("small-field continuation after an odd number of large-field lines (expected a '*' "
+                            "continuation to complete the logical line)", file=file, line=number, card=card.name)
+        if free and len(data) > capacity:
+            extra = data[capacity:]
+            # One extra item is allowed: it is the field-10 continuation marker.
+            if len(extra) > 1 or (extra[0] and extra[0][0] not in "+*"):
+                raise DeckError(f"free-field line has {len(data)} fields after field 1 (expected at most "
+                                f"{capacity} data fields and a continuation marker)",
+                                file=file, line=number, card=card.name)
+            data = data[:capacity]
+        if not continuation:
+            cards.append(card)
+        # Short lines are padded so that each continuation starts at its positional data field.
+        card.fields += data + [""] * (capacity - len(data))
+        card.lines += [number] * capacity
+    return cards
+
+
+class Fields:
+    """Typed, checked access to the data fields of one card; errors carry file:line and field."""
+
+    def __init__(self, raw: RawCard, file: str) -> None:
+        self.raw = raw
+        self.file = file
+        self.label = raw.name  #: becomes "NAME ID" once the ID is read
+
+    def __len__(self) -> int:
+        return len(self.raw.fields)
+
+    def text(self, d: int) -> str:
+        """Stripped text of data field ``d`` ('' when blank or beyond the card)."""
+        return self.raw.fields[d - 1] if d <= len(self.raw.fields) else ""
+
+    def error(self, message: str, d: int | None = None, name: str = "", last: int | None = None) -> DeckError:
+        """A DeckError at the line holding field ``d`` (the card's first line when absent)."""
+        line = self.raw.lines[d - 1] if d is not None and d <= len(self.raw.lines) else self.raw.line
+        return DeckError(message, file=self.file, line=line, card=self.label,
+                         field=describe(d, name, last) if d is not None else None)
+
+    def _blank(self, d: int, name: str, default: Any, expected: str) -> Any:
+        if default is REQUIRED:
+            raise self.error(f"required field is blank (expected {expected})", d, name)
+        return default
+
+    def integer(self, d: int, name: str, default: Any = REQUIRED, minimum: int | None = None) -> Any:
+        """Integer field; a real or a word is an error."""
+        text = self.text(d)
+        expected = "an integer" if minimum is None else f"an integer >= {minimum}"
+        if not text:
+            return self._blank(d, name, default, expected)
+        value = parse_int(text)
+        if value is None or (minimum is not None and value < minimum):
+            raise self.error(f"expected {expected}, got {text!r}", d, name)
+        return value
+
+    def ident(self, d: int, name: str) -> int:
+        """The card's required positive ID; later errors name the card with it."""
+        value = self.integer(d, name, minimum=1)
+        self.label = f"{self.raw.name} {value}"
+        return value
+
+    def real(self, d: int, name: str, default: Any = REQUIRED) -> Any:
+        """Real field; the decimal point is required, as in NASTRAN."""
+        text = self.text(d)
+        if not text:
+            return self._blank(d, name, default, "a real number")
+        value = parse_real(text)
+        if value is None:
+            hint = " with a decimal point" if parse_int(text) is not None else ""
+            raise self.error(f"expected a real number{hint}, got {text!r}", d, name)
+        if not math.isfinite(value):
+            raise self.error(f"real number {text!r} is out of range (expected a finite value)", d, name)
+        return value
+
+    def word(self, d: int, name: str, default: Any = REQUIRED, allowed: Iterable[str] | None = None) -> Any:
+        """Character field (upper case), optionally one of ``allowed``."""
+        text = self.text(d).upper()
+        if not text:
+            return self._blank(d, name, default, "a character value")
+        choices = tuple(allowed) if allowed is not None else None
+        if not _WORD.fullmatch(text) or (choices is not None and text not in choices):
+            expected = "one of " + ", ".join(choices) if choices else "a character value"
+            raise self.error(f"expected {expected}, got {text!r}", d, name)
+        return text
+
+    def components(self, d: int, name: str, default: Any = REQUIRED) -> str:
+        """Component list such as '123456' or '2', normalised to sorted unique digits."""
+        text = self.text(d)
+        if not text:
+            return self._blank(d, name, default, "components (digits 1-6)")
+        if not re.fullmatch(r"[1-6]+", text):
+            raise self.error(f"expected components (digits 1-6), got {text!r}", d, name)
+        return "".join(sorted(set(text)))
+
+    def component(self, d: int, name: str) -> int:
+        """A single required component 1-6 of a grid."""
+        text = self.text(d)
+        if text == "0":
+            raise self.error("component 0 (scalar point) is not supported by mace-fmu "
+                             "(expected a single digit 1-6)", d, name)
+        if not text:
+            return self._blank(d, name, REQUIRED, "a single component digit 1-6")
+        if not re.fullmatch(r"[1-6]", text):
+            raise self.error(f"expected a single component digit 1-6, got {text!r}", d, name)
+        return int(text)
+
+    def blank(self, d: int, name: str) -> None:
+        """Field that must be blank (unused by NASTRAN or by mace-fmu)."""
+        if self.text(d):
+            raise self.error(f"expected a blank field, got {self.text(d)!r}", d, name)
+
+    def end(self, last: int) -> None:
+        """No data beyond field ``last``."""
+        for d in range(last + 1, len(self) + 1):
+            if self.text(d):
+                raise self.error(f"unexpected value {self.text(d)!r} (the card has {last} data fields)",
+                                 d, "unused")
