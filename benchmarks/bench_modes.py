@@ -26,11 +26,22 @@ CASES = {
 }
 
 
+def cpu_name() -> str:
+    """CPU model from /proc/cpuinfo (Linux), else platform's guess."""
+    try:
+        for line in open("/proc/cpuinfo"):
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or platform.machine()
+
+
 def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--runs", type=int, default=7)
     args = parser.parse_args()
-    print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
+    print(f"machine: {cpu_name()}, {os.cpu_count()} cores, "
           f"Python {platform.python_version()}, numpy {np.__version__}, scipy {scipy.__version__}")
     print(f"date: {time.strftime('%Y-%m-%d')}, runs per case: {args.runs} (median; first run included)")
     print("| case | median [s] | min [s] | modes <= 250 Hz |")

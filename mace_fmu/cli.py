@@ -61,7 +61,7 @@ def cmd_modes(args: argparse.Namespace) -> int:
 
 
 def cmd_build(args: argparse.Namespace) -> int:
-    from mace_fmu.thesis import format_rows, table_5_1_0g, table_5_1_1g, thesis_data
+    from mace_fmu.thesis import format_rows, format_side_by_side, table_5_1_0g, table_5_1_1g, thesis_data
 
     deck = read_deck(args.deck)
     _progress("0-g modes (suspension removed, linear)")
@@ -71,9 +71,9 @@ def cmd_build(args: argparse.Namespace) -> int:
         _progress(f"1-g modes ({kind} gravity preload)")
         results[kind] = compute_modes(deck, structure="1g", preload=kind, progress=_progress if kind == "large" else None)
     print(format_rows(table_5_1_0g(m0), title="Table 5.1, 0-g column (flexible modes)"))
-    for kind, m1 in results.items():
-        print()
-        print(format_rows(table_5_1_1g(m1, m0), title=f"Table 5.1, 1-g column, {kind} preload (paired by MAC)"))
+    print()
+    print(format_side_by_side({kind: table_5_1_1g(m1, m0) for kind, m1 in results.items()},
+                              title="Table 5.1, 1-g column (structural modes paired with the 0-g ones by MAC)"))
     ref = thesis_data()["table_3_15"]
     p = m0.mass_properties
     j = np.diag(p.inertia_about_reference_kgm2)

@@ -63,3 +63,16 @@ def format_rows(rows: list[ComparisonRow], *, title: str) -> str:
         lines.append(f"{r.thesis_label:24s} {r.thesis_hz:9.2f} {r.ours_hz:9.3f} {r.error_percent:8.2f}  "
                      f"{r.ours_label:28s}" + (f" {r.mac:.2f}" if r.mac is not None else ""))
     return "\n".join(lines)
+
+
+def format_side_by_side(columns: dict[str, list[ComparisonRow]], *, title: str) -> str:
+    """One row per thesis mode, one (Hz, error %) pair per result column (e.g. per preload)."""
+    names = list(columns)
+    head = f"{'thesis mode':24s} {'thesis Hz':>9s}" + "".join(f" {n + ' Hz':>12s} {'err %':>6s}" for n in names) + \
+        "  label (ours)"
+    lines = [title, head, "-" * len(head)]
+    for i, first in enumerate(columns[names[0]]):
+        cells = "".join(f" {columns[n][i].ours_hz:12.3f} {columns[n][i].error_percent:6.2f}" for n in names)
+        labels = {columns[n][i].ours_label for n in names}
+        lines.append(f"{first.thesis_label:24s} {first.thesis_hz:9.2f}{cells}  {' / '.join(sorted(labels))}")
+    return "\n".join(lines)

@@ -21,9 +21,11 @@ class Constraints:
     spc_set: int | None
     mpc_set: int | None
 
-    def reduce(self, matrix: np.ndarray) -> np.ndarray:
-        """T^T A T for a dense A."""
+    def reduce(self, matrix: np.ndarray | sparse.sparray) -> np.ndarray:
+        """T^T A T as a dense array, for a dense or a sparse A."""
         t = self.transform
+        if sparse.issparse(matrix):
+            return (t.T @ matrix @ t).toarray()
         return (t.T @ (t.T @ matrix).T).T
 
 

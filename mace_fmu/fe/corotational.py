@@ -21,6 +21,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy import sparse
 
 from mace_fmu.errors import MaceError
 from mace_fmu.fe.assembly import Bars
@@ -118,9 +119,13 @@ def _nodal_matrix(m_z: np.ndarray) -> np.ndarray:
     return m_z[..., _ZMAP[:, None], _ZMAP[None, :]] * np.outer(_ZSIGN, _ZSIGN)
 
 
-def _reduced_derivatives(bars: Bars, state: BarState) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(d, dd/dz, d2d/dz2): shapes (n, 7), (n, 7, 9), (n, 7, 9, 9)."""
+def _reduced_derivatives(bars: Bars, state: BarState, *, second: bool = True
+                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    """(d, dd/dz, d2d/dz2 or None): shapes (n, 7), (n, 7, 9), (n, 7, 9, 9)."""
     n = len(bars.ids)
+    if not second:
+        d_all = _deformations(bars, state, np.broadcast_to(1j * _CS_STEP * np.eye(9), (n, 9, 9)))
+        return d_all[:, 0].real, np.swapaxes(d_all.imag, 1, 2) / _CS_STEP, None
     h = np.full((n, 9), _FD_RELATIVE_STEP)
     h[:, 0:3] *= bars.lengths0[:, None]
     eye = np.eye(9)
@@ -145,6 +150,14 @@ def deformation_derivatives(bars: Bars, state: BarState) -> tuple[np.ndarray, np
     return d, _nodal_vector(bz), _nodal_matrix(d2z)
 
 
+def internal_force(bars: Bars, state: BarState, n_dof: int) -> np.ndarray:
+    """Internal force vector [N, N m] of all bars at ``state`` (first derivatives only: cheap)."""
+    d, bz, _ = _reduced_derivatives(bars, state, second=False)
+    g = np.einsum("nij,nj->ni", bars.k_natural, d)
+    f_e = _nodal_vector(np.einsum("nki,nk->ni", bz, g))
+    return np.bincount(bar_dof_indices(bars).ravel(), weights=f_e.ravel(), minlength=n_dof)
+
+
 def bar_energies(bars: Bars, state: BarState, natural_forces: np.ndarray, vectors: np.ndarray) -> np.ndarray:
     """(n_bar, n_vec) potential energy 1/2 v_e^T K_T,e v_e of each bar for global vectors (n_dof, n_vec)."""
     _, bz, d2z = _reduced_derivatives(bars, state)
@@ -160,8 +173,8 @@ def bar_dof_indices(bars: Bars) -> np.ndarray:
 
 
 def tangent(bars: Bars, state: BarState, n_dof: int, *, natural_forces: np.ndarray | None = None
-            ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(internal force [n_dof], tangent stiffness [n_dof, n_dof], natural forces [n_bar, 7]) of all bars.
+            ) -> tuple[np.ndarray, sparse.csr_array, np.ndarray]:
+    """(internal force [n_dof], sparse tangent stiffness, natural forces [n_bar, 7]) of all bars.
 
     The natural forces default to K_n d at ``state``; pass them to build a linear-prestress
     stiffness (stresses from a linear solution, geometry of ``state``).
@@ -172,8 +185,9 @@ def tangent(bars: Bars, state: BarState, n_dof: int, *, natural_forces: np.ndarr
     k_z = np.swapaxes(bz, 1, 2) @ bars.k_natural @ bz + np.einsum("nk,nkij->nij", g, d2z)
     k_e = _nodal_matrix(k_z)
     idx = bar_dof_indices(bars)
-    f = np.zeros(n_dof)
-    np.add.at(f, idx, f_e)
-    k = np.zeros((n_dof, n_dof))
-    np.add.at(k, (idx[:, :, None], idx[:, None, :]), k_e)
-    return f, 0.5 * (k + k.T), g
+    f = np.bincount(idx.ravel(), weights=f_e.ravel(), minlength=n_dof)
+    k_e = 0.5 * (k_e + np.swapaxes(k_e, 1, 2))
+    rows = np.broadcast_to(idx[:, :, None], k_e.shape).ravel()
+    cols = np.broadcast_to(idx[:, None, :], k_e.shape).ravel()
+    k = sparse.coo_array((k_e.ravel(), (rows, cols)), shape=(n_dof, n_dof)).tocsr()  # sums duplicates
+    return f, k, g
