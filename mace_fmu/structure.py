@@ -13,8 +13,11 @@ from importlib import resources
 from pathlib import Path
 from typing import Any, Literal, Mapping
 
+import numpy as np
+
 from mace_fmu.deck.cards import Deck, Subcase
-from mace_fmu.errors import MaceError
+from mace_fmu.deck.reader import check_deck
+from mace_fmu.errors import DeckError, MaceError
 
 StructureKind = Literal["1g", "0g"]
 
@@ -63,6 +66,8 @@ def _id_set(values: list[Any], where: str) -> frozenset[int]:
             ids.add(v)
         elif isinstance(v, str) and v.count("-") == 1 and all(p.strip().isdigit() for p in v.split("-")):
             lo, hi = (int(p) for p in v.split("-"))
+            if hi < lo:
+                raise MaceError(f"{where}: range {v!r} runs backwards (expected 'first-last' with first <= last)")
             ids.update(range(lo, hi + 1))
         else:
             raise MaceError(f"{where}: expected an ID or a 'first-last' range, got {v!r}")
@@ -102,20 +107,68 @@ class Structure:
     spec: StructureSpec
 
 
+def _ids_text(ids: list[int]) -> str:
+    """'1-31, 35, 93-112': IDs as compact ranges for error messages."""
+    ids, parts, start = sorted(ids), [], None
+    for i, k in enumerate(ids):
+        start = k if start is None else start
+        if i + 1 == len(ids) or ids[i + 1] != k + 1:
+            parts.append(str(k) if k == start else f"{start}-{k}")
+            start = None
+    return ", ".join(parts)
+
+
+def _checked_value(card: str, cid: int, name: str, old: Any, new: Any) -> Any:
+    """``new`` converted to the type of the field it replaces, or a MaceError saying what was expected."""
+    def is_number(x: Any) -> bool:
+        return isinstance(x, (int, float, np.integer, np.floating)) and not isinstance(x, bool)
+
+    if isinstance(old, tuple):
+        if not isinstance(new, (tuple, list)) or len(new) != len(old) or not all(is_number(x) for x in new):
+            raise MaceError(f"override of {card} {cid}: field {name!r} takes {len(old)} numbers, got {new!r}")
+        return tuple(float(x) if isinstance(o, float) else x for x, o in zip(new, old))
+    if isinstance(old, bool) or isinstance(old, str):
+        if type(new) is not type(old):
+            raise MaceError(f"override of {card} {cid}: field {name!r} takes a {type(old).__name__}, got {new!r}")
+        return new
+    if isinstance(old, int):
+        if not isinstance(new, (int, np.integer)) or isinstance(new, bool):
+            raise MaceError(f"override of {card} {cid}: field {name!r} takes an integer ID, got {new!r}")
+        return int(new)
+    if new is None or is_number(new):  # real fields, possibly blank (None)
+        return None if new is None else float(new)
+    raise MaceError(f"override of {card} {cid}: field {name!r} takes a real number, got {new!r}")
+
+
 def apply_overrides(deck: Deck, overrides: Mapping[tuple[str, int], Mapping[str, Any]]) -> Deck:
-    """Deck with card fields replaced, e.g. {("MAT1", 2): {"e": 2.4e9}, ("PBAR", 1): {"k1": 0.55}}."""
+    """Deck with card fields replaced, e.g. {("MAT1", 2): {"e": 2.4e9}, ("PBAR", 1): {"k1": 0.55}}.
+
+    Values are type-checked against the fields they replace, and the changed deck gets the
+    reader's cross-reference and geometry checks; any problem is a MaceError (a ValueError)
+    naming the override.
+    """
+    if not overrides:
+        return deck
     tables = {name: dict(getattr(deck, attr)) for name, attr in _CARD_TABLES.items()}
     for (card, cid), fields in overrides.items():
         if card not in tables:
-            raise ValueError(f"override of unknown card type {card!r}; allowed: {sorted(tables)}")
+            raise MaceError(f"override of unknown card type {card!r}; allowed: {sorted(tables)}")
         if cid not in tables[card]:
-            raise ValueError(f"override of {card} {cid}: no such card in {deck.path}")
-        allowed = {f.name for f in dataclasses.fields(tables[card][cid])} - {"id", "source"}
+            raise MaceError(f"override of {card} {cid}: no such card in {deck.path}; {card} IDs there: "
+                             f"{_ids_text(list(tables[card]))}")
+        old = tables[card][cid]
+        allowed = {f.name for f in dataclasses.fields(old)} - {"id", "source"}
         unknown = set(fields) - allowed
         if unknown:
-            raise ValueError(f"override of {card} {cid}: unknown field(s) {sorted(unknown)}; allowed: {sorted(allowed)}")
-        tables[card][cid] = dataclasses.replace(tables[card][cid], **fields)
-    return dataclasses.replace(deck, **{attr: tables[name] for name, attr in _CARD_TABLES.items()})
+            raise MaceError(f"override of {card} {cid}: unknown field(s) {sorted(unknown)}; allowed: {sorted(allowed)}")
+        values = {k: _checked_value(card, cid, k, getattr(old, k), v) for k, v in fields.items()}
+        tables[card][cid] = dataclasses.replace(old, **values)
+    changed = dataclasses.replace(deck, **{attr: tables[name] for name, attr in _CARD_TABLES.items()})
+    try:
+        check_deck(changed)
+    except DeckError as exc:
+        raise MaceError(f"overrides {dict(overrides)} make the deck invalid: {exc}") from None
+    return changed
 
 
 def remove_suspension(deck: Deck, spec: StructureSpec) -> Deck:

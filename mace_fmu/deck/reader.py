@@ -362,6 +362,12 @@ def _need(key: int | None, table: Any, card: Any, label: str, field: str, noun: 
 
 def _validate(deck: Deck, selections: Selections) -> None:
     """Cross references, MPC dependent DOFs, bar geometry and case-control selections."""
+    check_deck(deck)
+    _check_selections(deck, selections)
+
+
+def check_deck(deck: Deck) -> None:
+    """Cross references, MPC dependent DOFs and bar geometry of a deck (also one changed in code)."""
     frames = coordinate_frames(deck)
     grid, coord = ("grid", "a GRID ID"), ("coordinate system", "0 or a CORD2R ID")
     for g in deck.grids.values():
@@ -395,7 +401,6 @@ def _validate(deck: Deck, selections: Selections) -> None:
             _need(lset, deck.gravs, ld, f"LOAD {ld.sid}", f"L{k}", "load set", "a GRAV SID")
     _check_mpc_dofs(deck)
     _check_bars(deck, frames)
-    _check_selections(deck, selections)
 
 
 def _check_mpc_dofs(deck: Deck) -> None:

@@ -55,7 +55,9 @@ def rotation_vector_small(r: np.ndarray) -> np.ndarray:
     """Rotation vector of rotation matrices near the identity (angle < 0.5 rad), complex-safe."""
     w = 0.5 * np.stack([r[..., 2, 1] - r[..., 1, 2], r[..., 0, 2] - r[..., 2, 0], r[..., 1, 0] - r[..., 0, 1]], -1)
     s2 = np.sum(w * w, axis=-1)
-    if np.max(np.abs(s2.real)) > np.sin(_MAX_LOCAL_ROTATION) ** 2:
+    # trace = 1 + 2 cos(angle): the sine alone cannot tell 0.1 rad from pi - 0.1 rad
+    trace = (r[..., 0, 0] + r[..., 1, 1] + r[..., 2, 2]).real
+    if np.min(trace) < 1 + 2 * np.cos(_MAX_LOCAL_ROTATION):
         raise MaceError(f"a bar's local rotation exceeds {_MAX_LOCAL_ROTATION} rad: the preload deforms the "
                         f"structure beyond small-strain beam theory (or the solution diverged)")
     # asin(s)/s as a series in s^2 (no square root, so complex-step stays analytic)

@@ -1,0 +1,119 @@
+"""The ``mace-fmu`` command line, called in-process through mace_fmu.cli.main."""
+
+from __future__ import annotations
+
+import json
+import re
+
+import pytest
+
+from mace_fmu.cli import main
+
+
+def _run(capsys, argv: list[str]) -> tuple[int, str, str]:
+    code = main(argv)
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def test_modes_0g_json(capsys):
+    code, out, err = _run(capsys, ["modes", "0g", "--json"])
+    assert code == 0
+    data = json.loads(out)
+    assert {"structure", "modes", "mass_properties"} <= set(data)
+    assert data["structure"] == "0g" and data["preload"] is None
+    modes = data["modes"]
+    assert len(modes) == 35  # thesis: 35 modes cover 0-250 Hz in 0-g
+    assert [m["index"] for m in modes] == list(range(1, 36))
+    freqs = [m["frequency_hz"] for m in modes]
+    assert freqs == sorted(freqs) and max(freqs) <= 250.0
+    assert all(isinstance(m["label"], str) and m["label"] for m in modes)
+    props = data["mass_properties"]
+    assert props["mass_kg"] == pytest.approx(36.64, rel=5e-3)
+    inertia = props["inertia_about_center_node_kgm2"]
+    assert len(inertia) == 3 and all(len(row) == 3 for row in inertia)
+    for got, want in zip((inertia[i][i] for i in range(3)), (0.664, 9.104, 9.557)):
+        assert got == pytest.approx(want, rel=5e-3)
+    assert inertia[0][1] == pytest.approx(inertia[1][0], abs=1e-12)  # symmetric
+    com = props["center_of_mass_m"]
+    assert len(com) == 3 and all(isinstance(x, float) for x in com)
+    assert props["reference_grid"] == 16
+    assert err == ""  # --json: no progress chatter
+
+
+def test_modes_1g_linear_json(capsys):
+    code, out, _ = _run(capsys, ["modes", "1g", "--json", "--preload", "linear", "--max-hz", "5"])
+    assert code == 0
+    data = json.loads(out)
+    assert data["structure"] == "1g" and data["preload"] == "linear"
+    modes = data["modes"]
+    assert all(m["frequency_hz"] <= 5.0 for m in modes)
+    zero = [m for m in modes if abs(m["frequency_hz"]) < 0.01]
+    assert len(zero) == 3
+    assert all(m["label"].startswith("mechanism: reaction wheel ") for m in zero)
+    assert sorted(m["label"] for m in zero) == [f"mechanism: reaction wheel {i}" for i in (1, 2, 3)]
+    bending = next(m for m in modes if "bending" in m["label"])
+    assert bending["label"] == "1st Z bending"
+    assert bending["frequency_hz"] == pytest.approx(2.06, rel=1.5e-2)
+
+
+def _write_broken_deck(tmp_path):
+    path = tmp_path / "broken.bdf"
+    path.write_text("BEGIN BULK\n"
+                    "MAT1,1,2.0e11,,0.3,7800.0\n"
+                    "PBAR,1,1,1.0e-4,1.0e-8,1.0e-8,2.0e-8\n"
+                    "GRID,1,,0.0,0.0,0.0\n"
+                    "CBAR,10,1,1,99,0.0,0.0,1.0\n"  # line 5: grid 99 does not exist
+                    "ENDDATA\n")
+    return path
+
+
+def test_broken_deck_gives_one_line_error(capsys, tmp_path):
+    path = _write_broken_deck(tmp_path)
+    code, out, err = _run(capsys, ["modes", "0g", "--deck", str(path)])
+    assert code == 2
+    assert out == ""
+    lines = err.splitlines()
+    assert len(lines) == 1, err
+    line = lines[0]
+    assert line.startswith("mace-fmu: error:")
+    assert str(path) in line and f"{path}:5:" in line
+    assert "CBAR" in line and "99" in line
+    assert "Traceback" not in err
+
+
+def test_nonexistent_deck_gives_one_line_error(capsys, tmp_path):
+    path = tmp_path / "missing.bdf"
+    code, out, err = _run(capsys, ["modes", "1g", "--deck", str(path)])
+    assert code == 2
+    assert out == ""
+    lines = err.splitlines()
+    assert len(lines) == 1, err
+    assert lines[0].startswith("mace-fmu: error:") and str(path) in lines[0]
+    assert "Traceback" not in err
+
+
+def test_modes_0g_text_output(capsys):
+    code, out, _ = _run(capsys, ["modes", "0g", "--max-hz", "15"])
+    assert code == 0
+    rows = [m for m in re.finditer(r"^\s*(\d+)\s+(-?\d+\.\d+)\s+(.+?)\s*$", out, re.M)]
+    assert len(rows) == 21  # 13 zero modes + 8 flexible modes below 15 Hz
+    assert [int(m.group(1)) for m in rows] == list(range(1, 22))
+    assert all(float(m.group(2)) <= 15.0 for m in rows)
+    bending = [m for m in rows if m.group(3) == "1st Z bending"]
+    assert len(bending) == 1
+    assert float(bending[0].group(2)) == pytest.approx(2.10, rel=5e-3)
+    mass = re.search(r"^mass (\d+\.\d+) kg, centre of mass .* Jxx (\d+\.\d+), Jyy (\d+\.\d+), Jzz (\d+\.\d+)", out, re.M)
+    assert mass is not None, out
+    assert float(mass.group(1)) == pytest.approx(36.64, rel=5e-3)
+    assert float(mass.group(2)) == pytest.approx(0.664, rel=5e-3)
+
+
+@pytest.mark.parametrize("argv", [["modes", "2g"], ["modes"], ["modes", "0g", "--preload", "huge"],
+                                  ["modes", "0g", "--max-hz", "abc"], ["frobnicate"]])
+def test_argparse_errors_exit_with_status_2(capsys, argv):
+    with pytest.raises(SystemExit) as exc:
+        main(argv)
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert "usage: mace-fmu" in err
