@@ -1,7 +1,7 @@
 """Gravity preload of the suspended structure and the tangent stiffness about it.
 
 Two options, as offered by NASTRAN:
-- ``"large"`` (SOL 106 with PARAM,LGDISP,1): the load is applied in NLPARM increments with full
+- ``"large"`` (SOL 106 with PARAM,LGDISP,1): the load is applied in NLPARM increments with
   Newton iterations on the updated geometry; the tangent of the final state is the Hessian of
   the total potential (material + geometric stiffness at the deformed geometry).
 - ``"linear"``: one linear static solution; the geometric stiffness comes from its bar forces,
