@@ -117,31 +117,43 @@ def _mechanism_rotations(modes: Modes, spec: StructureSpec) -> np.ndarray:
     return np.array(out).reshape(len(spec.mechanisms), len(modes))
 
 
+def _m_orthonormal(vectors: np.ndarray, mass: np.ndarray) -> np.ndarray:
+    """Gram-Schmidt in the mass inner product, in column order (the first columns keep their direction)."""
+    gram = vectors.T @ mass @ vectors
+    return vectors @ np.linalg.inv(np.linalg.cholesky(gram).T)
+
+
 def _zero_cluster(model: FEModel, modes: Modes, spec: StructureSpec, zero: np.ndarray, reference: np.ndarray
                   ) -> tuple[np.ndarray, list[str]]:
-    """Rotate the zero-frequency shapes into rigid-body and single-mechanism motions."""
+    """Replace the zero-frequency shapes by exact rigid-body motions and single-mechanism motions.
+
+    Rigid motions are built geometrically rather than projected from the computed shapes, which
+    are exact only to ~1e-7: internal torques then give exactly zero modal force on them.
+    """
     z = modes.shapes[:, zero]
+    mass = model.mass
     rigid = rigid_body_vectors(model, reference)
-    coeffs, names = [], []
+    rigid[np.all(modes.shapes == 0.0, axis=1)] = 0.0  # constrained DOFs
+    names: list[str] = []
+    cols = []
     for r in range(6):
-        a = z.T @ (model.mass @ rigid[:, r])
-        norm2 = rigid[:, r] @ model.mass @ rigid[:, r]
+        a = z.T @ (mass @ rigid[:, r])
+        norm2 = rigid[:, r] @ mass @ rigid[:, r]
         if norm2 > 0 and a @ a >= 0.999 * norm2:
-            coeffs.append(a)
+            cols.append(rigid[:, r])
             names.append(f"rigid body: {_RIGID_NAMES[r]}")
-    sub = replace(modes, frequencies_hz=modes.frequencies_hz[zero], shapes=z)
+    basis = _m_orthonormal(np.array(cols).T, mass) if cols else np.zeros((len(z), 0))
+    rest = z - basis @ (basis.T @ mass @ z)  # the mechanism part of the zero space, rank k - n_rigid
+    w, v = np.linalg.eigh(rest.T @ mass @ rest)
+    rest = rest @ v[:, len(cols):]
+    sub = replace(modes, frequencies_hz=np.zeros(rest.shape[1]), shapes=rest)
     jac = _mechanism_rotations(sub, spec)
     moving = np.linalg.norm(jac, axis=1) > 1e-6 * max(np.abs(jac).max(), 1e-300)
-    pinv = np.linalg.pinv(jac[moving])
-    for col, m in zip(pinv.T, [m for m, mv in zip(spec.mechanisms, moving) if mv]):
-        coeffs.append(col)
-        names.append(f"mechanism: {m.name}")
-    k = z.shape[1]
-    if len(coeffs) != k:
-        return z, [f"zero-frequency mode {i + 1}" for i in range(k)]
-    q, _ = np.linalg.qr(np.array(coeffs).T)
-    q *= np.sign(np.sum(q * np.array(coeffs).T, axis=0))
-    return z @ q, names
+    mechs = rest @ np.linalg.pinv(jac[moving])
+    names += [f"mechanism: {m.name}" for m, mv in zip(spec.mechanisms, moving) if mv]
+    if len(names) != z.shape[1]:
+        return z, [f"zero-frequency mode {i + 1}" for i in range(z.shape[1])]
+    return _m_orthonormal(np.hstack([basis, mechs]), mass), names
 
 
 def _cable_label(model: FEModel, modes: Modes, spec: StructureSpec, m: int, ke_cables: dict[str, float]) -> str:
@@ -185,6 +197,11 @@ def label_modes(model: FEModel, modes: Modes, spec: StructureSpec, *, reference:
         shapes[:, zero] = rotated
         for i, name in zip(np.flatnonzero(zero), names):
             labels[i] = name
+        # Exact flexible modes are mass-orthogonal to rigid and mechanism motions; the computed
+        # ones are so only to the accuracy of the zero cluster (~1e-7), so purify them.
+        flex = shapes[:, ~zero]
+        flex -= rotated @ (rotated.T @ model.mass @ flex)
+        shapes[:, ~zero] = flex / np.sqrt(np.einsum("im,ij,jm->m", flex, model.mass, flex))
     modes = replace(modes, shapes=shapes)
     if state is None:
         state = BarState(model.positions, np.broadcast_to(np.eye(3), (len(model.positions), 3, 3)))

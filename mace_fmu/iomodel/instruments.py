@@ -1,0 +1,185 @@
+"""Actuators, sensors, electronics, servos and damping of a structure, read from its data file.
+
+Every actuator and sensor is a named weighted sum of (grid, component) DOFs, components in the
+grid's displacement (CD) system, so nothing indexes a mode-shape vector by position.
+"""
+
+from __future__ import annotations
+
+import fnmatch
+import tomllib
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+from typing import Any, Literal, Mapping
+
+import numpy as np
+
+from mace_fmu.errors import MaceError
+from mace_fmu.fe.assembly import cd_component_vector
+from mace_fmu.fe.dofs import DofMap
+
+SensorKind = Literal["displacement", "rate"]
+Dof = tuple[int, int, float]  #: (grid, component 1-6 in CD, weight)
+
+
+@dataclass(frozen=True)
+class Actuator:
+    """An input: generalised force of 1 N m (physical) per unit, times ``gain`` N m per volt."""
+
+    name: str
+    description: str
+    dofs: tuple[Dof, ...]
+    gain: float  #: [N m / V] (Table 3.11)
+
+
+@dataclass(frozen=True)
+class Sensor:
+    """An output: the weighted DOFs (displacement) or their rate, times ``gain`` volts per unit."""
+
+    name: str
+    description: str
+    kind: SensorKind
+    dofs: tuple[Dof, ...]
+    gain: float  #: [V per strain, per rad/s, ...] (Table 3.12, notch DC gains of Table 3.13)
+
+
+@dataclass(frozen=True)
+class Electronics:
+    """Filters and delays between the structure and the control computer (thesis 3.5, 4.5)."""
+
+    bessel_order: int
+    bessel_cutoff_hz: float
+    bessel_equivalent_delay_s: float  #: the Pade stand-in for a Bessel filter (Fig. 3.18)
+    analog_sensors: tuple[str, ...]  #: sensor names behind a Bessel filter
+    sensor_delays_s: Mapping[str, float]  #: extra delays (Table 4.6)
+    actuator_delays_s: Mapping[str, float]  #: computational delays (Table 4.5)
+
+
+@dataclass(frozen=True)
+class Servos:
+    """Local loops: wheel speed (eq. 3.18) and gimbal angle (eq. 3.19-3.20)."""
+
+    wheel_forward_gain: float  #: K_f
+    wheel_backward_gain: float  #: K_b
+    wheels: Mapping[str, str]  #: wheel actuator -> its tachometer
+    gimbal_angle_gain: float  #: K_a [V / deg]
+    gimbal_rate_gain: float  #: K_r [V / (deg/s)]
+    gimbals: Mapping[str, str]  #: gimbal actuator -> its encoder
+
+
+@dataclass(frozen=True)
+class ViolinFamily:
+    order: int
+    cables: frozenset[int]
+    zeta: tuple[float, ...]
+
+
+@dataclass(frozen=True)
+class DampingTable:
+    """Open-loop modal damping ratios by mode label (Table 4.7 measurement model)."""
+
+    default: float
+    zero_frequency: float
+    by_label: Mapping[str, float]
+    violin_families: tuple[ViolinFamily, ...]
+
+
+@dataclass(frozen=True)
+class Instruments:
+    """Everything between the FE modes and the volts-volts model."""
+
+    actuators: tuple[Actuator, ...]
+    sensors: tuple[Sensor, ...]
+    electronics: Electronics
+    servos: Servos
+    damping: DampingTable
+    source: str
+
+    def actuator(self, name: str) -> Actuator:
+        return _by_name(self.actuators, name, "actuator")
+
+    def sensor(self, name: str) -> Sensor:
+        return _by_name(self.sensors, name, "sensor")
+
+    @property
+    def analog_sensor_names(self) -> tuple[str, ...]:
+        """Sensors behind a Bessel filter, in output order."""
+        return tuple(s.name for s in self.sensors
+                     if any(fnmatch.fnmatchcase(s.name, pat) for pat in self.electronics.analog_sensors))
+
+
+def _by_name(items, name: str, what: str):
+    for item in items:
+        if item.name == name:
+            return item
+    raise ValueError(f"unknown {what} {name!r}; known: {', '.join(i.name for i in items)}")
+
+
+def influence_vector(dofs: tuple[Dof, ...], dof_map: DofMap, cd_frames: np.ndarray) -> np.ndarray:
+    """Row vector over the basic DOFs that forms sum(weight * u(grid, component in CD))."""
+    vec = np.zeros(dof_map.size)
+    for grid, comp, weight in dofs:
+        vec += weight * cd_component_vector(dof_map, cd_frames, grid, comp)
+    return vec
+
+
+def _dofs(entry: Mapping[str, Any], where: str) -> tuple[Dof, ...]:
+    """DOF list from ``dofs = [[grid, comp, w], ...]`` or ``wheels = [[wheel, base, w], ...]``."""
+    if "dofs" in entry:
+        rows = entry["dofs"]
+        out = [(int(g), int(c), float(w)) for g, c, w in rows]
+    elif "wheels" in entry:
+        # A wheel is spun about its CD z axis (component 6) relative to its base.
+        out = []
+        for wheel, base, w in entry["wheels"]:
+            out += [(int(wheel), 6, float(w)), (int(base), 6, -float(w))]
+    else:
+        raise MaceError(f"{where}: needs 'dofs' or 'wheels'")
+    for g, c, _ in out:
+        if not 1 <= c <= 6:
+            raise MaceError(f"{where}: component {c} of grid {g} is not 1-6")
+    return tuple(out)
+
+
+def load_instruments(path: str | Path | None = None) -> Instruments:
+    """Read instruments, electronics, servos and damping (default: the bundled mace_em.toml)."""
+    path = Path(path) if path is not None else Path(str(resources.files("mace_fmu") / "data" / "mace_em.toml"))
+    try:
+        data = tomllib.loads(path.read_text())
+    except (OSError, tomllib.TOMLDecodeError) as exc:
+        raise MaceError(f"{path}: cannot read the instrument data: {exc}") from None
+    try:
+        actuators = tuple(Actuator(name=a["name"], description=a["description"], dofs=_dofs(a, f"{path} actuator "
+                                   f"{a['name']}"), gain=float(a["gain"])) for a in data["actuators"])
+        sensors = tuple(Sensor(name=s["name"], description=s["description"], kind=s["kind"],
+                               dofs=_dofs(s, f"{path} sensor {s['name']}"), gain=float(s["gain"]))
+                        for s in data["sensors"])
+        el, sv, dm = data["electronics"], data["servos"], data["damping"]
+        electronics = Electronics(bessel_order=int(el["bessel_order"]), bessel_cutoff_hz=float(el["bessel_cutoff_hz"]),
+                                  bessel_equivalent_delay_s=float(el["bessel_equivalent_delay_s"]),
+                                  analog_sensors=tuple(el["analog_sensors"]), sensor_delays_s=dict(el["gyro_delays_s"]),
+                                  actuator_delays_s=dict(el["actuator_delays_s"]))
+        servos = Servos(wheel_forward_gain=float(sv["wheel_forward_gain"]),
+                        wheel_backward_gain=float(sv["wheel_backward_gain"]), wheels=dict(sv["wheels"]),
+                        gimbal_angle_gain=float(sv["gimbal_angle_gain"]), gimbal_rate_gain=float(sv["gimbal_rate_gain"]),
+                        gimbals=dict(sv["gimbals"]))
+        damping = DampingTable(default=float(dm["default"]), zero_frequency=float(dm["zero_frequency"]),
+                               by_label=dict(dm["by_label"]),
+                               violin_families=tuple(ViolinFamily(order=int(f["order"]), cables=frozenset(f["cables"]),
+                                                                  zeta=tuple(f["zeta"])) for f in dm["violin_families"]))
+    except KeyError as exc:
+        raise MaceError(f"{path}: missing table or key {exc}") from None
+    for s in sensors:
+        if s.kind not in ("displacement", "rate"):
+            raise MaceError(f"{path}: sensor {s.name}: kind must be 'displacement' or 'rate', got {s.kind!r}")
+    inst = Instruments(actuators=actuators, sensors=sensors, electronics=electronics, servos=servos, damping=damping,
+                       source=str(path))
+    names = [a.name for a in actuators] + [s.name for s in sensors]
+    for key in list(electronics.sensor_delays_s) + list(servos.wheels.values()) + list(servos.gimbals.values()):
+        inst.sensor(key)
+    for key in list(electronics.actuator_delays_s) + list(servos.wheels) + list(servos.gimbals):
+        inst.actuator(key)
+    if len(set(names)) != len(names):
+        raise MaceError(f"{path}: actuator and sensor names must be unique")
+    return inst

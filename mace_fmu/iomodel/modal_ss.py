@@ -1,0 +1,94 @@
+"""Physical modal state-space model (thesis eq. 3.5-3.6): inputs [N m], outputs in physical units.
+
+x = [eta; eta_dot] per retained mode; A = [[0, I], [-Omega^2, -2 zeta Omega]], B = [0; Phi^T b],
+C = [c_d Phi, 0; 0, c_r Phi], D = 0. Besides the sensors, the model outputs the displacement
+reading (``<name>_angle``) of each rate sensor a gimbal servo integrates (the encoders).
+
+Zero-frequency modes (rigid bodies and mechanisms) come as a basis of named motions (see
+fe.labels). Their states are removed by rule, and the reason is recorded:
+- a zero mode no actuator moves (all inputs are internal torques, so rigid-body momentum is
+  conserved) is uncontrollable: both of its states go;
+- a zero mode whose displacement no output reads (a wheel angle: the tachometer senses rate)
+  keeps only its rate state.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import control as ct
+import numpy as np
+
+from mace_fmu.fe.modal import Modes
+from mace_fmu.iomodel.instruments import Instruments, influence_vector
+
+ZERO_HZ = 0.01
+_NEGLIGIBLE = 1e-9  # relative to the largest modal input/output coefficient
+
+
+@dataclass(frozen=True)
+class ModalPlant:
+    """The physical modal model with the bookkeeping a reader needs."""
+
+    system: ct.StateSpace  #: named inputs (actuators, N m), outputs (sensors; *_angle [rad])
+    frequencies_hz: np.ndarray  #: of the retained modes
+    damping: np.ndarray
+    labels: tuple[str, ...]
+    removed_states: tuple[tuple[str, str], ...]  #: (state name, reason)
+
+
+def modal_plant(modes: Modes, instruments: Instruments, damping: np.ndarray, *, max_hz: float) -> ModalPlant:
+    """Modal state-space of the modes up to ``max_hz`` [Hz] with the instruments' DOFs (no gains)."""
+    keep = modes.frequencies_hz <= max_hz
+    freq = modes.frequencies_hz[keep]
+    zeta = damping[keep]
+    labels = tuple(lab for lab, k in zip(modes.labels, keep) if k)
+    phi = modes.shapes[:, keep]
+    omega = 2.0 * np.pi * np.where(np.abs(freq) < ZERO_HZ, 0.0, freq)
+
+    b = np.array([influence_vector(a.dofs, modes.dofs, modes.cd_frames) for a in instruments.actuators]).T
+    modal_b = phi.T @ b  # (n_modes, n_inputs)
+    rows = {s.name: influence_vector(s.dofs, modes.dofs, modes.cd_frames) @ phi for s in instruments.sensors}
+    rate_names = [s.name for s in instruments.sensors if s.kind == "rate"]
+    integrated = [s.name for s in instruments.sensors if s.name in instruments.servos.gimbals.values()]
+    disp_out = {s.name: rows[s.name] for s in instruments.sensors if s.kind == "displacement"}
+    disp_out.update({f"{n}_angle": rows[n] for n in integrated})
+    rate_out = {n: rows[n] for n in rate_names}
+
+    n = len(freq)
+    keep_disp = np.ones(n, dtype=bool)
+    keep_rate = np.ones(n, dtype=bool)
+    removed: list[tuple[str, str]] = []
+    b_scale = np.abs(modal_b).max()
+    d_scale = max(np.abs(np.array(list(disp_out.values()))).max(), 1e-300)
+    for j in np.flatnonzero(np.abs(freq) < ZERO_HZ):
+        if np.abs(modal_b[j]).max() <= _NEGLIGIBLE * b_scale:
+            keep_disp[j] = keep_rate[j] = False
+            removed += [(f"mode{j + 1}", f"{labels[j]}: no actuator moves it (internal torques only), uncontrollable")]
+        elif max(abs(r[j]) for r in disp_out.values()) <= _NEGLIGIBLE * d_scale:
+            keep_disp[j] = False
+            removed += [(f"mode{j + 1}_disp", f"{labels[j]}: no output reads its displacement, unobservable")]
+
+    d_idx, r_idx = np.flatnonzero(keep_disp), np.flatnonzero(keep_rate)
+    nd, nr = len(d_idx), len(r_idx)
+    a = np.zeros((nd + nr, nd + nr))
+    pos_r = {j: nd + k for k, j in enumerate(r_idx)}
+    for k, j in enumerate(d_idx):
+        a[k, pos_r[j]] = 1.0
+        a[pos_r[j], k] = -omega[j] ** 2
+    for j in r_idx:
+        a[pos_r[j], pos_r[j]] = -2.0 * zeta[j] * omega[j]
+    bm = np.vstack([np.zeros((nd, modal_b.shape[1])), modal_b[r_idx]])
+    names_out = list(disp_out) + list(rate_out)
+    c = np.zeros((len(names_out), nd + nr))
+    for i, name in enumerate(names_out):
+        if name in disp_out:
+            c[i, :nd] = disp_out[name][d_idx]
+        else:
+            c[i, nd:] = rate_out[name][r_idx]
+    sensor_order = [s.name for s in instruments.sensors] + [f"{n}_angle" for n in integrated]
+    order = [names_out.index(name) for name in sensor_order]
+    states = [f"mode{j + 1}_disp" for j in d_idx] + [f"mode{j + 1}_vel" for j in r_idx]
+    sys = ct.ss(a, bm, c[order], np.zeros((len(order), bm.shape[1])), inputs=[x.name for x in instruments.actuators],
+                outputs=sensor_order, states=states, name="structure")
+    return ModalPlant(system=sys, frequencies_hz=freq, damping=zeta, labels=labels, removed_states=tuple(removed))
