@@ -4,12 +4,14 @@ x = [eta; eta_dot] per retained mode; A = [[0, I], [-Omega^2, -2 zeta Omega]], B
 C = [c_d Phi, 0; 0, c_r Phi], D = 0. Besides the sensors, the model outputs the displacement
 reading (``<name>_angle``) of each rate sensor a gimbal servo integrates (the encoders).
 
-Zero-frequency modes (rigid bodies and mechanisms) come as a basis of named motions (see
-fe.labels). Their states are removed by rule, and the reason is recorded:
-- a zero mode no actuator moves (all inputs are internal torques, so rigid-body momentum is
-  conserved) is uncontrollable: both of its states go;
-- a zero mode whose displacement no output reads (a wheel angle: the tachometer senses rate)
-  keeps only its rate state.
+Zero-frequency modes (rigid bodies and mechanisms) obey eta'' = Phi^T b u in any orthonormal
+basis of their cluster, so the cluster is rotated (mass normalisation kept) and reduced by rule,
+with the reason recorded:
+- directions no actuator moves are uncontrollable: all inputs are internal torques, so the
+  rigid-body momenta are conserved; both states of these directions go;
+- of the rest, displacement directions no output reads (wheel angles: the tachometers sense
+  rate) keep only their rate state.
+Appendix C (gimcon3) reduces its 0-g cluster by an SVD of the rate outputs in the same spirit.
 """
 
 from __future__ import annotations
@@ -23,7 +25,9 @@ from mace_fmu.fe.modal import Modes
 from mace_fmu.iomodel.instruments import Instruments, influence_vector
 
 ZERO_HZ = 0.01
-_NEGLIGIBLE = 1e-9  # relative to the largest modal input/output coefficient
+# Relative to the largest modal input/output coefficient. The computed zero cluster is exact to
+# ~1e-8 (mechanisms) and to round-off (rigid bodies, built geometrically).
+_NEGLIGIBLE = 1e-6
 
 
 @dataclass(frozen=True)
@@ -55,20 +59,38 @@ def modal_plant(modes: Modes, instruments: Instruments, damping: np.ndarray, *, 
     disp_out.update({f"{n}_angle": rows[n] for n in integrated})
     rate_out = {n: rows[n] for n in rate_names}
 
+    # Reduce the zero-frequency cluster: rotate it so that controllable and observable
+    # directions separate, then drop the others.
+    zero = np.flatnonzero(np.abs(freq) < ZERO_HZ)
+    removed: list[tuple[str, str]] = []
+    rot = np.eye(len(zero))
+    n_ctrl = n_obs = len(zero)
+    if len(zero):
+        u_b, s_b, _ = np.linalg.svd(modal_b[zero], full_matrices=True)
+        n_ctrl = int(np.sum(s_b > _NEGLIGIBLE * np.abs(modal_b).max()))
+        c_d = np.array([r[zero] for r in disp_out.values()]) @ u_b[:, :n_ctrl]
+        _, s_d, vt_d = np.linalg.svd(c_d, full_matrices=True)
+        n_obs = int(np.sum(s_d > _NEGLIGIBLE * max(np.abs(np.array(list(disp_out.values()))).max(), 1e-300)))
+        rot = np.hstack([u_b[:, :n_ctrl] @ vt_d.T, u_b[:, n_ctrl:]])
+        if n_ctrl < len(zero):
+            removed.append(("zero-frequency cluster", f"{len(zero) - n_ctrl} directions no actuator moves (internal "
+                            "torques conserve the rigid-body momenta): uncontrollable, both states removed"))
+        if n_obs < n_ctrl:
+            removed.append(("zero-frequency cluster", f"{n_ctrl - n_obs} displacement directions no output reads "
+                            "(rate sensing only): unobservable, displacement states removed"))
+        phi = phi.copy()
+        phi[:, zero] = phi[:, zero] @ rot
+        modal_b = modal_b.copy()
+        modal_b[zero] = rot.T @ modal_b[zero]
+        for table in (disp_out, rate_out):
+            for key in table:
+                table[key] = table[key].copy()
+                table[key][zero] = table[key][zero] @ rot
     n = len(freq)
     keep_disp = np.ones(n, dtype=bool)
     keep_rate = np.ones(n, dtype=bool)
-    removed: list[tuple[str, str]] = []
-    b_scale = np.abs(modal_b).max()
-    d_scale = max(np.abs(np.array(list(disp_out.values()))).max(), 1e-300)
-    for j in np.flatnonzero(np.abs(freq) < ZERO_HZ):
-        if np.abs(modal_b[j]).max() <= _NEGLIGIBLE * b_scale:
-            keep_disp[j] = keep_rate[j] = False
-            removed += [(f"mode{j + 1}", f"{labels[j]}: no actuator moves it (internal torques only), uncontrollable")]
-        elif max(abs(r[j]) for r in disp_out.values()) <= _NEGLIGIBLE * d_scale:
-            keep_disp[j] = False
-            removed += [(f"mode{j + 1}_disp", f"{labels[j]}: no output reads its displacement, unobservable")]
-
+    keep_rate[zero[n_ctrl:]] = False
+    keep_disp[zero[n_obs:]] = False
     d_idx, r_idx = np.flatnonzero(keep_disp), np.flatnonzero(keep_rate)
     nd, nr = len(d_idx), len(r_idx)
     a = np.zeros((nd + nr, nd + nr))
