@@ -93,6 +93,55 @@ def cmd_build(args: argparse.Namespace) -> int:
     return 0
 
 
+def _volts(args: argparse.Namespace):
+    from mace_fmu.iomodel.volts import volts_model
+
+    return volts_model(args.structure, servos=not args.no_servos, bessel=args.bessel, delays=not args.no_delays,
+                       pade_order=args.pade_order, max_hz=args.max_hz, preload=args.preload,
+                       deck=read_deck(args.deck))
+
+
+def cmd_model(args: argparse.Namespace) -> int:
+    from mace_fmu.iomodel.poles import closed_loop_poles
+    from mace_fmu.thesis import format_pole_rows, table_4_7_comparison, table_5_2_comparison
+
+    model = _volts(args)
+    sys_ = model.system
+    poles = closed_loop_poles(model)
+    if args.npz:
+        np.savez(args.npz, A=sys_.A, B=sys_.B, C=sys_.C, D=sys_.D, inputs=np.array(sys_.input_labels),
+                 outputs=np.array(sys_.output_labels), states=np.array(sys_.state_labels))
+    if args.json:
+        json.dump({"structure": args.structure, "states": sys_.nstates, "inputs": list(sys_.input_labels),
+                   "outputs": list(sys_.output_labels),
+                   "poles": [{"frequency_hz": p.frequency_hz, "damping": p.damping, "label": p.label} for p in poles]},
+                  sys.stdout, indent=1)
+        print()
+        return 0
+    print(f"{args.structure} volts-volts model: {sys_.nstates} states, {sys_.ninputs} inputs, {sys_.noutputs} outputs "
+          f"(servos {'on' if model.servos else 'off'}, Bessel {model.bessel}, delays {'on' if model.delays else 'off'})")
+    for state, reason in model.plant.removed_states:
+        print(f"  removed: {state}: {reason}")
+    if args.poles:
+        rows = table_4_7_comparison(poles) if args.structure == "1g" else table_5_2_comparison(poles, column="g0")
+        title = "Table 4.7, FE columns (closed loop)" if args.structure == "1g" else "Table 5.2, 0-g column (closed loop)"
+        print(format_pole_rows(rows, title=title))
+        print()
+        print(f"all closed-loop poles up to {args.max_hz} Hz")
+        for p in poles:
+            if p.frequency_hz <= args.max_hz:
+                print(f"  {p.frequency_hz:9.3f} Hz  zeta {p.damping:6.3f}  {p.label}")
+    return 0
+
+
+def cmd_report(args: argparse.Namespace) -> int:
+    from mace_fmu.report import bode_report
+
+    for path in bode_report(read_deck(args.deck), out_dir=args.out, progress=_progress):
+        print(path)
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="mace-fmu", description=__doc__)
     sub = parser.add_subparsers(dest="command", required=True)
@@ -109,6 +158,26 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--mass", choices=["lumped", "consistent"], default="lumped", help="bar mass matrix")
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.set_defaults(func=cmd_modes)
+
+    p = sub.add_parser("model", help="volts-volts state-space model of the 1-g or 0-g structure")
+    p.add_argument("structure", choices=["1g", "0g"])
+    deck_option(p)
+    p.add_argument("--poles", action="store_true", help="closed-loop poles next to Table 4.7 (1g) or 5.2 (0g)")
+    p.add_argument("--json", action="store_true", help="states, signal names and poles as JSON")
+    p.add_argument("--npz", metavar="FILE", help="write A, B, C, D and the signal names to FILE (.npz)")
+    p.add_argument("--max-hz", type=float, default=250.0, help="highest retained mode [Hz] (default 250)")
+    p.add_argument("--bessel", choices=["full", "delay", "none"], default="full",
+                   help="Bessel filters as 8-pole filters, as their 2.44 ms Pade delay, or left out")
+    p.add_argument("--no-servos", action="store_true", help="leave the wheel speed loops and gimbal servos open")
+    p.add_argument("--no-delays", action="store_true", help="leave out the actuator and gyro time delays")
+    p.add_argument("--pade-order", type=int, default=3, help="order of the Pade delay approximations (default 3)")
+    p.add_argument("--preload", choices=["large", "linear"], default="large", help="1-g gravity preload")
+    p.set_defaults(func=cmd_model)
+
+    p = sub.add_parser("report", help="Bode plots of the 1-g and 0-g models (PNG; thesis Figs. 4.15, 4.16, 5.1, 5.2)")
+    deck_option(p)
+    p.add_argument("--out", default="report", help="output directory (default ./report)")
+    p.set_defaults(func=cmd_report)
 
     p = sub.add_parser("build", help="the main job: 1-g and 0-g modes of the deck next to the thesis tables")
     deck_option(p)

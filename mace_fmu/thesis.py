@@ -76,3 +76,65 @@ def format_side_by_side(columns: dict[str, list[ComparisonRow]], *, title: str) 
         labels = {columns[n][i].ours_label for n in names}
         lines.append(f"{first.thesis_label:24s} {first.thesis_hz:9.2f}{cells}  {' / '.join(sorted(labels))}")
     return "\n".join(lines)
+
+
+@dataclass(frozen=True)
+class PoleRow:
+    """A closed-loop mode of the thesis next to our pole with a matching label."""
+
+    thesis_label: str
+    thesis_hz: float
+    thesis_zeta: float | None
+    heavy: bool  #: zeta >= 10 % in the thesis (servo-dominated)
+    ours_hz: float | None  #: None when no pole of ours carries a matching label
+    ours_zeta: float | None
+    ours_label: str
+
+    @property
+    def error_percent(self) -> float | None:
+        return None if self.ours_hz is None else 100.0 * (self.ours_hz - self.thesis_hz) / self.thesis_hz
+
+
+def _pair_poles(rows: list[tuple[str, str, float, float | None, bool]], poles) -> list[PoleRow]:
+    """Each thesis row takes the nearest unused pole whose label matches its pattern."""
+    import fnmatch
+
+    used: set[int] = set()
+    out = []
+    for label, pattern, hz, zeta, heavy in rows:
+        cands = [i for i, p in enumerate(poles) if i not in used and fnmatch.fnmatchcase(p.label, pattern)]
+        if not cands:
+            out.append(PoleRow(label, hz, zeta, heavy, None, None, "(none)"))
+            continue
+        i = min(cands, key=lambda i: abs(poles[i].frequency_hz - hz))
+        used.add(i)
+        out.append(PoleRow(label, hz, zeta, heavy, poles[i].frequency_hz, poles[i].damping, poles[i].label))
+    return out
+
+
+def table_4_7_comparison(poles) -> list[PoleRow]:
+    """Closed-loop 1-g poles against Table 4.7's FE columns."""
+    rows = [(r["label"], r["ours"], r["fe_hz"], r["fe_zeta"], r["fe_zeta"] >= 0.1) for r in thesis_data()["table_4_7"]]
+    return _pair_poles(rows, poles)
+
+
+def table_5_2_comparison(poles, *, column: str) -> list[PoleRow]:
+    """Closed-loop poles against Table 5.2's "g1" or "g0" column (damping not tabulated)."""
+    rows = [(r["label"], r["ours"], r[column], None, r["heavy"]) for r in thesis_data()["table_5_2"]]
+    return _pair_poles(rows, poles)
+
+
+def format_pole_rows(rows: list[PoleRow], *, title: str) -> str:
+    """Plain-text table of closed-loop poles: thesis vs ours, frequency error, damping."""
+    head = f"{'thesis mode':16s} {'Hz':>7s} {'zeta':>6s} | {'ours Hz':>8s} {'zeta':>6s} {'err %':>7s}  our label"
+    lines = [title, head, "-" * len(head)]
+    for r in rows:
+        tz = f"{r.thesis_zeta:6.3f}" if r.thesis_zeta is not None else "     -"
+        if r.ours_hz is None:
+            lines.append(f"{r.thesis_label:16s} {r.thesis_hz:7.2f} {tz} | {'-':>8s} {'-':>6s} {'-':>7s}  (no match)")
+            continue
+        mark = " *" if r.heavy else ""
+        lines.append(f"{r.thesis_label:16s} {r.thesis_hz:7.2f} {tz} | {r.ours_hz:8.3f} {r.ours_zeta:6.3f} "
+                     f"{r.error_percent:7.2f}  {r.ours_label}{mark}")
+    lines.append("* heavily damped in the thesis (zeta >= 10 %): servo-dominated, reported, not held to 3 %")
+    return "\n".join(lines)

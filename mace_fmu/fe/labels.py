@@ -170,12 +170,16 @@ def _cable_label(model: FEModel, modes: Modes, spec: StructureSpec, m: int, ke_c
     axis = (pts[-1] - pts[0]) / np.linalg.norm(pts[-1] - pts[0])
     in_plane = np.cross(normal, axis)
     disp = np.array([modes.shapes[model.dofs.indices(g)[:3], m] for g in grids])
+    numbers = " and ".join(n.split("_", 1)[1] for n in cables)
+    axial = disp @ axis
+    if np.sum(axial**2) > np.sum((disp - np.outer(axial, axis)) ** 2):
+        # the carriage bouncing on the cable's axial stiffness, not a string mode
+        return f"axial (carriage bounce), {'cables' if len(cables) > 1 else 'cable'} {numbers}"
     disp = disp - np.linspace(disp[0], disp[-1], len(disp))  # relative to the moving chord
     w_in, w_out = disp @ in_plane, disp @ normal
     plane, w = ("in-plane", w_in) if np.sum(w_in**2) >= np.sum(w_out**2) else ("out-of-plane", w_out)
     significant = w[1:-1][np.abs(w[1:-1]) > 0.05 * np.abs(w).max()]
     order = 1 + int(np.sum(np.diff(np.sign(significant)) != 0))
-    numbers = " and ".join(n.split("_", 1)[1] for n in cables)
     return f"{ordinal(order)} {plane} violin, {'cables' if len(cables) > 1 else 'cable'} {numbers}"
 
 

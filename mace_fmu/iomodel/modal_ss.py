@@ -80,6 +80,12 @@ def modal_plant(modes: Modes, instruments: Instruments, damping: np.ndarray, *, 
                             "(rate sensing only): unobservable, displacement states removed"))
         phi = phi.copy()
         phi[:, zero] = phi[:, zero] @ rot
+        # a rotated direction keeps the name of the motion it is mostly made of
+        old = [labels[j] for j in zero]
+        new_labels = list(labels)
+        for k, j in enumerate(zero):
+            new_labels[j] = old[int(np.argmax(np.abs(rot[:, k])))]
+        labels = tuple(new_labels)
         modal_b = modal_b.copy()
         modal_b[zero] = rot.T @ modal_b[zero]
         for table in (disp_out, rate_out):

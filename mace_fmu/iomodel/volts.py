@@ -1,0 +1,189 @@
+"""Volts-volts input-output models of the 1-g and 0-g structures, assembled from modelica_like blocks.
+
+Block diagram (thesis 3.4-3.7, Appendix C abcdmace/gimcon3):
+
+    commands -> actuator delays (Table 4.5) -> [wheel speed loops | gimbal servos] -> actuator
+    gains [N m/V] -> structure (modal, eq. 3.6) -> sensor gains [V/unit] -> Bessel filters on
+    the analog channels -> extra gyro delays (Table 4.6) -> outputs [V]
+
+Wheel speed loops (eq. 3.18): torque command = K_f (u - K_b tach). Gimbal servos (eq. 3.19-3.20):
+v = K_a (r - theta) - K_r dtheta/dt on the encoder angle and rate in degrees, so a gimbal input
+is a commanded relative angle (1 V = 1 deg) and the computational delay sits inside the loop.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal, Sequence
+
+import control as ct
+import numpy as np
+
+from mace_fmu.deck.cards import Deck
+from mace_fmu.fe.preload import PreloadKind
+from mace_fmu.iomodel.damping import modal_damping
+from mace_fmu.iomodel.instruments import Instruments, load_instruments
+from mace_fmu.iomodel.modal_ss import ZERO_HZ, ModalPlant, modal_plant
+from mace_fmu.pipeline import StructureModes, compute_modes
+from mace_fmu.structure import StructureKind
+from modelica_like import BesselFilter, Gain, PadeDelay, PD, StateSpace, Sum, System
+
+BesselKind = Literal["full", "delay", "none"]
+DEG_PER_RAD = 180.0 / np.pi
+
+
+@dataclass(frozen=True)
+class VoltsModel:
+    """A volts-volts model and what it was built from."""
+
+    system: ct.StateSpace  #: named inputs [V] and outputs [V]; states "block.state"
+    diagram: System  #: the modelica_like block diagram (to_modelica() writes it as Modelica)
+    plant: ModalPlant  #: the physical modal model inside
+    structure_modes: StructureModes
+    instruments: Instruments
+    servos: bool
+    bessel: BesselKind
+    delays: bool
+
+
+def _check(condition: bool, message: str) -> None:
+    if not condition:
+        raise ValueError(message)
+
+
+def build_diagram(plant: ModalPlant, instruments: Instruments, *, servos: bool = True, bessel: BesselKind = "full",
+                  delays: bool = True, pade_order: int = 3) -> System:
+    """The modelica_like System of one volts-volts model (see the module docstring)."""
+    _check(bessel in ("full", "delay", "none"), f"bessel must be 'full', 'delay' or 'none', got {bessel!r}")
+    _check(isinstance(pade_order, int) and pade_order >= 1, f"pade_order must be an integer >= 1, got {pade_order!r}")
+    el, sv = instruments.electronics, instruments.servos
+    act_names = [a.name for a in instruments.actuators]
+    sen_names = [s.name for s in instruments.sensors]
+    for name, value in list(el.actuator_delays_s.items()) + list(el.sensor_delays_s.items()):
+        _check(value >= 0.0, f"delay of {name} must be >= 0 s, got {value}")
+
+    s = System("mace_volts")
+    ss = plant.system
+    s.add(StateSpace("structure", ss.A, ss.B, ss.C, ss.D, inputs=list(ss.input_labels), outputs=list(ss.output_labels),
+                     states=list(ss.state_labels)))
+    s.add(Gain("actuator_gain", np.diag([a.gain for a in instruments.actuators]), inputs=act_names, outputs=act_names))
+    s.connect("actuator_gain.y", "structure.u")
+    s.add(Gain("sensor_gain", np.diag([x.gain for x in instruments.sensors]), inputs=sen_names, outputs=sen_names))
+    for name in sen_names:
+        s.connect(f"structure.y[{name}]", f"sensor_gain.u[{name}]")
+
+    # Analog channels: Bessel filter (or its equivalent delay) and the extra gyro delays.
+    analog = list(instruments.analog_sensor_names)
+    extra = {n: (el.sensor_delays_s.get(n, 0.0) if delays else 0.0) for n in analog}
+    source = {n: f"sensor_gain.y[{n}]" for n in sen_names}
+    if bessel == "full":
+        s.add(BesselFilter("bessel", el.bessel_order, el.bessel_cutoff_hz, size=len(analog), signals=analog))
+        for n in analog:
+            s.connect(source[n], f"bessel.u[{n}]")
+            source[n] = f"bessel.y[{n}]"
+    net = {n: extra[n] + (el.bessel_equivalent_delay_s if bessel == "delay" else 0.0) for n in analog}
+    for n in analog:
+        if net[n] > 0.0:
+            s.add(PadeDelay(f"delay_{n}", net[n], pade_order))
+            s.connect(source[n], f"delay_{n}.u")
+            source[n] = f"delay_{n}.y"
+    for n in sen_names:
+        s.expose_output(n, source[n])
+
+    # Actuator channels: computational delay, then the local servo, then the actuator gain.
+    drive = {}
+    for n in act_names:
+        d = el.actuator_delays_s.get(n, 0.0) if delays else 0.0
+        if d > 0.0:
+            s.add(PadeDelay(f"delay_{n}", d, pade_order))
+            drive[n] = (f"delay_{n}.u", f"delay_{n}.y")
+        else:
+            drive[n] = (None, None)
+
+    def feed(name: str, signal_in: str | None) -> None:
+        """Route ``signal_in`` (None: the system input) through the delay to the actuator gain."""
+        delay_in, delay_out = drive[name]
+        if delay_in is None:
+            target = f"actuator_gain.u[{name}]"
+            s.expose_input(name, target) if signal_in is None else s.connect(signal_in, target)
+        else:
+            s.expose_input(name, delay_in) if signal_in is None else s.connect(signal_in, delay_in)
+            s.connect(delay_out, f"actuator_gain.u[{name}]")
+
+    looped = set()
+    if servos:
+        for wheel, tach in sv.wheels.items():
+            # eq. 3.18: v = K_f (u - K_b tach); the command delay is outside the analog loop
+            s.add(Sum(f"speed_{wheel}", signs=(1, -1)))
+            s.add(Gain(f"kb_{wheel}", sv.wheel_backward_gain))
+            s.add(Gain(f"kf_{wheel}", sv.wheel_forward_gain))
+            s.connect(f"sensor_gain.y[{tach}]", f"kb_{wheel}.u")
+            s.connect(f"kb_{wheel}.y", f"speed_{wheel}.u2")
+            s.connect(f"speed_{wheel}.y", f"kf_{wheel}.u")
+            delay_in, delay_out = drive[wheel]
+            if delay_in is None:
+                s.expose_input(wheel, f"speed_{wheel}.u1")
+            else:
+                s.expose_input(wheel, delay_in)
+                s.connect(delay_out, f"speed_{wheel}.u1")
+            s.connect(f"kf_{wheel}.y", f"actuator_gain.u[{wheel}]")
+            looped.add(wheel)
+        for gimbal, encoder in sv.gimbals.items():
+            # eq. 3.20 with encoder angle and rate in degrees: v = K_a (r - theta) + K_r (-dtheta)
+            s.add(Gain(f"angle_deg_{gimbal}", DEG_PER_RAD))
+            s.add(Gain(f"rate_deg_{gimbal}", -DEG_PER_RAD))
+            s.add(Sum(f"error_{gimbal}", signs=(1, -1)))
+            s.add(PD(f"servo_{gimbal}", kp=sv.gimbal_angle_gain, kd=sv.gimbal_rate_gain))
+            s.connect(f"structure.y[{encoder}_angle]", f"angle_deg_{gimbal}.u")
+            s.connect(f"structure.y[{encoder}]", f"rate_deg_{gimbal}.u")
+            s.connect(f"angle_deg_{gimbal}.y", f"error_{gimbal}.u2")
+            s.connect(f"error_{gimbal}.y", f"servo_{gimbal}.x")
+            s.connect(f"rate_deg_{gimbal}.y", f"servo_{gimbal}.dx")
+            s.expose_input(gimbal, f"error_{gimbal}.u1")
+            feed(gimbal, f"servo_{gimbal}.y")
+            looped.add(gimbal)
+    for n in act_names:
+        if n not in looped:
+            feed(n, None)
+    return s
+
+
+def volts_model(structure: StructureKind = "1g", *, servos: bool = True, bessel: BesselKind = "full",
+                delays: bool = True, pade_order: int = 3, max_hz: float = 250.0, preload: PreloadKind = "large",
+                deck: Deck | str | None = None, instruments: Instruments | None = None,
+                modes: StructureModes | None = None, inputs: Sequence[str] | None = None,
+                outputs: Sequence[str] | None = None) -> VoltsModel:
+    """Volts-volts model of the 1-g or 0-g structure, modes up to ``max_hz`` [Hz].
+
+    Inputs: gimbal commands (relative angle, 1 V = 1 deg, with servos; motor volts without),
+    wheel speed commands and active strut volts. Outputs: the 20 sensors in volts.
+    """
+    _check(structure in ("1g", "0g"), f"structure must be '1g' or '0g', got {structure!r}")
+    instruments = instruments if instruments is not None else load_instruments()
+    if modes is None:
+        modes = compute_modes(deck, structure=structure, preload=preload, max_hz=max(max_hz, 1.0))
+    flexible = modes.modes.frequencies_hz[np.abs(modes.modes.frequencies_hz) >= ZERO_HZ]
+    _check(len(flexible) > 0 and max_hz >= flexible.min(),
+           f"max_hz = {max_hz} Hz is below the first flexible mode ({flexible.min():.3f} Hz); allowed: >= that")
+    zeta = modal_damping(modes.modes.labels, modes.modes.frequencies_hz, instruments.damping)
+    plant = modal_plant(modes.modes, instruments, zeta, max_hz=max_hz)
+    diagram = build_diagram(plant, instruments, servos=servos, bessel=bessel, delays=delays, pade_order=pade_order)
+    system = diagram.compile()
+    return VoltsModel(system=select_signals(system, inputs=inputs, outputs=outputs), diagram=diagram, plant=plant,
+                      structure_modes=modes, instruments=instruments, servos=servos, bessel=bessel, delays=delays)
+
+
+def select_signals(system: ct.StateSpace, *, inputs: Sequence[str] | None = None,
+                   outputs: Sequence[str] | None = None) -> ct.StateSpace:
+    """The channels ``inputs`` -> ``outputs`` (by name) of a model; None keeps them all."""
+    ins, outs = list(system.input_labels), list(system.output_labels)
+    for name in inputs or ():
+        _check(name in ins, f"unknown input signal {name!r}; allowed: {', '.join(ins)}")
+    for name in outputs or ():
+        _check(name in outs, f"unknown output signal {name!r}; allowed: {', '.join(outs)}")
+    if inputs is None and outputs is None:
+        return system
+    i = [ins.index(n) for n in (inputs or ins)]
+    o = [outs.index(n) for n in (outputs or outs)]
+    return ct.ss(system.A, system.B[:, i], system.C[o], system.D[np.ix_(o, i)], inputs=[ins[k] for k in i],
+                 outputs=[outs[k] for k in o], states=list(system.state_labels), name=system.name)

@@ -1,0 +1,62 @@
+"""Plots a person would rather look at than read: Bode overlays of the 1-g and 0-g models."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Callable
+
+import matplotlib
+
+matplotlib.use("Agg")  # files only: no display on CI or servers
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from mace_fmu.deck.cards import Deck  # noqa: E402
+from mace_fmu.iomodel.frf import frequency_response  # noqa: E402
+from mace_fmu.iomodel.volts import VoltsModel, volts_model  # noqa: E402
+
+# Disturbance (secondary gimbal) to performance (payload gyro): thesis Figs. 4.15/5.1 and 4.16/5.2
+CHANNELS = (
+    ("gimbal_secondary_z", "gyro_payload_z", "in-plane: secondary Z gimbal -> payload Z gyro (Figs. 4.15, 5.1)"),
+    ("gimbal_secondary_x", "gyro_payload_x", "out-of-plane: secondary X gimbal -> payload X gyro (Figs. 4.16, 5.2)"),
+)
+
+
+def channel_response(model: VoltsModel, u: str, y: str, frequencies_hz: np.ndarray) -> np.ndarray:
+    """Complex response [V/V] of one named channel."""
+    i = list(model.system.input_labels).index(u)
+    o = list(model.system.output_labels).index(y)
+    return frequency_response(model.system, frequencies_hz)[:, o, i]
+
+
+def bode_report(deck: Deck | None = None, *, out_dir: str | Path = "report",
+                frequencies_hz: np.ndarray | None = None, progress: Callable[[str], None] | None = None) -> list[Path]:
+    """Write one PNG per channel of CHANNELS with the 1-g and 0-g models overlaid; return the paths."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    f = np.logspace(np.log10(0.1), np.log10(250.0), 2000) if frequencies_hz is None else frequencies_hz
+    models = {}
+    for kind in ("1g", "0g"):
+        if progress:
+            progress(f"{kind} volts-volts model")
+        models[kind] = volts_model(kind, deck=deck)
+    paths = []
+    for u, y, title in CHANNELS:
+        fig, (ax_m, ax_p) = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
+        for kind, style in (("1g", "-"), ("0g", "--")):
+            h = channel_response(models[kind], u, y, f)
+            ax_m.loglog(f, np.abs(h), style, label=f"{kind} model")
+            ax_p.semilogx(f, np.degrees(np.unwrap(np.angle(h))), style)
+        ax_m.set_ylabel("magnitude [V/V]")
+        ax_m.set_title(title, fontsize=10)
+        ax_m.legend()
+        ax_m.grid(True, which="both", alpha=0.3)
+        ax_p.set_ylabel("phase [deg]")
+        ax_p.set_xlabel("frequency [Hz]")
+        ax_p.grid(True, which="both", alpha=0.3)
+        fig.tight_layout()
+        path = out / f"bode_{u}_to_{y}.png"
+        fig.savefig(path, dpi=110)
+        plt.close(fig)
+        paths.append(path)
+    return paths
