@@ -96,13 +96,15 @@ class PoleRow:
 
 
 def _pair_poles(rows: list[tuple[str, str, float, float | None, bool]], poles) -> list[PoleRow]:
-    """Each thesis row takes the nearest unused pole whose label matches its pattern."""
+    """Each thesis row takes the nearest unused pole whose label matches its pattern ("a|b": either)."""
     import fnmatch
 
     used: set[int] = set()
     out = []
     for label, pattern, hz, zeta, heavy in rows:
-        cands = [i for i, p in enumerate(poles) if i not in used and fnmatch.fnmatchcase(p.label, pattern)]
+        # real poles (servo and speed-loop lags) are no vibration mode of the thesis's tables
+        cands = [i for i, p in enumerate(poles) if i not in used and p.damping < 0.999
+                 and any(fnmatch.fnmatchcase(p.label, pat) for pat in pattern.split("|"))]
         if not cands:
             out.append(PoleRow(label, hz, zeta, heavy, None, None, "(none)"))
             continue

@@ -38,6 +38,7 @@ class ModalPlant:
     frequencies_hz: np.ndarray  #: of the retained modes
     damping: np.ndarray
     labels: tuple[str, ...]
+    shapes: np.ndarray  #: (n_dof, n_modes) mode shapes behind the states (zero cluster rotated)
     removed_states: tuple[tuple[str, str], ...]  #: (state name, reason)
 
 
@@ -119,4 +120,5 @@ def modal_plant(modes: Modes, instruments: Instruments, damping: np.ndarray, *, 
     states = [f"mode{j + 1}_disp" for j in d_idx] + [f"mode{j + 1}_vel" for j in r_idx]
     sys = ct.ss(a, bm, c[order], np.zeros((len(order), bm.shape[1])), inputs=[x.name for x in instruments.actuators],
                 outputs=sensor_order, states=states, name="structure")
-    return ModalPlant(system=sys, frequencies_hz=freq, damping=zeta, labels=labels, removed_states=tuple(removed))
+    return ModalPlant(system=sys, frequencies_hz=freq, damping=zeta, labels=labels, shapes=phi,
+                      removed_states=tuple(removed))
