@@ -13,8 +13,8 @@ is a commanded relative angle (1 V = 1 deg) and the computational delay sits ins
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Literal, Sequence
+from dataclasses import dataclass, replace
+from typing import Literal, Mapping, Sequence
 
 import control as ct
 import numpy as np
@@ -110,40 +110,42 @@ def build_diagram(plant: ModalPlant, instruments: Instruments, *, servos: bool =
             s.expose_input(name, delay_in) if signal_in is None else s.connect(signal_in, delay_in)
             s.connect(delay_out, f"actuator_gain.u[{name}]")
 
-    looped = set()
-    if servos:
-        for wheel, tach in sv.wheels.items():
-            # eq. 3.18: v = K_f (u - K_b tach); the command delay is outside the analog loop
-            s.add(Sum(f"speed_{wheel}", signs=(1, -1)))
-            s.add(Gain(f"kb_{wheel}", sv.wheel_backward_gain))
-            s.add(Gain(f"kf_{wheel}", sv.wheel_forward_gain))
-            s.connect(f"sensor_gain.y[{tach}]", f"kb_{wheel}.u")
-            s.connect(f"kb_{wheel}.y", f"speed_{wheel}.u2")
-            s.connect(f"speed_{wheel}.y", f"kf_{wheel}.u")
-            delay_in, delay_out = drive[wheel]
-            if delay_in is None:
-                s.expose_input(wheel, f"speed_{wheel}.u1")
-            else:
-                s.expose_input(wheel, delay_in)
-                s.connect(delay_out, f"speed_{wheel}.u1")
-            s.connect(f"kf_{wheel}.y", f"actuator_gain.u[{wheel}]")
-            looped.add(wheel)
-        for gimbal, encoder in sv.gimbals.items():
-            # eq. 3.20 with encoder angle and rate in degrees: v = K_a (r - theta) + K_r (-dtheta)
-            s.add(Gain(f"angle_deg_{gimbal}", DEG_PER_RAD))
-            s.add(Gain(f"rate_deg_{gimbal}", -DEG_PER_RAD))
-            s.add(Sum(f"error_{gimbal}", signs=(1, -1)))
-            s.add(PD(f"servo_{gimbal}", kp=sv.gimbal_angle_gain, kd=sv.gimbal_rate_gain))
-            s.connect(f"structure.y[{encoder}_angle]", f"angle_deg_{gimbal}.u")
-            s.connect(f"structure.y[{encoder}]", f"rate_deg_{gimbal}.u")
-            s.connect(f"angle_deg_{gimbal}.y", f"error_{gimbal}.u2")
-            s.connect(f"error_{gimbal}.y", f"servo_{gimbal}.x")
-            s.connect(f"rate_deg_{gimbal}.y", f"servo_{gimbal}.dx")
-            s.expose_input(gimbal, f"error_{gimbal}.u1")
-            feed(gimbal, f"servo_{gimbal}.y")
-            looped.add(gimbal)
-    for n in act_names:
-        if n not in looped:
+    def wheel_loop(wheel: str, tach: str) -> None:
+        """eq. 3.18: v = K_f (u - K_b tach); the command delay is outside the analog loop."""
+        s.add(Sum(f"speed_{wheel}", signs=(1, -1)))
+        s.add(Gain(f"kb_{wheel}", sv.wheel_backward_gain))
+        s.add(Gain(f"kf_{wheel}", sv.wheel_forward_gain))
+        s.connect(f"sensor_gain.y[{tach}]", f"kb_{wheel}.u")
+        s.connect(f"kb_{wheel}.y", f"speed_{wheel}.u2")
+        s.connect(f"speed_{wheel}.y", f"kf_{wheel}.u")
+        delay_in, delay_out = drive[wheel]
+        if delay_in is None:
+            s.expose_input(wheel, f"speed_{wheel}.u1")
+        else:
+            s.expose_input(wheel, delay_in)
+            s.connect(delay_out, f"speed_{wheel}.u1")
+        s.connect(f"kf_{wheel}.y", f"actuator_gain.u[{wheel}]")
+
+    def gimbal_servo(gimbal: str, encoder: str) -> None:
+        """eq. 3.20 with encoder angle and rate in degrees: v = K_a (r - theta) + K_r (-dtheta)."""
+        s.add(Gain(f"angle_deg_{gimbal}", DEG_PER_RAD))
+        s.add(Gain(f"rate_deg_{gimbal}", -DEG_PER_RAD))
+        s.add(Sum(f"error_{gimbal}", signs=(1, -1)))
+        s.add(PD(f"servo_{gimbal}", kp=sv.gimbal_angle_gain, kd=sv.gimbal_rate_gain))
+        s.connect(f"structure.y[{encoder}_angle]", f"angle_deg_{gimbal}.u")
+        s.connect(f"structure.y[{encoder}]", f"rate_deg_{gimbal}.u")
+        s.connect(f"angle_deg_{gimbal}.y", f"error_{gimbal}.u2")
+        s.connect(f"error_{gimbal}.y", f"servo_{gimbal}.x")
+        s.connect(f"rate_deg_{gimbal}.y", f"servo_{gimbal}.dx")
+        s.expose_input(gimbal, f"error_{gimbal}.u1")
+        feed(gimbal, f"servo_{gimbal}.y")
+
+    for n in act_names:  # in actuator order, which is the order of the model's inputs
+        if servos and n in sv.wheels:
+            wheel_loop(n, sv.wheels[n])
+        elif servos and n in sv.gimbals:
+            gimbal_servo(n, sv.gimbals[n])
+        else:
             feed(n, None)
     return s
 
@@ -152,14 +154,18 @@ def volts_model(structure: StructureKind = "1g", *, servos: bool = True, bessel:
                 delays: bool = True, pade_order: int = 3, max_hz: float = 250.0, preload: PreloadKind = "large",
                 deck: Deck | str | None = None, instruments: Instruments | None = None,
                 modes: StructureModes | None = None, inputs: Sequence[str] | None = None,
-                outputs: Sequence[str] | None = None) -> VoltsModel:
+                outputs: Sequence[str] | None = None, actuator_delays_s: Mapping[str, float] | None = None,
+                sensor_delays_s: Mapping[str, float] | None = None) -> VoltsModel:
     """Volts-volts model of the 1-g or 0-g structure, modes up to ``max_hz`` [Hz].
 
     Inputs: gimbal commands (relative angle, 1 V = 1 deg, with servos; motor volts without),
     wheel speed commands and active strut volts. Outputs: the 20 sensors in volts.
+    ``actuator_delays_s`` / ``sensor_delays_s`` [s] replace the delays of the named channels
+    (defaults: Tables 4.5 and 4.6 from the instrument file).
     """
     _check(structure in ("1g", "0g"), f"structure must be '1g' or '0g', got {structure!r}")
     instruments = instruments if instruments is not None else load_instruments()
+    instruments = _with_delays(instruments, actuator_delays_s or {}, sensor_delays_s or {})
     if modes is None:
         modes = compute_modes(deck, structure=structure, preload=preload, max_hz=max(max_hz, 1.0))
     flexible = modes.modes.frequencies_hz[np.abs(modes.modes.frequencies_hz) >= ZERO_HZ]
@@ -171,6 +177,20 @@ def volts_model(structure: StructureKind = "1g", *, servos: bool = True, bessel:
     system = diagram.compile()
     return VoltsModel(system=select_signals(system, inputs=inputs, outputs=outputs), diagram=diagram, plant=plant,
                       structure_modes=modes, instruments=instruments, servos=servos, bessel=bessel, delays=delays)
+
+
+def _with_delays(instruments: Instruments, actuators: Mapping[str, float], sensors: Mapping[str, float]) -> Instruments:
+    """Instruments with the given delays replaced, after checking names and signs."""
+    el = instruments.electronics
+    for table, allowed, what in ((actuators, el.actuator_delays_s, "actuator"), (sensors, el.sensor_delays_s, "sensor")):
+        for name, value in table.items():
+            _check(name in allowed, f"no {what} delay named {name!r}; allowed: {', '.join(allowed)}")
+            _check(float(value) >= 0.0, f"delay of {name} must be >= 0 s, got {value}")
+    if not actuators and not sensors:
+        return instruments
+    new = replace(el, actuator_delays_s={**el.actuator_delays_s, **actuators},
+                  sensor_delays_s={**el.sensor_delays_s, **sensors})
+    return replace(instruments, electronics=new)
 
 
 def select_signals(system: ct.StateSpace, *, inputs: Sequence[str] | None = None,

@@ -1,0 +1,277 @@
+"""``System``: blocks, connections and exposed signals, compiled to one ``control.StateSpace``."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TypeVar
+
+import control as ct
+
+from .blocks import Block
+from .connectors import Connector, Element, check_identifier, parse_reference
+from .errors import ModelError
+from .graph import find_algebraic_loop, unconnected_inputs
+from .modelica import modelica_source
+
+__all__ = ["System"]
+
+BlockT = TypeVar("BlockT", bound=Block)
+
+
+@dataclass(frozen=True)
+class _SystemInput:
+    """A system input as the source driving a block input element."""
+
+    name: str
+
+    def __str__(self) -> str:
+        return f"system input {self.name!r}"
+
+
+@dataclass(frozen=True)
+class _Selection:
+    """The resolved elements of one connector reference."""
+
+    text: str
+    block: Block
+    connector: Connector
+    elements: tuple[Element, ...]
+
+    @property
+    def where(self) -> str:
+        return f"{self.block.name}.{self.connector.name}"
+
+
+class System:
+    """A block diagram: blocks, connections between their connectors and exposed signals.
+
+    ``compile()`` turns it into one continuous-time ``control.StateSpace`` whose inputs and
+    outputs are the exposed signals (in the order they were first exposed) and whose states are
+    the blocks' states, block by block in the order of ``add`` (names ``"<block>.<state>"``).
+    """
+
+    def __init__(self, name: str) -> None:
+        self._name = check_identifier(name, "System name")
+        self._blocks: dict[str, Block] = {}
+        self._drivers: dict[Element, Element | _SystemInput] = {}  # input element -> its source
+        self._inputs: dict[str, list[Element]] = {}  # system input -> elements it drives
+        self._outputs: dict[str, Element] = {}  # system output -> block output element
+
+    # --- building -----------------------------------------------------------------------------
+    @property
+    def name(self) -> str:
+        """System name (also the compiled system's and the Modelica model's default name)."""
+        return self._name
+
+    @property
+    def blocks(self) -> tuple[Block, ...]:
+        """The blocks in ``add`` order (= the order of their states in the compiled system)."""
+        return tuple(self._blocks.values())
+
+    @property
+    def inputs(self) -> tuple[str, ...]:
+        """Exposed input names, in compiled-input order."""
+        return tuple(self._inputs)
+
+    @property
+    def outputs(self) -> tuple[str, ...]:
+        """Exposed output names, in compiled-output order."""
+        return tuple(self._outputs)
+
+    def add(self, block: BlockT) -> BlockT:
+        """Add a block (names unique within the system) and return it."""
+        if not isinstance(block, Block):
+            raise ModelError(f"system {self._name!r}: add() expects a modelica_like block, got "
+                             f"{type(block).__name__}")
+        if block.name in self._blocks:
+            raise ModelError(f"system {self._name!r} already has a block named {block.name!r} "
+                             f"({self._blocks[block.name]!r}); block names must be unique")
+        self._blocks[block.name] = block
+        return block
+
+    def block(self, name: str) -> Block:
+        """The block called ``name``."""
+        try:
+            return self._blocks[name]
+        except KeyError:
+            raise ModelError(f"system {self._name!r} has no block {name!r}; its blocks are "
+                             f"{', '.join(self._blocks) or '(none)'}") from None
+
+    def connect(self, a: str, b: str) -> None:
+        """Connect an output connector (or some of its elements) to an input connector.
+
+        The arguments may come in either order, as in Modelica; the two selections must have
+        the same size and no selected input element may already be driven.
+        """
+        sa, sb = self._select(a), self._select(b)
+        kinds = (sa.connector.causality, sb.connector.causality)
+        if kinds == ("input", "output"):
+            sa, sb = sb, sa
+        elif kinds != ("output", "input"):
+            raise ModelError(f"connect({a!r}, {b!r}): {sa.where} and {sb.where} are both "
+                             f"{kinds[0]}s; expected one output and one input")
+        if len(sa.elements) != len(sb.elements):
+            raise ModelError(f"connect({a!r}, {b!r}): size mismatch: {sa.text} has size "
+                             f"{len(sa.elements)} but {sb.text} has size {len(sb.elements)}")
+        self._drive(list(zip(sa.elements, sb.elements)), f"connect({a!r}, {b!r})")
+
+    def expose_input(self, names: str | Sequence[str], ref: str) -> None:
+        """Drive the input connector ``ref`` with system input(s) ``names`` (one per element).
+
+        Exposing an existing name again adds a destination (one input may feed many).
+        """
+        names = self._names(names, "expose_input", ref)
+        sel = self._select(ref)
+        if sel.connector.causality != "input":
+            raise ModelError(f"expose_input({ref!r}): {sel.where} is an output; expected a "
+                             "block input connector")
+        if len(names) != len(sel.elements):
+            raise ModelError(f"expose_input({names!r}, {ref!r}): size mismatch: {len(names)} "
+                             f"name(s) for {sel.text} of size {len(sel.elements)}")
+        clash = [n for n in names if n in self._outputs]
+        if clash:
+            raise ModelError(f"expose_input({ref!r}): {clash} already name system outputs; "
+                             "input and output names must differ")
+        self._drive([(_SystemInput(n), e) for n, e in zip(names, sel.elements)],
+                    f"expose_input({ref!r})")
+        for n, e in zip(names, sel.elements):
+            self._inputs.setdefault(n, []).append(e)
+
+    def expose_output(self, names: str | Sequence[str], ref: str) -> None:
+        """Make the output connector ``ref`` system output(s) ``names`` (one per element)."""
+        names = self._names(names, "expose_output", ref)
+        sel = self._select(ref)
+        if sel.connector.causality != "output":
+            raise ModelError(f"expose_output({ref!r}): {sel.where} is an input; expected a "
+                             "block output connector")
+        if len(names) != len(sel.elements):
+            raise ModelError(f"expose_output({names!r}, {ref!r}): size mismatch: {len(names)} "
+                             f"name(s) for {sel.text} of size {len(sel.elements)}")
+        for n in names:
+            if n in self._outputs:
+                raise ModelError(f"expose_output({ref!r}): system output {n!r} is already "
+                                 f"{self._outputs[n]}")
+            if n in self._inputs:
+                raise ModelError(f"expose_output({ref!r}): {n!r} already names a system input; "
+                                 "input and output names must differ")
+        self._outputs.update(zip(names, sel.elements))
+
+    # --- checking and compiling ---------------------------------------------------------------
+    def check(self) -> None:
+        """Raise ModelError if the diagram cannot be compiled (what ``compile`` checks first)."""
+        if not self._outputs:
+            raise ModelError(f"system {self._name!r} has no exposed outputs; call "
+                             "expose_output(name, 'block.port') first")
+        missing = unconnected_inputs(self._blocks.values(), self._drivers)
+        if missing:
+            raise ModelError(f"system {self._name!r}: {len(missing)} block input element(s) "
+                             f"neither connected nor exposed: {', '.join(map(str, missing))}; "
+                             "connect() each or expose_input() it")
+        if not self._inputs:
+            # python-control 0.10 cannot build a LinearICSystem with zero inputs (D gets shape
+            # (0, 0) instead of (p, 0)), and an input-output model needs one anyway.
+            raise ModelError(f"system {self._name!r} has no exposed inputs; call "
+                             "expose_input(name, 'block.port') first")
+        internal = {d: s for d, s in self._drivers.items() if isinstance(s, Element)}
+        loop = find_algebraic_loop(self._blocks.values(), internal)
+        if loop:
+            raise ModelError(f"system {self._name!r}: algebraic loop (a cycle of direct-"
+                             f"feedthrough paths, D != 0 all the way round): "
+                             f"{' -> '.join(map(str, loop))}; put a strictly proper block "
+                             "(Integrator, BesselFilter, StateSpace with D = 0) in the loop; a "
+                             "PadeDelay does not break it (its D is +-1)")
+
+    def compile(self) -> ct.StateSpace:
+        """The whole diagram as one continuous-time ``control.StateSpace``.
+
+        Inputs and outputs are labelled with the exposed names; states are
+        ``"<block>.<state>"``, blocks in ``add`` order and each block's states in its own order.
+        The result comes from ``control.interconnect`` (a ``LinearICSystem``, which is a
+        ``control.StateSpace``).
+        """
+        self.check()
+        blocks = list(self._blocks.values())
+        position = {b.name: k for k, b in enumerate(blocks)}
+
+        def spec(e: Element) -> tuple[int, int]:
+            b = self._blocks[e.block]
+            return position[e.block], b.offset(e.port) + e.index
+
+        connections = [[spec(dst), spec(src)] for dst, src in self._drivers.items()
+                       if isinstance(src, Element)]
+        return ct.interconnect(
+            [b.lti() for b in blocks],
+            # interconnect reads [] as one empty connection (IndexError); False means "none".
+            connections=connections or False,
+            inplist=[[spec(e) for e in dests] for dests in self._inputs.values()],
+            outlist=[spec(e) for e in self._outputs.values()],
+            inputs=list(self._inputs), outputs=list(self._outputs),
+            states=[f"{b.name}.{s}" for b in blocks for s in b.states],
+            name=self._name,
+            dt=0,  # all-static diagrams would otherwise get dt=None
+            check_unused=False,  # inputs are checked above; unused outputs are legitimate
+            warn_duplicate=False,
+        )
+
+    # --- Modelica -----------------------------------------------------------------------------
+    def to_modelica(self, model_name: str | None = None) -> str:
+        """Modelica source of a model equivalent to ``compile()`` (see ``modelica_source``).
+
+        ``model_name`` defaults to the system name; either is sanitised to a Modelica identifier.
+        """
+        lti = self.compile()
+        return modelica_source(lti.A, lti.B, lti.C, lti.D, model_name=model_name or self._name,
+                               inputs=lti.input_labels, outputs=lti.output_labels,
+                               states=lti.state_labels,
+                               description=f"LTI model of modelica_like system {self._name!r}")
+
+    def write_modelica(self, path: str | os.PathLike[str], model_name: str | None = None) -> Path:
+        """Write ``to_modelica(model_name)`` to ``path`` (usually ``<model>.mo``); return it."""
+        path = Path(path)
+        path.write_text(self.to_modelica(model_name), encoding="utf-8")
+        return path
+
+    # --- internals ----------------------------------------------------------------------------
+    def _select(self, text: str) -> _Selection:
+        ref = parse_reference(text)
+        if ref.block not in self._blocks:
+            raise ModelError(f"{text!r}: system {self._name!r} has no block {ref.block!r}; its "
+                             f"blocks are {', '.join(self._blocks) or '(none)'}")
+        block = self._blocks[ref.block]
+        try:
+            connector = block.connector(ref.port)
+        except ModelError as exc:
+            raise ModelError(f"{text!r}: {exc}") from None
+        where = f"{block.name}.{connector.name}"
+        indices = connector.select(ref.selector, where)
+        elements = tuple(Element(block.name, connector.name, i,
+                                 f"{block.name}.{connector.label(i)}") for i in indices)
+        return _Selection(ref.text, block, connector, elements)
+
+    def _drive(self, pairs: list[tuple[Element | _SystemInput, Element]], context: str) -> None:
+        """Record sources of input elements, refusing a second source for any of them."""
+        seen: dict[Element, Element | _SystemInput] = {}
+        for src, dst in pairs:
+            previous = self._drivers.get(dst, seen.get(dst))
+            if previous is not None:
+                raise ModelError(f"{context}: {dst} is already driven by {previous}; it cannot "
+                                 f"also be driven by {src} (an input takes one source)")
+            seen[dst] = src
+        self._drivers.update(seen)  # all or nothing
+
+    def _names(self, names: str | Sequence[str], method: str, ref: str) -> list[str]:
+        names = [names] if isinstance(names, str) else list(names)
+        bad = [n for n in names if not isinstance(n, str) or not n.strip()]
+        if bad or not names:
+            raise ModelError(f"{method}({names!r}, {ref!r}): signal names must be non-empty "
+                             "strings")
+        if len(set(names)) != len(names):
+            raise ModelError(f"{method}({names!r}, {ref!r}): duplicate names")
+        return names
+
+    def __repr__(self) -> str:
+        return (f"<System {self._name!r}: {len(self._blocks)} blocks, "
+                f"{len(self._inputs)} inputs, {len(self._outputs)} outputs>")
