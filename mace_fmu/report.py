@@ -12,7 +12,6 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from mace_fmu.deck.cards import Deck  # noqa: E402
-from mace_fmu.iomodel.frf import frequency_response  # noqa: E402
 from mace_fmu.iomodel.volts import VoltsModel, volts_model  # noqa: E402
 
 # Disturbance (secondary gimbal) to performance (payload gyro): thesis Figs. 4.15/5.1 and 4.16/5.2
@@ -26,7 +25,7 @@ def channel_response(model: VoltsModel, u: str, y: str, frequencies_hz: np.ndarr
     """Complex response [V/V] of one named channel."""
     i = list(model.system.input_labels).index(u)
     o = list(model.system.output_labels).index(y)
-    return frequency_response(model.system, frequencies_hz)[:, o, i]
+    return model.frequency_response(frequencies_hz)[:, o, i]
 
 
 def bode_report(deck: Deck | None = None, *, out_dir: str | Path = "report",

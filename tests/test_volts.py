@@ -63,7 +63,7 @@ def test_1g_model_also_matches_table_5_2_1g_column(v1):
 
 def _encoder_angle_response(model, gimbal: str, encoder: str, f: np.ndarray) -> np.ndarray:
     """Encoder angle [deg] per commanded angle [deg]: the encoder output is a rate (1 V / (rad/s))."""
-    h = frequency_response(model.system, f)
+    h = model.frequency_response(f)
     i, o = model.system.input_labels.index(gimbal), model.system.output_labels.index(encoder)
     return h[:, o, i] / (2j * np.pi * f) * 180.0 / np.pi
 
@@ -84,7 +84,7 @@ def test_gimbal_servo_tracks_its_command_with_a_few_hz_bandwidth(v0, v1, gimbal)
 
 def _peaks_below(model, f_max: float) -> list[float]:
     f = np.logspace(-1.5, np.log10(f_max), 4000)
-    h = frequency_response(model.system, f)
+    h = model.frequency_response(f)
     i, o = model.system.input_labels.index("gimbal_secondary_z"), model.system.output_labels.index("gyro_payload_z")
     mag = np.abs(h[:, o, i])
     return [f[k] for k in range(1, len(f) - 1) if mag[k] > mag[k - 1] and mag[k] > mag[k + 1]]
@@ -98,13 +98,17 @@ def test_0g_has_no_resonance_below_first_bending_while_1g_has_the_suspension(v0,
     assert any(abs(p - 0.23) < 0.02 for p in peaks) and any(abs(p - 0.445) < 0.02 for p in peaks)
 
 
-def test_fast_frequency_response_equals_python_control(v1):
+@pytest.mark.parametrize("route", ["model", "generic"])
+def test_fast_frequency_response_equals_python_control(v1, route):
+    """Both routes agree with control.frequency_response to 1e-9 of each channel's peak: the
+    model's (core eigen-decomposition x exact output filters); the generic balanced one, which
+    the 13 identical Bessel filters limit to ~1e-8, to 2e-8."""
     f = np.logspace(np.log10(0.5), np.log10(250.0), 60)
-    ours = frequency_response(v1.system, f)
+    ours = v1.frequency_response(f) if route == "model" else frequency_response(v1.system, f)
     ref = ct.frequency_response(v1.system, 2 * np.pi * f)
     theirs = np.moveaxis(np.asarray(ref.frdata), -1, 0)
     scale = np.abs(theirs).max(axis=0, keepdims=True)
-    assert np.max(np.abs(ours - theirs) / scale) < 1e-9
+    assert np.max(np.abs(ours - theirs) / scale) < (1e-9 if route == "model" else 2e-8)
 
 
 def test_bessel_delay_variant_and_open_loop_variant():

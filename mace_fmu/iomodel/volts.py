@@ -14,6 +14,7 @@ is a commanded relative angle (1 V = 1 deg) and the computational delay sits ins
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from functools import cached_property
 from typing import Literal, Mapping, Sequence
 
 import control as ct
@@ -22,6 +23,7 @@ import numpy as np
 from mace_fmu.deck.cards import Deck
 from mace_fmu.fe.preload import PreloadKind
 from mace_fmu.iomodel.damping import modal_damping
+from mace_fmu.iomodel.frf import frequency_response
 from mace_fmu.iomodel.instruments import Instruments, load_instruments
 from mace_fmu.iomodel.modal_ss import ZERO_HZ, ModalPlant, modal_plant
 from mace_fmu.pipeline import StructureModes, compute_modes
@@ -44,6 +46,48 @@ class VoltsModel:
     servos: bool
     bessel: BesselKind
     delays: bool
+    pade_order: int
+
+    def frequency_response(self, frequencies_hz: np.ndarray) -> np.ndarray:
+        """H[k, output, input] [V/V] at ``frequencies_hz`` [Hz], all channels at once.
+
+        The Bessel filters and the gyro delays sit in series on the outputs, outside every
+        loop: the core (structure, servos, actuator delays; distinct eigenvalues) goes through
+        one eigen-decomposition, and each output's filters are evaluated as scalar transfer
+        functions and multiplied in. The full model's 13 identical Bessel filters would make
+        its eigenvectors ill-conditioned.
+        """
+        core = self._core
+        h = frequency_response(core, frequencies_hz)
+        analog = set(self.instruments.analog_sensor_names)
+        for o, name in enumerate(core.output_labels):
+            if name in analog:
+                h[:, o, :] *= self._output_filter(name, frequencies_hz)[:, None]
+        ins, outs = list(core.input_labels), list(core.output_labels)
+        i = [ins.index(n) for n in self.system.input_labels]
+        o = [outs.index(n) for n in self.system.output_labels]
+        return h[:, o][:, :, i]
+
+    @cached_property
+    def _core(self) -> ct.StateSpace:
+        """The model without its output filters (built once per model)."""
+        el = self.instruments.electronics
+        quiet = replace(self.instruments, electronics=replace(el, sensor_delays_s={k: 0.0 for k in el.sensor_delays_s}))
+        return build_diagram(self.plant, quiet, servos=self.servos, bessel="none", delays=self.delays,
+                             pade_order=self.pade_order).compile()
+
+    def _output_filter(self, sensor: str, frequencies_hz: np.ndarray) -> np.ndarray:
+        """Bessel filter and delay of one analog output channel, evaluated exactly."""
+        el = self.instruments.electronics
+        extra = el.sensor_delays_s.get(sensor, 0.0) if self.delays else 0.0
+        response = np.ones(len(frequencies_hz), dtype=complex)
+        if self.bessel == "full":
+            response *= frequency_response(BesselFilter("f", el.bessel_order, el.bessel_cutoff_hz).lti(),
+                                           frequencies_hz)[:, 0, 0]
+        delay = extra + (el.bessel_equivalent_delay_s if self.bessel == "delay" else 0.0)
+        if delay > 0.0:
+            response *= frequency_response(PadeDelay("d", delay, self.pade_order).lti(), frequencies_hz)[:, 0, 0]
+        return response
 
 
 def _check(condition: bool, message: str) -> None:
@@ -176,7 +220,8 @@ def volts_model(structure: StructureKind = "1g", *, servos: bool = True, bessel:
     diagram = build_diagram(plant, instruments, servos=servos, bessel=bessel, delays=delays, pade_order=pade_order)
     system = diagram.compile()
     return VoltsModel(system=select_signals(system, inputs=inputs, outputs=outputs), diagram=diagram, plant=plant,
-                      structure_modes=modes, instruments=instruments, servos=servos, bessel=bessel, delays=delays)
+                      structure_modes=modes, instruments=instruments, servos=servos, bessel=bessel, delays=delays,
+                      pade_order=pade_order)
 
 
 def _with_delays(instruments: Instruments, actuators: Mapping[str, float], sensors: Mapping[str, float]) -> Instruments:
