@@ -108,6 +108,8 @@ def cmd_model(args: argparse.Namespace) -> int:
     model = _volts(args)
     sys_ = model.system
     poles = closed_loop_poles(model)
+    if args.modelica:
+        model.diagram.write_modelica(args.modelica, model_name=f"MACE_{args.structure}_volts")
     if args.npz:
         np.savez(args.npz, A=sys_.A, B=sys_.B, C=sys_.C, D=sys_.D, inputs=np.array(sys_.input_labels),
                  outputs=np.array(sys_.output_labels), states=np.array(sys_.state_labels))
@@ -165,6 +167,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--poles", action="store_true", help="closed-loop poles next to Table 4.7 (1g) or 5.2 (0g)")
     p.add_argument("--json", action="store_true", help="states, signal names and poles as JSON")
     p.add_argument("--npz", metavar="FILE", help="write A, B, C, D and the signal names to FILE (.npz)")
+    p.add_argument("--modelica", metavar="FILE", help="write the model as Modelica source (.mo)")
     p.add_argument("--max-hz", type=float, default=250.0, help="highest retained mode [Hz] (default 250)")
     p.add_argument("--bessel", choices=["full", "delay", "none"], default="full",
                    help="Bessel filters as 8-pole filters, as their 2.44 ms Pade delay, or left out")

@@ -146,14 +146,18 @@ def test_signal_selection_keeps_names(v0):
 
 
 def test_cli_model_json_and_npz(capsys, tmp_path):
-    npz = tmp_path / "m.npz"
-    assert main(["model", "0g", "--json", "--npz", str(npz)]) == 0
+    npz, mo = tmp_path / "m.npz", tmp_path / "m.mo"
+    assert main(["model", "0g", "--json", "--npz", str(npz), "--modelica", str(mo)]) == 0
     data = json.loads(capsys.readouterr().out)
     assert data["states"] == 195 and len(data["inputs"]) == 9 and len(data["outputs"]) == 20
     first_z = next(p for p in data["poles"] if p["label"] == "1st Z bending")
     assert first_z["frequency_hz"] == pytest.approx(1.94, rel=0.03)
     saved = np.load(npz)
     assert saved["A"].shape == (195, 195) and list(saved["inputs"]) == data["inputs"]
+    source = mo.read_text()
+    assert source.startswith("model MACE_0g_volts") and source.rstrip().endswith("end MACE_0g_volts;")
+    assert source.count("Modelica.Blocks.Interfaces.RealInput") == 9
+    assert source.count("Modelica.Blocks.Interfaces.RealOutput") == 20
 
 
 def test_cli_model_poles_prints_the_thesis_table(capsys):
