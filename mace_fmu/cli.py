@@ -129,9 +129,9 @@ def cmd_model(args: argparse.Namespace) -> int:
         title = "Table 4.7, FE columns (closed loop)" if args.structure == "1g" else "Table 5.2, 0-g column (closed loop)"
         print(format_pole_rows(rows, title=title))
         print()
-        print(f"all closed-loop poles up to {args.max_hz} Hz")
+        print(f"all closed-loop poles up to {args.list_max_hz} Hz")
         for p in poles:
-            if p.frequency_hz <= args.max_hz:
+            if p.frequency_hz <= args.list_max_hz:
                 print(f"  {p.frequency_hz:9.3f} Hz  zeta {p.damping:6.3f}  {p.label}")
     return 0
 
@@ -165,6 +165,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("structure", choices=["1g", "0g"])
     deck_option(p)
     p.add_argument("--poles", action="store_true", help="closed-loop poles next to Table 4.7 (1g) or 5.2 (0g)")
+    p.add_argument("--list-max-hz", type=float, default=60.0, help="with --poles: list all poles up to this [Hz]")
     p.add_argument("--json", action="store_true", help="states, signal names and poles as JSON")
     p.add_argument("--npz", metavar="FILE", help="write A, B, C, D and the signal names to FILE (.npz)")
     p.add_argument("--modelica", metavar="FILE", help="write the model as Modelica source (.mo)")
