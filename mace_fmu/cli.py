@@ -83,6 +83,14 @@ def cmd_build(args: argparse.Namespace) -> int:
                                ("Jyy kg m^2", j[1], ref["jyy"]), ("Jzz kg m^2", j[2], ref["jzz"])):
         print(f"{name:12s} thesis {theirs:8.3f}  ours {ours:8.4f}  error {100 * (ours - theirs) / theirs:6.2f} %")
     print()
+    from mace_fmu.fmu.export import export_fmu
+    from mace_fmu.iomodel.volts import volts_model
+
+    for kind, modes in (("1g", results["large"]), ("0g", m0)):
+        _progress(f"{kind} volts-volts model and FMU")
+        path = export_fmu(volts_model(kind, modes=modes), out_dir=args.out)
+        print(f"wrote {path}")
+    print()
     print("1-g modes below 25 Hz (large-displacement preload | linear preload)")
     large, linear = results["large"].modes, results["linear"].modes
     for i in range(len(large)):
@@ -136,6 +144,15 @@ def cmd_model(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_export(args: argparse.Namespace) -> int:
+    from mace_fmu.fmu.export import export_fmu
+
+    _progress(f"{args.structure} volts-volts model")
+    path = export_fmu(_volts(args), out_dir=args.out)
+    print(path)
+    return 0
+
+
 def cmd_report(args: argparse.Namespace) -> int:
     from mace_fmu.report import bode_report
 
@@ -178,13 +195,26 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--preload", choices=["large", "linear"], default="large", help="1-g gravity preload")
     p.set_defaults(func=cmd_model)
 
+    p = sub.add_parser("export", help="FMI 2.0 co-simulation FMU of the 1-g or 0-g volts-volts model")
+    p.add_argument("structure", choices=["1g", "0g"])
+    deck_option(p)
+    p.add_argument("-o", "--out", default=".", help="output directory (writes MACE_1g.fmu / MACE_0g.fmu)")
+    p.add_argument("--max-hz", type=float, default=250.0, help="highest retained mode [Hz] (default 250)")
+    p.add_argument("--bessel", choices=["full", "delay", "none"], default="full")
+    p.add_argument("--no-servos", action="store_true")
+    p.add_argument("--no-delays", action="store_true")
+    p.add_argument("--pade-order", type=int, default=3)
+    p.add_argument("--preload", choices=["large", "linear"], default="large")
+    p.set_defaults(func=cmd_export)
+
     p = sub.add_parser("report", help="Bode plots of the 1-g and 0-g models (PNG; thesis Figs. 4.15, 4.16, 5.1, 5.2)")
     deck_option(p)
     p.add_argument("--out", default="report", help="output directory (default ./report)")
     p.set_defaults(func=cmd_report)
 
-    p = sub.add_parser("build", help="the main job: 1-g and 0-g modes of the deck next to the thesis tables")
+    p = sub.add_parser("build", help="the main job: modes next to the thesis tables, and both FMUs")
     deck_option(p)
+    p.add_argument("-o", "--out", default="fmus", help="where to write MACE_1g.fmu and MACE_0g.fmu (default ./fmus)")
     p.set_defaults(func=cmd_build)
     return parser
 

@@ -1,0 +1,171 @@
+"""The 1-g and 0-g FMUs against the same models' state-space responses (exact ZOH).
+
+pythonfmu pitfall: deleting an extracted FMU folder while the process runs and then loading
+more pythonfmu FMUs has been seen to abort Python at exit. Each FMU is therefore extracted once
+into a pytest temporary directory that lives until the session ends, and every simulation uses
+that folder (fmpy then extracts and deletes nothing).
+"""
+
+from __future__ import annotations
+
+import control as ct
+import fmpy
+import numpy as np
+import pytest
+from fmpy.fmi1 import FMICallException
+from fmpy.fmi2 import FMU2Slave
+from fmpy.validation import validate_fmu
+
+from mace_fmu.fmu.export import export_fmu
+from mace_fmu.iomodel.volts import volts_model
+
+DURATION = 1.0
+
+
+@pytest.fixture(scope="module", params=["1g", "0g"])
+def built(request, tmp_path_factory):
+    model = volts_model(request.param)
+    fmu = export_fmu(model, out_dir=tmp_path_factory.mktemp("fmu"))
+    unzipped = fmpy.extract(str(fmu), unzipdir=str(tmp_path_factory.mktemp("unzipped")))
+    return model, fmu, unzipped
+
+
+def _signal(kind: str, t: np.ndarray, n_inputs: int) -> np.ndarray:
+    """(n_inputs, len(t)) test inputs [V], a different one on every channel."""
+    k = np.arange(n_inputs)[:, None]
+    if kind == "step":
+        return (0.1 + 0.05 * k) * (t[None, :] >= 0.01)
+    if kind == "chirp":  # 0.1 -> 250 Hz, linear sweep over the run
+        f0, f1 = 0.1, 250.0
+        phase = 2 * np.pi * (f0 * t + 0.5 * (f1 - f0) / DURATION * t**2)
+        return 0.2 * np.sin(phase[None, :] + k)
+    rng = np.random.default_rng(7)
+    freqs = np.geomspace(0.2, 200.0, 15)
+    phases = rng.uniform(0, 2 * np.pi, (n_inputs, len(freqs)))
+    return 0.1 * np.sum(np.sin(2 * np.pi * freqs[None, :, None] * t[None, None, :] + phases[:, :, None]), axis=1)
+
+
+def _reference(model, t: np.ndarray, u: np.ndarray) -> np.ndarray:
+    """Exact ZOH response of the state-space model, sampled where the FMU reports."""
+    steps = np.diff(t)
+    if np.allclose(steps, steps[0]):
+        return ct.forced_response(ct.sample_system(model.system, steps[0], "zoh"), T=t, U=u).outputs
+    x = np.zeros(model.system.nstates)
+    y = [model.system.C @ x + model.system.D @ u[:, 0]]
+    for k, h in enumerate(steps):  # an independent discretization for every step size
+        d = ct.sample_system(model.system, h, "zoh")
+        x = d.A @ x + d.B @ u[:, k]
+        y.append(model.system.C @ x + model.system.D @ u[:, k])
+    return np.array(y).T
+
+
+def _check(model, y: np.ndarray, ref: np.ndarray) -> None:
+    span = np.ptp(ref, axis=1, keepdims=True)
+    assert np.all(span > 0), "every output must move, or the comparison proves nothing"
+    assert np.max(np.abs(y - ref) / span) <= 1e-8
+
+
+def test_model_description_validates_and_names_signals(built):
+    model, fmu, _ = built
+    assert validate_fmu(str(fmu)) == []
+    md = fmpy.read_model_description(str(fmu))
+    assert md.modelName == f"MACE_{model.structure_modes.structure.kind}"
+    assert md.defaultExperiment.startTime == "0.0" and md.defaultExperiment.stopTime == "10.0"
+    assert md.defaultExperiment.stepSize == "0.002"
+    ins = [v for v in md.modelVariables if v.causality == "input"]
+    outs = [v for v in md.modelVariables if v.causality == "output"]
+    assert [v.name for v in ins] == list(model.system.input_labels)
+    assert [v.name for v in outs] == list(model.system.output_labels)
+    assert all(v.unit == "V" and v.description for v in ins + outs)
+    assert "1 V = 1 deg" in ins[0].description and md.description and md.author == "mace-fmu"
+
+
+@pytest.mark.parametrize("signal", ["step", "chirp", "multisine"])
+@pytest.mark.parametrize("step", [1e-3, 2e-3])
+def test_fmpy_simulation_equals_state_space(built, signal, step):
+    model, _, unzipped = built
+    t = np.arange(0.0, DURATION + step / 2, step)
+    names = list(model.system.input_labels)
+    u = _signal(signal, t, len(names))
+    table = np.zeros(len(t), dtype=[("time", float)] + [(n, float) for n in names])
+    table["time"] = t
+    for i, n in enumerate(names):
+        table[n] = u[i]
+    res = fmpy.simulate_fmu(unzipped, start_time=0.0, stop_time=t[-1], step_size=step, output_interval=step,
+                            input=table, output=list(model.system.output_labels))
+    assert np.allclose(res["time"], t)
+    y = np.array([res[n] for n in model.system.output_labels])
+    _check(model, y, _reference(model, t, u))
+
+
+def _slave(model, unzipped, name="instance") -> FMU2Slave:
+    md = fmpy.read_model_description(unzipped)
+    fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzipped, modelIdentifier=md.coSimulation.modelIdentifier,
+                    instanceName=name)
+    fmu.instantiate()
+    fmu.setupExperiment(startTime=0.0)
+    fmu.enterInitializationMode()
+    fmu.exitInitializationMode()
+    return fmu
+
+
+def _vrs(unzipped):
+    md = fmpy.read_model_description(unzipped)
+    return ({v.name: v.valueReference for v in md.modelVariables if v.causality == "input"},
+            {v.name: v.valueReference for v in md.modelVariables if v.causality == "output"})
+
+
+def _run(model, fmu, unzipped, t, u):
+    ins, outs = _vrs(unzipped)
+    in_vr = [ins[n] for n in model.system.input_labels]
+    out_vr = [outs[n] for n in model.system.output_labels]
+    y = [fmu.getReal(out_vr)]
+    for k in range(len(t) - 1):
+        fmu.setReal(in_vr, list(u[:, k]))
+        fmu.doStep(currentCommunicationPoint=t[k], communicationStepSize=t[k + 1] - t[k])
+        y.append(fmu.getReal(out_vr))
+    return np.array(y).T
+
+
+def test_varying_step_sizes_are_exact(built):
+    model, _, unzipped = built
+    rng = np.random.default_rng(3)
+    t = np.concatenate([[0.0], np.cumsum(rng.choice([0.5e-3, 1e-3, 2e-3, 3.7e-3], size=300))])
+    u = _signal("multisine", t, model.system.ninputs)
+    fmu = _slave(model, unzipped)
+    y = _run(model, fmu, unzipped, t, u)
+    fmu.terminate()
+    fmu.freeInstance()
+    _check(model, y, _reference(model, t, u))
+
+
+def test_instances_are_independent_and_state_can_be_saved(built):
+    model, _, unzipped = built
+    t = np.arange(0.0, 0.3, 2e-3)
+    u1, u2 = _signal("multisine", t, model.system.ninputs), _signal("step", t, model.system.ninputs)
+    a, b = _slave(model, unzipped, "a"), _slave(model, unzipped, "b")
+    ya, yb = _run(model, a, unzipped, t, u1), _run(model, b, unzipped, t, u2)
+    _check(model, ya, _reference(model, t, u1))
+    _check(model, yb, _reference(model, t, u2))
+    # save the state of a, disturb it, restore it: the continuation is the same
+    ins, outs = _vrs(unzipped)
+    out_vr = [outs[n] for n in model.system.output_labels]
+    state = a.getFMUstate()
+    a.doStep(currentCommunicationPoint=t[-1], communicationStepSize=2e-3)
+    first = a.getReal(out_vr)
+    a.setFMUstate(state)
+    a.doStep(currentCommunicationPoint=t[-1], communicationStepSize=2e-3)
+    assert a.getReal(out_vr) == first
+    for fmu in (a, b):
+        fmu.terminate()
+        fmu.freeInstance()
+
+
+def test_non_finite_input_is_an_error_not_garbage(built):
+    model, _, unzipped = built
+    ins, _ = _vrs(unzipped)
+    fmu = _slave(model, unzipped)
+    fmu.setReal([ins[model.system.input_labels[0]]], [float("nan")])
+    with pytest.raises(FMICallException):
+        fmu.doStep(currentCommunicationPoint=0.0, communicationStepSize=1e-3)
+    fmu.freeInstance()
