@@ -36,6 +36,7 @@ class MaceSlave(Fmi2Slave):
         out_desc = [str(n) for n in data["output_descriptions"]]
         self._x = np.zeros(self._a.shape[0])
         self._u = np.zeros(len(self._inputs))
+        self._y = None  # outputs, computed once per change of x or u (hosts read them one by one)
         self._cache: dict[float, tuple[np.ndarray, np.ndarray]] = {}
         self._failed = False
         for k, (name, desc) in enumerate(zip(self._inputs, in_desc)):
@@ -52,10 +53,15 @@ class MaceSlave(Fmi2Slave):
     def _input_setter(self, k):
         def setter(value):
             self._u[k] = value
+            self._y = None
         return setter
 
     def _output_getter(self, k):
-        return lambda: float(self._c[k] @ self._x + self._d[k] @ self._u)
+        def getter():
+            if self._y is None:
+                self._y = self._c @ self._x + self._d @ self._u
+            return float(self._y[k])
+        return getter
 
     def _transition(self, h: float) -> tuple[np.ndarray, np.ndarray]:
         """(Phi, Gamma) of the zero-order hold over h seconds, cached."""
@@ -77,6 +83,7 @@ class MaceSlave(Fmi2Slave):
         if step_size > 0.0:
             phi, gamma = self._transition(float(step_size))
             self._x = phi @ self._x + gamma @ self._u
+            self._y = None
         return True
 
     # FMU state (fmi2GetFMUstate / fmi2SetFMUstate): the hidden state vector and the held inputs.
@@ -86,3 +93,4 @@ class MaceSlave(Fmi2Slave):
     def _set_fmu_state(self, state: dict) -> None:
         self._x = np.array(state["x"], dtype=np.float64)
         self._u = np.array(state["u"], dtype=np.float64)
+        self._y = None
