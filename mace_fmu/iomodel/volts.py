@@ -147,11 +147,12 @@ def build_diagram(plant: ModalPlant, instruments: Instruments, *, servos: bool =
     def feed(name: str, signal_in: str | None) -> None:
         """Route ``signal_in`` (None: the system input) through the delay to the actuator gain."""
         delay_in, delay_out = drive[name]
-        if delay_in is None:
-            target = f"actuator_gain.u[{name}]"
-            s.expose_input(name, target) if signal_in is None else s.connect(signal_in, target)
+        target = f"actuator_gain.u[{name}]" if delay_in is None else delay_in
+        if signal_in is None:
+            s.expose_input(name, target)
         else:
-            s.expose_input(name, delay_in) if signal_in is None else s.connect(signal_in, delay_in)
+            s.connect(signal_in, target)
+        if delay_in is not None:
             s.connect(delay_out, f"actuator_gain.u[{name}]")
 
     def wheel_loop(wheel: str, tach: str) -> None:
