@@ -282,3 +282,21 @@ def test_thousand_instantiate_simulate_free_cycles_do_not_grow_memory(fmu_1g, tm
     growth = _rss_bytes() - before
     assert len(set(first + values)) == 1  # every instance starts from rest and computes the same
     assert growth < 10 * 2**20, f"resident memory grew by {growth / 2**20:.1f} MB over 1000 cycles"
+
+
+def test_reset_returns_to_rest_and_reruns_identically(built):
+    model, _, unzipped = built
+    t = np.arange(0.0, 0.1, 2e-3)
+    u = _signal("multisine", t, model.system.ninputs)
+    fmu = _slave(model, unzipped)
+    first = _run(model, fmu, unzipped, t, u)
+    fmu.reset()
+    _, outs = _vrs(unzipped)
+    assert fmu.getReal([outs[n] for n in model.system.output_labels]) == [0.0] * model.system.noutputs
+    fmu.setupExperiment(startTime=0.0)
+    fmu.enterInitializationMode()
+    fmu.exitInitializationMode()
+    again = _run(model, fmu, unzipped, t, u)
+    fmu.terminate()
+    fmu.freeInstance()
+    np.testing.assert_array_equal(first, again)
