@@ -33,21 +33,30 @@ _MAX_LOCAL_ROTATION = 0.5  # rad; beyond this the bar is far outside small-strai
 
 def skew(v: np.ndarray) -> np.ndarray:
     """(..., 3) -> (..., 3, 3) cross-product matrices."""
-    z = np.zeros_like(v[..., 0])
-    return np.stack([np.stack([z, -v[..., 2], v[..., 1]], -1),
-                     np.stack([v[..., 2], z, -v[..., 0]], -1),
-                     np.stack([-v[..., 1], v[..., 0], z], -1)], -2)
+    k = np.zeros(v.shape + (3,), dtype=v.dtype)
+    k[..., 0, 1], k[..., 0, 2] = -v[..., 2], v[..., 1]
+    k[..., 1, 0], k[..., 1, 2] = v[..., 2], -v[..., 0]
+    k[..., 2, 0], k[..., 2, 1] = -v[..., 1], v[..., 0]
+    return k
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Cross product over the last axis (np.cross is slow on large complex batches)."""
+    return np.stack([a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1], a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2],
+                     a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]], -1)
 
 
 def rotation_matrix(theta: np.ndarray) -> np.ndarray:
     """Rodrigues' formula for rotation vectors (..., 3); complex-safe for small complex parts."""
     phi2 = np.sum(theta * theta, axis=-1)[..., None, None]
+    k = skew(theta)
+    if np.max(np.abs(phi2), initial=0.0) < 1e-6:  # every rotation tiny (derivative batches): series only
+        return np.eye(3) + (1 - phi2 / 6 + phi2**2 / 120) * k + (0.5 - phi2 / 24 + phi2**2 / 720) * (k @ k)
     small = np.abs(phi2) < 1e-6
     phi = np.sqrt(np.where(small, 1.0, phi2))
     # Series below 1e-3 rad keep complex-step derivatives analytic and accurate.
     a = np.where(small, 1 - phi2 / 6 + phi2**2 / 120, np.sin(phi) / phi)
     b = np.where(small, 0.5 - phi2 / 24 + phi2**2 / 720, (1 - np.cos(phi)) / np.where(small, 1.0, phi2))
-    k = skew(theta)
     return np.eye(3) + a * k + b * (k @ k)
 
 
@@ -72,9 +81,9 @@ def natural_deformations(xa, xb, ra, rb, frames0, lengths0):
     e1 = chord / length[..., None]
     y0 = frames0[..., 1, :]
     q = 0.5 * (np.einsum("...ij,...j->...i", ra, y0) + np.einsum("...ij,...j->...i", rb, y0))
-    e3 = np.cross(e1, q)
+    e3 = _cross(e1, q)
     e3 = e3 / np.sqrt(np.sum(e3 * e3, axis=-1))[..., None]
-    e2 = np.cross(e3, e1)
+    e2 = _cross(e3, e1)
     rows = np.stack([e1, e2, e3], -2)  # corotated frame, rows = axes in basic
     triad0 = np.swapaxes(frames0, -1, -2)  # columns = undeformed element axes
     theta_a = rotation_vector_small(rows @ ra @ triad0)
