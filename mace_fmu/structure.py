@@ -7,7 +7,6 @@ mechanisms is data (``mace_em.toml`` next to the deck), not code.
 from __future__ import annotations
 
 import dataclasses
-import tomllib
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
@@ -17,6 +16,7 @@ import numpy as np
 
 from mace_fmu.deck.cards import Deck, Subcase
 from mace_fmu.deck.reader import check_deck
+from mace_fmu.datafile import data_file_path, read_data_file
 from mace_fmu.errors import DeckError, MaceError
 
 StructureKind = Literal["1g", "0g"]
@@ -76,11 +76,8 @@ def _id_set(values: list[Any], where: str) -> frozenset[int]:
 
 def load_spec(path: str | Path | None = None) -> StructureSpec:
     """Read the structure data file (default: the bundled ``mace_em.toml``)."""
-    path = Path(path) if path is not None else Path(str(resources.files("mace_fmu") / "data" / "mace_em.toml"))
-    try:
-        data = tomllib.loads(path.read_text())
-    except (OSError, tomllib.TOMLDecodeError) as exc:
-        raise MaceError(f"{path}: cannot read the structure data file: {exc}") from None
+    path = data_file_path(path)
+    data = read_data_file(path, what="structure data file")
     try:
         susp = data["suspension"]
         spec = StructureSpec(

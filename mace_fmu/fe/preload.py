@@ -113,7 +113,7 @@ def large_displacement_preload(model: FEModel, constraints: Constraints, load: n
         state = advance(state, last_increment)  # secant predictor
         u_start = u.copy()
         u = u + last_increment
-        solve, previous = None, np.inf
+        solve, previous, refresh = None, np.inf, True
         for it in range(1, max_iterations + 1):
             # Full Newton from the unstressed state (the cables have no lateral stiffness yet), in
             # the last increment, and whenever modified Newton stops contracting.

@@ -7,14 +7,13 @@ grid's displacement (CD) system, so nothing indexes a mode-shape vector by posit
 from __future__ import annotations
 
 import fnmatch
-import tomllib
 from dataclasses import dataclass
-from importlib import resources
 from pathlib import Path
 from typing import Any, Literal, Mapping
 
 import numpy as np
 
+from mace_fmu.datafile import data_file_path, read_data_file
 from mace_fmu.errors import MaceError
 from mace_fmu.fe.assembly import cd_component_vector
 from mace_fmu.fe.dofs import DofMap
@@ -144,11 +143,8 @@ def _dofs(entry: Mapping[str, Any], where: str) -> tuple[Dof, ...]:
 
 def load_instruments(path: str | Path | None = None) -> Instruments:
     """Read instruments, electronics, servos and damping (default: the bundled mace_em.toml)."""
-    path = Path(path) if path is not None else Path(str(resources.files("mace_fmu") / "data" / "mace_em.toml"))
-    try:
-        data = tomllib.loads(path.read_text())
-    except (OSError, tomllib.TOMLDecodeError) as exc:
-        raise MaceError(f"{path}: cannot read the instrument data: {exc}") from None
+    path = data_file_path(path)
+    data = read_data_file(path, what="instrument data")
     try:
         actuators = tuple(Actuator(name=a["name"], description=a["description"], dofs=_dofs(a, f"{path} actuator "
                                    f"{a['name']}"), gain=float(a["gain"])) for a in data["actuators"])
