@@ -129,6 +129,8 @@ def test_bessel_delay_variant_and_open_loop_variant():
     (dict(pade_order=0), "pade_order must be an integer >= 1"),
     (dict(max_hz=1.0), "below the first flexible mode"),
     (dict(bessel="elliptic"), "bessel must be 'full', 'delay' or 'none'"),
+    (dict(damping={"1st W bending": 0.02}), "no mode labelled '1st W bending' in the 0g structure"),
+    (dict(damping={"1st Z bending": 1.5}), "must be >= 0 and < 1, got 1.5"),
 ])
 def test_bad_requests_are_value_errors_that_say_what_is_allowed(v0, kwargs, message):
     with pytest.raises(ValueError, match=message.replace("(", r"\(").replace(")", r"\)")):
@@ -165,3 +167,14 @@ def test_cli_model_poles_prints_the_thesis_table(capsys):
     out = capsys.readouterr().out
     assert "Table 4.7" in out and "time delay (gimbal_primary_x)" in out
     assert "removed: zero-frequency cluster" in out
+
+
+def test_damping_override_moves_only_that_pole(v0):
+    """Open-loop damping of the 0-g 5th Y bending mode from 1.6 % to 5 %: its closed-loop pole
+    follows (the servos hardly touch it), the others stay."""
+    base = {p.label: p for p in closed_loop_poles(v0) if "bending" in p.label}
+    damped = volts_model("0g", modes=v0.structure_modes, damping={"5th Y bending": 0.05})
+    new = {p.label: p for p in closed_loop_poles(damped) if "bending" in p.label}
+    assert base["5th Y bending"].damping == pytest.approx(0.017, abs=0.002)
+    assert new["5th Y bending"].damping == pytest.approx(0.05, abs=0.003)
+    assert new["4th Z bending"].damping == pytest.approx(base["4th Z bending"].damping, rel=1e-6)

@@ -200,13 +200,16 @@ def volts_model(structure: StructureKind = "1g", *, servos: bool = True, bessel:
                 deck: Deck | str | None = None, instruments: Instruments | None = None,
                 modes: StructureModes | None = None, inputs: Sequence[str] | None = None,
                 outputs: Sequence[str] | None = None, actuator_delays_s: Mapping[str, float] | None = None,
-                sensor_delays_s: Mapping[str, float] | None = None) -> VoltsModel:
+                sensor_delays_s: Mapping[str, float] | None = None,
+                damping: Mapping[str, float] | None = None) -> VoltsModel:
     """Volts-volts model of the 1-g or 0-g structure, modes up to ``max_hz`` [Hz].
 
     Inputs: gimbal commands (relative angle, 1 V = 1 deg, with servos; motor volts without),
     wheel speed commands and active strut volts. Outputs: the 20 sensors in volts.
     ``actuator_delays_s`` / ``sensor_delays_s`` [s] replace the delays of the named channels
-    (defaults: Tables 4.5 and 4.6 from the instrument file).
+    (defaults: Tables 4.5 and 4.6 from the instrument file). ``damping`` maps mode labels (as in
+    ``compute_modes(...).modes.labels``, e.g. "1st Z bending") to open-loop damping ratios that
+    replace the instrument file's table.
     """
     _check(structure in ("1g", "0g"), f"structure must be '1g' or '0g', got {structure!r}")
     instruments = instruments if instruments is not None else load_instruments()
@@ -216,6 +219,14 @@ def volts_model(structure: StructureKind = "1g", *, servos: bool = True, bessel:
     flexible = modes.modes.frequencies_hz[np.abs(modes.modes.frequencies_hz) >= ZERO_HZ]
     _check(len(flexible) > 0 and max_hz >= flexible.min(),
            f"max_hz = {max_hz} Hz is below the first flexible mode ({flexible.min():.3f} Hz); allowed: >= that")
+    if damping:
+        known = set(modes.modes.labels)
+        for label, value in damping.items():
+            _check(label in known, f"no mode labelled {label!r} in the {structure} structure; labels: "
+                                   f"{', '.join(sorted(known))}")
+            _check(0.0 <= float(value) < 1.0, f"damping ratio of {label!r} must be >= 0 and < 1, got {value}")
+        table = replace(instruments.damping, by_label={**instruments.damping.by_label, **damping})
+        instruments = replace(instruments, damping=table)
     zeta = modal_damping(modes.modes.labels, modes.modes.frequencies_hz, instruments.damping)
     plant = modal_plant(modes.modes, instruments, zeta, max_hz=max_hz)
     diagram = build_diagram(plant, instruments, servos=servos, bessel=bessel, delays=delays, pade_order=pade_order)
