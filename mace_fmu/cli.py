@@ -61,6 +61,9 @@ def cmd_modes(args: argparse.Namespace) -> int:
 
 
 def cmd_build(args: argparse.Namespace) -> int:
+    # imported here, as in the other commands, so that `mace-fmu modes` starts without control/pythonfmu
+    from mace_fmu.fmu.export import export_fmu
+    from mace_fmu.iomodel.volts import volts_model
     from mace_fmu.thesis import format_rows, format_side_by_side, table_5_1_0g, table_5_1_1g, thesis_data
 
     deck = read_deck(args.deck)
@@ -83,9 +86,6 @@ def cmd_build(args: argparse.Namespace) -> int:
                                ("Jyy kg m^2", j[1], ref["jyy"]), ("Jzz kg m^2", j[2], ref["jzz"])):
         print(f"{name:12s} thesis {theirs:8.3f}  ours {ours:8.4f}  error {100 * (ours - theirs) / theirs:6.2f} %")
     print()
-    from mace_fmu.fmu.export import export_fmu
-    from mace_fmu.iomodel.volts import volts_model
-
     for kind, modes in (("1g", results["large"]), ("0g", m0)):
         _progress(f"{kind} volts-volts model and FMU")
         path = export_fmu(volts_model(kind, modes=modes), out_dir=args.out)

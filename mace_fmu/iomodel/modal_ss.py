@@ -42,6 +42,43 @@ class ModalPlant:
     removed_states: tuple[tuple[str, str], ...]  #: (state name, reason)
 
 
+def _reduce_zero_cluster(zero: np.ndarray, phi: np.ndarray, labels: tuple[str, ...], modal_b: np.ndarray,
+                         disp_out: dict[str, np.ndarray], rate_out: dict[str, np.ndarray]):
+    """Rotate the zero-frequency modes so that controllable and observable directions come first.
+
+    Returns the rotated (phi, labels, modal_b), the numbers of controllable and of
+    displacement-observable directions, and the reasons for what goes; ``disp_out`` and
+    ``rate_out`` (output rows over the modes) are rotated in place.
+    """
+    removed: list[tuple[str, str]] = []
+    if not len(zero):
+        return phi, labels, modal_b, 0, 0, removed
+    u_b, s_b, _ = np.linalg.svd(modal_b[zero], full_matrices=True)
+    n_ctrl = int(np.sum(s_b > _NEGLIGIBLE * np.abs(modal_b).max()))
+    c_d = np.array([r[zero] for r in disp_out.values()]) @ u_b[:, :n_ctrl]
+    _, s_d, vt_d = np.linalg.svd(c_d, full_matrices=True)
+    n_obs = int(np.sum(s_d > _NEGLIGIBLE * max(np.abs(np.array(list(disp_out.values()))).max(), 1e-300)))
+    rot = np.hstack([u_b[:, :n_ctrl] @ vt_d.T, u_b[:, n_ctrl:]])
+    if n_ctrl < len(zero):
+        removed.append(("zero-frequency cluster", f"{len(zero) - n_ctrl} directions no actuator moves (internal "
+                        "torques conserve the rigid-body momenta): uncontrollable, both states removed"))
+    if n_obs < n_ctrl:
+        removed.append(("zero-frequency cluster", f"{n_ctrl - n_obs} displacement directions no output reads "
+                        "(rate sensing only): unobservable, displacement states removed"))
+    phi = phi.copy()
+    phi[:, zero] = phi[:, zero] @ rot
+    new_labels = list(labels)  # a rotated direction keeps the name of the motion it is mostly made of
+    for k, j in enumerate(zero):
+        new_labels[j] = labels[zero[int(np.argmax(np.abs(rot[:, k])))]]
+    modal_b = modal_b.copy()
+    modal_b[zero] = rot.T @ modal_b[zero]
+    for table in (disp_out, rate_out):
+        for key in table:
+            table[key] = table[key].copy()
+            table[key][zero] = table[key][zero] @ rot
+    return phi, tuple(new_labels), modal_b, n_ctrl, n_obs, removed
+
+
 def modal_plant(modes: Modes, instruments: Instruments, damping: np.ndarray, *, max_hz: float) -> ModalPlant:
     """Modal state-space of the modes up to ``max_hz`` [Hz] with the instruments' DOFs (no gains)."""
     keep = modes.frequencies_hz <= max_hz
@@ -60,39 +97,8 @@ def modal_plant(modes: Modes, instruments: Instruments, damping: np.ndarray, *, 
     disp_out.update({f"{n}_angle": rows[n] for n in integrated})
     rate_out = {n: rows[n] for n in rate_names}
 
-    # Reduce the zero-frequency cluster: rotate it so that controllable and observable
-    # directions separate, then drop the others.
     zero = np.flatnonzero(np.abs(freq) < ZERO_HZ)
-    removed: list[tuple[str, str]] = []
-    rot = np.eye(len(zero))
-    n_ctrl = n_obs = len(zero)
-    if len(zero):
-        u_b, s_b, _ = np.linalg.svd(modal_b[zero], full_matrices=True)
-        n_ctrl = int(np.sum(s_b > _NEGLIGIBLE * np.abs(modal_b).max()))
-        c_d = np.array([r[zero] for r in disp_out.values()]) @ u_b[:, :n_ctrl]
-        _, s_d, vt_d = np.linalg.svd(c_d, full_matrices=True)
-        n_obs = int(np.sum(s_d > _NEGLIGIBLE * max(np.abs(np.array(list(disp_out.values()))).max(), 1e-300)))
-        rot = np.hstack([u_b[:, :n_ctrl] @ vt_d.T, u_b[:, n_ctrl:]])
-        if n_ctrl < len(zero):
-            removed.append(("zero-frequency cluster", f"{len(zero) - n_ctrl} directions no actuator moves (internal "
-                            "torques conserve the rigid-body momenta): uncontrollable, both states removed"))
-        if n_obs < n_ctrl:
-            removed.append(("zero-frequency cluster", f"{n_ctrl - n_obs} displacement directions no output reads "
-                            "(rate sensing only): unobservable, displacement states removed"))
-        phi = phi.copy()
-        phi[:, zero] = phi[:, zero] @ rot
-        # a rotated direction keeps the name of the motion it is mostly made of
-        old = [labels[j] for j in zero]
-        new_labels = list(labels)
-        for k, j in enumerate(zero):
-            new_labels[j] = old[int(np.argmax(np.abs(rot[:, k])))]
-        labels = tuple(new_labels)
-        modal_b = modal_b.copy()
-        modal_b[zero] = rot.T @ modal_b[zero]
-        for table in (disp_out, rate_out):
-            for key in table:
-                table[key] = table[key].copy()
-                table[key][zero] = table[key][zero] @ rot
+    phi, labels, modal_b, n_ctrl, n_obs, removed = _reduce_zero_cluster(zero, phi, labels, modal_b, disp_out, rate_out)
     n = len(freq)
     keep_disp = np.ones(n, dtype=bool)
     keep_rate = np.ones(n, dtype=bool)
