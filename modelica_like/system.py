@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import TypeVar
 
 import control as ct
+import numpy as np
 
 from .blocks import Block
 from .connectors import Connector, Element, check_identifier, parse_reference
@@ -29,6 +30,18 @@ class _SystemInput:
 
     def __str__(self) -> str:
         return f"system input {self.name!r}"
+
+
+@dataclass(frozen=True)
+class Interconnection:
+    """Blocks and wiring of a System: u_b = wiring @ y_b + entry @ r, y = exit @ y_b."""
+
+    blocks: tuple[Block, ...]
+    wiring: np.ndarray  #: L, (block inputs, block outputs)
+    entry: np.ndarray  #: E, (block inputs, system inputs)
+    exit: np.ndarray  #: F, (system outputs, block outputs)
+    inputs: tuple[str, ...]
+    outputs: tuple[str, ...]
 
 
 @dataclass(frozen=True)
@@ -215,6 +228,37 @@ class System:
             check_unused=False,  # inputs are checked above; unused outputs are legitimate
             warn_duplicate=False,
         )
+
+    def connection_matrices(self) -> Interconnection:
+        """The diagram as data: blocks in ``add`` order and 0/1 matrices that wire them.
+
+        With the blocks' inputs u_b and outputs y_b stacked in block order, u_b = L y_b + E r for
+        the system inputs r, and y = F y_b for the system outputs. ``interconnect`` in
+        ``modelica_like.algebra`` turns that back into one state-space system (numpy only).
+        """
+        self.check()
+        blocks = list(self._blocks.values())
+        in_start, out_start, n_in, n_out = {}, {}, 0, 0
+        for b in blocks:
+            in_start[b.name], out_start[b.name] = n_in, n_out
+            n_in += len(b.elements("input"))
+            n_out += len(b.elements("output"))
+
+        def position(e: Element, start: dict[str, int]) -> int:
+            return start[e.block] + self._blocks[e.block].offset(e.port) + e.index
+
+        names_in = list(self._inputs)
+        wiring, entry = np.zeros((n_in, n_out)), np.zeros((n_in, len(names_in)))
+        for dst, src in self._drivers.items():
+            if isinstance(src, Element):
+                wiring[position(dst, in_start), position(src, out_start)] = 1.0
+            else:
+                entry[position(dst, in_start), names_in.index(src.name)] = 1.0
+        exit_ = np.zeros((len(self._outputs), n_out))
+        for k, e in enumerate(self._outputs.values()):
+            exit_[k, position(e, out_start)] = 1.0
+        return Interconnection(blocks=tuple(blocks), wiring=wiring, entry=entry, exit=exit_,
+                               inputs=tuple(names_in), outputs=tuple(self._outputs))
 
     # --- Modelica -----------------------------------------------------------------------------
     def to_modelica(self, model_name: str | None = None) -> str:

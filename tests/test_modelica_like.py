@@ -352,3 +352,37 @@ def test_to_modelica_round_trips_the_matrices(tmp_path):
 def test_package_docstring_example_runs():
     result = doctest.testmod(modelica_like, optionflags=doctest.ELLIPSIS)
     assert result.attempted > 10 and result.failed == 0
+
+
+def test_numpy_algebra_matches_control_and_compile():
+    """modelica_like.algebra (numpy/scipy only, used inside FMUs): its Pade realisation equals
+    control.pade, and interconnect() of connection_matrices() equals compile()."""
+    import control as ct
+    import numpy as np
+
+    from modelica_like import Gain, PadeDelay, StateSpace, Sum, System
+    from modelica_like.algebra import interconnect, pade
+
+    for delay, order in ((2.44e-3, 3), (5e-3, 2), (1e-3, 5)):
+        a, b, c, d = pade(delay, order)
+        num, den = ct.pade(delay, order)
+        w = 2 * np.pi * np.array([1.0, 10.0, 100.0, 300.0])
+        ours = np.array([(c @ np.linalg.solve(1j * x * np.eye(order) - a, b) + d)[0, 0] for x in w])
+        np.testing.assert_allclose(ours, np.polyval(num, 1j * w) / np.polyval(den, 1j * w), atol=1e-14)
+    s = System("loop")
+    s.add(StateSpace("plant", [[0, 1], [-4, -0.4]], [[0], [1]], np.eye(2), 0, inputs=["f"], outputs=["x", "v"]))
+    s.add(Sum("err"))
+    s.add(Gain("k", [[20.0, 3.0]]))
+    s.add(PadeDelay("d", 1e-3, 2))
+    s.expose_input("cmd", "err.u1")
+    s.connect("plant.y[x]", "err.u2")
+    s.connect("err.y", "d.u")
+    s.connect("d.y", "k.u[1]")
+    s.connect("plant.y[v]", "k.u[2]")
+    s.connect("k.y", "plant.u")
+    s.expose_output("x", "plant.y[x]")
+    ic = s.connection_matrices()
+    a, b, c, d = interconnect([(x.A, x.B, x.C, x.D) for x in ic.blocks], ic.wiring, ic.entry, ic.exit)
+    ref = s.compile()
+    for ours, theirs in ((a, ref.A), (b, ref.B), (c, ref.C), (d, ref.D)):
+        np.testing.assert_allclose(ours, theirs, atol=1e-12)
