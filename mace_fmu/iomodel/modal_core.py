@@ -1,0 +1,97 @@
+"""Modal state-space matrices (eq. 3.5-3.6) from modal data, with numpy only.
+
+Used by mace_fmu.iomodel.modal_ss and copied verbatim into FMUs, which rebuild their structure
+after a reanalysis at initialisation. Zero-frequency modes (rigid bodies and mechanisms) obey
+eta'' = Phi^T b u in any orthonormal basis of their cluster, so the cluster is rotated (mass
+normalisation kept) and reduced by rule, with the reason recorded:
+- directions no actuator moves are uncontrollable: all inputs are internal torques, so the
+  rigid-body momenta are conserved; both states of these directions go;
+- of the rest, displacement directions no output reads (wheel angles: the tachometers sense
+  rate) keep only their rate state.
+Appendix C (gimcon3) reduces its 0-g cluster by an SVD of the rate outputs in the same spirit.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+ZERO_HZ = 0.01
+# Relative to the largest modal input/output coefficient. The computed zero cluster is exact to
+# ~1e-8 (mechanisms) and to round-off (rigid bodies, built geometrically).
+NEGLIGIBLE = 1e-6
+
+
+def reduce_zero_cluster(zero: np.ndarray, phi: np.ndarray, labels: tuple[str, ...], modal_b: np.ndarray,
+                         disp_out: dict[str, np.ndarray], rate_out: dict[str, np.ndarray]):
+    """Rotate the zero-frequency modes so that controllable and observable directions come first.
+
+    Returns the rotated (phi, labels, modal_b), the numbers of controllable and of
+    displacement-observable directions, and the reasons for what goes; ``disp_out`` and
+    ``rate_out`` (output rows over the modes) are rotated in place.
+    """
+    removed: list[tuple[str, str]] = []
+    if not len(zero):
+        return phi, labels, modal_b, 0, 0, removed
+    u_b, s_b, _ = np.linalg.svd(modal_b[zero], full_matrices=True)
+    n_ctrl = int(np.sum(s_b > NEGLIGIBLE * np.abs(modal_b).max()))
+    c_d = np.array([r[zero] for r in disp_out.values()]) @ u_b[:, :n_ctrl]
+    _, s_d, vt_d = np.linalg.svd(c_d, full_matrices=True)
+    n_obs = int(np.sum(s_d > NEGLIGIBLE * max(np.abs(np.array(list(disp_out.values()))).max(), 1e-300)))
+    rot = np.hstack([u_b[:, :n_ctrl] @ vt_d.T, u_b[:, n_ctrl:]])
+    if n_ctrl < len(zero):
+        removed.append(("zero-frequency cluster", f"{len(zero) - n_ctrl} directions no actuator moves (internal "
+                        "torques conserve the rigid-body momenta): uncontrollable, both states removed"))
+    if n_obs < n_ctrl:
+        removed.append(("zero-frequency cluster", f"{n_ctrl - n_obs} displacement directions no output reads "
+                        "(rate sensing only): unobservable, displacement states removed"))
+    phi = phi.copy()
+    phi[:, zero] = phi[:, zero] @ rot
+    new_labels = list(labels)  # a rotated direction keeps the name of the motion it is mostly made of
+    for k, j in enumerate(zero):
+        new_labels[j] = labels[zero[int(np.argmax(np.abs(rot[:, k])))]]
+    modal_b = modal_b.copy()
+    modal_b[zero] = rot.T @ modal_b[zero]
+    for table in (disp_out, rate_out):
+        for key in table:
+            table[key] = table[key].copy()
+            table[key][zero] = table[key][zero] @ rot
+    return phi, tuple(new_labels), modal_b, n_ctrl, n_obs, removed
+
+
+def modal_matrices(freq_hz: np.ndarray, zeta: np.ndarray, labels: tuple[str, ...], shapes: np.ndarray,
+                   modal_b: np.ndarray, disp_out: dict[str, np.ndarray], rate_out: dict[str, np.ndarray],
+                   output_order: list[str]):
+    """(A, B, C, state names, rotated labels, rotated shapes, reasons for removed states).
+
+    x = [eta; eta_dot] over the kept states; rows of C follow ``output_order`` (names of
+    ``disp_out`` and ``rate_out``, whose rows are over the modes); D = 0.
+    """
+    disp_out = {k: v.copy() for k, v in disp_out.items()}
+    rate_out = {k: v.copy() for k, v in rate_out.items()}
+    omega = 2.0 * np.pi * np.where(np.abs(freq_hz) < ZERO_HZ, 0.0, freq_hz)
+    zero = np.flatnonzero(np.abs(freq_hz) < ZERO_HZ)
+    shapes, labels, modal_b, n_ctrl, n_obs, removed = reduce_zero_cluster(zero, shapes, labels, modal_b, disp_out,
+                                                                          rate_out)
+    n = len(freq_hz)
+    keep_disp = np.ones(n, dtype=bool)
+    keep_rate = np.ones(n, dtype=bool)
+    keep_rate[zero[n_ctrl:]] = False
+    keep_disp[zero[n_obs:]] = False
+    d_idx, r_idx = np.flatnonzero(keep_disp), np.flatnonzero(keep_rate)
+    nd, nr = len(d_idx), len(r_idx)
+    a = np.zeros((nd + nr, nd + nr))
+    pos_r = {j: nd + k for k, j in enumerate(r_idx)}
+    for k, j in enumerate(d_idx):
+        a[k, pos_r[j]] = 1.0
+        a[pos_r[j], k] = -omega[j] ** 2
+    for j in r_idx:
+        a[pos_r[j], pos_r[j]] = -2.0 * zeta[j] * omega[j]
+    b = np.vstack([np.zeros((nd, modal_b.shape[1])), modal_b[r_idx]])
+    c = np.zeros((len(output_order), nd + nr))
+    for i, name in enumerate(output_order):
+        if name in disp_out:
+            c[i, :nd] = disp_out[name][d_idx]
+        else:
+            c[i, nd:] = rate_out[name][r_idx]
+    states = [f"mode{j + 1}_disp" for j in d_idx] + [f"mode{j + 1}_vel" for j in r_idx]
+    return a, b, c, states, labels, shapes, removed
