@@ -1,8 +1,10 @@
 """Package a volts-volts model as an FMI 2.0 co-simulation FMU (pythonfmu), self-contained.
 
-The FMU holds its matrices (``resources/model.npz``) and a slave script that needs only numpy,
-scipy and pythonfmu (see :mod:`mace_fmu.fmu.slave`). pythonfmu cannot declare units, a default
-experiment or a version, so those are written into the model description after the build.
+The FMU holds its blocks, wiring, modal data and stiffness sensitivities
+(``resources/model.npz``) and a slave script that needs only numpy, scipy and pythonfmu (see
+:mod:`mace_fmu.fmu.slave`), so it rebuilds itself when parameters change. pythonfmu cannot
+declare units, a default experiment or a version, so those are written into the model
+description after the build.
 """
 
 from __future__ import annotations
@@ -17,10 +19,19 @@ from xml.etree import ElementTree as ET
 import numpy as np
 from pythonfmu.builder import FmuBuilder
 
+from mace_fmu.datafile import data_file_path, read_data_file
+from mace_fmu.fe.assembly import assemble
+from mace_fmu.iomodel import modal_core
+from mace_fmu.iomodel.modal_ss import modal_data
 from mace_fmu.iomodel.volts import VoltsModel
+from mace_fmu.structure import apply_overrides
+from modelica_like import algebra
 
 SLAVE_SOURCE = Path(__file__).with_name("slave.py")
 DEFAULT_EXPERIMENT = {"startTime": "0.0", "stopTime": "10.0", "stepSize": "0.002"}
+_UNITS = (("E_", "Pa"), ("k_", "N/m"), ("delay_", "s"), ("damping_mode_", "1"), ("K_a", "V/deg"),
+          ("K_r", "V/(deg/s)"), ("K_f", "1"), ("K_b", "1"), ("frequency_mode_", "Hz"))
+_RELATIVE_STEP = 1e-3  # the material stiffness is linear in E and k: the difference quotient is exact
 
 
 def _descriptions(model: VoltsModel) -> tuple[list[str], list[str]]:
@@ -42,8 +53,69 @@ def _descriptions(model: VoltsModel) -> tuple[list[str], list[str]]:
     return ins, outs
 
 
+def _blocks(model: VoltsModel) -> tuple[dict, list[tuple[str, float, str]]]:
+    """Block arrays for the npz and the non-physical parameters (name, value, description)."""
+    ic = model.diagram.connection_matrices()
+    kinds, params, arrays, parameters = [], [], {}, []
+    sv = model.instruments.servos
+    for i, block in enumerate(ic.blocks):
+        name = block.name
+        if name == "structure":
+            kinds.append("structure"), params.append("")
+        elif name.startswith("delay_"):
+            kinds.append("delay"), params.append(name)
+            delay = float(getattr(block, "_delay"))
+            parameters.append((name, delay, f"time delay of {name[len('delay_'):]} [s] (Pade order {model.pade_order})"))
+        elif name.startswith(("kf_", "kb_")):
+            gain = "K_f" if name.startswith("kf_") else "K_b"
+            kinds.append("gain"), params.append(gain)
+        elif name.startswith("servo_"):
+            kinds.append("pd"), params.append("K_a,K_r")
+        else:
+            kinds.append("const"), params.append("")
+        for m in "ABCD":
+            arrays[f"block{i}_{m}"] = np.asarray(getattr(block, m), dtype=float)
+    if "K_f" in params:
+        parameters += [("K_f", sv.wheel_forward_gain, "reaction wheel speed loop forward gain (eq. 3.18)"),
+                       ("K_b", sv.wheel_backward_gain, "reaction wheel speed loop backward (tachometer) gain")]
+    if "K_a,K_r" in params:
+        parameters += [("K_a", sv.gimbal_angle_gain, "gimbal servo angle gain [V/deg] (eq. 3.20)"),
+                       ("K_r", sv.gimbal_rate_gain, "gimbal servo rate gain [V/(deg/s)] (eq. 3.20)")]
+    ins = [list(ic.inputs).index(n) for n in model.system.input_labels]
+    outs = [list(ic.outputs).index(n) for n in model.system.output_labels]
+    arrays.update(block_kinds=np.array(kinds), block_params=np.array(params), wiring=ic.wiring,
+                  entry=ic.entry[:, ins], exit=ic.exit[outs], pade_order=np.array(model.pade_order))
+    return arrays, parameters
+
+
+def _physical(model: VoltsModel, shapes: np.ndarray) -> tuple[list[tuple[str, float, str]], np.ndarray]:
+    """Physical parameters and their projected stiffness sensitivities Phi0^T dK/d(ln p) Phi0."""
+    names = read_data_file(data_file_path(), what="parameter names").get("parameters", {})
+    deck, fe = model.structure_modes.structure.deck, model.structure_modes.model
+    used = sorted({deck.pbars[b.pid].mid for b in deck.bars.values()})
+    parameters, sensitivities = [], []
+    for mid in used:
+        e = deck.mat1s[mid].youngs_modulus
+        label = names.get("materials", {}).get(str(mid), f"mat{mid}")
+        # The material stiffness is linear in E, so the difference quotient is exact. For 1-g it
+        # leaves out that a stiffer bus also sags less (the preload's geometric part): differencing
+        # the whole tangent instead amplifies its 1e-9 derivative noise by 1/step.
+        k_plus = assemble(apply_overrides(deck, {("MAT1", mid): {"e": e * (1 + _RELATIVE_STEP)}})).stiffness
+        dk = (k_plus - fe.stiffness) / _RELATIVE_STEP
+        parameters.append((f"E_{label}", e, f"Young's modulus of {label} (MAT1 {mid}) [Pa]; takes effect by "
+                                            "reanalysis on the retained modes"))
+        sensitivities.append(shapes.T @ dk @ shapes)
+    for row, (sid, k) in enumerate(zip(fe.spring_ids, fe.spring_constants)):
+        label = names.get("springs", {}).get(str(sid), f"spring{sid}")
+        v = fe.spring_vectors[row] @ shapes
+        parameters.append((f"k_{label}", float(k), f"stiffness of {label} (CELAS2 {sid}) [N/m]; reanalysis"))
+        sensitivities.append(k * np.outer(v, v))
+    n = shapes.shape[1]
+    return parameters, np.array(sensitivities).reshape(len(parameters), n, n)
+
+
 def _patch_model_description(fmu: Path, *, description: str, version: str) -> None:
-    """Add unit "V", a default experiment, initial unknowns, description and version to modelDescription.xml."""
+    """Add units, a default experiment, initial unknowns, description and version."""
     with zipfile.ZipFile(fmu) as z:
         entries = {n: z.read(n) for n in z.namelist()}
     root = ET.fromstring(entries["modelDescription.xml"])
@@ -51,27 +123,48 @@ def _patch_model_description(fmu: Path, *, description: str, version: str) -> No
     root.set("version", version)
     root.set("author", "mace-fmu")
     root.set("generationTool", f"mace-fmu {version} ({root.get('generationTool', 'PythonFMU')})")
+    used = set()
+    for var in root.iter("ScalarVariable"):
+        name = var.get("name")
+        unit = "V" if var.get("causality") in ("input", "output") else next(
+            (u for prefix, u in _UNITS if name.startswith(prefix)), None)
+        if unit is not None:
+            var.find("Real").set("unit", unit)
+            used.add(unit)
     units = ET.Element("UnitDefinitions")
-    ET.SubElement(units, "Unit", name="V")
+    for unit in sorted(used):
+        ET.SubElement(units, "Unit", name=unit)
     root.insert(list(root).index(root.find("CoSimulation")) + 1, units)
     for old in root.findall("DefaultExperiment"):
         root.remove(old)
-    position = list(root).index(root.find("ModelVariables"))
-    root.insert(position, ET.Element("DefaultExperiment", DEFAULT_EXPERIMENT))
-    for real in root.iter("Real"):
-        real.set("unit", "V")
-    # FMI 2.0: outputs with calculated initial values are initial unknowns (pythonfmu omits them)
+    root.insert(list(root).index(root.find("ModelVariables")), ET.Element("DefaultExperiment", DEFAULT_EXPERIMENT))
+    # FMI 2.0: outputs and calculated parameters are initial unknowns (pythonfmu omits them)
     structure = root.find("ModelStructure")
     outputs = structure.find("Outputs")
-    if outputs is not None and structure.find("InitialUnknowns") is None:
+    if structure.find("InitialUnknowns") is None:
         initial = ET.Element("InitialUnknowns")
-        for unknown in outputs.findall("Unknown"):
-            ET.SubElement(initial, "Unknown", index=unknown.get("index"))
-        structure.insert(list(structure).index(outputs) + 1, initial)
+        variables = list(root.find("ModelVariables"))
+        for k, var in enumerate(variables, start=1):
+            if var.get("causality") in ("output", "calculatedParameter"):
+                ET.SubElement(initial, "Unknown", index=str(k))
+        position = list(structure).index(outputs) + 1 if outputs is not None else 0
+        structure.insert(position, initial)
     entries["modelDescription.xml"] = ET.tostring(root, encoding="UTF-8", xml_declaration=True)
     with zipfile.ZipFile(fmu, "w", zipfile.ZIP_DEFLATED) as z:
         for name, data in entries.items():
             z.writestr(name, data)
+
+
+def _entry_script(name: str, description: str) -> str:
+    """One file: the numpy cores, then the slave renamed (pythonfmu loads a single module)."""
+    parts = []
+    for path in (Path(algebra.__file__), Path(modal_core.__file__), SLAVE_SOURCE):
+        lines = [ln for ln in path.read_text().splitlines()
+                 if ln.strip() != "from __future__ import annotations" and not ln.rstrip().endswith("# fmu: inlined")]
+        parts.append("\n".join(lines))
+    source = "from __future__ import annotations\n\n" + "\n\n".join(parts) + "\n"
+    source = source.replace("class MaceSlave(Fmi2Slave):", f"class {name}(Fmi2Slave):")
+    return source.replace('description = "MACE volts-volts model"', f"description = {description!r}")
 
 
 def export_fmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str | None = None) -> Path:
@@ -86,16 +179,28 @@ def export_fmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str | None
     ins, outs = _descriptions(model)
     description = (f"MACE {kind} volts-volts model: {sys_.nstates} states; servos {'closed' if model.servos else 'open'}, "
                    f"Bessel filters {model.bessel}, delays {'on' if model.delays else 'off'}")
+    max_hz = float(np.max(model.plant.frequencies_hz))
+    data = modal_data(model.structure_modes.modes, model.instruments, max_hz=max_hz)
+    arrays, parameters = _blocks(model)
+    physical, dk = _physical(model, data.shapes)
+    damping = [(f"damping_mode_{k + 1}", float(z), f"open-loop damping ratio of mode {k + 1}: {label}")
+               for k, (z, label) in enumerate(zip(model.plant.damping, data.labels))]
+    parameters = damping + parameters + physical
+    arrays.update(
+        inputs=np.array(sys_.input_labels), outputs=np.array(sys_.output_labels), input_descriptions=np.array(ins),
+        output_descriptions=np.array(outs), param_names=np.array([p[0] for p in parameters]),
+        param_values=np.array([p[1] for p in parameters], dtype=float),
+        param_descriptions=np.array([p[2] for p in parameters]), physical_names=np.array([p[0] for p in physical]),
+        physical_dk=dk, frequencies_hz=data.frequencies_hz, mode_labels=np.array(data.labels), modal_b=data.modal_b,
+        disp_names=np.array(list(data.disp_out)), disp_rows=np.array(list(data.disp_out.values())),
+        rate_names=np.array(list(data.rate_out)), rate_rows=np.array(list(data.rate_out.values())),
+        structure_outputs=np.array(data.output_order))
     with tempfile.TemporaryDirectory(prefix="mace_fmu_") as tmp:
         tmp = Path(tmp)
-        script = tmp / f"{name.lower()}_slave.py"
-        source = SLAVE_SOURCE.read_text().replace("class MaceSlave(Fmi2Slave):", f"class {name}(Fmi2Slave):")
-        script.write_text(source.replace('description = "MACE volts-volts model"', f"description = {description!r}"))
-        np.savez(tmp / "model.npz", A=sys_.A, B=sys_.B, C=sys_.C, D=sys_.D, inputs=np.array(sys_.input_labels),
-                 outputs=np.array(sys_.output_labels), input_descriptions=np.array(ins),
-                 output_descriptions=np.array(outs))
+        script = tmp / f"{name.lower()}_fmu.py"
+        script.write_text(_entry_script(name, description))
+        np.savez(tmp / "model.npz", **arrays)
         path = FmuBuilder.build_FMU(script, dest=out / f"{name}.fmu", project_files=[tmp / "model.npz"],
                                     canGetAndSetFMUstate=True, canSerializeFMUstate=True)
-    version = metadata.version("mace-fmu")
-    _patch_model_description(Path(path), description=description, version=version)
+    _patch_model_description(Path(path), description=description, version=metadata.version("mace-fmu"))
     return Path(path)

@@ -1,12 +1,17 @@
 """The FMI 2.0 co-simulation slave that runs inside a MACE FMU (pythonfmu).
 
-This file is copied into the FMU with its class renamed (MaceSlave -> e.g. MACE_1g) and must
-import nothing but numpy, scipy and pythonfmu: the FMU runs without mace-fmu installed. Its
-matrices and signal names come from ``resources/model.npz``.
+The FMU's entry script is this file with modelica_like.algebra and mace_fmu.iomodel.modal_core
+pasted in front (pythonfmu cannot load a second module from the resources), and the class
+renamed (MaceSlave -> e.g. MACE_1g). It imports nothing but numpy, scipy and pythonfmu: the FMU
+runs without mace-fmu installed. Its data come from ``resources/model.npz``.
 
+Parameters take effect at initialisation, when the system is rebuilt from its blocks:
+- physical parameters (Young's moduli, spring stiffnesses) by Ritz reanalysis on the retained
+  nominal modes (thesis eq. 4.6-4.9): K_r = Omega0^2 + sum_i (p_i / p_i0 - 1) Phi0^T dK_i Phi0,
+  whose eigen-solution gives the new frequencies and Phi_R, and Phi = Phi0 Phi_R;
+- modal damping ratios, time delays (Pade), servo gains: the blocks they belong to.
 Stepping is an exact zero-order hold: over a communication step h with the inputs u held,
-[x(t+h); u] = expm([[A, B], [0, 0]] h) [x(t); u]. The matrix exponential is cached per step size,
-so any (also varying) step size is exact. Outputs are y = C x + D u at the communication points.
+[x(t+h); u] = expm([[A, B], [0, 0]] h) [x(t); u], cached per step size.
 """
 
 from __future__ import annotations
@@ -19,34 +24,46 @@ from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability, Real
 from pythonfmu.enums import Fmi2Status
 from scipy.linalg import expm
 
+from mace_fmu.iomodel.modal_core import modal_matrices  # fmu: inlined
+from modelica_like.algebra import interconnect, pade  # fmu: inlined
+
 
 class MaceSlave(Fmi2Slave):
-    """State-space model y = C x + D u, x' = A x + B u with exact ZOH stepping."""
+    """State-space model y = C x + D u, x' = A x + B u, rebuilt from parameters; exact ZOH stepping."""
 
     author = "mace-fmu"
     description = "MACE volts-volts model"
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
-        data = np.load(Path(self.resources) / "model.npz", allow_pickle=False)
-        self._a, self._b, self._c, self._d = (np.asarray(data[k], dtype=np.float64) for k in "ABCD")
+        self._data = data = dict(np.load(Path(self.resources) / "model.npz", allow_pickle=False))
         self._inputs = [str(n) for n in data["inputs"]]
         self._outputs = [str(n) for n in data["outputs"]]
-        in_desc = [str(n) for n in data["input_descriptions"]]
-        out_desc = [str(n) for n in data["output_descriptions"]]
-        self._x = np.zeros(self._a.shape[0])
-        self._u = np.zeros(len(self._inputs))
-        self._y = None  # outputs, computed once per change of x or u (hosts read them one by one)
+        self._param_names = [str(n) for n in data["param_names"]]
+        self._nominal = np.asarray(data["param_values"], dtype=np.float64)
+        self._params = self._nominal.copy()
+        self._built_with = None
+        self._x = self._u = self._y = None
         self._cache: dict[float, tuple[np.ndarray, np.ndarray]] = {}
-        self._failed = False
-        for k, (name, desc) in enumerate(zip(self._inputs, in_desc)):
+        self._build()
+        for k, (name, desc) in enumerate(zip(self._inputs, data["input_descriptions"])):
             self.register_variable(Real(name, causality=Fmi2Causality.input, variability=Fmi2Variability.continuous,
-                                        start=0.0, description=desc, getter=self._input_getter(k),
+                                        start=0.0, description=str(desc), getter=self._input_getter(k),
                                         setter=self._input_setter(k)))
-        for k, (name, desc) in enumerate(zip(self._outputs, out_desc)):
+        for k, (name, desc) in enumerate(zip(self._outputs, data["output_descriptions"])):
             self.register_variable(Real(name, causality=Fmi2Causality.output, variability=Fmi2Variability.continuous,
-                                        description=desc, getter=self._output_getter(k)))
+                                        description=str(desc), getter=self._output_getter(k)))
+        for k, (name, desc) in enumerate(zip(self._param_names, data["param_descriptions"])):
+            self.register_variable(Real(name, causality=Fmi2Causality.parameter, variability=Fmi2Variability.fixed,
+                                        start=float(self._nominal[k]), description=str(desc),
+                                        getter=self._param_getter(k), setter=self._param_setter(k)))
+        for k, label in enumerate(data["mode_labels"]):
+            self.register_variable(Real(f"frequency_mode_{k + 1}", causality=Fmi2Causality.calculatedParameter,
+                                        variability=Fmi2Variability.fixed,
+                                        description=f"natural frequency [Hz] of mode {k + 1} ({label}) after reanalysis",
+                                        getter=self._frequency_getter(k)))
 
+    # --- variable access -------------------------------------------------------------------
     def _input_getter(self, k):
         return lambda: float(self._u[k])
 
@@ -58,11 +75,85 @@ class MaceSlave(Fmi2Slave):
 
     def _output_getter(self, k):
         def getter():
-            if self._y is None:
+            if self._y is None:  # computed once per change of x or u; hosts read outputs one by one
                 self._y = self._c @ self._x + self._d @ self._u
             return float(self._y[k])
         return getter
 
+    def _param_getter(self, k):
+        return lambda: float(self._params[k])
+
+    def _param_setter(self, k):
+        def setter(value):
+            self._params[k] = value
+        return setter
+
+    def _frequency_getter(self, k):
+        def getter():
+            self._build()
+            return float(self._frequencies[k])
+        return getter
+
+    # --- building the system from its blocks --------------------------------------------------
+    def _param(self, name: str) -> float:
+        return float(self._params[self._param_names.index(name)])
+
+    def _structure(self):
+        """(A, B, C, D) of the modal structure block for the current parameters."""
+        d = self._data
+        freq0 = d["frequencies_hz"]
+        omega2 = np.sign(freq0) * (2 * np.pi * freq0) ** 2
+        physical = [i for i, n in enumerate(self._param_names) if n in set(str(x) for x in d["physical_names"])]
+        rel = np.array([self._params[i] / self._nominal[i] - 1.0 for i in physical])
+        n = len(freq0)
+        if np.any(rel != 0.0):
+            k_r = np.diag(omega2) + np.tensordot(rel, d["physical_dk"], axes=1)
+            w2, phi_r = np.linalg.eigh(0.5 * (k_r + k_r.T))
+            freq = np.sign(w2) * np.sqrt(np.abs(w2)) / (2 * np.pi)
+        else:
+            freq, phi_r = freq0, np.eye(n)
+        self._frequencies = freq
+        zeta = np.array([self._param(f"damping_mode_{k + 1}") for k in range(n)])
+        disp = {str(name): row @ phi_r for name, row in zip(d["disp_names"], d["disp_rows"])}
+        rate = {str(name): row @ phi_r for name, row in zip(d["rate_names"], d["rate_rows"])}
+        labels = tuple(str(x) for x in d["mode_labels"])
+        a, b, c, *_ = modal_matrices(freq, zeta, labels, np.zeros((0, n)), phi_r.T @ d["modal_b"], disp, rate,
+                                     [str(x) for x in d["structure_outputs"]])
+        return a, b, c, np.zeros((c.shape[0], b.shape[1]))
+
+    def _block(self, i: int):
+        """(A, B, C, D) of block i for the current parameters."""
+        d = self._data
+        kind, param = str(d["block_kinds"][i]), str(d["block_params"][i])
+        if kind == "structure":
+            return self._structure()
+        if kind == "delay":
+            return pade(self._param(param), int(d["pade_order"]))
+        if kind == "gain":
+            return np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((1, 0)), np.array([[self._param(param)]])
+        if kind == "pd":
+            kp, kd = (self._param(p) for p in param.split(","))
+            return np.zeros((0, 0)), np.zeros((0, 2)), np.zeros((1, 0)), np.array([[kp, kd]])
+        return tuple(d[f"block{i}_{m}"] for m in "ABCD")
+
+    def _build(self) -> None:
+        """(Re)build A, B, C, D when the parameters changed since the last build."""
+        if self._built_with is not None and np.array_equal(self._built_with, self._params):
+            return
+        d = self._data
+        blocks = [self._block(i) for i in range(len(d["block_kinds"]))]
+        self._a, self._b, self._c, self._d = interconnect(blocks, d["wiring"], d["entry"], d["exit"])
+        self._built_with = self._params.copy()
+        self._cache.clear()
+        self._x = np.zeros(self._a.shape[0])
+        self._u = np.zeros(len(self._inputs)) if self._u is None else self._u
+        self._y = None
+
+    def exit_initialization_mode(self):
+        self._build()
+        return True
+
+    # --- stepping ----------------------------------------------------------------------------
     def _transition(self, h: float) -> tuple[np.ndarray, np.ndarray]:
         """(Phi, Gamma) of the zero-order hold over h seconds, cached."""
         if h not in self._cache:
