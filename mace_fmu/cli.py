@@ -161,6 +161,22 @@ def cmd_report(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_view(args: argparse.Namespace) -> int:
+    from viewer import animate_modes, write_mode_html  # meshcat is only needed here
+
+    deck = read_deck(args.deck)
+    max_hz = args.max_hz if args.max_hz is not None else (None if args.mode else 60.0)
+    result = compute_modes(deck, structure=args.structure, max_hz=max_hz, progress=_progress)
+    modes = args.mode or list(range(1, result.modes.frequencies_hz.size + 1))
+    animation = animate_modes(result, modes, scale=args.scale, cycles=args.cycles,
+                              seconds_per_cycle=args.seconds_per_cycle)
+    size = write_mode_html(animation, args.html, title=f"MACE {args.structure} modes")
+    for clip in animation.frames.clips:
+        print(f"  {clip.start_s:6.1f}-{clip.end_s:6.1f} s  {clip.title}")
+    print(f"wrote {args.html} ({size / 1e6:.1f} MB, {len(animation.mode_indices)} modes)")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="mace-fmu", description=__doc__)
     sub = parser.add_subparsers(dest="command", required=True)
@@ -211,6 +227,21 @@ def build_parser() -> argparse.ArgumentParser:
     deck_option(p)
     p.add_argument("--out", default="report", help="output directory (default ./report)")
     p.set_defaults(func=cmd_report)
+
+    p = sub.add_parser("view", help="meshcat animation of mode shapes as a standalone HTML file")
+    view = p.add_subparsers(dest="what", required=True)
+    p = view.add_parser("modes", help="animate mode shapes (one clip per mode, one after the other)")
+    p.add_argument("structure", choices=["1g", "0g"])
+    deck_option(p)
+    p.add_argument("--mode", action="append", help="1-based index or label (prefix); repeat for several "
+                   "(default: every mode up to --max-hz)")
+    p.add_argument("--max-hz", type=float, default=None, help="highest mode computed [Hz] (default 60 without --mode)")
+    p.add_argument("--scale", type=float, default=None,
+                   help="metres drawn per unit mass-normalised shape (default: largest motion 8%% of the size)")
+    p.add_argument("--cycles", type=int, default=1, help="vibration cycles per mode (default 1)")
+    p.add_argument("--seconds-per-cycle", type=float, default=1.0, help="playback time of one cycle [s]")
+    p.add_argument("--html", required=True, help="output HTML file")
+    p.set_defaults(func=cmd_view)
 
     p = sub.add_parser("build", help="the main job: modes next to the thesis tables, and both FMUs")
     deck_option(p)

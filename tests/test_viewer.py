@@ -1,0 +1,180 @@
+"""Viewer: the scene against the deck, key frames against shape x scale x sin, and a real browser."""
+
+from __future__ import annotations
+
+import base64
+import os
+import re
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+import umsgpack
+
+from mace_fmu.errors import MaceError
+from mace_fmu.pipeline import compute_modes
+from viewer import animate_mode, animate_modes, build_scene, scene_commands, standalone_html, write_mode_html
+from viewer.frames import body_motion
+from viewer.meshcat_scene import FLOAT32_EXT
+from viewer.scene import tube_outer_radius_m
+
+BUILD = Path(__file__).resolve().parents[1] / "build"
+
+
+@pytest.fixture(scope="module")
+def modes_0g():
+    return compute_modes(structure="0g", max_hz=60.0)
+
+
+@pytest.fixture(scope="module")
+def modes_1g():
+    return compute_modes(structure="1g", max_hz=20.0)
+
+
+def _decoded_commands(html: str) -> list[dict]:
+    blobs = re.search(r"var blobs = \[(.*?)\];", html, re.S).group(1)
+    return [umsgpack.unpackb(base64.b64decode(b)) for b in re.findall(r'"([A-Za-z0-9+/=]+)"', blobs)]
+
+
+def _track_values(animation: dict, path_suffix: str, name: str) -> np.ndarray:
+    for entry in animation["animations"]:
+        if entry["path"].endswith(path_suffix):
+            for track in entry["clip"]["tracks"]:
+                if track["name"] == "." + name:
+                    ext = track["values"]
+                    assert ext.type == FLOAT32_EXT
+                    return np.frombuffer(ext.data, dtype="<f4")
+    raise AssertionError(f"no {name} track for {path_suffix}")
+
+
+def test_tube_radius_from_area_and_inertia():
+    ro, ri = 0.02, 0.017
+    area = np.pi * (ro**2 - ri**2)
+    inertia = np.pi * (ro**4 - ri**4) / 4
+    assert tube_outer_radius_m(area, inertia) == pytest.approx(ro, rel=1e-12)
+
+
+def test_scene_bodies_match_the_deck(modes_0g, modes_1g):
+    for sm in (modes_0g, modes_1g):
+        deck = sm.structure.deck
+        scene = build_scene(sm, segments_per_bar=3)
+        assert len(scene.segments) == 3 * len(deck.bars)
+        assert {s.bar_id for s in scene.segments} == set(deck.bars)
+        assert len(scene.masses) == sum(1 for c in deck.conm2s.values() if c.mass > 0)
+        for body in scene.masses:
+            grid = deck.conm2s[int(body.name.split("/")[1])].grid
+            np.testing.assert_allclose(scene.positions_m[body.row], sm.model.positions[sm.model.dofs.grid_index(grid)])
+    # 1-g carries the suspension cables (CBAR 103-126), 0-g does not
+    cables_1g = {s.bar_id for s in build_scene(modes_1g).segments if s.radius_m == 0.0}
+    assert cables_1g == set(range(103, 127))
+    assert not any(s.radius_m == 0.0 for s in build_scene(modes_0g).segments)
+
+
+def test_mode_frames_are_shape_times_scale_times_sine(modes_0g):
+    anim = animate_mode(modes_0g, "1st Z bending", cycles=2, frames_per_cycle=16)
+    index = anim.mode_indices[0]
+    shape = modes_0g.modes.shapes[:, index - 1].reshape(-1, 6)
+    t = anim.frames.times_s[:-1]
+    expected = np.sin(2 * np.pi * t)[:, None, None] * anim.scales[0] * shape[None]
+    np.testing.assert_allclose(anim.frames.displacements[:-1], expected, atol=1e-15)
+    largest = anim.scales[0] * np.linalg.norm(shape[:, :3], axis=1).max()
+    assert largest == pytest.approx(0.08 * anim.scene.length_m, rel=1e-12)
+
+
+def test_exported_key_frames_reproduce_grid_motion(modes_0g):
+    """Decode the HTML's animation: masses move by shape x scale x sin, bar ends follow their grids."""
+    anim = animate_modes(modes_0g, ["1st Y bending", "torsion, primary"], frames_per_cycle=12)
+    html = standalone_html(scene_commands(anim.scene, anim.frames), title="t", clips=anim.frames.clips)
+    animation = [c for c in _decoded_commands(html) if c["type"] == "set_animation"][0]
+    n_frames = anim.frames.times_s.size
+    for body in anim.scene.masses[::5]:
+        got = _track_values(animation, body.name, "position").reshape(n_frames, 3)
+        want = anim.scene.positions_m[body.row] + anim.frames.displacements[:, body.row, :3]
+        np.testing.assert_allclose(got, want, atol=2e-7)
+    # first segment of each bar: its start point is grid A displaced, in position, orientation and length
+    motion = body_motion(anim.scene, anim.frames)
+    for k, seg in enumerate(anim.scene.segments):
+        if seg.s0 != 0.0 or k % 7:
+            continue
+        pos = _track_values(animation, seg.name, "position").reshape(n_frames, 3)
+        quat = _track_values(animation, seg.name, "quaternion").reshape(n_frames, 4)
+        stretch = _track_values(animation, seg.name, "scale").reshape(n_frames, 3)[:, 1]
+        np.testing.assert_allclose(pos, motion.segment_positions_m[:, k], atol=2e-7)
+        x, y, z, w = quat.T.astype(float)
+        axis_dir = np.stack([2 * (x * y - w * z), 1 - 2 * (x * x + z * z), 2 * (y * z + w * x)], axis=1)  # R @ e_y
+        length0 = (seg.s1 - seg.s0) * np.linalg.norm(anim.scene.positions_m[seg.row_b] - anim.scene.positions_m[seg.row_a])
+        start = pos - 0.5 * length0 * stretch[:, None] * axis_dir
+        want = anim.scene.positions_m[seg.row_a] + anim.frames.displacements[:, seg.row_a, :3]
+        np.testing.assert_allclose(start, want, atol=1e-6)
+
+
+def test_rigid_rotation_moves_every_bar_point_rigidly(modes_0g):
+    """A rigid-body rotation mode is a linear field u = a + theta x x: the cubic bars reproduce it exactly."""
+    anim = animate_mode(modes_0g, "rigid body: Y rotation", frames_per_cycle=8)
+    shape = modes_0g.modes.shapes[:, anim.mode_indices[0] - 1].reshape(-1, 6) * anim.scales[0]
+    on_bars = sorted({s.row_a for s in anim.scene.segments} | {s.row_b for s in anim.scene.segments})
+    theta = shape[on_bars[0], 3:]
+    a = shape[on_bars[0], :3] - np.cross(theta, anim.scene.positions_m[on_bars[0]])
+    np.testing.assert_allclose(shape[on_bars, 3:], np.broadcast_to(theta, (len(on_bars), 3)), atol=1e-12)
+    np.testing.assert_allclose(shape[on_bars, :3], a + np.cross(theta, anim.scene.positions_m[on_bars]), atol=1e-12)
+    motion = body_motion(anim.scene, anim.frames)
+    mids0 = motion.segment_positions_m[0]  # frame 0 is undeformed (sin 0)
+    sine = np.sin(2 * np.pi * anim.frames.times_s)
+    want = mids0[None] + sine[:, None, None] * (a + np.cross(theta, mids0))[None]
+    np.testing.assert_allclose(motion.segment_positions_m, want, atol=1e-12)
+
+
+def test_bad_mode_names_say_what_exists(modes_0g):
+    with pytest.raises(MaceError, match="exactly one mode"):
+        animate_mode(modes_0g, "no such mode")
+    with pytest.raises(MaceError, match="numbered 1 to"):
+        animate_mode(modes_0g, 999)
+
+
+def _chromium() -> str | None:
+    return shutil.which("chromium") or shutil.which("chromium-browser")
+
+
+@pytest.mark.skipif(_chromium() is None and not os.environ.get("MACE_REQUIRE_CHROMIUM"),
+                    reason="Debian chromium not installed (.ci/run installs it and requires this test)")
+def test_html_renders_the_structure_in_headless_chromium(modes_0g, tmp_path):
+    from PIL import Image
+
+    assert _chromium(), "chromium missing: .ci/run must install Debian's chromium"
+    anim = animate_modes(modes_0g, [14, 15], frames_per_cycle=12)
+    page = tmp_path / "modes.html"
+    write_mode_html(anim, page, title="MACE 0g modes")
+    BUILD.mkdir(exist_ok=True)
+    shot = BUILD / "viewer_0g_modes.png"
+    shot.unlink(missing_ok=True)
+    subprocess.run([_chromium(), "--headless", "--no-sandbox", "--disable-gpu", "--enable-unsafe-swiftshader",
+                    "--use-angle=swiftshader", "--disable-quic", "--no-first-run", "--disable-background-networking",
+                    "--disable-component-update", "--disable-sync", f"--user-data-dir={tmp_path / 'profile'}",
+                    "--window-size=800,600", "--virtual-time-budget=3000", f"--screenshot={shot}", page.as_uri()],
+                   check=True, capture_output=True, timeout=240)
+    pixels = np.asarray(Image.open(shot).convert("RGB"), dtype=float)
+    assert pixels.shape == (600, 800, 3)
+    assert pixels.std() > 20.0  # not blank
+    r, g, b = pixels[..., 0], pixels[..., 1], pixels[..., 2]
+    # the bus is drawn in its component blue (0x4A7FC1), the secondary gimbal red, the wheels green
+    bus_like = (np.abs(r - 0x4A) < 40) & (np.abs(g - 0x7F) < 40) & (b > 150) & (b - r > 60)
+    red_like = (r > 150) & (g < 110) & (b < 130)
+    green_like = (g > 120) & (r < 110) & (b < 120)
+    assert bus_like.sum() > 200, f"bus pixels: {bus_like.sum()}"
+    assert red_like.sum() > 50, f"secondary gimbal pixels: {red_like.sum()}"
+    assert green_like.sum() > 50, f"wheel pixels: {green_like.sum()}"
+
+
+def test_cli_writes_the_html_and_lists_the_clips(tmp_path, capsys):
+    from mace_fmu.cli import main
+
+    out = tmp_path / "m.html"
+    assert main(["view", "modes", "0g", "--mode", "1st Z bending", "--mode", "15", "--html", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "mode 14: 2.100 Hz 1st Z bending" in printed and "mode 15:" in printed
+    commands = _decoded_commands(out.read_text())
+    assert sum(c["type"] == "set_object" for c in commands) > 100
+    assert main(["view", "modes", "0g", "--mode", "no such", "--html", str(out)]) == 2
+    assert "exactly one mode" in capsys.readouterr().err

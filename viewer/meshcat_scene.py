@@ -1,0 +1,101 @@
+"""The scene and its key frames as meshcat commands, for a live server or a standalone HTML."""
+
+from __future__ import annotations
+
+import meshcat.geometry as g
+import numpy as np
+import umsgpack
+from meshcat.commands import SetObject, SetProperty, SetTransform
+from meshcat.path import Path
+
+from viewer.frames import BodyMotion, Frames, body_motion
+from viewer.scene import COMPONENT_COLOURS, Scene
+
+ROOT = Path(("meshcat", "mace"))
+#: Deck basic axes have Y up (gravity -Y, thesis Fig. 3.1); meshcat has Z up: turn +90 deg about X.
+Y_UP_TO_Z_UP = np.array([[1.0, 0, 0, 0], [0, 0, -1, 0], [0, 1, 0, 0], [0, 0, 0, 1]])
+CABLE_DRAW_RADIUS_M = 0.0015
+
+
+class _Raw:
+    """A command already lowered to its msgpack-ready dict (meshcat's own classes build it slowly)."""
+
+    def __init__(self, data: dict):
+        self.data = data
+
+    def lower(self) -> dict:
+        return self.data
+
+
+def _material(component: str) -> g.MeshLambertMaterial:
+    return g.MeshLambertMaterial(color=COMPONENT_COLOURS.get(component, COMPONENT_COLOURS["other"]))
+
+
+#: msgpack extension code of a Float32Array, as meshcat's geometry and its viewer's decoder use it
+FLOAT32_EXT = 0x17
+
+
+def _float32(values: np.ndarray) -> umsgpack.Ext:
+    return umsgpack.Ext(FLOAT32_EXT, np.ascontiguousarray(values, dtype="<f4").tobytes())
+
+
+def _track(name: str, jstype: str, values: np.ndarray) -> dict:
+    """A three.js keyframe track in its flat form (times in frames, values row-major)."""
+    return {"name": "." + name, "type": jstype, "times": _float32(np.arange(values.shape[0])),
+            "values": _float32(values)}
+
+
+def static_commands(scene: Scene) -> list:
+    """Commands that draw the undeformed structure, a ground plane and axes."""
+    cmds: list = [SetTransform(Y_UP_TO_Z_UP, ROOT)]
+    for seg in scene.segments:
+        a, b = scene.positions_m[seg.row_a], scene.positions_m[seg.row_b]
+        length = (seg.s1 - seg.s0) * float(np.linalg.norm(b - a))
+        radius = seg.radius_m if seg.radius_m > 0 else CABLE_DRAW_RADIUS_M
+        cmds.append(SetObject(g.Cylinder(length, radius), _material(seg.component), ROOT.append(seg.name)))
+    for mass in scene.masses:
+        cmds.append(SetObject(g.Sphere(mass.radius_m), _material(mass.component), ROOT.append(mass.name)))
+    floor = np.eye(4)
+    floor[:3, 3] = 0.5 * (scene.positions_m.min(axis=0) + scene.positions_m.max(axis=0))
+    floor[1, 3] = scene.positions_m[:, 1].min() - 0.05
+    cmds.append(SetObject(g.Box([2.0 * scene.length_m, 0.005, 2.0 * scene.length_m]),
+                          g.MeshLambertMaterial(color=0xDDDDDD, opacity=0.6, transparent=True),
+                          ROOT.append("ground")))
+    cmds.append(SetTransform(floor, ROOT.append("ground")))
+    cmds.append(SetObject(g.triad(0.3 * scene.length_m), path=ROOT.append("axes")))
+    # meshcat's camera node is in three.js axes (Y up): look down at the structure from a diagonal
+    cmds.append(SetProperty("position", [0.9 * scene.length_m, 0.6 * scene.length_m, 1.1 * scene.length_m],
+                            Path(("Cameras", "default", "rotated", "<object>"))))
+    return cmds
+
+
+def animation_command(scene: Scene, frames: Frames, motion: BodyMotion | None = None,
+                      repetitions: int = 1000) -> _Raw:
+    """One set_animation command key-framing every body's transform at every frame."""
+    motion = body_motion(scene, frames) if motion is None else motion
+    animations = []
+    ones = np.ones_like(motion.segment_stretch)
+    for k, seg in enumerate(scene.segments):
+        scale = np.stack([ones[:, k], motion.segment_stretch[:, k], ones[:, k]], axis=1)
+        tracks = [_track("position", "vector3", motion.segment_positions_m[:, k]),
+                  _track("quaternion", "quaternion", motion.segment_quaternions[:, k]),
+                  _track("scale", "vector3", scale)]
+        animations.append({"path": ROOT.append(seg.name).lower(),
+                           "clip": {"fps": frames.fps, "name": "default", "tracks": tracks}})
+    for k, mass in enumerate(scene.masses):
+        animations.append({"path": ROOT.append(mass.name).lower(),
+                           "clip": {"fps": frames.fps, "name": "default",
+                                    "tracks": [_track("position", "vector3", motion.mass_positions_m[:, k])]}})
+    return _Raw({"type": "set_animation", "animations": animations,
+                 "options": {"play": True, "repetitions": repetitions}, "path": ""})
+
+
+def scene_commands(scene: Scene, frames: Frames) -> list:
+    """All commands: the drawn structure then its animation."""
+    return static_commands(scene) + [animation_command(scene, frames)]
+
+
+def send_to_visualizer(visualizer, commands: list) -> None:
+    """Replay commands on a live ``meshcat.Visualizer`` (for interactive work)."""
+    for cmd in commands:
+        visualizer.window.send(cmd)

@@ -1,0 +1,97 @@
+"""The structure as drawable bodies: bar segments, lumped masses, springs (SI units, basic axes)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from mace_fmu.pipeline import StructureModes
+
+#: RGB colours by component (``mace_em.toml`` [components]); anything else is "other".
+COMPONENT_COLOURS: dict[str, int] = {
+    "bus": 0x4A7FC1, "bus_rate_gyro": 0x4A7FC1, "primary_gimbal": 0xE08A2E, "secondary_gimbal": 0xD1495B,
+    "reaction_wheels": 0x3FA34D, "suspension_attach": 0x888888, "cable_1": 0x555555, "cable_2": 0x555555,
+    "cable_3": 0x555555, "other": 0x9E9E9E,
+}
+#: Materials drawn as lines (no bending stiffness worth showing): the suspension cables.
+CABLE_MATERIALS = frozenset({5, 6, 7})
+
+
+@dataclass(frozen=True)
+class BarSegment:
+    """One straight piece of a bar, ``s0``..``s1`` along it (0 = GA, 1 = GB)."""
+
+    name: str  #: scene path, "bars/<cbar id>/<k>"
+    bar_id: int
+    row_a: int  #: grid row of GA in the DofMap
+    row_b: int
+    s0: float
+    s1: float
+    radius_m: float  #: outer radius of the section; 0 for a cable (drawn as a line)
+    component: str
+
+
+@dataclass(frozen=True)
+class MassBody:
+    """A CONM2 drawn as a sphere at its grid, radius from its mass (steel density)."""
+
+    name: str  #: "masses/<conm2 id>"
+    row: int
+    radius_m: float
+    component: str
+
+
+@dataclass(frozen=True)
+class Scene:
+    """Everything the viewer draws, with undeformed grid positions [m] (deck basic axes, Y up)."""
+
+    positions_m: np.ndarray  #: (n_grid, 3)
+    grid_ids: tuple[int, ...]
+    segments: tuple[BarSegment, ...]
+    masses: tuple[MassBody, ...]
+    length_m: float  #: largest extent of the structure, for scaling deflections
+
+
+def tube_outer_radius_m(area_m2: float, inertia_m4: float) -> float:
+    """Outer radius of the thin or thick tube with this area and (mean) bending inertia."""
+    # A = pi (ro^2 - ri^2), I = A (ro^2 + ri^2) / 4  ->  ro^2 = (4 I / A + A / pi) / 2
+    return float(np.sqrt(max(4.0 * inertia_m4 / area_m2 + area_m2 / np.pi, 0.0) / 2.0))
+
+
+def _component_of(spec_components, grid_ids: tuple[int, ...]) -> str:
+    for name, grids in spec_components.items():
+        if all(g in grids for g in grid_ids):
+            return name
+    return "other"
+
+
+def build_scene(structure_modes: StructureModes, *, segments_per_bar: int = 4) -> Scene:
+    """Bodies of a computed structure: each CBAR in ``segments_per_bar`` pieces, each CONM2 a sphere."""
+    if segments_per_bar < 1:
+        raise ValueError(f"segments_per_bar must be >= 1, got {segments_per_bar}")
+    deck = structure_modes.structure.deck
+    dofs = structure_modes.model.dofs
+    components = structure_modes.structure.spec.components
+    positions = structure_modes.model.positions
+    segments = []
+    for bar_id, bar in sorted(deck.bars.items()):
+        pbar = deck.pbars[bar.pid]
+        cable = pbar.mid in CABLE_MATERIALS
+        radius = 0.0 if cable else tube_outer_radius_m(pbar.area, 0.5 * (pbar.i1 + pbar.i2))
+        component = _component_of(components, (bar.ga, bar.gb))
+        edges = np.linspace(0.0, 1.0, segments_per_bar + 1)
+        for k in range(segments_per_bar):
+            segments.append(BarSegment(name=f"bars/{bar_id}/{k}", bar_id=bar_id, row_a=dofs.grid_index(bar.ga),
+                                       row_b=dofs.grid_index(bar.gb), s0=float(edges[k]), s1=float(edges[k + 1]),
+                                       radius_m=radius, component=component))
+    masses = []
+    for mid, conm in sorted(deck.conm2s.items()):
+        if conm.mass <= 0.0:
+            continue
+        radius = float(np.cbrt(3.0 * conm.mass / (4.0 * np.pi * 7800.0)))
+        masses.append(MassBody(name=f"masses/{mid}", row=dofs.grid_index(conm.grid), radius_m=radius,
+                               component=_component_of(components, (conm.grid,))))
+    extent = positions.max(axis=0) - positions.min(axis=0)
+    return Scene(positions_m=positions, grid_ids=dofs.grid_ids, segments=tuple(segments), masses=tuple(masses),
+                 length_m=float(extent.max()))
