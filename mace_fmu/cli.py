@@ -162,18 +162,34 @@ def cmd_report(args: argparse.Namespace) -> int:
 
 
 def cmd_view(args: argparse.Namespace) -> int:
-    from viewer import animate_modes, write_mode_html  # meshcat is only needed here
+    from viewer import animate_modes, scene_commands, send_to_visualizer, write_mode_html  # meshcat only here
 
+    if not args.html and not args.live:
+        raise MaceError("say where to show the animation: --html OUT.html, --live, or both")
     deck = read_deck(args.deck)
     max_hz = args.max_hz if args.max_hz is not None else (None if args.mode else 60.0)
     result = compute_modes(deck, structure=args.structure, max_hz=max_hz, progress=_progress)
     modes = args.mode or list(range(1, result.modes.frequencies_hz.size + 1))
     animation = animate_modes(result, modes, scale=args.scale, cycles=args.cycles,
                               seconds_per_cycle=args.seconds_per_cycle)
-    size = write_mode_html(animation, args.html, title=f"MACE {args.structure} modes")
     for clip in animation.frames.clips:
         print(f"  {clip.start_s:6.1f}-{clip.end_s:6.1f} s  {clip.title}")
-    print(f"wrote {args.html} ({size / 1e6:.1f} MB, {len(animation.mode_indices)} modes)")
+    if args.html:
+        size = write_mode_html(animation, args.html, title=f"MACE {args.structure} modes")
+        print(f"wrote {args.html} ({size / 1e6:.1f} MB, {len(animation.mode_indices)} modes)")
+    if args.live:
+        import time
+
+        import meshcat
+
+        visualizer = meshcat.Visualizer()
+        send_to_visualizer(visualizer, scene_commands(animation.scene, animation.frames))
+        print(f"meshcat server at {visualizer.url()} - Ctrl-C to stop", flush=True)
+        try:
+            while True:
+                time.sleep(1.0)
+        except KeyboardInterrupt:
+            pass
     return 0
 
 
@@ -240,7 +256,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="metres drawn per unit mass-normalised shape (default: largest motion 8%% of the size)")
     p.add_argument("--cycles", type=int, default=1, help="vibration cycles per mode (default 1)")
     p.add_argument("--seconds-per-cycle", type=float, default=1.0, help="playback time of one cycle [s]")
-    p.add_argument("--html", required=True, help="output HTML file")
+    p.add_argument("--html", help="write a standalone HTML file (opens in any browser, no server)")
+    p.add_argument("--live", action="store_true", help="also serve it on a live meshcat server until Ctrl-C")
     p.set_defaults(func=cmd_view)
 
     p = sub.add_parser("build", help="the main job: modes next to the thesis tables, and both FMUs")
