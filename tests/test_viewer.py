@@ -131,6 +131,8 @@ def test_bad_mode_names_say_what_exists(modes_0g):
         animate_mode(modes_0g, "no such mode")
     with pytest.raises(MaceError, match="numbered 1 to"):
         animate_mode(modes_0g, 999)
+    with pytest.raises(MaceError, match="seconds_per_cycle > 0"):
+        animate_mode(modes_0g, 14, seconds_per_cycle=0.0)
 
 
 def _chromium() -> str | None:

@@ -61,8 +61,11 @@ def animate_modes(structure_modes: StructureModes, modes: Sequence[int | str], *
     unit shape] defaults to the one that makes the largest translation ``fraction_of_length`` of
     the structure's size.
     """
-    if cycles < 1 or frames_per_cycle < 4:
-        raise MaceError(f"need cycles >= 1 and frames_per_cycle >= 4, got {cycles} and {frames_per_cycle}")
+    if cycles < 1 or frames_per_cycle < 4 or not seconds_per_cycle > 0:
+        raise MaceError(f"need cycles >= 1, frames_per_cycle >= 4 and seconds_per_cycle > 0 [s], got {cycles}, "
+                        f"{frames_per_cycle} and {seconds_per_cycle}")
+    if scale is not None and not np.isfinite(scale):
+        raise MaceError(f"scale must be a finite number of metres per unit shape, got {scale}")
     scene = build_scene(structure_modes, segments_per_bar=segments_per_bar)
     indices = tuple(mode_index(structure_modes, m) for m in modes)
     if not indices:
