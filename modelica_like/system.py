@@ -136,14 +136,7 @@ class System:
 
         Exposing an existing name again adds a destination (one input may feed many).
         """
-        names = self._names(names, "expose_input", ref)
-        sel = self._select(ref)
-        if sel.connector.causality != "input":
-            raise ModelError(f"expose_input({ref!r}): {sel.where} is an output; expected a "
-                             "block input connector")
-        if len(names) != len(sel.elements):
-            raise ModelError(f"expose_input({names!r}, {ref!r}): size mismatch: {len(names)} "
-                             f"name(s) for {sel.text} of size {len(sel.elements)}")
+        names, sel = self._exposed(names, ref, "input")
         clash = [n for n in names if n in self._outputs]
         if clash:
             raise ModelError(f"expose_input({ref!r}): {clash} already name system outputs; "
@@ -155,14 +148,7 @@ class System:
 
     def expose_output(self, names: str | Sequence[str], ref: str) -> None:
         """Make the output connector ``ref`` system output(s) ``names`` (one per element)."""
-        names = self._names(names, "expose_output", ref)
-        sel = self._select(ref)
-        if sel.connector.causality != "output":
-            raise ModelError(f"expose_output({ref!r}): {sel.where} is an input; expected a "
-                             "block output connector")
-        if len(names) != len(sel.elements):
-            raise ModelError(f"expose_output({names!r}, {ref!r}): size mismatch: {len(names)} "
-                             f"name(s) for {sel.text} of size {len(sel.elements)}")
+        names, sel = self._exposed(names, ref, "output")
         for n in names:
             if n in self._outputs:
                 raise ModelError(f"expose_output({ref!r}): system output {n!r} is already "
@@ -171,6 +157,19 @@ class System:
                 raise ModelError(f"expose_output({ref!r}): {n!r} already names a system input; "
                                  "input and output names must differ")
         self._outputs.update(zip(names, sel.elements))
+
+    def _exposed(self, names: str | Sequence[str], ref: str, causality: str) -> tuple[list[str], _Selection]:
+        """Names and the connector they expose, checked for causality and size."""
+        method = f"expose_{causality}"
+        names = self._names(names, method, ref)
+        sel = self._select(ref)
+        if sel.connector.causality != causality:
+            raise ModelError(f"{method}({ref!r}): {sel.where} is an {sel.connector.causality}; expected a "
+                             f"block {causality} connector")
+        if len(names) != len(sel.elements):
+            raise ModelError(f"{method}({names!r}, {ref!r}): size mismatch: {len(names)} "
+                             f"name(s) for {sel.text} of size {len(sel.elements)}")
+        return names, sel
 
     # --- checking and compiling ---------------------------------------------------------------
     def check(self) -> None:
