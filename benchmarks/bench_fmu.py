@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import platform
 import statistics
 import tempfile
 import time
@@ -16,7 +15,7 @@ import control as ct
 import fmpy
 import numpy as np
 
-from bench_modes import cpu_name
+from common import machine_line
 from mace_fmu.fmu.export import export_fmu
 from mace_fmu.iomodel.volts import volts_model
 
@@ -60,8 +59,7 @@ def main() -> None:
     err = np.max(np.abs(y - ref.outputs) / np.ptp(ref.outputs, axis=1, keepdims=True))
     f, c = statistics.median(fmu_times), statistics.median(ctl_times)
     n_steps = len(t) - 1
-    print(f"- machine: {cpu_name()}, {os.cpu_count()} cores, Python {platform.python_version()}, "
-          f"fmpy {fmpy.__version__}, control {ct.__version__}")
+    print(machine_line(fmpy=fmpy.__version__, control=ct.__version__))
     print(f"- date: {time.strftime('%Y-%m-%d')}, runs: {args.runs} (median)\n")
     print("| case | median [s] | per step [us] | notes |")
     print("|---|---|---|---|")

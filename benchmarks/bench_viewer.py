@@ -5,11 +5,11 @@ Run: python benchmarks/bench_viewer.py   (goal: under 2 s, modes computed before
 
 from __future__ import annotations
 
+import importlib.metadata
 import os
-import statistics
 import tempfile
-import time
 
+from common import machine_line, timed
 from mace_fmu.pipeline import compute_modes
 from viewer import animate_modes, write_mode_html
 
@@ -17,18 +17,14 @@ from viewer import animate_modes, write_mode_html
 def main(repeats: int = 7) -> None:
     modes = compute_modes(structure="0g", max_hz=60.0)
     indices = list(range(1, modes.modes.frequencies_hz.size + 1))
-    times, size = [], 0
     with tempfile.TemporaryDirectory() as tmp:
         path = os.path.join(tmp, "modes.html")
-        for _ in range(repeats):
-            t0 = time.perf_counter()
-            size = write_mode_html(animate_modes(modes, indices), path, title="MACE 0g modes")
-            times.append(time.perf_counter() - t0)
-    t0 = time.perf_counter()
-    compute_modes(structure="0g", max_hz=60.0)
-    solve = time.perf_counter() - t0
-    print(f"0-g, {len(indices)} modes <= 60 Hz: HTML written in {statistics.median(times):.3f} s "
-          f"(median of {repeats}; min {min(times):.3f}), {size / 1e6:.1f} MB; eigen-solution {solve:.3f} s")
+        median, fastest, size = timed(lambda: write_mode_html(animate_modes(modes, indices), path,
+                                                              title="MACE 0g modes"), repeats)
+    solve, _, _ = timed(lambda: compute_modes(structure="0g", max_hz=60.0), 1)
+    print(machine_line(meshcat=importlib.metadata.version("meshcat")))
+    print(f"0-g, {len(indices)} modes <= 60 Hz: HTML written in {median:.3f} s "
+          f"(median of {repeats}; min {fastest:.3f}), {size / 1e6:.1f} MB; eigen-solution {solve:.3f} s")
 
 
 if __name__ == "__main__":

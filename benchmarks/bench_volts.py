@@ -6,34 +6,22 @@ Run by hand: ``python benchmarks/bench_volts.py [--runs 5]``; results go into be
 from __future__ import annotations
 
 import argparse
-import statistics
 import time
 
 import control as ct
 import numpy as np
 
-from bench_modes import cpu_name
+from common import machine_line, timed
 from mace_fmu.deck.reader import read_deck
 from mace_fmu.iomodel.volts import volts_model
 from mace_fmu.structure import bundled_deck_path
-
-
-def timed(fn, runs):
-    times, out = [], None
-    for _ in range(runs):
-        t0 = time.perf_counter()
-        out = fn()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times), min(times), out
 
 
 def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--runs", type=int, default=5)
     args = parser.parse_args()
-    import os, platform
-    print(f"- machine: {cpu_name()}, {os.cpu_count()} cores, Python {platform.python_version()}, "
-          f"control {ct.__version__}, numpy {np.__version__}")
+    print(machine_line(control=ct.__version__, numpy=np.__version__))
     print(f"- date: {time.strftime('%Y-%m-%d')}, runs: {args.runs} (median, min)\n")
     print("| case | median [s] | min [s] | notes |")
     print("|---|---|---|---|")
