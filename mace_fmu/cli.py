@@ -63,16 +63,18 @@ def cmd_modes(args: argparse.Namespace) -> int:
 def cmd_build(args: argparse.Namespace) -> int:
     # imported here, as in the other commands, so that `mace-fmu modes` starts without control/pythonfmu
     from mace_fmu.fmu.export import export_fmu
-    from mace_fmu.iomodel.volts import volts_model
+    from mace_fmu.iomodel.volts import DEFAULT_MAX_HZ, volts_model
     from mace_fmu.thesis import format_rows, format_side_by_side, table_5_1_0g, table_5_1_1g, thesis_data
 
     deck = read_deck(args.deck)
     _progress("0-g modes (suspension removed, linear)")
-    m0 = compute_modes(deck, structure="0g")
+    # the modes the FMUs are built from: the same cut-off as `mace-fmu export`, whatever the deck's EIGRL says
+    m0 = compute_modes(deck, structure="0g", max_hz=DEFAULT_MAX_HZ)
     results = {}
     for kind in ("large", "linear"):
         _progress(f"1-g modes ({kind} gravity preload)")
-        results[kind] = compute_modes(deck, structure="1g", preload=kind, progress=_progress if kind == "large" else None)
+        results[kind] = compute_modes(deck, structure="1g", preload=kind, max_hz=DEFAULT_MAX_HZ,
+                                      progress=_progress if kind == "large" else None)
     print(format_rows(table_5_1_0g(m0), title="Table 5.1, 0-g column (flexible modes)"))
     print()
     print(format_side_by_side({kind: table_5_1_1g(m1, m0) for kind, m1 in results.items()},
@@ -200,6 +202,15 @@ def build_parser() -> argparse.ArgumentParser:
     def deck_option(p: argparse.ArgumentParser) -> None:
         p.add_argument("--deck", default=str(bundled_deck_path()), help="NASTRAN bulk deck (default: bundled MACE deck)")
 
+    def model_options(p: argparse.ArgumentParser) -> None:
+        p.add_argument("--max-hz", type=float, default=250.0, help="highest retained mode [Hz] (default 250)")
+        p.add_argument("--bessel", choices=["full", "delay", "none"], default="full",
+                       help="Bessel filters as 8-pole filters, as their 2.44 ms Pade delay, or left out")
+        p.add_argument("--no-servos", action="store_true", help="leave the wheel speed loops and gimbal servos open")
+        p.add_argument("--no-delays", action="store_true", help="leave out the actuator and gyro time delays")
+        p.add_argument("--pade-order", type=int, default=3, help="order of the Pade delay approximations (default 3)")
+        p.add_argument("--preload", choices=["large", "linear"], default="large", help="1-g gravity preload")
+
     p = sub.add_parser("modes", help="natural frequencies [Hz] and labels of the 1-g or 0-g structure")
     p.add_argument("structure", choices=["1g", "0g"])
     deck_option(p)
@@ -218,25 +229,14 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="states, signal names and poles as JSON")
     p.add_argument("--npz", metavar="FILE", help="write A, B, C, D and the signal names to FILE (.npz)")
     p.add_argument("--modelica", metavar="FILE", help="write the model as Modelica source (.mo)")
-    p.add_argument("--max-hz", type=float, default=250.0, help="highest retained mode [Hz] (default 250)")
-    p.add_argument("--bessel", choices=["full", "delay", "none"], default="full",
-                   help="Bessel filters as 8-pole filters, as their 2.44 ms Pade delay, or left out")
-    p.add_argument("--no-servos", action="store_true", help="leave the wheel speed loops and gimbal servos open")
-    p.add_argument("--no-delays", action="store_true", help="leave out the actuator and gyro time delays")
-    p.add_argument("--pade-order", type=int, default=3, help="order of the Pade delay approximations (default 3)")
-    p.add_argument("--preload", choices=["large", "linear"], default="large", help="1-g gravity preload")
+    model_options(p)
     p.set_defaults(func=cmd_model)
 
     p = sub.add_parser("export", help="FMI 2.0 co-simulation FMU of the 1-g or 0-g volts-volts model")
     p.add_argument("structure", choices=["1g", "0g"])
     deck_option(p)
     p.add_argument("-o", "--out", default=".", help="output directory (writes MACE_1g.fmu / MACE_0g.fmu)")
-    p.add_argument("--max-hz", type=float, default=250.0, help="highest retained mode [Hz] (default 250)")
-    p.add_argument("--bessel", choices=["full", "delay", "none"], default="full")
-    p.add_argument("--no-servos", action="store_true")
-    p.add_argument("--no-delays", action="store_true")
-    p.add_argument("--pade-order", type=int, default=3)
-    p.add_argument("--preload", choices=["large", "linear"], default="large")
+    model_options(p)
     p.set_defaults(func=cmd_export)
 
     p = sub.add_parser("report", help="Bode plots of the 1-g and 0-g models (PNG; thesis Figs. 4.15, 4.16, 5.1, 5.2)")

@@ -21,11 +21,11 @@ CHANNELS = (
 )
 
 
-def channel_response(model: VoltsModel, u: str, y: str, frequencies_hz: np.ndarray) -> np.ndarray:
-    """Complex response [V/V] of one named channel."""
+def channel_response(model: VoltsModel, response: np.ndarray, u: str, y: str) -> np.ndarray:
+    """Complex response [V/V] of one named channel out of the model's all-channel ``response``."""
     i = list(model.system.input_labels).index(u)
     o = list(model.system.output_labels).index(y)
-    return model.frequency_response(frequencies_hz)[:, o, i]
+    return response[:, o, i]
 
 
 def bode_report(deck: Deck | None = None, *, out_dir: str | Path = "report",
@@ -34,16 +34,17 @@ def bode_report(deck: Deck | None = None, *, out_dir: str | Path = "report",
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     f = np.logspace(np.log10(0.1), np.log10(250.0), 2000) if frequencies_hz is None else frequencies_hz
-    models = {}
+    models, responses = {}, {}
     for kind in ("1g", "0g"):
         if progress:
             progress(f"{kind} volts-volts model")
         models[kind] = volts_model(kind, deck=deck)
+        responses[kind] = models[kind].frequency_response(f)  # all channels at once, then indexed
     paths = []
     for u, y, title in CHANNELS:
         fig, (ax_m, ax_p) = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
         for kind, style in (("1g", "-"), ("0g", "--")):
-            h = channel_response(models[kind], u, y, f)
+            h = channel_response(models[kind], responses[kind], u, y)
             ax_m.loglog(f, np.abs(h), style, label=f"{kind} model")
             ax_p.semilogx(f, np.degrees(np.unwrap(np.angle(h))), style)
         ax_m.set_ylabel("magnitude [V/V]")

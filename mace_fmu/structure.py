@@ -50,10 +50,10 @@ class StructureSpec:
     mechanisms: tuple[Mechanism, ...]
     source: str
 
-    def component_of(self, grid: int) -> str | None:
-        """Name of the component that contains ``grid`` (None when it is in none)."""
-        for name, grids in self.components.items():
-            if grid in grids:
+    def component_of(self, *grids: int) -> str | None:
+        """Name of the component that contains every one of ``grids`` (None when none does)."""
+        for name, members in self.components.items():
+            if all(g in members for g in grids):
                 return name
         return None
 

@@ -9,7 +9,7 @@ from meshcat.commands import SetObject, SetProperty, SetTransform
 from meshcat.path import Path
 
 from viewer.frames import BodyMotion, Frames, body_motion
-from viewer.scene import COMPONENT_COLOURS, Scene
+from viewer.scene import Scene, component_colour
 
 ROOT = Path(("meshcat", "mace"))
 #: Deck basic axes have Y up (gravity -Y, thesis Fig. 3.1); meshcat has Z up: turn +90 deg about X.
@@ -28,7 +28,7 @@ class _Raw:
 
 
 def _material(component: str) -> g.MeshLambertMaterial:
-    return g.MeshLambertMaterial(color=COMPONENT_COLOURS.get(component, COMPONENT_COLOURS["other"]))
+    return g.MeshLambertMaterial(color=component_colour(component))
 
 
 #: msgpack extension code of a Float32Array, as meshcat's geometry and its viewer's decoder use it

@@ -8,14 +8,19 @@ import numpy as np
 
 from mace_fmu.pipeline import StructureModes
 
-#: RGB colours by component (``mace_em.toml`` [components]); anything else is "other".
+#: RGB colours by component name prefix (``mace_em.toml`` [components]); anything else is "other".
 COMPONENT_COLOURS: dict[str, int] = {
-    "bus": 0x4A7FC1, "bus_rate_gyro": 0x4A7FC1, "primary_gimbal": 0xE08A2E, "secondary_gimbal": 0xD1495B,
-    "reaction_wheels": 0x3FA34D, "suspension_attach": 0x888888, "cable_1": 0x555555, "cable_2": 0x555555,
-    "cable_3": 0x555555, "other": 0x9E9E9E,
+    "bus": 0x4A7FC1, "primary_gimbal": 0xE08A2E, "secondary_gimbal": 0xD1495B, "reaction_wheels": 0x3FA34D,
+    "suspension": 0x888888, "cable": 0x555555, "other": 0x9E9E9E,
 }
-#: Materials drawn as lines (no bending stiffness worth showing): the suspension cables.
-CABLE_MATERIALS = frozenset({5, 6, 7})
+#: Components whose bars are drawn as lines (no bending stiffness worth showing), as fe.labels finds cables.
+CABLE_PREFIX = "cable_"
+
+
+def component_colour(component: str) -> int:
+    """RGB colour of a component: the entry whose name is the longest prefix of it."""
+    matches = [name for name in COMPONENT_COLOURS if component.startswith(name)]
+    return COMPONENT_COLOURS[max(matches, key=len)] if matches else COMPONENT_COLOURS["other"]
 
 
 @dataclass(frozen=True)
@@ -59,27 +64,20 @@ def tube_outer_radius_m(area_m2: float, inertia_m4: float) -> float:
     return float(np.sqrt(max(4.0 * inertia_m4 / area_m2 + area_m2 / np.pi, 0.0) / 2.0))
 
 
-def _component_of(spec_components, grid_ids: tuple[int, ...]) -> str:
-    for name, grids in spec_components.items():
-        if all(g in grids for g in grid_ids):
-            return name
-    return "other"
-
-
 def build_scene(structure_modes: StructureModes, *, segments_per_bar: int = 4) -> Scene:
     """Bodies of a computed structure: each CBAR in ``segments_per_bar`` pieces, each CONM2 a sphere."""
     if segments_per_bar < 1:
         raise ValueError(f"segments_per_bar must be >= 1, got {segments_per_bar}")
     deck = structure_modes.structure.deck
     dofs = structure_modes.model.dofs
-    components = structure_modes.structure.spec.components
+    spec = structure_modes.structure.spec
     positions = structure_modes.model.positions
     segments = []
     for bar_id, bar in sorted(deck.bars.items()):
         pbar = deck.pbars[bar.pid]
-        cable = pbar.mid in CABLE_MATERIALS
+        component = spec.component_of(bar.ga, bar.gb) or "other"
+        cable = component.startswith(CABLE_PREFIX)
         radius = 0.0 if cable else tube_outer_radius_m(pbar.area, 0.5 * (pbar.i1 + pbar.i2))
-        component = _component_of(components, (bar.ga, bar.gb))
         edges = np.linspace(0.0, 1.0, segments_per_bar + 1)
         for k in range(segments_per_bar):
             segments.append(BarSegment(name=f"bars/{bar_id}/{k}", bar_id=bar_id, row_a=dofs.grid_index(bar.ga),
@@ -91,7 +89,7 @@ def build_scene(structure_modes: StructureModes, *, segments_per_bar: int = 4) -
             continue
         radius = float(np.cbrt(3.0 * conm.mass / (4.0 * np.pi * 7800.0)))
         masses.append(MassBody(name=f"masses/{mid}", row=dofs.grid_index(conm.grid), radius_m=radius,
-                               component=_component_of(components, (conm.grid,))))
+                               component=spec.component_of(conm.grid) or "other"))
     extent = positions.max(axis=0) - positions.min(axis=0)
     return Scene(positions_m=positions, grid_ids=dofs.grid_ids, segments=tuple(segments), masses=tuple(masses),
                  length_m=float(extent.max()))

@@ -27,9 +27,9 @@ import numpy as np
 from mace_fmu.fe.assembly import FEModel
 from mace_fmu.fe.corotational import BarState, bar_dof_indices, bar_energies, deformation_derivatives
 from mace_fmu.fe.modal import Modes
+from mace_fmu.iomodel.modal_core import ZERO_HZ
 from mace_fmu.structure import StructureSpec
 
-ZERO_HZ = 0.01
 _AXES = "XYZ"
 _RIGID_NAMES = ("X translation", "Y translation", "Z translation", "X rotation", "Y rotation", "Z rotation")
 _SUSPENSION_NAMES = ("X suspension pendulum (X translation)", "bounce (Y translation)",

@@ -196,8 +196,12 @@ def build_diagram(plant: ModalPlant, instruments: Instruments, *, servos: bool =
     return s
 
 
+#: Highest retained mode [Hz] of the volts-volts models (thesis 3.4: modes to 250 Hz).
+DEFAULT_MAX_HZ = 250.0
+
+
 def volts_model(structure: StructureKind = "1g", *, servos: bool = True, bessel: BesselKind = "full",
-                delays: bool = True, pade_order: int = 3, max_hz: float = 250.0, preload: PreloadKind = "large",
+                delays: bool = True, pade_order: int = 3, max_hz: float = DEFAULT_MAX_HZ, preload: PreloadKind = "large",
                 deck: Deck | str | None = None, instruments: Instruments | None = None,
                 modes: StructureModes | None = None, inputs: Sequence[str] | None = None,
                 outputs: Sequence[str] | None = None, actuator_delays_s: Mapping[str, float] | None = None,
