@@ -12,18 +12,6 @@ import numpy as np
 import scipy.linalg
 
 
-def block_diagonal(mats: list[np.ndarray], shape_of_empty: tuple[int, int] = (0, 0)) -> np.ndarray:
-    """Block-diagonal stack of 2-D arrays (zero-size blocks allowed)."""
-    rows = sum(m.shape[0] for m in mats)
-    cols = sum(m.shape[1] for m in mats)
-    out = np.zeros((rows, cols) if mats else shape_of_empty)
-    r = c = 0
-    for m in mats:
-        out[r:r + m.shape[0], c:c + m.shape[1]] = m
-        r, c = r + m.shape[0], c + m.shape[1]
-    return out
-
-
 def interconnect(blocks: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]], wiring: np.ndarray,
                  entry: np.ndarray, exit_: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(A, B, C, D) of blocks wired by u_b = wiring @ y_b + entry @ r, y = exit_ @ y_b.
@@ -31,10 +19,7 @@ def interconnect(blocks: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarr
     With W = (I - wiring D_b)^-1: A = A_b + B_b W L C_b, B = B_b W E, C = F (C_b + D_b W L C_b),
     D = F D_b W E. W exists when the diagram has no algebraic loop.
     """
-    a_b = block_diagonal([b[0] for b in blocks])
-    b_b = block_diagonal([b[1] for b in blocks])
-    c_b = block_diagonal([b[2] for b in blocks])
-    d_b = block_diagonal([b[3] for b in blocks])
+    a_b, b_b, c_b, d_b = (scipy.linalg.block_diag(*[b[k] for b in blocks]) for k in range(4))
     w = np.linalg.inv(np.eye(wiring.shape[0]) - wiring @ d_b)
     lc, we = w @ wiring @ c_b, w @ entry
     return a_b + b_b @ lc, b_b @ we, exit_ @ (c_b + d_b @ lc), exit_ @ d_b @ we

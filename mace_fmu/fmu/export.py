@@ -64,7 +64,7 @@ def _blocks(model: VoltsModel) -> tuple[dict, list[tuple[str, float, str]]]:
             kinds.append("structure"), params.append("")
         elif name.startswith("delay_"):
             kinds.append("delay"), params.append(name)
-            delay = float(getattr(block, "_delay"))
+            delay = float(block.delay)
             parameters.append((name, delay, f"time delay of {name[len('delay_'):]} [s] (Pade order {model.pade_order})"))
         elif name.startswith(("kf_", "kb_")):
             gain = "K_f" if name.startswith("kf_") else "K_b"

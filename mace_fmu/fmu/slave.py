@@ -155,7 +155,12 @@ class MaceSlave(Fmi2Slave):
 
     # --- stepping ----------------------------------------------------------------------------
     def _transition(self, h: float) -> tuple[np.ndarray, np.ndarray]:
-        """(Phi, Gamma) of the zero-order hold over h seconds, cached."""
+        """(Phi, Gamma) of the zero-order hold over h seconds, cached.
+
+        Keyed on h to 12 significant digits: hosts compute steps as t[k+1] - t[k], which gives a
+        dozen round-off variants of one step size, each of which would cost a matrix exponential.
+        """
+        h = float(f"{h:.12g}")
         if h not in self._cache:
             n, m = self._b.shape
             aug = np.zeros((n + m, n + m))
