@@ -11,7 +11,7 @@ import tempfile
 
 from common import machine_line, timed
 from mace_fmu.pipeline import compute_modes
-from viewer import animate_modes, write_mode_html
+from viewer import animate_modes, write_animation_html
 
 
 def main(repeats: int = 7) -> None:
@@ -19,7 +19,7 @@ def main(repeats: int = 7) -> None:
     indices = list(range(1, modes.modes.frequencies_hz.size + 1))
     with tempfile.TemporaryDirectory() as tmp:
         path = os.path.join(tmp, "modes.html")
-        median, fastest, size = timed(lambda: write_mode_html(animate_modes(modes, indices), path,
+        median, fastest, size = timed(lambda: write_animation_html(animate_modes(modes, indices), path,
                                                               title="MACE 0g modes"), repeats)
     solve, _, _ = timed(lambda: compute_modes(structure="0g", max_hz=60.0), 1)
     print(machine_line(meshcat=importlib.metadata.version("meshcat")))

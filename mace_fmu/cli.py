@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from pathlib import Path
 from typing import Sequence
 
 import numpy as np
@@ -103,12 +104,26 @@ def cmd_build(args: argparse.Namespace) -> int:
     return 0
 
 
-def _volts(args: argparse.Namespace):
+def _motion_grids(text: str | None):
+    """--motion-grids: None, "all" or comma-separated grid IDs."""
+    if text is None or text == "all":
+        return () if text is None else "all"
+    try:
+        return [int(g) for g in text.split(",") if g.strip()]
+    except ValueError:
+        raise MaceError(f"--motion-grids takes 'all' or comma-separated grid IDs, got {text!r}") from None
+
+
+def _volts(args: argparse.Namespace, **overrides):
     from mace_fmu.iomodel.volts import volts_model
 
-    return volts_model(args.structure, servos=not args.no_servos, bessel=args.bessel, delays=not args.no_delays,
-                       pade_order=args.pade_order, max_hz=args.max_hz, preload=args.preload,
-                       deck=read_deck(args.deck))
+    options = dict(servos=not args.no_servos, bessel=args.bessel, delays=not args.no_delays,
+                   pade_order=args.pade_order, max_hz=args.max_hz, preload=args.preload, deck=read_deck(args.deck),
+                   motion_grids=_motion_grids(args.motion_grids))
+    try:
+        return volts_model(args.structure, **{**options, **overrides})
+    except ValueError as exc:  # a bad option value: one message, not a traceback
+        raise MaceError(str(exc)) from None
 
 
 def cmd_model(args: argparse.Namespace) -> int:
@@ -163,22 +178,13 @@ def cmd_report(args: argparse.Namespace) -> int:
     return 0
 
 
-def cmd_view(args: argparse.Namespace) -> int:
-    from viewer import animate_modes, scene_commands, send_to_visualizer, write_mode_html  # meshcat only here
+def _show(animation, args: argparse.Namespace, *, title: str) -> None:
+    """Write the animation to --html and/or serve it on a live meshcat server until Ctrl-C."""
+    from viewer import scene_commands, send_to_visualizer, write_animation_html  # meshcat only here
 
-    if not args.html and not args.live:
-        raise MaceError("say where to show the animation: --html OUT.html, --live, or both")
-    deck = read_deck(args.deck)
-    max_hz = args.max_hz if args.max_hz is not None else (None if args.mode else 60.0)
-    result = compute_modes(deck, structure=args.structure, max_hz=max_hz, progress=_progress)
-    modes = args.mode or list(range(1, result.modes.frequencies_hz.size + 1))
-    animation = animate_modes(result, modes, scale=args.scale, cycles=args.cycles,
-                              seconds_per_cycle=args.seconds_per_cycle)
-    for clip in animation.frames.clips:
-        print(f"  {clip.start_s:6.1f}-{clip.end_s:6.1f} s  {clip.title}")
     if args.html:
-        size = write_mode_html(animation, args.html, title=f"MACE {args.structure} modes")
-        print(f"wrote {args.html} ({size / 1e6:.1f} MB, {len(animation.mode_indices)} modes)")
+        size = write_animation_html(animation, args.html, title=title)
+        print(f"wrote {args.html} ({size / 1e6:.1f} MB, {animation.frames.times_s.size} frames)")
     if args.live:
         import time
 
@@ -192,6 +198,71 @@ def cmd_view(args: argparse.Namespace) -> int:
                 time.sleep(1.0)
         except KeyboardInterrupt:
             pass
+
+
+def _need_target(args: argparse.Namespace) -> None:
+    if not args.html and not args.live:
+        raise MaceError("say where to show the animation: --html OUT.html, --live, or both")
+
+
+def cmd_view_response(args: argparse.Namespace) -> int:
+    from mace_fmu.fmu.export import export_fmu
+    from mace_fmu.fmu.simulate import simulate_input_response
+    from viewer import animate_response, plot_response
+
+    _need_target(args)
+    out_dir = Path(args.html).parent if args.html else Path(".")
+    if args.fmu:
+        fmu = Path(args.fmu)
+        if not fmu.exists():
+            raise MaceError(f"--fmu {fmu}: no such file")
+        modes = compute_modes(read_deck(args.deck), structure=args.structure, max_hz=args.max_hz, progress=_progress)
+    else:
+        _progress(f"{args.structure} volts-volts model with the motion of every grid")
+        model = _volts(args, motion_grids=_motion_grids(args.motion_grids) or "all")
+        modes = model.structure_modes
+        fmu = export_fmu(model, out_dir=out_dir, name=f"MACE_{args.structure}_motion")
+        print(f"wrote {fmu} (reuse it with --fmu)")
+    _progress(f"simulating {args.duration} s of {args.signal} on {args.input} through fmpy")
+    run = simulate_input_response(fmu, input_name=args.input, signal=args.signal, duration_s=args.duration,
+                                  step_s=args.step, amplitude_v=args.amplitude, chirp_hz=tuple(args.chirp_hz))
+    animation = animate_response(modes, run, scale=args.scale, playback_speed=args.speed, fps=args.fps)
+    print(f"  {animation.frames.times_s.size} frames at {animation.frames.fps:.3g} frames/s of playback, "
+          f"{args.speed:g} simulated s per s, motion drawn x {animation.scale:.4g}")
+    output = args.output or _collocated_output(args.input, run)
+    if args.html:
+        png = plot_response(run, output_name=output, path=Path(args.html).with_suffix(".png"),
+                            title=f"MACE {args.structure}: {args.signal} on {args.input}")
+        print(f"wrote {png}")
+    _show(animation, args, title=f"MACE {args.structure}: {args.signal} response to {args.input}")
+    return 0
+
+
+def _collocated_output(input_name: str, run) -> str:
+    """The sensor that closes the input's local loop (encoder, tachometer), else the first sensor output."""
+    from mace_fmu.iomodel.instruments import load_instruments
+    from mace_fmu.iomodel.modal_ss import parse_motion_output
+
+    servos = load_instruments().servos
+    partner = {**servos.gimbals, **servos.wheels}.get(input_name)
+    if partner in run.outputs:
+        return partner
+    return next(n for n in run.outputs if parse_motion_output(n) is None)
+
+
+def cmd_view(args: argparse.Namespace) -> int:
+    from viewer import animate_modes
+
+    _need_target(args)
+    deck = read_deck(args.deck)
+    max_hz = args.max_hz if args.max_hz is not None else (None if args.mode else 60.0)
+    result = compute_modes(deck, structure=args.structure, max_hz=max_hz, progress=_progress)
+    modes = args.mode or list(range(1, result.modes.frequencies_hz.size + 1))
+    animation = animate_modes(result, modes, scale=args.scale, cycles=args.cycles,
+                              seconds_per_cycle=args.seconds_per_cycle)
+    for clip in animation.frames.clips:
+        print(f"  {clip.start_s:6.1f}-{clip.end_s:6.1f} s  {clip.title}")
+    _show(animation, args, title=f"MACE {args.structure} modes")
     return 0
 
 
@@ -210,6 +281,8 @@ def build_parser() -> argparse.ArgumentParser:
         p.add_argument("--no-delays", action="store_true", help="leave out the actuator and gyro time delays")
         p.add_argument("--pade-order", type=int, default=3, help="order of the Pade delay approximations (default 3)")
         p.add_argument("--preload", choices=["large", "linear"], default="large", help="1-g gravity preload")
+        p.add_argument("--motion-grids", default=None, metavar="all|ID,ID,...",
+                       help="also output these grids' translations [m] and rotations [rad] (for animation)")
 
     p = sub.add_parser("modes", help="natural frequencies [Hz] and labels of the 1-g or 0-g structure")
     p.add_argument("structure", choices=["1g", "0g"])
@@ -244,7 +317,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", default="report", help="output directory (default ./report)")
     p.set_defaults(func=cmd_report)
 
-    p = sub.add_parser("view", help="meshcat animation of mode shapes as a standalone HTML file")
+    p = sub.add_parser("view", help="meshcat animation of mode shapes or FMU time responses (standalone HTML)")
     view = p.add_subparsers(dest="what", required=True)
     p = view.add_parser("modes", help="animate mode shapes (one clip per mode, one after the other)")
     p.add_argument("structure", choices=["1g", "0g"])
@@ -259,6 +332,28 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--html", help="write a standalone HTML file (opens in any browser, no server)")
     p.add_argument("--live", action="store_true", help="also serve it on a live meshcat server until Ctrl-C")
     p.set_defaults(func=cmd_view)
+
+    p = view.add_parser("response", help="an FMU's time response to one input, played on the mesh (fmpy)")
+    p.add_argument("structure", choices=["1g", "0g"])
+    deck_option(p)
+    p.add_argument("--input", required=True, help="the driven input, e.g. gimbal_secondary_z")
+    p.add_argument("--signal", choices=["step", "chirp", "impulse"], default="step",
+                   help="step from t = 0, chirp (see --chirp-hz), or a pulse over the first step (default step)")
+    p.add_argument("--duration", type=float, default=2.0, help="simulated time [s] (default 2)")
+    p.add_argument("--amplitude", type=float, default=1.0, help="signal amplitude [V] (default 1)")
+    p.add_argument("--chirp-hz", type=float, nargs=2, default=[0.1, 10.0], metavar=("F0", "F1"),
+                   help="chirp start and end frequency [Hz] (default 0.1 10)")
+    p.add_argument("--step", type=float, default=0.002, help="FMU communication step [s] (default 0.002)")
+    p.add_argument("--speed", type=float, default=1.0, help="playback speed: simulated s per s (default 1, real time)")
+    p.add_argument("--fps", type=float, default=50.0, help="key frames per second of playback (default 50)")
+    p.add_argument("--scale", type=float, default=None,
+                   help="magnification of the motion (default: largest motion 8%% of the size)")
+    p.add_argument("--output", help="output plotted next to the input (default: the input's encoder or tachometer)")
+    p.add_argument("--fmu", help="an FMU with motion outputs to run (default: export one next to the HTML)")
+    p.add_argument("--html", help="write a standalone HTML file and, next to it, a PNG plot of input and output")
+    p.add_argument("--live", action="store_true", help="also serve it on a live meshcat server until Ctrl-C")
+    model_options(p)
+    p.set_defaults(func=cmd_view_response)
 
     p = sub.add_parser("build", help="the main job: modes next to the thesis tables, and both FMUs")
     deck_option(p)

@@ -27,3 +27,19 @@ def pytest_unconfigure(config: pytest.Config) -> None:
         sys.stdout.flush()
         sys.stderr.flush()
         os._exit(_exit_status[-1])
+
+
+@pytest.fixture(scope="session")
+def motion_fmu_0g(tmp_path_factory):
+    """(model, fmu, extracted folder) of the 0-g model with the motion of every grid as outputs.
+
+    Extracted once into a session folder that outlives every simulation (see tests/test_fmu.py).
+    """
+    import fmpy
+
+    from mace_fmu.fmu.export import export_fmu
+    from mace_fmu.iomodel.volts import volts_model
+
+    model = volts_model("0g", motion_grids="all")
+    fmu = export_fmu(model, out_dir=tmp_path_factory.mktemp("motion_fmu"), name="MACE_0g_motion")
+    return model, fmu, fmpy.extract(str(fmu), unzipdir=str(tmp_path_factory.mktemp("motion_unzipped")))

@@ -17,6 +17,7 @@ from fmpy.fmi2 import FMU2Slave
 from fmpy.validation import validate_fmu
 
 from mace_fmu.fmu.export import export_fmu
+from mace_fmu.iomodel.modal_ss import MOTION_COMPONENTS
 from mace_fmu.iomodel.volts import volts_model
 
 DURATION = 1.0
@@ -389,3 +390,55 @@ def test_parameters_rebuild_the_same_model_as_volts_model(built, change):
     fmu.freeInstance()
     _check(rebuilt, y, _reference(rebuilt, t, u))
     assert np.max(np.abs(y - _reference(model, t, u))) > 1e-6  # the parameter did change the response
+
+
+def test_motion_outputs_equal_state_space_with_units(motion_fmu_0g):
+    """Every grid's six motion outputs [m, rad] follow the state-space model like the sensors do."""
+    model, fmu, unzipped = motion_fmu_0g
+    grids = model.structure_modes.modes.dofs.grid_ids
+    outs = list(model.system.output_labels)
+    assert len(outs) == 20 + 6 * len(grids) and outs[20:26] == [f"grid_{grids[0]}_{c}" for c in MOTION_COMPONENTS]
+    md = fmpy.read_model_description(str(fmu))
+    units = {v.name: v.unit for v in md.modelVariables if v.causality == "output"}
+    assert units[f"grid_{grids[5]}_ty"] == "m" and units[f"grid_{grids[5]}_rz"] == "rad"
+    assert units["gyro_bus_x"] == "V" and validate_fmu(str(fmu)) == []
+    step = 2e-3
+    t = np.arange(0.0, 0.5 + step / 2, step)
+    names = list(model.system.input_labels)
+    u = _signal("multisine", t, len(names))
+    table = np.zeros(len(t), dtype=[("time", float)] + [(n, float) for n in names])
+    table["time"] = t
+    for i, n in enumerate(names):
+        table[n] = u[i]
+    res = fmpy.simulate_fmu(unzipped, start_time=0.0, stop_time=t[-1], output_interval=step, input=table)
+    y = np.array([res[n] for n in outs])
+    ref = _reference(model, t, u)
+    span = np.ptp(ref, axis=1)
+    moving = span > 0
+    # one grid carries no element and no mass (it rests); everything else moves
+    assert moving.sum() >= len(outs) - 6
+    assert np.max(np.abs(y - ref)[moving] / span[moving, None]) <= 1e-8
+    assert np.all(y[~moving] == 0.0) and np.all(ref[~moving] == 0.0)
+
+
+def test_motion_outputs_keep_the_centre_of_mass_at_rest_in_0g(motion_fmu_0g):
+    """Internal torques cannot move the free-floating structure's centre of mass: r^T M u(t) = 0.
+
+    u(t) is the whole displacement field read from the FMU's motion outputs, M the assembled
+    mass matrix (an independent check: it is not used to build the outputs).
+    """
+    from mace_fmu.fmu.simulate import simulate_input_response
+
+    model, _, unzipped = motion_fmu_0g
+    sm = model.structure_modes
+    grids = sm.modes.dofs.grid_ids
+    run = simulate_input_response(unzipped, input_name="rwa_y", signal="chirp", duration_s=1.0, chirp_hz=(0.5, 20.0))
+    u = np.stack([np.stack([run.outputs[f"grid_{g}_{c}"] for c in MOTION_COMPONENTS], axis=1) for g in grids], axis=1)
+    u = u.reshape(len(run.times_s), -1)  # (n_samples, 6 n_grid), DOFs in DofMap order
+    mass = sm.model.mass
+    for axis in range(3):
+        rigid = np.zeros(mass.shape[0])
+        rigid[axis::6] = 1.0
+        centre = u @ (mass @ rigid) / (rigid @ mass @ rigid)  # centre-of-mass displacement [m]
+        assert np.max(np.abs(centre)) <= 1e-9 * np.max(np.abs(u[:, axis::6]))
+    assert np.max(np.abs(u[:, 1::6])) > 1e-6  # the structure does move (metres per volt of wheel command)

@@ -15,7 +15,8 @@ import umsgpack
 
 from mace_fmu.errors import MaceError
 from mace_fmu.pipeline import compute_modes
-from viewer import animate_mode, animate_modes, build_scene, scene_commands, standalone_html, write_mode_html
+from viewer import (animate_mode, animate_modes, animate_response, build_scene, scene_commands, standalone_html,
+                    write_animation_html)
 from viewer.frames import body_motion
 from viewer.meshcat_scene import FLOAT32_EXT
 from viewer.scene import tube_outer_radius_m
@@ -139,17 +140,26 @@ def _chromium() -> str | None:
     return shutil.which("chromium") or shutil.which("chromium-browser")
 
 
+@pytest.fixture(params=["modes", "response"])
+def page_0g(request, modes_0g, motion_fmu_0g, step_run_0g, tmp_path):
+    """(page, screenshot path): two 0-g mode clips, or the step response of the secondary gimbal."""
+    if request.param == "modes":
+        anim = animate_modes(modes_0g, [14, 15], frames_per_cycle=12)
+    else:
+        anim = animate_response(motion_fmu_0g[0].structure_modes, step_run_0g)
+    page = tmp_path / f"{request.param}.html"
+    write_animation_html(anim, page, title=f"MACE 0g {request.param}")
+    return page, BUILD / f"viewer_0g_{request.param}.png"
+
+
 @pytest.mark.skipif(_chromium() is None and not os.environ.get("MACE_REQUIRE_CHROMIUM"),
                     reason="Debian chromium not installed (.ci/run installs it and requires this test)")
-def test_html_renders_the_structure_in_headless_chromium(modes_0g, tmp_path):
+def test_html_renders_the_structure_in_headless_chromium(page_0g, tmp_path):
     from PIL import Image
 
     assert _chromium(), "chromium missing: .ci/run must install Debian's chromium"
-    anim = animate_modes(modes_0g, [14, 15], frames_per_cycle=12)
-    page = tmp_path / "modes.html"
-    write_mode_html(anim, page, title="MACE 0g modes")
+    page, shot = page_0g
     BUILD.mkdir(exist_ok=True)
-    shot = BUILD / "viewer_0g_modes.png"
     shot.unlink(missing_ok=True)
     subprocess.run([_chromium(), "--headless", "--no-sandbox", "--disable-gpu", "--enable-unsafe-swiftshader",
                     "--use-angle=swiftshader", "--disable-quic", "--no-first-run", "--disable-background-networking",
@@ -199,3 +209,71 @@ def test_live_meshcat_server_receives_the_same_animation(modes_0g):
     ours = [umsgpack.packb(c.lower()) for c in commands]
     assert len(ours) > 100
     assert all(blob in blobs for blob in ours)  # every body, transform, property and the animation
+
+
+@pytest.fixture(scope="module")
+def step_run_0g(motion_fmu_0g):
+    from mace_fmu.fmu.simulate import simulate_input_response
+
+    _, _, unzipped = motion_fmu_0g
+    return simulate_input_response(unzipped, input_name="gimbal_secondary_z", signal="step", duration_s=1.0)
+
+
+def test_response_frames_are_the_fmu_outputs_times_the_scale(motion_fmu_0g, step_run_0g):
+    """Every frame is one communication point: grid motion = scale x the FMU's grid_<id>_<c> outputs."""
+    model, _, _ = motion_fmu_0g
+    run = step_run_0g
+    assert run.inputs["gimbal_secondary_z"].tolist() == [1.0] * run.times_s.size
+    anim = animate_response(model.structure_modes, run, playback_speed=0.5, fps=25.0)
+    stride = 10  # 0.5 simulated s per s / (25 frames/s x 2 ms)
+    np.testing.assert_array_equal(anim.sample_indices, np.arange(0, run.times_s.size, stride))
+    np.testing.assert_allclose(anim.frames.times_s, run.times_s[::stride] / 0.5, rtol=0, atol=1e-12)
+    assert anim.frames.fps == pytest.approx(25.0)
+    for row, grid in enumerate(anim.scene.grid_ids):
+        for c, comp in enumerate(("tx", "ty", "tz", "rx", "ry", "rz")):
+            np.testing.assert_array_equal(anim.frames.displacements[:, row, c],
+                                          anim.scale * run.outputs[f"grid_{grid}_{comp}"][::stride])
+    # the default magnification makes the largest drawn translation 8 % of the structure's size
+    drawn = np.linalg.norm(anim.frames.displacements[..., :3], axis=-1).max()
+    assert drawn == pytest.approx(0.08 * anim.scene.length_m, rel=0.05)
+    # the page plays those frames: a mass's key frames are its grid's position plus the drawn motion
+    html = standalone_html(scene_commands(anim.scene, anim.frames), title="t", clips=anim.frames.clips)
+    animation = [c for c in _decoded_commands(html) if c["type"] == "set_animation"][0]
+    n_frames = anim.frames.times_s.size
+    for body in anim.scene.masses:
+        got = _track_values(animation, body.name, "position").reshape(n_frames, 3)
+        grid = anim.scene.grid_ids[body.row]
+        want = anim.scene.positions_m[body.row] + anim.scale * np.stack(
+            [run.outputs[f"grid_{grid}_{c}"][::stride] for c in ("tx", "ty", "tz")], axis=1)
+        np.testing.assert_allclose(got, want, atol=2e-7)
+
+
+def test_response_needs_the_motion_of_every_drawn_grid(motion_fmu_0g, step_run_0g):
+    model, _, _ = motion_fmu_0g
+    run = step_run_0g
+    partial = type(run)(times_s=run.times_s, inputs=run.inputs, units=run.units, descriptions=run.descriptions,
+                        outputs={k: v for k, v in run.outputs.items() if not k.startswith("grid_7_")})
+    with pytest.raises(MaceError, match=r"no motion outputs for grid\(s\) \[7\]"):
+        animate_response(model.structure_modes, partial)
+    with pytest.raises(MaceError, match="playback_speed and fps must be > 0"):
+        animate_response(model.structure_modes, run, playback_speed=0.0)
+
+
+def test_cli_view_response_writes_page_plot_and_fmu(motion_fmu_0g, tmp_path, capsys):
+    from PIL import Image
+
+    from mace_fmu.cli import main
+
+    _, fmu, _ = motion_fmu_0g
+    out = tmp_path / "resp.html"
+    assert main(["view", "response", "0g", "--input", "rwa_z", "--signal", "impulse", "--duration", "0.4",
+                 "--speed", "0.1", "--fmu", str(fmu), "--html", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "201 frames at 50 frames/s" in printed  # 0.4 s at 0.1x: every 2 ms sample is a frame
+    commands = _decoded_commands(out.read_text())
+    assert sum(c["type"] == "set_object" for c in commands) > 100
+    assert sum(c["type"] == "set_animation" for c in commands) == 1
+    plot = np.asarray(Image.open(out.with_suffix(".png")).convert("L"), dtype=float)
+    assert plot.std() > 10.0  # axes and curves, not a blank image
+    assert main(["view", "response", "0g", "--input", "no_such_input", "--fmu", str(fmu), "--html", str(out)]) == 2
+    assert "has no input 'no_such_input'; inputs: gimbal_primary_x" in capsys.readouterr().err

@@ -10,6 +10,7 @@ import pytest
 
 from mace_fmu.cli import main
 from mace_fmu.iomodel.frf import frequency_response
+from mace_fmu.iomodel.modal_ss import modal_data
 from mace_fmu.iomodel.poles import closed_loop_poles
 from mace_fmu.iomodel.volts import volts_model
 from mace_fmu.thesis import table_4_7_comparison, table_5_2_comparison
@@ -131,6 +132,8 @@ def test_bessel_delay_variant_and_open_loop_variant():
     (dict(bessel="elliptic"), "bessel must be 'full', 'delay' or 'none'"),
     (dict(damping={"1st W bending": 0.02}), "no mode labelled '1st W bending' in the 0g structure"),
     (dict(damping={"1st Z bending": 1.5}), "must be >= 0 and < 1, got 1.5"),
+    (dict(motion_grids=[1, 999999]), "999999] are not in the 0g model; it has grids 1..112"),
+    (dict(motion_grids="some"), "motion_grids must be grid IDs or 'all'"),
 ])
 def test_bad_requests_are_value_errors_that_say_what_is_allowed(v0, kwargs, message):
     with pytest.raises(ValueError, match=message.replace("(", r"\(").replace(")", r"\)")):
@@ -145,6 +148,37 @@ def test_signal_selection_keeps_names(v0):
     full = frequency_response(v0.system, f)
     i, o = v0.system.input_labels.index("gimbal_secondary_z"), v0.system.output_labels.index("gyro_payload_z")
     np.testing.assert_allclose(frequency_response(sub.system, f)[:, 0, 0], full[:, o, i], rtol=1e-12)
+
+
+def test_motion_outputs_add_grid_motion_and_leave_the_sensors_alone(v0):
+    """Asking for grid motion keeps the states no sensor reads (the 3 wheel angles, in 0-g) and
+    leaves the sensors' response as it was."""
+    grids = v0.structure_modes.modes.dofs.grid_ids
+    moving = volts_model("0g", modes=v0.structure_modes, motion_grids=[grids[0], grids[-1]])
+    assert list(moving.system.output_labels) == list(v0.system.output_labels) + [
+        f"grid_{g}_{c}" for g in (grids[0], grids[-1]) for c in ("tx", "ty", "tz", "rx", "ry", "rz")]
+    assert moving.system.nstates == v0.system.nstates + 3
+    f = np.array([0.5, 2.0, 10.0, 40.0])
+    h, hm = v0.frequency_response(f), moving.frequency_response(f)
+    assert np.max(np.abs(hm[:, :20] - h) / np.abs(h).max(axis=0)) <= 1e-8  # of each channel's peak
+    # open loop, no filters or delays: the motion is the plain modal sum over every retained mode,
+    # zero-frequency ones included unreduced (1 / -w^2)
+    bare = volts_model("0g", modes=v0.structure_modes, motion_grids=[grids[-1]], servos=False, bessel="none",
+                       delays=False)
+    data = modal_data(v0.structure_modes.modes, bare.instruments, max_hz=250.0, motion_grids=[grids[-1]])
+    w = 2 * np.pi * f
+    wk = 2 * np.pi * np.where(np.abs(data.frequencies_hz) < 0.01, 0.0, data.frequencies_hz)
+    for actuator in ("rwa_x", "active_strut_z", "gimbal_primary_x"):
+        a = [x.name for x in bare.instruments.actuators].index(actuator)
+        gain = bare.instruments.actuator(actuator).gain
+        for c, component in enumerate(("tx", "ty", "tz", "rx", "ry", "rz")):
+            row = data.motion_out[f"grid_{grids[-1]}_{component}"]
+            modal = row * data.modal_b[:, a] * gain
+            want = (modal[None, :] / (wk[None, :] ** 2 - w[:, None] ** 2
+                                      + 2j * bare.plant.damping[None, :] * wk[None, :] * w[:, None])).sum(axis=1)
+            got = bare.frequency_response(f)[:, 20 + c, list(bare.system.input_labels).index(actuator)]
+            assert np.max(np.abs(want)) > 0
+            assert np.max(np.abs(got - want)) <= 1e-9 * np.max(np.abs(want))
 
 
 def test_cli_model_json_and_npz(capsys, tmp_path):

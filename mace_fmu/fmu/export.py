@@ -22,7 +22,7 @@ from pythonfmu.builder import FmuBuilder
 from mace_fmu.datafile import data_file_path, read_data_file
 from mace_fmu.fe.assembly import assemble
 from mace_fmu.iomodel import modal_core
-from mace_fmu.iomodel.modal_ss import modal_data
+from mace_fmu.iomodel.modal_ss import modal_data, motion_unit, parse_motion_output
 from mace_fmu.iomodel.volts import VoltsModel
 from mace_fmu.structure import apply_overrides
 from modelica_like import algebra
@@ -48,8 +48,16 @@ def _descriptions(model: VoltsModel) -> tuple[list[str], list[str]]:
             ins.append(f"{a.description}: speed-loop command [V]")
         else:
             ins.append(f"{a.description} [V], {a.gain} N m/V")
-    outs = [f"{inst.sensor(n).description} [V], {inst.sensor(n).gain} V per physical unit"
-            for n in model.system.output_labels]
+    outs = []
+    for name in model.system.output_labels:
+        motion = parse_motion_output(name)
+        if motion is None:
+            outs.append(f"{inst.sensor(name).description} [V], {inst.sensor(name).gain} V per physical unit")
+        else:
+            grid, comp = motion
+            what = "translation along" if comp.startswith("t") else "rotation about"
+            outs.append(f"grid {grid}: {what} basic {comp[1].upper()} [{motion_unit(comp)}], from the equilibrium "
+                        "(animation output)")
     return ins, outs
 
 
@@ -126,8 +134,13 @@ def _patch_model_description(fmu: Path, *, description: str, version: str) -> No
     used = set()
     for var in root.iter("ScalarVariable"):
         name = var.get("name")
-        unit = "V" if var.get("causality") in ("input", "output") else next(
-            (u for prefix, u in _UNITS if name.startswith(prefix)), None)
+        motion = parse_motion_output(name)
+        if motion is not None:
+            unit = motion_unit(motion[1])
+        elif var.get("causality") in ("input", "output"):
+            unit = "V"
+        else:
+            unit = next((u for prefix, u in _UNITS if name.startswith(prefix)), None)
         if unit is not None:
             var.find("Real").set("unit", unit)
             used.add(unit)
@@ -180,7 +193,8 @@ def export_fmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str | None
     description = (f"MACE {kind} volts-volts model: {sys_.nstates} states; servos {'closed' if model.servos else 'open'}, "
                    f"Bessel filters {model.bessel}, delays {'on' if model.delays else 'off'}")
     max_hz = float(np.max(model.plant.frequencies_hz))
-    data = modal_data(model.structure_modes.modes, model.instruments, max_hz=max_hz)
+    motion_grids = list(dict.fromkeys(parse_motion_output(n)[0] for n in model.plant.motion_outputs))
+    data = modal_data(model.structure_modes.modes, model.instruments, max_hz=max_hz, motion_grids=motion_grids)
     arrays, parameters = _blocks(model)
     physical, dk = _physical(model, data.shapes)
     damping = [(f"damping_mode_{k + 1}", float(z), f"open-loop damping ratio of mode {k + 1}: {label}")
@@ -194,6 +208,8 @@ def export_fmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str | None
         physical_dk=dk, frequencies_hz=data.frequencies_hz, mode_labels=np.array(data.labels), modal_b=data.modal_b,
         disp_names=np.array(list(data.disp_out)), disp_rows=np.array(list(data.disp_out.values())),
         rate_names=np.array(list(data.rate_out)), rate_rows=np.array(list(data.rate_out.values())),
+        motion_names=np.array(list(data.motion_out), dtype=str),
+        motion_rows=np.array(list(data.motion_out.values())).reshape(len(data.motion_out), len(data.labels)),
         structure_outputs=np.array(data.output_order))
     with tempfile.TemporaryDirectory(prefix="mace_fmu_") as tmp:
         tmp = Path(tmp)

@@ -116,9 +116,10 @@ class MaceSlave(Fmi2Slave):
         zeta = np.array([self._param(f"damping_mode_{k + 1}") for k in range(n)])
         disp = {str(name): row @ phi_r for name, row in zip(d["disp_names"], d["disp_rows"])}
         rate = {str(name): row @ phi_r for name, row in zip(d["rate_names"], d["rate_rows"])}
+        motion = {str(name): row @ phi_r for name, row in zip(d["motion_names"], d["motion_rows"])}
         labels = tuple(str(x) for x in d["mode_labels"])
         a, b, c, *_ = modal_matrices(freq, zeta, labels, np.zeros((0, n)), phi_r.T @ d["modal_b"], disp, rate,
-                                     [str(x) for x in d["structure_outputs"]])
+                                     [str(x) for x in d["structure_outputs"]], motion)
         return a, b, c, np.zeros((c.shape[0], b.shape[1]))
 
     def _block(self, i: int):

@@ -6,8 +6,10 @@ eta'' = Phi^T b u in any orthonormal basis of their cluster, so the cluster is r
 normalisation kept) and reduced by rule, with the reason recorded:
 - directions no actuator moves are uncontrollable: all inputs are internal torques, so the
   rigid-body momenta are conserved; both states of these directions go;
-- of the rest, displacement directions no output reads (wheel angles: the tachometers sense
-  rate) keep only their rate state.
+- of the rest, displacement directions no sensor reads (wheel angles: the tachometers sense
+  rate) keep only their rate state, unless a motion output (grid motion for animation) reads
+  them. Sensor readings of such directions are below NEGLIGIBLE, rounding noise of the mechanism
+  modes, and are set to zero, so that motion outputs never change what the sensors see.
 Appendix C (gimcon3) reduces its 0-g cluster by an SVD of the rate outputs in the same spirit.
 """
 
@@ -21,29 +23,44 @@ ZERO_HZ = 0.01
 NEGLIGIBLE = 1e-6
 
 
+def _read_directions(rows: dict[str, np.ndarray], zero: np.ndarray, basis: np.ndarray) -> tuple[int, np.ndarray]:
+    """How many directions of ``basis`` (columns over the zero modes) the output rows read, and the
+    rotation of ``basis`` that puts those first."""
+    if not rows or not basis.shape[1]:
+        return 0, np.eye(basis.shape[1])
+    table = np.array(list(rows.values()))  # the threshold is relative to the largest reading of any mode
+    _, s, vt = np.linalg.svd(table[:, zero] @ basis, full_matrices=True)
+    return int(np.sum(s > NEGLIGIBLE * max(np.abs(table).max(), 1e-300))), vt.T
+
+
 def reduce_zero_cluster(zero: np.ndarray, phi: np.ndarray, labels: tuple[str, ...], modal_b: np.ndarray,
-                         disp_out: dict[str, np.ndarray], rate_out: dict[str, np.ndarray]):
+                         disp_out: dict[str, np.ndarray], rate_out: dict[str, np.ndarray],
+                         motion_out: dict[str, np.ndarray] | None = None):
     """Rotate the zero-frequency modes so that controllable and observable directions come first.
 
-    Returns the rotated (phi, labels, modal_b), the numbers of controllable and of
-    displacement-observable directions, and the reasons for what goes; ``disp_out`` and
-    ``rate_out`` (output rows over the modes) are rotated in place.
+    Returns the rotated (phi, labels, modal_b), the numbers of controllable directions and of
+    directions whose displacement is kept (read by a sensor or a motion output), and the reasons
+    for what goes; ``disp_out``, ``rate_out`` and ``motion_out`` (rows over the modes) are
+    rotated in place.
     """
     removed: list[tuple[str, str]] = []
+    motion_out = {} if motion_out is None else motion_out
     if not len(zero):
         return phi, labels, modal_b, 0, 0, removed
     u_b, s_b, _ = np.linalg.svd(modal_b[zero], full_matrices=True)
     n_ctrl = int(np.sum(s_b > NEGLIGIBLE * np.abs(modal_b).max()))
-    c_d = np.array([r[zero] for r in disp_out.values()]) @ u_b[:, :n_ctrl]
-    _, s_d, vt_d = np.linalg.svd(c_d, full_matrices=True)
-    n_obs = int(np.sum(s_d > NEGLIGIBLE * max(np.abs(np.array(list(disp_out.values()))).max(), 1e-300)))
-    rot = np.hstack([u_b[:, :n_ctrl] @ vt_d.T, u_b[:, n_ctrl:]])
+    ctrl = u_b[:, :n_ctrl]
+    n_obs, turn = _read_directions(disp_out, zero, ctrl)
+    ctrl = ctrl @ turn
+    n_mot, turn = _read_directions(motion_out, zero, ctrl[:, n_obs:])
+    ctrl[:, n_obs:] = ctrl[:, n_obs:] @ turn
+    rot = np.hstack([ctrl, u_b[:, n_ctrl:]])
     if n_ctrl < len(zero):
         removed.append(("zero-frequency cluster", f"{len(zero) - n_ctrl} directions no actuator moves (internal "
                         "torques conserve the rigid-body momenta): uncontrollable, both states removed"))
-    if n_obs < n_ctrl:
-        removed.append(("zero-frequency cluster", f"{n_ctrl - n_obs} displacement directions no output reads "
-                        "(rate sensing only): unobservable, displacement states removed"))
+    if n_obs + n_mot < n_ctrl:
+        removed.append(("zero-frequency cluster", f"{n_ctrl - n_obs - n_mot} displacement directions no output "
+                        "reads (rate sensing only): unobservable, displacement states removed"))
     phi = phi.copy()
     phi[:, zero] = phi[:, zero] @ rot
     new_labels = list(labels)  # a rotated direction keeps the name of the motion it is mostly made of
@@ -51,27 +68,31 @@ def reduce_zero_cluster(zero: np.ndarray, phi: np.ndarray, labels: tuple[str, ..
         new_labels[j] = labels[zero[int(np.argmax(np.abs(rot[:, k])))]]
     modal_b = modal_b.copy()
     modal_b[zero] = rot.T @ modal_b[zero]
-    for table in (disp_out, rate_out):
+    for table in (disp_out, rate_out, motion_out):
         for key in table:
             table[key] = table[key].copy()
             table[key][zero] = table[key][zero] @ rot
-    return phi, tuple(new_labels), modal_b, n_ctrl, n_obs, removed
+    for key in disp_out:  # below NEGLIGIBLE: what the sensor-only model drops with the states
+        disp_out[key][zero[n_obs:]] = 0.0
+    return phi, tuple(new_labels), modal_b, n_ctrl, n_obs + n_mot, removed
 
 
 def modal_matrices(freq_hz: np.ndarray, zeta: np.ndarray, labels: tuple[str, ...], shapes: np.ndarray,
                    modal_b: np.ndarray, disp_out: dict[str, np.ndarray], rate_out: dict[str, np.ndarray],
-                   output_order: list[str]):
+                   output_order: list[str], motion_out: dict[str, np.ndarray] | None = None):
     """(A, B, C, state names, rotated labels, rotated shapes, reasons for removed states).
 
     x = [eta; eta_dot] over the kept states; rows of C follow ``output_order`` (names of
-    ``disp_out`` and ``rate_out``, whose rows are over the modes); D = 0.
+    ``disp_out``, ``rate_out`` and ``motion_out``, whose rows are over the modes); D = 0.
+    ``motion_out`` are displacement outputs that do not decide the sensors' model (grid motion).
     """
     disp_out = {k: v.copy() for k, v in disp_out.items()}
     rate_out = {k: v.copy() for k, v in rate_out.items()}
+    motion_out = {k: v.copy() for k, v in (motion_out or {}).items()}
     omega = 2.0 * np.pi * np.where(np.abs(freq_hz) < ZERO_HZ, 0.0, freq_hz)
     zero = np.flatnonzero(np.abs(freq_hz) < ZERO_HZ)
     shapes, labels, modal_b, n_ctrl, n_obs, removed = reduce_zero_cluster(zero, shapes, labels, modal_b, disp_out,
-                                                                          rate_out)
+                                                                          rate_out, motion_out)
     n = len(freq_hz)
     keep_disp = np.ones(n, dtype=bool)
     keep_rate = np.ones(n, dtype=bool)
@@ -89,8 +110,8 @@ def modal_matrices(freq_hz: np.ndarray, zeta: np.ndarray, labels: tuple[str, ...
     b = np.vstack([np.zeros((nd, modal_b.shape[1])), modal_b[r_idx]])
     c = np.zeros((len(output_order), nd + nr))
     for i, name in enumerate(output_order):
-        if name in disp_out:
-            c[i, :nd] = disp_out[name][d_idx]
+        if name in disp_out or name in motion_out:
+            c[i, :nd] = (disp_out[name] if name in disp_out else motion_out[name])[d_idx]
         else:
             c[i, nd:] = rate_out[name][r_idx]
     states = [f"mode{j + 1}_disp" for j in d_idx] + [f"mode{j + 1}_vel" for j in r_idx]

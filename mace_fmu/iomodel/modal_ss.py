@@ -2,14 +2,18 @@
 
 x = [eta; eta_dot] per retained mode; A = [[0, I], [-Omega^2, -2 zeta Omega]], B = [0; Phi^T b],
 C = [c_d Phi, 0; 0, c_r Phi], D = 0. Besides the sensors, the model outputs the displacement
-reading (``<name>_angle``) of each rate sensor a gimbal servo integrates (the encoders).
+reading (``<name>_angle``) of each rate sensor a gimbal servo integrates (the encoders) and, on
+request, the motion of named grids for animation (``grid_<id>_<tx|ty|tz|rx|ry|rz>``, basic axes,
+metres and radians).
 
 The zero-frequency cluster is reduced by rule (see mace_fmu.iomodel.modal_core).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import re
+from collections.abc import Sequence
+from dataclasses import dataclass, field
 
 import control as ct
 import numpy as np
@@ -17,6 +21,27 @@ import numpy as np
 from mace_fmu.fe.modal import Modes
 from mace_fmu.iomodel.instruments import Instruments, influence_vector
 from mace_fmu.iomodel.modal_core import modal_matrices
+
+#: Components of a grid's motion output, in DOF order (NASTRAN T1 T2 T3 R1 R2 R3), basic axes.
+MOTION_COMPONENTS = ("tx", "ty", "tz", "rx", "ry", "rz")
+_MOTION_NAME = re.compile(r"grid_(\d+)_(tx|ty|tz|rx|ry|rz)")
+
+
+def motion_output_name(grid: int, component: str) -> str:
+    """Output name of one motion component of a grid, e.g. ``grid_1001_ty``."""
+    return f"grid_{grid}_{component}"
+
+
+def parse_motion_output(name: str) -> tuple[int, str] | None:
+    """(grid, component) of a motion output name; None for any other signal."""
+    match = _MOTION_NAME.fullmatch(name)
+    return (int(match.group(1)), match.group(2)) if match else None
+
+
+def motion_unit(component: str) -> str:
+    """SI unit of a motion component: metres for translations, radians for rotations."""
+    return "m" if component.startswith("t") else "rad"
+
 
 @dataclass(frozen=True)
 class ModalPlant:
@@ -28,19 +53,26 @@ class ModalPlant:
     labels: tuple[str, ...]
     shapes: np.ndarray  #: (n_dof, n_modes) mode shapes behind the states (zero cluster rotated)
     removed_states: tuple[tuple[str, str], ...]  #: (state name, reason)
+    motion_outputs: tuple[str, ...] = ()  #: grid motion outputs [m, rad] (see motion_output_name)
 
 
-def modal_plant(modes: Modes, instruments: Instruments, damping: np.ndarray, *, max_hz: float) -> ModalPlant:
-    """Modal state-space of the modes up to ``max_hz`` [Hz] with the instruments' DOFs (no gains)."""
-    data = modal_data(modes, instruments, max_hz=max_hz)
+def modal_plant(modes: Modes, instruments: Instruments, damping: np.ndarray, *, max_hz: float,
+                motion_grids: Sequence[int] = ()) -> ModalPlant:
+    """Modal state-space of the modes up to ``max_hz`` [Hz] with the instruments' DOFs (no gains).
+
+    ``motion_grids`` adds the six motion components of each named grid as outputs. Directions of
+    the zero-frequency cluster that only they read (wheel angles) keep their displacement states;
+    the sensor outputs stay those of the model without them.
+    """
+    data = modal_data(modes, instruments, max_hz=max_hz, motion_grids=motion_grids)
     keep = modes.frequencies_hz <= max_hz
     a, b, c, states, labels, shapes, removed = modal_matrices(
         data.frequencies_hz, damping[keep], data.labels, data.shapes, data.modal_b, data.disp_out, data.rate_out,
-        data.output_order)
+        data.output_order, data.motion_out)
     sys = ct.ss(a, b, c, np.zeros((len(data.output_order), b.shape[1])), inputs=[x.name for x in instruments.actuators],
                 outputs=data.output_order, states=states, name="structure")
     return ModalPlant(system=sys, frequencies_hz=data.frequencies_hz, damping=damping[keep], labels=labels,
-                      shapes=shapes, removed_states=tuple(removed))
+                      shapes=shapes, removed_states=tuple(removed), motion_outputs=data.motion_outputs)
 
 
 @dataclass(frozen=True)
@@ -53,11 +85,18 @@ class ModalData:
     modal_b: np.ndarray  #: (n_modes, n_actuators): Phi^T b, per N m
     disp_out: dict[str, np.ndarray]  #: displacement outputs: rows over the modes
     rate_out: dict[str, np.ndarray]  #: rate outputs: rows over the modes
-    output_order: list[str]  #: the 20 sensors, then the integrated encoders' "<name>_angle"
+    output_order: list[str]  #: the 20 sensors, the integrated encoders' "<name>_angle", the motion outputs
+    motion_out: dict[str, np.ndarray] = field(default_factory=dict)  #: grid motion outputs: rows over the modes
+
+    @property
+    def motion_outputs(self) -> tuple[str, ...]:
+        """Names of the grid motion outputs, in output order."""
+        return tuple(self.motion_out)
 
 
-def modal_data(modes: Modes, instruments: Instruments, *, max_hz: float) -> ModalData:
-    """Project the modes up to ``max_hz`` [Hz] on the actuators and sensors."""
+def modal_data(modes: Modes, instruments: Instruments, *, max_hz: float,
+               motion_grids: Sequence[int] = ()) -> ModalData:
+    """Project the modes up to ``max_hz`` [Hz] on the actuators, the sensors and the ``motion_grids``."""
     keep = modes.frequencies_hz <= max_hz
     phi = modes.shapes[:, keep]
     b = np.array([influence_vector(a.dofs, modes.dofs, modes.cd_frames) for a in instruments.actuators]).T
@@ -67,5 +106,10 @@ def modal_data(modes: Modes, instruments: Instruments, *, max_hz: float) -> Moda
     disp_out.update({f"{n}_angle": rows[n] for n in integrated})
     rate_out = {s.name: rows[s.name] for s in instruments.sensors if s.kind == "rate"}
     order = [s.name for s in instruments.sensors] + [f"{n}_angle" for n in integrated]
+    if len(set(motion_grids)) != len(motion_grids):
+        raise ValueError(f"motion grids must be distinct, got {list(motion_grids)}")
+    motion_out = {motion_output_name(grid, component): phi[index] for grid in motion_grids
+                  for component, index in zip(MOTION_COMPONENTS, modes.dofs.indices(grid))}  # KeyError names a grid
     return ModalData(frequencies_hz=modes.frequencies_hz[keep], labels=tuple(l for l, k in zip(modes.labels, keep) if k),
-                     shapes=phi, modal_b=phi.T @ b, disp_out=disp_out, rate_out=rate_out, output_order=order)
+                     shapes=phi, modal_b=phi.T @ b, disp_out=disp_out, rate_out=rate_out,
+                     output_order=order + list(motion_out), motion_out=motion_out)

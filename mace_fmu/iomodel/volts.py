@@ -134,6 +134,8 @@ def build_diagram(plant: ModalPlant, instruments: Instruments, *, servos: bool =
             source[n] = f"delay_{n}.y"
     for n in sen_names:
         s.expose_output(n, source[n])
+    for n in plant.motion_outputs:  # grid motion for animation [m, rad]: straight from the structure
+        s.expose_output(n, f"structure.y[{n}]")
 
     # Actuator channels: computational delay, then the local servo, then the actuator gain.
     drive = {}
@@ -206,7 +208,8 @@ def volts_model(structure: StructureKind = "1g", *, servos: bool = True, bessel:
                 modes: StructureModes | None = None, inputs: Sequence[str] | None = None,
                 outputs: Sequence[str] | None = None, actuator_delays_s: Mapping[str, float] | None = None,
                 sensor_delays_s: Mapping[str, float] | None = None,
-                damping: Mapping[str, float] | None = None) -> VoltsModel:
+                damping: Mapping[str, float] | None = None,
+                motion_grids: Sequence[int] | Literal["all"] = ()) -> VoltsModel:
     """Volts-volts model of the 1-g or 0-g structure, modes up to ``max_hz`` [Hz].
 
     Inputs: gimbal commands (relative angle, 1 V = 1 deg, with servos; motor volts without),
@@ -214,7 +217,9 @@ def volts_model(structure: StructureKind = "1g", *, servos: bool = True, bessel:
     ``actuator_delays_s`` / ``sensor_delays_s`` [s] replace the delays of the named channels
     (defaults: Tables 4.5 and 4.6 from the instrument file). ``damping`` maps mode labels (as in
     ``compute_modes(...).modes.labels``, e.g. "1st Z bending") to open-loop damping ratios that
-    replace the instrument file's table.
+    replace the instrument file's table. ``motion_grids`` (grid IDs, or "all") adds each grid's
+    translations [m] and rotations [rad] in basic axes as outputs ``grid_<id>_<tx|ty|tz|rx|ry|rz>``
+    after the sensors, for animation.
     """
     _check(structure in ("1g", "0g"), f"structure must be '1g' or '0g', got {structure!r}")
     instruments = instruments if instruments is not None else load_instruments()
@@ -233,7 +238,14 @@ def volts_model(structure: StructureKind = "1g", *, servos: bool = True, bessel:
         table = replace(instruments.damping, by_label={**instruments.damping.by_label, **damping})
         instruments = replace(instruments, damping=table)
     zeta = modal_damping(modes.modes.labels, modes.modes.frequencies_hz, instruments.damping)
-    plant = modal_plant(modes.modes, instruments, zeta, max_hz=max_hz)
+    grids = modes.modes.dofs.grid_ids
+    if isinstance(motion_grids, str):
+        _check(motion_grids == "all", f"motion_grids must be grid IDs or 'all', got {motion_grids!r}")
+        motion_grids = grids
+    unknown = sorted(set(motion_grids) - set(grids))
+    _check(not unknown, f"motion_grids: grid(s) {unknown} are not in the {structure} model; it has grids "
+                        f"{grids[0]}..{grids[-1]} ({len(grids)} in all)")
+    plant = modal_plant(modes.modes, instruments, zeta, max_hz=max_hz, motion_grids=list(motion_grids))
     diagram = build_diagram(plant, instruments, servos=servos, bessel=bessel, delays=delays, pade_order=pade_order)
     system = diagram.compile()
     return VoltsModel(system=select_signals(system, inputs=inputs, outputs=outputs), diagram=diagram, plant=plant,

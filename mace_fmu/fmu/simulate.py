@@ -1,0 +1,137 @@
+"""Run a MACE FMU (through fmpy) with a test signal on one input; inputs [V], outputs in their units.
+
+pythonfmu pitfall: its native wrapper has been seen to corrupt the heap of a process that loaded
+pythonfmu FMUs, so that Python aborts at exit ("corrupted double-linked list") after all work was
+done; deleting extracted FMU folders and loading more FMUs makes it likelier. The simulation
+therefore runs, by default, in a fresh worker process that returns the samples: the caller's
+process never loads the FMU's native code.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Literal, Sequence
+
+import fmpy
+import numpy as np
+
+from mace_fmu.errors import MaceError
+
+SignalKind = Literal["step", "chirp", "impulse"]
+SIGNALS: tuple[str, ...] = ("step", "chirp", "impulse")
+
+
+@dataclass(frozen=True)
+class FmuRun:
+    """One simulation: the signals at the communication points [s]."""
+
+    times_s: np.ndarray  #: (n,) communication points, uniform, from 0
+    inputs: dict[str, np.ndarray]  #: the driven input [V], held over the step that starts at t (others 0 V)
+    outputs: dict[str, np.ndarray]  #: every recorded output, in ``units``
+    units: dict[str, str]  #: unit of each input and output, from the model description
+    descriptions: dict[str, str]  #: of each input and output, from the model description
+
+
+def input_signal(kind: SignalKind, times_s: np.ndarray, *, amplitude_v: float = 1.0,
+                 chirp_hz: tuple[float, float] = (0.1, 10.0)) -> np.ndarray:
+    """A test signal [V] at ``times_s``, held over each step (zero-order hold).
+
+    step: ``amplitude_v`` from t = 0 on; impulse: ``amplitude_v`` over the first step, then 0;
+    chirp: ``amplitude_v`` sin of a linear sweep from ``chirp_hz[0]`` to ``chirp_hz[1]`` [Hz]
+    over the run.
+    """
+    t = np.asarray(times_s, dtype=float)
+    if kind == "step":
+        return np.full(t.shape, float(amplitude_v))
+    if kind == "impulse":
+        u = np.zeros(t.shape)
+        u[0] = amplitude_v
+        return u
+    if kind == "chirp":
+        f0, f1 = chirp_hz
+        if not (f0 >= 0.0 and f1 > 0.0):
+            raise MaceError(f"chirp frequencies must be >= 0 Hz and the end > 0 Hz, got {chirp_hz}")
+        duration = max(float(t[-1] - t[0]), 1e-300)
+        return amplitude_v * np.sin(2 * np.pi * (f0 * t + 0.5 * (f1 - f0) / duration * t**2))
+    raise MaceError(f"signal must be one of {', '.join(SIGNALS)}, got {kind!r}")
+
+
+def simulate_input_response(fmu: str | os.PathLike, *, input_name: str, signal: SignalKind = "step",
+                            duration_s: float = 2.0, step_s: float = 0.002, amplitude_v: float = 1.0,
+                            chirp_hz: tuple[float, float] = (0.1, 10.0),
+                            outputs: Sequence[str] | None = None, in_subprocess: bool = True) -> FmuRun:
+    """Simulate ``fmu`` (an .fmu file or an extracted folder) with ``signal`` on ``input_name``.
+
+    All other inputs stay at 0 V. ``outputs`` None records every output. The FMU is stepped at
+    ``step_s`` [s] for ``duration_s`` [s] and sampled at every step; ``in_subprocess`` runs fmpy
+    in a fresh worker process (see the module docstring).
+    """
+    if not (duration_s > 0 and step_s > 0 and duration_s >= step_s):
+        raise MaceError(f"need duration_s >= step_s > 0 [s], got duration {duration_s} s, step {step_s} s")
+    md = fmpy.read_model_description(str(fmu))
+    variables = {v.name: v for v in md.modelVariables}
+    ins = [v.name for v in md.modelVariables if v.causality == "input"]
+    outs = [v.name for v in md.modelVariables if v.causality == "output"]
+    if input_name not in ins:
+        raise MaceError(f"{os.fspath(fmu)} has no input {input_name!r}; inputs: {', '.join(ins)}")
+    recorded = list(outs if outputs is None else outputs)
+    unknown = [n for n in recorded if n not in outs]
+    if unknown:
+        raise MaceError(f"{os.fspath(fmu)} has no output(s) {', '.join(unknown)}; outputs: {', '.join(outs)}")
+    n_steps = int(round(duration_s / step_s))
+    t = np.arange(n_steps + 1) * step_s
+    u = input_signal(signal, t, amplitude_v=amplitude_v, chirp_hz=chirp_hz)
+    table = np.zeros(len(t), dtype=[("time", float)] + [(n, float) for n in ins])
+    table["time"], table[input_name] = t, u
+    run = _simulate_in_subprocess if in_subprocess else _simulate
+    result = run(os.fspath(fmu), table, recorded, step_s)
+    if len(result) != len(t) or not np.allclose(result["time"], t, rtol=0, atol=1e-9 * step_s):
+        raise MaceError(f"{os.fspath(fmu)}: fmpy reported {len(result)} samples, expected {len(t)} at {step_s} s")
+    named = [input_name] + recorded
+    return FmuRun(times_s=t, inputs={input_name: u},
+                  outputs={n: np.asarray(result[n], dtype=float) for n in recorded},
+                  units={n: variables[n].unit or "" for n in named},
+                  descriptions={n: variables[n].description or "" for n in named})
+
+
+def _simulate(fmu: str, table: np.ndarray, outputs: list[str], step_s: float) -> np.ndarray:
+    """fmpy's co-simulation with the input table, sampled at every step."""
+    return fmpy.simulate_fmu(fmu, start_time=0.0, stop_time=float(table["time"][-1]), output_interval=step_s,
+                             input=table, output=outputs)
+
+
+_DONE = "mace-fmu worker: samples written"
+
+
+def _simulate_in_subprocess(fmu: str, table: np.ndarray, outputs: list[str], step_s: float) -> np.ndarray:
+    """``_simulate`` in a fresh Python process (a plain subprocess: no re-import of the caller's script).
+
+    The worker reports success on stdout after writing the samples, so a crash at its exit (the
+    pitfall above) loses nothing; any earlier failure raises with the worker's error output.
+    """
+    with tempfile.TemporaryDirectory(prefix="mace_fmu_run_") as tmp:
+        request, answer = Path(tmp) / "request.npz", Path(tmp) / "answer.npy"
+        np.savez(request, table=table, outputs=np.array(outputs, dtype=str), step_s=step_s, fmu=fmu)
+        code = f"from mace_fmu.fmu.simulate import _worker; _worker({str(request)!r}, {str(answer)!r})"
+        done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+        if _DONE not in done.stdout or not answer.exists():
+            raise MaceError(f"simulating {fmu} failed in the worker process (exit status {done.returncode}):\n"
+                            f"{done.stderr.strip()[-2000:]}")
+        columns = np.load(answer, allow_pickle=False)
+    result = np.zeros(columns.shape[1], dtype=[("time", float)] + [(n, float) for n in outputs])
+    for k, name in enumerate(["time"] + outputs):
+        result[name] = columns[k]
+    return result
+
+
+def _worker(request: str, answer: str) -> None:
+    """Entry point of the worker process: read the request, simulate, write the samples."""
+    with np.load(request, allow_pickle=False) as r:
+        result = _simulate(str(r["fmu"]), r["table"], [str(n) for n in r["outputs"]], float(r["step_s"]))
+    np.save(answer, np.array([result[n] for n in result.dtype.names], dtype=float), allow_pickle=False)
+    print(_DONE, flush=True)

@@ -1,0 +1,105 @@
+"""Time-response animations: an FMU's grid motion outputs played on the mesh, and a plot of the signals."""
+
+from __future__ import annotations
+
+import textwrap
+from dataclasses import dataclass
+from pathlib import Path
+
+import matplotlib
+import numpy as np
+
+matplotlib.use("Agg")  # files only: no display on CI or servers
+import matplotlib.pyplot as plt  # noqa: E402
+
+from mace_fmu.errors import MaceError
+from mace_fmu.fmu.simulate import FmuRun
+from mace_fmu.iomodel.modal_ss import MOTION_COMPONENTS, motion_output_name
+from mace_fmu.pipeline import StructureModes
+from viewer.frames import Clip, Frames
+from viewer.scene import Scene, build_scene
+
+
+@dataclass(frozen=True)
+class ResponseAnimation:
+    """A scene, its key frames, and which FMU samples they show at which magnification."""
+
+    scene: Scene
+    frames: Frames
+    sample_indices: np.ndarray  #: the FMU communication point behind each frame
+    scale: float  #: drawn metres per metre of computed motion (and radians per radian)
+    playback_speed: float  #: simulated seconds per second of playback
+
+
+def grid_motion(run: FmuRun, scene: Scene) -> np.ndarray:
+    """(n_samples, n_grid, 6) motion [m, rad] of the scene's grids from the ``grid_<id>_<c>`` outputs.
+
+    Every grid a body is drawn from must have its six outputs; other grids stay at rest.
+    """
+    drawn = sorted({r for s in scene.segments for r in (s.row_a, s.row_b)} | {m.row for m in scene.masses})
+    motion = np.zeros((run.times_s.size, len(scene.grid_ids), 6))
+    missing = []
+    for row, grid in enumerate(scene.grid_ids):
+        names = [motion_output_name(grid, c) for c in MOTION_COMPONENTS]
+        if all(n in run.outputs for n in names):
+            motion[:, row] = np.stack([run.outputs[n] for n in names], axis=1)
+        elif row in drawn:
+            missing.append(grid)
+    if missing:
+        raise MaceError(f"the FMU has no motion outputs for grid(s) {missing[:10]}{' ...' if len(missing) > 10 else ''}"
+                        "; export it with motion outputs (mace-fmu export --motion-grids all)")
+    return motion
+
+
+def animate_response(structure_modes: StructureModes, run: FmuRun, *, scale: float | None = None,
+                     fraction_of_length: float = 0.08, playback_speed: float = 1.0, fps: float = 50.0,
+                     segments_per_bar: int = 4) -> ResponseAnimation:
+    """Key frames of an FMU run: each frame is one communication point's motion x ``scale``.
+
+    Playback runs at ``playback_speed`` simulated seconds per second (1 = real time, 0.1 = ten
+    times slower). Frames are every k-th communication point, with k chosen so the frame rate is
+    as close to ``fps`` as the step allows. ``scale`` defaults to the magnification that makes the
+    largest translation over the run ``fraction_of_length`` of the structure's size.
+    """
+    if not (playback_speed > 0 and fps > 0):
+        raise MaceError(f"playback_speed and fps must be > 0, got {playback_speed} and {fps}")
+    if scale is not None and not np.isfinite(scale):
+        raise MaceError(f"scale must be a finite magnification, got {scale}")
+    scene = build_scene(structure_modes, segments_per_bar=segments_per_bar)
+    motion = grid_motion(run, scene)
+    step_s = float(run.times_s[1] - run.times_s[0]) if run.times_s.size > 1 else 1.0
+    stride = max(1, int(round(playback_speed / (fps * step_s))))
+    samples = np.arange(0, run.times_s.size, stride)
+    largest = float(np.linalg.norm(motion[..., :3], axis=-1).max())
+    if scale is None:
+        scale = fraction_of_length * scene.length_m / largest if largest > 0 else 1.0
+    frame_fps = playback_speed / (stride * step_s)
+    times = run.times_s[samples] / playback_speed
+    inputs = ", ".join(run.inputs)
+    clip = Clip(title=f"response to {inputs}: {run.times_s[-1]:.3g} s simulated at {playback_speed:g}x, "
+                      f"motion x {scale:.3g}", start_s=0.0, end_s=float(times[-1]))
+    frames = Frames(times_s=times, displacements=float(scale) * motion[samples], fps=frame_fps, clips=(clip,))
+    return ResponseAnimation(scene=scene, frames=frames, sample_indices=samples, scale=float(scale),
+                             playback_speed=float(playback_speed))
+
+
+def plot_response(run: FmuRun, *, output_name: str, path: str | Path, title: str = "") -> Path:
+    """PNG of the driven input [V] and one output over time [s], stacked."""
+    if output_name not in run.outputs:
+        raise MaceError(f"no output {output_name!r} in this run; outputs: {', '.join(list(run.outputs)[:30])}")
+    fig, axes = plt.subplots(2, 1, sharex=True, figsize=(8, 5))
+    (input_name, held), shown = next(iter(run.inputs.items())), run.outputs[output_name]
+    axes[0].step(run.times_s, held, where="post", lw=1.0)  # the FMU holds its input over each step
+    axes[1].plot(run.times_s, shown, lw=1.0)
+    for ax, name in zip(axes, (input_name, output_name)):
+        ax.set_ylabel(f"{name} [{run.units.get(name, '')}]")
+        ax.set_title(textwrap.shorten(run.descriptions.get(name, ""), width=110), fontsize=8, loc="left")
+        ax.grid(True, alpha=0.3)
+    axes[-1].set_xlabel("time [s]")
+    fig.suptitle(title)
+    fig.tight_layout()
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
