@@ -117,3 +117,23 @@ def test_argparse_errors_exit_with_status_2(capsys, argv):
     assert exc.value.code == 2
     err = capsys.readouterr().err
     assert "usage: mace-fmu" in err
+
+
+def test_export_with_motion_grids_names_their_outputs(capsys, tmp_path):
+    import fmpy
+
+    code, out, _ = _run(capsys, ["export", "0g", "-o", str(tmp_path), "--motion-grids", "1,7"])
+    assert code == 0 and out.strip().endswith("MACE_0g.fmu")
+    md = fmpy.read_model_description(out.strip().splitlines()[-1])
+    outs = [v for v in md.modelVariables if v.causality == "output"]
+    assert len(outs) == 20 + 12
+    assert [(v.name, v.unit) for v in outs[20:23]] == [("grid_1_tx", "m"), ("grid_1_ty", "m"), ("grid_1_tz", "m")]
+    assert outs[-1].name == "grid_7_rz" and outs[-1].unit == "rad" and "rotation about basic Z" in outs[-1].description
+
+
+@pytest.mark.parametrize("value, message", [("1,x", "takes 'all' or comma-separated grid IDs, got '1,x'"),
+                                            ("1,99999", "are not in the 0g model")])
+def test_bad_motion_grids_give_one_line_errors(capsys, tmp_path, value, message):
+    code, _, err = _run(capsys, ["export", "0g", "-o", str(tmp_path), "--motion-grids", value])
+    last = err.strip().splitlines()[-1]  # after the progress lines: one error line
+    assert code == 2 and last.startswith("mace-fmu: error: ") and message in last

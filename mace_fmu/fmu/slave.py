@@ -17,6 +17,7 @@ Stepping is an exact zero-order hold: over a communication step h with the input
 from __future__ import annotations
 
 import math
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -36,6 +37,10 @@ class MaceSlave(Fmi2Slave):
 
     def __init__(self, **kwargs):
         super().__init__(**kwargs)
+        # pythonfmu inserts the resources folder into sys.path on every instantiation: keep one entry
+        if self.resources in sys.path:
+            first = sys.path.index(self.resources)
+            sys.path[first + 1:] = [p for p in sys.path[first + 1:] if p != self.resources]
         self._data = data = dict(np.load(Path(self.resources) / "model.npz", allow_pickle=False))
         self._inputs = [str(n) for n in data["inputs"]]
         self._outputs = [str(n) for n in data["outputs"]]
