@@ -120,3 +120,16 @@ def test_modal_plant_dc_strain_matches_a_static_solution(inst, m0):
     sub_a, sub_b, sub_c = a[np.ix_(states, states)], bb[states, i], cc[o, states]
     assert len(states) == 2 * n_flex and keep.sum() >= 2 * n_flex
     assert -sub_c @ np.linalg.solve(sub_a, sub_b) == pytest.approx(modal_dc, rel=1e-9)
+
+
+def test_a_negative_frequency_is_an_unstable_mode_not_an_oscillator():
+    """A negative eigenvalue (frequency reported as -f, e.g. a softened spring) gives the poles
+    +-2 pi f of eta'' = (2 pi f)^2 eta, the divergent solution, as an FMU reanalysis must show."""
+    from mace_fmu.iomodel.modal_core import modal_matrices
+
+    freq = np.array([-1.5, 4.0])
+    a, *_ = modal_matrices(freq, np.zeros(2), ("soft", "stiff"), np.zeros((0, 2)), np.ones((2, 1)),
+                           {"x": np.ones(2)}, {}, ["x"])
+    poles = np.sort_complex(np.linalg.eigvals(a))
+    np.testing.assert_allclose(poles, np.sort_complex([-3.0 * np.pi, 3.0 * np.pi, -8j * np.pi, 8j * np.pi]),
+                               atol=1e-12)

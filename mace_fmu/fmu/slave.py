@@ -24,6 +24,7 @@ import numpy as np
 from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability, Real
 from pythonfmu.enums import Fmi2Status
 from scipy.linalg import expm
+from scipy.optimize import linear_sum_assignment
 
 from mace_fmu.iomodel.modal_core import modal_matrices  # fmu: inlined
 from modelica_like.algebra import interconnect, pade  # fmu: inlined
@@ -65,10 +66,42 @@ class MaceSlave(Fmi2Slave):
         for k, label in enumerate(data["mode_labels"]):
             self.register_variable(Real(f"frequency_mode_{k + 1}", causality=Fmi2Causality.calculatedParameter,
                                         variability=Fmi2Variability.fixed,
-                                        description=f"natural frequency [Hz] of mode {k + 1} ({label}) after reanalysis",
+                                        description=f"natural frequency [Hz] of mode {k + 1} ({label}) after reanalysis "
+                                                "(the mode it continues into, not the k-th lowest)",
                                         getter=self._frequency_getter(k)))
 
+        self._input_of_vr = {vr: self._inputs.index(v.name) for vr, v in self.vars.items()
+                             if v.causality == Fmi2Causality.input}
+        self._output_of_vr = {vr: self._outputs.index(v.name) for vr, v in self.vars.items()
+                              if v.causality == Fmi2Causality.output}
+        self._index_cache: dict[tuple, np.ndarray | None] = {}
+        self._last_step: tuple[float, tuple[np.ndarray, np.ndarray]] | None = None
+
     # --- variable access -------------------------------------------------------------------
+    # Hosts write all inputs and read all outputs once per step: the vectorised paths below
+    # replace pythonfmu's per-variable loop for those calls (other variables go through it).
+    def _indices(self, vrs, table: dict[int, int], kind: str) -> np.ndarray | None:
+        key = (kind, tuple(vrs))
+        if key not in self._index_cache:
+            index = [table.get(vr) for vr in vrs]
+            self._index_cache[key] = None if None in index else np.array(index, dtype=int)
+        return self._index_cache[key]
+
+    def get_real(self, vrs):
+        index = self._indices(vrs, self._output_of_vr, "out")
+        if index is None:
+            return super().get_real(vrs)
+        if self._y is None:
+            self._y = self._c @ self._x + self._d @ self._u
+        return self._y[index].tolist()
+
+    def set_real(self, vrs, values):
+        index = self._indices(vrs, self._input_of_vr, "in")
+        if index is None:
+            return super().set_real(vrs, values)
+        self._u[index] = values
+        self._y = None
+
     def _input_getter(self, k):
         return lambda: float(self._u[k])
 
@@ -114,6 +147,10 @@ class MaceSlave(Fmi2Slave):
         if np.any(rel != 0.0):
             k_r = np.diag(omega2) + np.tensordot(rel, d["physical_dk"], axes=1)
             w2, phi_r = np.linalg.eigh(0.5 * (k_r + k_r.T))
+            # each new mode takes the index of the nominal mode it continues (largest overlap), so
+            # damping_mode_k and frequency_mode_k follow the physical mode through a crossing
+            _, order = linear_sum_assignment(-np.abs(phi_r))
+            w2, phi_r = w2[order], phi_r[:, order]
             freq = np.sign(w2) * np.sqrt(np.abs(w2)) / (2 * np.pi)
         else:
             freq, phi_r = freq0, np.eye(n)
@@ -151,6 +188,7 @@ class MaceSlave(Fmi2Slave):
         self._a, self._b, self._c, self._d = interconnect(blocks, d["wiring"], d["entry"], d["exit"])
         self._built_with = self._params.copy()
         self._cache.clear()
+        self._last_step = None
         self._x = np.zeros(self._a.shape[0])
         self._u = np.zeros(len(self._inputs)) if self._u is None else self._u
         self._y = None
@@ -166,7 +204,9 @@ class MaceSlave(Fmi2Slave):
         Keyed on h to 12 significant digits: hosts compute steps as t[k+1] - t[k], which gives a
         dozen round-off variants of one step size, each of which would cost a matrix exponential.
         """
-        h = float(f"{h:.12g}")
+        if self._last_step is not None and self._last_step[0] == h:
+            return self._last_step[1]
+        raw, h = h, float(f"{h:.12g}")
         if h not in self._cache:
             n, m = self._b.shape
             aug = np.zeros((n + m, n + m))
@@ -175,10 +215,11 @@ class MaceSlave(Fmi2Slave):
             if len(self._cache) > 64:  # a varying step size must not grow memory without bound
                 self._cache.clear()
             self._cache[h] = (e[:n, :n].copy(), e[:n, n:].copy())
+        self._last_step = (raw, self._cache[h])
         return self._cache[h]
 
     def do_step(self, current_time: float, step_size: float) -> bool:
-        if not all(math.isfinite(v) for v in self._u):
+        if not np.isfinite(self._u).all():
             bad = [n for n, v in zip(self._inputs, self._u) if not math.isfinite(v)]
             self.log(f"non-finite input value(s) at t = {current_time}: {', '.join(bad)}", status=Fmi2Status.error)
             return False

@@ -89,7 +89,10 @@ def modal_matrices(freq_hz: np.ndarray, zeta: np.ndarray, labels: tuple[str, ...
     disp_out = {k: v.copy() for k, v in disp_out.items()}
     rate_out = {k: v.copy() for k, v in rate_out.items()}
     motion_out = {k: v.copy() for k, v in (motion_out or {}).items()}
-    omega = 2.0 * np.pi * np.where(np.abs(freq_hz) < ZERO_HZ, 0.0, freq_hz)
+    # signed: a negative frequency is a negative eigenvalue (an unstable mode, e.g. a softened
+    # spring), whose state-space block must diverge, not oscillate
+    freq = np.where(np.abs(freq_hz) < ZERO_HZ, 0.0, freq_hz)
+    omega2, omega = np.sign(freq) * (2.0 * np.pi * freq) ** 2, 2.0 * np.pi * np.abs(freq)
     zero = np.flatnonzero(np.abs(freq_hz) < ZERO_HZ)
     shapes, labels, modal_b, n_ctrl, n_obs, removed = reduce_zero_cluster(zero, shapes, labels, modal_b, disp_out,
                                                                           rate_out, motion_out)
@@ -104,7 +107,7 @@ def modal_matrices(freq_hz: np.ndarray, zeta: np.ndarray, labels: tuple[str, ...
     pos_r = {j: nd + k for k, j in enumerate(r_idx)}
     for k, j in enumerate(d_idx):
         a[k, pos_r[j]] = 1.0
-        a[pos_r[j], k] = -omega[j] ** 2
+        a[pos_r[j], k] = -omega2[j]
     for j in r_idx:
         a[pos_r[j], pos_r[j]] = -2.0 * zeta[j] * omega[j]
     b = np.vstack([np.zeros((nd, modal_b.shape[1])), modal_b[r_idx]])
