@@ -65,7 +65,8 @@ def cmd_build(args: argparse.Namespace) -> int:
     # imported here, as in the other commands, so that `mace-fmu modes` starts without control/pythonfmu
     from mace_fmu.fmu.export import export_fmu
     from mace_fmu.iomodel.volts import DEFAULT_MAX_HZ, volts_model
-    from mace_fmu.thesis import format_rows, format_side_by_side, table_5_1_0g, table_5_1_1g, thesis_data
+    from mace_fmu.thesis import (format_mass_rows, format_rows, format_side_by_side, table_3_15_comparison,
+                                 table_5_1_0g, table_5_1_1g)
 
     deck = read_deck(args.deck)
     _progress("0-g modes (suspension removed, linear)")
@@ -80,14 +81,8 @@ def cmd_build(args: argparse.Namespace) -> int:
     print()
     print(format_side_by_side({kind: table_5_1_1g(m1, m0) for kind, m1 in results.items()},
                               title="Table 5.1, 1-g column (structural modes paired with the 0-g ones by MAC)"))
-    ref = thesis_data()["table_3_15"]
-    p = m0.mass_properties
-    j = np.diag(p.inertia_about_reference_kgm2)
     print()
-    print("Table 3.15, free-free mass properties about the centre node")
-    for name, ours, theirs in (("mass kg", p.mass_kg, ref["mass_kg"]), ("Jxx kg m^2", j[0], ref["jxx"]),
-                               ("Jyy kg m^2", j[1], ref["jyy"]), ("Jzz kg m^2", j[2], ref["jzz"])):
-        print(f"{name:12s} thesis {theirs:8.3f}  ours {ours:8.4f}  error {100 * (ours - theirs) / theirs:6.2f} %")
+    print(format_mass_rows(table_3_15_comparison(m0), title="Table 3.15, free-free mass properties about the centre node"))
     print()
     for kind, modes in (("1g", results["large"]), ("0g", m0)):
         _progress(f"{kind} volts-volts model and FMU")
@@ -96,7 +91,7 @@ def cmd_build(args: argparse.Namespace) -> int:
     print()
     print("1-g modes below 25 Hz (large-displacement preload | linear preload)")
     large, linear = results["large"].modes, results["linear"].modes
-    for i in range(len(large)):
+    for i in range(min(len(large), len(linear))):  # side by side by index: the two preloads keep the mode order
         if large.frequencies_hz[i] > 25.0:
             break
         print(f"{i + 1:3d} {large.frequencies_hz[i]:9.3f}  {large.labels[i]:40s} | "

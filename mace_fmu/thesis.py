@@ -56,6 +56,35 @@ def table_5_1_1g(m1: StructureModes, m0: StructureModes) -> list[ComparisonRow]:
             for ref, (_, j, mac) in zip(data, pairs)]
 
 
+@dataclass(frozen=True)
+class MassRow:
+    """One free-free mass property about the centre node: ours next to Table 3.15."""
+
+    name: str  #: with its unit, e.g. "mass kg"
+    ours: float
+    thesis: float
+
+    @property
+    def error_percent(self) -> float:
+        return 100.0 * (self.ours - self.thesis) / self.thesis
+
+
+def table_3_15_comparison(m0: StructureModes) -> list[MassRow]:
+    """Mass [kg] and principal inertias [kg m^2] about the centre node against Table 3.15."""
+    ref = thesis_data()["table_3_15"]
+    p = m0.mass_properties
+    j = np.diag(p.inertia_about_reference_kgm2)
+    return [MassRow("mass kg", p.mass_kg, ref["mass_kg"]), MassRow("Jxx kg m^2", j[0], ref["jxx"]),
+            MassRow("Jyy kg m^2", j[1], ref["jyy"]), MassRow("Jzz kg m^2", j[2], ref["jzz"])]
+
+
+def format_mass_rows(rows: list[MassRow], *, title: str) -> str:
+    """Plain-text table of mass properties: thesis, ours, error %."""
+    lines = [title] + [f"{r.name:12s} thesis {r.thesis:8.3f}  ours {r.ours:8.4f}  error {r.error_percent:6.2f} %"
+                       for r in rows]
+    return "\n".join(lines)
+
+
 def format_rows(rows: list[ComparisonRow], *, title: str) -> str:
     """Plain-text table: thesis label, thesis Hz, ours Hz, error %, our label (and MAC)."""
     has_mac = any(r.mac is not None for r in rows)

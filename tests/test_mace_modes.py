@@ -9,7 +9,7 @@ from mace_fmu.deck.geometry import grid_positions
 from mace_fmu.deck.reader import read_deck
 from mace_fmu.pipeline import compute_modes
 from mace_fmu.structure import bundled_deck_path
-from mace_fmu.thesis import table_5_1_0g, table_5_1_1g, thesis_data
+from mace_fmu.thesis import table_3_15_comparison, table_5_1_0g, table_5_1_1g, thesis_data
 
 
 @pytest.fixture(scope="module")
@@ -67,6 +67,9 @@ def test_0g_mass_properties_match_table_3_15(m0):
     assert p.reference_grid == 16
     assert p.mass_kg == pytest.approx(ref["mass_kg"], rel=5e-3)
     np.testing.assert_allclose(np.diag(p.inertia_about_reference_kgm2), [ref["jxx"], ref["jyy"], ref["jzz"]], rtol=5e-3)
+    rows = table_3_15_comparison(m0)  # what `mace-fmu build` prints
+    assert [r.thesis for r in rows] == [ref["mass_kg"], ref["jxx"], ref["jyy"], ref["jzz"]]
+    assert rows[0].ours == p.mass_kg and max(abs(r.error_percent) for r in rows) < 0.5
 
 
 def test_0g_has_13_zero_modes_rigid_gimbal_wheel(m0):
