@@ -26,7 +26,7 @@ from mace_fmu.iomodel import modal_core
 from mace_fmu.iomodel.modal_ss import modal_data, motion_unit, parse_motion_output
 from mace_fmu.iomodel.volts import VoltsModel
 from mace_fmu.structure import apply_overrides
-from modelica_like import algebra
+from modelica_like import PD, Gain, PadeDelay, algebra
 
 SLAVE_SOURCE = Path(__file__).with_name("slave.py")
 DEFAULT_EXPERIMENT = {"startTime": "0.0", "stopTime": "10.0", "stepSize": "0.002"}
@@ -69,16 +69,17 @@ def _blocks(model: VoltsModel) -> tuple[dict, list[tuple[str, float, str]]]:
     sv = model.instruments.servos
     for i, block in enumerate(ic.blocks):
         name = block.name
+        # block kinds by class; which servo gain a Gain block carries, by the name volts.py gives it
         if name == "structure":
             kinds.append("structure"), params.append("")
-        elif name.startswith("delay_"):
+        elif isinstance(block, PadeDelay):
             kinds.append("delay"), params.append(name)
-            delay = float(block.delay)
-            parameters.append((name, delay, f"time delay of {name[len('delay_'):]} [s] (Pade order {model.pade_order})"))
-        elif name.startswith(("kf_", "kb_")):
+            what = name.removeprefix("delay_")
+            parameters.append((name, float(block.delay), f"time delay of {what} [s] (Pade order {model.pade_order})"))
+        elif isinstance(block, Gain) and name.startswith(("kf_", "kb_")):
             gain = "K_f" if name.startswith("kf_") else "K_b"
             kinds.append("gain"), params.append(gain)
-        elif name.startswith("servo_"):
+        elif isinstance(block, PD):
             kinds.append("pd"), params.append("K_a,K_r")
         else:
             kinds.append("const"), params.append("")
