@@ -114,7 +114,7 @@ def _volts(args: argparse.Namespace, **overrides):
 
     options = dict(servos=not args.no_servos, bessel=args.bessel, delays=not args.no_delays,
                    pade_order=args.pade_order, max_hz=args.max_hz, preload=args.preload, deck=read_deck(args.deck),
-                   motion_grids=_motion_grids(args.motion_grids))
+                   motion_grids=_motion_grids(getattr(args, "motion_grids", None)))
     try:
         return volts_model(args.structure, **{**options, **overrides})
     except ValueError as exc:  # a bad option value: one message, not a traceback
@@ -208,13 +208,20 @@ def cmd_view_response(args: argparse.Namespace) -> int:
     _need_target(args)
     out_dir = Path(args.html).parent if args.html else Path(".")
     if args.fmu:
+        import fmpy
+
         fmu = Path(args.fmu)
         if not fmu.exists():
             raise MaceError(f"--fmu {fmu}: no such file")
-        modes = compute_modes(read_deck(args.deck), structure=args.structure, max_hz=args.max_hz, progress=_progress)
+        described = fmpy.read_model_description(str(fmu)).description or ""
+        if not described.startswith(f"MACE {args.structure} "):
+            raise MaceError(f"--fmu {fmu} is not a MACE {args.structure} model (its description: {described!r})")
+        # only the scene is needed from the FE model: its lowest modes are enough
+        modes = compute_modes(read_deck(args.deck), structure=args.structure, preload=args.preload, max_hz=1.0,
+                              progress=_progress)
     else:
         _progress(f"{args.structure} volts-volts model with the motion of every grid")
-        model = _volts(args, motion_grids=_motion_grids(args.motion_grids) or "all")
+        model = _volts(args, motion_grids="all")
         modes = model.structure_modes
         fmu = export_fmu(model, out_dir=out_dir, name=f"MACE_{args.structure}_motion")
         print(f"wrote {fmu} (reuse it with --fmu)")
@@ -242,7 +249,7 @@ def _collocated_output(input_name: str, run) -> str:
     partner = {**servos.gimbals, **servos.wheels}.get(input_name)
     if partner in run.outputs:
         return partner
-    return next(n for n in run.outputs if parse_motion_output(n) is None)
+    return next((n for n in run.outputs if parse_motion_output(n) is None), next(iter(run.outputs)))
 
 
 def cmd_view(args: argparse.Namespace) -> int:
@@ -268,7 +275,7 @@ def build_parser() -> argparse.ArgumentParser:
     def deck_option(p: argparse.ArgumentParser) -> None:
         p.add_argument("--deck", default=str(bundled_deck_path()), help="NASTRAN bulk deck (default: bundled MACE deck)")
 
-    def model_options(p: argparse.ArgumentParser) -> None:
+    def model_options(p: argparse.ArgumentParser, *, motion: bool = True) -> None:
         p.add_argument("--max-hz", type=float, default=250.0, help="highest retained mode [Hz] (default 250)")
         p.add_argument("--bessel", choices=["full", "delay", "none"], default="full",
                        help="Bessel filters as 8-pole filters, as their 2.44 ms Pade delay, or left out")
@@ -276,8 +283,9 @@ def build_parser() -> argparse.ArgumentParser:
         p.add_argument("--no-delays", action="store_true", help="leave out the actuator and gyro time delays")
         p.add_argument("--pade-order", type=int, default=3, help="order of the Pade delay approximations (default 3)")
         p.add_argument("--preload", choices=["large", "linear"], default="large", help="1-g gravity preload")
-        p.add_argument("--motion-grids", default=None, metavar="all|ID,ID,...",
-                       help="also output these grids' translations [m] and rotations [rad] (for animation)")
+        if motion:
+            p.add_argument("--motion-grids", default=None, metavar="all|ID,ID,...",
+                           help="also output these grids' translations [m] and rotations [rad] (for animation)")
 
     p = sub.add_parser("modes", help="natural frequencies [Hz] and labels of the 1-g or 0-g structure")
     p.add_argument("structure", choices=["1g", "0g"])
@@ -347,7 +355,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--fmu", help="an FMU with motion outputs to run (default: export one next to the HTML)")
     p.add_argument("--html", help="write a standalone HTML file and, next to it, a PNG plot of input and output")
     p.add_argument("--live", action="store_true", help="also serve it on a live meshcat server until Ctrl-C")
-    model_options(p)
+    model_options(p, motion=False)  # the exported FMU carries the motion of every grid
     p.set_defaults(func=cmd_view_response)
 
     p = sub.add_parser("build", help="the main job: modes next to the thesis tables, and both FMUs")

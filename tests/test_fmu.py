@@ -337,10 +337,8 @@ def _frequencies(fmu, unzipped) -> np.ndarray:
 
 def test_physical_parameter_reanalysis_matches_the_fe_rebuild(built):
     """E of Lexan center +5 % set in the FMU (Ritz reanalysis on the retained modes, eq. 4.6-4.9)
-    against the FE core rebuilt with that modulus. 0-g: every flexible mode within 1e-3 (measured
-    2.8e-4). 1-g: within 1e-3 except the three gravity-stiffened modes (Z tilt, X twist, 1st Y
-    bending: 1.9e-3 to 2.9e-3): a stiffer bus also sags less, which changes the preload's
-    geometric stiffness, and the FMU's stiffness sensitivity is the material part only."""
+    against the FE core rebuilt with that modulus: every flexible mode within 1e-3 (measured 2.8e-4
+    in 0-g, 7.8e-4 in 1-g, where the stiffness change is taken about the sagged configuration)."""
     from mace_fmu.pipeline import compute_modes
 
     model, _, unzipped = built
@@ -355,10 +353,7 @@ def test_physical_parameter_reanalysis_matches_the_fe_rebuild(built):
     flexible = np.abs(ref) > 0.01
     assert np.max(np.abs(ref[flexible] / nominal[flexible] - 1)) > 0.015  # the change moves modes by 2 %
     error = np.abs(np.sort(ours)[flexible] / ref[flexible] - 1)
-    gravity = np.array([lab in ("Z tilt (Z rotation)", "X twist (X rotation)", "1st Y bending")
-                        for lab in np.array(labels)[flexible]]) if kind == "1g" else np.zeros(len(error), bool)
-    assert np.max(error[~gravity]) < 1e-3
-    assert np.max(error, initial=0.0) < 3e-3
+    assert np.max(error) < 1e-3, f"worst: {np.array(labels)[flexible][np.argmax(error)]} ({np.max(error):.1e})"
 
 
 def test_reanalysed_modes_keep_their_index_through_a_frequency_crossing(motion_fmu_0g):
@@ -463,3 +458,15 @@ def test_motion_outputs_keep_the_centre_of_mass_at_rest_in_0g(motion_fmu_0g):
         centre = u @ (mass @ rigid) / (rigid @ mass @ rigid)  # centre-of-mass displacement [m]
         assert np.max(np.abs(centre)) <= 1e-9 * np.max(np.abs(u[:, axis::6]))
     assert np.max(np.abs(u[:, 1::6])) > 1e-6  # the structure does move (metres per volt of wheel command)
+
+
+def test_export_leaves_no_cached_implementation_behind(tmp_path):
+    """The builder runs the entry script in the exporting process; its cache entry goes with it, so a
+    long model-updating loop that exports many FMUs does not accumulate implementations."""
+    import sys
+
+    from mace_fmu.fmu.export import _CACHE_PREFIX
+
+    before = {k for k in sys.modules if k.startswith(_CACHE_PREFIX)}
+    export_fmu(volts_model("0g", max_hz=20.0), out_dir=tmp_path, name="MACE_0g_small")
+    assert {k for k in sys.modules if k.startswith(_CACHE_PREFIX)} == before

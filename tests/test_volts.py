@@ -12,7 +12,7 @@ from mace_fmu.cli import main
 from mace_fmu.iomodel.frf import frequency_response
 from mace_fmu.iomodel.modal_ss import modal_data
 from mace_fmu.iomodel.poles import closed_loop_poles
-from mace_fmu.iomodel.volts import volts_model
+from mace_fmu.iomodel.volts import DEFAULT_MAX_HZ, volts_model
 from mace_fmu.thesis import table_4_7_comparison, table_5_2_comparison
 
 
@@ -134,6 +134,7 @@ def test_bessel_delay_variant_and_open_loop_variant():
     (dict(damping={"1st Z bending": 1.5}), "must be >= 0 and < 1, got 1.5"),
     (dict(motion_grids=[1, 999999]), "999999] are not in the 0g model; it has grids 1..112"),
     (dict(motion_grids="some"), "motion_grids must be grid IDs or 'all'"),
+    (dict(motion_grids=1), "motion_grids must be a list of grid IDs or 'all', got 1"),
 ])
 def test_bad_requests_are_value_errors_that_say_what_is_allowed(v0, kwargs, message):
     with pytest.raises(ValueError, match=message.replace("(", r"\(").replace(")", r"\)")):
@@ -158,6 +159,9 @@ def test_motion_outputs_add_grid_motion_and_leave_the_sensors_alone(v0):
     assert list(moving.system.output_labels) == list(v0.system.output_labels) + [
         f"grid_{g}_{c}" for g in (grids[0], grids[-1]) for c in ("tx", "ty", "tz", "rx", "ry", "rz")]
     assert moving.system.nstates == v0.system.nstates + 3
+    # asking only for sensors keeps the sensor model: no unread wheel-angle states
+    quiet = volts_model("0g", modes=v0.structure_modes, motion_grids=[grids[0]], outputs=["gyro_bus_x"])
+    assert quiet.system.nstates == v0.system.nstates
     f = np.array([0.5, 2.0, 10.0, 40.0])
     h, hm = v0.frequency_response(f), moving.frequency_response(f)
     assert np.max(np.abs(hm[:, :20] - h) / np.abs(h).max(axis=0)) <= 1e-8  # of each channel's peak
@@ -165,7 +169,7 @@ def test_motion_outputs_add_grid_motion_and_leave_the_sensors_alone(v0):
     # zero-frequency ones included unreduced (1 / -w^2)
     bare = volts_model("0g", modes=v0.structure_modes, motion_grids=[grids[-1]], servos=False, bessel="none",
                        delays=False)
-    data = modal_data(v0.structure_modes.modes, bare.instruments, max_hz=250.0, motion_grids=[grids[-1]])
+    data = modal_data(v0.structure_modes.modes, bare.instruments, max_hz=DEFAULT_MAX_HZ, motion_grids=[grids[-1]])
     w = 2 * np.pi * f
     wk = 2 * np.pi * np.where(np.abs(data.frequencies_hz) < 0.01, 0.0, data.frequencies_hz)
     for actuator in ("rwa_x", "active_strut_z", "gimbal_primary_x"):

@@ -6,18 +6,20 @@ import textwrap
 from dataclasses import dataclass
 from pathlib import Path
 
-import matplotlib
-import numpy as np
+from typing import TYPE_CHECKING
 
-matplotlib.use("Agg")  # files only: no display on CI or servers
-import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
 
 from mace_fmu.errors import MaceError
-from mace_fmu.fmu.simulate import FmuRun
 from mace_fmu.iomodel.modal_ss import MOTION_COMPONENTS, motion_output_name
 from mace_fmu.pipeline import StructureModes
 from viewer.frames import Clip, Frames
 from viewer.scene import Scene, build_scene
+
+if TYPE_CHECKING:  # fmpy is imported only where an FMU runs
+    from mace_fmu.fmu.simulate import FmuRun
 
 
 @dataclass(frozen=True)
@@ -87,7 +89,9 @@ def plot_response(run: FmuRun, *, output_name: str, path: str | Path, title: str
     """PNG of the driven input [V] and one output over time [s], stacked."""
     if output_name not in run.outputs:
         raise MaceError(f"no output {output_name!r} in this run; outputs: {', '.join(list(run.outputs)[:30])}")
-    fig, axes = plt.subplots(2, 1, sharex=True, figsize=(8, 5))
+    fig = Figure(figsize=(8, 5))  # no pyplot: the caller's matplotlib backend stays as it is
+    FigureCanvasAgg(fig)
+    axes = fig.subplots(2, 1, sharex=True)
     (input_name, held), shown = next(iter(run.inputs.items())), run.outputs[output_name]
     axes[0].step(run.times_s, held, where="post", lw=1.0)  # the FMU holds its input over each step
     axes[1].plot(run.times_s, shown, lw=1.0)
@@ -101,5 +105,4 @@ def plot_response(run: FmuRun, *, output_name: str, path: str | Path, title: str
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=110)
-    plt.close(fig)
     return path

@@ -84,6 +84,9 @@ def simulate_input_response(fmu: str | os.PathLike, *, input_name: str, signal: 
     if unknown:
         raise MaceError(f"{os.fspath(fmu)} has no output(s) {', '.join(unknown)}; outputs: {', '.join(outs)}")
     n_steps = int(round(duration_s / step_s))
+    if abs(n_steps * step_s - duration_s) > 1e-9 * duration_s:
+        raise MaceError(f"duration {duration_s} s is not a whole number of {step_s} s steps; "
+                        f"use e.g. {n_steps * step_s:g} s or {(n_steps + 1) * step_s:g} s")
     t = np.arange(n_steps + 1) * step_s
     u = input_signal(signal, t, amplitude_v=amplitude_v, chirp_hz=chirp_hz)
     table = np.zeros(len(t), dtype=[("time", float)] + [(n, float) for n in ins])

@@ -26,7 +26,7 @@ from pythonfmu.enums import Fmi2Status
 from scipy.linalg import expm
 from scipy.optimize import linear_sum_assignment
 
-from mace_fmu.iomodel.modal_core import modal_matrices  # fmu: inlined
+from mace_fmu.iomodel.modal_core import modal_matrices, signed_frequency_hz, signed_omega2  # fmu: inlined
 from modelica_like.algebra import interconnect, pade  # fmu: inlined
 
 
@@ -140,18 +140,19 @@ class MaceSlave(Fmi2Slave):
         """(A, B, C, D) of the modal structure block for the current parameters."""
         d = self._data
         freq0 = d["frequencies_hz"]
-        omega2 = np.sign(freq0) * (2 * np.pi * freq0) ** 2
+        omega2 = signed_omega2(freq0)
         physical = [i for i, n in enumerate(self._param_names) if n in set(str(x) for x in d["physical_names"])]
         rel = np.array([self._params[i] / self._nominal[i] - 1.0 for i in physical])
         n = len(freq0)
         if np.any(rel != 0.0):
             k_r = np.diag(omega2) + np.tensordot(rel, d["physical_dk"], axes=1)
             w2, phi_r = np.linalg.eigh(0.5 * (k_r + k_r.T))
-            # each new mode takes the index of the nominal mode it continues (largest overlap), so
+            # each new mode takes the index of the nominal mode it continues (the one-to-one pairing
+            # with the largest total squared overlap, a MAC in the mass-normalised basis), so
             # damping_mode_k and frequency_mode_k follow the physical mode through a crossing
-            _, order = linear_sum_assignment(-np.abs(phi_r))
+            _, order = linear_sum_assignment(-(phi_r**2))
             w2, phi_r = w2[order], phi_r[:, order]
-            freq = np.sign(w2) * np.sqrt(np.abs(w2)) / (2 * np.pi)
+            freq = signed_frequency_hz(w2)
         else:
             freq, phi_r = freq0, np.eye(n)
         self._frequencies = freq

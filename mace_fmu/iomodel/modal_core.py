@@ -23,6 +23,17 @@ ZERO_HZ = 0.01
 NEGLIGIBLE = 1e-6
 
 
+def signed_omega2(freq_hz: np.ndarray) -> np.ndarray:
+    """Eigenvalues omega^2 [rad^2/s^2] of signed frequencies [Hz] (negative: a negative eigenvalue)."""
+    freq = np.asarray(freq_hz, dtype=float)
+    return np.sign(freq) * (2.0 * np.pi * freq) ** 2
+
+
+def signed_frequency_hz(omega2: np.ndarray) -> np.ndarray:
+    """Signed frequencies [Hz] of eigenvalues omega^2 [rad^2/s^2], the inverse of signed_omega2."""
+    return np.sign(omega2) * np.sqrt(np.abs(omega2)) / (2.0 * np.pi)
+
+
 def _read_directions(rows: dict[str, np.ndarray], zero: np.ndarray, basis: np.ndarray) -> tuple[int, np.ndarray]:
     """How many directions of ``basis`` (columns over the zero modes) the output rows read, and the
     rotation of ``basis`` that puts those first."""
@@ -92,7 +103,7 @@ def modal_matrices(freq_hz: np.ndarray, zeta: np.ndarray, labels: tuple[str, ...
     # signed: a negative frequency is a negative eigenvalue (an unstable mode, e.g. a softened
     # spring), whose state-space block must diverge, not oscillate
     freq = np.where(np.abs(freq_hz) < ZERO_HZ, 0.0, freq_hz)
-    omega2, omega = np.sign(freq) * (2.0 * np.pi * freq) ** 2, 2.0 * np.pi * np.abs(freq)
+    omega2, omega = signed_omega2(freq), 2.0 * np.pi * np.abs(freq)
     zero = np.flatnonzero(np.abs(freq_hz) < ZERO_HZ)
     shapes, labels, modal_b, n_ctrl, n_obs, removed = reduce_zero_cluster(zero, shapes, labels, modal_b, disp_out,
                                                                           rate_out, motion_out)

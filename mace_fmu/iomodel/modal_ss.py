@@ -54,6 +54,7 @@ class ModalPlant:
     shapes: np.ndarray  #: (n_dof, n_modes) mode shapes behind the states (zero cluster rotated)
     removed_states: tuple[tuple[str, str], ...]  #: (state name, reason)
     motion_outputs: tuple[str, ...] = ()  #: grid motion outputs [m, rad] (see motion_output_name)
+    motion_grids: tuple[int, ...] = ()  #: the grids behind them, in output order
 
 
 def modal_plant(modes: Modes, instruments: Instruments, damping: np.ndarray, *, max_hz: float,
@@ -72,7 +73,8 @@ def modal_plant(modes: Modes, instruments: Instruments, damping: np.ndarray, *, 
     sys = ct.ss(a, b, c, np.zeros((len(data.output_order), b.shape[1])), inputs=[x.name for x in instruments.actuators],
                 outputs=data.output_order, states=states, name="structure")
     return ModalPlant(system=sys, frequencies_hz=data.frequencies_hz, damping=damping[keep], labels=labels,
-                      shapes=shapes, removed_states=tuple(removed), motion_outputs=data.motion_outputs)
+                      shapes=shapes, removed_states=tuple(removed), motion_outputs=data.motion_outputs,
+                      motion_grids=tuple(motion_grids))
 
 
 @dataclass(frozen=True)

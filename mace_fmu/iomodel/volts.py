@@ -26,7 +26,7 @@ from mace_fmu.iomodel.damping import modal_damping
 from mace_fmu.iomodel.frf import frequency_response
 from mace_fmu.iomodel.instruments import Instruments, load_instruments
 from mace_fmu.iomodel.modal_core import ZERO_HZ
-from mace_fmu.iomodel.modal_ss import ModalPlant, modal_plant
+from mace_fmu.iomodel.modal_ss import ModalPlant, modal_plant, parse_motion_output
 from mace_fmu.pipeline import StructureModes, compute_modes
 from mace_fmu.structure import StructureKind
 from modelica_like import BesselFilter, Gain, PadeDelay, PD, StateSpace, Sum, System
@@ -242,6 +242,11 @@ def volts_model(structure: StructureKind = "1g", *, servos: bool = True, bessel:
     if isinstance(motion_grids, str):
         _check(motion_grids == "all", f"motion_grids must be grid IDs or 'all', got {motion_grids!r}")
         motion_grids = grids
+    _check(isinstance(motion_grids, Sequence) and all(isinstance(g, (int, np.integer)) for g in motion_grids),
+           f"motion_grids must be a list of grid IDs or 'all', got {motion_grids!r}")
+    if outputs is not None:  # only grids whose motion is asked for: the others' states would go unread
+        named = {parse_motion_output(n)[0] for n in outputs if parse_motion_output(n) is not None}
+        motion_grids = [g for g in motion_grids if g in named]
     unknown = sorted(set(motion_grids) - set(grids))
     _check(not unknown, f"motion_grids: grid(s) {unknown} are not in the {structure} model; it has grids "
                         f"{grids[0]}..{grids[-1]} ({len(grids)} in all)")
