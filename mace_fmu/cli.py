@@ -243,7 +243,7 @@ def cmd_view_response(args: argparse.Namespace) -> int:
 def _collocated_output(input_name: str, run) -> str:
     """The sensor that closes the input's local loop (encoder, tachometer), else the first sensor output."""
     from mace_fmu.iomodel.instruments import load_instruments
-    from mace_fmu.iomodel.modal_ss import parse_motion_output
+    from mace_fmu.iomodel.motion import parse_motion_output
 
     servos = load_instruments().servos
     partner = {**servos.gimbals, **servos.wheels}.get(input_name)

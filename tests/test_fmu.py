@@ -17,7 +17,7 @@ from fmpy.fmi2 import FMU2Slave
 from fmpy.validation import validate_fmu
 
 from mace_fmu.fmu.export import export_fmu
-from mace_fmu.iomodel.modal_ss import MOTION_COMPONENTS
+from mace_fmu.iomodel.motion import MOTION_COMPONENTS
 from mace_fmu.iomodel.volts import volts_model
 
 DURATION = 1.0

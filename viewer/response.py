@@ -13,7 +13,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 from mace_fmu.errors import MaceError
-from mace_fmu.iomodel.modal_ss import MOTION_COMPONENTS, motion_output_name
+from mace_fmu.iomodel.motion import MOTION_COMPONENTS, motion_output_name
 from mace_fmu.pipeline import StructureModes
 from viewer.frames import Clip, Frames
 from viewer.scene import Scene, build_scene

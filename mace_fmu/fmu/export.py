@@ -26,7 +26,8 @@ from mace_fmu.fe.assembly import FEModel, assemble
 from mace_fmu.fe.corotational import tangent
 from mace_fmu.fe.preload import Preload
 from mace_fmu.iomodel import modal_core
-from mace_fmu.iomodel.modal_ss import modal_data, motion_unit, parse_motion_output
+from mace_fmu.iomodel.modal_ss import modal_data
+from mace_fmu.iomodel.motion import motion_unit, parse_motion_output
 from mace_fmu.iomodel.volts import VoltsModel
 from mace_fmu.structure import apply_overrides
 from modelica_like import PD, Gain, PadeDelay, algebra

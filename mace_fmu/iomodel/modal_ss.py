@@ -11,7 +11,6 @@ The zero-frequency cluster is reduced by rule (see mace_fmu.iomodel.modal_core).
 
 from __future__ import annotations
 
-import re
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
@@ -21,27 +20,7 @@ import numpy as np
 from mace_fmu.fe.modal import Modes
 from mace_fmu.iomodel.instruments import Instruments, influence_vector
 from mace_fmu.iomodel.modal_core import modal_matrices
-
-#: Components of a grid's motion output, in DOF order (NASTRAN T1 T2 T3 R1 R2 R3), basic axes.
-MOTION_COMPONENTS = ("tx", "ty", "tz", "rx", "ry", "rz")
-_MOTION_NAME = re.compile(r"grid_(\d+)_(tx|ty|tz|rx|ry|rz)")
-
-
-def motion_output_name(grid: int, component: str) -> str:
-    """Output name of one motion component of a grid, e.g. ``grid_1001_ty``."""
-    return f"grid_{grid}_{component}"
-
-
-def parse_motion_output(name: str) -> tuple[int, str] | None:
-    """(grid, component) of a motion output name; None for any other signal."""
-    match = _MOTION_NAME.fullmatch(name)
-    return (int(match.group(1)), match.group(2)) if match else None
-
-
-def motion_unit(component: str) -> str:
-    """SI unit of a motion component: metres for translations, radians for rotations."""
-    return "m" if component.startswith("t") else "rad"
-
+from mace_fmu.iomodel.motion import MOTION_COMPONENTS, motion_output_name
 
 @dataclass(frozen=True)
 class ModalPlant:

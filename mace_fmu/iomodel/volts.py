@@ -26,7 +26,8 @@ from mace_fmu.iomodel.damping import modal_damping
 from mace_fmu.iomodel.frf import frequency_response
 from mace_fmu.iomodel.instruments import Instruments, load_instruments
 from mace_fmu.iomodel.modal_core import ZERO_HZ
-from mace_fmu.iomodel.modal_ss import ModalPlant, modal_plant, parse_motion_output
+from mace_fmu.iomodel.modal_ss import ModalPlant, modal_plant
+from mace_fmu.iomodel.motion import parse_motion_output
 from mace_fmu.pipeline import StructureModes, compute_modes
 from mace_fmu.structure import StructureKind
 from modelica_like import BesselFilter, Gain, PadeDelay, PD, StateSpace, Sum, System
