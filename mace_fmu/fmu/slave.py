@@ -1,15 +1,14 @@
 """The FMI 2.0 co-simulation slave that runs inside a MACE FMU (pythonfmu).
 
-The FMU's entry script is this file with modelica_like.algebra and mace_fmu.iomodel.modal_core
-pasted in front (pythonfmu cannot load a second module from the resources), and the class
+The FMU's entry script is this file with modelica_like.algebra and mace_fmu.iomodel's modal_core,
+reanalysis and parametric pasted in front (pythonfmu cannot load a second module from the resources), and the class
 renamed (MaceSlave -> e.g. MACE_1g). It imports nothing but numpy, scipy and pythonfmu: the FMU
 runs without mace-fmu installed. Its data come from ``resources/model.npz``.
 
-Parameters take effect at initialisation, when the system is rebuilt from its blocks:
-- physical parameters (Young's moduli, spring stiffnesses) by Ritz reanalysis on the retained
-  nominal modes (thesis eq. 4.6-4.9): K_r = Omega0^2 + sum_i (p_i / p_i0 - 1) Phi0^T dK_i Phi0,
-  whose eigen-solution gives the new frequencies and Phi_R, and Phi = Phi0 Phi_R;
-- modal damping ratios, time delays (Pade), servo gains: the blocks they belong to.
+Parameters take effect at initialisation, when the system is rebuilt from its blocks by
+:class:`mace_fmu.iomodel.parametric.ParametricSystem` (physical parameters by Ritz reanalysis on
+the retained nominal modes, thesis eq. 4.6-4.9; damping ratios, delays and servo gains in the
+blocks they belong to).
 Stepping is an exact zero-order hold: over a communication step h with the inputs u held,
 [x(t+h); u] = expm([[A, B], [0, 0]] h) [x(t); u], cached per step size.
 """
@@ -24,10 +23,8 @@ import numpy as np
 from pythonfmu import Fmi2Causality, Fmi2Slave, Fmi2Variability, Real
 from pythonfmu.enums import Fmi2Status
 from scipy.linalg import expm
-from scipy.optimize import linear_sum_assignment
 
-from mace_fmu.iomodel.modal_core import modal_matrices, signed_frequency_hz, signed_omega2  # fmu: inlined
-from modelica_like.algebra import interconnect, pade  # fmu: inlined
+from mace_fmu.iomodel.parametric import ParametricSystem  # fmu: inlined
 
 
 class MaceSlave(Fmi2Slave):
@@ -42,11 +39,11 @@ class MaceSlave(Fmi2Slave):
         if self.resources in sys.path:
             first = sys.path.index(self.resources)
             sys.path[first + 1:] = [p for p in sys.path[first + 1:] if p != self.resources]
-        self._data = data = dict(np.load(Path(self.resources) / "model.npz", allow_pickle=False))
-        self._inputs = [str(n) for n in data["inputs"]]
-        self._outputs = [str(n) for n in data["outputs"]]
-        self._param_names = [str(n) for n in data["param_names"]]
-        self._nominal = np.asarray(data["param_values"], dtype=np.float64)
+        data = dict(np.load(Path(self.resources) / "model.npz", allow_pickle=False))
+        self._system = ParametricSystem(data)
+        self._inputs, self._outputs = self._system.inputs, self._system.outputs
+        self._param_names = self._system.parameter_names
+        self._nominal = self._system.nominal
         self._params = self._nominal.copy()
         self._built_with = None
         self._x = self._u = self._y = None
@@ -133,60 +130,12 @@ class MaceSlave(Fmi2Slave):
         return getter
 
     # --- building the system from its blocks --------------------------------------------------
-    def _param(self, name: str) -> float:
-        return float(self._params[self._param_names.index(name)])
-
-    def _structure(self):
-        """(A, B, C, D) of the modal structure block for the current parameters."""
-        d = self._data
-        freq0 = d["frequencies_hz"]
-        omega2 = signed_omega2(freq0)
-        physical = [i for i, n in enumerate(self._param_names) if n in set(str(x) for x in d["physical_names"])]
-        rel = np.array([self._params[i] / self._nominal[i] - 1.0 for i in physical])
-        n = len(freq0)
-        if np.any(rel != 0.0):
-            k_r = np.diag(omega2) + np.tensordot(rel, d["physical_dk"], axes=1)
-            w2, phi_r = np.linalg.eigh(0.5 * (k_r + k_r.T))
-            # each new mode takes the index of the nominal mode it continues (the one-to-one pairing
-            # with the largest total squared overlap, a MAC in the mass-normalised basis), so
-            # damping_mode_k and frequency_mode_k follow the physical mode through a crossing
-            _, order = linear_sum_assignment(-(phi_r**2))
-            w2, phi_r = w2[order], phi_r[:, order]
-            freq = signed_frequency_hz(w2)
-        else:
-            freq, phi_r = freq0, np.eye(n)
-        self._frequencies = freq
-        zeta = np.array([self._param(f"damping_mode_{k + 1}") for k in range(n)])
-        disp = {str(name): row @ phi_r for name, row in zip(d["disp_names"], d["disp_rows"])}
-        rate = {str(name): row @ phi_r for name, row in zip(d["rate_names"], d["rate_rows"])}
-        motion = {str(name): row @ phi_r for name, row in zip(d["motion_names"], d["motion_rows"])}
-        labels = tuple(str(x) for x in d["mode_labels"])
-        a, b, c, *_ = modal_matrices(freq, zeta, labels, np.zeros((0, n)), phi_r.T @ d["modal_b"], disp, rate,
-                                     [str(x) for x in d["structure_outputs"]], motion)
-        return a, b, c, np.zeros((c.shape[0], b.shape[1]))
-
-    def _block(self, i: int):
-        """(A, B, C, D) of block i for the current parameters."""
-        d = self._data
-        kind, param = str(d["block_kinds"][i]), str(d["block_params"][i])
-        if kind == "structure":
-            return self._structure()
-        if kind == "delay":
-            return pade(self._param(param), int(d["pade_order"]))
-        if kind == "gain":
-            return np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((1, 0)), np.array([[self._param(param)]])
-        if kind == "pd":
-            kp, kd = (self._param(p) for p in param.split(","))
-            return np.zeros((0, 0)), np.zeros((0, 2)), np.zeros((1, 0)), np.array([[kp, kd]])
-        return tuple(d[f"block{i}_{m}"] for m in "ABCD")
-
     def _build(self) -> None:
         """(Re)build A, B, C, D when the parameters changed since the last build."""
         if self._built_with is not None and np.array_equal(self._built_with, self._params):
             return
-        d = self._data
-        blocks = [self._block(i) for i in range(len(d["block_kinds"]))]
-        self._a, self._b, self._c, self._d = interconnect(blocks, d["wiring"], d["entry"], d["exit"])
+        self._a, self._b, self._c, self._d = self._system.build(self._params)
+        self._frequencies = self._system.frequencies_hz
         self._built_with = self._params.copy()
         self._cache.clear()
         self._last_step = None

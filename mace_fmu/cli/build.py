@@ -1,0 +1,54 @@
+"""``mace-fmu build``: the main job: modes next to the thesis tables, and the FMUs of both models."""
+
+from __future__ import annotations
+
+import argparse
+
+from mace_fmu.cli.common import deck_option, progress
+from mace_fmu.deck.reader import read_deck
+from mace_fmu.pipeline import compute_modes
+
+
+def cmd_build(args: argparse.Namespace) -> int:
+    # imported here, as in the other commands, so that `mace-fmu modes` starts without control/pythonfmu
+    from mace_fmu.fmu.export import export_fmu
+    from mace_fmu.iomodel.volts import DEFAULT_MAX_HZ, volts_model
+    from mace_fmu.thesis import (format_mass_rows, format_rows, format_side_by_side, table_3_15_comparison,
+                                 table_5_1_0g, table_5_1_1g)
+
+    deck = read_deck(args.deck)
+    progress("0-g modes (suspension removed, linear)")
+    # the modes the FMUs are built from: the same cut-off as `mace-fmu export`, whatever the deck's EIGRL says
+    m0 = compute_modes(deck, structure="0g", max_hz=DEFAULT_MAX_HZ)
+    results = {}
+    for kind in ("large", "linear"):
+        progress(f"1-g modes ({kind} gravity preload)")
+        results[kind] = compute_modes(deck, structure="1g", preload=kind, max_hz=DEFAULT_MAX_HZ,
+                                      progress=progress if kind == "large" else None)
+    print(format_rows(table_5_1_0g(m0), title="Table 5.1, 0-g column (flexible modes)"))
+    print()
+    print(format_side_by_side({kind: table_5_1_1g(m1, m0) for kind, m1 in results.items()},
+                              title="Table 5.1, 1-g column (structural modes paired with the 0-g ones by MAC)"))
+    print()
+    print(format_mass_rows(table_3_15_comparison(m0), title="Table 3.15, free-free mass properties about the centre node"))
+    print()
+    for kind, modes in (("1g", results["large"]), ("0g", m0)):
+        progress(f"{kind} volts-volts model and FMU")
+        path = export_fmu(volts_model(kind, modes=modes), out_dir=args.out)
+        print(f"wrote {path}")
+    print()
+    print("1-g modes below 25 Hz (large-displacement preload | linear preload)")
+    large, linear = results["large"].modes, results["linear"].modes
+    for i in range(min(len(large), len(linear))):  # side by side by index: the two preloads keep the mode order
+        if large.frequencies_hz[i] > 25.0:
+            break
+        print(f"{i + 1:3d} {large.frequencies_hz[i]:9.3f}  {large.labels[i]:40s} | "
+              f"{linear.frequencies_hz[i]:9.3f}  {linear.labels[i]}")
+    return 0
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("build", help="the main job: modes next to the thesis tables, and both FMUs")
+    deck_option(p)
+    p.add_argument("-o", "--out", default="fmus", help="where to write MACE_1g.fmu and MACE_0g.fmu (default ./fmus)")
+    p.set_defaults(func=cmd_build)

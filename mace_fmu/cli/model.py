@@ -1,0 +1,59 @@
+"""``mace-fmu model``: the volts-volts state-space model, its poles, its matrices or Modelica source."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+import numpy as np
+
+from mace_fmu.cli.common import deck_option, model_options, volts
+
+
+def cmd_model(args: argparse.Namespace) -> int:
+    from mace_fmu.iomodel.poles import closed_loop_poles
+    from mace_fmu.thesis import format_pole_rows, table_4_7_comparison, table_5_2_comparison
+
+    model = volts(args)
+    sys_ = model.system
+    poles = closed_loop_poles(model)
+    if args.modelica:
+        model.diagram.write_modelica(args.modelica, model_name=f"MACE_{args.structure}_volts")
+    if args.npz:
+        np.savez(args.npz, A=sys_.A, B=sys_.B, C=sys_.C, D=sys_.D, inputs=np.array(sys_.input_labels),
+                 outputs=np.array(sys_.output_labels), states=np.array(sys_.state_labels))
+    if args.json:
+        json.dump({"structure": args.structure, "states": sys_.nstates, "inputs": list(sys_.input_labels),
+                   "outputs": list(sys_.output_labels),
+                   "poles": [{"frequency_hz": p.frequency_hz, "damping": p.damping, "label": p.label} for p in poles]},
+                  sys.stdout, indent=1)
+        print()
+        return 0
+    print(f"{args.structure} volts-volts model: {sys_.nstates} states, {sys_.ninputs} inputs, {sys_.noutputs} outputs "
+          f"(servos {'on' if model.servos else 'off'}, Bessel {model.bessel}, delays {'on' if model.delays else 'off'})")
+    for state, reason in model.plant.removed_states:
+        print(f"  removed: {state}: {reason}")
+    if args.poles:
+        rows = table_4_7_comparison(poles) if args.structure == "1g" else table_5_2_comparison(poles, column="g0")
+        title = "Table 4.7, FE columns (closed loop)" if args.structure == "1g" else "Table 5.2, 0-g column (closed loop)"
+        print(format_pole_rows(rows, title=title))
+        print()
+        print(f"all closed-loop poles up to {args.list_max_hz} Hz")
+        for p in poles:
+            if p.frequency_hz <= args.list_max_hz:
+                print(f"  {p.frequency_hz:9.3f} Hz  zeta {p.damping:6.3f}  {p.label}")
+    return 0
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("model", help="volts-volts state-space model of the 1-g or 0-g structure")
+    p.add_argument("structure", choices=["1g", "0g"])
+    deck_option(p)
+    p.add_argument("--poles", action="store_true", help="closed-loop poles next to Table 4.7 (1g) or 5.2 (0g)")
+    p.add_argument("--list-max-hz", type=float, default=60.0, help="with --poles: list all poles up to this [Hz]")
+    p.add_argument("--json", action="store_true", help="states, signal names and poles as JSON")
+    p.add_argument("--npz", metavar="FILE", help="write A, B, C, D and the signal names to FILE (.npz)")
+    p.add_argument("--modelica", metavar="FILE", help="write the model as Modelica source (.mo)")
+    model_options(p)
+    p.set_defaults(func=cmd_model)

@@ -1,0 +1,66 @@
+"""``mace-fmu modes``: natural frequencies and labels of the 1-g or 0-g structure."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+
+import numpy as np
+
+from mace_fmu.cli.common import deck_option, progress
+from mace_fmu.deck.reader import read_deck
+from mace_fmu.pipeline import StructureModes, compute_modes
+
+
+def _modes_json(result: StructureModes) -> dict:
+    props = result.mass_properties
+    return {
+        "structure": result.structure.kind,
+        "deck": result.structure.deck.path,
+        "preload": result.preload.kind if result.preload else None,
+        "modes": [{"index": i + 1, "frequency_hz": float(f), "label": lab}
+                  for i, (f, lab) in enumerate(zip(result.modes.frequencies_hz, result.modes.labels))],
+        "mass_properties": {
+            "mass_kg": props.mass_kg,
+            "center_of_mass_m": [float(x) for x in props.center_of_mass_m],
+            "reference_grid": props.reference_grid,
+            "inertia_about_center_node_kgm2": [[float(x) for x in row] for row in props.inertia_about_reference_kgm2],
+        },
+    }
+
+
+def _print_modes(result: StructureModes) -> None:
+    pre = f", {result.preload.kind} preload" if result.preload else ""
+    print(f"{result.structure.kind} modes of {result.structure.deck.path}{pre}")
+    print(f"{'mode':>4s} {'frequency Hz':>13s}  label")
+    for i, (f, lab) in enumerate(zip(result.modes.frequencies_hz, result.modes.labels)):
+        print(f"{i + 1:4d} {f:13.4f}  {lab}")
+    p = result.mass_properties
+    j = np.diag(p.inertia_about_reference_kgm2)
+    print(f"mass {p.mass_kg:.4f} kg, centre of mass {np.round(p.center_of_mass_m, 5).tolist()} m, inertia about "
+          f"grid {p.reference_grid}: Jxx {j[0]:.4f}, Jyy {j[1]:.4f}, Jzz {j[2]:.4f} kg m^2")
+
+
+def cmd_modes(args: argparse.Namespace) -> int:
+    deck = read_deck(args.deck)
+    result = compute_modes(deck, structure=args.structure, preload=args.preload, mass=args.mass, max_hz=args.max_hz,
+                           progress=None if args.json else progress)
+    if args.json:
+        json.dump(_modes_json(result), sys.stdout, indent=1)
+        print()
+    else:
+        _print_modes(result)
+    return 0
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("modes", help="natural frequencies [Hz] and labels of the 1-g or 0-g structure")
+    p.add_argument("structure", choices=["1g", "0g"])
+    deck_option(p)
+    p.add_argument("--max-hz", type=float, default=None, help="upper frequency [Hz] (default: the deck's EIGRL)")
+    p.add_argument("--preload", choices=["large", "linear"], default="large",
+                   help="1-g gravity preload: large displacement (SOL 106, default) or linear")
+    p.add_argument("--mass", choices=["lumped", "consistent"], default="lumped", help="bar mass matrix")
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.set_defaults(func=cmd_modes)

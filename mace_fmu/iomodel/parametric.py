@@ -1,0 +1,98 @@
+"""A volts-volts model as data whose parameters can change: blocks, wiring and modal data, numpy only.
+
+The arrays (see :func:`mace_fmu.iomodel.parametric_data.parametric_arrays`) hold every block of
+the diagram, the 0/1 wiring matrices, the retained modes projected on the instruments and the
+projected stiffness sensitivities of the physical parameters. ``build`` turns a parameter vector
+into (A, B, C, D):
+- physical parameters (Young's moduli, spring stiffnesses) by Ritz reanalysis on the retained
+  modes (mace_fmu.iomodel.reanalysis);
+- modal damping ratios, time delays (Pade), servo gains: the blocks they belong to.
+
+Used by the updating engine and copied verbatim into FMUs (with modal_core, reanalysis and
+modelica_like.algebra before it), so it imports nothing beyond numpy and scipy.
+"""
+
+from __future__ import annotations
+
+from typing import Mapping
+
+import numpy as np
+
+from mace_fmu.iomodel.modal_core import modal_matrices, signed_frequency_hz, signed_omega2  # fmu: inlined
+from mace_fmu.iomodel.reanalysis import ritz_reanalysis  # fmu: inlined
+from modelica_like.algebra import interconnect, pade  # fmu: inlined
+
+
+class ParametricSystem:
+    """(A, B, C, D) of a volts-volts model for any values of its named parameters."""
+
+    def __init__(self, data: Mapping[str, np.ndarray]):
+        self.data = data
+        self.parameter_names = [str(n) for n in data["param_names"]]
+        self.nominal = np.asarray(data["param_values"], dtype=np.float64)
+        self.inputs = [str(n) for n in data["inputs"]]
+        self.outputs = [str(n) for n in data["outputs"]]
+        self.mode_labels = tuple(str(x) for x in data["mode_labels"])
+        self._index = {name: k for k, name in enumerate(self.parameter_names)}
+        physical = {str(x) for x in data["physical_names"]}
+        self._physical = np.array([k for k, n in enumerate(self.parameter_names) if n in physical], dtype=int)
+        self._damping = np.array([self._index[f"damping_mode_{k + 1}"] for k in range(len(self.mode_labels))],
+                                 dtype=int)
+        self.frequencies_hz = np.asarray(data["frequencies_hz"], dtype=np.float64)  #: after the last build
+        self.state_names: list[str] = []  #: "block.state" of the last build
+
+    def index(self, name: str) -> int:
+        """Position of parameter ``name`` in the parameter vector."""
+        return self._index[name]
+
+    def modes(self, params: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(frequencies [Hz], Phi_R) of the retained modes after reanalysis of the physical parameters."""
+        d = self.data
+        rel = params[self._physical] / self.nominal[self._physical] - 1.0
+        w2, phi_r = ritz_reanalysis(signed_omega2(d["frequencies_hz"]), d["physical_dk"], rel)
+        return signed_frequency_hz(w2), phi_r
+
+    def structure(self, params: np.ndarray, *, frequencies_hz: np.ndarray | None = None,
+                  phi_r: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[str]]:
+        """(A, B, C, state names) of the modal structure block; modes by reanalysis unless given."""
+        d = self.data
+        if frequencies_hz is None:
+            frequencies_hz, phi_r = self.modes(params)
+        self.frequencies_hz = frequencies_hz
+        zeta = params[self._damping]
+        disp = {str(name): row @ phi_r for name, row in zip(d["disp_names"], d["disp_rows"])}
+        rate = {str(name): row @ phi_r for name, row in zip(d["rate_names"], d["rate_rows"])}
+        motion = {str(name): row @ phi_r for name, row in zip(d["motion_names"], d["motion_rows"])}
+        a, b, c, states, *_ = modal_matrices(frequencies_hz, zeta, self.mode_labels, np.zeros((0, len(zeta))),
+                                             phi_r.T @ d["modal_b"], disp, rate,
+                                             [str(x) for x in d["structure_outputs"]], motion)
+        return a, b, c, states
+
+    def _block(self, i: int, params: np.ndarray, structure) -> tuple[np.ndarray, ...]:
+        """(A, B, C, D) of block i for the parameter vector ``params``."""
+        d = self.data
+        kind, param = str(d["block_kinds"][i]), str(d["block_params"][i])
+        if kind == "structure":
+            a, b, c, _ = structure
+            return a, b, c, np.zeros((c.shape[0], b.shape[1]))
+        if kind == "delay":
+            return pade(float(params[self._index[param]]), int(d["pade_order"]))
+        if kind == "gain":
+            return np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((1, 0)), np.array([[params[self._index[param]]]])
+        if kind == "pd":
+            kp, kd = (float(params[self._index[p]]) for p in param.split(","))
+            return np.zeros((0, 0)), np.zeros((0, 2)), np.zeros((1, 0)), np.array([[kp, kd]])
+        return tuple(d[f"block{i}_{m}"] for m in "ABCD")
+
+    def build(self, params: np.ndarray, *, frequencies_hz: np.ndarray | None = None,
+              phi_r: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """(A, B, C, D) for the parameter vector ``params``; ``frequencies_hz`` and ``phi_r`` [Hz, -]
+        replace the reanalysis (the modal-sensitivity route of the updating engine)."""
+        params = np.asarray(params, dtype=np.float64)
+        structure = self.structure(params, frequencies_hz=frequencies_hz, phi_r=phi_r)
+        kinds = [str(k) for k in self.data["block_kinds"]]
+        blocks = [self._block(i, params, structure) for i in range(len(kinds))]
+        names = [str(n) for n in self.data["block_names"]]
+        self.state_names = [f"{names[i]}.{s}" for i, kind in enumerate(kinds) for s in
+                            (structure[3] if kind == "structure" else [f"x{k}" for k in range(blocks[i][0].shape[0])])]
+        return interconnect(blocks, self.data["wiring"], self.data["entry"], self.data["exit"])

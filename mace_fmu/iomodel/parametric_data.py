@@ -1,0 +1,152 @@
+"""The arrays of a :class:`~mace_fmu.iomodel.parametric.ParametricSystem` made from a volts-volts model.
+
+Blocks and wiring of the diagram, the retained modes projected on the instruments, the tunable
+parameters (modal damping ratios, delays, servo gains, physical parameters) with their nominal
+values and descriptions, and the physical parameters' projected stiffness sensitivities. FMUs
+carry these arrays as ``resources/model.npz``; the updating engine re-analyses with them.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from mace_fmu.datafile import data_file_path, read_data_file
+from mace_fmu.fe.assembly import FEModel, assemble
+from mace_fmu.fe.corotational import tangent
+from mace_fmu.fe.preload import Preload
+from mace_fmu.iomodel.modal_ss import modal_data
+from mace_fmu.iomodel.motion import motion_unit, parse_motion_output
+from mace_fmu.iomodel.volts import VoltsModel
+from mace_fmu.structure import apply_overrides
+from modelica_like import PD, Gain, PadeDelay
+
+_RELATIVE_STEP = 1e-3  # the material stiffness is linear in E and k: the difference quotient is exact
+
+
+def signal_descriptions(model: VoltsModel) -> tuple[list[str], list[str]]:
+    """Input and output descriptions that say which actuator or sensor, which axis and what a volt means."""
+    inst = model.instruments
+    gimbals = set(inst.servos.gimbals) if model.servos else set()
+    wheels = set(inst.servos.wheels) if model.servos else set()
+    ins = []
+    for name in model.system.input_labels:
+        a = inst.actuator(name)
+        if name in gimbals:
+            ins.append(f"{a.description}: commanded relative angle through the gimbal servo, 1 V = 1 deg")
+        elif name in wheels:
+            ins.append(f"{a.description}: speed-loop command [V]")
+        else:
+            ins.append(f"{a.description} [V], {a.gain} N m/V")
+    outs = []
+    for name in model.system.output_labels:
+        motion = parse_motion_output(name)
+        if motion is None:
+            outs.append(f"{inst.sensor(name).description} [V], {inst.sensor(name).gain} V per physical unit")
+        else:
+            grid, comp = motion
+            what = "translation along" if comp.startswith("t") else "rotation about"
+            outs.append(f"grid {grid}: {what} basic {comp[1].upper()} [{motion_unit(comp)}], from the equilibrium "
+                        "(animation output)")
+    return ins, outs
+
+
+def _blocks(model: VoltsModel) -> tuple[dict, list[tuple[str, float, str]]]:
+    """Block arrays and the non-physical block parameters (name, value, description)."""
+    ic = model.diagram.connection_matrices()
+    kinds, params, arrays, parameters = [], [], {}, []
+    sv = model.instruments.servos
+    for i, block in enumerate(ic.blocks):
+        name = block.name
+        # block kinds by class; which servo gain a Gain block carries, by the name volts.py gives it
+        if name == "structure":
+            kinds.append("structure"), params.append("")
+        elif isinstance(block, PadeDelay):
+            kinds.append("delay"), params.append(name)
+            what = name.removeprefix("delay_")
+            parameters.append((name, float(block.delay), f"time delay of {what} [s] (Pade order {model.pade_order})"))
+        elif isinstance(block, Gain) and name.startswith(("kf_", "kb_")):
+            gain = "K_f" if name.startswith("kf_") else "K_b"
+            kinds.append("gain"), params.append(gain)
+        elif isinstance(block, PD):
+            kinds.append("pd"), params.append("K_a,K_r")
+        else:
+            kinds.append("const"), params.append("")
+        for m in "ABCD":
+            arrays[f"block{i}_{m}"] = np.asarray(getattr(block, m), dtype=float)
+    if "K_f" in params:
+        parameters += [("K_f", sv.wheel_forward_gain, "reaction wheel speed loop forward gain (eq. 3.18)"),
+                       ("K_b", sv.wheel_backward_gain, "reaction wheel speed loop backward (tachometer) gain")]
+    if "K_a,K_r" in params:
+        parameters += [("K_a", sv.gimbal_angle_gain, "gimbal servo angle gain [V/deg] (eq. 3.20)"),
+                       ("K_r", sv.gimbal_rate_gain, "gimbal servo rate gain [V/(deg/s)] (eq. 3.20)")]
+    ins = [list(ic.inputs).index(n) for n in model.system.input_labels]
+    outs = [list(ic.outputs).index(n) for n in model.system.output_labels]
+    arrays.update(block_kinds=np.array(kinds), block_params=np.array(params),
+                  block_names=np.array([b.name for b in ic.blocks]), wiring=ic.wiring, entry=ic.entry[:, ins],
+                  exit=ic.exit[outs], pade_order=np.array(model.pade_order))
+    return arrays, parameters
+
+
+def material_stiffness(fe: FEModel, preload: Preload | None) -> np.ndarray:
+    """Bar stiffness [N/m, N m/rad] about the configuration the modes are computed in.
+
+    1-g: the preloaded (sagged) geometry with the preload's bar forces held, so a change of E
+    changes only the material part, as at the new equilibrium, where gravity sets the forces.
+    Taking the undeformed geometry instead puts spurious strain into the near-rigid suspension
+    modes: Z tilt, X twist and 1st Y bending then came out 1.9e-3 to 2.9e-3 off after E of the
+    Lexan center +5 %, against 7.8e-4 at most this way.
+    """
+    if preload is None:
+        return fe.stiffness
+    return tangent(fe.bars, preload.state, fe.dofs.size, natural_forces=preload.bar_forces)[1].toarray()
+
+
+def physical_sensitivities(model: VoltsModel, shapes: np.ndarray) -> tuple[list[tuple[str, float, str]], np.ndarray]:
+    """Physical parameters (name, value, description) and Phi0^T dK/d(ln p) Phi0 for each."""
+    names = read_data_file(data_file_path(), what="parameter names").get("parameters", {})
+    deck, fe = model.structure_modes.structure.deck, model.structure_modes.model
+    used = sorted({deck.pbars[b.pid].mid for b in deck.bars.values()})
+    pre = model.structure_modes.preload
+    nominal = material_stiffness(fe, pre)
+    parameters, sensitivities = [], []
+    for mid in used:
+        e = deck.mat1s[mid].youngs_modulus
+        label = names.get("materials", {}).get(str(mid), f"mat{mid}")
+        plus = assemble(apply_overrides(deck, {("MAT1", mid): {"e": e * (1 + _RELATIVE_STEP)}}))
+        dk = (material_stiffness(plus, pre) - nominal) / _RELATIVE_STEP  # linear in E: the quotient is exact
+        parameters.append((f"E_{label}", e, f"Young's modulus of {label} (MAT1 {mid}) [Pa]; takes effect by "
+                                            "reanalysis on the retained modes"))
+        sensitivities.append(shapes.T @ dk @ shapes)
+    for row, (sid, k) in enumerate(zip(fe.spring_ids, fe.spring_constants)):
+        label = names.get("springs", {}).get(str(sid), f"spring{sid}")
+        v = fe.spring_vectors[row] @ shapes
+        parameters.append((f"k_{label}", float(k), f"stiffness of {label} (CELAS2 {sid}) [N/m]; reanalysis"))
+        sensitivities.append(k * np.outer(v, v))
+    n = shapes.shape[1]
+    return parameters, np.array(sensitivities).reshape(len(parameters), n, n)
+
+
+def parametric_arrays(model: VoltsModel) -> dict[str, np.ndarray]:
+    """Everything a ParametricSystem (and an FMU) needs to rebuild ``model`` for new parameter values."""
+    sys_ = model.system
+    ins, outs = signal_descriptions(model)
+    max_hz = float(np.max(model.plant.frequencies_hz))
+    data = modal_data(model.structure_modes.modes, model.instruments, max_hz=max_hz,
+                      motion_grids=list(model.plant.motion_grids))
+    arrays, parameters = _blocks(model)
+    physical, dk = physical_sensitivities(model, data.shapes)
+    damping = [(f"damping_mode_{k + 1}", float(z), f"open-loop damping ratio of mode {k + 1}: {label}")
+               for k, (z, label) in enumerate(zip(model.plant.damping, data.labels))]
+    parameters = damping + parameters + physical
+    arrays.update(
+        inputs=np.array(sys_.input_labels), outputs=np.array(sys_.output_labels), input_descriptions=np.array(ins),
+        output_descriptions=np.array(outs), param_names=np.array([p[0] for p in parameters]),
+        param_values=np.array([p[1] for p in parameters], dtype=float),
+        param_descriptions=np.array([p[2] for p in parameters]), physical_names=np.array([p[0] for p in physical]),
+        physical_dk=dk, frequencies_hz=data.frequencies_hz, mode_labels=np.array(data.labels), modal_b=data.modal_b,
+        disp_names=np.array(list(data.disp_out)), disp_rows=np.array(list(data.disp_out.values())),
+        rate_names=np.array(list(data.rate_out)), rate_rows=np.array(list(data.rate_out.values())),
+        motion_names=np.array(list(data.motion_out), dtype=str),
+        motion_rows=np.array(list(data.motion_out.values())).reshape(len(data.motion_out), len(data.labels)),
+        structure_outputs=np.array(data.output_order))
+    return arrays
