@@ -30,6 +30,8 @@ class ParametricSystem:
         self.data = data
         self.parameter_names = [str(n) for n in data["param_names"]]
         self.nominal = np.asarray(data["param_values"], dtype=np.float64)
+        self.minimum = np.asarray(data["param_min"], dtype=np.float64)  #: declared ranges (inf: none)
+        self.maximum = np.asarray(data["param_max"], dtype=np.float64)
         self.inputs = [str(n) for n in data["inputs"]]
         self.outputs = [str(n) for n in data["outputs"]]
         self.mode_labels = tuple(str(x) for x in data["mode_labels"])

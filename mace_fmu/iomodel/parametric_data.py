@@ -126,6 +126,22 @@ def physical_sensitivities(model: VoltsModel, shapes: np.ndarray) -> tuple[list[
     return parameters, np.array(sensitivities).reshape(len(parameters), n, n)
 
 
+def parameter_range(name: str) -> tuple[float, float]:
+    """Declared [min, max] of a tunable parameter (inf: unbounded); FMUs declare and check them.
+
+    Damping ratios in [0, 1] (1 itself is refused at initialisation: critically damped modes
+    are not vibration modes), delays in [0, 1] s, moduli and spring stiffnesses >= 0; servo
+    gains are signed and unbounded.
+    """
+    if name.startswith("damping_mode_"):
+        return 0.0, 1.0
+    if name.startswith("delay_"):
+        return 0.0, 1.0
+    if name.startswith(("E_", "k_")):
+        return 0.0, np.inf
+    return -np.inf, np.inf
+
+
 def parametric_arrays(model: VoltsModel) -> dict[str, np.ndarray]:
     """Everything a ParametricSystem (and an FMU) needs to rebuild ``model`` for new parameter values."""
     sys_ = model.system
@@ -142,7 +158,9 @@ def parametric_arrays(model: VoltsModel) -> dict[str, np.ndarray]:
         inputs=np.array(sys_.input_labels), outputs=np.array(sys_.output_labels), input_descriptions=np.array(ins),
         output_descriptions=np.array(outs), param_names=np.array([p[0] for p in parameters]),
         param_values=np.array([p[1] for p in parameters], dtype=float),
-        param_descriptions=np.array([p[2] for p in parameters]), physical_names=np.array([p[0] for p in physical]),
+        param_descriptions=np.array([p[2] for p in parameters]),
+        param_min=np.array([parameter_range(p[0])[0] for p in parameters]),
+        param_max=np.array([parameter_range(p[0])[1] for p in parameters]), physical_names=np.array([p[0] for p in physical]),
         physical_dk=dk, frequencies_hz=data.frequencies_hz, mode_labels=np.array(data.labels), modal_b=data.modal_b,
         disp_names=np.array(list(data.disp_out)), disp_rows=np.array(list(data.disp_out.values())),
         rate_names=np.array(list(data.rate_out)), rate_rows=np.array(list(data.rate_out.values())),
