@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+from pathlib import Path
 from dataclasses import dataclass
 from typing import Any, Callable, Mapping
 
@@ -18,6 +19,7 @@ from mace_fmu.fe.constraints import build_constraints
 from mace_fmu.fe.labels import label_modes, rigid_body_vectors
 from mace_fmu.fe.modal import Modes, solve_modes
 from mace_fmu.fe.preload import Preload, PreloadKind, large_displacement_preload, linear_preload
+from mace_fmu.parameters import ParameterSet, deck_fingerprint, fe_overrides
 from mace_fmu.structure import Structure, StructureKind, StructureSpec, build_structure, bundled_deck_path
 
 DEFAULT_MAX_HZ = 250.0
@@ -86,14 +88,26 @@ def _max_hz(deck: Deck, structure: Structure) -> float:
     return DEFAULT_MAX_HZ
 
 
+def check_parameters_deck(parameters: ParameterSet, deck: Deck) -> None:
+    """A MaceError when ``parameters`` were made for another deck (its provenance's fingerprint)."""
+    prov = parameters.provenance
+    if prov is None or not prov.deck_sha256 or not Path(deck.path).is_file():
+        return
+    if deck_fingerprint(deck.path) != prov.deck_sha256:
+        raise MaceError(f"the parameter set was made for deck {prov.deck!r} (sha256 {prov.deck_sha256[:12]}...), "
+                        f"not for {deck.path}; refit it for this deck or remove its deck_sha256")
+
+
 def compute_modes(deck: Deck | str | os.PathLike | None = None, *, structure: StructureKind = "1g",
                   preload: PreloadKind = "large", mass: MassKind = "lumped", max_hz: float | None = None,
                   overrides: Mapping[tuple[str, int], Mapping[str, Any]] | None = None,
-                  spec: StructureSpec | None = None, progress: Callable[[str], None] | None = None) -> StructureModes:
+                  spec: StructureSpec | None = None, progress: Callable[[str], None] | None = None,
+                  parameters: ParameterSet | None = None) -> StructureModes:
     """Modes [Hz] of the 1-g or 0-g structure of a deck (default: the bundled MACE deck).
 
     ``max_hz`` defaults to the deck's EIGRL upper frequency. ``overrides`` replaces card fields
-    (see :func:`mace_fmu.structure.apply_overrides`).
+    (see :func:`mace_fmu.structure.apply_overrides`); ``parameters`` replaces moduli and spring
+    stiffnesses by name (``E_<material>``, ``k_<spring>``; its other entries act later).
     """
     if preload not in ("large", "linear"):
         raise ValueError(f"preload must be 'large' or 'linear', got {preload!r}")
@@ -101,6 +115,9 @@ def compute_modes(deck: Deck | str | os.PathLike | None = None, *, structure: St
         raise ValueError(f"mass must be 'lumped' or 'consistent', got {mass!r}")
     if not isinstance(deck, Deck):
         deck = read_deck(deck if deck is not None else bundled_deck_path())
+    if parameters is not None:
+        check_parameters_deck(parameters, deck)
+        overrides = {**fe_overrides(parameters), **(overrides or {})}
     struct = build_structure(deck, kind=structure, spec=spec, overrides=overrides)
     model = assemble(struct.deck, mass=mass)
     props = mass_properties(model, struct.deck)

@@ -129,20 +129,14 @@ class PoleRow:
 
 def _pair_poles(rows: list[tuple[str, str, float, float | None, bool]], poles) -> list[PoleRow]:
     """Each thesis row takes the nearest unused pole whose label matches its pattern ("a|b": either)."""
-    import fnmatch
+    from mace_fmu.updating.pairing import pair_poles
 
-    used: set[int] = set()
     out = []
-    for label, pattern, hz, zeta, heavy in rows:
-        # real poles (servo and speed-loop lags) are no vibration mode of the thesis's tables
-        cands = [i for i, p in enumerate(poles) if i not in used and p.damping < 0.999
-                 and any(fnmatch.fnmatchcase(p.label, pat) for pat in pattern.split("|"))]
-        if not cands:
+    for (label, _, hz, zeta, heavy), i in zip(rows, pair_poles([(r[1], r[2]) for r in rows], poles)):
+        if i is None:
             out.append(PoleRow(label, hz, zeta, heavy, None, None, "(none)"))
-            continue
-        i = min(cands, key=lambda i: abs(poles[i].frequency_hz - hz))
-        used.add(i)
-        out.append(PoleRow(label, hz, zeta, heavy, poles[i].frequency_hz, poles[i].damping, poles[i].label))
+        else:
+            out.append(PoleRow(label, hz, zeta, heavy, poles[i].frequency_hz, poles[i].damping, poles[i].label))
     return out
 
 

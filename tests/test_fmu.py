@@ -383,21 +383,18 @@ def test_reanalysed_modes_keep_their_index_through_a_frequency_crossing(motion_f
 def test_parameters_rebuild_the_same_model_as_volts_model(built, change):
     """A delay, a servo gain or a modal damping ratio set in the FMU gives the response of the
     model rebuilt by volts_model with that value (1e-8 of each output's range)."""
-    from dataclasses import replace
+    from mace_fmu.parameters import ParameterSet
 
     model, _, unzipped = built
     if change == "delay":
-        start, rebuilt = {"delay_gimbal_primary_x": 6.0e-3}, volts_model(
-            model.structure_modes.structure.kind, modes=model.structure_modes,
-            actuator_delays_s={"gimbal_primary_x": 6.0e-3})
+        start, values = {"delay_gimbal_primary_x": 6.0e-3}, {"delay_gimbal_primary_x": 6.0e-3}
     elif change == "servo":
-        inst = replace(model.instruments, servos=replace(model.instruments.servos, gimbal_angle_gain=-1.5))
-        start, rebuilt = {"K_a": -1.5}, volts_model(model.structure_modes.structure.kind,
-                                                     modes=model.structure_modes, instruments=inst)
+        start, values = {"K_a": -1.5}, {"K_a": -1.5}
     else:
         k = list(model.plant.labels).index("1st Z bending")
-        start, rebuilt = {f"damping_mode_{k + 1}": 0.05}, volts_model(
-            model.structure_modes.structure.kind, modes=model.structure_modes, damping={"1st Z bending": 0.05})
+        start, values = {f"damping_mode_{k + 1}": 0.05}, {"damping:1st Z bending": 0.05}
+    rebuilt = volts_model(model.structure_modes.structure.kind, modes=model.structure_modes,
+                          parameters=ParameterSet(values))
     t = np.arange(0.0, 0.4, 2e-3)
     u = _signal("multisine", t, model.system.ninputs)
     fmu = _initialised(model, unzipped, start)

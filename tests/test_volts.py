@@ -14,6 +14,7 @@ from mace_fmu.iomodel.modal_ss import modal_data
 from mace_fmu.iomodel.poles import closed_loop_poles
 from mace_fmu.iomodel.volts import DEFAULT_MAX_HZ, volts_model
 from mace_fmu.thesis import table_4_7_comparison, table_5_2_comparison
+from mace_fmu.parameters import ParameterSet
 
 
 @pytest.fixture(scope="module")
@@ -125,13 +126,15 @@ def test_bessel_delay_variant_and_open_loop_variant():
 @pytest.mark.parametrize(("kwargs", "message"), [
     (dict(outputs=["gyro_payload_q"]), "unknown output signal 'gyro_payload_q'; allowed: encoder_primary_x"),
     (dict(inputs=["gimbal_tertiary"]), "unknown input signal 'gimbal_tertiary'; allowed: gimbal_primary_x"),
-    (dict(actuator_delays_s={"gimbal_primary_x": -1e-3}), "must be >= 0 s"),
-    (dict(sensor_delays_s={"gyro_payload_y": 1e-3}), "no sensor delay named 'gyro_payload_y'"),
+    (dict(parameters=ParameterSet({"delay_gimbal_primary_x": -1e-3})), "a delay must be >= 0 s"),
+    (dict(parameters=ParameterSet({"delay_gyro_payload_y": 1e-3})), "no delayed channel 'gyro_payload_y'"),
+    (dict(parameters=ParameterSet({"E_unobtainium": 1e9})), "no such material; known: E_lexan_end"),
     (dict(pade_order=0), "pade_order must be an integer >= 1"),
     (dict(max_hz=1.0), "below the first flexible mode"),
     (dict(bessel="elliptic"), "bessel must be 'full', 'delay' or 'none'"),
-    (dict(damping={"1st W bending": 0.02}), "no mode labelled '1st W bending' in the 0g structure"),
-    (dict(damping={"1st Z bending": 1.5}), "must be >= 0 and < 1, got 1.5"),
+    (dict(parameters=ParameterSet({"damping:1st W bending": 0.02})),
+     "no mode labelled '1st W bending' in the 0g structure"),
+    (dict(parameters=ParameterSet({"damping:1st Z bending": 1.5})), "must be >= 0 and < 1, got 1.5"),
     (dict(motion_grids=[1, 999999]), "999999] are not in the 0g model; it has grids 1..112"),
     (dict(motion_grids="some"), "motion_grids must be grid IDs or 'all'"),
     (dict(motion_grids=1), "motion_grids must be a list of grid IDs or 'all', got 1"),
@@ -211,7 +214,7 @@ def test_damping_override_moves_only_that_pole(v0):
     """Open-loop damping of the 0-g 5th Y bending mode from 1.6 % to 5 %: its closed-loop pole
     follows (the servos hardly touch it), the others stay."""
     base = {p.label: p for p in closed_loop_poles(v0) if "bending" in p.label}
-    damped = volts_model("0g", modes=v0.structure_modes, damping={"5th Y bending": 0.05})
+    damped = volts_model("0g", modes=v0.structure_modes, parameters=ParameterSet({"damping:5th Y bending": 0.05}))
     new = {p.label: p for p in closed_loop_poles(damped) if "bending" in p.label}
     assert base["5th Y bending"].damping == pytest.approx(0.017, abs=0.002)
     assert new["5th Y bending"].damping == pytest.approx(0.05, abs=0.003)

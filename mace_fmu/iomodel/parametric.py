@@ -42,6 +42,8 @@ class ParametricSystem:
                                  dtype=int)
         self.frequencies_hz = np.asarray(data["frequencies_hz"], dtype=np.float64)  #: after the last build
         self.state_names: list[str] = []  #: "block.state" of the last build
+        #: labels of the modes behind the structure's states in the last build (zero cluster rotated)
+        self.state_mode_labels: tuple[str, ...] = self.mode_labels
 
     def index(self, name: str) -> int:
         """Position of parameter ``name`` in the parameter vector."""
@@ -65,9 +67,10 @@ class ParametricSystem:
         disp = {str(name): row @ phi_r for name, row in zip(d["disp_names"], d["disp_rows"])}
         rate = {str(name): row @ phi_r for name, row in zip(d["rate_names"], d["rate_rows"])}
         motion = {str(name): row @ phi_r for name, row in zip(d["motion_names"], d["motion_rows"])}
-        a, b, c, states, *_ = modal_matrices(frequencies_hz, zeta, self.mode_labels, np.zeros((0, len(zeta))),
-                                             phi_r.T @ d["modal_b"], disp, rate,
-                                             [str(x) for x in d["structure_outputs"]], motion)
+        a, b, c, states, labels, *_ = modal_matrices(frequencies_hz, zeta, self.mode_labels,
+                                                     np.zeros((0, len(zeta))), phi_r.T @ d["modal_b"], disp, rate,
+                                                     [str(x) for x in d["structure_outputs"]], motion)
+        self.state_mode_labels = labels
         return a, b, c, states
 
     def _block(self, i: int, params: np.ndarray, structure) -> tuple[np.ndarray, ...]:

@@ -142,15 +142,20 @@ def parameter_range(name: str) -> tuple[float, float]:
     return -np.inf, np.inf
 
 
-def parametric_arrays(model: VoltsModel) -> dict[str, np.ndarray]:
-    """Everything a ParametricSystem (and an FMU) needs to rebuild ``model`` for new parameter values."""
+def parametric_arrays(model: VoltsModel, *, physical: bool = True) -> dict[str, np.ndarray]:
+    """Everything a ParametricSystem (and an FMU) needs to rebuild ``model`` for new parameter values.
+
+    ``physical=False`` leaves out the moduli and springs and their stiffness sensitivities (the
+    costly part): the system then rebuilds for new damping ratios, delays and gains only.
+    """
     sys_ = model.system
     ins, outs = signal_descriptions(model)
     max_hz = float(np.max(model.plant.frequencies_hz))
     data = modal_data(model.structure_modes.modes, model.instruments, max_hz=max_hz,
                       motion_grids=list(model.plant.motion_grids))
     arrays, parameters = _blocks(model)
-    physical, dk = physical_sensitivities(model, data.shapes)
+    n = len(data.labels)
+    physical, dk = physical_sensitivities(model, data.shapes) if physical else ([], np.zeros((0, n, n)))
     damping = [(f"damping_mode_{k + 1}", float(z), f"open-loop damping ratio of mode {k + 1}: {label}")
                for k, (z, label) in enumerate(zip(model.plant.damping, data.labels))]
     parameters = damping + parameters + physical

@@ -14,9 +14,12 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass
+from typing import Sequence
 
 import numpy as np
 import scipy.linalg as sla
+from scipy.sparse import csr_matrix
+from scipy.sparse.csgraph import connected_components
 
 from mace_fmu.fe.labels import ordinal
 from mace_fmu.iomodel.volts import VoltsModel
@@ -36,11 +39,11 @@ class ClosedLoopPole:
     eigenvalue: complex
 
 
-def _group(state: str, model: VoltsModel) -> str:
+def _group(state: str, mode_labels: Sequence[str]) -> str:
     """Label of the group a state belongs to: a structural mode's label or a block's role."""
     match = _MODE_STATE.match(state)
     if match:
-        return model.plant.labels[int(match.group(1)) - 1]
+        return mode_labels[int(match.group(1)) - 1]
     block = state.split(".", 1)[0]
     if block.startswith("delay_"):
         return f"time delay ({block[len('delay_'):]})"
@@ -51,10 +54,45 @@ def _group(state: str, model: VoltsModel) -> str:
 
 def closed_loop_poles(model: VoltsModel, *, max_hz: float | None = None) -> list[ClosedLoopPole]:
     """Poles with Im >= 0 sorted by frequency [Hz], labelled; up to ``max_hz`` when given."""
-    lam, v = sla.eig(model.system.A)
-    w = sla.inv(v)  # rows: left eigenvectors normalised so that w v = I
-    part = np.abs(v * w.T)  # (state, pole)
-    groups = [_group(s, model) for s in model.system.state_labels]
+    return label_poles(model.system.A, state_names=model.system.state_labels, mode_labels=model.plant.labels,
+                       max_hz=max_hz)
+
+
+def _eigen_participation(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Eigenvalues of ``a`` and participation factors |v_k w_k| (state, pole), block by block.
+
+    The states are split into the strongly connected components of A's coupling graph, which
+    puts A in block-triangular form (filters and delays on the outputs sit downstream of every
+    loop). The eigenvalues are those of the diagonal blocks, and a pole's right and left
+    eigenvectors overlap only on its own block, so its participation factors are those of the
+    block alone: exact, cheaper than one eigen-solution of A, and free of the ill-conditioning
+    that identical output filters give the eigenvectors of the whole.
+    """
+    n = a.shape[0]
+    n_comp, comp = connected_components(csr_matrix(a != 0.0), directed=True, connection="strong")
+    lam = np.empty(n, dtype=complex)
+    part = np.zeros((n, n))
+    at = 0
+    for c in range(n_comp):
+        idx = np.flatnonzero(comp == c)
+        block_lam, v = sla.eig(a[np.ix_(idx, idx)])
+        w = sla.inv(v)  # rows: left eigenvectors normalised so that w v = I
+        cols = np.arange(at, at + len(idx))
+        lam[cols] = block_lam
+        part[np.ix_(idx, cols)] = np.abs(v * w.T)
+        at += len(idx)
+    return lam, part
+
+
+def label_poles(a: np.ndarray, *, state_names: Sequence[str], mode_labels: Sequence[str],
+                max_hz: float | None = None) -> list[ClosedLoopPole]:
+    """Poles of ``a`` with Im >= 0 sorted by frequency [Hz], each labelled by the states it lives in.
+
+    ``state_names`` are "block.state" (the structure's "structure.mode<k>_disp|vel", k 1-based
+    into ``mode_labels``).
+    """
+    lam, part = _eigen_participation(a)
+    groups = [_group(s, mode_labels) for s in state_names]
     names = sorted(set(groups))
     share = np.zeros((len(names), len(lam)))
     np.add.at(share, np.array([names.index(g) for g in groups]), part)

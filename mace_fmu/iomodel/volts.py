@@ -21,6 +21,7 @@ import control as ct
 import numpy as np
 
 from mace_fmu.deck.cards import Deck
+from mace_fmu.errors import MaceError
 from mace_fmu.fe.preload import PreloadKind
 from mace_fmu.iomodel.damping import modal_damping
 from mace_fmu.iomodel.frf import frequency_response
@@ -28,6 +29,7 @@ from mace_fmu.iomodel.instruments import Instruments, load_instruments
 from mace_fmu.iomodel.modal_core import ZERO_HZ
 from mace_fmu.iomodel.modal_ss import ModalPlant, modal_plant
 from mace_fmu.iomodel.motion import parse_motion_output
+from mace_fmu.parameters import DAMPING_PREFIX, SERVO_GAINS, ParameterSet, fe_overrides
 from mace_fmu.pipeline import StructureModes, compute_modes
 from mace_fmu.structure import StructureKind
 from modelica_like import BesselFilter, Gain, PadeDelay, PD, StateSpace, Sum, System
@@ -203,41 +205,36 @@ def build_diagram(plant: ModalPlant, instruments: Instruments, *, servos: bool =
 DEFAULT_MAX_HZ = 250.0
 
 
-def volts_model(structure: StructureKind = "1g", *, servos: bool = True, bessel: BesselKind = "full",
-                delays: bool = True, pade_order: int = 3, max_hz: float = DEFAULT_MAX_HZ, preload: PreloadKind = "large",
-                deck: Deck | str | None = None, instruments: Instruments | None = None,
+def volts_model(structure: StructureKind = "1g", *, parameters: ParameterSet | None = None, servos: bool = True,
+                bessel: BesselKind = "full", delays: bool = True, pade_order: int = 3, max_hz: float = DEFAULT_MAX_HZ,
+                preload: PreloadKind = "large", deck: Deck | str | None = None, instruments: Instruments | None = None,
                 modes: StructureModes | None = None, inputs: Sequence[str] | None = None,
-                outputs: Sequence[str] | None = None, actuator_delays_s: Mapping[str, float] | None = None,
-                sensor_delays_s: Mapping[str, float] | None = None,
-                damping: Mapping[str, float] | None = None,
-                motion_grids: Sequence[int] | Literal["all"] = ()) -> VoltsModel:
+                outputs: Sequence[str] | None = None, motion_grids: Sequence[int] | Literal["all"] = ()) -> VoltsModel:
     """Volts-volts model of the 1-g or 0-g structure, modes up to ``max_hz`` [Hz].
 
     Inputs: gimbal commands (relative angle, 1 V = 1 deg, with servos; motor volts without),
     wheel speed commands and active strut volts. Outputs: the 20 sensors in volts.
-    ``actuator_delays_s`` / ``sensor_delays_s`` [s] replace the delays of the named channels
-    (defaults: Tables 4.5 and 4.6 from the instrument file). ``damping`` maps mode labels (as in
-    ``compute_modes(...).modes.labels``, e.g. "1st Z bending") to open-loop damping ratios that
-    replace the instrument file's table. ``motion_grids`` (grid IDs, or "all") adds each grid's
+    ``parameters`` (a :class:`~mace_fmu.parameters.ParameterSet`) replaces moduli and spring
+    stiffnesses (in the FE model, unless ``modes`` are given, which must then have been computed
+    with them), delays (defaults: Tables 4.5 and 4.6 from the instrument file), servo gains and
+    open-loop damping ratios by mode label (as in ``compute_modes(...).modes.labels``, e.g.
+    "1st Z bending"). ``motion_grids`` (grid IDs, or "all") adds each grid's
     translations [m] and rotations [rad] in basic axes as outputs ``grid_<id>_<tx|ty|tz|rx|ry|rz>``
     after the sensors, for animation.
     """
     _check(structure in ("1g", "0g"), f"structure must be '1g' or '0g', got {structure!r}")
     instruments = instruments if instruments is not None else load_instruments()
-    instruments = _with_delays(instruments, actuator_delays_s or {}, sensor_delays_s or {})
     if modes is None:
-        modes = compute_modes(deck, structure=structure, preload=preload, max_hz=max(max_hz, 1.0))
+        modes = compute_modes(deck, structure=structure, preload=preload, max_hz=max(max_hz, 1.0),
+                              parameters=parameters)
+    try:
+        fe_overrides(parameters)  # the moduli and springs must name cards, whether or not modes were given
+        instruments = apply_parameters(instruments, parameters, modes.modes.labels, structure=structure)
+    except MaceError as exc:
+        raise ValueError(str(exc)) from None
     flexible = modes.modes.frequencies_hz[np.abs(modes.modes.frequencies_hz) >= ZERO_HZ]
     _check(len(flexible) > 0 and max_hz >= flexible.min(),
            f"max_hz = {max_hz} Hz is below the first flexible mode ({flexible.min():.3f} Hz); allowed: >= that")
-    if damping:
-        known = set(modes.modes.labels)
-        for label, value in damping.items():
-            _check(label in known, f"no mode labelled {label!r} in the {structure} structure; labels: "
-                                   f"{', '.join(sorted(known))}")
-            _check(0.0 <= float(value) < 1.0, f"damping ratio of {label!r} must be >= 0 and < 1, got {value}")
-        table = replace(instruments.damping, by_label={**instruments.damping.by_label, **damping})
-        instruments = replace(instruments, damping=table)
     zeta = modal_damping(modes.modes.labels, modes.modes.frequencies_hz, instruments.damping)
     grids = modes.modes.dofs.grid_ids
     if isinstance(motion_grids, str):
@@ -259,18 +256,40 @@ def volts_model(structure: StructureKind = "1g", *, servos: bool = True, bessel:
                       pade_order=pade_order)
 
 
-def _with_delays(instruments: Instruments, actuators: Mapping[str, float], sensors: Mapping[str, float]) -> Instruments:
-    """Instruments with the given delays replaced, after checking names and signs."""
-    el = instruments.electronics
-    for table, allowed, what in ((actuators, el.actuator_delays_s, "actuator"), (sensors, el.sensor_delays_s, "sensor")):
-        for name, value in table.items():
-            _check(name in allowed, f"no {what} delay named {name!r}; allowed: {', '.join(allowed)}")
-            _check(float(value) >= 0.0, f"delay of {name} must be >= 0 s, got {value}")
-    if not actuators and not sensors:
+def apply_parameters(instruments: Instruments, parameters: ParameterSet | None, mode_labels: Sequence[str], *,
+                     structure: str = "") -> Instruments:
+    """Instruments with the set's delays [s], servo gains and damping ratios by mode label replaced.
+
+    Names are checked against the instrument file and ``mode_labels``; a MaceError names the
+    entry and what is allowed.
+    """
+    if parameters is None:
         return instruments
-    new = replace(el, actuator_delays_s={**el.actuator_delays_s, **actuators},
-                  sensor_delays_s={**el.sensor_delays_s, **sensors})
-    return replace(instruments, electronics=new)
+    el, sv = instruments.electronics, instruments.servos
+    actuators, sensors = dict(el.actuator_delays_s), dict(el.sensor_delays_s)
+    for name, value in parameters.of_kind("delay").items():
+        channel = name.removeprefix("delay_")
+        table = actuators if channel in actuators else sensors if channel in sensors else None
+        if table is None:
+            raise MaceError(f"parameter {name!r}: no delayed channel {channel!r}; known: "
+                            f"{', '.join('delay_' + c for c in [*actuators, *sensors])}")
+        if value < 0.0:
+            raise MaceError(f"parameter {name!r}: a delay must be >= 0 s, got {value}")
+        table[channel] = value
+    gains = {SERVO_GAINS[name]: value for name, value in parameters.of_kind("gain").items()}
+    known = set(mode_labels)
+    damping = {}
+    for name, value in parameters.of_kind("damping").items():
+        label = name.removeprefix(DAMPING_PREFIX)
+        if label not in known:
+            raise MaceError(f"parameter {name!r}: no mode labelled {label!r} in the {structure} structure; labels: "
+                            f"{', '.join(sorted(known))}")
+        if not 0.0 <= value < 1.0:
+            raise MaceError(f"parameter {name!r}: a damping ratio must be >= 0 and < 1, got {value}")
+        damping[label] = value
+    return replace(instruments, electronics=replace(el, actuator_delays_s=actuators, sensor_delays_s=sensors),
+                   servos=replace(sv, **gains),
+                   damping=replace(instruments.damping, by_label={**instruments.damping.by_label, **damping}))
 
 
 def select_signals(system: ct.StateSpace, *, inputs: Sequence[str] | None = None,

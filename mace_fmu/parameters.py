@@ -1,0 +1,243 @@
+"""Named model parameters as one frozen object that every stage takes; TOML in and out, with provenance.
+
+A parameter set maps names to values in SI units. The names are the FMUs' own:
+
+- ``E_<material>`` Young's modulus [Pa] of a MAT1 card, ``k_<spring>`` stiffness [N/m] of a
+  CELAS2 card (material and spring names from the ``[parameters]`` table of the structure data
+  file, e.g. ``E_lexan_center``, ``k_suspension_device_1``): FE overrides, so they act on the
+  modes (and, through the 1-g preload, on gravity's stiffening);
+- ``delay_<channel>`` [s]: an actuator's computational delay (Table 4.5) or a rate gyro's extra
+  delay (Table 4.6), e.g. ``delay_gimbal_primary_x``, ``delay_gyro_bus_y``;
+- ``K_a`` [V/deg], ``K_r`` [V/(deg/s)] gimbal servo gains, ``K_f``, ``K_b`` wheel speed loop gains;
+- ``damping:<mode label>`` open-loop modal damping ratio of the modes with that label, e.g.
+  ``damping:1st Z bending``.
+
+Names not given keep the deck's and the data file's values.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import datetime
+import hashlib
+import math
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+from types import MappingProxyType
+from typing import Any, Literal, Mapping
+
+from mace_fmu.atomic import write_text_atomic
+from mace_fmu.datafile import data_file_path, read_data_file
+from mace_fmu.errors import MaceError
+
+ParameterKind = Literal["modulus", "spring", "delay", "gain", "damping"]
+DAMPING_PREFIX = "damping:"
+SERVO_GAINS = {"K_a": "gimbal_angle_gain", "K_r": "gimbal_rate_gain", "K_f": "wheel_forward_gain",
+               "K_b": "wheel_backward_gain"}
+UNITS = {"modulus": "Pa", "spring": "N/m", "delay": "s", "damping": "1"}
+
+
+def parameter_kind(name: str) -> ParameterKind:
+    """What a parameter name refers to (by its prefix); a MaceError for a name of no known kind."""
+    if name.startswith("E_"):
+        return "modulus"
+    if name.startswith("k_"):
+        return "spring"
+    if name.startswith("delay_"):
+        return "delay"
+    if name in SERVO_GAINS:
+        return "gain"
+    if name.startswith(DAMPING_PREFIX) and len(name) > len(DAMPING_PREFIX):
+        return "damping"
+    raise MaceError(f"parameter {name!r}: unknown kind of name; expected E_<material>, k_<spring>, "
+                    f"delay_<channel>, {', '.join(SERVO_GAINS)} or {DAMPING_PREFIX}<mode label>")
+
+
+def parameter_unit(name: str) -> str:
+    """SI unit of a parameter, as the FMUs declare it."""
+    return {"K_a": "V/deg", "K_r": "V/(deg/s)"}.get(name, UNITS.get(parameter_kind(name), "1"))
+
+
+@dataclass(frozen=True)
+class Provenance:
+    """Where a parameter set comes from: which data, which cost, how far it got, when."""
+
+    created: str  #: ISO 8601 date and time (UTC)
+    tool: str  #: e.g. "mace-fmu 0.1.0"
+    deck: str = ""  #: file name of the deck the values belong to
+    deck_sha256: str = ""  #: its content hash: a set made for another deck is refused
+    structure: str = ""  #: "1g" or "0g", the model that was fitted
+    data: str = ""  #: what was measured
+    cost: str = ""  #: which cost was minimised
+    method: str = ""  #: how the parameters entered the model, outer iterations, penalty
+    initial_cost: float | None = None  #: j^T j at the start
+    final_cost: float | None = None  #: j^T j at the end
+    notes: str = ""
+
+
+def deck_fingerprint(path: str | Path) -> str:
+    """SHA-256 of a deck file's bytes."""
+    try:
+        return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+    except OSError as exc:
+        raise MaceError(f"{path}: cannot read the deck to fingerprint it: {exc}") from None
+
+
+def tool_version() -> str:
+    from importlib import metadata
+
+    try:
+        return f"mace-fmu {metadata.version('mace-fmu')}"
+    except metadata.PackageNotFoundError:  # running from a source tree
+        return "mace-fmu (source tree)"
+
+
+def now_utc() -> str:
+    return datetime.datetime.now(datetime.timezone.utc).replace(microsecond=0).isoformat()
+
+
+@dataclass(frozen=True)
+class ParameterSet:
+    """Parameter values [SI] by name (see the module docstring), with where they come from."""
+
+    values: Mapping[str, float] = field(default_factory=dict)
+    provenance: Provenance | None = None
+
+    def __post_init__(self) -> None:
+        checked = {}
+        for name, value in dict(self.values).items():
+            parameter_kind(name)
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+                raise MaceError(f"parameter {name!r}: value must be a finite number, got {value!r}")
+            checked[name] = float(value)
+        object.__setattr__(self, "values", MappingProxyType(checked))
+
+    def __getitem__(self, name: str) -> float:
+        return self.values[name]
+
+    def __contains__(self, name: object) -> bool:
+        return name in self.values
+
+    def __len__(self) -> int:
+        return len(self.values)
+
+    def of_kind(self, *kinds: ParameterKind) -> dict[str, float]:
+        """The values whose names are of the given kinds."""
+        return {n: v for n, v in self.values.items() if parameter_kind(n) in kinds}
+
+    def updated(self, values: Mapping[str, float], *, provenance: Provenance | None = None) -> ParameterSet:
+        """A new set with ``values`` replacing or adding entries (provenance replaced when given)."""
+        return ParameterSet({**self.values, **values}, provenance if provenance is not None else self.provenance)
+
+    # --- TOML ---------------------------------------------------------------------------------
+    def to_toml(self) -> str:
+        """The set as TOML: a [provenance] table and a [values] table (units in comments)."""
+        lines = ["# mace-fmu parameter set: values in SI units (see mace_fmu/parameters.py for the names)", ""]
+        if self.provenance is not None:
+            lines.append("[provenance]")
+            for f in dataclasses.fields(Provenance):
+                value = getattr(self.provenance, f.name)
+                if value is not None and value != "":
+                    lines.append(f"{f.name} = {_toml_value(value)}")
+            lines.append("")
+        lines.append("[values]")
+        for name, value in self.values.items():
+            lines.append(f"{_toml_key(name)} = {_toml_value(value)}  # [{parameter_unit(name)}]")
+        return "\n".join(lines) + "\n"
+
+    @classmethod
+    def from_toml(cls, text: str, *, source: str = "<string>") -> ParameterSet:
+        """Parse :meth:`to_toml`'s format; errors name ``source`` and the offending entry."""
+        try:
+            data = tomllib.loads(text)
+        except tomllib.TOMLDecodeError as exc:
+            raise MaceError(f"{source}: not a valid TOML parameter set: {exc}") from None
+        unknown = set(data) - {"provenance", "values"}
+        if unknown:
+            raise MaceError(f"{source}: unknown table(s) {sorted(unknown)}; a parameter set has [provenance] and "
+                            "[values]")
+        if not isinstance(data.get("values"), dict):
+            raise MaceError(f"{source}: no [values] table")
+        prov = None
+        if "provenance" in data:
+            allowed = {f.name for f in dataclasses.fields(Provenance)}
+            extra = set(data["provenance"]) - allowed
+            if extra:
+                raise MaceError(f"{source}: [provenance] has unknown key(s) {sorted(extra)}; allowed: {sorted(allowed)}")
+            if "created" not in data["provenance"] or "tool" not in data["provenance"]:
+                raise MaceError(f"{source}: [provenance] needs 'created' and 'tool'")
+            prov = Provenance(**data["provenance"])
+        try:
+            return cls(data["values"], prov)
+        except MaceError as exc:
+            raise MaceError(f"{source}: {exc}") from None
+
+    def write(self, path: str | Path) -> Path:
+        """Write the TOML atomically (a reader never sees half a file)."""
+        return write_text_atomic(path, self.to_toml())
+
+    @classmethod
+    def read(cls, path: str | Path) -> ParameterSet:
+        """Read a parameter set written by :meth:`write` (or by hand)."""
+        try:
+            text = Path(path).read_text(encoding="utf-8")
+        except FileNotFoundError:
+            raise MaceError(f"{path}: no such parameter file") from None
+        except (OSError, UnicodeDecodeError) as exc:
+            raise MaceError(f"{path}: cannot read the parameter file: {exc}") from None
+        return cls.from_toml(text, source=str(path))
+
+
+def _toml_key(name: str) -> str:
+    return name if all(c.isalnum() or c in "_-" for c in name) else '"' + name.replace('"', '\\"') + '"'
+
+
+def _toml_value(value: Any) -> str:
+    if isinstance(value, str):
+        return '"' + value.replace("\\", "\\\\").replace('"', '\\"').replace("\n", "\\n") + '"'
+    return repr(float(value))
+
+
+# --- the structure's parameter names ----------------------------------------------------------
+@dataclass(frozen=True)
+class ParameterNames:
+    """Which MAT1 and CELAS2 cards the E_ and k_ names of a structure refer to."""
+
+    materials: Mapping[str, int]  #: material name -> MAT1 ID
+    springs: Mapping[str, int]  #: spring name -> CELAS2 ID
+
+
+def load_parameter_names(path: str | Path | None = None) -> ParameterNames:
+    """The ``[parameters]`` table of the structure data file (default: the bundled mace_em.toml)."""
+    path = data_file_path(path)
+    table = read_data_file(path, what="parameter names").get("parameters", {})
+    return ParameterNames(materials={name: int(mid) for mid, name in table.get("materials", {}).items()},
+                          springs={name: int(sid) for sid, name in table.get("springs", {}).items()})
+
+
+def deck_values(deck, names: ParameterNames | None = None) -> dict[str, float]:
+    """The E_ and k_ values [Pa, N/m] a deck has for every named material and spring it contains."""
+    names = names if names is not None else load_parameter_names()
+    out = {f"E_{n}": deck.mat1s[mid].youngs_modulus for n, mid in names.materials.items() if mid in deck.mat1s}
+    out.update({f"k_{n}": deck.celas2s[sid].k for n, sid in names.springs.items() if sid in deck.celas2s})
+    return out
+
+
+def fe_overrides(parameters: ParameterSet | None, names: ParameterNames | None = None
+                 ) -> dict[tuple[str, int], dict[str, float]]:
+    """The E_ and k_ entries as deck overrides ({("MAT1", 2): {"e": 2.3e9}, ("CELAS2", 138): {"k": ...}})."""
+    if parameters is None:
+        return {}
+    names = names if names is not None else load_parameter_names()
+    out: dict[tuple[str, int], dict[str, float]] = {}
+    for name, value in parameters.of_kind("modulus", "spring").items():
+        table, card, key = ((names.materials, "MAT1", "e") if name.startswith("E_") else (names.springs, "CELAS2", "k"))
+        short = name[2:]
+        if short not in table:
+            raise MaceError(f"parameter {name!r}: no such {'material' if card == 'MAT1' else 'spring'}; known: "
+                            f"{', '.join(name[:2] + n for n in table)}")
+        if value <= 0.0:
+            raise MaceError(f"parameter {name!r} must be > 0, got {value}")
+        out[(card, table[short])] = {key: value}
+    return out

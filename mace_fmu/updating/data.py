@@ -1,0 +1,107 @@
+"""Measured data the costs compare a model with: modal parameters, frequency responses, time histories."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Mapping
+
+import numpy as np
+
+from mace_fmu.errors import MaceError
+
+
+@dataclass(frozen=True)
+class MeasuredMode:
+    """One mode of a measurement model: frequency [Hz] and damping ratio, and which model poles it can be.
+
+    ``pattern`` is an fnmatch pattern of model pole labels ("a|b" for either), e.g. "* Y bending".
+    """
+
+    label: str
+    pattern: str
+    frequency_hz: float
+    damping: float
+    weight: float = 1.0  #: weight of this mode's residuals
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.frequency_hz) and self.frequency_hz > 0):
+            raise MaceError(f"measured mode {self.label!r}: frequency must be a positive number, got "
+                            f"{self.frequency_hz!r}")
+        if not (math.isfinite(self.damping) and 0.0 <= self.damping < 1.0):
+            raise MaceError(f"measured mode {self.label!r}: damping ratio must be in [0, 1), got {self.damping!r}")
+        if not (math.isfinite(self.weight) and self.weight >= 0):
+            raise MaceError(f"measured mode {self.label!r}: weight must be >= 0, got {self.weight!r}")
+
+
+def _finite(name: str, values: np.ndarray, source: str) -> None:
+    bad = np.flatnonzero(~np.isfinite(values).reshape(values.shape[0], -1).all(axis=1))
+    if bad.size:
+        raise MaceError(f"{source}: {name} is not finite (NaN or inf) at row {int(bad[0])} "
+                        f"({bad.size} rows in all)")
+
+
+@dataclass(frozen=True)
+class FrequencyResponseData:
+    """Measured H[k, output, input] at ``frequencies_hz`` [Hz], signals named as the model's."""
+
+    frequencies_hz: np.ndarray
+    inputs: tuple[str, ...]
+    outputs: tuple[str, ...]
+    response: np.ndarray  #: complex (k, output, input)
+    source: str = "<memory>"
+
+    def __post_init__(self) -> None:
+        f = np.asarray(self.frequencies_hz, dtype=float)
+        h = np.asarray(self.response, dtype=complex)
+        object.__setattr__(self, "frequencies_hz", f)
+        object.__setattr__(self, "response", h)
+        object.__setattr__(self, "inputs", tuple(self.inputs))
+        object.__setattr__(self, "outputs", tuple(self.outputs))
+        if f.ndim != 1 or f.size == 0:
+            raise MaceError(f"{self.source}: frequencies must be a non-empty vector")
+        _finite("frequency", f, self.source)
+        if np.any(np.diff(f) <= 0) or f[0] < 0:
+            k = int(np.flatnonzero(np.diff(f) <= 0)[0]) + 1 if np.any(np.diff(f) <= 0) else 0
+            raise MaceError(f"{self.source}: frequencies must be >= 0 and increasing (row {k})")
+        if h.shape != (f.size, len(self.outputs), len(self.inputs)):
+            raise MaceError(f"{self.source}: response has shape {h.shape}, expected "
+                            f"({f.size}, {len(self.outputs)}, {len(self.inputs)}) (frequency, output, input)")
+        _finite("the response", h, self.source)
+
+
+@dataclass(frozen=True)
+class TimeHistory:
+    """Measured inputs and outputs [model units] sampled at uniformly spaced ``times_s`` [s]."""
+
+    times_s: np.ndarray
+    inputs: Mapping[str, np.ndarray]
+    outputs: Mapping[str, np.ndarray]
+    source: str = "<memory>"
+
+    def __post_init__(self) -> None:
+        t = np.asarray(self.times_s, dtype=float)
+        object.__setattr__(self, "times_s", t)
+        if t.ndim != 1 or t.size < 2:
+            raise MaceError(f"{self.source}: the time column needs at least two samples")
+        _finite("time", t, self.source)
+        dt = np.diff(t)
+        if np.any(dt <= 0):
+            raise MaceError(f"{self.source}: time is not increasing at row {int(np.flatnonzero(dt <= 0)[0]) + 1}")
+        if not np.allclose(dt, dt[0], rtol=1e-6, atol=0.0):
+            k = int(np.argmax(np.abs(dt - dt[0]))) + 1
+            raise MaceError(f"{self.source}: samples are not uniformly spaced (step {dt[0]:.6g} s, but "
+                            f"{dt[k - 1]:.6g} s at row {k})")
+        for table in ("inputs", "outputs"):
+            signals = {name: np.asarray(v, dtype=float) for name, v in getattr(self, table).items()}
+            for name, v in signals.items():
+                if v.shape != t.shape:
+                    raise MaceError(f"{self.source}: channel {name!r} has {v.size} samples, time has {t.size}")
+                _finite(f"channel {name!r}", v, self.source)
+            object.__setattr__(self, table, signals)
+        if not self.outputs:
+            raise MaceError(f"{self.source}: no output channels")
+
+    @property
+    def sample_time_s(self) -> float:
+        return float(self.times_s[1] - self.times_s[0])

@@ -1,0 +1,180 @@
+"""The MACE volts-volts model as a parametrised family: full re-solves, reanalysis, modal coordinates.
+
+Parameter names are those of :mod:`mace_fmu.parameters`. The FE solve depends only on the
+moduli and springs, so it is cached by their values; damping ratios, delays and servo gains
+then enter exactly through the blocks of a :class:`~mace_fmu.iomodel.parametric.ParametricSystem`
+(the FMUs' own rebuild), so a change of damping costs a block rebuild, not an FE solve.
+"""
+
+from __future__ import annotations
+
+from collections import OrderedDict
+from typing import Mapping, Sequence
+
+import numpy as np
+
+from mace_fmu.deck.cards import Deck
+from mace_fmu.deck.reader import read_deck
+from mace_fmu.errors import MaceError
+from mace_fmu.fe.preload import PreloadKind
+from mace_fmu.iomodel.parametric import ParametricSystem
+from mace_fmu.iomodel.parametric_data import parametric_arrays
+from mace_fmu.iomodel.volts import DEFAULT_MAX_HZ, VoltsModel, volts_model
+from mace_fmu.parameters import DAMPING_PREFIX, ParameterSet, deck_values, parameter_kind
+from mace_fmu.pipeline import StructureModes, compute_modes
+from mace_fmu.structure import StructureKind, bundled_deck_path
+from mace_fmu.updating.model import LinearModel
+
+Values = Mapping[str, float]
+_CACHE_SIZE = 4  # base point, perturbed points of a modal-sensitivity step come and go
+
+
+class MaceSolution:
+    """One FE solve and what was built from it; the reanalysis data only when asked for."""
+
+    def __init__(self, volts: VoltsModel):
+        self.volts = volts
+        self.system = ParametricSystem(parametric_arrays(volts, physical=False))  #: damping, delays, gains
+        self._reanalysis: ParametricSystem | None = None
+
+    @property
+    def reanalysis(self) -> ParametricSystem:
+        """The system with the moduli and springs and their stiffness sensitivities (computed once)."""
+        if self._reanalysis is None:
+            self._reanalysis = ParametricSystem(parametric_arrays(self.volts))
+        return self._reanalysis
+
+
+def linear_model(system: ParametricSystem, vector: np.ndarray, **modes) -> LinearModel:
+    """The LinearModel of ``system`` at parameter vector ``vector`` (FMU order); ``modes`` as in build()."""
+    a, b, c, d = system.build(vector, **modes)
+    return LinearModel(a=a, b=b, c=c, d=d, inputs=tuple(system.inputs), outputs=tuple(system.outputs),
+                       state_names=tuple(system.state_names), mode_labels=tuple(system.state_mode_labels))
+
+
+class MaceFamily:
+    """The 1-g or 0-g volts-volts model (servos closed) at any parameter values."""
+
+    def __init__(self, *, structure: StructureKind = "1g", base: ParameterSet | None = None,
+                 deck: Deck | str | None = None, preload: PreloadKind = "large", max_hz: float = DEFAULT_MAX_HZ):
+        self.structure = structure
+        self.base = base if base is not None else ParameterSet()
+        self.deck = deck if isinstance(deck, Deck) else read_deck(deck if deck is not None else bundled_deck_path())
+        self.preload = preload
+        self.max_hz = max_hz
+        self._cache: OrderedDict[tuple, MaceSolution] = OrderedDict()
+        self._deck_values = deck_values(self.deck)  # the cache keys on every modulus and spring, given or not
+        self.solves = 0  #: FE solves done (for benchmarks)
+        nominal = self.solution(self.base.values)
+        # moduli and springs of the analysed structure (0-g has no suspension springs)
+        self.physical = tuple(deck_values(nominal.volts.structure_modes.structure.deck))
+
+    # --- solving --------------------------------------------------------------------------------
+    def parameter_set(self, values: Values) -> ParameterSet:
+        """The base set with ``values`` replacing its entries."""
+        return self.base.updated(values)
+
+    def solution(self, values: Values) -> MaceSolution:
+        """The FE solve at the moduli and springs of ``values`` (cached)."""
+        params = self.parameter_set(values)
+        physical = {**self._deck_values, **params.of_kind("modulus", "spring")}
+        key = tuple(sorted(physical.items()))
+        if key in self._cache:
+            self._cache.move_to_end(key)
+            return self._cache[key]
+        modes = compute_modes(self.deck, structure=self.structure, preload=self.preload, max_hz=self.max_hz,
+                              parameters=params)
+        volts = volts_model(self.structure, modes=modes, parameters=self._non_modal(params), max_hz=self.max_hz)
+        solution = MaceSolution(volts)
+        self.solves += 1
+        self._cache[key] = solution
+        if len(self._cache) > _CACHE_SIZE:
+            self._cache.popitem(last=False)
+        return solution
+
+    def _non_modal(self, params: ParameterSet) -> ParameterSet:
+        """The base set's damping, delays and gains (the arrays' nominal block values)."""
+        return ParameterSet(params.of_kind("delay", "gain", "damping"))
+
+    def vector(self, system: ParametricSystem, values: Values) -> np.ndarray:
+        """The FMU-ordered parameter vector of ``system`` with ``values`` (and the base set) written in."""
+        vec = system.nominal.copy()
+        labels = np.array(system.mode_labels)
+        for name, value in self.parameter_set(values).values.items():
+            kind = parameter_kind(name)
+            if kind == "damping":
+                hits = np.flatnonzero(labels == name.removeprefix(DAMPING_PREFIX))
+                if not hits.size:
+                    raise MaceError(f"parameter {name!r}: no mode with that label in the {self.structure} model")
+                for k in hits:
+                    vec[system.index(f"damping_mode_{k + 1}")] = value
+            elif kind in ("modulus", "spring"):
+                if name in system.parameter_names:  # the reanalysis system; the others were solved with them
+                    vec[system.index(name)] = value
+            else:
+                try:
+                    vec[system.index(name)] = value
+                except KeyError:
+                    raise MaceError(f"parameter {name!r} is not a parameter of the {self.structure} model") from None
+        return vec
+
+    # --- the ModelFamily interface ---------------------------------------------------------------
+    def full(self, values: Values) -> LinearModel:
+        """Complete re-solve at ``values`` (the FE part cached by moduli and springs)."""
+        sol = self.solution(values)
+        return linear_model(sol.system, self.vector(sol.system, values))
+
+    def basis(self, values: Values) -> MaceBasis:
+        return MaceBasis(family=self, solution=self.solution(values))
+
+    def current_values(self, names: Sequence[str]) -> dict[str, float]:
+        """Values [SI] of ``names`` at the base point: the base set's, else the deck's and the data file's."""
+        sol = self.solution(self.base.values)
+        labels = np.array(sol.system.mode_labels)
+        out = {}
+        for n in names:
+            if n in self.base:
+                out[n] = self.base[n]
+            elif n in self._deck_values:
+                out[n] = self._deck_values[n]
+            elif n.startswith(DAMPING_PREFIX):
+                hits = np.flatnonzero(labels == n.removeprefix(DAMPING_PREFIX))
+                if not hits.size:
+                    raise MaceError(f"parameter {n!r}: no mode with that label in the {self.structure} model")
+                out[n] = float(sol.system.nominal[sol.system.index(f"damping_mode_{hits[0] + 1}")])
+            elif n in sol.system.parameter_names:
+                out[n] = float(sol.system.nominal[sol.system.index(n)])
+            else:
+                raise MaceError(f"parameter {n!r} is not a parameter of the {self.structure} model")
+        return out
+
+    def volts_model(self, values: Values) -> VoltsModel:
+        """The full volts-volts model (python-control, exact FRF) at ``values``."""
+        params = self.parameter_set(values)
+        return volts_model(self.structure, modes=self.solution(values).volts.structure_modes, parameters=params,
+                           max_hz=self.max_hz)
+
+
+class MaceBasis:
+    """Modes of one base point: reanalysis and modal coordinates about it."""
+
+    def __init__(self, *, family: MaceFamily, solution: MaceSolution):
+        self.family = family
+        self.solution = solution
+        self.physical = family.physical
+        modes: StructureModes = solution.volts.structure_modes
+        keep = modes.modes.frequencies_hz <= family.max_hz
+        self._phi0 = modes.modes.shapes[:, keep]
+        self._mass = modes.model.mass
+
+    def model(self, values: Values, *, frequencies_hz: np.ndarray | None = None,
+              phi_r: np.ndarray | None = None) -> LinearModel:
+        system = self.solution.reanalysis
+        extra = {} if frequencies_hz is None else {"frequencies_hz": frequencies_hz, "phi_r": phi_r}
+        return linear_model(system, self.family.vector(system, values), **extra)
+
+    def modes_of(self, values: Values) -> tuple[np.ndarray, np.ndarray]:
+        fam = self.family
+        modes = compute_modes(fam.deck, structure=fam.structure, preload=fam.preload, max_hz=1.1 * fam.max_hz,
+                              parameters=fam.parameter_set(values))
+        return modes.modes.frequencies_hz, self._phi0.T @ self._mass @ modes.modes.shapes

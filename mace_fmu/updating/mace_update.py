@@ -1,0 +1,285 @@
+"""The MACE update of thesis 4.5: from the pre-update moduli to an updated 1-g model.
+
+Start: the "engineering insight" model, whose moduli follow from Table 4.4 as E_updated /
+(1 + change); the bundled deck holds the updated ones. Data: the measurement-model column of
+Table 4.7 (frequencies and damping ratios, the only measured numbers the thesis prints). Cost:
+the modal cost (eq. 4.2 plus a damping term) on the closed-loop (servoed) volts-volts model, modes
+paired by label and frequency. Candidates: the 13 of section 4.5, judged by the orthogonality and
+strength tests. Sequence: physical parameters, then the gimbal servo delays, then the damping
+ratios, twice.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Callable, Mapping, Sequence
+
+import numpy as np
+
+from mace_fmu.fe.preload import PreloadKind
+from mace_fmu.parameters import DAMPING_PREFIX, ParameterSet, Provenance, deck_fingerprint, now_utc, tool_version
+from mace_fmu.thesis import thesis_data
+from mace_fmu.updating.costs import ModalCost, scalar_cost
+from mace_fmu.updating.data import MeasuredMode
+from mace_fmu.updating.mace_family import MaceFamily
+from mace_fmu.updating.selection import Selection, SelectionRule, select_parameters
+from mace_fmu.updating.sensitivity import CostSensitivities, Progress, cost_sensitivities
+from mace_fmu.updating.solve import Bounds, Stage, UpdateResult, UpdateSettings, update
+
+#: the 13 candidates of section 4.5, numbered as in Figures 4.11 and 4.12
+CANDIDATES = ("E_lexan_end", "E_lexan_center", "E_stainless_steel", "E_aluminium", "E_cable_1", "E_cable_2",
+              "E_cable_3", "E_active_strut_end", "E_active_strut_piezo", "E_active_strut_center",
+              "k_suspension_device_1", "k_suspension_device_2", "k_suspension_device_3")
+#: what the thesis kept (section 4.5): aluminium, stainless steel and the three springs dropped
+THESIS_KEPT = ("E_lexan_end", "E_lexan_center", "E_cable_1", "E_cable_2", "E_cable_3", "E_active_strut_end",
+               "E_active_strut_piezo", "E_active_strut_center")
+#: the active strut's moduli are kept or dropped together (thesis 4.5)
+ACTIVE_STRUT = ("E_active_strut_end", "E_active_strut_piezo", "E_active_strut_center")
+#: delays inside the gimbal servo loops: the only delays closed-loop poles see
+SERVO_DELAYS = ("delay_gimbal_primary_x", "delay_gimbal_primary_z", "delay_gimbal_secondary_x",
+                "delay_gimbal_secondary_z")
+HEAVY_DAMPING = 0.10  #: thesis 5.3: heavily damped means zeta >= 10 %
+HEAVY_WEIGHT = 0.2  #: servo-dominated modes count less in the physical update
+
+
+def pre_update_parameters() -> ParameterSet:
+    """Table 4.4 back-computed: E_before = E_updated / (1 + change)."""
+    rows = thesis_data()["table_4_4"]
+    return ParameterSet({f"E_{name}": row["e"] / (1.0 + row["change_percent"] / 100.0) for name, row in rows.items()})
+
+
+def table_4_4_moduli() -> dict[str, float]:
+    """The updated moduli [Pa] of Table 4.4 by parameter name."""
+    return {f"E_{name}": row["e"] for name, row in thesis_data()["table_4_4"].items()}
+
+
+#: the thesis's update band (4.5): above the low-frequency scatter, below the roll-off of gyros and filters
+UPDATE_BAND_HZ = (0.5, 60.0)
+
+
+def measured_modes(*, heavy_weight: float = HEAVY_WEIGHT,
+                   band_hz: tuple[float, float] | None = UPDATE_BAND_HZ) -> tuple[MeasuredMode, ...]:
+    """Table 4.7's measurement-model column within ``band_hz`` [Hz] (None: all), with the label
+    patterns that pair our poles."""
+    lo, hi = band_hz if band_hz is not None else (0.0, np.inf)
+    return tuple(MeasuredMode(label=r["label"], pattern=r["ours"], frequency_hz=r["mm_hz"], damping=r["mm_zeta"],
+                              weight=1.0 if r["mm_zeta"] < HEAVY_DAMPING else heavy_weight)
+                 for r in thesis_data()["table_4_7"] if lo <= r["mm_hz"] <= hi)
+
+
+def damping_labels(family: MaceFamily) -> tuple[str, ...]:
+    """Mode labels whose damping ratio the data file sets by label and the model has (bending and
+    suspension modes; violin families keep their table)."""
+    table = family.solution(family.base.values).volts.instruments.damping.by_label
+    present = set(family.solution(family.base.values).system.mode_labels)
+    return tuple(label for label in table if label in present)
+
+
+def default_bounds(names: Sequence[str], start: Mapping[str, float]) -> dict[str, Bounds]:
+    """Range and plausible change (eq. 4.18's gamma) by kind, relative to the start value: moduli
+    x0.5-1.5 (10 %), springs x0.2-5 (50 %), delays x0.2-3 (50 %), damping x0.1-4 below 0.95 (100 %),
+    servo gains x0.2-5 (50 %)."""
+    out = {}
+    for n in names:
+        v = start[n]
+        if n.startswith("E_"):
+            out[n] = Bounds(0.5 * v, 1.5 * v, gamma_percent=10.0)
+        elif n.startswith("k_"):
+            out[n] = Bounds(0.2 * v, 5.0 * v, gamma_percent=50.0)
+        elif n.startswith("delay_"):
+            out[n] = Bounds(0.2 * v, 3.0 * v, gamma_percent=50.0)
+        elif n.startswith(DAMPING_PREFIX):
+            out[n] = Bounds(0.1 * v, min(4.0 * v, 0.95), gamma_percent=100.0)
+        else:
+            out[n] = Bounds(min(0.2 * v, 5 * v), max(0.2 * v, 5 * v), gamma_percent=50.0)
+    return out
+
+
+@dataclass(frozen=True)
+class MaceUpdate:
+    """Everything the MACE update produced."""
+
+    family: MaceFamily
+    cost: ModalCost
+    start: ParameterSet
+    selection_sensitivities: CostSensitivities
+    selection: Selection
+    result: UpdateResult
+    parameters: ParameterSet  #: the updated set (start values for the rest), with provenance
+    seconds: Mapping[str, float] = field(default_factory=dict)  #: wall time per stage
+
+
+def run_mace_update(*, start: ParameterSet | None = None, preload: PreloadKind = "large",
+                    settings: UpdateSettings = UpdateSettings(rounds=2), rule: SelectionRule | None = None,
+                    candidates: Sequence[str] = CANDIDATES, deck=None, runner: Callable = map,
+                    progress: Progress | None = None, message: Callable[[str], None] | None = None) -> MaceUpdate:
+    """Selection on the candidates about ``start`` (default: the pre-update moduli), then the update."""
+    seconds: dict[str, float] = {}
+    say = message or (lambda text: None)
+    start = start if start is not None else pre_update_parameters()
+    t0 = time.perf_counter()
+    say("1-g model at the start point")
+    family = MaceFamily(structure="1g", base=start, deck=deck, preload=preload)
+    cost = ModalCost(measured=measured_modes())
+    seconds["start model"] = time.perf_counter() - t0
+
+    t0 = time.perf_counter()
+    say(f"parameter selection: cost sensitivities of {len(candidates)} candidates")
+    values = family.current_values(candidates)
+    base = family.base.updated(values).values
+    perturbed = family.full if settings.perturbation == "full" else family.basis(base).model
+    sens = cost_sensitivities(cost, base_model=family.full(base), perturbed=perturbed, base=base, names=candidates,
+                              relative_step=settings.relative_step, perturbation=settings.perturbation, runner=runner,
+                              progress=progress)
+    rule = rule if rule is not None else SelectionRule(groups=(ACTIVE_STRUT,))
+    selection = select_parameters(sens, rule=rule)
+    seconds["selection"] = time.perf_counter() - t0
+
+    t0 = time.perf_counter()
+    damp = tuple(DAMPING_PREFIX + label for label in damping_labels(family))
+    # stiffness dominates the closed-loop frequencies, damping ratios and servo delays the damping
+    # (thesis 4.3): the stiffness stage sees the frequency errors only
+    frequencies_only = ModalCost(measured=cost.measured, damping_weight=0.0)
+    stages = [Stage("physical", selection.keep, cost=frequencies_only), Stage("delays", SERVO_DELAYS),
+              Stage("damping", damp)]
+    names = [n for s in stages for n in s.parameters]
+    values = {**base, **family.current_values(names)}
+    say(f"update: {', '.join(f'{s.name} ({len(s.parameters)})' for s in stages)}, {settings.rounds} rounds")
+    result = update(family, cost, start=values, stages=stages, bounds=default_bounds(names, values), settings=settings,
+                    runner=runner, progress=progress)
+    seconds["update"] = time.perf_counter() - t0
+    for k, v in result.stage_seconds.items():
+        seconds[f"update: {k}"] = v
+    deck_path = family.deck.path
+    prov = Provenance(created=now_utc(), tool=tool_version(), deck=str(deck_path).rsplit("/", 1)[-1],
+                      deck_sha256=deck_fingerprint(deck_path), structure="1g",
+                      data="thesis Table 4.7, measurement model column (frequencies and damping ratios)",
+                      cost=f"modal (eq. 4.2 + damping term, damping weight {cost.damping_weight}, modes with "
+                           f"zeta >= {HEAVY_DAMPING} weighted {HEAVY_WEIGHT}, {UPDATE_BAND_HZ[0]}-{UPDATE_BAND_HZ[1]} "
+                           "Hz; the physical stage on frequencies only), closed-loop 1-g volts-volts model",
+                      method=f"{settings.method} ({settings.perturbation} perturbations, step {settings.relative_step}), "
+                             f"penalty {'on' if settings.penalty else 'off'}, {settings.rounds} rounds of "
+                             + ", ".join(s.name for s in stages) + f"; {preload} preload",
+                      initial_cost=result.initial_cost, final_cost=result.final_cost)
+    updated = start.updated(result.values, provenance=prov)
+    return MaceUpdate(family=family, cost=cost, start=start, selection_sensitivities=sens, selection=selection,
+                      result=result, parameters=updated, seconds=seconds)
+
+
+@dataclass(frozen=True)
+class ModeRow:
+    """One measured mode: the thesis's FE model, ours before and after the update."""
+
+    label: str
+    measured_hz: float
+    measured_zeta: float
+    thesis_hz: float
+    thesis_zeta: float
+    before_hz: float
+    before_zeta: float
+    before_label: str
+    after_hz: float
+    after_zeta: float
+    after_label: str
+
+    def error(self, hz: float) -> float:
+        return 100.0 * (hz - self.measured_hz) / self.measured_hz
+
+
+def mode_rows(outcome: MaceUpdate) -> list[ModeRow]:
+    """Mode by mode over all of Table 4.7: measured, thesis FE, ours before, ours after (poles paired
+    as in the cost)."""
+    fam, cost = outcome.family, ModalCost(measured=measured_modes(band_hz=None))
+    before = fam.full(outcome.result.start)
+    after = fam.full(outcome.result.values)
+    pb, pa = before.poles(), after.poles()
+    ib, ia = cost.pairs(before), cost.pairs(after)
+    rows = []
+    for r, m, i, j in zip(thesis_data()["table_4_7"], cost.measured, ib, ia):
+        rows.append(ModeRow(m.label, m.frequency_hz, m.damping, r["fe_hz"], r["fe_zeta"], pb[i].frequency_hz,
+                            pb[i].damping, pb[i].label, pa[j].frequency_hz, pa[j].damping, pa[j].label))
+    return rows
+
+
+def is_structural(label: str) -> bool:
+    """Bending modes of the test article (not suspension, violin, gimbal or delay modes)."""
+    return "bending" in label
+
+
+@dataclass(frozen=True)
+class Scores:
+    """The goals of the MACE update in numbers."""
+
+    rms_light_thesis: float  #: RMS frequency error [%] over measured modes with zeta < 10 %, Table 4.7
+    rms_light_before: float
+    rms_light_after: float
+    worst_structural_before: tuple[str, float]  #: (mode, error %) of the lightly damped bending modes
+    worst_structural_after: tuple[str, float]
+
+
+def scores(rows: Sequence[ModeRow]) -> Scores:
+    light = [r for r in rows if r.measured_zeta < HEAVY_DAMPING]
+
+    def rms(values):
+        return float(np.sqrt(np.mean(np.square(values))))
+
+    structural = [r for r in light if is_structural(r.label)]
+
+    def worst(attr):
+        r = max(structural, key=lambda r: abs(r.error(getattr(r, attr))))
+        return f"{r.label} {r.measured_hz:g} Hz", r.error(getattr(r, attr))
+
+    return Scores(rms_light_thesis=rms([r.error(r.thesis_hz) for r in light]),
+                  rms_light_before=rms([r.error(r.before_hz) for r in light]),
+                  rms_light_after=rms([r.error(r.after_hz) for r in light]),
+                  worst_structural_before=worst("before_hz"), worst_structural_after=worst("after_hz"))
+
+
+def format_mode_rows(rows: Sequence[ModeRow]) -> str:
+    """The before/after table, one line per measured mode."""
+    head = (f"{'mode (Table 4.7)':16s} {'meas Hz':>7s} {'zeta':>5s} | {'thesis':>6s} {'err%':>5s} | "
+            f"{'before':>7s} {'err%':>5s} {'zeta':>5s} | {'after':>7s} {'err%':>5s} {'zeta':>5s}  our label (after)")
+    lines = [head, "-" * len(head)]
+    for r in rows:
+        mark = "*" if r.measured_zeta >= HEAVY_DAMPING else " "
+        lines.append(f"{r.label:15s}{mark} {r.measured_hz:7.2f} {r.measured_zeta:5.3f} | {r.thesis_hz:6.2f} "
+                     f"{r.error(r.thesis_hz):5.1f} | {r.before_hz:7.3f} {r.error(r.before_hz):5.1f} "
+                     f"{r.before_zeta:5.3f} | {r.after_hz:7.3f} {r.error(r.after_hz):5.1f} {r.after_zeta:5.3f}  "
+                     f"{r.after_label}")
+    lines.append("* heavily damped (zeta >= 10 %): servo-dominated, weighted "
+                 f"{HEAVY_WEIGHT} in the cost, not in the RMS below")
+    s = scores(rows)
+    lines.append(f"RMS frequency error over the {sum(r.measured_zeta < HEAVY_DAMPING for r in rows)} modes with "
+                 f"zeta < 10 %: thesis {s.rms_light_thesis:.2f} %, ours before {s.rms_light_before:.2f} %, "
+                 f"after {s.rms_light_after:.2f} %")
+    lines.append(f"worst lightly damped bending mode: before {s.worst_structural_before[0]} "
+                 f"{s.worst_structural_before[1]:+.2f} %, after {s.worst_structural_after[0]} "
+                 f"{s.worst_structural_after[1]:+.2f} %")
+    return "\n".join(lines)
+
+
+def format_moduli(outcome: MaceUpdate) -> str:
+    """Our updated moduli next to Table 4.4's, with the changes from the pre-update values."""
+    thesis = table_4_4_moduli()
+    start = outcome.result.start
+    lines = [f"{'parameter':24s} {'start':>11s} {'ours':>11s} {'change%':>8s} | {'Table 4.4':>11s} {'change%':>8s}"]
+    for n in CANDIDATES:
+        if n not in outcome.result.values and n not in thesis:
+            continue
+        s0 = start.get(n, outcome.parameters.values.get(n, np.nan))
+        ours = outcome.result.values.get(n, s0)
+        th = thesis.get(n, np.nan)
+        lines.append(f"{n:24s} {s0:11.4g} {ours:11.4g} {100 * (ours / s0 - 1):8.2f} | {th:11.4g} "
+                     f"{100 * (th / s0 - 1):8.2f}")
+    return "\n".join(lines)
+
+
+def cost_history(outcome: MaceUpdate) -> list[tuple[str, float, float]]:
+    """(stage/round/outer, cost before, predicted cost) per outer iteration."""
+    return [(f"round {it.round + 1} {it.stage} #{it.outer + 1}", it.cost_before, it.cost_predicted)
+            for it in outcome.result.history]
+
+
+def final_cost(outcome: MaceUpdate) -> float:
+    return scalar_cost(outcome.result.final_residual)

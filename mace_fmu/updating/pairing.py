@@ -1,0 +1,40 @@
+"""Which model pole is which measured mode: by label pattern, then by frequency."""
+
+from __future__ import annotations
+
+import fnmatch
+from typing import Sequence
+
+import numpy as np
+from scipy.optimize import linear_sum_assignment
+
+from mace_fmu.iomodel.poles import ClosedLoopPole
+
+#: poles this close to critical damping are real (servo and speed-loop lags), no vibration mode
+REAL_POLE_DAMPING = 0.999
+_NO_MATCH = 1e6  # assignment cost of a pole whose label does not match: taken only when nothing else can be
+
+
+def pair_poles(patterns: Sequence[tuple[str, float]], poles: Sequence[ClosedLoopPole]) -> list[int | None]:
+    """For each (label pattern, frequency [Hz]), the index of its pole, or None when no pole matches.
+
+    A pole can be a measured mode's when its label matches the pattern ("a|b": either) and it is
+    no real pole; among those, one pole per mode is chosen so that the sum of squared relative
+    frequency differences is least (an optimal assignment, not the nearest pole mode by mode:
+    a greedy choice swaps partners of closely spaced modes, such as the violin families, at the
+    slightest shift, and makes a cost built on the pairing jump).
+    """
+    if not patterns:
+        return []
+    cost = np.full((len(patterns), len(poles)), _NO_MATCH)
+    for i, (pattern, hz) in enumerate(patterns):
+        alternatives = pattern.split("|")
+        for j, p in enumerate(poles):
+            if p.damping < REAL_POLE_DAMPING and any(fnmatch.fnmatchcase(p.label, pat) for pat in alternatives):
+                cost[i, j] = ((p.frequency_hz - hz) / hz) ** 2
+    rows, cols = linear_sum_assignment(cost)
+    out: list[int | None] = [None] * len(patterns)
+    for i, j in zip(rows, cols):
+        if cost[i, j] < _NO_MATCH:
+            out[i] = int(j)
+    return out

@@ -1,0 +1,238 @@
+"""The update: stages of parameters, each an outer loop around scipy.optimize.least_squares.
+
+Parameters are moved in relative terms, x_i = p_i / p_i,start - 1. The cost vector is augmented
+with a penalty on the changes from the start (thesis eq. 4.18), j~ = [j; W x], W diagonal, with
+the thesis's own reading of its weighting: a change of gamma_i percent in parameter i costs 1 %
+of the stage's initial cost j0^T j0, W_ii = sqrt(0.01 j0^T j0) / (gamma_i / 100). gamma_i is the
+change one would call plausible (``Bounds.gamma_percent``: 10 % for a modulus, more for a
+damping ratio).
+
+Inclusion ``cost-sensitivity`` (the thesis's MACE update): about the current point, j0 from a
+full model and Delta J from N perturbed models (``perturbation``: full re-solves or reanalysis),
+then least squares on the linearised cost j0 + Delta J dx; the sensitivities are recomputed about
+the new point until no parameter moves by more than ``tolerance`` (the thesis's outer loop).
+The other inclusions give least squares the model itself (finite-difference Jacobian with step
+``relative_step``), about a base point that is moved the same way until converged. The outer
+loop always moves on to the new point, as the thesis's does (a time-domain cost can be worse at
+a point nearer the truth), and each stage ends at the best point it visited (augmented cost of
+the full model).
+Stages run in order and the whole sequence ``rounds`` times (thesis 4.5: physical parameters,
+then delays, then damping, repeated).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Callable, Literal, Mapping, Sequence
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from mace_fmu.errors import MaceError
+from mace_fmu.updating.costs import Cost, scalar_cost
+from mace_fmu.updating.inclusion import ModelFamily, evaluator
+from mace_fmu.updating.sensitivity import CostSensitivities, Progress, cost_sensitivities
+
+Method = Literal["cost-sensitivity", "full", "reanalysis", "modal-sensitivity"]
+
+
+@dataclass(frozen=True)
+class Bounds:
+    """Allowed range [SI] of one update parameter, and its plausible change for the penalty."""
+
+    lower: float
+    upper: float
+    gamma_percent: float = 10.0  #: a change this large costs 1 % of the initial cost (eq. 4.18)
+
+
+@dataclass(frozen=True)
+class Stage:
+    """One step of the sequence: which parameters move together, against which cost.
+
+    ``cost`` (default: the update's cost) lets a stage see only what its parameters can fix,
+    e.g. frequencies for stiffnesses (thesis 4.3: stiffness and damping updated separately).
+    """
+
+    name: str
+    parameters: tuple[str, ...]
+    cost: Cost | None = None
+
+
+@dataclass(frozen=True)
+class UpdateSettings:
+    """How the update runs (see the module docstring)."""
+
+    method: Method = "cost-sensitivity"
+    perturbation: Literal["full", "reanalysis"] = "reanalysis"  #: perturbed models of the cost-sensitivity method
+    relative_step: float = 1e-2  #: finite-difference step, relative to each parameter
+    penalty: bool = True  #: augment the cost with eq. 4.18's penalty
+    tolerance: float = 1e-3  #: largest relative parameter change that ends the outer loop
+    max_outer: int = 6
+    rounds: int = 1  #: repeats of the stage sequence (fewer when a round moves nothing)
+    loss: str = "linear"  #: least_squares loss ("soft_l1", "huber", "cauchy", "arctan": outliers count less)
+    loss_scale: float = 1.0  #: residual size beyond which the loss treats an entry as an outlier (f_scale)
+
+
+@dataclass(frozen=True)
+class Iteration:
+    """One outer iteration of one stage."""
+
+    stage: str
+    round: int
+    outer: int
+    cost_before: float  #: j^T j of the stage's cost, full model, at the base point
+    cost_predicted: float  #: what the linearised / included model predicted for the new point
+    cost_after: float  #: j^T j of the full model at the new point
+    improved: bool  #: the new point is the best of the stage so far (augmented cost, eq. 4.18)
+    values: Mapping[str, float]  #: the new point (the stage's parameters)
+    largest_change: float  #: max |relative change| from the base point
+    seconds: float
+    sensitivities: CostSensitivities | None = None
+
+
+@dataclass(frozen=True)
+class UpdateResult:
+    """Where the update ended and how it got there."""
+
+    start: Mapping[str, float]
+    values: Mapping[str, float]  #: every parameter the update touched, final
+    initial_cost: float  #: j^T j of the full model at the start
+    final_cost: float  #: j^T j of the full model at the end
+    initial_residual: np.ndarray
+    final_residual: np.ndarray
+    history: tuple[Iteration, ...]
+    settings: UpdateSettings
+    seconds: float
+    stage_seconds: Mapping[str, float] = field(default_factory=dict)
+
+    @property
+    def reduction(self) -> float:
+        """Fraction of the initial cost removed (0.25: 25 % lower)."""
+        return 1.0 - self.final_cost / self.initial_cost if self.initial_cost > 0 else 0.0
+
+
+def _check(names: Sequence[str], start: Mapping[str, float], bounds: Mapping[str, Bounds]) -> None:
+    for n in names:
+        if n not in start:
+            raise MaceError(f"update parameter {n!r} has no start value; known: {', '.join(sorted(start))}")
+        if n not in bounds:
+            raise MaceError(f"update parameter {n!r} has no bounds")
+        b, v = bounds[n], start[n]
+        if not (math.isfinite(v) and v != 0.0):
+            raise MaceError(f"update parameter {n!r}: start value must be finite and nonzero (changes are relative), "
+                            f"got {v}")
+        if not b.lower < b.upper:
+            raise MaceError(f"update parameter {n!r}: lower bound {b.lower} must be below upper bound {b.upper}")
+        if not b.lower < v < b.upper:
+            raise MaceError(f"update parameter {n!r}: bounds [{b.lower:g}, {b.upper:g}] exclude its start value {v:g}")
+
+
+def update(family: ModelFamily, cost: Cost, *, start: Mapping[str, float], stages: Sequence[Stage],
+           bounds: Mapping[str, Bounds], settings: UpdateSettings = UpdateSettings(), runner: Callable = map,
+           progress: Progress | None = None) -> UpdateResult:
+    """Update ``start`` (every parameter value the family needs) stage by stage to lower ``cost``."""
+    t_start = time.perf_counter()
+    names_all = sorted({n for s in stages for n in s.parameters})
+    _check(names_all, start, bounds)
+    if settings.method not in ("cost-sensitivity", "full", "reanalysis", "modal-sensitivity"):
+        raise MaceError(f"method must be cost-sensitivity, full, reanalysis or modal-sensitivity, got {settings.method!r}")
+    model = family.full(start)
+    j_start = cost.residual(model)
+    initial = scalar_cost(j_start)
+    values = dict(start)
+    history: list[Iteration] = []
+    stage_seconds: dict[str, float] = {}
+    for rnd in range(settings.rounds):
+        before = dict(values)
+        for stage in stages:
+            t_stage = time.perf_counter()
+            values, model = _run_stage(family, stage.cost or cost, stage, rnd, values, model, start, bounds,
+                                       settings, history, runner, progress)
+            stage_seconds[stage.name] = stage_seconds.get(stage.name, 0.0) + time.perf_counter() - t_stage
+        if max(abs(values[n] / before[n] - 1.0) for n in names_all) < settings.tolerance:
+            break  # a whole round moved nothing: the sequence has converged
+    touched = {n: values[n] for n in names_all}
+    return UpdateResult(start=dict(start), values=touched, initial_cost=initial,
+                        final_cost=scalar_cost(cost.residual(model)), initial_residual=j_start,
+                        final_residual=cost.residual(model), history=tuple(history), settings=settings,
+                        seconds=time.perf_counter() - t_start, stage_seconds=stage_seconds)
+
+
+def _run_stage(family, cost, stage, rnd, values, model, start, bounds, settings, history, runner, progress):
+    """The outer loop of one stage from ``values`` (``model``: the full model there); returns the new
+    values and the full model at them."""
+    names = list(stage.parameters)
+    s = np.array([start[n] for n in names])  # relative changes are measured from the update's start
+    lo = np.array([bounds[n].lower for n in names]) / s - 1.0
+    hi = np.array([bounds[n].upper for n in names]) / s - 1.0
+    lo, hi = np.minimum(lo, hi), np.maximum(lo, hi)  # a negative start value flips the interval
+    j_base = cost.residual(model)
+    gamma = np.array([bounds[n].gamma_percent for n in names]) / 100.0
+    w = np.sqrt(0.01 * scalar_cost(j_base)) / gamma if settings.penalty else np.zeros(len(names))
+    best = (_total(j_base, w, np.array([values[n] for n in names]) / s - 1.0, settings), values, model)
+
+    def point(x: np.ndarray) -> dict[str, float]:
+        return {**values, **{n: float(v) for n, v in zip(names, s * (1.0 + x))}}
+
+    for outer in range(settings.max_outer):
+        t0 = time.perf_counter()
+        x_base = np.array([values[n] for n in names]) / s - 1.0
+        if settings.method == "cost-sensitivity":
+            perturbed = family.full if settings.perturbation == "full" else family.basis(values).model
+            sens = cost_sensitivities(cost, base_model=model, perturbed=perturbed, base=values,
+                                      names=names, relative_step=settings.relative_step,
+                                      perturbation=settings.perturbation, runner=runner, progress=progress)
+            # d x_base-relative = (1 + x) / (1 + x_base) - 1: the sensitivities are per unit change of the base value
+            scale = 1.0 / (1.0 + x_base)
+
+            def fun(x):
+                j = sens.linearised((x - x_base) * scale)
+                return np.concatenate([j, w * x])
+
+            jac_j = sens.matrix * scale[None, :]
+            jac = np.vstack([jac_j, np.diag(w)])
+            sol = least_squares(fun, x_base, jac=lambda x: jac, bounds=(lo, hi), loss=settings.loss,
+                                f_scale=settings.loss_scale, x_scale=1.0)
+            predicted = scalar_cost(sens.linearised((sol.x - x_base) * scale))
+        else:
+            model_at = evaluator(family, settings.method, values, names, relative_step=settings.relative_step,
+                                 runner=runner)
+            sens = None
+            calls = [0]
+
+            def fun(x):
+                calls[0] += 1
+                if progress is not None:
+                    progress(f"{stage.name}: least squares on the {settings.method} model", calls[0], 0)
+                return np.concatenate([cost.residual(model_at(point(x))), w * x])
+
+            sol = least_squares(fun, np.clip(x_base, lo, hi), bounds=(lo, hi), loss=settings.loss,
+                                f_scale=settings.loss_scale, diff_step=settings.relative_step, x_scale="jac")
+            predicted = scalar_cost(sol.fun[:-len(names)])
+        new = point(sol.x)
+        new_model = family.full(new)
+        j_new = cost.residual(new_model)
+        change = float(np.max(np.abs((1.0 + sol.x) / (1.0 + x_base) - 1.0)))
+        total = _total(j_new, w, sol.x, settings)
+        history.append(Iteration(stage=stage.name, round=rnd, outer=outer, cost_before=scalar_cost(j_base),
+                                 cost_predicted=predicted, cost_after=scalar_cost(j_new), improved=total < best[0],
+                                 values={n: new[n] for n in names}, largest_change=change,
+                                 seconds=time.perf_counter() - t0, sensitivities=sens))
+        values, model, j_base = new, new_model, j_new
+        if total < best[0]:
+            best = (total, values, model)
+        if change < settings.tolerance or settings.method == "full":
+            break
+    return best[1], best[2]
+
+
+def _total(j: np.ndarray, w: np.ndarray, x: np.ndarray, settings: UpdateSettings) -> float:
+    """What least_squares minimises: the loss summed over the augmented cost [j; W x] (eq. 4.18)."""
+    c = settings.loss_scale
+    z = (np.concatenate([j, w * x]) / c) ** 2
+    rho = {"linear": lambda z: z, "soft_l1": lambda z: 2.0 * (np.sqrt(1.0 + z) - 1.0),
+           "huber": lambda z: np.where(z <= 1.0, z, 2.0 * np.sqrt(z) - 1.0), "cauchy": np.log1p,
+           "arctan": np.arctan}[settings.loss]
+    return float(c**2 * np.sum(rho(z)))
