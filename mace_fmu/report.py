@@ -3,16 +3,14 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Callable
+from typing import Callable, Mapping
 
-import matplotlib
+import numpy as np
+from matplotlib.figure import Figure  # no pyplot: the caller's backend and figures stay untouched
 
-matplotlib.use("Agg")  # files only: no display on CI or servers
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from mace_fmu.deck.cards import Deck  # noqa: E402
-from mace_fmu.iomodel.volts import VoltsModel, volts_model  # noqa: E402
+from mace_fmu.atomic import atomic_path
+from mace_fmu.deck.cards import Deck
+from mace_fmu.iomodel.volts import VoltsModel, volts_model
 
 # Disturbance (secondary gimbal) to performance (payload gyro): thesis Figs. 4.15/5.1 and 4.16/5.2
 CHANNELS = (
@@ -42,21 +40,27 @@ def bode_report(deck: Deck | None = None, *, out_dir: str | Path = "report",
         responses[kind] = models[kind].frequency_response(f)  # all channels at once, then indexed
     paths = []
     for u, y, title in CHANNELS:
-        fig, (ax_m, ax_p) = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
-        for kind, style in (("1g", "-"), ("0g", "--")):
-            h = channel_response(models[kind], responses[kind], u, y)
-            ax_m.loglog(f, np.abs(h), style, label=f"{kind} model")
-            ax_p.semilogx(f, np.degrees(np.unwrap(np.angle(h))), style)
-        ax_m.set_ylabel("magnitude [V/V]")
-        ax_m.set_title(title, fontsize=10)
-        ax_m.legend()
-        ax_m.grid(True, which="both", alpha=0.3)
-        ax_p.set_ylabel("phase [deg]")
-        ax_p.set_xlabel("frequency [Hz]")
-        ax_p.grid(True, which="both", alpha=0.3)
-        fig.tight_layout()
-        path = out / f"bode_{u}_to_{y}.png"
-        fig.savefig(path, dpi=110)
-        plt.close(fig)
-        paths.append(path)
+        curves = {f"{kind} model": channel_response(models[kind], responses[kind], u, y) for kind in ("1g", "0g")}
+        paths.append(plot_bode(f, curves, title=title, path=out / f"bode_{u}_to_{y}.png"))
     return paths
+
+
+def plot_bode(frequencies_hz: np.ndarray, curves: Mapping[str, np.ndarray], *, title: str, path: str | Path,
+              styles: tuple[str, ...] = ("-", "--", ":", "-.")) -> Path:
+    """Magnitude [V/V] and phase [deg] of several complex responses over ``frequencies_hz`` [Hz], as a PNG."""
+    fig = Figure(figsize=(8, 6))
+    ax_m, ax_p = fig.subplots(2, 1, sharex=True)
+    for (label, h), style in zip(curves.items(), styles * len(curves)):
+        ax_m.loglog(frequencies_hz, np.abs(h), style, label=label)
+        ax_p.semilogx(frequencies_hz, np.degrees(np.unwrap(np.angle(h))), style)
+    ax_m.set_ylabel("magnitude [V/V]")
+    ax_m.set_title(title, fontsize=10)
+    ax_m.legend()
+    ax_m.grid(True, which="both", alpha=0.3)
+    ax_p.set_ylabel("phase [deg]")
+    ax_p.set_xlabel("frequency [Hz]")
+    ax_p.grid(True, which="both", alpha=0.3)
+    fig.tight_layout()
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=110, format="png")
+    return Path(path)

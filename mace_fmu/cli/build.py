@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from mace_fmu.cli.common import deck_option, progress
+from mace_fmu.cli.common import deck_option, parameters, parameters_option, progress
 from mace_fmu.deck.reader import read_deck
 from mace_fmu.pipeline import compute_modes
 
@@ -17,14 +17,17 @@ def cmd_build(args: argparse.Namespace) -> int:
                                  table_5_1_0g, table_5_1_1g)
 
     deck = read_deck(args.deck)
+    params = parameters(args)
+    if params is not None:
+        progress(f"parameter set {args.parameters} ({len(params)} values)")
     progress("0-g modes (suspension removed, linear)")
     # the modes the FMUs are built from: the same cut-off as `mace-fmu export`, whatever the deck's EIGRL says
-    m0 = compute_modes(deck, structure="0g", max_hz=DEFAULT_MAX_HZ)
+    m0 = compute_modes(deck, structure="0g", max_hz=DEFAULT_MAX_HZ, parameters=params)
     results = {}
     for kind in ("large", "linear"):
         progress(f"1-g modes ({kind} gravity preload)")
         results[kind] = compute_modes(deck, structure="1g", preload=kind, max_hz=DEFAULT_MAX_HZ,
-                                      progress=progress if kind == "large" else None)
+                                      progress=progress if kind == "large" else None, parameters=params)
     print(format_rows(table_5_1_0g(m0), title="Table 5.1, 0-g column (flexible modes)"))
     print()
     print(format_side_by_side({kind: table_5_1_1g(m1, m0) for kind, m1 in results.items()},
@@ -34,7 +37,7 @@ def cmd_build(args: argparse.Namespace) -> int:
     print()
     for kind, modes in (("1g", results["large"]), ("0g", m0)):
         progress(f"{kind} volts-volts model and FMU")
-        path = export_fmu(volts_model(kind, modes=modes), out_dir=args.out)
+        path = export_fmu(volts_model(kind, modes=modes, parameters=params), out_dir=args.out)
         print(f"wrote {path}")
     print()
     print("1-g modes below 25 Hz (large-displacement preload | linear preload)")
@@ -50,5 +53,6 @@ def cmd_build(args: argparse.Namespace) -> int:
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("build", help="the main job: modes next to the thesis tables, and both FMUs")
     deck_option(p)
+    parameters_option(p)
     p.add_argument("-o", "--out", default="fmus", help="where to write MACE_1g.fmu and MACE_0g.fmu (default ./fmus)")
     p.set_defaults(func=cmd_build)

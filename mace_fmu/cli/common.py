@@ -28,6 +28,7 @@ def model_options(p: argparse.ArgumentParser, *, motion: bool = True) -> None:
     p.add_argument("--no-delays", action="store_true", help="leave out the actuator and gyro time delays")
     p.add_argument("--pade-order", type=int, default=3, help="order of the Pade delay approximations (default 3)")
     p.add_argument("--preload", choices=["large", "linear"], default="large", help="1-g gravity preload")
+    parameters_option(p)
     if motion:
         p.add_argument("--motion-grids", default=None, metavar="all|ID,ID,...",
                        help="also output these grids' translations [m] and rotations [rad] (for animation)")
@@ -43,13 +44,26 @@ def motion_grids(text: str | None):
         raise MaceError(f"--motion-grids takes 'all' or comma-separated grid IDs, got {text!r}") from None
 
 
+def parameters_option(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--parameters", metavar="FILE",
+                   help="parameter set (TOML, e.g. from mace-fmu update) replacing the deck's and data file's values")
+
+
+def parameters(args: argparse.Namespace):
+    """The --parameters file as a ParameterSet (None without the option)."""
+    from mace_fmu.parameters import ParameterSet
+
+    path = getattr(args, "parameters", None)
+    return ParameterSet.read(path) if path else None
+
+
 def volts(args: argparse.Namespace, **overrides):
     """The volts-volts model the command line asks for (model_options), errors as one message."""
     from mace_fmu.iomodel.volts import volts_model
 
     options = dict(servos=not args.no_servos, bessel=args.bessel, delays=not args.no_delays,
                    pade_order=args.pade_order, max_hz=args.max_hz, preload=args.preload, deck=read_deck(args.deck),
-                   motion_grids=motion_grids(getattr(args, "motion_grids", None)))
+                   motion_grids=motion_grids(getattr(args, "motion_grids", None)), parameters=parameters(args))
     try:
         return volts_model(args.structure, **{**options, **overrides})
     except ValueError as exc:  # a bad option value: one message, not a traceback

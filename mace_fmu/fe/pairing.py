@@ -37,3 +37,23 @@ def pair_by_mac(reference: Modes, reference_model: FEModel, other: Modes, indice
         taken.add(j)
         pairs[i] = (j, float(mac[i, j]))
     return [(i, *pairs[i]) for i in indices]
+
+
+def carry_labels(reference: Modes, reference_model: FEModel, other: Modes) -> Modes:
+    """``other`` with each mode labelled as the reference mode it continues (one-to-one, largest total MAC).
+
+    Energy-based labels are recomputed from scratch for every solution, so a small change of a
+    parameter can move a label ("5th Z bending") to another mode when two modes of a family swap
+    character; everything keyed by label (damping ratios, pairing with measurements) would jump
+    with it. Carried labels follow the physical mode. Modes with no partner keep their own label.
+    """
+    import dataclasses
+
+    from scipy.optimize import linear_sum_assignment
+
+    mac = mac_matrix(reference, reference_model, other)
+    rows, cols = linear_sum_assignment(-mac)
+    labels = list(other.labels)
+    for i, j in zip(rows, cols):
+        labels[j] = reference.labels[i]
+    return dataclasses.replace(other, labels=tuple(labels))

@@ -261,7 +261,9 @@ def apply_parameters(instruments: Instruments, parameters: ParameterSet | None, 
     """Instruments with the set's delays [s], servo gains and damping ratios by mode label replaced.
 
     Names are checked against the instrument file and ``mode_labels``; a MaceError names the
-    entry and what is allowed.
+    entry and what is allowed. A damping ratio whose mode the structure lacks is skipped only when
+    the set was made for the other structure (its provenance says so): a 1-g set carries the
+    damping of suspension and violin modes, which the 0-g structure does not have.
     """
     if parameters is None:
         return instruments
@@ -278,9 +280,13 @@ def apply_parameters(instruments: Instruments, parameters: ParameterSet | None, 
         table[channel] = value
     gains = {SERVO_GAINS[name]: value for name, value in parameters.of_kind("gain").items()}
     known = set(mode_labels)
+    prov = parameters.provenance
+    other_structure = prov is not None and prov.structure not in ("", structure)
     damping = {}
     for name, value in parameters.of_kind("damping").items():
         label = name.removeprefix(DAMPING_PREFIX)
+        if label not in known and other_structure:
+            continue
         if label not in known:
             raise MaceError(f"parameter {name!r}: no mode labelled {label!r} in the {structure} structure; labels: "
                             f"{', '.join(sorted(known))}")

@@ -105,3 +105,9 @@ class TimeHistory:
     @property
     def sample_time_s(self) -> float:
         return float(self.times_s[1] - self.times_s[0])
+
+    def head(self, samples: int) -> TimeHistory:
+        """The first ``samples`` samples of the record."""
+        return TimeHistory(self.times_s[:samples], {k: v[:samples] for k, v in self.inputs.items()},
+                           {k: v[:samples] for k, v in self.outputs.items()},
+                           source=f"{self.source} (first {samples} samples)")

@@ -3,11 +3,14 @@
 Parameter names are those of :mod:`mace_fmu.parameters`. The FE solve depends only on the
 moduli and springs, so it is cached by their values; damping ratios, delays and servo gains
 then enter exactly through the blocks of a :class:`~mace_fmu.iomodel.parametric.ParametricSystem`
-(the FMUs' own rebuild), so a change of damping costs a block rebuild, not an FE solve.
+(the FMUs' own rebuild), so a change of damping costs a block rebuild, not an FE solve. Every
+solve after the first carries the first one's mode labels by MAC, so damping ratios keyed by
+label stay with their modes (a recomputed label can jump to another mode: the cost would jump).
 """
 
 from __future__ import annotations
 
+import dataclasses
 from collections import OrderedDict
 from typing import Mapping, Sequence
 
@@ -16,6 +19,7 @@ import numpy as np
 from mace_fmu.deck.cards import Deck
 from mace_fmu.deck.reader import read_deck
 from mace_fmu.errors import MaceError
+from mace_fmu.fe.pairing import carry_labels
 from mace_fmu.fe.preload import PreloadKind
 from mace_fmu.iomodel.parametric import ParametricSystem
 from mace_fmu.iomodel.parametric_data import parametric_arrays
@@ -64,8 +68,10 @@ class MaceFamily:
         self.max_hz = max_hz
         self._cache: OrderedDict[tuple, MaceSolution] = OrderedDict()
         self._deck_values = deck_values(self.deck)  # the cache keys on every modulus and spring, given or not
+        self._reference: MaceSolution | None = None  # the base point's solution: labels are carried from it
         self.solves = 0  #: FE solves done (for benchmarks)
         nominal = self.solution(self.base.values)
+        self._reference = nominal
         # moduli and springs of the analysed structure (0-g has no suspension springs)
         self.physical = tuple(deck_values(nominal.volts.structure_modes.structure.deck))
 
@@ -84,6 +90,9 @@ class MaceFamily:
             return self._cache[key]
         modes = compute_modes(self.deck, structure=self.structure, preload=self.preload, max_hz=self.max_hz,
                               parameters=params)
+        if self._reference is not None:  # labels (and the damping ratios keyed by them) follow the mode
+            ref = self._reference.volts.structure_modes
+            modes = dataclasses.replace(modes, modes=carry_labels(ref.modes, ref.model, modes.modes))
         volts = volts_model(self.structure, modes=modes, parameters=self._non_modal(params), max_hz=self.max_hz)
         solution = MaceSolution(volts)
         self.solves += 1

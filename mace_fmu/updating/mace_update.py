@@ -202,6 +202,41 @@ def mode_rows(outcome: MaceUpdate) -> list[ModeRow]:
     return rows
 
 
+@dataclass(frozen=True)
+class PreUpdateRow:
+    """One row of Table 4.1 (after engineering insight, before automated updating) beside our pre-update model."""
+
+    label: str
+    measured_hz: float
+    thesis_hz: float  #: Table 4.1's finite element column
+    ours_hz: float
+    ours_label: str
+
+
+def table_4_1_rows(family: MaceFamily, values: Mapping[str, float]) -> list[PreUpdateRow]:
+    """Our closed-loop model at ``values`` paired with Table 4.1's rows (label pattern, then frequency)."""
+    from mace_fmu.updating.pairing import pair_poles
+
+    rows = thesis_data()["table_4_1"]
+    poles = family.full(values).poles()
+    pairs = pair_poles([(r["ours"], r["fe_hz"]) for r in rows], poles)
+    return [PreUpdateRow(r["label"], r["mm_hz"], r["fe_hz"], poles[i].frequency_hz if i is not None else np.nan,
+                         poles[i].label if i is not None else "(none)") for r, i in zip(rows, pairs)]
+
+
+def format_table_4_1(rows: Sequence[PreUpdateRow]) -> str:
+    """Table 4.1 beside our pre-update model: measured, thesis FE, ours, and the gap to the thesis."""
+    head = f"{'mode (Table 4.1)':16s} {'meas Hz':>7s} | {'thesis FE':>9s} {'err%':>5s} | {'ours':>7s} {'err%':>5s} " \
+           f"{'vs FE%':>6s}  our label"
+    lines = [head, "-" * len(head)]
+    for r in rows:
+        lines.append(f"{r.label:16s} {r.measured_hz:7.2f} | {r.thesis_hz:9.2f} "
+                     f"{100 * (r.thesis_hz / r.measured_hz - 1):5.1f} | {r.ours_hz:7.3f} "
+                     f"{100 * (r.ours_hz / r.measured_hz - 1):5.1f} {100 * (r.ours_hz / r.thesis_hz - 1):6.1f}  "
+                     f"{r.ours_label}")
+    return "\n".join(lines)
+
+
 def is_structural(label: str) -> bool:
     """Bending modes of the test article (not suspension, violin, gimbal or delay modes)."""
     return "bending" in label

@@ -13,9 +13,9 @@ then least squares on the linearised cost j0 + Delta J dx; the sensitivities are
 the new point until no parameter moves by more than ``tolerance`` (the thesis's outer loop).
 The other inclusions give least squares the model itself (finite-difference Jacobian with step
 ``relative_step``), about a base point that is moved the same way until converged. The outer
-loop always moves on to the new point, as the thesis's does (a time-domain cost can be worse at
-a point nearer the truth), and each stage ends at the best point it visited (augmented cost of
-the full model).
+loop is a trust region: it moves to the new point when the full model there costs less
+(augmented cost), else it stays and halves the largest step it allows, reusing the
+linearisation; a label flip or a mispairing far from the base cannot drag the update away.
 Stages run in order and the whole sequence ``rounds`` times (thesis 4.5: physical parameters,
 then delays, then damping, repeated).
 """
@@ -176,56 +176,74 @@ def _run_stage(family, cost, stage, rnd, values, model, start, bounds, settings,
     def point(x: np.ndarray) -> dict[str, float]:
         return {**values, **{n: float(v) for n, v in zip(names, s * (1.0 + x))}}
 
+    radius = np.inf  # trust region: largest step in x from the base point
+    linearisation = None  # (x_base, fun builder) kept while the base point does not move
     for outer in range(settings.max_outer):
         t0 = time.perf_counter()
         x_base = np.array([values[n] for n in names]) / s - 1.0
-        if settings.method == "cost-sensitivity":
-            perturbed = family.full if settings.perturbation == "full" else family.basis(values).model
-            sens = cost_sensitivities(cost, base_model=model, perturbed=perturbed, base=values,
-                                      names=names, relative_step=settings.relative_step,
-                                      perturbation=settings.perturbation, runner=runner, progress=progress)
-            # d x_base-relative = (1 + x) / (1 + x_base) - 1: the sensitivities are per unit change of the base value
-            scale = 1.0 / (1.0 + x_base)
-
-            def fun(x):
-                j = sens.linearised((x - x_base) * scale)
-                return np.concatenate([j, w * x])
-
-            jac_j = sens.matrix * scale[None, :]
-            jac = np.vstack([jac_j, np.diag(w)])
-            sol = least_squares(fun, x_base, jac=lambda x: jac, bounds=(lo, hi), loss=settings.loss,
-                                f_scale=settings.loss_scale, x_scale=1.0)
-            predicted = scalar_cost(sens.linearised((sol.x - x_base) * scale))
-        else:
-            model_at = evaluator(family, settings.method, values, names, relative_step=settings.relative_step,
-                                 runner=runner)
-            sens = None
-            calls = [0]
-
-            def fun(x):
-                calls[0] += 1
-                if progress is not None:
-                    progress(f"{stage.name}: least squares on the {settings.method} model", calls[0], 0)
-                return np.concatenate([cost.residual(model_at(point(x))), w * x])
-
-            sol = least_squares(fun, np.clip(x_base, lo, hi), bounds=(lo, hi), loss=settings.loss,
-                                f_scale=settings.loss_scale, diff_step=settings.relative_step, x_scale="jac")
-            predicted = scalar_cost(sol.fun[:-len(names)])
+        lo_t, hi_t = np.maximum(lo, x_base - radius), np.minimum(hi, x_base + radius)
+        if linearisation is None:
+            linearisation = _linearise(family, cost, stage, settings, values, model, names, x_base, w, point,
+                                       runner, progress)
+        sens, solve = linearisation
+        sol, predicted = solve(lo_t, hi_t)
         new = point(sol.x)
         new_model = family.full(new)
         j_new = cost.residual(new_model)
         change = float(np.max(np.abs((1.0 + sol.x) / (1.0 + x_base) - 1.0)))
         total = _total(j_new, w, sol.x, settings)
+        improved = total < best[0]
         history.append(Iteration(stage=stage.name, round=rnd, outer=outer, cost_before=scalar_cost(j_base),
-                                 cost_predicted=predicted, cost_after=scalar_cost(j_new), improved=total < best[0],
+                                 cost_predicted=predicted, cost_after=scalar_cost(j_new), improved=improved,
                                  values={n: new[n] for n in names}, largest_change=change,
                                  seconds=time.perf_counter() - t0, sensitivities=sens))
-        values, model, j_base = new, new_model, j_new
-        if total < best[0]:
-            best = (total, values, model)
         if change < settings.tolerance or settings.method == "full":
+            if improved:
+                best = (total, new, new_model)
             break
+        if improved:
+            best = (total, new, new_model)
+            values, model, j_base = new, new_model, j_new
+            linearisation = None
+        else:  # the linearisation promised more than the model gives: shorter steps from the same point
+            radius = 0.5 * float(np.max(np.abs(sol.x - x_base)))
     return best[1], best[2]
+
+
+def _linearise(family, cost, stage, settings, values, model, names, x_base, w, point, runner, progress):
+    """(sensitivities or None, solve(lo, hi) -> (least-squares solution, predicted j^T j)) about ``values``."""
+    if settings.method == "cost-sensitivity":
+        perturbed = family.full if settings.perturbation == "full" else family.basis(values).model
+        sens = cost_sensitivities(cost, base_model=model, perturbed=perturbed, base=values, names=names,
+                                  relative_step=settings.relative_step, perturbation=settings.perturbation,
+                                  runner=runner, progress=progress)
+        scale = 1.0 / (1.0 + x_base)  # the sensitivities are per unit relative change of the base value
+        jac = np.vstack([sens.matrix * scale[None, :], np.diag(w)])
+
+        def fun(x):
+            return np.concatenate([sens.linearised((x - x_base) * scale), w * x])
+
+        def solve(lo, hi):
+            sol = least_squares(fun, np.clip(x_base, lo, hi), jac=lambda x: jac, bounds=(lo, hi), loss=settings.loss,
+                                f_scale=settings.loss_scale, x_scale=1.0)
+            return sol, scalar_cost(sens.linearised((sol.x - x_base) * scale))
+
+        return sens, solve
+    model_at = evaluator(family, settings.method, values, names, relative_step=settings.relative_step, runner=runner)
+    calls = [0]
+
+    def fun(x):
+        calls[0] += 1
+        if progress is not None:
+            progress(f"{stage.name}: least squares on the {settings.method} model", calls[0], 0)
+        return np.concatenate([cost.residual(model_at(point(x))), w * x])
+
+    def solve(lo, hi):
+        sol = least_squares(fun, np.clip(x_base, lo, hi), bounds=(lo, hi), loss=settings.loss,
+                            f_scale=settings.loss_scale, diff_step=settings.relative_step, x_scale="jac")
+        return sol, scalar_cost(sol.fun[:-len(names)])
+
+    return None, solve
 
 
 def _total(j: np.ndarray, w: np.ndarray, x: np.ndarray, settings: UpdateSettings) -> float:
