@@ -10,21 +10,33 @@ from mace_fmu.deck.reader import read_deck
 from mace_fmu.errors import MaceError
 from mace_fmu.pipeline import compute_modes
 
+#: viewer.camera.CAMERA_VIEWS, spelled out so that `mace-fmu --help` does not import meshcat
+CAMERA_CHOICES = ("iso", "x", "y", "z")
+
 
 def _show(animation, args: argparse.Namespace, *, title: str) -> None:
-    """Write the animation to --html and/or serve it on a live meshcat server until Ctrl-C."""
-    from viewer import scene_commands, send_to_visualizer, write_animation_html  # meshcat only here
+    """Write the animation to --html, a still of it to --png, and/or serve it live until Ctrl-C."""
+    import tempfile
+
+    from viewer import scene_commands, send_to_visualizer, write_animation_html, write_still  # meshcat only here
 
     if args.html:
-        size = write_animation_html(animation, args.html, title=title)
+        size = write_animation_html(animation, args.html, title=title, camera=args.camera)
         print(f"wrote {args.html} ({size / 1e6:.1f} MB, {animation.frames.times_s.size} frames)")
+    if args.png:
+        with tempfile.TemporaryDirectory(prefix="mace_fmu_page_") as tmp:
+            page = args.html or Path(tmp) / "page.html"
+            if not args.html:
+                write_animation_html(animation, page, title=title, camera=args.camera)
+            write_still(page, args.png)
+        print(f"wrote {args.png} (still from headless Chromium, {args.camera} view)")
     if args.live:
         import time
 
         import meshcat
 
         visualizer = meshcat.Visualizer()
-        send_to_visualizer(visualizer, scene_commands(animation.scene, animation.frames))
+        send_to_visualizer(visualizer, scene_commands(animation.scene, animation.frames, camera=args.camera))
         print(f"meshcat server at {visualizer.url()} - Ctrl-C to stop", flush=True)
         try:
             while True:
@@ -34,8 +46,14 @@ def _show(animation, args: argparse.Namespace, *, title: str) -> None:
 
 
 def _need_target(args: argparse.Namespace) -> None:
-    if not args.html and not args.live:
-        raise MaceError("say where to show the animation: --html OUT.html, --live, or both")
+    """An output is named, and a still can be taken (before any work is done)."""
+    from viewer import chromium_executable
+
+    if not (args.html or args.png or args.live):
+        raise MaceError("say where to show the animation: --html OUT.html, --png OUT.png, --live, or several")
+    if args.png and chromium_executable() is None:
+        raise MaceError("--png needs headless Chromium, which is not installed (Debian: apt-get install chromium); "
+                        "use --html and open the page in a browser")
 
 
 def cmd_view_response(args: argparse.Namespace) -> int:
@@ -71,11 +89,17 @@ def cmd_view_response(args: argparse.Namespace) -> int:
           f"{args.speed:g} simulated s per s, motion drawn x {animation.scale:.4g}")
     output = args.output or _collocated_output(args.input, run)
     if args.html:
-        png = plot_response(run, output_name=output, path=Path(args.html).with_suffix(".png"),
+        png = plot_response(run, output_name=output, path=signals_plot_path(args.html),
                             title=f"MACE {args.structure}: {args.signal} on {args.input}")
         print(f"wrote {png}")
     _show(animation, args, title=f"MACE {args.structure}: {args.signal} response to {args.input}")
     return 0
+
+
+def signals_plot_path(html: str | Path) -> Path:
+    """Where view response puts its plot of input and output: <page name>_signals.png next to the page."""
+    html = Path(html)
+    return html.with_name(f"{html.stem}_signals.png")
 
 
 def _collocated_output(input_name: str, run) -> str:
@@ -106,6 +130,15 @@ def cmd_view(args: argparse.Namespace) -> int:
     return 0
 
 
+def _output_options(p: argparse.ArgumentParser, *, html: str) -> None:
+    """Where the animation goes and from where it is seen (both view commands)."""
+    p.add_argument("--html", help=html)
+    p.add_argument("--png", help="write a still of the page (1200 x 800) through headless Chromium, if installed")
+    p.add_argument("--camera", choices=CAMERA_CHOICES, default="iso",
+                   help="initial view: iso (3/4 view, default), or along the x, y (from above) or z axis")
+    p.add_argument("--live", action="store_true", help="also serve it on a live meshcat server until Ctrl-C")
+
+
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("view", help="meshcat animation of mode shapes or FMU time responses (standalone HTML)")
     view = p.add_subparsers(dest="what", required=True)
@@ -119,8 +152,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="metres drawn per unit mass-normalised shape (default: largest motion 8%% of the size)")
     p.add_argument("--cycles", type=int, default=1, help="vibration cycles per mode (default 1)")
     p.add_argument("--seconds-per-cycle", type=float, default=1.0, help="playback time of one cycle [s]")
-    p.add_argument("--html", help="write a standalone HTML file (opens in any browser, no server)")
-    p.add_argument("--live", action="store_true", help="also serve it on a live meshcat server until Ctrl-C")
+    _output_options(p, html="write a standalone HTML file (opens in any browser, no server)")
     p.set_defaults(func=cmd_view)
 
     p = view.add_parser("response", help="an FMU's time response to one input, played on the mesh (fmpy)")
@@ -140,7 +172,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="magnification of the motion (default: largest motion 8%% of the size)")
     p.add_argument("--output", help="output plotted next to the input (default: the input's encoder or tachometer)")
     p.add_argument("--fmu", help="an FMU with motion outputs to run (default: export one next to the HTML)")
-    p.add_argument("--html", help="write a standalone HTML file and, next to it, a PNG plot of input and output")
-    p.add_argument("--live", action="store_true", help="also serve it on a live meshcat server until Ctrl-C")
+    _output_options(p, html="write a standalone HTML file and, next to it, <name>_signals.png: input and output "
+                    "over time")
     model_options(p, motion=False)  # the exported FMU carries the motion of every grid
     p.set_defaults(func=cmd_view_response)
