@@ -401,13 +401,16 @@ def test_cli_view_response_writes_page_plot_and_fmu(motion_fmu_0g, tmp_path, cap
                  "--speed", "0.1", "--fmu", str(fmu), "--html", str(out)]) == 0
     printed = capsys.readouterr().out
     assert "201 frames at 50 frames/s" in printed  # 0.4 s at 0.1x: every 2 ms sample is a frame
+    assert f"wrote {tmp_path / 'resp_signals.png'} (rwa_z and tach_z over time)" in printed
     commands = _decoded_commands(out.read_text())
     assert sum(c["type"] == "set_object" for c in commands) > 100
     assert sum(c["type"] == "set_animation" for c in commands) == 1
     plot = np.asarray(Image.open(tmp_path / "resp_signals.png").convert("L"), dtype=float)
     assert plot.std() > 10.0  # axes and curves, not a blank image
-    assert main(["view", "response", "0g", "--input", "no_such_input", "--fmu", str(fmu), "--html", str(out)]) == 2
-    assert "has no input 'no_such_input'; inputs: gimbal_primary_x" in capsys.readouterr().err
+    # the active strut's own sensor is strut 2's strain gauge pair, not the first output (an encoder)
+    assert main(["view", "response", "0g", "--input", "active_strut_z", "--duration", "0.1", "--fmu", str(fmu),
+                 "--html", str(out)]) == 0
+    assert "(active_strut_z and strain_strut2_z over time)" in capsys.readouterr().out
     assert main(["view", "response", "1g", "--input", "rwa_z", "--fmu", str(fmu), "--html", str(out)]) == 2
     assert "is not a MACE 1g model" in capsys.readouterr().err
     assert main(["view", "response", "0g", "--input", "rwa_z", "--duration", "0.1", "--step", "0.003",

@@ -7,6 +7,7 @@ import argparse
 from mace_fmu.cli.common import deck_option, progress
 from mace_fmu.deck.reader import read_deck
 from mace_fmu.pipeline import compute_modes
+from mace_fmu.text import hz_text
 
 
 def cmd_build(args: argparse.Namespace) -> int:
@@ -42,8 +43,8 @@ def cmd_build(args: argparse.Namespace) -> int:
     for i in range(min(len(large), len(linear))):  # side by side by index: the two preloads keep the mode order
         if large.frequencies_hz[i] > 25.0:
             break
-        print(f"{i + 1:3d} {large.frequencies_hz[i]:9.3f}  {large.labels[i]:40s} | "
-              f"{linear.frequencies_hz[i]:9.3f}  {linear.labels[i]}")
+        print(f"{i + 1:3d} {hz_text(large.frequencies_hz[i], decimals=3):>9s}  {large.labels[i]:40s} | "
+              f"{hz_text(linear.frequencies_hz[i], decimals=3):>9s}  {linear.labels[i]}")
     return 0
 
 

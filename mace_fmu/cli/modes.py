@@ -11,6 +11,7 @@ import numpy as np
 from mace_fmu.cli.common import deck_option, progress
 from mace_fmu.deck.reader import read_deck
 from mace_fmu.pipeline import StructureModes, compute_modes
+from mace_fmu.text import hz_text
 
 
 def _modes_json(result: StructureModes) -> dict:
@@ -35,7 +36,7 @@ def _print_modes(result: StructureModes) -> None:
     print(f"{result.structure.kind} modes of {result.structure.deck.path}{pre}")
     print(f"{'mode':>4s} {'frequency Hz':>13s}  label")
     for i, (f, lab) in enumerate(zip(result.modes.frequencies_hz, result.modes.labels)):
-        print(f"{i + 1:4d} {f:13.4f}  {lab}")
+        print(f"{i + 1:4d} {hz_text(f, decimals=4):>13s}  {lab}")
     p = result.mass_properties
     j = np.diag(p.inertia_about_reference_kgm2)
     print(f"mass {p.mass_kg:.4f} kg, centre of mass {np.round(p.center_of_mass_m, 5).tolist()} m, inertia about "

@@ -56,30 +56,70 @@ def _need_target(args: argparse.Namespace) -> None:
                         "use --html and open the page in a browser")
 
 
+def _check_signals(args: argparse.Namespace, deck) -> str:
+    """Check --output (a sensor or a grid motion of this structure) and the run's times; returns the output.
+
+    --input is checked by argparse (its choices). The default output is the sensor collocated
+    with the input. All of this is known before anything is exported or simulated.
+    """
+    from mace_fmu.deck.geometry import grid_positions
+    from mace_fmu.fmu.simulate import communication_times, input_signal
+    from mace_fmu.iomodel.collocation import collocated_sensor
+    from mace_fmu.iomodel.instruments import load_instruments
+    from mace_fmu.iomodel.motion import MOTION_COMPONENTS, parse_motion_output
+    from mace_fmu.structure import build_structure
+
+    input_signal(args.signal, communication_times(duration_s=args.duration, step_s=args.step),
+                 amplitude_v=args.amplitude, chirp_hz=tuple(args.chirp_hz))
+    instruments = load_instruments()
+    if args.output is None:
+        return collocated_sensor(instruments, args.input, grid_positions(deck))
+    sensors = [s.name for s in instruments.sensors]
+    motion = parse_motion_output(args.output)
+    grids = build_structure(deck, kind=args.structure).deck.grids
+    if args.output in sensors or (motion is not None and motion[0] in grids):
+        return args.output
+    raise MaceError(f"--output {args.output!r} is not an output of the {args.structure} model: use a sensor "
+                    f"({', '.join(sensors)}) or grid_<id>_<{'|'.join(MOTION_COMPONENTS)}> for one of its "
+                    f"{len(grids)} grids")
+
+
+def _checked_fmu(path: str, structure: str) -> Path:
+    """--fmu: an existing MACE FMU of this structure with grid motion outputs."""
+    import fmpy
+
+    from mace_fmu.iomodel.motion import parse_motion_output
+
+    fmu = Path(path)
+    if not fmu.is_file():
+        raise MaceError(f"--fmu {fmu}: no such file")
+    md = fmpy.read_model_description(str(fmu))
+    if not (md.description or "").startswith(f"MACE {structure} "):
+        raise MaceError(f"--fmu {fmu} is not a MACE {structure} model (its description: {md.description!r})")
+    if not any(parse_motion_output(v.name) for v in md.modelVariables if v.causality == "output"):
+        raise MaceError(f"--fmu {fmu} has no grid motion outputs; export one with "
+                        f"mace-fmu export {structure} --motion-grids all")
+    return fmu
+
+
 def cmd_view_response(args: argparse.Namespace) -> int:
     from mace_fmu.fmu.export import export_fmu
     from mace_fmu.fmu.simulate import simulate_input_response
     from viewer import animate_response, plot_response
 
     _need_target(args)
-    out_dir = Path(args.html).parent if args.html else Path(".")
+    deck = read_deck(args.deck)
+    output = _check_signals(args, deck)
+    out_dir = Path(args.html or args.png or "page").parent
     if args.fmu:
-        import fmpy
-
-        fmu = Path(args.fmu)
-        if not fmu.exists():
-            raise MaceError(f"--fmu {fmu}: no such file")
-        described = fmpy.read_model_description(str(fmu)).description or ""
-        if not described.startswith(f"MACE {args.structure} "):
-            raise MaceError(f"--fmu {fmu} is not a MACE {args.structure} model (its description: {described!r})")
+        fmu = _checked_fmu(args.fmu, args.structure)
         # only the scene is needed from the FE model: its lowest modes are enough
-        modes = compute_modes(read_deck(args.deck), structure=args.structure, preload=args.preload, max_hz=1.0,
-                              progress=progress)
+        modes = compute_modes(deck, structure=args.structure, preload=args.preload, max_hz=1.0, progress=progress)
     else:
         progress(f"{args.structure} volts-volts model with the motion of every grid")
         model = volts(args, motion_grids="all")
         modes = model.structure_modes
-        fmu = export_fmu(model, out_dir=out_dir, name=f"MACE_{args.structure}_motion")
+        fmu = export_fmu(model, out_dir=out_dir)  # the name `mace-fmu export --motion-grids all` gives it
         print(f"wrote {fmu} (reuse it with --fmu)")
     progress(f"simulating {args.duration} s of {args.signal} on {args.input} through fmpy")
     run = simulate_input_response(fmu, input_name=args.input, signal=args.signal, duration_s=args.duration,
@@ -87,11 +127,10 @@ def cmd_view_response(args: argparse.Namespace) -> int:
     animation = animate_response(modes, run, scale=args.scale, playback_speed=args.speed, fps=args.fps)
     print(f"  {animation.frames.times_s.size} frames at {animation.frames.fps:.3g} frames/s of playback, "
           f"{args.speed:g} simulated s per s, motion drawn x {animation.scale:.4g}")
-    output = args.output or _collocated_output(args.input, run)
     if args.html:
         png = plot_response(run, output_name=output, path=signals_plot_path(args.html),
                             title=f"MACE {args.structure}: {args.signal} on {args.input}")
-        print(f"wrote {png}")
+        print(f"wrote {png} ({args.input} and {output} over time)")
     _show(animation, args, title=f"MACE {args.structure}: {args.signal} response to {args.input}")
     return 0
 
@@ -100,18 +139,6 @@ def signals_plot_path(html: str | Path) -> Path:
     """Where view response puts its plot of input and output: <page name>_signals.png next to the page."""
     html = Path(html)
     return html.with_name(f"{html.stem}_signals.png")
-
-
-def _collocated_output(input_name: str, run) -> str:
-    """The sensor that closes the input's local loop (encoder, tachometer), else the first sensor output."""
-    from mace_fmu.iomodel.instruments import load_instruments
-    from mace_fmu.iomodel.motion import parse_motion_output
-
-    servos = load_instruments().servos
-    partner = {**servos.gimbals, **servos.wheels}.get(input_name)
-    if partner in run.outputs:
-        return partner
-    return next((n for n in run.outputs if parse_motion_output(n) is None), next(iter(run.outputs)))
 
 
 def cmd_view(args: argparse.Namespace) -> int:
@@ -140,6 +167,8 @@ def _output_options(p: argparse.ArgumentParser, *, html: str) -> None:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
+    from mace_fmu.iomodel.instruments import load_instruments  # the signal names for --help (a small TOML file)
+
     p = sub.add_parser("view", help="meshcat animation of mode shapes or FMU time responses (standalone HTML)")
     view = p.add_subparsers(dest="what", required=True)
     p = view.add_parser("modes", help="animate mode shapes (one clip per mode, one after the other)")
@@ -158,7 +187,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = view.add_parser("response", help="an FMU's time response to one input, played on the mesh (fmpy)")
     p.add_argument("structure", choices=["1g", "0g"])
     deck_option(p)
-    p.add_argument("--input", required=True, help="the driven input, e.g. gimbal_secondary_z")
+    instruments = load_instruments()
+    p.add_argument("--input", required=True, choices=[a.name for a in instruments.actuators], metavar="INPUT",
+                   help="the driven input: " + ", ".join(a.name for a in instruments.actuators))
     p.add_argument("--signal", choices=["step", "chirp", "impulse"], default="step",
                    help="step from t = 0, chirp (see --chirp-hz), or a pulse over the first step (default step)")
     p.add_argument("--duration", type=float, default=2.0, help="simulated time [s] (default 2)")
@@ -170,7 +201,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--fps", type=float, default=50.0, help="key frames per second of playback (default 50)")
     p.add_argument("--scale", type=float, default=None,
                    help="magnification of the motion (default: largest motion 8%% of the size)")
-    p.add_argument("--output", help="output plotted next to the input (default: the input's encoder or tachometer)")
+    p.add_argument("--output", help="output plotted next to the input: a sensor (" + ", ".join(
+        s.name for s in instruments.sensors) + ") or grid_<id>_<tx|ty|tz|rx|ry|rz> (default: the sensor "
+                   "collocated with the input: its encoder or tachometer, the active strut's strain gauge)")
     p.add_argument("--fmu", help="an FMU with motion outputs to run (default: export one next to the HTML)")
     _output_options(p, html="write a standalone HTML file and, next to it, <name>_signals.png: input and output "
                     "over time")
