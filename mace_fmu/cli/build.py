@@ -43,7 +43,7 @@ def cmd_build(args: argparse.Namespace) -> int:
     for i in range(min(len(large), len(linear))):  # side by side by index: the two preloads keep the mode order
         if large.frequencies_hz[i] > 25.0:
             break
-        print(f"{i + 1:3d} {hz_text(large.frequencies_hz[i], decimals=3):>9s}  {large.labels[i]:40s} | "
+        print(f"{i + 1:3d} {hz_text(large.frequencies_hz[i], decimals=3):>9s}  {large.labels[i]:46s} | "
               f"{hz_text(linear.frequencies_hz[i], decimals=3):>9s}  {linear.labels[i]}")
     return 0
 
