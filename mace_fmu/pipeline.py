@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass
-from typing import Any, Callable, Mapping
+from typing import Any, Mapping
 
 import numpy as np
 
@@ -18,6 +18,7 @@ from mace_fmu.fe.constraints import build_constraints
 from mace_fmu.fe.labels import label_modes, rigid_body_vectors
 from mace_fmu.fe.modal import Modes, solve_modes
 from mace_fmu.fe.preload import Preload, PreloadKind, large_displacement_preload, linear_preload
+from mace_fmu.progress import ProgressCallback
 from mace_fmu.structure import Structure, StructureKind, StructureSpec, build_structure, bundled_deck_path
 
 DEFAULT_MAX_HZ = 250.0
@@ -89,11 +90,12 @@ def _max_hz(deck: Deck, structure: Structure) -> float:
 def compute_modes(deck: Deck | str | os.PathLike | None = None, *, structure: StructureKind = "1g",
                   preload: PreloadKind = "large", mass: MassKind = "lumped", max_hz: float | None = None,
                   overrides: Mapping[tuple[str, int], Mapping[str, Any]] | None = None,
-                  spec: StructureSpec | None = None, progress: Callable[[str], None] | None = None) -> StructureModes:
+                  spec: StructureSpec | None = None, progress: ProgressCallback | None = None) -> StructureModes:
     """Modes [Hz] of the 1-g or 0-g structure of a deck (default: the bundled MACE deck).
 
     ``max_hz`` defaults to the deck's EIGRL upper frequency. ``overrides`` replaces card fields
-    (see :func:`mace_fmu.structure.apply_overrides`).
+    (see :func:`mace_fmu.structure.apply_overrides`). ``progress`` is called after each preload
+    increment; nothing is printed (the increments are also logged at DEBUG level).
     """
     if preload not in ("large", "linear"):
         raise ValueError(f"preload must be 'large' or 'linear', got {preload!r}")

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from mace_fmu.cli.common import deck_option, progress
+from mace_fmu.cli.common import deck_option, progress, progress_bar
 from mace_fmu.deck.reader import read_deck
 from mace_fmu.pipeline import compute_modes
 from mace_fmu.text import hz_text
@@ -24,8 +24,8 @@ def cmd_build(args: argparse.Namespace) -> int:
     results = {}
     for kind in ("large", "linear"):
         progress(f"1-g modes ({kind} gravity preload)")
-        results[kind] = compute_modes(deck, structure="1g", preload=kind, max_hz=DEFAULT_MAX_HZ,
-                                      progress=progress if kind == "large" else None)
+        with progress_bar() as bar:
+            results[kind] = compute_modes(deck, structure="1g", preload=kind, max_hz=DEFAULT_MAX_HZ, progress=bar)
     print(format_rows(table_5_1_0g(m0), title="Table 5.1, 0-g column (flexible modes)"))
     print()
     print(format_side_by_side({kind: table_5_1_1g(m1, m0) for kind, m1 in results.items()},

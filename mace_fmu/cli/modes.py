@@ -8,7 +8,7 @@ import sys
 
 import numpy as np
 
-from mace_fmu.cli.common import deck_option, progress
+from mace_fmu.cli.common import deck_option, progress_bar
 from mace_fmu.deck.reader import read_deck
 from mace_fmu.pipeline import StructureModes, compute_modes
 from mace_fmu.text import hz_text
@@ -45,8 +45,9 @@ def _print_modes(result: StructureModes) -> None:
 
 def cmd_modes(args: argparse.Namespace) -> int:
     deck = read_deck(args.deck)
-    result = compute_modes(deck, structure=args.structure, preload=args.preload, mass=args.mass, max_hz=args.max_hz,
-                           progress=None if args.json else progress)
+    with progress_bar() as bar:
+        result = compute_modes(deck, structure=args.structure, preload=args.preload, mass=args.mass,
+                               max_hz=args.max_hz, progress=bar)
     if args.json:
         json.dump(_modes_json(result), sys.stdout, indent=1)
         print()

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from mace_fmu.cli.common import deck_option, model_options, progress, volts
+from mace_fmu.cli.common import deck_option, model_options, progress, progress_bar, volts
 from mace_fmu.deck.reader import read_deck
 from mace_fmu.errors import MaceError
 from mace_fmu.pipeline import compute_modes
@@ -114,7 +114,8 @@ def cmd_view_response(args: argparse.Namespace) -> int:
     if args.fmu:
         fmu = _checked_fmu(args.fmu, args.structure)
         # only the scene is needed from the FE model: its lowest modes are enough
-        modes = compute_modes(deck, structure=args.structure, preload=args.preload, max_hz=1.0, progress=progress)
+        with progress_bar() as bar:
+            modes = compute_modes(deck, structure=args.structure, preload=args.preload, max_hz=1.0, progress=bar)
     else:
         progress(f"{args.structure} volts-volts model with the motion of every grid")
         model = volts(args, motion_grids="all")
@@ -147,7 +148,8 @@ def cmd_view(args: argparse.Namespace) -> int:
     _need_target(args)
     deck = read_deck(args.deck)
     max_hz = args.max_hz if args.max_hz is not None else (None if args.mode else 60.0)
-    result = compute_modes(deck, structure=args.structure, max_hz=max_hz, progress=progress)
+    with progress_bar() as bar:
+        result = compute_modes(deck, structure=args.structure, max_hz=max_hz, progress=bar)
     modes = args.mode or list(range(1, result.modes.frequencies_hz.size + 1))
     animation = animate_modes(result, modes, scale=args.scale, cycles=args.cycles,
                               seconds_per_cycle=args.seconds_per_cycle)
