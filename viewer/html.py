@@ -38,6 +38,7 @@ function markClip() {
   clipRows.forEach((row, k) => {
     const last = k === clipRows.length - 1;
     const playing = t >= +row.dataset.start && (t < +row.dataset.end || (last && t <= +row.dataset.end));
+    if (playing && !row.classList.contains("playing")) row.scrollIntoView({block: "nearest"});  // long lists
     row.classList.toggle("playing", playing);
     if (playing && row.dataset.rate) now = "t = " + (t * row.dataset.rate).toFixed(3) + " s simulated";
   });
@@ -55,7 +56,7 @@ def standalone_html(commands: list, *, title: str, clips: tuple[Clip, ...] = ())
     return f"""<!DOCTYPE html>
 <html><head><meta charset="utf-8"><title>{html_text.escape(title)}</title>
 <style>body {{margin: 0;}} #meshcat-pane {{width: 100vw; height: 100vh; overflow: hidden;}}
-#mace-legend {{position: absolute; left: 8px; bottom: 8px; max-height: 40vh; overflow: auto;
+#mace-legend {{position: absolute; left: 8px; bottom: 8px; max-height: 30vh; overflow: auto;
  font: 12px sans-serif; background: rgba(255,255,255,0.85); padding: 6px;}}
 #mace-legend td {{padding: 0 4px;}} #mace-legend tr.playing {{background: #ffd54f; font-weight: bold;}}</style>
 </head>

@@ -82,8 +82,8 @@ def animate_modes(structure_modes: StructureModes, modes: Sequence[int | str], *
         blocks.append(np.sin(phase)[:, None, None] * (sc * shape)[None])
         hz = structure_modes.modes.frequencies_hz[index - 1]
         label = structure_modes.modes.labels[index - 1] if structure_modes.modes.labels else ""
-        clips.append(Clip(title=f"mode {index}: {hz_text(hz, decimals=3)} Hz {label}".rstrip(), start_s=k * per_mode / fps,
-                          end_s=(k + 1) * per_mode / fps, motion_scale=sc))
+        clips.append(Clip(title=f"mode {index}: {hz_text(hz, decimals=3)} Hz {label}".rstrip(),
+                          start_s=k * per_mode / fps, end_s=(k + 1) * per_mode / fps, motion_scale=sc))
     blocks.append(np.zeros((1,) + blocks[0].shape[1:]))  # close the loop at rest
     displacements = np.concatenate(blocks)
     frames = Frames(times_s=np.arange(displacements.shape[0]) / fps, displacements=displacements, fps=fps,

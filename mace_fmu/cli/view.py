@@ -110,7 +110,7 @@ def cmd_view_response(args: argparse.Namespace) -> int:
     _need_target(args)
     deck = read_deck(args.deck)
     output = _check_signals(args, deck)
-    out_dir = Path(args.html or args.png or "page").parent
+    out_dir = Path(args.html or args.png).parent if (args.html or args.png) else Path(".")  # FMU next to the page
     if args.fmu:
         fmu = _checked_fmu(args.fmu, args.structure)
         # only the scene is needed from the FE model: its lowest modes are enough
