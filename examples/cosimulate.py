@@ -6,7 +6,8 @@ Disturbance: a 0.5 deg square wave on the secondary Z gimbal command. Controller
 rate-gyro voltage, times a gain, commands the primary Z gimbal angle, a damping loop on the
 payload. (The payload Z gyro reads -theta_z, as mounted, hence the positive sign; the loop is
 stable up to a gain of about 0.3 deg/V with this FMU's delays.) Prints the payload gyro RMS with
-the loop open and closed. ``simulate`` is used by the tests.
+the loop open and closed. ``simulate`` is used by the tests. The FMU is unpacked once, for both
+runs, into a temporary folder that ``main`` removes when they are done.
 """
 
 from __future__ import annotations
@@ -19,11 +20,13 @@ import numpy as np
 from fmpy.fmi2 import FMU2Slave
 
 
-def simulate(fmu_path: str, *, gain: float, duration_s: float = 4.0, step_s: float = 2e-3) -> np.ndarray:
-    """Payload Z gyro voltage [V] at every step, with the rate loop of ``gain`` [deg/V] (0: open loop)."""
-    md = fmpy.read_model_description(fmu_path)
+def simulate(unzipped: str, *, gain: float, duration_s: float = 4.0, step_s: float = 2e-3) -> np.ndarray:
+    """Payload Z gyro voltage [V] at every step, with the rate loop of ``gain`` [deg/V] (0: open loop).
+
+    ``unzipped`` is the folder the FMU was extracted into (fmpy.extract).
+    """
+    md = fmpy.read_model_description(unzipped)
     vr = {v.name: v.valueReference for v in md.modelVariables}
-    unzipped = fmpy.extract(fmu_path, unzipdir=tempfile.mkdtemp(prefix="mace_cosim_"))  # kept: see tests/test_fmu.py
     fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzipped, modelIdentifier=md.coSimulation.modelIdentifier,
                     instanceName="mace")
     fmu.instantiate()
@@ -46,8 +49,10 @@ def simulate(fmu_path: str, *, gain: float, duration_s: float = 4.0, step_s: flo
 
 def main() -> None:
     fmu = sys.argv[1] if len(sys.argv) > 1 else "fmus/MACE_1g.fmu"
-    open_loop = simulate(fmu, gain=0.0)
-    closed = simulate(fmu, gain=0.2)
+    with tempfile.TemporaryDirectory(prefix="mace_cosim_") as folder:
+        unzipped = fmpy.extract(fmu, unzipdir=folder)
+        open_loop = simulate(unzipped, gain=0.0)
+        closed = simulate(unzipped, gain=0.2)
     rms = lambda y: float(np.sqrt(np.mean(y**2)))  # noqa: E731
     print(f"payload Z gyro RMS, loop open:   {rms(open_loop):.4f} V")
     print(f"payload Z gyro RMS, loop closed: {rms(closed):.4f} V  ({20 * np.log10(rms(closed) / rms(open_loop)):+.1f} dB)")

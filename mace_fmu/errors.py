@@ -11,7 +11,8 @@ class DeckError(MaceError):
     """A deck that cannot be read or is inconsistent, located at ``file:line`` (and card, field).
 
     ``str(e)`` is one line, e.g.
-    ``deck.bdf:123: CBAR 41, field 5 (GB): grid 999 is not defined (expected a GRID ID)``.
+    ``deck.bdf:123: CBAR 41, field 5 (GB): grid 999 is not defined (expected a GRID ID)``;
+    line 0 means the file as a whole: ``deck.bdf: no such file``.
     """
 
     def __init__(self, message: str, *, file: str, line: int, card: str | None = None,
@@ -25,7 +26,8 @@ class DeckError(MaceError):
 
     def __str__(self) -> str:
         where = ", ".join(part for part in (self.card, self.field) if part)
-        text = f"{self.file}:{self.line}: " + (f"{where}: " if where else "") + self.message
+        at = f"{self.file}:{self.line}: " if self.line > 0 else f"{self.file}: "  # line 0: the file as a whole
+        text = at + (f"{where}: " if where else "") + self.message
         # One line, whatever the message or a card field dragged in.
         return " ".join(text.splitlines())
 

@@ -3,9 +3,9 @@
 from __future__ import annotations
 
 import os
-from pathlib import Path
 from dataclasses import dataclass
-from typing import Any, Callable, Mapping
+from pathlib import Path
+from typing import Any, Mapping
 
 import numpy as np
 
@@ -20,6 +20,7 @@ from mace_fmu.fe.labels import label_modes, rigid_body_vectors
 from mace_fmu.fe.modal import Modes, solve_modes
 from mace_fmu.fe.preload import Preload, PreloadKind, large_displacement_preload, linear_preload
 from mace_fmu.parameters import ParameterSet, deck_fingerprint, fe_overrides
+from mace_fmu.progress import ProgressCallback
 from mace_fmu.structure import Structure, StructureKind, StructureSpec, build_structure, bundled_deck_path
 
 DEFAULT_MAX_HZ = 250.0
@@ -101,13 +102,15 @@ def check_parameters_deck(parameters: ParameterSet, deck: Deck) -> None:
 def compute_modes(deck: Deck | str | os.PathLike | None = None, *, structure: StructureKind = "1g",
                   preload: PreloadKind = "large", mass: MassKind = "lumped", max_hz: float | None = None,
                   overrides: Mapping[tuple[str, int], Mapping[str, Any]] | None = None,
-                  spec: StructureSpec | None = None, progress: Callable[[str], None] | None = None,
+                  spec: StructureSpec | None = None, progress: ProgressCallback | None = None,
                   parameters: ParameterSet | None = None) -> StructureModes:
     """Modes [Hz] of the 1-g or 0-g structure of a deck (default: the bundled MACE deck).
 
     ``max_hz`` defaults to the deck's EIGRL upper frequency. ``overrides`` replaces card fields
     (see :func:`mace_fmu.structure.apply_overrides`); ``parameters`` replaces moduli and spring
     stiffnesses by name (``E_<material>``, ``k_<spring>``; its other entries act later).
+    ``progress`` is called after each preload increment; nothing is printed (the increments are
+    also logged at DEBUG level).
     """
     if preload not in ("large", "linear"):
         raise ValueError(f"preload must be 'large' or 'linear', got {preload!r}")

@@ -213,17 +213,20 @@ def fmu_1g(tmp_path_factory):
     return export_fmu(volts_model("1g"), out_dir=tmp_path_factory.mktemp("fmu_1g"))
 
 
-def test_cosimulation_example_closes_a_loop_around_the_1g_fmu(fmu_1g):
+def test_cosimulation_example_closes_a_loop_around_the_1g_fmu(fmu_1g, tmp_path_factory):
     """examples/cosimulate.py: a Python controller stepping the FMU through fmpy damps the payload."""
     import sys
     from pathlib import Path
 
-    fmu = fmu_1g
+    import fmpy
+
+    # unpacked into a folder that outlives the test process's FMU instances (README, "Teardown")
+    unzipped = fmpy.extract(str(fmu_1g), unzipdir=str(tmp_path_factory.mktemp("cosim_unzipped")))
     sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "examples"))
     from cosimulate import simulate
 
     rms = lambda y: float(np.sqrt(np.mean(y**2)))  # noqa: E731
-    open_loop, closed = simulate(str(fmu), gain=0.0), simulate(str(fmu), gain=0.2)
+    open_loop, closed = simulate(unzipped, gain=0.0), simulate(unzipped, gain=0.2)
     assert 0.05 < rms(open_loop) < 1.0
     assert 20 * np.log10(rms(closed) / rms(open_loop)) < -2.0
 

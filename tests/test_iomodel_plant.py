@@ -78,6 +78,26 @@ def test_damping_by_label_and_violin_family(inst, m1):
     assert all(zz == 0.0 for f, zz in zip(m1.modes.frequencies_hz, z) if abs(f) < 0.01)
 
 
+@pytest.mark.parametrize("key", ["0g_large", "1g_large", "1g_linear"])
+def test_unique_labels_leave_every_damping_ratio_as_it_was(inst, key):
+    """Same modes, same damping table: the ratios of every mode up to 250 Hz equal those computed with
+    the labels before they were made unique (tests/data/modal_damping_before_unique_labels.json)."""
+    import json
+    from pathlib import Path
+
+    before = json.loads((Path(__file__).parent / "data" / "modal_damping_before_unique_labels.json").read_text())
+    ref = before["models"][key]
+    structure, preload = key.split("_")
+    sm = compute_modes(structure=structure, preload=preload, max_hz=250.0)
+    np.testing.assert_allclose(sm.modes.frequencies_hz, ref["frequencies_hz"], rtol=0, atol=2e-6)
+    z = modal_damping(sm.modes.labels, sm.modes.frequencies_hz, inst.damping)
+    np.testing.assert_array_equal(z, ref["damping"])
+    assert len(set(sm.modes.labels)) == len(sm.modes.labels)
+    # only labels that used to repeat changed
+    changed = [(old, new) for old, new in zip(ref["labels"], sm.modes.labels) if old != new]
+    assert changed and all(ref["labels"].count(old) > 1 for old, _ in changed)
+
+
 def test_1g_plant_keeps_80_modes_and_drops_the_wheel_angles(inst, m1):
     z = modal_damping(m1.modes.labels, m1.modes.frequencies_hz, inst.damping)
     plant = modal_plant(m1.modes, inst, z, max_hz=250.0)

@@ -5,7 +5,6 @@ from __future__ import annotations
 import base64
 import os
 import re
-import shutil
 import subprocess
 from pathlib import Path
 
@@ -20,6 +19,7 @@ from viewer import (animate_mode, animate_modes, animate_response, build_scene, 
 from viewer.frames import body_motion
 from viewer.meshcat_scene import FLOAT32_EXT
 from viewer.scene import tube_outer_radius_m
+from viewer.still import chromium_executable, write_still
 
 BUILD = Path(__file__).resolve().parents[1] / "build"
 
@@ -84,6 +84,60 @@ def test_mode_frames_are_shape_times_scale_times_sine(modes_0g):
     assert largest == pytest.approx(0.08 * anim.scene.length_m, rel=1e-12)
 
 
+def _look_at_projection(eye: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """(n, 2) tangents (right, up) of points seen from ``eye`` looking at the origin, Y up (three.js lookAt)."""
+    forward = -eye / np.linalg.norm(eye)
+    right = np.cross(forward, [0.0, 1.0, 0.0])
+    right /= np.linalg.norm(right)
+    up = np.cross(right, forward)
+    rel = points - eye
+    depth = rel @ forward
+    return np.stack([rel @ right / depth, rel @ up / depth], axis=1)
+
+
+def test_camera_frames_the_article_not_the_cables(modes_0g, modes_1g):
+    """Each view: the article's box projects within 80 % of a 4:3 picture, touching that bound or kept
+    0.45 article lengths from the camera (end-on); the iso and z views are bound by the picture."""
+    from viewer import CAMERA_VIEWS, camera_position
+
+    tan_v = np.tan(np.radians(75.0 / 2))
+    for sm in (modes_0g, modes_1g):
+        scene = build_scene(sm)
+        # the article (bus, gimbals, wheels) is 1.710 m along X (Table 3.15); the 1-g cables reach 4.9 m up
+        assert scene.extent_m[0] == pytest.approx(1.710, abs=1e-3) and scene.length_m == scene.extent_m[0]
+        assert scene.positions_m[:, 1].max() - scene.positions_m[:, 1].min() > (4.5 if sm is modes_1g else 0.0)
+        half = 0.5 * scene.extent_m
+        corners = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)]) * half
+        for view in CAMERA_VIEWS:
+            eye = camera_position(scene, view)
+            tangents = np.abs(_look_at_projection(eye, corners))
+            used = max(tangents[:, 0].max() / (0.8 * tan_v * 4 / 3), tangents[:, 1].max() / (0.8 * tan_v))
+            clearance = np.min(np.linalg.norm(eye) - corners @ (eye / np.linalg.norm(eye))) / scene.length_m
+            assert used <= 1.0 + 1e-9 and clearance >= 0.45 - 1e-9, view
+            assert used == pytest.approx(1.0, rel=1e-6) or clearance == pytest.approx(0.45, rel=1e-6), view
+            if view in ("iso", "z"):
+                assert used == pytest.approx(1.0, rel=1e-6), view
+    with pytest.raises(MaceError, match="camera view must be one of iso, x, y, z"):
+        camera_position(build_scene(modes_0g), "top")
+
+
+def test_page_centres_the_article_and_aims_the_camera(modes_1g):
+    """The page shifts the article's centre to the orbit target (origin) and hides meshcat's 20 m grid."""
+    from viewer import camera_position
+
+    anim = animate_mode(modes_1g, "1st Z bending", frames_per_cycle=8)
+    commands = _decoded_commands(standalone_html(scene_commands(anim.scene, anim.frames, camera="z"), title="t"))
+    root = next(c for c in commands if c["type"] == "set_transform" and c["path"] == "/meshcat/mace")
+    matrix = np.array(root["matrix"], dtype=float).reshape(4, 4).T  # three.js stores column-major
+    centre = np.append(anim.scene.centre_m, 1.0)
+    np.testing.assert_allclose(matrix @ centre, [0, 0, 0, 1], atol=1e-12)
+    camera = next(c for c in commands if c["type"] == "set_property" and c["path"].startswith("/Cameras"))
+    np.testing.assert_allclose(camera["value"], camera_position(anim.scene, "z"))
+    assert camera["value"][0] == 0.0 and camera["value"][1] == 0.0
+    grid = next(c for c in commands if c["type"] == "set_property" and c["path"] == "/Grid")
+    assert grid["property"] == "visible" and grid["value"] is False
+
+
 def test_exported_key_frames_reproduce_grid_motion(modes_0g):
     """Decode the HTML's animation: masses move by shape x scale x sin, bar ends follow their grids."""
     anim = animate_modes(modes_0g, ["1st Y bending", "torsion, primary"], frames_per_cycle=12)
@@ -136,47 +190,94 @@ def test_bad_mode_names_say_what_exists(modes_0g):
         animate_mode(modes_0g, 14, seconds_per_cycle=0.0)
 
 
-def _chromium() -> str | None:
-    return shutil.which("chromium") or shutil.which("chromium-browser")
+needs_chromium = pytest.mark.skipif(chromium_executable() is None and not os.environ.get("MACE_REQUIRE_CHROMIUM"),
+                                    reason="Debian chromium not installed (.ci/run installs it and requires this test)")
 
 
-@pytest.fixture(params=["modes", "response"])
-def page_0g(request, modes_0g, motion_fmu_0g, step_run_0g, tmp_path):
-    """(page, screenshot path): two 0-g mode clips, or the step response of the secondary gimbal."""
-    if request.param == "modes":
+#: hue [deg] of each component drawn in the gimbal and wheel colours (viewer.scene.COMPONENT_COLOURS)
+_ARTICLE_HUES = {"primary_gimbal": 29.0, "secondary_gimbal": 351.0, "reaction_wheels": 127.0}
+
+
+def _component_mask(pixels: np.ndarray, hue_deg: float) -> np.ndarray:
+    """Pixels of one shaded component colour: hue within 12 deg, saturation of a lit matte surface.
+
+    Lambert shading scales the three channels alike, so hue and saturation survive it; the axis
+    triad's pure red and green lines (saturation 1) and the grey floor (saturation 0) do not pass.
+    """
+    top, bottom = pixels.max(axis=-1), pixels.min(axis=-1)
+    saturation = np.where(top > 0, (top - bottom) / np.maximum(top, 1e-9), 0.0)
+    r, g, b = (pixels[..., k] / 255.0 for k in range(3))
+    hue = np.degrees(np.arctan2(np.sqrt(3.0) * (g - b), 2.0 * r - g - b)) % 360.0
+    distance = np.abs((hue - hue_deg + 180.0) % 360.0 - 180.0)
+    return (distance < 12.0) & (saturation > 0.35) & (saturation < 0.9) & (top > 60)
+
+
+def _article_span(pixels: np.ndarray) -> tuple[float, dict[str, int]]:
+    """Fraction of the image width the gimbal and wheel pixels span (1st-99th percentile), and counts."""
+    masks = {name: _component_mask(pixels, hue) for name, hue in _ARTICLE_HUES.items()}
+    cols = np.nonzero(np.logical_or.reduce(list(masks.values())))[1]
+    span = (np.percentile(cols, 99) - np.percentile(cols, 1)) / pixels.shape[1] if cols.size else 0.0
+    return float(span), {name: int(m.sum()) for name, m in masks.items()}
+
+
+@pytest.fixture(params=["modes_1g", "modes_0g", "response_0g"])
+def framed_page(request, modes_0g, modes_1g, motion_fmu_0g, step_run_0g, tmp_path):
+    """(page, screenshot path): a 1-g and a 0-g mode page, and the 0-g step response of the secondary gimbal."""
+    if request.param == "modes_1g":
+        anim = animate_modes(modes_1g, ["1st Z bending", "1st Y bending"], frames_per_cycle=12)
+    elif request.param == "modes_0g":
         anim = animate_modes(modes_0g, [14, 15], frames_per_cycle=12)
     else:
         anim = animate_response(motion_fmu_0g[0].structure_modes, step_run_0g)
     page = tmp_path / f"{request.param}.html"
-    write_animation_html(anim, page, title=f"MACE 0g {request.param}")
-    return page, BUILD / f"viewer_0g_{request.param}.png"
+    write_animation_html(anim, page, title=f"MACE {request.param}")
+    return page, BUILD / f"viewer_{request.param}_1200x800.png"
 
 
-@pytest.mark.skipif(_chromium() is None and not os.environ.get("MACE_REQUIRE_CHROMIUM"),
-                    reason="Debian chromium not installed (.ci/run installs it and requires this test)")
-def test_html_renders_the_structure_in_headless_chromium(page_0g, tmp_path):
+@needs_chromium
+def test_pages_open_framed_on_the_test_article(framed_page):
+    """At 1200 x 800 the structure is drawn in its colours, and the gimbals and wheels span >= 40 % of the width."""
     from PIL import Image
 
-    assert _chromium(), "chromium missing: .ci/run must install Debian's chromium"
-    page, shot = page_0g
-    BUILD.mkdir(exist_ok=True)
-    shot.unlink(missing_ok=True)
-    subprocess.run([_chromium(), "--headless", "--no-sandbox", "--disable-gpu", "--enable-unsafe-swiftshader",
-                    "--use-angle=swiftshader", "--disable-quic", "--no-first-run", "--disable-background-networking",
-                    "--disable-component-update", "--disable-sync", f"--user-data-dir={tmp_path / 'profile'}",
-                    "--window-size=800,600", "--virtual-time-budget=3000", f"--screenshot={shot}", page.as_uri()],
-                   check=True, capture_output=True, timeout=240)
+    page, shot = framed_page
+    write_still(page, shot, width_px=1200, height_px=800)
     pixels = np.asarray(Image.open(shot).convert("RGB"), dtype=float)
-    assert pixels.shape == (600, 800, 3)
+    assert pixels.shape == (800, 1200, 3)
     assert pixels.std() > 20.0  # not blank
-    r, g, b = pixels[..., 0], pixels[..., 1], pixels[..., 2]
-    # the bus is drawn in its component blue (0x4A7FC1), the secondary gimbal red, the wheels green
-    bus_like = (np.abs(r - 0x4A) < 40) & (np.abs(g - 0x7F) < 40) & (b > 150) & (b - r > 60)
-    red_like = (r > 150) & (g < 110) & (b < 130)
-    green_like = (g > 120) & (r < 110) & (b < 120)
-    assert bus_like.sum() > 200, f"bus pixels: {bus_like.sum()}"
-    assert red_like.sum() > 50, f"secondary gimbal pixels: {red_like.sum()}"
-    assert green_like.sum() > 50, f"wheel pixels: {green_like.sum()}"
+    bus = _component_mask(pixels, 213.0)  # 0x4A7FC1
+    assert bus.sum() > 2000, f"bus pixels: {bus.sum()}"
+    span, counts = _article_span(pixels)
+    assert min(counts.values()) > 300, f"gimbal and wheel pixels: {counts}"
+    assert span >= 0.40, f"gimbals and wheels span {100 * span:.1f} % of the width ({counts} pixels)"
+
+
+@needs_chromium
+def test_legend_marks_the_clip_playing_now(modes_0g, motion_fmu_0g, step_run_0g, tmp_path):
+    """In Chromium the legend marks the row whose span holds the animator's time; a response states t x speed."""
+    for name, anim in (("modes", animate_modes(modes_0g, [14, 15, 16], frames_per_cycle=12)),
+                       ("response", animate_response(motion_fmu_0g[0].structure_modes, step_run_0g,
+                                                     playback_speed=0.5))):
+        page = tmp_path / f"{name}.html"
+        write_animation_html(anim, page, title=name)
+        dom = subprocess.run([chromium_executable(), "--headless", "--no-sandbox", "--disable-gpu",
+                              "--enable-unsafe-swiftshader", "--use-angle=swiftshader", "--no-first-run",
+                              f"--user-data-dir={tmp_path / 'profile'}", "--virtual-time-budget=4500", "--dump-dom",
+                              page.as_uri()], check=True, capture_output=True, text=True, timeout=240).stdout
+        time_s = float(re.search(r'id="mace-legend" data-time="([0-9.e-]+)"', dom).group(1))
+        assert time_s > 0.0
+        rows = re.findall(r'<tr data-start="([^"]+)" data-end="([^"]+)"(?: data-rate="[^"]+")?(?: class="(\w*)")?'
+                          r'><td>[^<]*</td><td>([^<]*)</td><td>motion x ([^<]*)</td>', dom)
+        assert len(rows) == len(anim.frames.clips)
+        playing = [title for start, end, mark, title, _ in rows if mark == "playing"]
+        holding = [c.title for c in anim.frames.clips if c.start_s <= time_s < c.end_s]
+        assert playing == holding and len(playing) == 1
+        for (_, _, _, _, scale), clip in zip(rows, anim.frames.clips):
+            assert float(scale) == pytest.approx(clip.motion_scale, rel=5e-3)
+        now = re.search(r'<div id="mace-now">([^<]*)</div>', dom).group(1)
+        if name == "response":
+            assert now == f"t = {time_s * 0.5:.3f} s simulated"
+        else:
+            assert now == ""
 
 
 def test_cli_writes_the_html_and_lists_the_clips(tmp_path, capsys):
@@ -190,6 +291,37 @@ def test_cli_writes_the_html_and_lists_the_clips(tmp_path, capsys):
     assert sum(c["type"] == "set_object" for c in commands) > 100
     assert main(["view", "modes", "0g", "--mode", "no such", "--html", str(out)]) == 2
     assert "exactly one mode" in capsys.readouterr().err
+
+
+@needs_chromium
+def test_cli_png_writes_a_still_from_the_chosen_camera(tmp_path, capsys):
+    """--png alone renders a temporary page; the x view looks along the bus, so it is narrow and tall."""
+    from PIL import Image
+
+    from mace_fmu.cli import main
+    from mace_fmu.cli.view import CAMERA_CHOICES
+    from viewer import CAMERA_VIEWS
+
+    assert CAMERA_CHOICES == tuple(CAMERA_VIEWS)
+    spans = {}
+    for camera in ("z", "x"):
+        png = tmp_path / f"{camera}.png"
+        assert main(["view", "modes", "0g", "--mode", "14", "--png", str(png), "--camera", camera]) == 0
+        assert f"wrote {png} (still from headless Chromium, {camera} view)" in capsys.readouterr().out
+        spans[camera] = _article_span(np.asarray(Image.open(png).convert("RGB"), dtype=float))[0]
+    assert spans["z"] >= 0.4 and spans["x"] < 0.5 * spans["z"], spans
+    assert not list(tmp_path.glob("*.html"))
+
+
+def test_cli_png_without_chromium_says_so_before_any_work(tmp_path, monkeypatch, capsys):
+    from mace_fmu.cli import main
+
+    monkeypatch.setenv("PATH", str(tmp_path))  # no chromium on PATH
+    assert main(["view", "modes", "0g", "--png", str(tmp_path / "m.png")]) == 2
+    err = capsys.readouterr().err
+    assert "--png needs headless Chromium, which is not installed" in err and "apt-get install chromium" in err
+    assert main(["view", "modes", "0g"]) == 2
+    assert "--html OUT.html, --png OUT.png, --live" in capsys.readouterr().err
 
 
 def test_live_meshcat_server_receives_the_same_animation(modes_0g):
@@ -269,13 +401,16 @@ def test_cli_view_response_writes_page_plot_and_fmu(motion_fmu_0g, tmp_path, cap
                  "--speed", "0.1", "--fmu", str(fmu), "--html", str(out)]) == 0
     printed = capsys.readouterr().out
     assert "201 frames at 50 frames/s" in printed  # 0.4 s at 0.1x: every 2 ms sample is a frame
+    assert f"wrote {tmp_path / 'resp_signals.png'} (rwa_z and tach_z over time)" in printed
     commands = _decoded_commands(out.read_text())
     assert sum(c["type"] == "set_object" for c in commands) > 100
     assert sum(c["type"] == "set_animation" for c in commands) == 1
-    plot = np.asarray(Image.open(out.with_suffix(".png")).convert("L"), dtype=float)
+    plot = np.asarray(Image.open(tmp_path / "resp_signals.png").convert("L"), dtype=float)
     assert plot.std() > 10.0  # axes and curves, not a blank image
-    assert main(["view", "response", "0g", "--input", "no_such_input", "--fmu", str(fmu), "--html", str(out)]) == 2
-    assert "has no input 'no_such_input'; inputs: gimbal_primary_x" in capsys.readouterr().err
+    # the active strut's own sensor is strut 2's strain gauge pair, not the first output (an encoder)
+    assert main(["view", "response", "0g", "--input", "active_strut_z", "--duration", "0.1", "--fmu", str(fmu),
+                 "--html", str(out)]) == 0
+    assert "(active_strut_z and strain_strut2_z over time)" in capsys.readouterr().out
     assert main(["view", "response", "1g", "--input", "rwa_z", "--fmu", str(fmu), "--html", str(out)]) == 2
     assert "is not a MACE 1g model" in capsys.readouterr().err
     assert main(["view", "response", "0g", "--input", "rwa_z", "--duration", "0.1", "--step", "0.003",
@@ -293,6 +428,6 @@ def test_cli_view_response_exports_its_own_motion_fmu(tmp_path, capsys):
     assert main(["view", "response", "0g", "--input", "gimbal_primary_x", "--duration", "0.2", "--html",
                  str(out)]) == 0
     fmu = tmp_path / "MACE_0g_motion.fmu"
-    assert f"wrote {fmu}" in capsys.readouterr().out and out.exists() and out.with_suffix(".png").exists()
+    assert f"wrote {fmu}" in capsys.readouterr().out and out.exists() and (tmp_path / "step_signals.png").exists()
     outputs = [v for v in fmpy.read_model_description(str(fmu)).modelVariables if v.causality == "output"]
     assert len(outputs) == 20 + 6 * 79

@@ -191,7 +191,9 @@ def test_motion_outputs_add_grid_motion_and_leave_the_sensors_alone(v0):
 def test_cli_model_json_and_npz(capsys, tmp_path):
     npz, mo = tmp_path / "m.npz", tmp_path / "m.mo"
     assert main(["model", "0g", "--json", "--npz", str(npz), "--modelica", str(mo)]) == 0
-    data = json.loads(capsys.readouterr().out)
+    out, err = capsys.readouterr()
+    data = json.loads(out)  # --json keeps stdout the JSON document; the confirmations go to stderr
+    assert f"wrote {mo}" in err and f"wrote {npz}" in err
     assert data["states"] == 195 and len(data["inputs"]) == 9 and len(data["outputs"]) == 20
     first_z = next(p for p in data["poles"] if p["label"] == "1st Z bending")
     assert first_z["frequency_hz"] == pytest.approx(1.94, rel=0.03)

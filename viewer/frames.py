@@ -17,6 +17,8 @@ class Clip:
     title: str
     start_s: float
     end_s: float
+    motion_scale: float = 1.0  #: drawn metres per unit of the motion (mode: per unit mass-normalised shape)
+    simulated_s_per_s: float | None = None  #: responses: simulated seconds per second of playback
 
 
 @dataclass(frozen=True)

@@ -10,16 +10,43 @@ from pathlib import Path as FilePath
 import meshcat
 import umsgpack
 
+from mace_fmu.atomic import write_text_atomic
 from viewer.frames import Clip
 
 _VIEWER_JS = FilePath(meshcat.__file__).parent / "viewer" / "dist" / "main.min.js"
 
 
 def _overlay(title: str, clips: tuple[Clip, ...]) -> str:
-    rows = "".join(f"<tr><td>{c.start_s:.1f}-{c.end_s:.1f} s</td><td>{html_text.escape(c.title)}</td></tr>"
-                   for c in clips)
+    """The legend: one row per clip (playback span, what it shows, motion scale), and a line for the time."""
+    rows = "".join(f'<tr data-start="{c.start_s!r}" data-end="{c.end_s!r}"'
+                   + (f' data-rate="{c.simulated_s_per_s!r}"' if c.simulated_s_per_s is not None else "")
+                   + f"><td>{c.start_s:.1f}-{c.end_s:.1f} s</td><td>{html_text.escape(c.title)}</td>"
+                   f"<td>motion x {c.motion_scale:.3g}</td></tr>" for c in clips)
     return (f'<div id="mace-legend"><b>{html_text.escape(title)}</b>'
-            f"<table>{rows}</table></div>")
+            f'<table>{rows}</table><div id="mace-now"></div></div>')
+
+
+#: Marks the legend row of the clip playing now (meshcat's animator time, playback seconds) and,
+#: for a response, states the simulated time. The time is also kept in data-time for tests.
+_LEGEND_SCRIPT = """
+const legend = document.getElementById("mace-legend");
+const clipRows = Array.from(legend.querySelectorAll("tr[data-start]"));
+function markClip() {
+  const t = viewer.animator.time;
+  legend.dataset.time = t;
+  let now = "";
+  clipRows.forEach((row, k) => {
+    const last = k === clipRows.length - 1;
+    const playing = t >= +row.dataset.start && (t < +row.dataset.end || (last && t <= +row.dataset.end));
+    if (playing && !row.classList.contains("playing")) row.scrollIntoView({block: "nearest"});  // long lists
+    row.classList.toggle("playing", playing);
+    if (playing && row.dataset.rate) now = "t = " + (t * row.dataset.rate).toFixed(3) + " s simulated";
+  });
+  document.getElementById("mace-now").textContent = now;
+}
+markClip();
+setInterval(markClip, 100);
+"""
 
 
 def standalone_html(commands: list, *, title: str, clips: tuple[Clip, ...] = ()) -> str:
@@ -29,8 +56,10 @@ def standalone_html(commands: list, *, title: str, clips: tuple[Clip, ...] = ())
     return f"""<!DOCTYPE html>
 <html><head><meta charset="utf-8"><title>{html_text.escape(title)}</title>
 <style>body {{margin: 0;}} #meshcat-pane {{width: 100vw; height: 100vh; overflow: hidden;}}
-#mace-legend {{position: absolute; left: 8px; bottom: 8px; max-height: 40vh; overflow: auto;
- font: 12px sans-serif; background: rgba(255,255,255,0.85); padding: 6px;}}</style></head>
+#mace-legend {{position: absolute; left: 8px; bottom: 8px; max-height: 30vh; overflow: auto;
+ font: 12px sans-serif; background: rgba(255,255,255,0.85); padding: 6px;}}
+#mace-legend td {{padding: 0 4px;}} #mace-legend tr.playing {{background: #ffd54f; font-weight: bold;}}</style>
+</head>
 <body><div id="meshcat-pane"></div>{_overlay(title, clips)}
 <script>{_VIEWER_JS.read_text()}</script>
 <script>
@@ -40,13 +69,12 @@ for (const b of blobs) {{
   const bytes = Uint8Array.from(atob(b), c => c.charCodeAt(0));
   viewer.handle_command_bytearray(bytes);
 }}
-</script></body></html>
+{_LEGEND_SCRIPT}</script></body></html>
 """
 
 
 def write_html(path: str | os.PathLike, commands: list, *, title: str, clips: tuple[Clip, ...] = ()) -> int:
     """Write the standalone page to ``path``; returns its size in bytes."""
     text = standalone_html(commands, title=title, clips=clips)
-    FilePath(path).parent.mkdir(parents=True, exist_ok=True)
-    FilePath(path).write_text(text, encoding="utf-8")
+    write_text_atomic(path, text)
     return len(text.encode("utf-8"))

@@ -8,6 +8,7 @@ import umsgpack
 from meshcat.commands import SetObject, SetProperty, SetTransform
 from meshcat.path import Path
 
+from viewer.camera import camera_position
 from viewer.frames import BodyMotion, Frames, body_motion
 from viewer.scene import Scene, component_colour
 
@@ -45,9 +46,15 @@ def _track(name: str, jstype: str, values: np.ndarray) -> dict:
             "values": _float32(values)}
 
 
-def static_commands(scene: Scene) -> list:
-    """Commands that draw the undeformed structure, a ground plane and axes."""
-    cmds: list = [SetTransform(Y_UP_TO_Z_UP, ROOT)]
+def static_commands(scene: Scene, *, camera: str = "iso") -> list:
+    """Commands that draw the undeformed structure, a floor under it, axes, and the camera on it.
+
+    The structure is shifted so the centre of the test article is the origin: meshcat's orbit
+    control turns about the origin, so it turns about the article.
+    """
+    shift = np.eye(4)
+    shift[:3, 3] = -scene.centre_m
+    cmds: list = [SetTransform(Y_UP_TO_Z_UP @ shift, ROOT)]
     for seg in scene.segments:
         a, b = scene.positions_m[seg.row_a], scene.positions_m[seg.row_b]
         length = (seg.s1 - seg.s0) * float(np.linalg.norm(b - a))
@@ -56,15 +63,17 @@ def static_commands(scene: Scene) -> list:
     for mass in scene.masses:
         cmds.append(SetObject(g.Sphere(mass.radius_m), _material(mass.component), ROOT.append(mass.name)))
     floor = np.eye(4)
-    floor[:3, 3] = 0.5 * (scene.positions_m.min(axis=0) + scene.positions_m.max(axis=0))
-    floor[1, 3] = scene.positions_m[:, 1].min() - 0.05
-    cmds.append(SetObject(g.Box([2.0 * scene.length_m, 0.005, 2.0 * scene.length_m]),
+    floor[:3, 3] = scene.centre_m
+    floor[1, 3] = scene.centre_m[1] - 0.5 * scene.extent_m[1] - 0.1 * scene.length_m
+    width = 1.6 * np.maximum(scene.extent_m[[0, 2]], 0.5 * scene.length_m)
+    cmds.append(SetObject(g.Box([width[0], 0.005, width[1]]),
                           g.MeshLambertMaterial(color=0xDDDDDD, opacity=0.6, transparent=True),
                           ROOT.append("ground")))
     cmds.append(SetTransform(floor, ROOT.append("ground")))
     cmds.append(SetObject(g.triad(0.3 * scene.length_m), path=ROOT.append("axes")))
-    # meshcat's camera node is in three.js axes (Y up): look down at the structure from a diagonal
-    cmds.append(SetProperty("position", [0.9 * scene.length_m, 0.6 * scene.length_m, 1.1 * scene.length_m],
+    cmds.append(SetProperty("visible", False, Path(("Grid",))))  # meshcat's 20 m grid would cut the article
+    # meshcat's camera node is in three.js axes, which the Y-up turn above makes the deck's axes
+    cmds.append(SetProperty("position", camera_position(scene, camera).tolist(),
                             Path(("Cameras", "default", "rotated", "<object>"))))
     return cmds
 
@@ -90,9 +99,9 @@ def animation_command(scene: Scene, frames: Frames, motion: BodyMotion | None = 
                  "options": {"play": True, "repetitions": repetitions}, "path": ""})
 
 
-def scene_commands(scene: Scene, frames: Frames) -> list:
-    """All commands: the drawn structure then its animation."""
-    return static_commands(scene) + [animation_command(scene, frames)]
+def scene_commands(scene: Scene, frames: Frames, *, camera: str = "iso") -> list:
+    """All commands: the drawn structure seen from ``camera`` (a CAMERA_VIEWS key), then its animation."""
+    return static_commands(scene, camera=camera) + [animation_command(scene, frames)]
 
 
 def send_to_visualizer(visualizer, commands: list) -> None:

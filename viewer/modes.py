@@ -9,6 +9,7 @@ import numpy as np
 
 from mace_fmu.errors import MaceError
 from mace_fmu.pipeline import StructureModes
+from mace_fmu.text import hz_text
 from viewer.frames import Clip, Frames
 from viewer.scene import Scene, build_scene
 
@@ -81,8 +82,8 @@ def animate_modes(structure_modes: StructureModes, modes: Sequence[int | str], *
         blocks.append(np.sin(phase)[:, None, None] * (sc * shape)[None])
         hz = structure_modes.modes.frequencies_hz[index - 1]
         label = structure_modes.modes.labels[index - 1] if structure_modes.modes.labels else ""
-        clips.append(Clip(title=f"mode {index}: {hz:.3f} Hz {label}".rstrip(),
-                          start_s=k * per_mode / fps, end_s=(k + 1) * per_mode / fps))
+        clips.append(Clip(title=f"mode {index}: {hz_text(hz, decimals=3)} Hz {label}".rstrip(),
+                          start_s=k * per_mode / fps, end_s=(k + 1) * per_mode / fps, motion_scale=sc))
     blocks.append(np.zeros((1,) + blocks[0].shape[1:]))  # close the loop at rest
     displacements = np.concatenate(blocks)
     frames = Frames(times_s=np.arange(displacements.shape[0]) / fps, displacements=displacements, fps=fps,

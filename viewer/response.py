@@ -12,6 +12,7 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
+from mace_fmu.atomic import atomic_path
 from mace_fmu.errors import MaceError
 from mace_fmu.iomodel.motion import MOTION_COMPONENTS, motion_output_name
 from mace_fmu.pipeline import StructureModes
@@ -78,8 +79,8 @@ def animate_response(structure_modes: StructureModes, run: FmuRun, *, scale: flo
     frame_fps = playback_speed / (stride * step_s)
     times = run.times_s[samples] / playback_speed
     inputs = ", ".join(run.inputs)
-    clip = Clip(title=f"response to {inputs}: {run.times_s[-1]:.3g} s simulated at {playback_speed:g}x, "
-                      f"motion x {scale:.3g}", start_s=0.0, end_s=float(times[-1]))
+    clip = Clip(title=f"response to {inputs}: {run.times_s[-1]:.3g} s simulated at {playback_speed:g}x",
+                start_s=0.0, end_s=float(times[-1]), motion_scale=float(scale), simulated_s_per_s=float(playback_speed))
     frames = Frames(times_s=times, displacements=float(scale) * motion[samples], fps=frame_fps, clips=(clip,))
     return ResponseAnimation(scene=scene, frames=frames, sample_indices=samples, scale=float(scale),
                              playback_speed=float(playback_speed))
@@ -102,7 +103,6 @@ def plot_response(run: FmuRun, *, output_name: str, path: str | Path, title: str
     axes[-1].set_xlabel("time [s]")
     fig.suptitle(title)
     fig.tight_layout()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    return path
+    with atomic_path(path) as part:
+        fig.savefig(part, dpi=110, format="png")
+    return Path(path)

@@ -15,6 +15,8 @@ COMPONENT_COLOURS: dict[str, int] = {
 }
 #: Components whose bars are drawn as lines (no bending stiffness worth showing), as fe.labels finds cables.
 CABLE_PREFIX = "cable_"
+#: Components (name prefixes) of the test article itself: the camera frames them, motion is scaled to them.
+ARTICLE_PREFIXES = ("bus", "primary_gimbal", "secondary_gimbal", "reaction_wheels")
 
 
 def component_colour(component: str) -> int:
@@ -55,7 +57,9 @@ class Scene:
     grid_ids: tuple[int, ...]
     segments: tuple[BarSegment, ...]
     masses: tuple[MassBody, ...]
-    length_m: float  #: largest extent of the structure, for scaling deflections
+    centre_m: np.ndarray  #: (3,) centre of the test article's bounding box (bus, gimbals, wheels)
+    extent_m: np.ndarray  #: (3,) size of that box along X, Y, Z
+    length_m: float  #: largest extent of the test article, for scaling deflections
 
 
 def tube_outer_radius_m(area_m2: float, inertia_m4: float) -> float:
@@ -90,6 +94,27 @@ def build_scene(structure_modes: StructureModes, *, segments_per_bar: int = 4) -
         radius = float(np.cbrt(3.0 * conm.mass / (4.0 * np.pi * 7800.0)))
         masses.append(MassBody(name=f"masses/{mid}", row=dofs.grid_index(conm.grid), radius_m=radius,
                                component=spec.component_of(conm.grid) or "other"))
-    extent = positions.max(axis=0) - positions.min(axis=0)
+    box = positions[article_rows(structure_modes)]
+    low, high = box.min(axis=0), box.max(axis=0)
     return Scene(positions_m=positions, grid_ids=dofs.grid_ids, segments=tuple(segments), masses=tuple(masses),
-                 length_m=float(extent.max()))
+                 centre_m=0.5 * (low + high), extent_m=high - low, length_m=float((high - low).max()))
+
+
+def article_rows(structure_modes: StructureModes) -> np.ndarray:
+    """Grid rows of the test article: components named ARTICLE_PREFIXES, else every grid but the cables.
+
+    The suspension cables of the 1-g model are 4.7 m long against a 1.7 m article; framing or
+    scaling by them would leave the article a speck.
+    """
+    spec = structure_modes.structure.spec
+    ids = structure_modes.model.dofs.grid_ids
+
+    def rows(keep) -> np.ndarray:
+        grids = frozenset().union(*(g for name, g in spec.components.items() if keep(name)))
+        return np.flatnonzero([g in grids for g in ids])
+
+    article = rows(lambda name: name.startswith(ARTICLE_PREFIXES))
+    if article.size:
+        return article
+    cables = rows(lambda name: name.startswith(CABLE_PREFIX))
+    return np.setdiff1d(np.arange(len(ids)), cables) if cables.size < len(ids) else np.arange(len(ids))

@@ -4,9 +4,10 @@ from __future__ import annotations
 
 import argparse
 
-from mace_fmu.cli.common import deck_option, parameters, parameters_option, progress
+from mace_fmu.cli.common import deck_option, parameters, parameters_option, progress, progress_bar
 from mace_fmu.deck.reader import read_deck
 from mace_fmu.pipeline import compute_modes
+from mace_fmu.text import hz_text
 
 
 def cmd_build(args: argparse.Namespace) -> int:
@@ -26,8 +27,9 @@ def cmd_build(args: argparse.Namespace) -> int:
     results = {}
     for kind in ("large", "linear"):
         progress(f"1-g modes ({kind} gravity preload)")
-        results[kind] = compute_modes(deck, structure="1g", preload=kind, max_hz=DEFAULT_MAX_HZ,
-                                      progress=progress if kind == "large" else None, parameters=params)
+        with progress_bar() as bar:
+            results[kind] = compute_modes(deck, structure="1g", preload=kind, max_hz=DEFAULT_MAX_HZ, progress=bar,
+                                          parameters=params)
     print(format_rows(table_5_1_0g(m0), title="Table 5.1, 0-g column (flexible modes)"))
     print()
     print(format_side_by_side({kind: table_5_1_1g(m1, m0) for kind, m1 in results.items()},
@@ -45,8 +47,8 @@ def cmd_build(args: argparse.Namespace) -> int:
     for i in range(min(len(large), len(linear))):  # side by side by index: the two preloads keep the mode order
         if large.frequencies_hz[i] > 25.0:
             break
-        print(f"{i + 1:3d} {large.frequencies_hz[i]:9.3f}  {large.labels[i]:40s} | "
-              f"{linear.frequencies_hz[i]:9.3f}  {linear.labels[i]}")
+        print(f"{i + 1:3d} {hz_text(large.frequencies_hz[i], decimals=3):>9s}  {large.labels[i]:46s} | "
+              f"{hz_text(linear.frequencies_hz[i], decimals=3):>9s}  {linear.labels[i]}")
     return 0
 
 

@@ -3,16 +3,42 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import sys
+from typing import Iterator
 
 from mace_fmu.deck.reader import read_deck
 from mace_fmu.errors import MaceError
+from mace_fmu.progress import ProgressCallback, Step
 from mace_fmu.structure import bundled_deck_path
 
 
 def progress(message: str) -> None:
     """One progress line on stderr (stdout stays the command's result)."""
     print(f"  {message}", file=sys.stderr, flush=True)
+
+
+@contextlib.contextmanager
+def progress_bar() -> Iterator[ProgressCallback]:
+    """A progress callback that draws one tqdm bar on stderr (none when stderr is not a terminal)."""
+    from tqdm import tqdm
+
+    bars: list[tqdm] = []
+
+    def update(step: Step) -> None:
+        if not bars:  # created at the first step: a computation without steps draws nothing
+            bars.append(tqdm(total=step.total, desc=step.task, unit="step", leave=False, file=sys.stderr,
+                             disable=None))
+        bar = bars[0]
+        bar.total, bar.n = step.total, step.done
+        bar.set_description(step.task, refresh=False)
+        bar.set_postfix_str(step.detail)
+
+    try:
+        yield update
+    finally:
+        for bar in bars:
+            bar.close()
 
 
 def deck_option(p: argparse.ArgumentParser) -> None:

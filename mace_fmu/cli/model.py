@@ -20,9 +20,11 @@ def cmd_model(args: argparse.Namespace) -> int:
     poles = closed_loop_poles(model)
     if args.modelica:
         model.diagram.write_modelica(args.modelica, model_name=f"MACE_{args.structure}_volts")
+        print(f"wrote {args.modelica}", file=sys.stderr if args.json else sys.stdout)
     if args.npz:
         np.savez(args.npz, A=sys_.A, B=sys_.B, C=sys_.C, D=sys_.D, inputs=np.array(sys_.input_labels),
                  outputs=np.array(sys_.output_labels), states=np.array(sys_.state_labels))
+        print(f"wrote {args.npz}", file=sys.stderr if args.json else sys.stdout)
     if args.json:
         json.dump({"structure": args.structure, "states": sys_.nstates, "inputs": list(sys_.input_labels),
                    "outputs": list(sys_.output_labels),

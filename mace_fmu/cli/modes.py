@@ -8,9 +8,10 @@ import sys
 
 import numpy as np
 
-from mace_fmu.cli.common import deck_option, progress
+from mace_fmu.cli.common import deck_option, progress_bar
 from mace_fmu.deck.reader import read_deck
 from mace_fmu.pipeline import StructureModes, compute_modes
+from mace_fmu.text import hz_text
 
 
 def _modes_json(result: StructureModes) -> dict:
@@ -35,7 +36,7 @@ def _print_modes(result: StructureModes) -> None:
     print(f"{result.structure.kind} modes of {result.structure.deck.path}{pre}")
     print(f"{'mode':>4s} {'frequency Hz':>13s}  label")
     for i, (f, lab) in enumerate(zip(result.modes.frequencies_hz, result.modes.labels)):
-        print(f"{i + 1:4d} {f:13.4f}  {lab}")
+        print(f"{i + 1:4d} {hz_text(f, decimals=4):>13s}  {lab}")
     p = result.mass_properties
     j = np.diag(p.inertia_about_reference_kgm2)
     print(f"mass {p.mass_kg:.4f} kg, centre of mass {np.round(p.center_of_mass_m, 5).tolist()} m, inertia about "
@@ -44,8 +45,9 @@ def _print_modes(result: StructureModes) -> None:
 
 def cmd_modes(args: argparse.Namespace) -> int:
     deck = read_deck(args.deck)
-    result = compute_modes(deck, structure=args.structure, preload=args.preload, mass=args.mass, max_hz=args.max_hz,
-                           progress=None if args.json else progress)
+    with progress_bar() as bar:
+        result = compute_modes(deck, structure=args.structure, preload=args.preload, mass=args.mass,
+                               max_hz=args.max_hz, progress=bar)
     if args.json:
         json.dump(_modes_json(result), sys.stdout, indent=1)
         print()

@@ -12,7 +12,7 @@ def cmd_report(args: argparse.Namespace) -> int:
     from mace_fmu.report import bode_report
 
     for path in bode_report(read_deck(args.deck), out_dir=args.out, progress=progress):
-        print(path)
+        print(f"wrote {path}")
     return 0
 
 

@@ -7,33 +7,9 @@ import json
 import sys
 from pathlib import Path
 
-from mace_fmu.cli.common import deck_option
+from mace_fmu.cli.common import deck_option, progress_bar
 from mace_fmu.deck.reader import read_deck
 from mace_fmu.errors import MaceError
-
-
-class ProgressBars:
-    """One tqdm bar per batch of model evaluations (the library reports (what, done, total))."""
-
-    def __init__(self) -> None:
-        self._bar = None
-        self._what = None
-
-    def __call__(self, what: str, done: int, total: int) -> None:
-        from tqdm import tqdm
-
-        if self._bar is None or what != self._what or done == 1:
-            self.close()
-            self._bar = tqdm(total=total or None, desc=f"  {what}", unit="model", leave=False, file=sys.stderr)
-            self._what = what
-        self._bar.update(done - self._bar.n)
-        if total and done >= total:
-            self.close()
-
-    def close(self) -> None:
-        if self._bar is not None:
-            self._bar.close()
-            self._bar = None
 
 
 def _say(message: str) -> None:
@@ -73,12 +49,9 @@ def cmd_update(args: argparse.Namespace) -> int:
     deck = read_deck(args.deck)
     start = ParameterSet.read(args.start) if args.start else None
     settings = UpdateSettings(method=args.method, perturbation=args.perturbation, rounds=args.rounds)
-    bars = ProgressBars()
-    try:
-        outcome = run_mace_update(start=start, preload=args.preload, settings=settings, deck=deck, progress=bars,
+    with progress_bar() as bar:
+        outcome = run_mace_update(start=start, preload=args.preload, settings=settings, deck=deck, progress=bar,
                                   message=_say)
-    finally:
-        bars.close()
     _say(f"writing the report to {out}/")
     paths = write_report(outcome, out)
     s = scores(mode_rows(outcome))

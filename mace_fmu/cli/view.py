@@ -5,26 +5,38 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from mace_fmu.cli.common import deck_option, model_options, progress, volts
+from mace_fmu.cli.common import deck_option, model_options, progress, progress_bar, volts
 from mace_fmu.deck.reader import read_deck
 from mace_fmu.errors import MaceError
 from mace_fmu.pipeline import compute_modes
 
+#: viewer.camera.CAMERA_VIEWS, spelled out so that `mace-fmu --help` does not import meshcat
+CAMERA_CHOICES = ("iso", "x", "y", "z")
+
 
 def _show(animation, args: argparse.Namespace, *, title: str) -> None:
-    """Write the animation to --html and/or serve it on a live meshcat server until Ctrl-C."""
-    from viewer import scene_commands, send_to_visualizer, write_animation_html  # meshcat only here
+    """Write the animation to --html, a still of it to --png, and/or serve it live until Ctrl-C."""
+    import tempfile
+
+    from viewer import scene_commands, send_to_visualizer, write_animation_html, write_still  # meshcat only here
 
     if args.html:
-        size = write_animation_html(animation, args.html, title=title)
+        size = write_animation_html(animation, args.html, title=title, camera=args.camera)
         print(f"wrote {args.html} ({size / 1e6:.1f} MB, {animation.frames.times_s.size} frames)")
+    if args.png:
+        with tempfile.TemporaryDirectory(prefix="mace_fmu_page_") as tmp:
+            page = args.html or Path(tmp) / "page.html"
+            if not args.html:
+                write_animation_html(animation, page, title=title, camera=args.camera)
+            write_still(page, args.png)
+        print(f"wrote {args.png} (still from headless Chromium, {args.camera} view)")
     if args.live:
         import time
 
         import meshcat
 
         visualizer = meshcat.Visualizer()
-        send_to_visualizer(visualizer, scene_commands(animation.scene, animation.frames))
+        send_to_visualizer(visualizer, scene_commands(animation.scene, animation.frames, camera=args.camera))
         print(f"meshcat server at {visualizer.url()} - Ctrl-C to stop", flush=True)
         try:
             while True:
@@ -34,8 +46,60 @@ def _show(animation, args: argparse.Namespace, *, title: str) -> None:
 
 
 def _need_target(args: argparse.Namespace) -> None:
-    if not args.html and not args.live:
-        raise MaceError("say where to show the animation: --html OUT.html, --live, or both")
+    """An output is named, and a still can be taken (before any work is done)."""
+    from viewer import chromium_executable
+
+    if not (args.html or args.png or args.live):
+        raise MaceError("say where to show the animation: --html OUT.html, --png OUT.png, --live, or several")
+    if args.png and chromium_executable() is None:
+        raise MaceError("--png needs headless Chromium, which is not installed (Debian: apt-get install chromium); "
+                        "use --html and open the page in a browser")
+
+
+def _check_signals(args: argparse.Namespace, deck) -> str:
+    """Check --output (a sensor or a grid motion of this structure) and the run's times; returns the output.
+
+    --input is checked by argparse (its choices). The default output is the sensor collocated
+    with the input. All of this is known before anything is exported or simulated.
+    """
+    from mace_fmu.deck.geometry import grid_positions
+    from mace_fmu.fmu.simulate import communication_times, input_signal
+    from mace_fmu.iomodel.collocation import collocated_sensor
+    from mace_fmu.iomodel.instruments import load_instruments
+    from mace_fmu.iomodel.motion import MOTION_COMPONENTS, parse_motion_output
+    from mace_fmu.structure import build_structure
+
+    input_signal(args.signal, communication_times(duration_s=args.duration, step_s=args.step),
+                 amplitude_v=args.amplitude, chirp_hz=tuple(args.chirp_hz))
+    instruments = load_instruments()
+    if args.output is None:
+        return collocated_sensor(instruments, args.input, grid_positions(deck))
+    sensors = [s.name for s in instruments.sensors]
+    motion = parse_motion_output(args.output)
+    grids = build_structure(deck, kind=args.structure).deck.grids
+    if args.output in sensors or (motion is not None and motion[0] in grids):
+        return args.output
+    raise MaceError(f"--output {args.output!r} is not an output of the {args.structure} model: use a sensor "
+                    f"({', '.join(sensors)}) or grid_<id>_<{'|'.join(MOTION_COMPONENTS)}> for one of its "
+                    f"{len(grids)} grids")
+
+
+def _checked_fmu(path: str, structure: str) -> Path:
+    """--fmu: an existing MACE FMU of this structure with grid motion outputs."""
+    import fmpy
+
+    from mace_fmu.iomodel.motion import parse_motion_output
+
+    fmu = Path(path)
+    if not fmu.is_file():
+        raise MaceError(f"--fmu {fmu}: no such file")
+    md = fmpy.read_model_description(str(fmu))
+    if not (md.description or "").startswith(f"MACE {structure} "):
+        raise MaceError(f"--fmu {fmu} is not a MACE {structure} model (its description: {md.description!r})")
+    if not any(parse_motion_output(v.name) for v in md.modelVariables if v.causality == "output"):
+        raise MaceError(f"--fmu {fmu} has no grid motion outputs; export one with "
+                        f"mace-fmu export {structure} --motion-grids all")
+    return fmu
 
 
 def cmd_view_response(args: argparse.Namespace) -> int:
@@ -44,24 +108,19 @@ def cmd_view_response(args: argparse.Namespace) -> int:
     from viewer import animate_response, plot_response
 
     _need_target(args)
-    out_dir = Path(args.html).parent if args.html else Path(".")
+    deck = read_deck(args.deck)
+    output = _check_signals(args, deck)
+    out_dir = Path(args.html or args.png).parent if (args.html or args.png) else Path(".")  # FMU next to the page
     if args.fmu:
-        import fmpy
-
-        fmu = Path(args.fmu)
-        if not fmu.exists():
-            raise MaceError(f"--fmu {fmu}: no such file")
-        described = fmpy.read_model_description(str(fmu)).description or ""
-        if not described.startswith(f"MACE {args.structure} "):
-            raise MaceError(f"--fmu {fmu} is not a MACE {args.structure} model (its description: {described!r})")
+        fmu = _checked_fmu(args.fmu, args.structure)
         # only the scene is needed from the FE model: its lowest modes are enough
-        modes = compute_modes(read_deck(args.deck), structure=args.structure, preload=args.preload, max_hz=1.0,
-                              progress=progress)
+        with progress_bar() as bar:
+            modes = compute_modes(deck, structure=args.structure, preload=args.preload, max_hz=1.0, progress=bar)
     else:
         progress(f"{args.structure} volts-volts model with the motion of every grid")
         model = volts(args, motion_grids="all")
         modes = model.structure_modes
-        fmu = export_fmu(model, out_dir=out_dir, name=f"MACE_{args.structure}_motion")
+        fmu = export_fmu(model, out_dir=out_dir)  # the name `mace-fmu export --motion-grids all` gives it
         print(f"wrote {fmu} (reuse it with --fmu)")
     progress(f"simulating {args.duration} s of {args.signal} on {args.input} through fmpy")
     run = simulate_input_response(fmu, input_name=args.input, signal=args.signal, duration_s=args.duration,
@@ -69,25 +128,18 @@ def cmd_view_response(args: argparse.Namespace) -> int:
     animation = animate_response(modes, run, scale=args.scale, playback_speed=args.speed, fps=args.fps)
     print(f"  {animation.frames.times_s.size} frames at {animation.frames.fps:.3g} frames/s of playback, "
           f"{args.speed:g} simulated s per s, motion drawn x {animation.scale:.4g}")
-    output = args.output or _collocated_output(args.input, run)
     if args.html:
-        png = plot_response(run, output_name=output, path=Path(args.html).with_suffix(".png"),
+        png = plot_response(run, output_name=output, path=signals_plot_path(args.html),
                             title=f"MACE {args.structure}: {args.signal} on {args.input}")
-        print(f"wrote {png}")
+        print(f"wrote {png} ({args.input} and {output} over time)")
     _show(animation, args, title=f"MACE {args.structure}: {args.signal} response to {args.input}")
     return 0
 
 
-def _collocated_output(input_name: str, run) -> str:
-    """The sensor that closes the input's local loop (encoder, tachometer), else the first sensor output."""
-    from mace_fmu.iomodel.instruments import load_instruments
-    from mace_fmu.iomodel.motion import parse_motion_output
-
-    servos = load_instruments().servos
-    partner = {**servos.gimbals, **servos.wheels}.get(input_name)
-    if partner in run.outputs:
-        return partner
-    return next((n for n in run.outputs if parse_motion_output(n) is None), next(iter(run.outputs)))
+def signals_plot_path(html: str | Path) -> Path:
+    """Where view response puts its plot of input and output: <page name>_signals.png next to the page."""
+    html = Path(html)
+    return html.with_name(f"{html.stem}_signals.png")
 
 
 def cmd_view(args: argparse.Namespace) -> int:
@@ -96,7 +148,8 @@ def cmd_view(args: argparse.Namespace) -> int:
     _need_target(args)
     deck = read_deck(args.deck)
     max_hz = args.max_hz if args.max_hz is not None else (None if args.mode else 60.0)
-    result = compute_modes(deck, structure=args.structure, max_hz=max_hz, progress=progress)
+    with progress_bar() as bar:
+        result = compute_modes(deck, structure=args.structure, max_hz=max_hz, progress=bar)
     modes = args.mode or list(range(1, result.modes.frequencies_hz.size + 1))
     animation = animate_modes(result, modes, scale=args.scale, cycles=args.cycles,
                               seconds_per_cycle=args.seconds_per_cycle)
@@ -106,7 +159,18 @@ def cmd_view(args: argparse.Namespace) -> int:
     return 0
 
 
+def _output_options(p: argparse.ArgumentParser, *, html: str) -> None:
+    """Where the animation goes and from where it is seen (both view commands)."""
+    p.add_argument("--html", help=html)
+    p.add_argument("--png", help="write a still of the page (1200 x 800) through headless Chromium, if installed")
+    p.add_argument("--camera", choices=CAMERA_CHOICES, default="iso",
+                   help="initial view: iso (3/4 view, default), or along the x, y (from above) or z axis")
+    p.add_argument("--live", action="store_true", help="also serve it on a live meshcat server until Ctrl-C")
+
+
 def register(sub: argparse._SubParsersAction) -> None:
+    from mace_fmu.iomodel.instruments import load_instruments  # the signal names for --help (a small TOML file)
+
     p = sub.add_parser("view", help="meshcat animation of mode shapes or FMU time responses (standalone HTML)")
     view = p.add_subparsers(dest="what", required=True)
     p = view.add_parser("modes", help="animate mode shapes (one clip per mode, one after the other)")
@@ -119,14 +183,15 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="metres drawn per unit mass-normalised shape (default: largest motion 8%% of the size)")
     p.add_argument("--cycles", type=int, default=1, help="vibration cycles per mode (default 1)")
     p.add_argument("--seconds-per-cycle", type=float, default=1.0, help="playback time of one cycle [s]")
-    p.add_argument("--html", help="write a standalone HTML file (opens in any browser, no server)")
-    p.add_argument("--live", action="store_true", help="also serve it on a live meshcat server until Ctrl-C")
+    _output_options(p, html="write a standalone HTML file (opens in any browser, no server)")
     p.set_defaults(func=cmd_view)
 
     p = view.add_parser("response", help="an FMU's time response to one input, played on the mesh (fmpy)")
     p.add_argument("structure", choices=["1g", "0g"])
     deck_option(p)
-    p.add_argument("--input", required=True, help="the driven input, e.g. gimbal_secondary_z")
+    instruments = load_instruments()
+    p.add_argument("--input", required=True, choices=[a.name for a in instruments.actuators], metavar="INPUT",
+                   help="the driven input: " + ", ".join(a.name for a in instruments.actuators))
     p.add_argument("--signal", choices=["step", "chirp", "impulse"], default="step",
                    help="step from t = 0, chirp (see --chirp-hz), or a pulse over the first step (default step)")
     p.add_argument("--duration", type=float, default=2.0, help="simulated time [s] (default 2)")
@@ -138,9 +203,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--fps", type=float, default=50.0, help="key frames per second of playback (default 50)")
     p.add_argument("--scale", type=float, default=None,
                    help="magnification of the motion (default: largest motion 8%% of the size)")
-    p.add_argument("--output", help="output plotted next to the input (default: the input's encoder or tachometer)")
+    p.add_argument("--output", help="output plotted next to the input: a sensor (" + ", ".join(
+        s.name for s in instruments.sensors) + ") or grid_<id>_<tx|ty|tz|rx|ry|rz> (default: the sensor "
+                   "collocated with the input: its encoder or tachometer, the active strut's strain gauge)")
     p.add_argument("--fmu", help="an FMU with motion outputs to run (default: export one next to the HTML)")
-    p.add_argument("--html", help="write a standalone HTML file and, next to it, a PNG plot of input and output")
-    p.add_argument("--live", action="store_true", help="also serve it on a live meshcat server until Ctrl-C")
+    _output_options(p, html="write a standalone HTML file and, next to it, <name>_signals.png: input and output "
+                    "over time")
     model_options(p, motion=False)  # the exported FMU carries the motion of every grid
     p.set_defaults(func=cmd_view_response)

@@ -27,7 +27,7 @@ def read_deck(path: str | os.PathLike[str]) -> Deck:
     try:
         text = Path(path).read_text(encoding="utf-8", errors="replace")
     except FileNotFoundError:
-        raise DeckError("the deck file does not exist", file=name, line=0) from None
+        raise DeckError("no such file", file=name, line=0) from None
     except OSError as exc:
         raise DeckError(f"cannot read the deck file ({exc.strerror})", file=name, line=0) from None
     return read_deck_text(text, name=name)

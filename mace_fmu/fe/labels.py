@@ -16,6 +16,10 @@ Rules, in order:
 4. Otherwise bus bending about Y or Z, or torsion, whichever holds most bus strain energy;
    bending modes are numbered by frequency within their family, torsion modes by the end
    (primary at low x, secondary at high x) holding most of the torsional strain energy.
+
+Every label of a model is unique: a violin mode shared by two cables says whether they swing in
+phase or in antiphase, and any label that still repeats is numbered in frequency order, the
+first keeping the plain label (Table 5.1's "torsion, primary end", then "2nd torsion, primary end").
 """
 
 from __future__ import annotations
@@ -156,31 +160,68 @@ def _zero_cluster(model: FEModel, modes: Modes, spec: StructureSpec, zero: np.nd
     return _m_orthonormal(np.hstack([basis, mechs]), mass), names
 
 
+def _cable_profile(model: FEModel, modes: Modes, spec: StructureSpec, cable: str, m: int, along: np.ndarray
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(fraction of the cable's length, translations (n, 3), unit axis) of cable grids in mode ``m``.
+
+    Grids are ordered along ``along`` (so that parallel cables are walked the same way).
+    """
+    grids = sorted((g for g in spec.components[cable] if g in model.dofs.grid_ids),
+                   key=lambda g: model.positions[model.dofs.grid_index(g)] @ along)
+    pts = np.array([model.positions[model.dofs.grid_index(g)] for g in grids])
+    chord = pts[-1] - pts[0]
+    fraction = (pts - pts[0]) @ chord / (chord @ chord)
+    disp = np.array([modes.shapes[model.dofs.indices(g)[:3], m] for g in grids])
+    return fraction, disp, chord / np.linalg.norm(chord)
+
+
 def _cable_label(model: FEModel, modes: Modes, spec: StructureSpec, m: int, ke_cables: dict[str, float]) -> str:
-    """'2nd in-plane violin, cable 3' (or 'cables 1 and 3' when two share the energy)."""
+    """'2nd in-plane violin, cable 3'; 'cables 1 and 3' when two share the energy, with
+    'in-phase' or 'antiphase' before 'violin' (the two cables' lateral deflections alike or opposite)."""
     cables = sorted(n for n, e in ke_cables.items() if e >= 0.25) or [max(ke_cables, key=ke_cables.get)]
     main = max(cables, key=lambda n: ke_cables[n])
     all_cable = np.array([model.positions[model.dofs.grid_index(g)] for n in ke_cables
                           for g in spec.components[n] if g in model.dofs.grid_ids])
     _, _, vt = np.linalg.svd(all_cable - all_cable.mean(axis=0))
     normal = vt[2]
-    grids = sorted((g for g in spec.components[main] if g in model.dofs.grid_ids),
-                   key=lambda g: model.positions[model.dofs.grid_index(g)] @ vt[0])
-    pts = np.array([model.positions[model.dofs.grid_index(g)] for g in grids])
-    axis = (pts[-1] - pts[0]) / np.linalg.norm(pts[-1] - pts[0])
+    fraction, disp, axis = _cable_profile(model, modes, spec, main, m, vt[0])
     in_plane = np.cross(normal, axis)
-    disp = np.array([modes.shapes[model.dofs.indices(g)[:3], m] for g in grids])
     numbers = " and ".join(n.split("_", 1)[1] for n in cables)
     axial = disp @ axis
     if np.sum(axial**2) > np.sum((disp - np.outer(axial, axis)) ** 2):
         # the carriage bouncing on the cable's axial stiffness, not a string mode
         return f"axial (carriage bounce), {'cables' if len(cables) > 1 else 'cable'} {numbers}"
-    disp = disp - np.linspace(disp[0], disp[-1], len(disp))  # relative to the moving chord
-    w_in, w_out = disp @ in_plane, disp @ normal
-    plane, w = ("in-plane", w_in) if np.sum(w_in**2) >= np.sum(w_out**2) else ("out-of-plane", w_out)
+
+    def lateral(fraction: np.ndarray, disp: np.ndarray, direction: np.ndarray) -> np.ndarray:
+        """Deflection along ``direction`` relative to the moving chord."""
+        return (disp - np.outer(1.0 - fraction, disp[0]) - np.outer(fraction, disp[-1])) @ direction
+
+    w_in, w_out = lateral(fraction, disp, in_plane), lateral(fraction, disp, normal)
+    plane, w, direction = (("in-plane", w_in, in_plane) if np.sum(w_in**2) >= np.sum(w_out**2)
+                           else ("out-of-plane", w_out, normal))
     significant = w[1:-1][np.abs(w[1:-1]) > 0.05 * np.abs(w).max()]
     order = 1 + int(np.sum(np.diff(np.sign(significant)) != 0))
-    return f"{ordinal(order)} {plane} violin, {'cables' if len(cables) > 1 else 'cable'} {numbers}"
+    phase = ""
+    if len(cables) == 2:  # the cables are parallel: compare deflections at the same fractions of length
+        other = next(n for n in cables if n != main)
+        f_other, d_other, _ = _cable_profile(model, modes, spec, other, m, vt[0])
+        w_other = np.interp(fraction, f_other, lateral(f_other, d_other, direction))
+        phase = "in-phase " if w @ w_other >= 0.0 else "antiphase "
+    return f"{ordinal(order)} {plane} {phase}violin, {'cables' if len(cables) > 1 else 'cable'} {numbers}"
+
+
+def unique_labels(labels: list[str], frequencies_hz: np.ndarray) -> tuple[str, ...]:
+    """Labels with every repeat numbered: the lowest-frequency mode keeps the label (Table 5.1's
+    'torsion, primary end'), the k-th gets its ordinal in front ('2nd torsion, primary end')."""
+    seen: dict[str, int] = {}
+    out = list(labels)
+    for m in np.argsort(frequencies_hz, kind="stable"):
+        seen[labels[m]] = seen.get(labels[m], 0) + 1
+        if seen[labels[m]] > 1:
+            out[m] = f"{ordinal(seen[labels[m]])} {labels[m]}"
+    if len(set(out)) != len(out):  # a numbered label equal to another label: number by index instead
+        out = [f"{lab} (mode {m + 1})" if out.count(lab) > 1 else lab for m, lab in enumerate(out)]
+    return tuple(out)
 
 
 def label_modes(model: FEModel, modes: Modes, spec: StructureSpec, *, reference: np.ndarray,
@@ -259,4 +300,4 @@ def label_modes(model: FEModel, modes: Modes, spec: StructureSpec, *, reference:
             else:
                 counters[family] += 1
                 labels[m] = f"{ordinal(counters[family])} {family} bending"
-    return replace(modes, labels=tuple(labels))
+    return replace(modes, labels=unique_labels(labels, modes.frequencies_hz))

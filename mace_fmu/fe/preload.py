@@ -10,6 +10,7 @@ Two options, as offered by NASTRAN:
 
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass
 from typing import Callable, Literal
 
@@ -23,9 +24,10 @@ from mace_fmu.fe.assembly import FEModel
 from mace_fmu.fe.constraints import Constraints
 from mace_fmu.fe.corotational import (BarState, bar_dof_indices, deformation_derivatives, internal_force,
                                       rotation_matrix, tangent)
+from mace_fmu.progress import ProgressCallback, Step
 
 PreloadKind = Literal["large", "linear"]
-Progress = Callable[[str], None]
+_log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True)
@@ -86,7 +88,7 @@ def _factor(k: np.ndarray | sparse.sparray) -> Callable[[np.ndarray], np.ndarray
 
 def large_displacement_preload(model: FEModel, constraints: Constraints, load: np.ndarray, *, increments: int = 10,
                                max_iterations: int = 25, path_tolerance: float = 1e-3,
-                               final_tolerance: float = 1e-14, progress: Progress | None = None) -> Preload:
+                               final_tolerance: float = 1e-14, progress: ProgressCallback | None = None) -> Preload:
     """Incremental Newton solution on the updated geometry (dead load), tangent of the final state.
 
     Intermediate increments only have to stay on the load path: a secant predictor, then
@@ -135,8 +137,10 @@ def large_displacement_preload(model: FEModel, constraints: Constraints, load: n
             raise MaceError(f"gravity preload did not converge: increment {step}/{increments}, work ratio "
                             f"{work_ratio:.2e} after {max_iterations} iterations")
         last_increment = u - u_start
+        detail = f"{it} iterations, work ratio {work_ratio:.1e}"
+        _log.debug("gravity preload increment %d/%d: %s", step, increments, detail)
         if progress is not None:
-            progress(f"preload increment {step}/{increments}: {it} iterations, work ratio {work_ratio:.1e}")
+            progress(Step(task="gravity preload", done=step, total=increments, detail=detail))
     f_int, k_bars, forces = tangent(model.bars, state, n)
     ratio = np.linalg.norm(t.T @ (load - f_int - model.spring_stiffness @ u)) / np.linalg.norm(t.T @ load)
     return Preload(kind="large", displacements=u, tangent_stiffness=k_bars.toarray() + model.spring_stiffness,

@@ -24,6 +24,7 @@ import numpy as np
 from pythonfmu.builder import FmuBuilder
 
 from mace_fmu.atomic import atomic_path
+from mace_fmu.fmu.naming import fmu_name
 from mace_fmu.iomodel import modal_core, parametric, reanalysis
 from mace_fmu.iomodel.motion import motion_unit, parse_motion_output
 from mace_fmu.iomodel.parametric_data import parametric_arrays
@@ -125,9 +126,10 @@ def _entry_script(name: str, description: str) -> str:
 
 
 def export_fmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str | None = None) -> Path:
-    """Write ``out_dir/<name>.fmu`` (default name MACE_1g / MACE_0g) and return its path."""
+    """Write ``out_dir/<name>.fmu`` (default name from ``fmu_name``: MACE_1g, MACE_1g_motion, ...); returns its path."""
     kind = model.structure_modes.structure.kind
-    name = name or f"MACE_{kind}"
+    name = name or fmu_name(kind, motion_grids=model.plant.motion_grids,
+                            all_grids=model.structure_modes.model.dofs.grid_ids)
     if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", name):
         raise ValueError(f"FMU name must be a Python/C identifier (it names the model class), got {name!r}")
     out = Path(out_dir)

@@ -61,6 +61,17 @@ def input_signal(kind: SignalKind, times_s: np.ndarray, *, amplitude_v: float = 
     raise MaceError(f"signal must be one of {', '.join(SIGNALS)}, got {kind!r}")
 
 
+def communication_times(*, duration_s: float, step_s: float) -> np.ndarray:
+    """Communication points [s] from 0 to ``duration_s`` at ``step_s``; the duration must be whole steps."""
+    if not (duration_s > 0 and step_s > 0 and duration_s >= step_s):
+        raise MaceError(f"need duration_s >= step_s > 0 [s], got duration {duration_s} s, step {step_s} s")
+    n_steps = int(round(duration_s / step_s))
+    if abs(n_steps * step_s - duration_s) > 1e-9 * duration_s:
+        raise MaceError(f"duration {duration_s} s is not a whole number of {step_s} s steps; "
+                        f"use e.g. {n_steps * step_s:g} s or {(n_steps + 1) * step_s:g} s")
+    return np.arange(n_steps + 1) * step_s
+
+
 def simulate_input_response(fmu: str | os.PathLike, *, input_name: str, signal: SignalKind = "step",
                             duration_s: float = 2.0, step_s: float = 0.002, amplitude_v: float = 1.0,
                             chirp_hz: tuple[float, float] = (0.1, 10.0),
@@ -71,8 +82,7 @@ def simulate_input_response(fmu: str | os.PathLike, *, input_name: str, signal: 
     ``step_s`` [s] for ``duration_s`` [s] and sampled at every step; ``in_subprocess`` runs fmpy
     in a fresh worker process (see the module docstring).
     """
-    if not (duration_s > 0 and step_s > 0 and duration_s >= step_s):
-        raise MaceError(f"need duration_s >= step_s > 0 [s], got duration {duration_s} s, step {step_s} s")
+    t = communication_times(duration_s=duration_s, step_s=step_s)
     md = fmpy.read_model_description(str(fmu))
     variables = {v.name: v for v in md.modelVariables}
     ins = [v.name for v in md.modelVariables if v.causality == "input"]
@@ -83,11 +93,6 @@ def simulate_input_response(fmu: str | os.PathLike, *, input_name: str, signal: 
     unknown = [n for n in recorded if n not in outs]
     if unknown:
         raise MaceError(f"{os.fspath(fmu)} has no output(s) {', '.join(unknown)}; outputs: {', '.join(outs)}")
-    n_steps = int(round(duration_s / step_s))
-    if abs(n_steps * step_s - duration_s) > 1e-9 * duration_s:
-        raise MaceError(f"duration {duration_s} s is not a whole number of {step_s} s steps; "
-                        f"use e.g. {n_steps * step_s:g} s or {(n_steps + 1) * step_s:g} s")
-    t = np.arange(n_steps + 1) * step_s
     u = input_signal(signal, t, amplitude_v=amplitude_v, chirp_hz=chirp_hz)
     table = np.zeros(len(t), dtype=[("time", float)] + [(n, float) for n in ins])
     table["time"], table[input_name] = t, u

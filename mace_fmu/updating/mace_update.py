@@ -24,7 +24,8 @@ from mace_fmu.updating.costs import ModalCost, scalar_cost
 from mace_fmu.updating.data import MeasuredMode
 from mace_fmu.updating.mace_family import MaceFamily
 from mace_fmu.updating.selection import Selection, SelectionRule, select_parameters
-from mace_fmu.updating.sensitivity import CostSensitivities, Progress, cost_sensitivities
+from mace_fmu.progress import ProgressCallback
+from mace_fmu.updating.sensitivity import CostSensitivities, cost_sensitivities
 from mace_fmu.updating.solve import Bounds, Stage, UpdateResult, UpdateSettings, update
 
 #: the 13 candidates of section 4.5, numbered as in Figures 4.11 and 4.12
@@ -113,7 +114,7 @@ class MaceUpdate:
 def run_mace_update(*, start: ParameterSet | None = None, preload: PreloadKind = "large",
                     settings: UpdateSettings = UpdateSettings(rounds=2), rule: SelectionRule | None = None,
                     candidates: Sequence[str] = CANDIDATES, deck=None, runner: Callable = map,
-                    progress: Progress | None = None, message: Callable[[str], None] | None = None) -> MaceUpdate:
+                    progress: ProgressCallback | None = None, message: Callable[[str], None] | None = None) -> MaceUpdate:
     """Selection on the candidates about ``start`` (default: the pre-update moduli), then the update."""
     seconds: dict[str, float] = {}
     say = message or (lambda text: None)

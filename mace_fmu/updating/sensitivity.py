@@ -7,12 +7,11 @@ from typing import Callable, Mapping, Sequence
 
 import numpy as np
 
+from mace_fmu.progress import ProgressCallback, Step
 from mace_fmu.updating.costs import Cost
 from mace_fmu.updating.inclusion import Evaluator
 from mace_fmu.updating.model import LinearModel
 
-#: (what, done, total): progress of a batch of model evaluations
-Progress = Callable[[str, int, int], None]
 
 
 @dataclass(frozen=True)
@@ -33,7 +32,7 @@ class CostSensitivities:
 
 def cost_sensitivities(cost: Cost, *, base_model: LinearModel, perturbed: Evaluator, base: Mapping[str, float],
                        names: Sequence[str], relative_step: float = 1e-2, perturbation: str = "",
-                       runner: Callable = map, progress: Progress | None = None) -> CostSensitivities:
+                       runner: Callable = map, progress: ProgressCallback | None = None) -> CostSensitivities:
     """j0 of ``base_model`` and one perturbed model per name (``base`` with that value times
     1 + ``relative_step``), the N + 1 evaluations of the cost-sensitivity method."""
     j0 = cost.residual(base_model)
@@ -46,7 +45,7 @@ def cost_sensitivities(cost: Cost, *, base_model: LinearModel, perturbed: Evalua
     for k, j in enumerate(runner(residual, points)):
         columns.append((j - j0) / relative_step)
         if progress is not None:
-            progress("cost sensitivities", k + 1, len(points))
+            progress(Step("cost sensitivities", k + 1, len(points), detail=names[k]))
     matrix = np.column_stack(columns) if columns else np.zeros((len(j0), 0))
     return CostSensitivities(names=tuple(names), base=dict(base), j0=j0, matrix=matrix, relative_step=relative_step,
                              perturbation=perturbation)

@@ -33,7 +33,8 @@ from scipy.optimize import least_squares
 from mace_fmu.errors import MaceError
 from mace_fmu.updating.costs import Cost, scalar_cost
 from mace_fmu.updating.inclusion import ModelFamily, evaluator
-from mace_fmu.updating.sensitivity import CostSensitivities, Progress, cost_sensitivities
+from mace_fmu.progress import ProgressCallback, Step
+from mace_fmu.updating.sensitivity import CostSensitivities, cost_sensitivities
 
 Method = Literal["cost-sensitivity", "full", "reanalysis", "modal-sensitivity"]
 
@@ -131,7 +132,7 @@ def _check(names: Sequence[str], start: Mapping[str, float], bounds: Mapping[str
 
 def update(family: ModelFamily, cost: Cost, *, start: Mapping[str, float], stages: Sequence[Stage],
            bounds: Mapping[str, Bounds], settings: UpdateSettings = UpdateSettings(), runner: Callable = map,
-           progress: Progress | None = None) -> UpdateResult:
+           progress: ProgressCallback | None = None) -> UpdateResult:
     """Update ``start`` (every parameter value the family needs) stage by stage to lower ``cost``."""
     t_start = time.perf_counter()
     names_all = sorted({n for s in stages for n in s.parameters})
@@ -235,7 +236,7 @@ def _linearise(family, cost, stage, settings, values, model, names, x_base, w, p
     def fun(x):
         calls[0] += 1
         if progress is not None:
-            progress(f"{stage.name}: least squares on the {settings.method} model", calls[0], 0)
+            progress(Step(f"{stage.name}: least squares on the {settings.method} model", calls[0], calls[0]))
         return np.concatenate([cost.residual(model_at(point(x))), w * x])
 
     def solve(lo, hi):

@@ -1,0 +1,26 @@
+"""File names of exported FMUs: the name says which outputs the FMU has, so variants never overwrite each other."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+#: Up to this many motion grids are spelled out in the name; more are counted.
+LISTED_GRIDS = 6
+
+
+def fmu_name(structure: str, *, motion_grids: Sequence[int] = (), all_grids: Sequence[int] = ()) -> str:
+    """Model name (and .fmu file stem) of a MACE FMU, e.g. MACE_1g, MACE_1g_motion, MACE_0g_motion_1_7.
+
+    No motion outputs: ``MACE_<structure>``; the motion of every grid in ``all_grids``:
+    ``MACE_<structure>_motion``; a few grids: their IDs; more than ``LISTED_GRIDS``:
+    ``MACE_<structure>_motion_<count>_grids``.
+    """
+    base = f"MACE_{structure}"
+    grids = sorted(set(int(g) for g in motion_grids))
+    if not grids:
+        return base
+    if all_grids and grids == sorted(set(int(g) for g in all_grids)):
+        return f"{base}_motion"
+    if len(grids) <= LISTED_GRIDS:
+        return f"{base}_motion_" + "_".join(str(g) for g in grids)
+    return f"{base}_motion_{len(grids)}_grids"

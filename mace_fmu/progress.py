@@ -1,0 +1,20 @@
+"""Progress of long computations, reported to a callback (the library never prints)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+
+@dataclass(frozen=True)
+class Step:
+    """``done`` of ``total`` steps of ``task`` are finished, e.g. 3 of 20 gravity-preload increments."""
+
+    task: str
+    done: int
+    total: int
+    detail: str = ""  #: e.g. "2 iterations, work ratio 3.5e-07"
+
+
+#: What long computations call after each step (``compute_modes(..., progress=...)``).
+ProgressCallback = Callable[[Step], None]

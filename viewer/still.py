@@ -1,0 +1,47 @@
+"""Stills of a page: headless Chromium renders the standalone HTML and saves a PNG."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import tempfile
+from pathlib import Path
+
+from mace_fmu.atomic import atomic_path
+from mace_fmu.errors import MaceError
+
+#: Executable names of Chromium, in the order they are looked up on PATH (Debian: chromium).
+CHROMIUM_NAMES = ("chromium", "chromium-browser", "google-chrome")
+
+
+def chromium_executable() -> str | None:
+    """Path of a Chromium on PATH, or None."""
+    return next((found for name in CHROMIUM_NAMES if (found := shutil.which(name))), None)
+
+
+def write_still(page: str | os.PathLike, png: str | os.PathLike, *, width_px: int = 1200, height_px: int = 800,
+                virtual_time_s: float = 3.0, timeout_s: float = 240.0) -> Path:
+    """Render ``page`` in headless Chromium (software WebGL) and write ``png``.
+
+    The picture is taken after ``virtual_time_s`` [s] of Chromium's virtual time, page loading
+    included (about 2 s of it for a 1-g page), so the animation has played a little.
+    """
+    chromium = chromium_executable()
+    if chromium is None:
+        raise MaceError(f"a PNG still needs headless Chromium, and none of {', '.join(CHROMIUM_NAMES)} is on PATH "
+                        "(Debian: apt-get install chromium)")
+    page = Path(page).resolve()
+    with tempfile.TemporaryDirectory(prefix="mace_fmu_chromium_") as profile, atomic_path(png) as part:
+        shot = Path(profile) / "still.png"  # then moved onto the temporary name next to ``png``
+        done = subprocess.run([chromium, "--headless", "--no-sandbox", "--disable-gpu", "--enable-unsafe-swiftshader",
+                               "--use-angle=swiftshader", "--disable-quic", "--no-first-run",
+                               "--disable-background-networking", "--disable-component-update", "--disable-sync",
+                               f"--user-data-dir={profile}/user", f"--window-size={width_px},{height_px}",
+                               f"--virtual-time-budget={int(round(1000 * virtual_time_s))}", f"--screenshot={shot}",
+                               page.as_uri()], capture_output=True, text=True, timeout=timeout_s)
+        if done.returncode != 0 or not shot.exists():
+            raise MaceError(f"Chromium could not render {page} (exit status {done.returncode}): "
+                            f"{done.stderr.strip()[-1000:]}")
+        shutil.move(shot, part)
+    return Path(png)
