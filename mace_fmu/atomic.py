@@ -6,7 +6,10 @@ import contextlib
 import os
 import tempfile
 from pathlib import Path
-from typing import Iterator
+from typing import TYPE_CHECKING, Iterator
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 
 @contextlib.contextmanager
@@ -31,6 +34,14 @@ def atomic_path(final: str | os.PathLike) -> Iterator[Path]:
     finally:
         with contextlib.suppress(FileNotFoundError):
             tmp_path.unlink()
+
+
+def save_figure_atomic(figure: Figure, path: str | os.PathLike, **savefig_options) -> Path:
+    """Save a matplotlib figure to ``path`` atomically (format from the suffix, PNG without one); returns the path."""
+    path = Path(path)
+    with atomic_path(path) as tmp:
+        figure.savefig(tmp, format=path.suffix.lstrip(".").lower() or "png", **savefig_options)
+    return path
 
 
 def write_text_atomic(path: str | os.PathLike, text: str) -> Path:

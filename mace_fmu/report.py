@@ -11,6 +11,7 @@ matplotlib.use("Agg")  # files only: no display on CI or servers
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from mace_fmu.atomic import save_figure_atomic  # noqa: E402
 from mace_fmu.deck.cards import Deck  # noqa: E402
 from mace_fmu.iomodel.volts import VoltsModel, volts_model  # noqa: E402
 
@@ -55,8 +56,6 @@ def bode_report(deck: Deck | None = None, *, out_dir: str | Path = "report",
         ax_p.set_xlabel("frequency [Hz]")
         ax_p.grid(True, which="both", alpha=0.3)
         fig.tight_layout()
-        path = out / f"bode_{u}_to_{y}.png"
-        fig.savefig(path, dpi=110)
+        paths.append(save_figure_atomic(fig, out / f"bode_{u}_to_{y}.png", dpi=110))
         plt.close(fig)
-        paths.append(path)
     return paths

@@ -10,6 +10,7 @@ from pathlib import Path as FilePath
 import meshcat
 import umsgpack
 
+from mace_fmu.atomic import write_text_atomic
 from viewer.frames import Clip
 
 _VIEWER_JS = FilePath(meshcat.__file__).parent / "viewer" / "dist" / "main.min.js"
@@ -47,6 +48,5 @@ for (const b of blobs) {{
 def write_html(path: str | os.PathLike, commands: list, *, title: str, clips: tuple[Clip, ...] = ()) -> int:
     """Write the standalone page to ``path``; returns its size in bytes."""
     text = standalone_html(commands, title=title, clips=clips)
-    FilePath(path).parent.mkdir(parents=True, exist_ok=True)
-    FilePath(path).write_text(text, encoding="utf-8")
+    write_text_atomic(path, text)  # an interrupted run leaves the previous page, not half of a new one
     return len(text.encode("utf-8"))

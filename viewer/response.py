@@ -12,6 +12,7 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
+from mace_fmu.atomic import save_figure_atomic
 from mace_fmu.errors import MaceError
 from mace_fmu.iomodel.motion import MOTION_COMPONENTS, motion_output_name
 from mace_fmu.pipeline import StructureModes
@@ -102,7 +103,4 @@ def plot_response(run: FmuRun, *, output_name: str, path: str | Path, title: str
     axes[-1].set_xlabel("time [s]")
     fig.suptitle(title)
     fig.tight_layout()
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    return path
+    return save_figure_atomic(fig, path, dpi=110)
