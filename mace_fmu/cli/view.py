@@ -39,6 +39,7 @@ def _need_target(args: argparse.Namespace) -> None:
 
 
 def cmd_view_response(args: argparse.Namespace) -> int:
+    from mace_fmu.fmu.archive import check_fmu
     from mace_fmu.fmu.export import export_fmu
     from mace_fmu.fmu.simulate import simulate_input_response
     from viewer import animate_response, plot_response
@@ -48,9 +49,7 @@ def cmd_view_response(args: argparse.Namespace) -> int:
     if args.fmu:
         import fmpy
 
-        fmu = Path(args.fmu)
-        if not fmu.exists():
-            raise MaceError(f"--fmu {fmu}: no such file")
+        fmu = check_fmu(args.fmu)  # a foreign, damaged or malicious archive is refused before fmpy opens it
         described = fmpy.read_model_description(str(fmu)).description or ""
         if not described.startswith(f"MACE {args.structure} "):
             raise MaceError(f"--fmu {fmu} is not a MACE {args.structure} model (its description: {described!r})")
