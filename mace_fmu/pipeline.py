@@ -18,6 +18,7 @@ from mace_fmu.fe.constraints import build_constraints
 from mace_fmu.fe.labels import label_modes, rigid_body_vectors
 from mace_fmu.fe.modal import Modes, solve_modes
 from mace_fmu.fe.preload import Preload, PreloadKind, large_displacement_preload, linear_preload
+from mace_fmu.threads import single_blas_thread
 from mace_fmu.structure import Structure, StructureKind, StructureSpec, build_structure, bundled_deck_path
 
 DEFAULT_MAX_HZ = 250.0
@@ -86,6 +87,7 @@ def _max_hz(deck: Deck, structure: Structure) -> float:
     return DEFAULT_MAX_HZ
 
 
+@single_blas_thread
 def compute_modes(deck: Deck | str | os.PathLike | None = None, *, structure: StructureKind = "1g",
                   preload: PreloadKind = "large", mass: MassKind = "lumped", max_hz: float | None = None,
                   overrides: Mapping[tuple[str, int], Mapping[str, Any]] | None = None,
