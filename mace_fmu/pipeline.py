@@ -18,8 +18,8 @@ from mace_fmu.fe.constraints import build_constraints
 from mace_fmu.fe.labels import label_modes, rigid_body_vectors
 from mace_fmu.fe.modal import Modes, solve_modes
 from mace_fmu.fe.preload import Preload, PreloadKind, large_displacement_preload, linear_preload
-from mace_fmu.threads import single_blas_thread
 from mace_fmu.structure import Structure, StructureKind, StructureSpec, build_structure, bundled_deck_path
+from mace_fmu.threads import single_blas_thread
 
 DEFAULT_MAX_HZ = 250.0
 
