@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import contextlib
 import os
-import tempfile
+import secrets
 from pathlib import Path
 from typing import TYPE_CHECKING, Iterator
 
@@ -22,14 +22,15 @@ def atomic_path(final: str | os.PathLike) -> Iterator[Path]:
     """
     final = Path(final)
     final.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{final.name}.", suffix=".part", dir=final.parent)
-    os.close(fd)
-    tmp_path = Path(tmp)
+    # The name is chosen before the file exists, so that an interrupt arriving the moment it is
+    # created still finds it in the cleanup below (mkstemp would return it only afterwards).
+    tmp_path = final.parent / f".{final.name}.{secrets.token_hex(6)}.part"
     try:
+        os.close(os.open(tmp_path, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o600))
         yield tmp_path
         mask = os.umask(0)
         os.umask(mask)
-        os.chmod(tmp_path, 0o666 & ~mask)  # mkstemp's 0600 would make every output private
+        os.chmod(tmp_path, 0o666 & ~mask)  # the 0600 it was created with would make every output private
         os.replace(tmp_path, final)
     finally:
         with contextlib.suppress(FileNotFoundError):
