@@ -4,9 +4,12 @@ from __future__ import annotations
 
 import contextlib
 import os
-import tempfile
+import secrets
 from pathlib import Path
-from typing import Iterator
+from typing import TYPE_CHECKING, Iterator
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
 
 
 @contextlib.contextmanager
@@ -19,18 +22,27 @@ def atomic_path(final: str | os.PathLike) -> Iterator[Path]:
     """
     final = Path(final)
     final.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{final.name}.", suffix=".part", dir=final.parent)
-    os.close(fd)
-    tmp_path = Path(tmp)
+    # The name is chosen before the file exists, so that an interrupt arriving the moment it is
+    # created still finds it in the cleanup below (mkstemp would return it only afterwards).
+    tmp_path = final.parent / f".{final.name}.{secrets.token_hex(6)}.part"
     try:
+        os.close(os.open(tmp_path, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o600))
         yield tmp_path
         mask = os.umask(0)
         os.umask(mask)
-        os.chmod(tmp_path, 0o666 & ~mask)  # mkstemp's 0600 would make every output private
+        os.chmod(tmp_path, 0o666 & ~mask)  # the 0600 it was created with would make every output private
         os.replace(tmp_path, final)
     finally:
         with contextlib.suppress(FileNotFoundError):
             tmp_path.unlink()
+
+
+def save_figure_atomic(figure: Figure, path: str | os.PathLike, **savefig_options) -> Path:
+    """Save a matplotlib figure to ``path`` atomically (format from the suffix, PNG without one); returns the path."""
+    path = Path(path)
+    with atomic_path(path) as tmp:
+        figure.savefig(tmp, format=path.suffix.lstrip(".").lower() or "png", **savefig_options)
+    return path
 
 
 def write_text_atomic(path: str | os.PathLike, text: str) -> Path:

@@ -22,6 +22,7 @@ from mace_fmu.fe.preload import Preload, PreloadKind, large_displacement_preload
 from mace_fmu.parameters import ParameterSet, deck_fingerprint, fe_overrides
 from mace_fmu.progress import ProgressCallback
 from mace_fmu.structure import Structure, StructureKind, StructureSpec, build_structure, bundled_deck_path
+from mace_fmu.threads import single_blas_thread
 
 DEFAULT_MAX_HZ = 250.0
 
@@ -99,6 +100,7 @@ def check_parameters_deck(parameters: ParameterSet, deck: Deck) -> None:
                         f"not for {deck.path}; refit it for this deck or remove its deck_sha256")
 
 
+@single_blas_thread
 def compute_modes(deck: Deck | str | os.PathLike | None = None, *, structure: StructureKind = "1g",
                   preload: PreloadKind = "large", mass: MassKind = "lumped", max_hz: float | None = None,
                   overrides: Mapping[tuple[str, int], Mapping[str, Any]] | None = None,

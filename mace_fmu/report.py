@@ -8,7 +8,7 @@ from typing import Callable, Mapping
 import numpy as np
 from matplotlib.figure import Figure  # no pyplot: the caller's backend and figures stay untouched
 
-from mace_fmu.atomic import atomic_path
+from mace_fmu.atomic import save_figure_atomic
 from mace_fmu.deck.cards import Deck
 from mace_fmu.iomodel.volts import VoltsModel, volts_model
 
@@ -61,6 +61,4 @@ def plot_bode(frequencies_hz: np.ndarray, curves: Mapping[str, np.ndarray], *, t
     ax_p.set_xlabel("frequency [Hz]")
     ax_p.grid(True, which="both", alpha=0.3)
     fig.tight_layout()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=110, format="png")
-    return Path(path)
+    return save_figure_atomic(fig, path, dpi=110)

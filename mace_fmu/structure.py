@@ -179,8 +179,9 @@ def remove_suspension(deck: Deck, spec: StructureSpec) -> Deck:
         for card in cards.values():
             dangling = [g for g in grids_of(card) if g in gone_g]
             if dangling:
-                raise MaceError(f"{card.source}: {what} {card.id} connects suspension grid(s) {dangling} but is not "
-                                f"listed as a suspension element in {spec.source}")
+                raise DeckError(f"connects suspension grid(s) {dangling} but is not listed as a suspension element in "
+                                f"{spec.source} (expected every element on a suspension grid listed there)",
+                                file=card.source.file, line=card.source.line, card=f"{what} {card.id}")
     mpcs = {sid: tuple(e for e in eqs if not any(t.grid in gone_g for t in e.terms)) for sid, eqs in deck.mpcs.items()}
     spc1s = {sid: tuple(dataclasses.replace(c, grids=tuple(g for g in c.grids if g not in gone_g)) for c in cards)
              for sid, cards in deck.spc1s.items()}
@@ -193,7 +194,8 @@ def _subcases(deck: Deck) -> tuple[Subcase | None, Subcase]:
     """(preload subcase = first with a LOAD, modal subcase = last) from the deck's case control."""
     cases = [deck.subcases[k] for k in sorted(deck.subcases)] or ([deck.global_case] if deck.global_case else [])
     if not cases:
-        raise MaceError(f"{deck.path}: no case control: cannot tell which SPC/MPC sets to use")
+        raise DeckError("no case control: cannot tell which SPC/MPC sets to use (expected CEND, SUBCASEs selecting "
+                        "SPC, MPC and LOAD, then BEGIN BULK)", file=deck.path, line=1)
     preload = next((c for c in cases if c.load is not None), None)
     return preload, cases[-1]
 
@@ -208,6 +210,8 @@ def build_structure(deck: Deck, *, kind: StructureKind, spec: StructureSpec | No
     preload, modal = _subcases(deck)
     if kind == "1g":
         if preload is None:
-            raise MaceError(f"{deck.path}: the 1-g structure needs a subcase with a LOAD (gravity preload)")
+            raise DeckError("the 1-g structure needs a subcase with a LOAD (gravity preload); none of the subcases "
+                            "selects one (expected LOAD = set ID in the preload subcase)", file=deck.path,
+                            line=modal.source.line, card=f"SUBCASE {modal.id}" if modal.id else "global case control")
         return Structure(kind=kind, deck=deck, preload=preload, modal=modal, spec=spec)
     return Structure(kind=kind, deck=remove_suspension(deck, spec), preload=None, modal=modal, spec=spec)

@@ -187,6 +187,61 @@ BROKEN = [
                  id="nlparm-epsu-integer"),
     pytest.param(base(sf("PARAM", "POST")), 6, "PARAM POST", "field 3 (V1): required field is blank",
                  id="param-no-value"),
+    # --- values checked where they are read, whether or not an element uses the card
+    pytest.param(base(sf("MAT1", 2, "-7.0E10", "", "0.3")), 6, "MAT1 2",
+                 "field 3 (E): value '-7.0E10' is out of range (expected a real number > 0.0)", id="mat1-negative-e"),
+    pytest.param(base(sf("MAT1", 2, "7.0E10", "0.0")), 6, "MAT1 2", "field 4 (G): value '0.0' is out of range",
+                 id="mat1-zero-g"),
+    pytest.param(base(sf("MAT1", 2, "7.0E10", "", "0.3", "-2700.0")), 6, "MAT1 2",
+                 "field 6 (RHO): value '-2700.0' is out of range (expected a real number >= 0.0)",
+                 id="mat1-negative-rho"),
+    pytest.param(base(sf("MAT1", 2, "7.0E10", "", "-1.0")), 6, "MAT1 2", "Poisson's ratio '-1.0' is outside",
+                 id="mat1-nu-minus-one"),
+    pytest.param(base(sf("PBAR", 2, 1, "1.0E-4", "1.0E-9", "1.0E-9", "1.0E-9", "-0.5")), 6, "PBAR 2",
+                 "field 8 (NSM): negative value '-0.5'", id="pbar-negative-nsm"),
+    pytest.param(base(sf("PBAR", 2, 1, "1.0E-4", "1.0E-9", "1.0E-9", "-1.0E-9")), 6, "PBAR 2",
+                 "field 7 (J): negative value '-1.0E-9'", id="pbar-negative-j"),
+    pytest.param(base(sf("PBAR", 2, 1, "1.0E-4", "1.0E-9", "1.0E-9"), sf("+"), sf("+", "", "", "2.0E-9")), 8,
+                 "PBAR 2", "(I12): I1 = 1e-09, I2 = 1e-09 and I12 = 2e-09 give I1 I2 <= I12^2", id="pbar-i12"),
+    pytest.param(base(sf("PBAR", 2, 1, "1.0E-4", "1.0E-9", "1.0E-9"), sf("+"), sf("+", "-0.5")), 8, "PBAR 2",
+                 "(K1): value '-0.5' is out of range (expected a real number >= 0.0)", id="pbar-negative-k1"),
+    pytest.param(base(sf("CONM2", 20, 1, "", "1.0"), sf("", "1.0", "2.0", "1.0", "", "", "1.0")), 7, "CONM2 20",
+                 "continuation 1 fields 2-7 (I11-I33): the inertia matrix is not positive semi-definite",
+                 id="conm2-inertia-not-psd"),
+    pytest.param(base(sf("CELAS2", 20, "1.0", 1, 2, 1, 2)), 6, "CELAS2 20", "both ends are DOF 1-2",
+                 id="celas2-same-dof"),
+    pytest.param(base(sf("CELAS2", 20, "1.0", 1, 2, 2)), 6, "CELAS2 20", "field 7 (C2): required field is blank",
+                 id="celas2-g2-without-c2"),
+    pytest.param(base(sf("GRAV", 1, "", "9.81", "0.0", "0.0", "-1.0", 2)), 6, "GRAV 1",
+                 "field 8 (MB): expected -1 or 0, got '2'", id="grav-mb"),
+    pytest.param(base(sf("GRAV", 1, -1, "9.81", "0.0", "0.0", "-1.0")), 6, "GRAV 1",
+                 "field 3 (CID): expected an integer >= 0, got '-1'", id="grav-negative-cid"),
+    pytest.param(base(sf("EIGRL", 1, "", "-5.0")), 6, "EIGRL 1", "(V2): V2 = -5.0 (expected an upper frequency > 0.0",
+                 id="eigrl-negative-v2"),
+    pytest.param(base(sf("NLPARM", 1), sf("", "", "", "0.0")), 7, "NLPARM 1",
+                 "(EPSW): value '0.0' is out of range (expected a real number > 0.0)", id="nlparm-zero-epsw"),
+    pytest.param(base(sf("PARAM", "GRDPNT", 77)), 6, "PARAM GRDPNT", "field 3 (V1): grid 77 is not defined",
+                 id="grdpnt-missing-grid"),
+    pytest.param(base(sf("PARAM", "GRDPNT", "YES")), 6, "PARAM GRDPNT", "expected -1, 0 or a GRID ID, got 'YES'",
+                 id="grdpnt-word"),
+    pytest.param(base(sf("CORD2R", 1, -2, "0.0", "0.0", "0.0", "0.0", "0.0", "1.0"), CORD_LINE2), 6, "CORD2R 1",
+                 "field 3 (RID): expected an integer >= 0, got '-2'", id="cord2r-negative-rid"),
+    pytest.param(base(sf("PARAM", "WTMASS", "0.00259")), 6, "PARAM WTMASS", "WTMASS '0.00259' is not supported",
+                 id="wtmass"),
+    # --- text and sections
+    pytest.param("", 1, "", "the file is empty", id="empty-file"),
+    pytest.param("$ only a comment\n\n", 2, "", "no bulk data cards", id="comments-only"),
+    pytest.param("SOL 103\nCEND\nBEGIN BULK\n$ nothing\nENDDATA\n", 5, "", "no bulk data cards", id="empty-bulk"),
+    pytest.param("SOL 103\nCEND\nSPC = 1\n" + text(*BASE), 2, "", "CEND but no BEGIN BULK", id="cend-no-begin-bulk"),
+    pytest.param(base(sf("GRID", 3, "", "1.0\x00")), 6, "", "control character U+0000 at column 28",
+                 id="nul-character"),
+    pytest.param(text(*BASE[:2], "$ comment with an escape \x1b[31m", *BASE[2:]), 3, "",
+                 "control character U+001B at column 26", id="escape-in-comment"),
+    pytest.param(base(sf("GRID", 3, "", "1.0\u200b")), 6, "GRID 3", "field 4 (X1): expected a real number",
+                 id="zero-width-space"),
+    pytest.param(base(sf("GRÎD", 3)), 6, "GRÎD", "unknown card 'GRÎD'", id="non-ascii-card-name"),
+    pytest.param(base(sf("GRID", 3, "", "1.0", "2.0", "3.0")[:33]), 6, "GRID 3", "field 5 (X2): expected a real number with a decimal point, got '2'",
+                 id="truncated-line"),
     # --- case control
     pytest.param("CEND\nSUBCASE 1\nSUBCASE 1\nBEGIN BULK\nENDDATA\n", 3, "SUBCASE 1",
                  "SUBCASE 1 defined twice: line 2 and line 3", id="duplicate-subcase"),
@@ -244,6 +299,33 @@ def test_read_deck_missing_file(tmp_path: Path) -> None:
         read_deck(path)
     assert info.value.line == 0
     assert str(info.value) == f"{path}: no such file"
+
+
+def test_undecodable_bytes_name_line_and_column(tmp_path: Path) -> None:
+    path = tmp_path / "latin1.bdf"
+    path.write_bytes(base(sf("GRID", 3, "", "1.0")).encode() + b"$ r\xe9sum\xe9\n")
+    with pytest.raises(DeckError) as info:
+        read_deck(path)
+    assert info.value.line == 7
+    assert str(info.value) == f"{path}:7: byte 0xe9 at column 4 is not text (expected an ASCII or UTF-8 text file)"
+
+
+def test_utf8_comments_and_byte_order_mark_are_text(tmp_path: Path) -> None:
+    path = tmp_path / "utf8.bdf"
+    path.write_bytes("\ufeff$ Young's modulus in N/m² — résumé\n".encode() + base().encode())
+    assert sorted(read_deck(path).grids) == [1, 2]
+
+
+def test_structure_errors_name_the_case_control_line() -> None:
+    from mace_fmu.structure import build_structure
+
+    deck = read_deck_text(case("SUBCASE 1\n  SPC = 1", sf("SPC1", 1, 123456, 1)), name="deck.bdf")
+    with pytest.raises(DeckError) as info:
+        build_structure(deck, kind="1g")
+    assert str(info.value).startswith("deck.bdf:3: SUBCASE 1: the 1-g structure needs a subcase with a LOAD")
+    with pytest.raises(DeckError) as info:
+        build_structure(read_deck_text(base(), name="bulk.bdf"), kind="0g")
+    assert str(info.value).startswith("bulk.bdf:1: no case control")
 
 
 def test_at_least_thirty_broken_decks() -> None:

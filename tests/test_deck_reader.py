@@ -183,7 +183,7 @@ def test_loads_springs_eigrl_nlparm_params() -> None:
              sf("NLPARM", 1, 1),
              sf("NLPARM", 10, 20, "", "iter", 1, 25, "w"),
              sf("", "", "", "1.5E-4"),
-             sf("PARAM", "GRDPNT", 16), sf("PARAM", "autospc", "no"), sf("PARAM", "WTMASS", "1.0"),
+             sf("PARAM", "GRDPNT", 2), sf("PARAM", "autospc", "no"), sf("PARAM", "WTMASS", "1.0"),
              "PARAM,DBCCONV,XL")
     assert d.celas2s[11].g2 is None and d.celas2s[11].c2 is None and d.celas2s[11].c1 == 2
     assert (d.celas2s[12].g2, d.celas2s[12].c2, d.celas2s[12].k) == (2, 6, 1.0e3)
@@ -196,7 +196,7 @@ def test_loads_springs_eigrl_nlparm_params() -> None:
         1, "AUTO", None, 25, "PW", 0.01, 0.01, 0.01)
     assert (n10.ninc, n10.kmethod, n10.kstep, n10.max_iter, n10.conv, n10.eps_u, n10.eps_w) == (
         20, "ITER", 1, 25, "W", 0.01, 1.5e-4)
-    assert d.params["GRDPNT"].values == (16,) and d.params["AUTOSPC"].values == ("NO",)
+    assert d.params["GRDPNT"].values == (2,) and d.params["AUTOSPC"].values == ("NO",)
     assert d.params["WTMASS"].values == (1.0,) and d.params["DBCCONV"].values == ("XL",)
     assert isinstance(d.params["WTMASS"].values[0], float) and d.params["GRDPNT"].name == "GRDPNT"
 

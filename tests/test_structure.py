@@ -117,7 +117,7 @@ def test_forgotten_suspension_element_is_named(deck, tmp_path):
 def test_one_forgotten_cable_bar_is_named_exactly(deck, tmp_path):
     old = '"103-126"'
     path = _write_toml(tmp_path, TOML_TEXT.replace(old, '"103-116", "118-126"'))
-    with pytest.raises(MaceError, match=r"CBAR 117 connects suspension grid") as exc:
+    with pytest.raises(MaceError, match=r"CBAR 117: connects suspension grid") as exc:
         build_structure(deck, kind="0g", spec=load_spec(path))
     assert str(path) in str(exc.value)
 

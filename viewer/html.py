@@ -76,5 +76,5 @@ for (const b of blobs) {{
 def write_html(path: str | os.PathLike, commands: list, *, title: str, clips: tuple[Clip, ...] = ()) -> int:
     """Write the standalone page to ``path``; returns its size in bytes."""
     text = standalone_html(commands, title=title, clips=clips)
-    write_text_atomic(path, text)
+    write_text_atomic(path, text)  # an interrupted run leaves the previous page, not half of a new one
     return len(text.encode("utf-8"))

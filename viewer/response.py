@@ -12,7 +12,7 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from mace_fmu.atomic import atomic_path
+from mace_fmu.atomic import save_figure_atomic
 from mace_fmu.errors import MaceError
 from mace_fmu.iomodel.motion import MOTION_COMPONENTS, motion_output_name
 from mace_fmu.pipeline import StructureModes
@@ -103,6 +103,4 @@ def plot_response(run: FmuRun, *, output_name: str, path: str | Path, title: str
     axes[-1].set_xlabel("time [s]")
     fig.suptitle(title)
     fig.tight_layout()
-    with atomic_path(path) as part:
-        fig.savefig(part, dpi=110, format="png")
-    return Path(path)
+    return save_figure_atomic(fig, path, dpi=110)

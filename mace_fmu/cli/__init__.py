@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
+import threading
 from typing import Sequence
 
 from mace_fmu.cli import build, export, model, modes, report, update, view
@@ -22,14 +24,26 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _terminated(signum: int, frame: object) -> None:
+    raise SystemExit(128 + signum)  # unwinds like Ctrl-C: unfinished atomic writes remove their temporary files
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the console script; errors in the input end with one message and status 2."""
     args = build_parser().parse_args(argv)
+    in_main_thread = threading.current_thread() is threading.main_thread()  # signal handlers live there only
+    previous = signal.signal(signal.SIGTERM, _terminated) if in_main_thread else None
     try:
         return args.func(args)
     except MaceError as exc:
         print(f"mace-fmu: error: {exc}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        print("mace-fmu: interrupted", file=sys.stderr)
+        return 130
+    finally:
+        if in_main_thread:
+            signal.signal(signal.SIGTERM, previous if previous is not None else signal.SIG_DFL)
 
 
 if __name__ == "__main__":

@@ -8,6 +8,7 @@ import sys
 
 import numpy as np
 
+from mace_fmu.atomic import atomic_path, write_text_atomic
 from mace_fmu.cli.common import deck_option, model_options, volts
 
 
@@ -19,11 +20,13 @@ def cmd_model(args: argparse.Namespace) -> int:
     sys_ = model.system
     poles = closed_loop_poles(model)
     if args.modelica:
-        model.diagram.write_modelica(args.modelica, model_name=f"MACE_{args.structure}_volts")
+        write_text_atomic(args.modelica, model.diagram.to_modelica(f"MACE_{args.structure}_volts"))
         print(f"wrote {args.modelica}", file=sys.stderr if args.json else sys.stdout)
     if args.npz:
-        np.savez(args.npz, A=sys_.A, B=sys_.B, C=sys_.C, D=sys_.D, inputs=np.array(sys_.input_labels),
-                 outputs=np.array(sys_.output_labels), states=np.array(sys_.state_labels))
+        # np.savez appends .npz to a file name without it; a file object keeps the temporary name
+        with atomic_path(args.npz if args.npz.endswith(".npz") else f"{args.npz}.npz") as tmp, open(tmp, "wb") as f:
+            np.savez(f, A=sys_.A, B=sys_.B, C=sys_.C, D=sys_.D, inputs=np.array(sys_.input_labels),
+                     outputs=np.array(sys_.output_labels), states=np.array(sys_.state_labels))
         print(f"wrote {args.npz}", file=sys.stderr if args.json else sys.stdout)
     if args.json:
         json.dump({"structure": args.structure, "states": sys_.nstates, "inputs": list(sys_.input_labels),

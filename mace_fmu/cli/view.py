@@ -103,6 +103,7 @@ def _checked_fmu(path: str, structure: str) -> Path:
 
 
 def cmd_view_response(args: argparse.Namespace) -> int:
+    from mace_fmu.fmu.archive import check_fmu
     from mace_fmu.fmu.export import export_fmu
     from mace_fmu.fmu.simulate import simulate_input_response
     from viewer import animate_response, plot_response

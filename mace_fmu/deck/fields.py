@@ -52,14 +52,30 @@ def _code(text: str) -> str:
     return text.split("$", 1)[0].strip()
 
 
+_CONTROL = re.compile(r"[\x00-\x08\x0b-\x1f\x7f-\x9f\u2028\u2029\ufeff\ufffe\uffff]")
+
+
+def check_text(lines: Lines, file: str) -> None:
+    """Control characters (other than tab) are no deck's content: reject them with their line and column."""
+    if not lines:
+        raise DeckError("the file is empty (expected bulk data cards)", file=file, line=1)
+    for number, text in lines:
+        if m := _CONTROL.search(text):
+            raise DeckError(f"control character U+{ord(m.group()):04X} at column {m.start() + 1} (expected text)",
+                            file=file, line=number)
+
+
 def split_sections(lines: Lines, file: str) -> tuple[Lines | None, Lines]:
     """(case-control lines or None, bulk-data lines up to ENDDATA)."""
     begin = next((i for i, (_, t) in enumerate(lines) if re.fullmatch(r"BEGIN\s*BULK", _code(t), re.I)), None)
+    cend = next((i for i, (_, t) in enumerate(lines[:begin]) if _code(t).upper() == "CEND"), None)
     if begin is None:
+        if cend is not None:
+            raise DeckError("CEND but no BEGIN BULK (expected BEGIN BULK after the case control)", file=file,
+                            line=lines[cend][0])
         case, bulk = None, lines
     else:
-        cend = next((i for i, (_, t) in enumerate(lines[:begin]) if _code(t).upper() == "CEND"), -1)
-        case, bulk = lines[cend + 1:begin], lines[begin + 1:]
+        case, bulk = lines[(cend if cend is not None else -1) + 1:begin], lines[begin + 1:]
     end = next((i for i, (_, t) in enumerate(bulk) if re.match(r"ENDDATA\b", _code(t), re.I)), None)
     if end is None and begin is not None:
         raise DeckError(f"BEGIN BULK at line {lines[begin][0]} has no ENDDATA (expected ENDDATA after the "
@@ -214,17 +230,21 @@ class Fields:
         self.label = f"{self.raw.name} {value}"
         return value
 
-    def real(self, d: int, name: str, default: Any = REQUIRED) -> Any:
-        """Real field; the decimal point is required, as in NASTRAN."""
+    def real(self, d: int, name: str, default: Any = REQUIRED, minimum: float | None = None,
+             above: float | None = None) -> Any:
+        """Real field (decimal point required, as in NASTRAN), optionally >= ``minimum`` or > ``above``."""
         text = self.text(d)
+        bound = (f" >= {minimum}" if minimum is not None else "") + (f" > {above}" if above is not None else "")
         if not text:
-            return self._blank(d, name, default, "a real number")
+            return self._blank(d, name, default, f"a real number{bound}")
         value = parse_real(text)
         if value is None:
             hint = " with a decimal point" if parse_int(text) is not None else ""
             raise self.error(f"expected a real number{hint}, got {text!r}", d, name)
         if not math.isfinite(value):
             raise self.error(f"real number {text!r} is out of range (expected a finite value)", d, name)
+        if (minimum is not None and value < minimum) or (above is not None and value <= above):
+            raise self.error(f"value {text!r} is out of range (expected a real number{bound})", d, name)
         return value
 
     def word(self, d: int, name: str, default: Any = REQUIRED, allowed: Iterable[str] | None = None) -> Any:

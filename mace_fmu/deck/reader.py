@@ -16,7 +16,8 @@ import numpy as np
 
 from mace_fmu.deck.cards import (CBar, Celas2, Conm2, Cord2R, Deck, Eigrl, Grav, Grid, Load, Mat1, Mpc, MpcTerm,
                                  Nlparm, Param, PBar, Source, Spc1)
-from mace_fmu.deck.fields import Fields, Selections, case_control, parse_int, parse_real, split_cards, split_sections
+from mace_fmu.deck.fields import (Fields, Selections, case_control, check_text, parse_int, parse_real, split_cards,
+                                  split_sections)
 from mace_fmu.deck.geometry import axes_from_points, bar_orientation, coordinate_frames, grid_positions
 from mace_fmu.errors import DeckError
 
@@ -25,24 +26,35 @@ def read_deck(path: str | os.PathLike[str]) -> Deck:
     """Read and validate the deck in file ``path``."""
     name = os.fspath(path)
     try:
-        text = Path(path).read_text(encoding="utf-8", errors="replace")
+        data = Path(path).read_bytes()
     except FileNotFoundError:
         raise DeckError("no such file", file=name, line=0) from None
     except OSError as exc:
         raise DeckError(f"cannot read the deck file ({exc.strerror})", file=name, line=0) from None
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line_start = data.rfind(b"\n", 0, exc.start) + 1
+        raise DeckError(f"byte 0x{data[exc.start]:02x} at column {exc.start - line_start + 1} is not text (expected "
+                        "an ASCII or UTF-8 text file)", file=name, line=data.count(b"\n", 0, exc.start) + 1) from None
     return read_deck_text(text, name=name)
 
 
 def read_deck_text(text: str, *, name: str = "<string>") -> Deck:
     """Read and validate a deck given as text; ``name`` stands for the file in error messages."""
     # Split on newlines only, so that line numbers match what an editor shows.
-    physical = text.split("\n")
+    physical = text.removeprefix("\ufeff").split("\n")  # a byte-order mark, which some editors write
     if physical and physical[-1] == "":
         physical.pop()
     lines = [(number, line.rstrip("\r")) for number, line in enumerate(physical, start=1)]
+    check_text(lines, name)
     case, bulk = split_sections(lines, name)
     global_case, subcases, selections = case_control(case, name) if case is not None else (None, {}, {})
-    tables = _bulk_tables(split_cards(bulk, name), name)
+    raw_cards = split_cards(bulk, name)
+    if not raw_cards:
+        raise DeckError("no bulk data cards (expected GRID, CBAR and the other cards before ENDDATA)", file=name,
+                        line=min(bulk[-1][0] + 1, lines[-1][0]) if bulk else lines[-1][0])
+    tables = _bulk_tables(raw_cards, name)
     deck = Deck(path=name, subcases=subcases, global_case=global_case, **tables)
     _validate(deck, selections)
     return deck
@@ -114,22 +126,27 @@ def _pbar(f: Fields, src: Source) -> PBar:
     pid = f.ident(1, "PID")
     mid = f.integer(2, "MID", minimum=1)
     area, i1, i2, j, nsm = (f.real(d, name, 0.0) for d, name in enumerate(("A", "I1", "I2", "J", "NSM"), start=3))
-    for d, name, value in ((3, "A", area), (4, "I1", i1), (5, "I2", i2), (6, "J", j)):
+    for d, name, value in ((3, "A", area), (4, "I1", i1), (5, "I2", i2), (6, "J", j), (7, "NSM", nsm)):
         if value < 0.0:
             raise f.error(f"negative value {f.text(d)!r} (expected >= 0.0)", d, name)
     f.blank(8, "unused")
     # First continuation: stress recovery points only; the shear factors are on the second.
     points = tuple(f.real(d, n, None) for d, n in enumerate(("C1", "C2", "D1", "D2", "E1", "E2", "F1", "F2"), 9))
-    k1, k2, i12 = f.real(17, "K1", None), f.real(18, "K2", None), f.real(19, "I12", 0.0)
+    k1, k2 = f.real(17, "K1", None, minimum=0.0), f.real(18, "K2", None, minimum=0.0)
+    i12 = f.real(19, "I12", 0.0)
     f.end(19)
+    if i12 != 0.0 and not i1 * i2 > i12 * i12:  # NASTRAN's rule for a product of inertia
+        raise f.error(f"I1 = {i1:g}, I2 = {i2:g} and I12 = {i12:g} give I1 I2 <= I12^2 (expected I1 I2 > I12^2)",
+                      19, "I12")
     return PBar(id=pid, mid=mid, area=area, i1=i1, i2=i2, j=j, nsm=nsm, stress_points=points, k1=k1, k2=k2,
                 i12=i12, source=src)
 
 
 def _mat1(f: Fields, src: Source) -> Mat1:
     mid = f.ident(1, "MID")
-    e, g, nu = f.real(2, "E", None), f.real(3, "G", None), f.real(4, "NU", None)
-    rho = f.real(5, "RHO", 0.0)
+    # NASTRAN allows E = G = 0.0; a bar made of it has no stiffness, so mace-fmu asks for > 0.
+    e, g, nu = f.real(2, "E", None, above=0.0), f.real(3, "G", None, above=0.0), f.real(4, "NU", None)
+    rho = f.real(5, "RHO", 0.0, minimum=0.0)
     for d, name in enumerate(("A", "TREF", "GE", "ST", "SC", "SS"), start=6):
         f.real(d, name, None)
     f.integer(12, "MCSID", None, minimum=0)
@@ -154,6 +171,12 @@ def _conm2(f: Fields, src: Source) -> Conm2:
     for d, name, value in ((4, "M", mass), (9, "I11", inertia[0]), (11, "I22", inertia[2]), (13, "I33", inertia[5])):
         if value < 0.0:
             raise f.error(f"negative {'mass' if name == 'M' else 'inertia'} {f.text(d)!r} (expected >= 0.0)", d, name)
+    i11, i21, i22, i31, i32, i33 = inertia
+    matrix = np.array([[i11, -i21, -i31], [-i21, i22, -i32], [-i31, -i32, i33]])
+    smallest = float(np.linalg.eigvalsh(matrix)[0])
+    if smallest < -1e-12 * max(i11 + i22 + i33, np.finfo(float).tiny):
+        raise f.error(f"the inertia matrix is not positive semi-definite (eigenvalue {smallest:.3g} kg m^2; expected "
+                      "products of inertia small enough that I11 I22 >= I21^2 and so on)", 9, "I11-I33", 14)
     return Conm2(id=eid, grid=grid, cid=cid, mass=mass, offset=offset, inertia=inertia,  # type: ignore[arg-type]
                  source=src)
 
@@ -164,6 +187,9 @@ def _celas2(f: Fields, src: Source) -> Celas2:
     g1, c1 = f.integer(3, "G1", minimum=1), f.component(4, "C1")
     grounded = not (f.text(5) or f.text(6))
     g2, c2 = (None, None) if grounded else (f.integer(5, "G2", minimum=1), f.component(6, "C2"))
+    if (g1, c1) == (g2, c2):
+        raise f.error(f"both ends are DOF {g1}-{c1} (expected two different DOFs, or G2 and C2 blank for a "
+                      "grounded spring)", 5, "G2, C2", 6)
     f.real(7, "GE", None)
     f.real(8, "S", None)
     f.end(8)
@@ -224,7 +250,8 @@ def _grav(f: Fields, src: Source) -> Grav:
     cid = f.integer(2, "CID", 0, minimum=0)
     scale = f.real(3, "A")
     direction = _vec(f, 4, ("N1", "N2", "N3"))
-    f.integer(7, "MB", None)
+    if f.integer(7, "MB", 0, minimum=-1) > 0:
+        raise f.error(f"expected -1 or 0, got {f.text(7)!r}", 7, "MB")
     f.end(7)
     if direction == (0.0, 0.0, 0.0):
         raise f.error("direction vector is zero (expected N1, N2, N3 not all 0.0)", 4, "N1-N3", 6)
@@ -256,6 +283,8 @@ def _eigrl(f: Fields, src: Source) -> Eigrl:
                       "V1, V2, ND", 4)
     if v1 is not None and v2 is not None and v2 <= v1:
         raise f.error(f"V2 = {f.text(3)} is not above V1 = {f.text(2)} (expected V1 < V2)", 3, "V2")
+    if v2 is not None and v2 <= 0.0:
+        raise f.error(f"V2 = {f.text(3)} (expected an upper frequency > 0.0 Hz)", 3, "V2")
     return Eigrl(sid=sid, v1=v1, v2=v2, nd=nd, msglvl=msglvl, source=src)
 
 
@@ -272,7 +301,7 @@ def _nlparm(f: Fields, src: Source) -> Nlparm:
     if not re.fullmatch(r"[UPWV]+", conv):
         raise f.error(f"expected a combination of U, P, W (and V), got {conv!r}", 7, "CONV")
     f.word(8, "INTOUT", None, ("YES", "NO", "ALL"))
-    eps_u, eps_p, eps_w = (f.real(d, name, 0.01) for d, name in ((9, "EPSU"), (10, "EPSP"), (11, "EPSW")))
+    eps_u, eps_p, eps_w = (f.real(d, name, 0.01, above=0.0) for d, name in ((9, "EPSU"), (10, "EPSP"), (11, "EPSW")))
     for d, name in ((12, "MAXDIV"), (13, "MAXQN"), (14, "MAXLS")):
         f.integer(d, name, None)
     f.real(15, "FSTRESS", None)
@@ -292,7 +321,11 @@ def _param(f: Fields, src: Source) -> Param:
     if not f.text(2):
         raise f.error("required field is blank (expected a value)", 2, "V1")
     f.end(3)
-    return Param(name=name, values=tuple(_param_value(f.text(d)) for d in (2, 3) if f.text(d)), source=src)
+    values = tuple(_param_value(f.text(d)) for d in (2, 3) if f.text(d))
+    if name == "WTMASS" and values != (1.0,):  # mass scaling is not applied: refuse rather than mislead
+        raise f.error(f"WTMASS {f.text(2)!r} is not supported by mace-fmu (expected 1.0: masses in consistent "
+                      "units)", 2, "V1")
+    return Param(name=name, values=values, source=src)
 
 
 _PARSERS: dict[str, Callable[[Fields, Source], Any]] = {
@@ -399,6 +432,11 @@ def check_deck(deck: Deck) -> None:
     for ld in deck.loads.values():
         for k, (_, lset) in enumerate(ld.terms, start=1):
             _need(lset, deck.gravs, ld, f"LOAD {ld.sid}", f"L{k}", "load set", "a GRAV SID")
+    if (grdpnt := deck.params.get("GRDPNT")) is not None:
+        value = grdpnt.values[0]
+        if not isinstance(value, int) or value < -1:
+            raise _fail(grdpnt, "PARAM GRDPNT", "field 3 (V1)", f"expected -1, 0 or a GRID ID, got {value!r}")
+        _need(value if value > 0 else None, deck.grids, grdpnt, "PARAM GRDPNT", "field 3 (V1)", *grid)
     _check_mpc_dofs(deck)
     _check_bars(deck, frames)
 

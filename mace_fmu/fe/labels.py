@@ -152,7 +152,8 @@ def _zero_cluster(model: FEModel, modes: Modes, spec: StructureSpec, zero: np.nd
     rest = rest @ v[:, len(cols):]
     sub = replace(modes, frequencies_hz=np.zeros(rest.shape[1]), shapes=rest)
     jac = _mechanism_rotations(sub, spec)
-    moving = np.linalg.norm(jac, axis=1) > 1e-6 * max(np.abs(jac).max(), 1e-300)
+    largest = np.abs(jac).max() if jac.size else 0.0  # no mechanism part left: nothing moves
+    moving = np.linalg.norm(jac, axis=1) > 1e-6 * max(largest, 1e-300)
     mechs = rest @ np.linalg.pinv(jac[moving])
     names += [f"mechanism: {m.name}" for m, mv in zip(spec.mechanisms, moving) if mv]
     if len(names) != z.shape[1]:

@@ -37,8 +37,10 @@ _UNITS = (("E_", "Pa"), ("k_", "N/m"), ("delay_", "s"), ("damping_mode_", "1"), 
           ("K_r", "V/(deg/s)"), ("K_f", "1"), ("K_b", "1"), ("frequency_mode_", "Hz"))
 
 
-def _patch_model_description(fmu: Path, *, description: str, version: str) -> None:
-    """Add units, a default experiment, initial unknowns, description and version."""
+def _patch_model_description(fmu: Path, *, description: str, version: str,
+                              ranges: dict[str, tuple[float, float]]) -> None:
+    """Add units, parameter ranges (min/max where finite), a default experiment, initial unknowns, description
+    and version."""
     with zipfile.ZipFile(fmu) as z:
         entries = {n: z.read(n) for n in z.namelist()}
     root = ET.fromstring(entries["modelDescription.xml"])
@@ -59,6 +61,9 @@ def _patch_model_description(fmu: Path, *, description: str, version: str) -> No
         if unit is not None:
             var.find("Real").set("unit", unit)
             used.add(unit)
+        for attribute, bound in zip(("min", "max"), ranges.get(name, ())):
+            if np.isfinite(bound):  # so that hosts can check values before the FMU does
+                var.find("Real").set(attribute, repr(float(bound)))
     units = ET.Element("UnitDefinitions")
     for unit in sorted(used):
         ET.SubElement(units, "Unit", name=unit)
@@ -149,6 +154,9 @@ def export_fmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str | None
                                     canGetAndSetFMUstate=True, canSerializeFMUstate=True)
         for key in {k for k in sys.modules if k.startswith(_CACHE_PREFIX)} - cached:
             del sys.modules[key]  # the builder ran the entry script here; loading the FMU rebuilds it
-        _patch_model_description(Path(path), description=description, version=metadata.version("mace-fmu"))
+        ranges = {str(n): (float(lo), float(hi)) for n, lo, hi in zip(arrays["param_names"], arrays["param_min"],
+                                                                       arrays["param_max"])}
+        _patch_model_description(Path(path), description=description, version=metadata.version("mace-fmu"),
+                                 ranges=ranges)
         shutil.copyfile(path, part)
     return final

@@ -9,6 +9,7 @@ process never loads the FMU's native code.
 
 from __future__ import annotations
 
+import logging
 import os
 import subprocess
 import sys
@@ -21,6 +22,10 @@ import fmpy
 import numpy as np
 
 from mace_fmu.errors import MaceError
+from mace_fmu.fmu.archive import check_fmu
+
+log = logging.getLogger(__name__)
+_STATUS = ("OK", "warning", "discard", "error", "fatal", "pending")  #: fmi2Status names, by value
 
 SignalKind = Literal["step", "chirp", "impulse"]
 SIGNALS: tuple[str, ...] = ("step", "chirp", "impulse")
@@ -83,6 +88,7 @@ def simulate_input_response(fmu: str | os.PathLike, *, input_name: str, signal: 
     in a fresh worker process (see the module docstring).
     """
     t = communication_times(duration_s=duration_s, step_s=step_s)
+    check_fmu(fmu)
     md = fmpy.read_model_description(str(fmu))
     variables = {v.name: v for v in md.modelVariables}
     ins = [v.name for v in md.modelVariables if v.causality == "input"]
@@ -108,12 +114,32 @@ def simulate_input_response(fmu: str | os.PathLike, *, input_name: str, signal: 
 
 
 def _simulate(fmu: str, table: np.ndarray, outputs: list[str], step_s: float) -> np.ndarray:
-    """fmpy's co-simulation with the input table, sampled at every step."""
-    return fmpy.simulate_fmu(fmu, start_time=0.0, stop_time=float(table["time"][-1]), output_interval=step_s,
-                             input=table, output=outputs)
+    """fmpy's co-simulation with the input table, sampled at every step; MaceError with the FMU's logged reason.
+
+    Debug logging is switched on because pythonfmu forwards an FMU's messages, errors included,
+    only then; messages of warning level and above go to this module's logger.
+    """
+    messages: list[str] = []
+
+    def collect(component, instance, status, category, message) -> None:
+        if status >= 1:
+            text = (message or b"").decode("utf-8", "replace")
+            messages.append(f"{_STATUS[status] if status < len(_STATUS) else status}: {text}")
+            log.log(logging.WARNING if status == 1 else logging.ERROR, "%s: %s", fmu, text)
+
+    try:
+        result = fmpy.simulate_fmu(fmu, start_time=0.0, stop_time=float(table["time"][-1]), output_interval=step_s,
+                                   input=table, output=outputs, debug_logging=True, logger=collect)
+    except Exception as exc:  # fmpy raises a bare Exception naming the FMI call and its status
+        raise MaceError(f"{fmu}: {exc}" + (f" FMU log: {' | '.join(messages)}" if messages else "")) from None
+    if len(result) != len(table) and messages:  # fmpy stops quietly at a discarded step: say why
+        raise MaceError(f"{fmu}: the simulation stopped at t = {result['time'][-1]:g} s of "
+                        f"{table['time'][-1]:g} s. FMU log: {' | '.join(messages)}")
+    return result
 
 
 _DONE = "mace-fmu worker: samples written"
+_FAILED = "mace-fmu worker: error: "
 
 
 def _simulate_in_subprocess(fmu: str, table: np.ndarray, outputs: list[str], step_s: float) -> np.ndarray:
@@ -127,6 +153,9 @@ def _simulate_in_subprocess(fmu: str, table: np.ndarray, outputs: list[str], ste
         np.savez(request, table=table, outputs=np.array(outputs, dtype=str), step_s=step_s, fmu=fmu)
         code = f"from mace_fmu.fmu.simulate import _worker; _worker({str(request)!r}, {str(answer)!r})"
         done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+        failed = [line.removeprefix(_FAILED) for line in done.stdout.splitlines() if line.startswith(_FAILED)]
+        if failed:
+            raise MaceError(failed[0])
         if _DONE not in done.stdout or not answer.exists():
             raise MaceError(f"simulating {fmu} failed in the worker process (exit status {done.returncode}):\n"
                             f"{done.stderr.strip()[-2000:]}")
@@ -140,6 +169,10 @@ def _simulate_in_subprocess(fmu: str, table: np.ndarray, outputs: list[str], ste
 def _worker(request: str, answer: str) -> None:
     """Entry point of the worker process: read the request, simulate, write the samples."""
     with np.load(request, allow_pickle=False) as r:
-        result = _simulate(str(r["fmu"]), r["table"], [str(n) for n in r["outputs"]], float(r["step_s"]))
+        try:
+            result = _simulate(str(r["fmu"]), r["table"], [str(n) for n in r["outputs"]], float(r["step_s"]))
+        except MaceError as exc:
+            print(_FAILED + " ".join(str(exc).splitlines()), flush=True)
+            return
     np.save(answer, np.array([result[n] for n in result.dtype.names], dtype=float), allow_pickle=False)
     print(_DONE, flush=True)

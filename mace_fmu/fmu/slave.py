@@ -11,6 +11,14 @@ the retained nominal modes, thesis eq. 4.6-4.9; damping ratios, delays and servo
 blocks they belong to).
 Stepping is an exact zero-order hold: over a communication step h with the inputs u held,
 [x(t+h); u] = expm([[A, B], [0, 0]] h) [x(t); u], cached per step size.
+
+Misuse never raises: pythonfmu turns any Python exception into fmi2Fatal and then frees the
+instance's Python objects twice, which corrupts the heap ("corrupted double-linked list" at exit).
+Instead every misuse is logged with status fmi2Error and a refused step returns False, which
+pythonfmu reports as fmi2Discard with the state unchanged (last successful time = the start of the
+step). Invalid parameters at initialisation, a fixed parameter set after it and unknown value
+references make every later step refused with the same reason. pythonfmu forwards the log to the
+host only when the host enabled debug logging (loggingOn).
 """
 
 from __future__ import annotations
@@ -46,6 +54,8 @@ class MaceSlave(Fmi2Slave):
         self._nominal = self._system.nominal
         self._params = self._nominal.copy()
         self._built_with = None
+        self._phase = "instantiated"  # -> "initialization" -> "stepping" -> "terminated"
+        self._refusal: str | None = None  # why every step is refused (an error the standard calls fatal to the run)
         self._x = self._u = self._y = None
         self._cache: dict[float, tuple[np.ndarray, np.ndarray]] = {}
         self._build()
@@ -87,7 +97,15 @@ class MaceSlave(Fmi2Slave):
     def get_real(self, vrs):
         index = self._indices(vrs, self._output_of_vr, "out")
         if index is None:
-            return super().get_real(vrs)
+            values = []
+            for vr in vrs:
+                var = self.vars.get(vr)
+                if isinstance(var, Real):
+                    values.append(float(var.getter()))
+                else:
+                    self._misuse(f"fmi2GetReal: {vr} is not the value reference of a Real variable")
+                    values.append(math.nan)
+            return values
         if self._y is None:
             self._y = self._c @ self._x + self._d @ self._u
         return self._y[index].tolist()
@@ -95,9 +113,28 @@ class MaceSlave(Fmi2Slave):
     def set_real(self, vrs, values):
         index = self._indices(vrs, self._input_of_vr, "in")
         if index is None:
-            return super().set_real(vrs, values)
+            for vr, value in zip(vrs, values):
+                var = self.vars.get(vr)
+                if not isinstance(var, Real) or var.setter is None:
+                    self._misuse(f"fmi2SetReal: {vr} is not the value reference of a Real variable that can be set")
+                elif var.causality == Fmi2Causality.parameter and self._phase not in ("instantiated",
+                                                                                       "initialization"):
+                    self._misuse(f"fmi2SetReal: {var.name} is a fixed parameter and cannot change after "
+                                 "initialisation (value ignored)")
+                else:
+                    var.setter(value)
+            return
         self._u[index] = values
         self._y = None
+
+    def _misuse(self, reason: str) -> None:
+        """Log ``reason`` at error level; every later step is refused with it (FMI: fmi2Error ends the run)."""
+        self.log(reason, status=Fmi2Status.error)
+        self._refusal = self._refusal or reason
+
+    def _refuse_step(self, current_time: float, reason: str) -> bool:
+        self.log(f"fmi2DoStep at t = {current_time} s refused: {reason}", status=Fmi2Status.error)
+        return False
 
     def _input_getter(self, k):
         return lambda: float(self._u[k])
@@ -125,6 +162,8 @@ class MaceSlave(Fmi2Slave):
 
     def _frequency_getter(self, k):
         def getter():
+            if self._system.parameter_problems(self._params):
+                return math.nan  # the reasons are logged at initialisation
             self._build()
             return float(self._frequencies[k])
         return getter
@@ -143,9 +182,24 @@ class MaceSlave(Fmi2Slave):
         self._u = np.zeros(len(self._inputs)) if self._u is None else self._u
         self._y = None
 
+    def enter_initialization_mode(self):
+        self._phase = "initialization"
+
     def exit_initialization_mode(self):
-        self._build()
-        return True
+        self._phase = "stepping"
+        problems = self._system.parameter_problems(self._params)
+        for problem in problems:
+            self.log(f"invalid parameter: {problem}", status=Fmi2Status.error)
+        if problems:
+            self._refusal = self._refusal or "invalid parameter(s): " + "; ".join(problems)
+            return
+        try:
+            self._build()
+        except Exception as exc:  # noqa: BLE001 - an exception here would be fmi2Fatal and corrupt the heap
+            self._misuse(f"the model could not be rebuilt with these parameters: {exc}")
+
+    def terminate(self):
+        self._phase = "terminated"
 
     # --- stepping ----------------------------------------------------------------------------
     def _transition(self, h: float) -> tuple[np.ndarray, np.ndarray]:
@@ -169,10 +223,16 @@ class MaceSlave(Fmi2Slave):
         return self._cache[h]
 
     def do_step(self, current_time: float, step_size: float) -> bool:
+        if self._phase != "stepping":
+            return self._refuse_step(current_time, "the FMU is not initialised (call fmi2ExitInitializationMode "
+                                     "first)" if self._phase != "terminated" else "the FMU is terminated")
+        if self._refusal is not None:
+            return self._refuse_step(current_time, self._refusal)
+        if not (math.isfinite(step_size) and step_size >= 0.0):
+            return self._refuse_step(current_time, f"step size {step_size} s (expected a finite value >= 0)")
         if not np.isfinite(self._u).all():
             bad = [n for n, v in zip(self._inputs, self._u) if not math.isfinite(v)]
-            self.log(f"non-finite input value(s) at t = {current_time}: {', '.join(bad)}", status=Fmi2Status.error)
-            return False
+            return self._refuse_step(current_time, f"non-finite input value(s): {', '.join(bad)}")
         if step_size > 0.0:
             phi, gamma = self._transition(float(step_size))
             self._x = phi @ self._x + gamma @ self._u

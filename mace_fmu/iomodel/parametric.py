@@ -32,6 +32,7 @@ class ParametricSystem:
         self.nominal = np.asarray(data["param_values"], dtype=np.float64)
         self.minimum = np.asarray(data["param_min"], dtype=np.float64)  #: declared ranges (inf: none)
         self.maximum = np.asarray(data["param_max"], dtype=np.float64)
+        self.maximum_excluded = np.asarray(data["param_max_excluded"], dtype=bool)  #: the maximum itself refused
         self.inputs = [str(n) for n in data["inputs"]]
         self.outputs = [str(n) for n in data["outputs"]]
         self.mode_labels = tuple(str(x) for x in data["mode_labels"])
@@ -44,6 +45,19 @@ class ParametricSystem:
         self.state_names: list[str] = []  #: "block.state" of the last build
         #: labels of the modes behind the structure's states in the last build (zero cluster rotated)
         self.state_mode_labels: tuple[str, ...] = self.mode_labels
+
+    def parameter_problems(self, params: np.ndarray) -> list[str]:
+        """Why parameter values cannot be used, one sentence each (empty when all can): not finite, below
+        the declared minimum, above the declared maximum, or at a maximum that is excluded."""
+        problems = []
+        for name, value, low, high, open_high in zip(self.parameter_names, np.asarray(params, dtype=np.float64),
+                                                      self.minimum, self.maximum, self.maximum_excluded):
+            if not np.isfinite(value):
+                problems.append(f"{name} = {value} is not a finite number")
+            elif value < low or value > high or (open_high and value == high):
+                upper = f"{high:g})" if open_high else f"{high:g}]"
+                problems.append(f"{name} = {value:g} is outside its range [{low:g}, {upper}")
+        return problems
 
     def index(self, name: str) -> int:
         """Position of parameter ``name`` in the parameter vector."""

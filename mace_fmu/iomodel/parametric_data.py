@@ -142,6 +142,11 @@ def parameter_range(name: str) -> tuple[float, float]:
     return -np.inf, np.inf
 
 
+def maximum_is_excluded(name: str) -> bool:
+    """True where the declared maximum itself is refused (damping ratio 1: not a vibration mode)."""
+    return name.startswith("damping_mode_")
+
+
 def parametric_arrays(model: VoltsModel, *, physical: bool = True) -> dict[str, np.ndarray]:
     """Everything a ParametricSystem (and an FMU) needs to rebuild ``model`` for new parameter values.
 
@@ -165,7 +170,9 @@ def parametric_arrays(model: VoltsModel, *, physical: bool = True) -> dict[str, 
         param_values=np.array([p[1] for p in parameters], dtype=float),
         param_descriptions=np.array([p[2] for p in parameters]),
         param_min=np.array([parameter_range(p[0])[0] for p in parameters]),
-        param_max=np.array([parameter_range(p[0])[1] for p in parameters]), physical_names=np.array([p[0] for p in physical]),
+        param_max=np.array([parameter_range(p[0])[1] for p in parameters]),
+        param_max_excluded=np.array([maximum_is_excluded(p[0]) for p in parameters]),
+        physical_names=np.array([p[0] for p in physical]),
         physical_dk=dk, frequencies_hz=data.frequencies_hz, mode_labels=np.array(data.labels), modal_b=data.modal_b,
         disp_names=np.array(list(data.disp_out)), disp_rows=np.array(list(data.disp_out.values())),
         rate_names=np.array(list(data.rate_out)), rate_rows=np.array(list(data.rate_out.values())),

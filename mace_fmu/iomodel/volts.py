@@ -32,6 +32,7 @@ from mace_fmu.iomodel.motion import parse_motion_output
 from mace_fmu.parameters import DAMPING_PREFIX, SERVO_GAINS, ParameterSet, fe_overrides
 from mace_fmu.pipeline import StructureModes, compute_modes
 from mace_fmu.structure import StructureKind
+from mace_fmu.threads import single_blas_thread
 from modelica_like import BesselFilter, Gain, PadeDelay, PD, StateSpace, Sum, System
 
 BesselKind = Literal["full", "delay", "none"]
@@ -205,6 +206,7 @@ def build_diagram(plant: ModalPlant, instruments: Instruments, *, servos: bool =
 DEFAULT_MAX_HZ = 250.0
 
 
+@single_blas_thread
 def volts_model(structure: StructureKind = "1g", *, parameters: ParameterSet | None = None, servos: bool = True,
                 bessel: BesselKind = "full", delays: bool = True, pade_order: int = 3, max_hz: float = DEFAULT_MAX_HZ,
                 preload: PreloadKind = "large", deck: Deck | str | None = None, instruments: Instruments | None = None,

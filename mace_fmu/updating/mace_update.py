@@ -20,6 +20,7 @@ import numpy as np
 from mace_fmu.fe.preload import PreloadKind
 from mace_fmu.parameters import DAMPING_PREFIX, ParameterSet, Provenance, deck_fingerprint, now_utc, tool_version
 from mace_fmu.thesis import thesis_data
+from mace_fmu.threads import single_blas_thread
 from mace_fmu.updating.costs import ModalCost, scalar_cost
 from mace_fmu.updating.data import MeasuredMode
 from mace_fmu.updating.mace_family import MaceFamily
@@ -121,6 +122,7 @@ class MaceUpdate:
     seconds: Mapping[str, float] = field(default_factory=dict)  #: wall time per stage
 
 
+@single_blas_thread
 def run_mace_update(*, start: ParameterSet | None = None, preload: PreloadKind = "large",
                     settings: UpdateSettings = UpdateSettings(rounds=2), rule: SelectionRule | None = None,
                     candidates: Sequence[str] = CANDIDATES, deck=None, runner: Callable = map,

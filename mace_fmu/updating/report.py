@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from mace_fmu.atomic import atomic_path, write_text_atomic
+from mace_fmu.atomic import save_figure_atomic, write_text_atomic
 from mace_fmu.iomodel.volts import volts_model
 from mace_fmu.report import plot_bode
 from mace_fmu.updating.mace_update import (MaceUpdate, cost_history, format_moduli, format_mode_rows,
@@ -88,9 +88,7 @@ def _plot_history(outcome: MaceUpdate, path: Path) -> Path:
     ax.legend()
     ax.grid(True, alpha=0.3)
     fig.tight_layout()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=110, format="png")
-    return path
+    return save_figure_atomic(fig, path, dpi=110)
 
 
 def _bode_overlays(outcome: MaceUpdate, out: Path) -> list[Path]:

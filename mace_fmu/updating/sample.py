@@ -21,6 +21,7 @@ import numpy as np
 import scipy.signal as signal
 
 from mace_fmu.thesis import thesis_data
+from mace_fmu.threads import single_blas_thread
 from mace_fmu.two_mass import TwoMassSystem
 from mace_fmu.updating.costs import Cost, FrequencyResponseCost, ModalCost, TimeResponseCost
 from mace_fmu.updating.data import FrequencyResponseData, MeasuredMode, TimeHistory
@@ -201,6 +202,7 @@ class SampleProblem:
     separate: Mapping[str, CaseResult] = field(default_factory=dict)
 
 
+@single_blas_thread
 def run_sample_problem(settings: SampleSettings = SampleSettings()) -> SampleProblem:
     """Generate the data, run the five cases and the two separate-updating variants."""
     data = generate_data(settings)

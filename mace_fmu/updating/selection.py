@@ -104,7 +104,7 @@ def plot_selection(selection: Selection, *, orthogonality_png: str | Path, stren
     """Figures like thesis Figs. 4.11 (orthogonality, as a 3-D bar chart) and 4.12 (strength bars)."""
     from matplotlib.figure import Figure
 
-    from mace_fmu.atomic import atomic_path
+    from mace_fmu.atomic import save_figure_atomic
 
     n = len(selection.names)
     ticks = np.arange(1, n + 1)
@@ -122,8 +122,7 @@ def plot_selection(selection: Selection, *, orthogonality_png: str | Path, stren
     ax.set_title(f"Orthogonality test (eq. 4.15){' - ' + title if title else ''}")
     legend = "\n".join(f"{k}: {name}" for k, name in zip(ticks, selection.names))
     fig.text(0.01, 0.01, legend, fontsize=7, family="monospace", va="bottom")
-    with atomic_path(orthogonality_png) as tmp:
-        fig.savefig(tmp, format="png", dpi=110)
+    save_figure_atomic(fig, orthogonality_png, dpi=110)
     fig = Figure(figsize=(7.5, 4.5))
     ax = fig.add_subplot()
     colours = ["tab:green" if nm in selection.keep else "tab:gray" for nm in selection.names]
@@ -132,8 +131,7 @@ def plot_selection(selection: Selection, *, orthogonality_png: str | Path, stren
     ax.set_ylabel("|j0^T dJ_i| / max")
     ax.set_title(f"Strength test (eq. 4.16): green kept{' - ' + title if title else ''}")
     fig.tight_layout()
-    with atomic_path(strength_png) as tmp:
-        fig.savefig(tmp, format="png", dpi=110)
+    save_figure_atomic(fig, strength_png, dpi=110)
     return Path(orthogonality_png), Path(strength_png)
 
 

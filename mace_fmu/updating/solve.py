@@ -31,6 +31,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from mace_fmu.errors import MaceError
+from mace_fmu.threads import single_blas_thread
 from mace_fmu.updating.costs import Cost, scalar_cost
 from mace_fmu.updating.inclusion import ModelFamily, evaluator
 from mace_fmu.progress import ProgressCallback, Step
@@ -130,6 +131,7 @@ def _check(names: Sequence[str], start: Mapping[str, float], bounds: Mapping[str
             raise MaceError(f"update parameter {n!r}: bounds [{b.lower:g}, {b.upper:g}] exclude its start value {v:g}")
 
 
+@single_blas_thread
 def update(family: ModelFamily, cost: Cost, *, start: Mapping[str, float], stages: Sequence[Stage],
            bounds: Mapping[str, Bounds], settings: UpdateSettings = UpdateSettings(), runner: Callable = map,
            progress: ProgressCallback | None = None) -> UpdateResult:
