@@ -6,11 +6,11 @@ import argparse
 import sys
 from typing import Sequence
 
-from mace_fmu.cli import build, export, model, modes, report, view
+from mace_fmu.cli import build, export, model, modes, report, study, view
 from mace_fmu.errors import MaceError
 
 #: command modules in the order ``mace-fmu --help`` lists them; each has register(subparsers)
-COMMANDS = (modes, model, export, report, view, build)
+COMMANDS = (modes, model, export, report, view, build, study)
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -1,0 +1,60 @@
+"""``mace-fmu study``: the modelling-for-control studies of thesis Appendix A (figures and a table)."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import numpy as np
+
+from mace_fmu.cli.common import progress
+from mace_fmu.errors import MaceError
+
+FIGURE_OF_AUTHORITY = {"low": "A2", "moderate": "A3", "high": "A4"}
+
+
+def _grid(text: str, what: str) -> np.ndarray:
+    """'start:stop:step' [N/m] to the inclusive grid."""
+    try:
+        start, stop, step = (float(x) for x in text.split(":"))
+    except ValueError:
+        raise MaceError(f"{what} takes START:STOP:STEP in N/m, got {text!r}") from None
+    if not (0.0 < start < stop and step > 0.0):
+        raise MaceError(f"{what}: expected 0 < START < STOP and STEP > 0, got {text!r}")
+    return np.round(np.arange(start, stop + 0.5 * step, step), 10)
+
+
+def cmd_lqg_sensitivity(args: argparse.Namespace) -> int:
+    from mace_fmu.control_studies.figures import sensitivity_contour
+    from mace_fmu.control_studies.stiffness_sensitivity import AUTHORITIES, format_studies, study_authority
+    from mace_fmu.atomic import write_text_atomic
+    from mace_fmu.two_mass import TwoMassSystem
+
+    k1, k2 = _grid(args.k1, "--k1"), _grid(args.k2, "--k2")
+    out = Path(args.out)
+    studies = []
+    for name, weights in AUTHORITIES.items():
+        if args.theta is not None:
+            weights = type(weights)(rho=weights.rho, theta=args.theta)
+        progress(f"{name} authority: {k1.size * k2.size} LQG designs")
+        study = study_authority(name=name, actual=TwoMassSystem(), weights=weights, k1_values=k1, k2_values=k2)
+        studies.append(study)
+        fig = FIGURE_OF_AUTHORITY[name]
+        print(sensitivity_contour(study.cost_map, minima=study.minima, path=out / f"figure_{fig}_{name}_authority.png",
+                                  title=f"Fig. {fig[0]}.{fig[1:]}: LQG sensitivity to stiffness errors, {name} authority"))
+    print(write_text_atomic(out / "lqg_sensitivity.txt", format_studies(studies)))
+    if not args.quiet:
+        print(format_studies(studies))
+    return 0
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("study", help="modelling-for-control studies of thesis Appendix A (PNG figures and a table)")
+    studies = p.add_subparsers(dest="study", required=True)
+    s = studies.add_parser("lqg-sensitivity", help="A.1: LQG designed on mismodelled stiffnesses (Figs. A.2-A.4)")
+    s.add_argument("--out", default="study", help="output directory (default ./study)")
+    s.add_argument("--k1", default="0.1:3.0:0.05", help="design k1 grid START:STOP:STEP [N/m] (default 0.1:3.0:0.05)")
+    s.add_argument("--k2", default="0.1:2.0:0.05", help="design k2 grid START:STOP:STEP [N/m] (default 0.1:2.0:0.05)")
+    s.add_argument("--theta", type=float, default=None, help="sensor noise intensity for all authorities (default 1)")
+    s.add_argument("--quiet", action="store_true", help="print only the written paths")
+    s.set_defaults(func=cmd_lqg_sensitivity)
