@@ -48,6 +48,48 @@ def cmd_lqg_sensitivity(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_reduced_order(args: argparse.Namespace) -> int:
+    from mace_fmu.atomic import write_text_atomic
+    from mace_fmu.control_studies.cantilever import cantilever_model
+    from mace_fmu.control_studies.figures import bode_overlay
+    from mace_fmu.control_studies.lqg import LqgWeights
+    from mace_fmu.control_studies.loop_shapes import dereverberated_crossover_hz, format_table, loop_shapes
+    from mace_fmu.control_studies.reduced_order import THESIS_COSTS, reduced_order_study, weights_for_full_cost
+
+    if args.max_iterations < 0:
+        raise MaceError(f"--max-iterations must be 0 or more, got {args.max_iterations}")
+    beam = cantilever_model()
+    progress(f"cantilever: {beam.length:.4f} m, modes " + ", ".join(f"{f:.1f}" for f in beam.frequencies_hz) + " Hz")
+    if args.rho is None:
+        weights = weights_for_full_cost(beam.system, target_cost=THESIS_COSTS["full"])
+    else:
+        weights = LqgWeights(rho=args.rho, theta=args.rho)
+    progress(f"rho = theta = {weights.rho:.4g}; updating the balanced 4-mode model (BFGS, at most "
+             f"{args.max_iterations} iterations)")
+    study = reduced_order_study(full=beam.system, weights=weights, max_iterations=args.max_iterations,
+                                progress=lambda k, j: progress(f"  iteration {k}: J/J_full = {j:.5f}")
+                                if k % 10 == 0 else None)
+    f = np.logspace(0.0, 4.0, 4001)
+    shapes = loop_shapes(study, frequencies_hz=f)
+    out = Path(args.out)
+    labels = {"full": "full order (5 modes)", "balanced": "balanced (4 modes)", "updated": "updated (4 modes)"}
+    for name, data, title, ylabel, unit in (
+            ("figure_A6_open_loop.png", shapes.plants, "Fig. A.6: open-loop tip force -> tip displacement",
+             "|G| [m/N]", False),
+            ("figure_A7_loop.png", shapes.loops, "Fig. A.7: loop G_full K of each model's compensator",
+             "|G K|", True),
+            ("figure_A8_compensators.png", shapes.compensators, "Fig. A.8: LQG compensators",
+             "|K| [N/m]", False)):
+        print(bode_overlay({labels[k]: v for k, v in data.items()}, frequencies_hz=f, title=title, ylabel=ylabel,
+                           path=out / name, unit_line=unit))
+    table = format_table(study, crossover_hz=dereverberated_crossover_hz(shapes.loops["full"], f),
+                         mode_frequencies_hz=beam.frequencies_hz, length_m=beam.length)
+    print(write_text_atomic(out / "table_A1.txt", table))
+    if not args.quiet:
+        print(table)
+    return 0
+
+
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("study", help="modelling-for-control studies of thesis Appendix A (PNG figures and a table)")
     studies = p.add_subparsers(dest="study", required=True)
@@ -58,3 +100,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--theta", type=float, default=None, help="sensor noise intensity for all authorities (default 1)")
     s.add_argument("--quiet", action="store_true", help="print only the written paths")
     s.set_defaults(func=cmd_lqg_sensitivity)
+    r = studies.add_parser("reduced-order", help="A.2: LQG on balanced and updated 4-mode models of a cantilever "
+                           "(Table A.1, Figs. A.6-A.8)")
+    r.add_argument("--out", default="study", help="output directory (default ./study)")
+    r.add_argument("--max-iterations", type=int, default=200, help="BFGS iterations of the update (default 200)")
+    r.add_argument("--rho", type=float, default=None,
+                   help="rho = theta (default: the value giving the thesis's J_full = 7.58e-6)")
+    r.add_argument("--quiet", action="store_true", help="print only the written paths")
+    r.set_defaults(func=cmd_reduced_order)
