@@ -29,7 +29,10 @@ K2_GRID = np.round(np.arange(0.1, 2.0 + 1e-9, 0.1), 10)
 
 @pytest.fixture(scope="module")
 def studies():
-    return {name: study_authority(name=name, actual=TwoMassSystem(), weights=w, k1_values=K1_GRID, k2_values=K2_GRID)
+    """The three maps; low authority only up to k1 = 2 N/m (its tests look no further)."""
+    return {name: study_authority(name=name, actual=TwoMassSystem(), weights=w,
+                                  k1_values=K1_GRID[K1_GRID <= 2.0 + 1e-9] if name == "low" else K1_GRID,
+                                  k2_values=K2_GRID)
             for name, w in AUTHORITIES.items()}
 
 
@@ -213,9 +216,9 @@ def test_balanced_truncation_keeps_four_modes_within_its_error_bound(beam):
 
 @pytest.fixture(scope="module")
 def table_a1(beam):
-    """Table A.1 with a short update (25 BFGS iterations; the CLI's default 200 reach J/J_full 1.053)."""
+    """Table A.1 with a short update (12 BFGS iterations; the CLI's default 200 reach J/J_full 1.053)."""
     weights = weights_for_full_cost(beam.system, target_cost=THESIS_COSTS["full"])
-    return reduced_order_study(full=beam.system, weights=weights, max_iterations=25)
+    return reduced_order_study(full=beam.system, weights=weights, max_iterations=12)
 
 
 def test_full_order_loop_crosses_over_near_the_third_mode(beam, table_a1):
@@ -229,7 +232,7 @@ def test_full_order_loop_crosses_over_near_the_third_mode(beam, table_a1):
 
 def test_table_a1_ordering_and_ratios(table_a1):
     """J_full < J_updated < J_balanced; the ratios to J_full within 5 % of the thesis's 1.125 and
-    1.091 (ours: 1.078, -4.2 %; 1.054 after 25 iterations, 1.053 after the CLI's 200)."""
+    1.091 (ours: 1.078, -4.2 %; 1.066 after 12 iterations, 1.053 after the CLI's 200)."""
     c = table_a1.costs
     assert c["full"] < c["updated"] < c["balanced"]
     thesis = {k: v / THESIS_COSTS["full"] for k, v in THESIS_COSTS.items()}
@@ -252,3 +255,9 @@ def test_cli_study_reduced_order_writes_figures_and_table(tmp_path, capsys):
     capsys.readouterr()
     assert main(["study", "reduced-order", "--out", str(out), "--max-iterations", "-1"]) == 2
     assert "--max-iterations" in capsys.readouterr().err
+
+
+def test_failed_riccati_solution_is_one_clear_error():
+    """rho = theta = 1e-14 on the cantilever: no stabilising solution in double precision."""
+    with pytest.raises(MaceError, match="LQG design of 'cantilever' failed for rho = 1e-14"):
+        design_lqg(cantilever_model().system, LqgWeights(rho=1e-14, theta=1e-14))

@@ -25,9 +25,10 @@ def _grid(text: str, what: str) -> np.ndarray:
 
 
 def cmd_lqg_sensitivity(args: argparse.Namespace) -> int:
-    from mace_fmu.control_studies.figures import sensitivity_contour
-    from mace_fmu.control_studies.stiffness_sensitivity import AUTHORITIES, format_studies, study_authority
     from mace_fmu.atomic import write_text_atomic
+    from mace_fmu.control_studies.figures import sensitivity_contour
+    from mace_fmu.control_studies.lqg import LqgWeights
+    from mace_fmu.control_studies.stiffness_sensitivity import AUTHORITIES, format_studies, study_authority
     from mace_fmu.two_mass import TwoMassSystem
 
     k1, k2 = _grid(args.k1, "--k1"), _grid(args.k2, "--k2")
@@ -35,13 +36,14 @@ def cmd_lqg_sensitivity(args: argparse.Namespace) -> int:
     studies = []
     for name, weights in AUTHORITIES.items():
         if args.theta is not None:
-            weights = type(weights)(rho=weights.rho, theta=args.theta)
+            weights = LqgWeights(rho=weights.rho, theta=args.theta)
         progress(f"{name} authority: {k1.size * k2.size} LQG designs")
         study = study_authority(name=name, actual=TwoMassSystem(), weights=weights, k1_values=k1, k2_values=k2)
         studies.append(study)
         fig = FIGURE_OF_AUTHORITY[name]
+        title = f"Fig. {fig[0]}.{fig[1:]}: LQG sensitivity to stiffness errors, {name} authority"
         print(sensitivity_contour(study.cost_map, minima=study.minima, path=out / f"figure_{fig}_{name}_authority.png",
-                                  title=f"Fig. {fig[0]}.{fig[1:]}: LQG sensitivity to stiffness errors, {name} authority"))
+                                  title=title))
     print(write_text_atomic(out / "lqg_sensitivity.txt", format_studies(studies)))
     if not args.quiet:
         print(format_studies(studies))
@@ -66,9 +68,13 @@ def cmd_reduced_order(args: argparse.Namespace) -> int:
         weights = LqgWeights(rho=args.rho, theta=args.rho)
     progress(f"rho = theta = {weights.rho:.4g}; updating the balanced 4-mode model (BFGS, at most "
              f"{args.max_iterations} iterations)")
+
+    def every_tenth(iteration: int, ratio: float) -> None:
+        if iteration % 10 == 0:
+            progress(f"  iteration {iteration}: J/J_full = {ratio:.5f}")
+
     study = reduced_order_study(full=beam.system, weights=weights, max_iterations=args.max_iterations,
-                                progress=lambda k, j: progress(f"  iteration {k}: J/J_full = {j:.5f}")
-                                if k % 10 == 0 else None)
+                                progress=every_tenth)
     f = np.logspace(0.0, 4.0, 4001)
     shapes = loop_shapes(study, frequencies_hz=f)
     out = Path(args.out)

@@ -73,6 +73,7 @@ def cantilever_deck_text(*, spec: CantileverSpec, length: float) -> str:
         raise MaceError(f"cantilever: expected a positive length and at least one element, got {length}, "
                         f"{spec.elements}")
     i_thin, i_wide = spec.bending_inertia, spec.thickness * spec.width**3 / 12.0
+    # Poisson's ratio only sets G, which no kept DOF feels (torsion is fixed, the bars have no shear factor)
     cards = [f"MAT1,1,{_r(spec.youngs_modulus)},,{_r(0.33)},{_r(spec.density)}",
              # I1 bends in the element x-y plane (orientation vector along basic y)
              f"PBAR,1,1,{_r(spec.area)},{_r(i_thin)},{_r(i_wide)},{_r(i_thin + i_wide)}"]

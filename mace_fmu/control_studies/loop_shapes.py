@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import control as ct
 import numpy as np
 
-from mace_fmu.control_studies.reduced_order import ReducedOrderStudy
+from mace_fmu.control_studies.reduced_order import THESIS_COSTS, ReducedOrderStudy
 from mace_fmu.iomodel.frf import frequency_response
 
 MODELS = ("full", "balanced", "updated")
@@ -86,15 +86,13 @@ def roots(values: np.ndarray) -> list[Root]:
 def format_table(study: ReducedOrderStudy, *, crossover_hz: float, mode_frequencies_hz: np.ndarray,
                  length_m: float) -> str:
     """Table A.1 beside the thesis's, with the choices and the models' poles and zeros."""
-    from mace_fmu.control_studies.reduced_order import THESIS_COSTS
-
     c, w = study.costs, study.weights
     lines = ["Reduced-order LQG (thesis A.2, Table A.1): cantilever, tip force -> tip displacement",
              f"  beam length {length_m:.4f} m ({length_m / 0.0254:.2f} in); modes [Hz]: "
              + ", ".join(f"{f:.1f}" for f in mode_frequencies_hz),
              f"  rho = theta = {w.rho:.4g}; dereverberated loop crossover {crossover_hz:.0f} Hz "
              f"(third mode {mode_frequencies_hz[2]:.0f} Hz)",
-             f"  Hankel singular values: " + ", ".join(f"{h:.3g}" for h in study.hankel_singular_values),
+             "  Hankel singular values: " + ", ".join(f"{h:.3g}" for h in study.hankel_singular_values),
              f"  update: {study.iterations} BFGS iterations, {study.evaluations} cost evaluations ({study.message})",
              "",
              f"  {'':10s} {'J thesis':>10s} {'J ours':>11s} {'J/J_full thesis':>16s} {'J/J_full ours':>14s}"]

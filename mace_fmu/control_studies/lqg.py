@@ -50,8 +50,12 @@ def design_lqg(model: ct.StateSpace, weights: LqgWeights) -> LqgDesign:
     """LQG compensator of ``model`` (force [N] in, displacement [m] out) for ``weights``."""
     _check_siso_plant(model, "LQG design model")
     a, b, c = model.A, model.B, model.C
-    k, _, _ = ct.lqr(a, b, c.T @ c, weights.rho * np.eye(1))
-    ell, _, _ = ct.lqe(a, b, c, np.eye(1), weights.theta * np.eye(1))
+    try:
+        k, _, _ = ct.lqr(a, b, c.T @ c, weights.rho * np.eye(1))
+        ell, _, _ = ct.lqe(a, b, c, np.eye(1), weights.theta * np.eye(1))
+    except (ArithmeticError, ValueError, np.linalg.LinAlgError) as exc:  # slycot's errors are ArithmeticErrors
+        raise MaceError(f"LQG design of {model.name!r} failed for rho = {weights.rho:g}, theta = {weights.theta:g}: "
+                        f"{' '.join(str(exc).split())}") from None
     compensator = ct.ss(a - b @ k - ell @ c, ell, -k, np.zeros((1, 1)), inputs=list(model.output_labels),
                         outputs=list(model.input_labels), name="lqg_compensator")
     return LqgDesign(regulator_gain=np.asarray(k), kalman_gain=np.asarray(ell), weights=weights,

@@ -145,7 +145,8 @@ def weights_for_full_cost(full: ct.StateSpace, *, target_cost: float) -> LqgWeig
 
 
 def update_reduced_model(*, full: ct.StateSpace, reduced: ct.StateSpace, weights: LqgWeights, max_iterations: int,
-                         progress: Callable[[int, float], None] | None = None) -> tuple[ct.StateSpace, so.OptimizeResult]:
+                         progress: Callable[[int, float], None] | None = None
+                         ) -> tuple[ct.StateSpace, so.OptimizeResult]:
     """The reduced model whose LQG compensator has the lowest closed-loop cost on ``full`` (BFGS).
 
     ``progress(iteration, J / J_full)`` after each iteration. Returns the model and scipy's result
@@ -159,7 +160,10 @@ def update_reduced_model(*, full: ct.StateSpace, reduced: ct.StateSpace, weights
         return params.form(p).system(**signals, name="updated")
 
     def cost(p: np.ndarray) -> float:
-        j = closed_loop_cost(full, design_lqg(model(p), weights)) / j_full
+        try:
+            j = closed_loop_cost(full, design_lqg(model(p), weights)) / j_full
+        except MaceError:  # no stabilising Riccati solution for this trial model: as bad as instability
+            return BARRIER
         return j if np.isfinite(j) else BARRIER
 
     iteration = [0]

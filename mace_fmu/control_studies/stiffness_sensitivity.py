@@ -24,7 +24,7 @@ from typing import Callable
 import numpy as np
 import scipy.optimize as so
 
-from mace_fmu.control_studies.lqg import LqgWeights, closed_loop_cost, design_lqg, optimal_cost
+from mace_fmu.control_studies.lqg import LqgWeights, closed_loop_cost, design_lqg, optimal_cost, regulator_poles
 from mace_fmu.errors import MaceError
 from mace_fmu.two_mass import TwoMassSystem
 
@@ -171,8 +171,6 @@ class AuthorityStudy:
 def study_authority(*, name: str, actual: TwoMassSystem, weights: LqgWeights, k1_values: np.ndarray,
                     k2_values: np.ndarray, progress: Callable[[int, int], None] | None = None) -> AuthorityStudy:
     """Map, local minima, tolerable spans and curvatures of one authority over a stiffness grid [N/m]."""
-    from mace_fmu.control_studies.lqg import regulator_poles
-
     cost_map = sensitivity_map(actual=actual, weights=weights, k1_values=k1_values, k2_values=k2_values,
                                progress=progress)
     plant = actual.state_space(force_on=FORCE_ON, measured=MEASURED)
