@@ -9,6 +9,7 @@ from pathlib import Path
 import control as ct
 import numpy as np
 import pytest
+import scipy.linalg as sla
 
 from mace_fmu.cli import main
 from mace_fmu.control_studies.cantilever import CantileverSpec, cantilever_model
@@ -197,21 +198,50 @@ def test_cantilever_refuses_too_few_elements():
 def test_modal_form_keeps_the_transfer_function(beam):
     """Second-order blocks with B = [0, 1], C = [n0, n1] reproduce the model to 1e-9 (relative)."""
     f = np.logspace(0, 4, 301)
-    for system in (beam.system, balanced_model(beam.system, states=8)):
+    for system in (beam.system, balanced_model(beam.system, states=8)[0]):
         form = modal_form(system).system(inputs=["u"], outputs=["y"], name="modal")
         np.testing.assert_allclose(siso_response(form, f), siso_response(system, f), rtol=1e-9)
 
 
-def test_balanced_truncation_keeps_four_modes_within_its_error_bound(beam):
-    """balred to 8 states: poles at the first four modes (0.1 %) and |G - G_r| below twice the sum
-    of the discarded Hankel singular values (the balanced-truncation bound) at every frequency."""
-    reduced = balanced_model(beam.system, states=8)
+def _gramians(system: ct.StateSpace) -> tuple[np.ndarray, np.ndarray]:
+    a, b, c = system.A, system.B, system.C
+    return (sla.solve_continuous_lyapunov(a, -b @ b.T), sla.solve_continuous_lyapunov(a.T, -c.T @ c))
+
+
+def test_balanced_truncation_is_balanced_and_within_its_error_bound(beam):
+    """Square-root balanced truncation to 8 states: the reduced model's two gramians both equal
+    diag of the first 8 Hankel singular values (1e-6 of the largest); these are the square roots of
+    the eigenvalues of Wc Wo of the full model (1e-6); poles at the first four modes (0.1 %); and
+    |G - G_r| below twice the sum of the discarded singular values at every frequency."""
+    reduced, hsv = balanced_model(beam.system, states=8)
     assert reduced.nstates == 8
+    wc, wo = _gramians(reduced)
+    for w in (wc, wo):
+        np.testing.assert_allclose(w, np.diag(hsv[:8]), atol=1e-6 * hsv[0])
+    full_wc, full_wo = _gramians(beam.system)
+    np.testing.assert_allclose(np.sort(np.sqrt(np.linalg.eigvals(full_wc @ full_wo).real))[::-1], hsv, rtol=1e-6)
     poles = np.sort(np.abs(np.linalg.eigvals(reduced.A)))[::2] / (2 * np.pi)
     np.testing.assert_allclose(poles, beam.frequencies_hz[:4], rtol=1e-3)
     f = np.logspace(0, 4.5, 3001)
-    bound = 2 * ct.hsvd(beam.system)[8:].sum()
-    assert np.abs(siso_response(beam.system, f) - siso_response(reduced, f)).max() <= bound
+    assert np.abs(siso_response(beam.system, f) - siso_response(reduced, f)).max() <= 2 * hsv[8:].sum()
+
+
+def test_balanced_truncation_equals_control_balred_where_slycot_is_installed(beam):
+    """Where slycot is present (not a dependency: see balanced_truncation.py), control.balred gives
+    the same transfer function to 1e-6 of its peak."""
+    pytest.importorskip("slycot")
+    f = np.logspace(0, 4, 801)
+    ours = siso_response(balanced_model(beam.system, states=8)[0], f)
+    theirs = siso_response(ct.balred(beam.system, 8, method="truncate"), f)
+    assert np.abs(ours - theirs).max() <= 1e-6 * np.abs(theirs).max()
+
+
+def test_balanced_truncation_refuses_unstable_and_uncontrollable_models():
+    with pytest.raises(MaceError, match="not asymptotically stable"):
+        balanced_model(ct.ss([[0.0, 1.0], [-1.0, 0.0]], [[0.0], [1.0]], [[1.0, 0.0]], 0), states=1)
+    uncontrollable = ct.ss(np.diag([-1.0, -2.0]), [[1.0], [0.0]], [[1.0, 1.0]], 0)
+    with pytest.raises(MaceError, match="uncontrollable"):
+        balanced_model(uncontrollable, states=1)
 
 
 @pytest.fixture(scope="module")
@@ -258,6 +288,7 @@ def test_cli_study_reduced_order_writes_figures_and_table(tmp_path, capsys):
 
 
 def test_failed_riccati_solution_is_one_clear_error():
-    """rho = theta = 1e-14 on the cantilever: no stabilising solution in double precision."""
-    with pytest.raises(MaceError, match="LQG design of 'cantilever' failed for rho = 1e-14"):
-        design_lqg(cantilever_model().system, LqgWeights(rho=1e-14, theta=1e-14))
+    """An unstable mode the force cannot move: no stabilising regulator, one message naming the model."""
+    model = ct.ss(np.diag([1.0, -1.0]), [[0.0], [1.0]], [[1.0, 1.0]], 0, name="unstabilisable")
+    with pytest.raises(MaceError, match="LQG design of 'unstabilisable' failed for rho = 1, theta = 1"):
+        design_lqg(model, LqgWeights(rho=1.0, theta=1.0))

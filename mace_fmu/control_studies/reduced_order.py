@@ -1,14 +1,15 @@
 """Thesis A.2: LQG on a reduced-order model of the cantilever, and the model's update under the LQG cost.
 
-The full model (5 modes) is reduced to 4 modes (8 states) by balanced truncation
-(``control.balred``, SLICOT); LQG compensators designed on the full, the balanced and the
-updated model are each closed around the full model, giving Table A.1. The update frees the
-reduced model's pole frequencies, damping ratios and every entry of B and C (the thesis's 24
-parameters) and minimises the closed-loop cost on the full model by BFGS; the constraint that the
-loop be stable is a barrier (an unstable loop costs BARRIER times J_full, so line searches turn
-back). Unstated in the thesis, chosen here: theta = rho (the Kalman filter is the regulator's dual
-and gets the same bandwidth), with rho set so that the full-order cost is the thesis's 7.58e-6
-(SI units); the loop's crossover then falls near the third mode, as the thesis says (README).
+The full model (5 modes) is reduced to 4 modes (8 states) by square-root balanced truncation
+(``balanced_truncation``: control.balred's method without slycot); LQG compensators designed on
+the full, the balanced and the updated model are each closed around the full model, giving Table
+A.1. The update frees the reduced model's pole frequencies, damping ratios and every entry of B
+and C (the thesis's 24 parameters) and minimises the closed-loop cost on the full model by BFGS;
+the constraint that the loop be stable is a barrier (an unstable loop costs BARRIER times J_full,
+so line searches turn back). Unstated in the thesis, chosen here: theta = rho (the Kalman filter
+is the regulator's dual and gets the same bandwidth), with rho set so that the full-order cost is
+the thesis's 7.58e-6 (SI units); the loop's crossover then falls near the third mode, as the
+thesis says (README).
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ import control as ct
 import numpy as np
 import scipy.optimize as so
 
+from mace_fmu.control_studies.balanced_truncation import balanced_truncation
 from mace_fmu.control_studies.lqg import LqgDesign, LqgWeights, closed_loop_cost, design_lqg
 from mace_fmu.errors import MaceError
 
@@ -27,8 +29,9 @@ from mace_fmu.errors import MaceError
 THESIS_COSTS = {"full": 7.58e-6, "balanced": 8.53e-6, "updated": 8.27e-6}
 #: cost of an unstable loop during the update, relative to J_full
 BARRIER = 1.0e3
-#: finite-difference step of the update's gradient: the cost is accurate to about 1e-7 relative
-#: (Riccati solutions of a lightly damped model), so steps below 1e-5 give noise, not slopes
+#: finite-difference step of the update's gradient: the cost is accurate to about 1e-8 relative
+#: (Riccati solutions of a lightly damped model; 1e-7 with slycot's), so steps below 1e-5 give
+#: noise, not slopes
 GRADIENT_STEP = 1.0e-4
 
 
@@ -121,14 +124,13 @@ class ReducedOrderStudy:
     message: str  #: the optimiser's final message
 
 
-def balanced_model(full: ct.StateSpace, *, states: int) -> ct.StateSpace:
-    """Balanced truncation of ``full`` to ``states`` states (control.balred, needs slycot)."""
-    try:
-        reduced = ct.balred(full, states, method="truncate")
-    except ImportError as exc:  # python-control names slycot in its message
-        raise MaceError(f"balanced reduction needs slycot (pip install slycot): {exc}") from None
-    return ct.ss(reduced.A, reduced.B, reduced.C, reduced.D, inputs=list(full.input_labels),
-                 outputs=list(full.output_labels), name="balanced")
+def balanced_model(full: ct.StateSpace, *, states: int) -> tuple[ct.StateSpace, np.ndarray]:
+    """Square-root balanced truncation of ``full`` to ``states`` states (named "balanced"), and the
+    full model's Hankel singular values."""
+    truncation = balanced_truncation(full, states=states)
+    r = truncation.reduced
+    return (ct.ss(r.A, r.B, r.C, r.D, inputs=list(full.input_labels), outputs=list(full.output_labels),
+                  name="balanced"), truncation.hankel_singular_values)
 
 
 def weights_for_full_cost(full: ct.StateSpace, *, target_cost: float) -> LqgWeights:
@@ -184,12 +186,12 @@ def reduced_order_study(*, full: ct.StateSpace, weights: LqgWeights, reduced_sta
                         max_iterations: int = 200,
                         progress: Callable[[int, float], None] | None = None) -> ReducedOrderStudy:
     """Table A.1: LQG on the full, the balanced and the updated reduced model, each closed around ``full``."""
-    balanced = balanced_model(full, states=reduced_states)
+    balanced, hsv = balanced_model(full, states=reduced_states)
     updated, result = update_reduced_model(full=full, reduced=balanced, weights=weights,
                                            max_iterations=max_iterations, progress=progress)
     models = {"full": full, "balanced": balanced, "updated": updated}
     designs = {k: design_lqg(m, weights) for k, m in models.items()}
     costs = {k: closed_loop_cost(full, d) for k, d in designs.items()}
     return ReducedOrderStudy(full=full, balanced=balanced, updated=updated, weights=weights, designs=designs,
-                             costs=costs, hankel_singular_values=ct.hsvd(full), iterations=int(result.nit),
+                             costs=costs, hankel_singular_values=hsv, iterations=int(result.nit),
                              evaluations=int(result.nfev), message=str(result.message))
