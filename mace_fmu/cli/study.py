@@ -1,0 +1,116 @@
+"""``mace-fmu study``: the modelling-for-control studies of thesis Appendix A (figures and a table)."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import numpy as np
+
+from mace_fmu.cli.common import progress
+from mace_fmu.errors import MaceError
+
+FIGURE_OF_AUTHORITY = {"low": "A2", "moderate": "A3", "high": "A4"}
+
+
+def _grid(text: str, what: str) -> np.ndarray:
+    """'start:stop:step' [N/m] to the inclusive grid."""
+    try:
+        start, stop, step = (float(x) for x in text.split(":"))
+    except ValueError:
+        raise MaceError(f"{what} takes START:STOP:STEP in N/m, got {text!r}") from None
+    if not (0.0 < start < stop and step > 0.0):
+        raise MaceError(f"{what}: expected 0 < START < STOP and STEP > 0, got {text!r}")
+    return np.round(np.arange(start, stop + 0.5 * step, step), 10)
+
+
+def cmd_lqg_sensitivity(args: argparse.Namespace) -> int:
+    from mace_fmu.atomic import write_text_atomic
+    from mace_fmu.control_studies.figures import sensitivity_contour
+    from mace_fmu.control_studies.lqg import LqgWeights
+    from mace_fmu.control_studies.stiffness_sensitivity import AUTHORITIES, format_studies, study_authority
+    from mace_fmu.two_mass import TwoMassSystem
+
+    k1, k2 = _grid(args.k1, "--k1"), _grid(args.k2, "--k2")
+    out = Path(args.out)
+    studies = []
+    for name, weights in AUTHORITIES.items():
+        if args.theta is not None:
+            weights = LqgWeights(rho=weights.rho, theta=args.theta)
+        progress(f"{name} authority: {k1.size * k2.size} LQG designs")
+        study = study_authority(name=name, actual=TwoMassSystem(), weights=weights, k1_values=k1, k2_values=k2)
+        studies.append(study)
+        fig = FIGURE_OF_AUTHORITY[name]
+        title = f"Fig. {fig[0]}.{fig[1:]}: LQG sensitivity to stiffness errors, {name} authority"
+        print(sensitivity_contour(study.cost_map, minima=study.minima, path=out / f"figure_{fig}_{name}_authority.png",
+                                  title=title))
+    print(write_text_atomic(out / "lqg_sensitivity.txt", format_studies(studies)))
+    if not args.quiet:
+        print(format_studies(studies))
+    return 0
+
+
+def cmd_reduced_order(args: argparse.Namespace) -> int:
+    from mace_fmu.atomic import write_text_atomic
+    from mace_fmu.control_studies.cantilever import cantilever_model
+    from mace_fmu.control_studies.figures import bode_overlay
+    from mace_fmu.control_studies.lqg import LqgWeights
+    from mace_fmu.control_studies.loop_shapes import dereverberated_crossover_hz, format_table, loop_shapes
+    from mace_fmu.control_studies.reduced_order import THESIS_COSTS, reduced_order_study, weights_for_full_cost
+
+    if args.max_iterations < 0:
+        raise MaceError(f"--max-iterations must be 0 or more, got {args.max_iterations}")
+    beam = cantilever_model()
+    progress(f"cantilever: {beam.length:.4f} m, modes " + ", ".join(f"{f:.1f}" for f in beam.frequencies_hz) + " Hz")
+    if args.rho is None:
+        weights = weights_for_full_cost(beam.system, target_cost=THESIS_COSTS["full"])
+    else:
+        weights = LqgWeights(rho=args.rho, theta=args.rho)
+    progress(f"rho = theta = {weights.rho:.4g}; updating the balanced 4-mode model (BFGS, at most "
+             f"{args.max_iterations} iterations)")
+
+    def every_tenth(iteration: int, ratio: float) -> None:
+        if iteration % 10 == 0:
+            progress(f"  iteration {iteration}: J/J_full = {ratio:.5f}")
+
+    study = reduced_order_study(full=beam.system, weights=weights, max_iterations=args.max_iterations,
+                                progress=every_tenth)
+    f = np.logspace(0.0, 4.0, 4001)
+    shapes = loop_shapes(study, frequencies_hz=f)
+    out = Path(args.out)
+    labels = {"full": "full order (5 modes)", "balanced": "balanced (4 modes)", "updated": "updated (4 modes)"}
+    for name, data, title, ylabel, unit in (
+            ("figure_A6_open_loop.png", shapes.plants, "Fig. A.6: open-loop tip force -> tip displacement",
+             "|G| [m/N]", False),
+            ("figure_A7_loop.png", shapes.loops, "Fig. A.7: loop G_full K of each model's compensator",
+             "|G K|", True),
+            ("figure_A8_compensators.png", shapes.compensators, "Fig. A.8: LQG compensators",
+             "|K| [N/m]", False)):
+        print(bode_overlay({labels[k]: v for k, v in data.items()}, frequencies_hz=f, title=title, ylabel=ylabel,
+                           path=out / name, unit_line=unit))
+    table = format_table(study, crossover_hz=dereverberated_crossover_hz(shapes.loops["full"], f),
+                         mode_frequencies_hz=beam.frequencies_hz, length_m=beam.length)
+    print(write_text_atomic(out / "table_A1.txt", table))
+    if not args.quiet:
+        print(table)
+    return 0
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("study", help="modelling-for-control studies of thesis Appendix A (PNG figures and a table)")
+    studies = p.add_subparsers(dest="study", required=True)
+    s = studies.add_parser("lqg-sensitivity", help="A.1: LQG designed on mismodelled stiffnesses (Figs. A.2-A.4)")
+    s.add_argument("--out", default="study", help="output directory (default ./study)")
+    s.add_argument("--k1", default="0.1:3.0:0.05", help="design k1 grid START:STOP:STEP [N/m] (default 0.1:3.0:0.05)")
+    s.add_argument("--k2", default="0.1:2.0:0.05", help="design k2 grid START:STOP:STEP [N/m] (default 0.1:2.0:0.05)")
+    s.add_argument("--theta", type=float, default=None, help="sensor noise intensity for all authorities (default 1)")
+    s.add_argument("--quiet", action="store_true", help="print only the written paths")
+    s.set_defaults(func=cmd_lqg_sensitivity)
+    r = studies.add_parser("reduced-order", help="A.2: LQG on balanced and updated 4-mode models of a cantilever "
+                           "(Table A.1, Figs. A.6-A.8)")
+    r.add_argument("--out", default="study", help="output directory (default ./study)")
+    r.add_argument("--max-iterations", type=int, default=200, help="BFGS iterations of the update (default 200)")
+    r.add_argument("--rho", type=float, default=None,
+                   help="rho = theta (default: the value giving the thesis's J_full = 7.58e-6)")
+    r.add_argument("--quiet", action="store_true", help="print only the written paths")
+    r.set_defaults(func=cmd_reduced_order)

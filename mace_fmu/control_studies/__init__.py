@@ -1,0 +1,8 @@
+"""Modelling for control (thesis Appendix A): how good must a model be for LQG design?
+
+- ``lqg``: LQG design on a model and its closed-loop cost on another (the evaluation system);
+- ``stiffness_sensitivity``: A.1, cost of designing on mismodelled stiffnesses (two-mass system);
+- ``cantilever``: A.2's aluminium cantilever from the FE core (beam elements), as a modal model;
+- ``reduced_order``: A.2, balanced reduction to 4 modes and its update under the closed-loop cost;
+- ``figures``: the contour and transfer-function PNGs.
+"""
