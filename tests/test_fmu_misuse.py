@@ -167,12 +167,14 @@ def test_a_million_steps_end_where_the_zero_order_hold_ends(fmu_0g) -> None:
 
 
 def test_simulate_and_the_cli_raise_with_the_fmus_logged_reason(fmu_0g, tmp_path, capsys) -> None:
-    _, fmu, _ = fmu_0g
+    model, fmu, _ = fmu_0g
     with pytest.raises(MaceError, match=r"stopped at t = 0 s of 0.01 s\. FMU log: error: fmi2DoStep at t = 0.0 s "
                                         r"refused: non-finite input value\(s\): rwa_z"):
         simulate_input_response(fmu, input_name="rwa_z", amplitude_v=float("nan"), duration_s=0.01)
+    # view response --fmu takes only an FMU with grid motion outputs (one grid is enough)
+    motion = export_fmu(volts_model("0g", modes=model.structure_modes, motion_grids=[16]), out_dir=tmp_path)
     code = main(["view", "response", "0g", "--input", "rwa_z", "--amplitude", "nan", "--duration", "0.01",
-                 "--fmu", str(fmu), "--html", str(tmp_path / "r.html")])
+                 "--fmu", str(motion), "--html", str(tmp_path / "r.html")])
     last = capsys.readouterr().err.splitlines()[-1]  # the lines before are progress
     assert code == 2 and last.startswith("mace-fmu: error: ") and "non-finite input value(s): rwa_z" in last, last
 

@@ -8,16 +8,19 @@ carry these arrays as ``resources/model.npz``; the updating engine re-analyses w
 
 from __future__ import annotations
 
+import dataclasses
+from typing import Sequence
+
 import numpy as np
 
 from mace_fmu.datafile import data_file_path, read_data_file
-from mace_fmu.fe.assembly import FEModel, assemble
-from mace_fmu.fe.corotational import tangent
+from mace_fmu.fe.assembly import FEModel, bar_section
+from mace_fmu.fe.beam import natural_stiffness
+from mace_fmu.fe.corotational import BarState, tangent
 from mace_fmu.fe.preload import Preload
 from mace_fmu.iomodel.modal_ss import modal_data
 from mace_fmu.iomodel.motion import motion_unit, parse_motion_output
 from mace_fmu.iomodel.volts import VoltsModel
-from mace_fmu.structure import apply_overrides
 from modelica_like import PD, Gain, PadeDelay
 
 _RELATIVE_STEP = 1e-3  # the material stiffness is linear in E and k: the difference quotient is exact
@@ -87,38 +90,60 @@ def _blocks(model: VoltsModel) -> tuple[dict, list[tuple[str, float, str]]]:
     return arrays, parameters
 
 
-def material_stiffness(fe: FEModel, preload: Preload | None) -> np.ndarray:
-    """Bar stiffness [N/m, N m/rad] about the configuration the modes are computed in.
+def material_sensitivity(fe: FEModel, deck, preload: Preload | None, mid: int) -> np.ndarray:
+    """dK/d(ln E) [N/m, N m/rad] of MAT1 ``mid``: the material stiffness of its bars per unit relative change.
 
-    1-g: the preloaded (sagged) geometry with the preload's bar forces held, so a change of E
-    changes only the material part, as at the new equilibrium, where gravity sets the forces.
-    Taking the undeformed geometry instead puts spurious strain into the near-rigid suspension
-    modes: Z tilt, X twist and 1st Y bending then came out 1.9e-3 to 2.9e-3 off after E of the
-    Lexan center +5 %, against 7.8e-4 at most this way.
+    About the configuration the modes are computed in: 1-g, the preloaded (sagged) geometry with
+    the preload's bar forces held, so a change of E changes only the material part, as at the new
+    equilibrium, where gravity sets the forces. Taking the undeformed geometry instead puts
+    spurious strain into the near-rigid suspension modes: Z tilt, X twist and 1st Y bending then
+    came out 1.9e-3 to 2.9e-3 off after E of the Lexan center +5 %, against 7.8e-4 at most this
+    way. The bar stiffness is linear in E (and in G, which NASTRAN derives from E when blank), so
+    the difference of the natural stiffnesses is exact; only this material's bars are evaluated.
     """
-    if preload is None:
-        return fe.stiffness
-    return tangent(fe.bars, preload.state, fe.dofs.size, natural_forces=preload.bar_forces)[1].toarray()
+    ids = fe.bars.ids
+    mine = np.array([deck.pbars[deck.bars[int(i)].pid].mid == mid for i in ids])
+    mat = deck.mat1s[mid]
+    plus = dataclasses.replace(mat, e=mat.youngs_modulus * (1 + _RELATIVE_STEP))  # G follows E when blank
+
+    def section_delta(pid: int, length: float) -> np.ndarray:
+        sec = bar_section(deck, pid)
+        stiffer = dataclasses.replace(sec, e=plus.youngs_modulus, g=plus.shear_modulus)
+        return (natural_stiffness(stiffer, length) - natural_stiffness(sec, length)) / _RELATIVE_STEP
+
+    dkn = np.array([section_delta(deck.bars[int(i)].pid, length)
+                    for i, length in zip(ids[mine], fe.bars.lengths0[mine])]).reshape(-1, 7, 7)
+    bars = dataclasses.replace(fe.bars, ids=ids[mine], node_a=fe.bars.node_a[mine], node_b=fe.bars.node_b[mine],
+                               frames0=fe.bars.frames0[mine], lengths0=fe.bars.lengths0[mine], k_natural=dkn)
+    if preload is not None:
+        state = preload.state
+    else:  # 0-g: the undeformed geometry, where the corotational tangent is the linear stiffness
+        state = BarState(fe.positions, np.broadcast_to(np.eye(3), (len(fe.positions), 3, 3)))
+    # forces held (zero change): only the material part B^T dK_n B of the tangent remains
+    return tangent(bars, state, fe.dofs.size, natural_forces=np.zeros((int(mine.sum()), 7)))[1].toarray()
 
 
-def physical_sensitivities(model: VoltsModel, shapes: np.ndarray) -> tuple[list[tuple[str, float, str]], np.ndarray]:
-    """Physical parameters (name, value, description) and Phi0^T dK/d(ln p) Phi0 for each."""
+def physical_sensitivities(model: VoltsModel, shapes: np.ndarray, *, only: Sequence[str] | None = None
+                           ) -> tuple[list[tuple[str, float, str]], np.ndarray]:
+    """Physical parameters (name, value, description) and Phi0^T dK/d(ln p) Phi0 for each (or for ``only``)."""
     names = read_data_file(data_file_path(), what="parameter names").get("parameters", {})
     deck, fe = model.structure_modes.structure.deck, model.structure_modes.model
     used = sorted({deck.pbars[b.pid].mid for b in deck.bars.values()})
     pre = model.structure_modes.preload
-    nominal = material_stiffness(fe, pre)
     parameters, sensitivities = [], []
     for mid in used:
         e = deck.mat1s[mid].youngs_modulus
         label = names.get("materials", {}).get(str(mid), f"mat{mid}")
-        plus = assemble(apply_overrides(deck, {("MAT1", mid): {"e": e * (1 + _RELATIVE_STEP)}}))
-        dk = (material_stiffness(plus, pre) - nominal) / _RELATIVE_STEP  # linear in E: the quotient is exact
+        if only is not None and f"E_{label}" not in only:
+            continue
+        dk = material_sensitivity(fe, deck, pre, mid)
         parameters.append((f"E_{label}", e, f"Young's modulus of {label} (MAT1 {mid}) [Pa]; takes effect by "
                                             "reanalysis on the retained modes"))
         sensitivities.append(shapes.T @ dk @ shapes)
     for row, (sid, k) in enumerate(zip(fe.spring_ids, fe.spring_constants)):
         label = names.get("springs", {}).get(str(sid), f"spring{sid}")
+        if only is not None and f"k_{label}" not in only:
+            continue
         v = fe.spring_vectors[row] @ shapes
         parameters.append((f"k_{label}", float(k), f"stiffness of {label} (CELAS2 {sid}) [N/m]; reanalysis"))
         sensitivities.append(k * np.outer(v, v))
@@ -147,11 +172,12 @@ def maximum_is_excluded(name: str) -> bool:
     return name.startswith("damping_mode_")
 
 
-def parametric_arrays(model: VoltsModel, *, physical: bool = True) -> dict[str, np.ndarray]:
+def parametric_arrays(model: VoltsModel, *, physical: bool | Sequence[str] = True) -> dict[str, np.ndarray]:
     """Everything a ParametricSystem (and an FMU) needs to rebuild ``model`` for new parameter values.
 
     ``physical=False`` leaves out the moduli and springs and their stiffness sensitivities (the
-    costly part): the system then rebuilds for new damping ratios, delays and gains only.
+    costly part): the system then rebuilds for new damping ratios, delays and gains only; a list
+    of names keeps just those (see also :func:`with_physical`).
     """
     sys_ = model.system
     ins, outs = signal_descriptions(model)
@@ -159,24 +185,46 @@ def parametric_arrays(model: VoltsModel, *, physical: bool = True) -> dict[str, 
     data = modal_data(model.structure_modes.modes, model.instruments, max_hz=max_hz,
                       motion_grids=list(model.plant.motion_grids))
     arrays, parameters = _blocks(model)
-    n = len(data.labels)
-    physical, dk = physical_sensitivities(model, data.shapes) if physical else ([], np.zeros((0, n, n)))
     damping = [(f"damping_mode_{k + 1}", float(z), f"open-loop damping ratio of mode {k + 1}: {label}")
                for k, (z, label) in enumerate(zip(model.plant.damping, data.labels))]
-    parameters = damping + parameters + physical
+    n = len(data.labels)
     arrays.update(
         inputs=np.array(sys_.input_labels), outputs=np.array(sys_.output_labels), input_descriptions=np.array(ins),
-        output_descriptions=np.array(outs), param_names=np.array([p[0] for p in parameters]),
-        param_values=np.array([p[1] for p in parameters], dtype=float),
-        param_descriptions=np.array([p[2] for p in parameters]),
-        param_min=np.array([parameter_range(p[0])[0] for p in parameters]),
-        param_max=np.array([parameter_range(p[0])[1] for p in parameters]),
-        param_max_excluded=np.array([maximum_is_excluded(p[0]) for p in parameters]),
-        physical_names=np.array([p[0] for p in physical]),
-        physical_dk=dk, frequencies_hz=data.frequencies_hz, mode_labels=np.array(data.labels), modal_b=data.modal_b,
+        output_descriptions=np.array(outs), physical_names=np.array([], dtype=str), physical_dk=np.zeros((0, n, n)),
+        frequencies_hz=data.frequencies_hz, mode_labels=np.array(data.labels), modal_b=data.modal_b,
         disp_names=np.array(list(data.disp_out)), disp_rows=np.array(list(data.disp_out.values())),
         rate_names=np.array(list(data.rate_out)), rate_rows=np.array(list(data.rate_out.values())),
         motion_names=np.array(list(data.motion_out), dtype=str),
         motion_rows=np.array(list(data.motion_out.values())).reshape(len(data.motion_out), len(data.labels)),
         structure_outputs=np.array(data.output_order))
-    return arrays
+    arrays = _with_parameters(arrays, damping + parameters)
+    if physical is False:
+        return arrays
+    entries, dk = physical_sensitivities(model, data.shapes, only=None if physical is True else physical)
+    return with_physical(arrays, entries, dk)
+
+
+def _with_parameters(arrays: dict[str, np.ndarray], parameters: Sequence[tuple[str, float, str]]) -> dict:
+    """``arrays`` with (name, value, description) parameters appended, their declared ranges too."""
+    out = dict(arrays)
+    old = list(out.get("param_names", []))
+    new = [p[0] for p in parameters]
+    out.update(
+        param_names=np.array(old + new), param_values=np.concatenate([out.get("param_values", []),
+                                                                       [p[1] for p in parameters]]).astype(float),
+        param_descriptions=np.array(list(out.get("param_descriptions", [])) + [p[2] for p in parameters]),
+        param_min=np.concatenate([out.get("param_min", []), [parameter_range(n)[0] for n in new]]).astype(float),
+        param_max=np.concatenate([out.get("param_max", []), [parameter_range(n)[1] for n in new]]).astype(float),
+        param_max_excluded=np.concatenate([out.get("param_max_excluded", []),
+                                           [maximum_is_excluded(n) for n in new]]).astype(bool))
+    return out
+
+
+def with_physical(arrays: dict[str, np.ndarray], parameters: Sequence[tuple[str, float, str]],
+                  projected_dk: np.ndarray) -> dict[str, np.ndarray]:
+    """``arrays`` with physical parameters (name, value, description) and their Phi0^T dK Phi0 added."""
+    out = _with_parameters(arrays, parameters)
+    out["physical_names"] = np.array(list(arrays["physical_names"]) + [p[0] for p in parameters])
+    out["physical_dk"] = np.concatenate([arrays["physical_dk"], np.asarray(projected_dk).reshape(
+        len(parameters), *arrays["physical_dk"].shape[1:])])
+    return out

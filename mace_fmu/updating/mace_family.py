@@ -22,7 +22,7 @@ from mace_fmu.errors import MaceError
 from mace_fmu.fe.pairing import carry_labels
 from mace_fmu.fe.preload import PreloadKind
 from mace_fmu.iomodel.parametric import ParametricSystem
-from mace_fmu.iomodel.parametric_data import parametric_arrays
+from mace_fmu.iomodel.parametric_data import parametric_arrays, physical_sensitivities, with_physical
 from mace_fmu.iomodel.volts import DEFAULT_MAX_HZ, VoltsModel, volts_model
 from mace_fmu.parameters import DAMPING_PREFIX, ParameterSet, deck_values, parameter_kind
 from mace_fmu.pipeline import StructureModes, compute_modes
@@ -34,19 +34,31 @@ _CACHE_SIZE = 4  # base point, perturbed points of a modal-sensitivity step come
 
 
 class MaceSolution:
-    """One FE solve and what was built from it; the reanalysis data only when asked for."""
+    """One FE solve and what was built from it; reanalysis data per parameter, only when asked for."""
 
-    def __init__(self, volts: VoltsModel):
+    def __init__(self, volts: VoltsModel, physical: Mapping[str, float]):
         self.volts = volts
-        self.system = ParametricSystem(parametric_arrays(volts, physical=False))  #: damping, delays, gains
-        self._reanalysis: ParametricSystem | None = None
+        self.physical = dict(physical)  #: moduli and springs [Pa, N/m] of this solve
+        self._arrays = parametric_arrays(volts, physical=False)
+        self.system = ParametricSystem(self._arrays)  #: rebuilds for damping ratios, delays and gains
+        self._sensitivities: dict[str, tuple[tuple[str, float, str], np.ndarray]] = {}
+        self._systems: dict[tuple[str, ...], ParametricSystem] = {}
 
-    @property
-    def reanalysis(self) -> ParametricSystem:
-        """The system with the moduli and springs and their stiffness sensitivities (computed once)."""
-        if self._reanalysis is None:
-            self._reanalysis = ParametricSystem(parametric_arrays(self.volts))
-        return self._reanalysis
+    def reanalysis(self, names: Sequence[str]) -> ParametricSystem:
+        """The system that also re-analyses the moduli and springs ``names`` (stiffness sensitivities
+        computed once per name: each costs a tangent of that material's bars)."""
+        key = tuple(sorted(names))
+        if key not in self._systems:
+            missing = [n for n in key if n not in self._sensitivities]
+            if missing:
+                keep = self.volts.structure_modes.modes.frequencies_hz <= np.max(self.volts.plant.frequencies_hz)
+                shapes = self.volts.structure_modes.modes.shapes[:, keep]
+                entries, dk = physical_sensitivities(self.volts, shapes, only=missing)
+                self._sensitivities.update({e[0]: (e, d) for e, d in zip(entries, dk)})
+            chosen = [self._sensitivities[n] for n in key]
+            arrays = with_physical(self._arrays, [c[0] for c in chosen], np.array([c[1] for c in chosen]))
+            self._systems[key] = ParametricSystem(arrays)
+        return self._systems[key]
 
 
 def linear_model(system: ParametricSystem, vector: np.ndarray, **modes) -> LinearModel:
@@ -94,7 +106,7 @@ class MaceFamily:
             ref = self._reference.volts.structure_modes
             modes = dataclasses.replace(modes, modes=carry_labels(ref.modes, ref.model, modes.modes))
         volts = volts_model(self.structure, modes=modes, parameters=self._non_modal(params), max_hz=self.max_hz)
-        solution = MaceSolution(volts)
+        solution = MaceSolution(volts, physical)
         self.solves += 1
         self._cache[key] = solution
         if len(self._cache) > _CACHE_SIZE:
@@ -178,8 +190,12 @@ class MaceBasis:
 
     def model(self, values: Values, *, frequencies_hz: np.ndarray | None = None,
               phi_r: np.ndarray | None = None) -> LinearModel:
-        system = self.solution.reanalysis
-        extra = {} if frequencies_hz is None else {"frequencies_hz": frequencies_hz, "phi_r": phi_r}
+        if frequencies_hz is not None:  # modes given: nothing to re-analyse
+            system, extra = self.solution.system, {"frequencies_hz": frequencies_hz, "phi_r": phi_r}
+        else:
+            at = self.family.parameter_set(values).values
+            changed = [n for n in self.physical if n in at and at[n] != self.solution.physical[n]]
+            system, extra = (self.solution.reanalysis(changed) if changed else self.solution.system), {}
         return linear_model(system, self.family.vector(system, values), **extra)
 
     def modes_of(self, values: Values) -> tuple[np.ndarray, np.ndarray]:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import fnmatch
+import functools
 from typing import Sequence
 
 import numpy as np
@@ -13,6 +14,13 @@ from mace_fmu.iomodel.poles import ClosedLoopPole
 #: poles this close to critical damping are real (servo and speed-loop lags), no vibration mode
 REAL_POLE_DAMPING = 0.999
 _NO_MATCH = 1e6  # assignment cost of a pole whose label does not match: taken only when nothing else can be
+
+
+@functools.lru_cache(maxsize=65536)
+def label_matches(label: str, pattern: str) -> bool:
+    """Whether a pole label matches a pattern ("a|b": either of two fnmatch patterns); cached, as an
+    update pairs the same few dozen labels thousands of times."""
+    return any(fnmatch.fnmatchcase(label, pat) for pat in pattern.split("|"))
 
 
 def pair_poles(patterns: Sequence[tuple[str, float]], poles: Sequence[ClosedLoopPole]) -> list[int | None]:
@@ -28,9 +36,8 @@ def pair_poles(patterns: Sequence[tuple[str, float]], poles: Sequence[ClosedLoop
         return []
     cost = np.full((len(patterns), len(poles)), _NO_MATCH)
     for i, (pattern, hz) in enumerate(patterns):
-        alternatives = pattern.split("|")
         for j, p in enumerate(poles):
-            if p.damping < REAL_POLE_DAMPING and any(fnmatch.fnmatchcase(p.label, pat) for pat in alternatives):
+            if p.damping < REAL_POLE_DAMPING and label_matches(p.label, pattern):
                 cost[i, j] = ((p.frequency_hz - hz) / hz) ** 2
     rows, cols = linear_sum_assignment(cost)
     out: list[int | None] = [None] * len(patterns)

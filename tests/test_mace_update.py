@@ -1,0 +1,138 @@
+"""The MACE update of thesis 4.5 through the command line: from the pre-update moduli to updated FMUs.
+
+One run of ``mace-fmu update -o DIR`` (module fixture) is checked against the issue's goals and
+the thesis: the start model against Table 4.1, the selection against the thesis's choice, the
+updated closed-loop modes against Table 4.7's measurement model (RMS no worse than the thesis's
+own, every lightly damped bending mode within 2 %), and the parameter set it writes, read back
+by ``mace-fmu model`` (python-control route) and ``mace-fmu export`` (the FMU's start values).
+"""
+
+from __future__ import annotations
+
+import json
+import zipfile
+from xml.etree import ElementTree as ET
+
+import numpy as np
+import pytest
+
+from mace_fmu.cli import main
+from mace_fmu.parameters import ParameterSet
+from mace_fmu.thesis import thesis_data
+from mace_fmu.updating.mace_family import MaceFamily
+from mace_fmu.updating.mace_update import (CANDIDATES, pre_update_parameters, table_4_1_rows, table_4_4_moduli)
+
+FILES = ("parameters.toml", "report.txt", "summary.json", "orthogonality.png", "strength.png", "cost_history.png",
+         "bode_gimbal_secondary_z_to_gyro_payload_z.png", "bode_gimbal_secondary_x_to_gyro_payload_x.png",
+         "bode_gimbal_primary_x_to_gyro_bus_x.png")
+
+
+@pytest.fixture(scope="module")
+def run(tmp_path_factory):
+    out = tmp_path_factory.mktemp("update")
+    assert main(["update", "-o", str(out)]) == 0
+    return out, json.loads((out / "summary.json").read_text())
+
+
+def test_pre_update_moduli_are_table_4_4_back_computed():
+    pre = pre_update_parameters()
+    assert pre["E_lexan_center"] == pytest.approx(2.335e9 / (1 - 0.049), rel=1e-12)
+    assert pre["E_cable_1"] == pytest.approx(1.982e11 / 1.089, rel=1e-12)
+    assert set(pre.values) == set(table_4_4_moduli())
+
+
+def test_the_pre_update_model_sits_near_table_4_1_for_the_bending_modes():
+    """Table 4.1's FE column is the thesis's model after engineering insight: our pre-update
+    closed-loop bending modes within 2 % of it (measured: within 0.6 %, but for the servo-dominated
+    3rd Z bending at 1.9 %)."""
+    family = MaceFamily(base=pre_update_parameters())
+    rows = table_4_1_rows(family, family.base.values)
+    bending = [r for r in rows if "bending" in r.label]
+    assert len(bending) == 11
+    for r in bending:
+        assert r.ours_hz == pytest.approx(r.thesis_hz, rel=0.02), r.label
+
+
+def test_every_file_is_written(run):
+    out, _ = run
+    for name in FILES:
+        assert (out / name).stat().st_size > 1000 or name.endswith((".toml", ".txt")), name
+    assert not list(out.glob(".*.part"))  # no temporary files left
+
+
+def test_the_selection_drops_what_the_thesis_dropped(run):
+    """Thesis 4.5: aluminium, stainless steel and the three suspension springs have virtually no
+    effect on the initial error; the active-strut moduli stay or go together."""
+    _, summary = run
+    sel = summary["selection"]
+    assert sel["candidates"] == list(CANDIDATES)
+    kept = set(sel["kept"])
+    dropped = {"E_aluminium", "E_stainless_steel", "k_suspension_device_1", "k_suspension_device_2",
+               "k_suspension_device_3"}
+    assert not kept & dropped
+    assert {"E_lexan_center", "E_active_strut_end", "E_active_strut_piezo", "E_active_strut_center"} <= kept
+    strength = dict(zip(sel["candidates"], sel["strength"]))
+    assert max(strength[n] for n in dropped) < 0.02 * max(strength.values())
+
+
+def test_the_update_meets_the_goals(run):
+    _, summary = run
+    rms = summary["rms_light_percent"]
+    assert rms["after"] <= rms["thesis"]  # no larger than Table 4.7's own error column
+    assert rms["after"] < rms["before"]
+    modes = summary["modes"]
+    for m in modes:
+        if m["measured_zeta"] < 0.1 and "bending" in m["label"]:
+            assert abs(m["after_hz"] / m["measured_hz"] - 1) <= 0.02, m["label"]
+    assert summary["reduction"] > 0.25  # the thesis's automated update: 27.8 %
+    history = summary["history"]
+    assert history[0]["cost"] == pytest.approx(summary["initial_cost"])
+
+
+def test_the_parameter_set_says_where_it_comes_from(run):
+    out, summary = run
+    params = ParameterSet.read(out / "parameters.toml")
+    prov = params.provenance
+    assert prov.structure == "1g" and "Table 4.7" in prov.data and prov.cost.startswith("modal")
+    assert prov.final_cost == pytest.approx(summary["final_cost"], rel=1e-12)
+    for name, value in summary["parameters"]["updated"].items():
+        assert params[name] == value
+    for name in set(pre_update_parameters().values) - set(summary["parameters"]["updated"]):
+        assert params[name] == pre_update_parameters()[name]  # not updated: the start value stands
+
+
+def test_model_and_export_take_the_updated_parameters(run, capsys, tmp_path):
+    """Second route: the python-control volts model built from parameters.toml has the poles the
+    update reported (its own numpy rebuild), and the FMU's start values are the updated ones."""
+    out, summary = run
+    assert main(["model", "1g", "--parameters", str(out / "parameters.toml"), "--json"]) == 0
+    poles = json.loads(capsys.readouterr().out)["poles"]
+    for m in summary["modes"]:
+        if "bending" in m["label"] and m["measured_zeta"] < 0.1:
+            nearest = min(poles, key=lambda p: abs(p["frequency_hz"] - m["after_hz"]))
+            assert nearest["frequency_hz"] == pytest.approx(m["after_hz"], rel=1e-6), m["label"]
+    assert main(["export", "1g", "--parameters", str(out / "parameters.toml"), "-o", str(tmp_path)]) == 0
+    fmu = next(tmp_path.glob("*.fmu"))
+    with zipfile.ZipFile(fmu) as z:
+        root = ET.fromstring(z.read("modelDescription.xml"))
+    start = {v.get("name"): float(v.find("Real").get("start")) for v in root.iter("ScalarVariable")
+             if v.find("Real") is not None and v.find("Real").get("start") is not None}
+    for name, value in summary["parameters"]["updated"].items():
+        if name.startswith("E_"):
+            assert start[name] == pytest.approx(value, rel=1e-12), name
+
+
+def test_bad_start_files_stop_before_any_work(tmp_path, capsys):
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[values]\nE_unobtainium = 1e9\n")
+    out = tmp_path / "out"
+    assert main(["update", "-o", str(out), "--start", str(bad)]) == 2
+    assert "E_unobtainium" in capsys.readouterr().err
+    assert not out.exists()  # nothing written half-way
+    assert main(["update", "-o", str(out), "--rounds", "0"]) == 2
+    assert not out.exists()
+
+
+def test_table_4_4_is_what_the_thesis_prints():
+    assert thesis_data()["table_4_4"]["lexan_center"]["change_percent"] == -4.9
+    assert np.isclose(table_4_4_moduli()["E_active_strut_piezo"], 3.783e9)
