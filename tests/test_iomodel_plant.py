@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from mace_fmu.iomodel.damping import modal_damping
+from mace_fmu.iomodel.modal_core import ZERO_HZ
 from mace_fmu.iomodel.instruments import influence_vector, load_instruments
 from mace_fmu.iomodel.modal_ss import modal_plant
 from mace_fmu.pipeline import compute_modes
@@ -89,7 +90,12 @@ def test_unique_labels_leave_every_damping_ratio_as_it_was(inst, key):
     ref = before["models"][key]
     structure, preload = key.split("_")
     sm = compute_modes(structure=structure, preload=preload, max_hz=250.0)
-    np.testing.assert_allclose(sm.modes.frequencies_hz, ref["frequencies_hz"], rtol=0, atol=2e-6)
+    # zero-frequency modes (rigid bodies, mechanisms) are rounding noise below 0.01 Hz, which moves
+    # with the BLAS thread count: they must stay below it; the others within 2e-6 Hz
+    f, f_ref = sm.modes.frequencies_hz, np.array(ref["frequencies_hz"])
+    zero = np.abs(f_ref) < ZERO_HZ
+    assert np.all(np.abs(f[zero]) < ZERO_HZ)
+    np.testing.assert_allclose(f[~zero], f_ref[~zero], rtol=0, atol=2e-6)
     z = modal_damping(sm.modes.labels, sm.modes.frequencies_hz, inst.damping)
     np.testing.assert_array_equal(z, ref["damping"])
     assert len(set(sm.modes.labels)) == len(sm.modes.labels)

@@ -90,9 +90,12 @@ def _checked_fmu(path: str, structure: str) -> Path:
 
     from mace_fmu.iomodel.motion import parse_motion_output
 
+    from mace_fmu.fmu.archive import check_fmu
+
     fmu = Path(path)
     if not fmu.is_file():
         raise MaceError(f"--fmu {fmu}: no such file")
+    check_fmu(fmu)  # a foreign, damaged or malicious archive is refused before fmpy opens it
     md = fmpy.read_model_description(str(fmu))
     if not (md.description or "").startswith(f"MACE {structure} "):
         raise MaceError(f"--fmu {fmu} is not a MACE {structure} model (its description: {md.description!r})")
@@ -103,7 +106,6 @@ def _checked_fmu(path: str, structure: str) -> Path:
 
 
 def cmd_view_response(args: argparse.Namespace) -> int:
-    from mace_fmu.fmu.archive import check_fmu
     from mace_fmu.fmu.export import export_fmu
     from mace_fmu.fmu.simulate import simulate_input_response
     from viewer import animate_response, plot_response

@@ -169,6 +169,28 @@ class MaceFamily:
                 raise MaceError(f"parameter {n!r} is not a parameter of the {self.structure} model")
         return out
 
+    def values_for_rebuild(self, values: Values) -> dict[str, float]:
+        """``values`` plus the damping ratios a model built afresh from them needs to be this model.
+
+        A re-solve here carries the first solve's labels; ``volts_model`` with a parameter set
+        labels the modes afresh, and where a fresh label differs ("5th" and "6th Z bending"
+        swapped), damping ratios keyed by label would land on other modes. Each mode whose damping
+        would differ gets its ratio under its fresh label; checked by rebuilding.
+        """
+        system = self.solution(values).system
+        vector = self.vector(system, values)
+        carried = np.array([vector[system.index(f"damping_mode_{k + 1}")] for k in range(len(system.mode_labels))])
+        out = dict(values)
+        for _ in range(3):
+            fresh = volts_model(self.structure, deck=self.deck, preload=self.preload, max_hz=self.max_hz,
+                                parameters=self.parameter_set(out)).plant
+            differ = np.flatnonzero(fresh.damping != carried)
+            if not differ.size:
+                return out
+            out.update({DAMPING_PREFIX + fresh.labels[k]: float(carried[k]) for k in differ})
+        raise MaceError("the updated damping ratios cannot be keyed by the labels of a fresh solve "
+                        f"(modes {', '.join(fresh.labels[k] for k in differ)})")
+
     def volts_model(self, values: Values) -> VoltsModel:
         """The full volts-volts model (python-control, exact FRF) at ``values``."""
         params = self.parameter_set(values)

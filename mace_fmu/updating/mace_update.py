@@ -176,7 +176,7 @@ def run_mace_update(*, start: ParameterSet | None = None, preload: PreloadKind =
                              f"penalty {'on' if settings.penalty else 'off'}, {settings.rounds} rounds of "
                              + ", ".join(s.name for s in stages) + f"; {preload} preload",
                       initial_cost=result.initial_cost, final_cost=result.final_cost)
-    updated = start.updated(result.values, provenance=prov)
+    updated = start.updated(family.values_for_rebuild({**start.values, **result.values}), provenance=prov)
     return MaceUpdate(family=family, cost=cost, start=start, selection_sensitivities=sens, selection=selection,
                       result=result, parameters=updated, seconds=seconds)
 
