@@ -1,6 +1,6 @@
 """Run a MACE FMU in libcosim (the Open Simulation Platform's co-simulation library).
 
-    python examples/libcosim_import.py fmus/MACE_1g.fmu
+    python examples/libcosim_import.py fmus/MACE_1g_native.fmu
 
 Drives the secondary Z gimbal (the disturbance source) with a 1 deg step command and prints
 the payload Z rate-gyro voltage every 0.1 s. ``run`` is also used by the tests, which compare
@@ -42,7 +42,7 @@ def run(fmu_path: str, *, inputs: dict[str, np.ndarray], outputs: list[str], ste
 
 
 def main() -> None:
-    fmu = sys.argv[1] if len(sys.argv) > 1 else "fmus/MACE_1g.fmu"
+    fmu = sys.argv[1] if len(sys.argv) > 1 else "fmus/MACE_1g_native.fmu"
     step = 2e-3
     n = 1000
     y = run(fmu, inputs={"gimbal_secondary_z": np.ones(n)}, outputs=["gyro_payload_z"], step_s=step)

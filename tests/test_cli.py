@@ -123,7 +123,7 @@ def test_export_with_motion_grids_names_their_outputs(capsys, tmp_path):
     import fmpy
 
     code, out, _ = _run(capsys, ["export", "0g", "-o", str(tmp_path), "--motion-grids", "1,7"])
-    assert code == 0 and out.strip().endswith("MACE_0g.fmu")
+    assert code == 0 and out.strip().endswith("MACE_0g_native.fmu")
     md = fmpy.read_model_description(out.strip().splitlines()[-1])
     outs = [v for v in md.modelVariables if v.causality == "output"]
     assert len(outs) == 20 + 12
@@ -137,3 +137,24 @@ def test_bad_motion_grids_give_one_line_errors(capsys, tmp_path, value, message)
     code, _, err = _run(capsys, ["export", "0g", "-o", str(tmp_path), "--motion-grids", value])
     last = err.strip().splitlines()[-1]  # after the progress lines: one error line
     assert code == 2 and last.startswith("mace-fmu: error: ") and message in last
+
+
+@pytest.mark.parametrize("options, stem, fmi_version", [([], "MACE_0g_native", "2.0"),
+                                                        (["--fmi-version", "3"], "MACE_0g_native_fmi3", "3.0"),
+                                                        (["--kind", "pythonfmu"], "MACE_0g_pythonfmu", "2.0")])
+def test_export_writes_the_kind_it_is_asked_for_under_a_name_that_says_so(capsys, tmp_path, options, stem,
+                                                                          fmi_version):
+    import fmpy
+
+    code, out, _ = _run(capsys, ["export", "0g", "-o", str(tmp_path), "--max-hz", "20", *options])
+    path = out.strip().splitlines()[-1]
+    assert code == 0 and path.endswith(f"{stem}.fmu")
+    md = fmpy.read_model_description(path)
+    assert md.fmiVersion == fmi_version and md.coSimulation.modelIdentifier == stem
+    assert (md.modelExchange is not None) == (stem == "MACE_0g_native")  # native FMI 2.0: also model exchange
+
+
+def test_export_refuses_fmi3_for_pythonfmu(capsys, tmp_path):
+    code, _, err = _run(capsys, ["export", "0g", "-o", str(tmp_path), "--kind", "pythonfmu", "--fmi-version", "3"])
+    assert code == 2 and "--fmi-version 3 needs --kind native" in err.strip().splitlines()[-1]
+    assert not list(tmp_path.iterdir())

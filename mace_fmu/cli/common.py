@@ -54,3 +54,9 @@ def volts(args: argparse.Namespace, **overrides):
         return volts_model(args.structure, **{**options, **overrides})
     except ValueError as exc:  # a bad option value: one message, not a traceback
         raise MaceError(str(exc)) from None
+
+
+def fmu_name(structure: str, *, kind: str, fmi_version: int = 2) -> str:
+    """File stem and model identifier of an exported FMU, saying which kind it is: MACE_1g_native,
+    MACE_1g_native_fmi3, MACE_1g_pythonfmu."""
+    return f"MACE_{structure}_{kind}" + ("_fmi3" if fmi_version == 3 else "")

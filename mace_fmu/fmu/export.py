@@ -24,16 +24,13 @@ import numpy as np
 from pythonfmu.builder import FmuBuilder
 
 from mace_fmu.atomic import atomic_path
+from mace_fmu.fmu.variables import DEFAULT_EXPERIMENT, model_summary, variable_unit
 from mace_fmu.iomodel import modal_core, parametric, reanalysis
-from mace_fmu.iomodel.motion import motion_unit, parse_motion_output
 from mace_fmu.iomodel.parametric_data import parametric_arrays
 from mace_fmu.iomodel.volts import VoltsModel
 from modelica_like import algebra
 
 SLAVE_SOURCE = Path(__file__).with_name("slave.py")
-DEFAULT_EXPERIMENT = {"startTime": "0.0", "stopTime": "10.0", "stepSize": "0.002"}
-_UNITS = (("E_", "Pa"), ("k_", "N/m"), ("delay_", "s"), ("damping_mode_", "1"), ("K_a", "V/deg"),
-          ("K_r", "V/(deg/s)"), ("K_f", "1"), ("K_b", "1"), ("frequency_mode_", "Hz"))
 
 
 def _patch_model_description(fmu: Path, *, description: str, version: str) -> None:
@@ -47,14 +44,7 @@ def _patch_model_description(fmu: Path, *, description: str, version: str) -> No
     root.set("generationTool", f"mace-fmu {version} ({root.get('generationTool', 'PythonFMU')})")
     used = set()
     for var in root.iter("ScalarVariable"):
-        name = var.get("name")
-        motion = parse_motion_output(name)
-        if motion is not None:
-            unit = motion_unit(motion[1])
-        elif var.get("causality") in ("input", "output"):
-            unit = "V"
-        else:
-            unit = next((u for prefix, u in _UNITS if name.startswith(prefix)), None)
+        unit = variable_unit(var.get("name"), var.get("causality"))
         if unit is not None:
             var.find("Real").set("unit", unit)
             used.add(unit)
@@ -132,9 +122,7 @@ def export_fmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str | None
         raise ValueError(f"FMU name must be a Python/C identifier (it names the model class), got {name!r}")
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    sys_ = model.system
-    description = (f"MACE {kind} volts-volts model: {sys_.nstates} states; servos {'closed' if model.servos else 'open'}, "
-                   f"Bessel filters {model.bessel}, delays {'on' if model.delays else 'off'}")
+    description = model_summary(model)
     arrays = parametric_arrays(model)
     final = out / f"{name}.fmu"
     with tempfile.TemporaryDirectory(prefix="mace_fmu_") as tmp, atomic_path(final) as part:
