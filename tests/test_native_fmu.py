@@ -653,3 +653,34 @@ def test_windows_binary_exports_the_fmi_functions(fmus, tmp_path):
     linux = subprocess.run(["nm", "-D", "--defined-only", str(so)], capture_output=True, text=True, check=True).stdout
     exported = {line.split()[-1] for line in linux.splitlines() if " T fmi" in line}
     assert len(exported) > 100 and all(name in table for name in exported)
+
+
+def test_models_without_a_modal_form_step_exactly_in_the_dense_form(tmp_path):
+    """With the servos open, the 0-g gimbals are free double integrators (a Jordan block): no
+    diagonal form exists and the runtime steps with the dense matrix exponential, as exactly."""
+    model = volts_model("0g", servos=False, max_hz=30.0)
+    folder = fmpy.extract(str(export_native_fmu(model, out_dir=tmp_path, name="MACE_0g_open")),
+                          unzipdir=str(tmp_path / "open"))
+    messages = Messages()
+    fmu = _slave(folder, messages=messages)
+    fmu.setDebugLogging(True, [])
+    fmu.setupExperiment(startTime=0.0)
+    fmu.enterInitializationMode()
+    fmu.exitInitializationMode()
+    assert any("dense matrix-exponential form" in m for _, m in messages.records), messages.records
+    t = np.arange(0.0, 0.3, 2e-3)
+    u = make_inputs("multisine", t, model.system.ninputs)
+    y = run_steps(model, fmu, folder, t, u)
+    fmu.freeInstance()
+    check_close(model, y, zoh_reference(model, t, u))
+
+
+def test_the_nominal_models_step_in_the_decoupled_modal_form(fmus):
+    messages = Messages()
+    fmu = _slave(fmus.dir2, messages=messages)
+    fmu.setDebugLogging(True, [])
+    fmu.setupExperiment(startTime=0.0)
+    fmu.enterInitializationMode()
+    fmu.exitInitializationMode()
+    fmu.freeInstance()
+    assert any("decoupled modal form" in m for _, m in messages.records), messages.records
