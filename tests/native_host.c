@@ -1,10 +1,11 @@
-/* A minimal FMI 2.0 co-simulation host without Python: loads a native FMU's binary with dlopen,
+/* A minimal FMI 2.0 co-simulation host without Python: loads a native FMU's binary (dlopen, or
+ * LoadLibrary when built for Windows, where the tests run it under wine),
  * instantiates it, sets parameters, steps it with inputs read from a file and writes the
  * outputs to a file. Used by tests/test_native_fmu.py (results, valgrind) and
  * benchmarks/bench_fmu.py (the time per step).
  *
  * native_host DIR MODEL_ID GUID STEP N_STEPS INPUTS.bin OUTPUTS.bin IN_VRS OUT_VRS [CYCLES [vr=value ...]]
- *   DIR        the extracted FMU; the binary is DIR/binaries/linux64/MODEL_ID.so
+ *   DIR        the extracted FMU; the binary is DIR/binaries/linux64/MODEL_ID.so (win64/MODEL_ID.dll)
  *   INPUTS.bin N_STEPS x n_in doubles (row k: the inputs held over step k)
  *   OUTPUTS.bin gets (N_STEPS + 1) x n_out doubles: the outputs at t = 0, STEP, ..., N_STEPS STEP
  *   IN_VRS, OUT_VRS comma-separated value references; CYCLES instantiate/run/free cycles (default 1)
@@ -13,7 +14,6 @@
  * FMI error (its message is printed by the logger on stderr).
  */
 #define _POSIX_C_SOURCE 200809L
-#include <dlfcn.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -21,6 +21,35 @@
 #include <time.h>
 
 #include "fmi2Functions.h"
+
+#ifdef _WIN32
+#include <windows.h>
+#define BINARY "binaries/win64/%s.dll"
+#define URI "file:///%s/resources"
+static void *open_library(const char *path) { return (void *)LoadLibraryA(path); }
+static void *symbol(void *lib, const char *name) { return (void *)GetProcAddress((HMODULE)lib, name); }
+static void close_library(void *lib) { FreeLibrary((HMODULE)lib); }
+static const char *library_error(void) { return "LoadLibrary failed"; }
+static double now(void) {
+    LARGE_INTEGER count, frequency;
+    QueryPerformanceCounter(&count);
+    QueryPerformanceFrequency(&frequency);
+    return (double)count.QuadPart / (double)frequency.QuadPart;
+}
+#else
+#include <dlfcn.h>
+#define BINARY "binaries/linux64/%s.so"
+#define URI "file://%s/resources"
+static void *open_library(const char *path) { return dlopen(path, RTLD_NOW | RTLD_LOCAL); }
+static void *symbol(void *lib, const char *name) { return dlsym(lib, name); }
+static void close_library(void *lib) { dlclose(lib); }
+static const char *library_error(void) { return dlerror(); }
+static double now(void) {
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+#endif
 
 static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status, fmi2String category,
                    fmi2String message, ...) {
@@ -45,14 +74,8 @@ static size_t parse_list(const char *text, fmi2ValueReference **out) {
     return k;
 }
 
-static double now(void) {
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 #define LOAD(name)                                                  \
-    name##TYPE *name = (name##TYPE *)dlsym(lib, #name);              \
+    name##TYPE *name = (name##TYPE *)symbol(lib, #name);             \
     if (!name) {                                                    \
         fprintf(stderr, "missing symbol %s\n", #name);              \
         return 1;                                                   \
@@ -95,11 +118,11 @@ int main(int argc, char **argv) {
         return 2;
     }
     fclose(f);
-    snprintf(path, sizeof(path), "%s/binaries/linux64/%s.so", dir, id);
-    snprintf(uri, sizeof(uri), "file://%s/resources", dir);
-    lib = dlopen(path, RTLD_NOW | RTLD_LOCAL);
+    snprintf(path, sizeof(path), "%s/" BINARY, dir, id);
+    snprintf(uri, sizeof(uri), URI, dir);
+    lib = open_library(path);
     if (!lib) {
-        fprintf(stderr, "dlopen: %s\n", dlerror());
+        fprintf(stderr, "loading %s: %s\n", path, library_error());
         return 1;
     }
     {
@@ -146,7 +169,7 @@ int main(int argc, char **argv) {
     }
     fclose(f);
     printf("seconds_per_step %.6g\n", n_steps ? elapsed / (double)n_steps : 0.0);
-    dlclose(lib);
+    close_library(lib);
     free(u);
     free(y);
     free(in_vr);

@@ -684,3 +684,30 @@ def test_the_nominal_models_step_in_the_decoupled_modal_form(fmus):
     fmu.exitInitializationMode()
     fmu.freeInstance()
     assert any("decoupled modal form" in m for _, m in messages.records), messages.records
+
+
+def test_windows_binary_runs_under_wine_like_the_linux_one(fmus, host, tmp_path):
+    """Where mingw-w64 and wine64 are installed: the C host cross-compiled for Windows runs the FMU's
+    win64 DLL under wine and gives the Linux binary's outputs."""
+    wine = shutil.which("wine64") or ("/usr/lib/wine/wine64" if Path("/usr/lib/wine/wine64").exists() else None)
+    if not (runtime.available(runtime.WIN64) and wine):
+        pytest.skip("needs x86_64-w64-mingw32-gcc and wine64")
+    if fmus.model.structure_modes.structure.kind != "0g":
+        pytest.skip("one model suffices")
+    exe = tmp_path / "native_host.exe"
+    subprocess.run([runtime.WIN64.compiler, "-std=c99", "-O2", "-Wall", "-Werror", f"-I{RUNTIME_DIR}", "-o", str(exe),
+                    str(HOST_SOURCE)], check=True)
+    model = fmus.model
+    u = make_inputs("multisine", np.arange(0.0, 0.2, 2e-3), model.system.ninputs)
+    y_linux, _ = _run_host(host, fmus, tmp_path, step=2e-3, u=u)
+    md = fmpy.read_model_description(fmus.dir2)
+    vr = _vr(fmus.dir2)
+    env = {**__import__("os").environ, "WINEPREFIX": str(tmp_path / "wineprefix"), "WINEDEBUG": "-all"}
+    done = subprocess.run([wine, str(exe), f"Z:{fmus.dir2}", md.coSimulation.modelIdentifier, md.guid, repr(2e-3),
+                           str(u.shape[1]), f"Z:{tmp_path / 'u.bin'}", f"Z:{tmp_path / 'y_windows.bin'}",
+                           ",".join(str(vr[n]) for n in model.system.input_labels),
+                           ",".join(str(vr[n]) for n in model.system.output_labels)],
+                          capture_output=True, text=True, env=env, timeout=900)
+    assert done.returncode == 0, done.stderr
+    y_windows = np.fromfile(tmp_path / "y_windows.bin", dtype="<f8").reshape(u.shape[1] + 1, -1).T
+    assert np.max(np.abs(y_windows - y_linux)) <= 1e-12 * np.max(np.abs(y_linux))
