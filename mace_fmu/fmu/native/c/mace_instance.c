@@ -171,8 +171,9 @@ MiStatus mi_exit_initialization(MiInstance *inst, const char *fn) {
     }
     inst->phase = inst->kind == MACE_CO_SIMULATION ? PH_STEP : PH_EVENT;
     if (inst->kind == MACE_CO_SIMULATION)
-        mi_debug(inst, "initialised; exact zero-order hold in the %s form", mace_fast_form(inst->model) ?
-                 "decoupled modal" : "dense matrix-exponential");
+        mi_debug(inst, "initialised; exact zero-order hold in the %s form (transformation condition %.2g)",
+                 mace_fast_form(inst->model) ? "decoupled modal" : "dense matrix-exponential",
+                 mace_fast_form_condition(inst->model));
     return MI_OK;
 }
 

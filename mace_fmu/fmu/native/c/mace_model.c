@@ -309,6 +309,7 @@ size_t mace_n_inputs(const MaceModel *m) { return m->n_in; }
 size_t mace_n_outputs(const MaceModel *m) { return m->n_out; }
 double mace_time(const MaceModel *m) { return m->time; }
 int mace_fast_form(const MaceModel *m) { return m->zoh ? zoh_is_fast(m->zoh) : 0; }
+double mace_fast_form_condition(const MaceModel *m) { return zoh_condition(m->zoh); }
 
 void mace_set_input(MaceModel *m, size_t k, double value) {
     m->u[k] = value;

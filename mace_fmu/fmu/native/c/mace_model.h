@@ -58,6 +58,8 @@ int mace_get(MaceModel *m, MaceGroup group, size_t k, double *value, char *err);
 int mace_build(MaceModel *m, char *err);
 /* 1 if the stepping uses the decoupled modal form, 0 for the dense matrix exponential. */
 int mace_fast_form(const MaceModel *m);
+/* Condition number of the decoupled modal form's transformation (1 for the dense form). */
+double mace_fast_form_condition(const MaceModel *m);
 
 /* Co-simulation: the exact zero-order-hold step from t over h seconds with the held inputs. */
 int mace_do_step(MaceModel *m, double t, double h, char *err);

@@ -27,6 +27,8 @@ void zoh_destroy(MaceZoh *z);
 /* Prepares the stepping of (A, B, C, D) (row-major); forget cached steps. */
 int zoh_prepare(MaceZoh *z, const double *a, const double *b, const double *c, const double *d, char *err);
 int zoh_is_fast(const MaceZoh *z);
+/* Condition number (1-norm) of the fast form's transformation to the model's states. */
+double zoh_condition(const MaceZoh *z);
 /* s <- the state after h seconds from time t with inputs u held; s in stepping coordinates. */
 int zoh_step(MaceZoh *z, double *s, const double *u, double t, double h, char *err);
 void zoh_output(const MaceZoh *z, const double *s, const double *u, double *y);
