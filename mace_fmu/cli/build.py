@@ -13,6 +13,7 @@ def cmd_build(args: argparse.Namespace) -> int:
     # imported here, as in the other commands, so that `mace-fmu modes` starts without control/pythonfmu
     from mace_fmu.fmu.export import export_fmu
     from mace_fmu.fmu.native.export import export_native_fmu
+    from mace_fmu.iomodel.parametric_data import parametric_arrays
     from mace_fmu.iomodel.volts import DEFAULT_MAX_HZ, volts_model
     from mace_fmu.thesis import (format_mass_rows, format_rows, format_side_by_side, table_3_15_comparison,
                                  table_5_1_0g, table_5_1_1g)
@@ -36,11 +37,12 @@ def cmd_build(args: argparse.Namespace) -> int:
     for kind, modes in (("1g", results["large"]), ("0g", m0)):
         progress(f"{kind} volts-volts model and FMUs")
         model = volts_model(kind, modes=modes)
+        arrays = parametric_arrays(model)  # what every kind of FMU carries: computed once
         for fmi_version in (2, 3):
             path = export_native_fmu(model, out_dir=args.out, name=fmu_name(kind, kind="native", fmi_version=fmi_version),
-                                     fmi_version=fmi_version)
+                                     fmi_version=fmi_version, arrays=arrays)
             print(f"wrote {path}")
-        print(f"wrote {export_fmu(model, out_dir=args.out, name=fmu_name(kind, kind='pythonfmu'))}")
+        print(f"wrote {export_fmu(model, out_dir=args.out, name=fmu_name(kind, kind='pythonfmu'), arrays=arrays)}")
     print()
     print("1-g modes below 25 Hz (large-displacement preload | linear preload)")
     large, linear = results["large"].modes, results["linear"].modes

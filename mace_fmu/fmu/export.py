@@ -114,8 +114,10 @@ def _entry_script(name: str, description: str) -> str:
                                   prefix=_CACHE_PREFIX)
 
 
-def export_fmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str | None = None) -> Path:
-    """Write ``out_dir/<name>.fmu`` (default name MACE_1g / MACE_0g) and return its path."""
+def export_fmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str | None = None,
+               arrays: dict[str, np.ndarray] | None = None) -> Path:
+    """Write ``out_dir/<name>.fmu`` (default name MACE_1g / MACE_0g) and return its path; ``arrays``:
+    the model's parametric arrays if already computed."""
     kind = model.structure_modes.structure.kind
     name = name or f"MACE_{kind}"
     if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", name):
@@ -123,7 +125,7 @@ def export_fmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str | None
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     description = model_summary(model)
-    arrays = parametric_arrays(model)
+    arrays = parametric_arrays(model) if arrays is None else arrays
     final = out / f"{name}.fmu"
     with tempfile.TemporaryDirectory(prefix="mace_fmu_") as tmp, atomic_path(final) as part:
         tmp = Path(tmp)

@@ -8,6 +8,7 @@ no -march=native and no -ffast-math (the exact zero-order hold relies on IEEE ar
 from __future__ import annotations
 
 import functools
+from concurrent.futures import ThreadPoolExecutor
 import hashlib
 import shutil
 import subprocess
@@ -75,3 +76,9 @@ def compile_runtime(platform: Platform = LINUX64) -> bytes:
     if not available(platform):
         raise MaceError(f"no C compiler for {platform.name}: {platform.compiler} is not installed")
     return _compile_cached(platform, _digest())
+
+
+def compile_runtimes(platforms: list[Platform]) -> dict[Platform, bytes]:
+    """The runtime for each of ``platforms``, the compilers running side by side."""
+    with ThreadPoolExecutor(max_workers=max(1, len(platforms))) as pool:
+        return dict(zip(platforms, pool.map(compile_runtime, platforms)))

@@ -18,6 +18,8 @@ from importlib import metadata
 from pathlib import Path
 from typing import Literal
 
+import numpy as np
+
 from mace_fmu.atomic import atomic_path
 from mace_fmu.errors import MaceError
 from mace_fmu.fmu.native import compile as runtime
@@ -43,15 +45,16 @@ def _token(data: dict, fmi_version: int) -> str:
 
 
 def export_native_fmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str | None = None,
-                      fmi_version: FmiVersion = 2) -> Path:
-    """Write ``out_dir/<name>.fmu`` (default MACE_1g / MACE_0g), a native FMU, and return its path."""
+                      fmi_version: FmiVersion = 2, arrays: dict[str, np.ndarray] | None = None) -> Path:
+    """Write ``out_dir/<name>.fmu`` (default MACE_1g / MACE_0g), a native FMU, and return its path;
+    ``arrays``: the model's parametric arrays if already computed."""
     kind = model.structure_modes.structure.kind
     name = name or f"MACE_{kind}"
     if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", name):
         raise MaceError(f"FMU name must be a C identifier (it names the model and its binary), got {name!r}")
     if fmi_version not in (2, 3):
         raise MaceError(f"native FMUs are FMI 2 or FMI 3, got FMI version {fmi_version!r}")
-    arrays = parametric_arrays(model)
+    arrays = parametric_arrays(model) if arrays is None else arrays
     reference = ParametricSystem(arrays)
     reference.build(reference.nominal)
     data = runtime_arrays(arrays)
@@ -65,7 +68,7 @@ def export_native_fmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str
     sources = runtime.source_files()
     c_files = [p.name for p in sources if p.suffix == ".c"]
     platforms = [p for p in (runtime.LINUX64, runtime.WIN64) if p is runtime.LINUX64 or runtime.available(p)]
-    binaries = {p: runtime.compile_runtime(p) for p in platforms}
+    binaries = runtime.compile_runtimes(platforms)
     if fmi_version == 2:
         description = fmi2_model_description(variables, model_identifier=name, guid=token,
                                              description=model_summary(model), version=version, source_files=c_files)
