@@ -1,6 +1,6 @@
 """The 1-g MACE FMU in closed loop with a controller written in Python, stepped by fmpy.
 
-    python examples/cosimulate.py fmus/MACE_1g.fmu
+    python examples/cosimulate.py fmus/MACE_1g_native.fmu
 
 Disturbance: a 0.5 deg square wave on the secondary Z gimbal command. Controller: the payload Z
 rate-gyro voltage, times a gain, commands the primary Z gimbal angle, a damping loop on the
@@ -48,7 +48,7 @@ def simulate(unzipped: str, *, gain: float, duration_s: float = 4.0, step_s: flo
 
 
 def main() -> None:
-    fmu = sys.argv[1] if len(sys.argv) > 1 else "fmus/MACE_1g.fmu"
+    fmu = sys.argv[1] if len(sys.argv) > 1 else "fmus/MACE_1g_native.fmu"
     with tempfile.TemporaryDirectory(prefix="mace_cosim_") as folder:
         unzipped = fmpy.extract(fmu, unzipdir=folder)
         open_loop = simulate(unzipped, gain=0.0)

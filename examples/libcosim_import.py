@@ -1,6 +1,6 @@
 """Run a MACE FMU in libcosim (the Open Simulation Platform's co-simulation library).
 
-    python examples/libcosim_import.py fmus/MACE_1g.fmu [--verbose]
+    python examples/libcosim_import.py fmus/MACE_1g_native.fmu [--verbose]
 
 Drives the secondary Z gimbal (the disturbance source) with a 1 deg step command and prints
 the payload Z rate-gyro voltage every 0.1 s. ``run`` is also used by the tests, which compare
@@ -50,7 +50,7 @@ def run(fmu_path: str, *, inputs: dict[str, np.ndarray], outputs: list[str], ste
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("fmu", nargs="?", default="fmus/MACE_1g.fmu", help="a MACE FMU (default fmus/MACE_1g.fmu)")
+    parser.add_argument("fmu", nargs="?", default="fmus/MACE_1g_native.fmu", help="a MACE FMU (default fmus/MACE_1g_native.fmu)")
     parser.add_argument("--verbose", action="store_true", help="also show libcosim's debug log")
     args = parser.parse_args()
     step = 2e-3

@@ -8,19 +8,17 @@ that folder (fmpy then extracts and deletes nothing).
 
 from __future__ import annotations
 
-import control as ct
 import fmpy
 import numpy as np
 import pytest
 from fmpy.fmi1 import FMICallException
-from fmpy.fmi2 import FMU2Slave
 from fmpy.validation import validate_fmu
 
+from fmu_checks import (DURATION, check_close, initialised_slave, make_inputs, nominal_slave, rss_bytes, run_steps,
+                        value_references, zoh_reference)
 from mace_fmu.fmu.export import export_fmu
 from mace_fmu.iomodel.motion import MOTION_COMPONENTS
 from mace_fmu.iomodel.volts import volts_model
-
-DURATION = 1.0
 
 
 @pytest.fixture(scope="module", params=["1g", "0g"])
@@ -29,41 +27,6 @@ def built(request, tmp_path_factory):
     fmu = export_fmu(model, out_dir=tmp_path_factory.mktemp("fmu"))
     unzipped = fmpy.extract(str(fmu), unzipdir=str(tmp_path_factory.mktemp("unzipped")))
     return model, fmu, unzipped
-
-
-def _signal(kind: str, t: np.ndarray, n_inputs: int) -> np.ndarray:
-    """(n_inputs, len(t)) test inputs [V], a different one on every channel."""
-    k = np.arange(n_inputs)[:, None]
-    if kind == "step":
-        return (0.1 + 0.05 * k) * (t[None, :] >= 0.01)
-    if kind == "chirp":  # 0.1 -> 250 Hz, linear sweep over the run
-        f0, f1 = 0.1, 250.0
-        phase = 2 * np.pi * (f0 * t + 0.5 * (f1 - f0) / DURATION * t**2)
-        return 0.2 * np.sin(phase[None, :] + k)
-    rng = np.random.default_rng(7)
-    freqs = np.geomspace(0.2, 200.0, 15)
-    phases = rng.uniform(0, 2 * np.pi, (n_inputs, len(freqs)))
-    return 0.1 * np.sum(np.sin(2 * np.pi * freqs[None, :, None] * t[None, None, :] + phases[:, :, None]), axis=1)
-
-
-def _reference(model, t: np.ndarray, u: np.ndarray) -> np.ndarray:
-    """Exact ZOH response of the state-space model, sampled where the FMU reports."""
-    steps = np.diff(t)
-    if np.allclose(steps, steps[0]):
-        return ct.forced_response(ct.sample_system(model.system, steps[0], "zoh"), T=t, U=u).outputs
-    x = np.zeros(model.system.nstates)
-    y = [model.system.C @ x + model.system.D @ u[:, 0]]
-    for k, h in enumerate(steps):  # an independent discretization for every step size
-        d = ct.sample_system(model.system, h, "zoh")
-        x = d.A @ x + d.B @ u[:, k]
-        y.append(model.system.C @ x + model.system.D @ u[:, k])
-    return np.array(y).T
-
-
-def _check(model, y: np.ndarray, ref: np.ndarray) -> None:
-    span = np.ptp(ref, axis=1, keepdims=True)
-    assert np.all(span > 0), "every output must move, or the comparison proves nothing"
-    assert np.max(np.abs(y - ref) / span) <= 1e-8
 
 
 def test_model_description_validates_and_names_signals(built):
@@ -87,7 +50,7 @@ def test_fmpy_simulation_equals_state_space(built, signal, step):
     model, _, unzipped = built
     t = np.arange(0.0, DURATION + step / 2, step)
     names = list(model.system.input_labels)
-    u = _signal(signal, t, len(names))
+    u = make_inputs(signal, t, len(names))
     table = np.zeros(len(t), dtype=[("time", float)] + [(n, float) for n in names])
     table["time"] = t
     for i, n in enumerate(names):
@@ -96,60 +59,31 @@ def test_fmpy_simulation_equals_state_space(built, signal, step):
                             input=table, output=list(model.system.output_labels))
     assert np.allclose(res["time"], t)
     y = np.array([res[n] for n in model.system.output_labels])
-    _check(model, y, _reference(model, t, u))
-
-
-def _slave(model, unzipped, name="instance") -> FMU2Slave:
-    md = fmpy.read_model_description(unzipped)
-    fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzipped, modelIdentifier=md.coSimulation.modelIdentifier,
-                    instanceName=name)
-    fmu.instantiate()
-    fmu.setupExperiment(startTime=0.0)
-    fmu.enterInitializationMode()
-    fmu.exitInitializationMode()
-    return fmu
-
-
-def _vrs(unzipped):
-    md = fmpy.read_model_description(unzipped)
-    return ({v.name: v.valueReference for v in md.modelVariables if v.causality == "input"},
-            {v.name: v.valueReference for v in md.modelVariables if v.causality == "output"})
-
-
-def _run(model, fmu, unzipped, t, u):
-    ins, outs = _vrs(unzipped)
-    in_vr = [ins[n] for n in model.system.input_labels]
-    out_vr = [outs[n] for n in model.system.output_labels]
-    y = [fmu.getReal(out_vr)]
-    for k in range(len(t) - 1):
-        fmu.setReal(in_vr, list(u[:, k]))
-        fmu.doStep(currentCommunicationPoint=t[k], communicationStepSize=t[k + 1] - t[k])
-        y.append(fmu.getReal(out_vr))
-    return np.array(y).T
+    check_close(model, y, zoh_reference(model, t, u))
 
 
 def test_varying_step_sizes_are_exact(built):
     model, _, unzipped = built
     rng = np.random.default_rng(3)
     t = np.concatenate([[0.0], np.cumsum(rng.choice([0.5e-3, 1e-3, 2e-3, 3.7e-3], size=300))])
-    u = _signal("multisine", t, model.system.ninputs)
-    fmu = _slave(model, unzipped)
-    y = _run(model, fmu, unzipped, t, u)
+    u = make_inputs("multisine", t, model.system.ninputs)
+    fmu = nominal_slave(model, unzipped)
+    y = run_steps(model, fmu, unzipped, t, u)
     fmu.terminate()
     fmu.freeInstance()
-    _check(model, y, _reference(model, t, u))
+    check_close(model, y, zoh_reference(model, t, u))
 
 
 def test_instances_are_independent_and_state_can_be_saved(built):
     model, _, unzipped = built
     t = np.arange(0.0, 0.3, 2e-3)
-    u1, u2 = _signal("multisine", t, model.system.ninputs), _signal("step", t, model.system.ninputs)
-    a, b = _slave(model, unzipped, "a"), _slave(model, unzipped, "b")
-    ya, yb = _run(model, a, unzipped, t, u1), _run(model, b, unzipped, t, u2)
-    _check(model, ya, _reference(model, t, u1))
-    _check(model, yb, _reference(model, t, u2))
+    u1, u2 = make_inputs("multisine", t, model.system.ninputs), make_inputs("step", t, model.system.ninputs)
+    a, b = nominal_slave(model, unzipped, "a"), nominal_slave(model, unzipped, "b")
+    ya, yb = run_steps(model, a, unzipped, t, u1), run_steps(model, b, unzipped, t, u2)
+    check_close(model, ya, zoh_reference(model, t, u1))
+    check_close(model, yb, zoh_reference(model, t, u2))
     # save the state of a, disturb it, restore it: the continuation is the same
-    ins, outs = _vrs(unzipped)
+    ins, outs = value_references(unzipped)
     out_vr = [outs[n] for n in model.system.output_labels]
     state = a.getFMUstate()
     a.doStep(currentCommunicationPoint=t[-1], communicationStepSize=2e-3)
@@ -164,8 +98,8 @@ def test_instances_are_independent_and_state_can_be_saved(built):
 
 def test_non_finite_input_is_an_error_not_garbage(built):
     model, _, unzipped = built
-    ins, _ = _vrs(unzipped)
-    fmu = _slave(model, unzipped)
+    ins, _ = value_references(unzipped)
+    fmu = nominal_slave(model, unzipped)
     fmu.setReal([ins[model.system.input_labels[0]]], [float("nan")])
     with pytest.raises(FMICallException):
         fmu.doStep(currentCommunicationPoint=0.0, communicationStepSize=1e-3)
@@ -184,7 +118,7 @@ def test_libcosim_gives_the_same_outputs_as_fmpy(built):
     model, fmu, unzipped = built
     step, n = 2e-3, 200
     t = np.arange(n + 1) * step
-    u = _signal("multisine", t, model.system.ninputs)
+    u = make_inputs("multisine", t, model.system.ninputs)
     names = list(model.system.input_labels)
     outputs = list(model.system.output_labels)
     exchange = Path(unzipped).parent / "libcosim_io.npz"
@@ -200,8 +134,8 @@ def test_libcosim_gives_the_same_outputs_as_fmpy(built):
     subprocess.run([sys.executable, "-c", script, str(fmu), str(exchange), str(examples), repr(step)],
                    check=True, capture_output=True, timeout=300)
     y_cosim = np.load(str(exchange) + ".y.npy")
-    fmu_fmpy = _slave(model, unzipped, "fmpy")
-    y_fmpy = _run(model, fmu_fmpy, unzipped, t, u)[:, 1:]
+    fmu_fmpy = nominal_slave(model, unzipped, "fmpy")
+    y_fmpy = run_steps(model, fmu_fmpy, unzipped, t, u)[:, 1:]
     fmu_fmpy.terminate()
     fmu_fmpy.freeInstance()
     span = np.ptp(y_fmpy, axis=1, keepdims=True)
@@ -259,16 +193,10 @@ def test_fmu_runs_in_a_fresh_venv_without_mace_fmu(fmu_1g, tmp_path):
     t = np.arange(0, 0.2001, 0.002)
     u = np.zeros((model.system.ninputs, len(t)))
     u[list(model.system.input_labels).index("gimbal_secondary_z")] = 1.0
-    ref = _reference(model, t, u)
+    ref = zoh_reference(model, t, u)
     outs = list(model.system.output_labels)
     expected = np.array([ref[outs.index("gyro_payload_z")], ref[outs.index("encoder_secondary_z")]])
     assert np.max(np.abs(fresh - expected) / np.ptp(expected, axis=1, keepdims=True)) <= 1e-8
-
-
-def _rss_bytes() -> int:
-    """Resident set size of this process (Linux)."""
-    with open("/proc/self/statm") as f:
-        return int(f.read().split()[1]) * __import__("os").sysconf("SC_PAGE_SIZE")
 
 
 def test_thousand_instantiate_simulate_free_cycles_do_not_grow_memory(fmu_1g, tmp_path):
@@ -277,11 +205,11 @@ def test_thousand_instantiate_simulate_free_cycles_do_not_grow_memory(fmu_1g, tm
     creates its class once and pays that reference back, so instances cost no memory."""
     model = volts_model("1g")
     unzipped = fmpy.extract(str(fmu_1g), unzipdir=str(tmp_path / "unzipped"))
-    ins, outs = _vrs(unzipped)
+    ins, outs = value_references(unzipped)
     in_vr, out_vr = [ins["gimbal_secondary_z"]], [outs["gyro_payload_z"]]
 
     def cycle(k: int) -> float:
-        fmu = _slave(model, unzipped, f"cycle{k}")
+        fmu = nominal_slave(model, unzipped, f"cycle{k}")
         fmu.setReal(in_vr, [1.0])
         for j in range(10):
             fmu.doStep(currentCommunicationPoint=j * 2e-3, communicationStepSize=2e-3)
@@ -291,9 +219,9 @@ def test_thousand_instantiate_simulate_free_cycles_do_not_grow_memory(fmu_1g, tm
         return value
 
     first = [cycle(k) for k in range(50)]  # warm-up: caches, allocator pools
-    before = _rss_bytes()
+    before = rss_bytes()
     values = [cycle(k) for k in range(50, 1050)]
-    growth = _rss_bytes() - before
+    growth = rss_bytes() - before
     assert len(set(first + values)) == 1  # every instance starts from rest and computes the same
     print(f"resident memory growth over 1000 cycles: {growth / 2**20:.2f} MB")
     assert growth < 10 * 2**20, f"resident memory grew by {growth / 2**20:.1f} MB over 1000 cycles"
@@ -302,33 +230,19 @@ def test_thousand_instantiate_simulate_free_cycles_do_not_grow_memory(fmu_1g, tm
 def test_reset_returns_to_rest_and_reruns_identically(built):
     model, _, unzipped = built
     t = np.arange(0.0, 0.1, 2e-3)
-    u = _signal("multisine", t, model.system.ninputs)
-    fmu = _slave(model, unzipped)
-    first = _run(model, fmu, unzipped, t, u)
+    u = make_inputs("multisine", t, model.system.ninputs)
+    fmu = nominal_slave(model, unzipped)
+    first = run_steps(model, fmu, unzipped, t, u)
     fmu.reset()
-    _, outs = _vrs(unzipped)
+    _, outs = value_references(unzipped)
     assert fmu.getReal([outs[n] for n in model.system.output_labels]) == [0.0] * model.system.noutputs
     fmu.setupExperiment(startTime=0.0)
     fmu.enterInitializationMode()
     fmu.exitInitializationMode()
-    again = _run(model, fmu, unzipped, t, u)
+    again = run_steps(model, fmu, unzipped, t, u)
     fmu.terminate()
     fmu.freeInstance()
     np.testing.assert_array_equal(first, again)
-
-
-def _initialised(model, unzipped, start: dict[str, float], name="params") -> FMU2Slave:
-    """An FMU instance initialised with the given parameter values."""
-    md = fmpy.read_model_description(unzipped)
-    vr = {v.name: v.valueReference for v in md.modelVariables}
-    fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzipped, modelIdentifier=md.coSimulation.modelIdentifier,
-                    instanceName=name)
-    fmu.instantiate()
-    fmu.setupExperiment(startTime=0.0)
-    fmu.enterInitializationMode()
-    fmu.setReal([vr[k] for k in start], list(start.values()))
-    fmu.exitInitializationMode()
-    return fmu
 
 
 def _frequencies(fmu, unzipped) -> np.ndarray:
@@ -347,7 +261,7 @@ def test_physical_parameter_reanalysis_matches_the_fe_rebuild(built):
     model, _, unzipped = built
     kind = model.structure_modes.structure.kind
     e = model.structure_modes.structure.deck.mat1s[2].youngs_modulus
-    fmu = _initialised(model, unzipped, {"E_lexan_center": 1.05 * e})
+    fmu = initialised_slave(model, unzipped, {"E_lexan_center": 1.05 * e})
     ours = _frequencies(fmu, unzipped)
     fmu.freeInstance()
     rebuilt = compute_modes(structure=kind, overrides={("MAT1", 2): {"e": 1.05 * e}}).modes
@@ -369,7 +283,7 @@ def test_reanalysed_modes_keep_their_index_through_a_frequency_crossing(motion_f
     md = fmpy.read_model_description(unzipped)
     param = next(v for v in md.modelVariables if v.name == "E_active_strut_piezo")
     mid = int(param.description.split("MAT1 ")[1].split(")")[0])
-    fmu = _initialised(model, unzipped, {param.name: 2.0 * float(param.start)})
+    fmu = initialised_slave(model, unzipped, {param.name: 2.0 * float(param.start)})
     ours = _frequencies(fmu, unzipped)
     fmu.freeInstance()
     rebuilt = compute_modes(structure="0g", overrides={("MAT1", mid): {"e": 2.0 * float(param.start)}}).modes
@@ -399,13 +313,13 @@ def test_parameters_rebuild_the_same_model_as_volts_model(built, change):
     rebuilt = volts_model(model.structure_modes.structure.kind, modes=model.structure_modes,
                           parameters=ParameterSet(values))
     t = np.arange(0.0, 0.4, 2e-3)
-    u = _signal("multisine", t, model.system.ninputs)
-    fmu = _initialised(model, unzipped, start)
-    y = _run(model, fmu, unzipped, t, u)
+    u = make_inputs("multisine", t, model.system.ninputs)
+    fmu = initialised_slave(model, unzipped, start)
+    y = run_steps(model, fmu, unzipped, t, u)
     fmu.terminate()
     fmu.freeInstance()
-    _check(rebuilt, y, _reference(rebuilt, t, u))
-    assert np.max(np.abs(y - _reference(model, t, u))) > 1e-6  # the parameter did change the response
+    check_close(rebuilt, y, zoh_reference(rebuilt, t, u))
+    assert np.max(np.abs(y - zoh_reference(model, t, u))) > 1e-6  # the parameter did change the response
 
 
 def test_motion_outputs_equal_state_space_with_units(motion_fmu_0g):
@@ -421,14 +335,14 @@ def test_motion_outputs_equal_state_space_with_units(motion_fmu_0g):
     step = 2e-3
     t = np.arange(0.0, 0.5 + step / 2, step)
     names = list(model.system.input_labels)
-    u = _signal("multisine", t, len(names))
+    u = make_inputs("multisine", t, len(names))
     table = np.zeros(len(t), dtype=[("time", float)] + [(n, float) for n in names])
     table["time"] = t
     for i, n in enumerate(names):
         table[n] = u[i]
     res = fmpy.simulate_fmu(unzipped, start_time=0.0, stop_time=t[-1], output_interval=step, input=table)
     y = np.array([res[n] for n in outs])
-    ref = _reference(model, t, u)
+    ref = zoh_reference(model, t, u)
     span = np.ptp(ref, axis=1)
     moving = span > 0
     # one grid carries no element and no mass (it rests); everything else moves

@@ -6,6 +6,7 @@ import argparse
 
 from mace_fmu.cli.common import deck_option, parameters, parameters_option, progress, progress_bar
 from mace_fmu.deck.reader import read_deck
+from mace_fmu.fmu.naming import fmu_name
 from mace_fmu.pipeline import compute_modes
 from mace_fmu.text import hz_text
 
@@ -13,6 +14,8 @@ from mace_fmu.text import hz_text
 def cmd_build(args: argparse.Namespace) -> int:
     # imported here, as in the other commands, so that `mace-fmu modes` starts without control/pythonfmu
     from mace_fmu.fmu.export import export_fmu
+    from mace_fmu.fmu.native.export import export_native_fmu
+    from mace_fmu.iomodel.parametric_data import parametric_arrays
     from mace_fmu.iomodel.volts import DEFAULT_MAX_HZ, volts_model
     from mace_fmu.thesis import (format_mass_rows, format_rows, format_side_by_side, table_3_15_comparison,
                                  table_5_1_0g, table_5_1_1g)
@@ -38,9 +41,15 @@ def cmd_build(args: argparse.Namespace) -> int:
     print(format_mass_rows(table_3_15_comparison(m0), title="Table 3.15, free-free mass properties about the centre node"))
     print()
     for kind, modes in (("1g", results["large"]), ("0g", m0)):
-        progress(f"{kind} volts-volts model and FMU")
-        path = export_fmu(volts_model(kind, modes=modes, parameters=params), out_dir=args.out)
-        print(f"wrote {path}")
+        progress(f"{kind} volts-volts model and FMUs")
+        model = volts_model(kind, modes=modes, parameters=params)
+        arrays = parametric_arrays(model)  # what every kind of FMU carries: computed once
+        for fmi_version in (2, 3):
+            name = fmu_name(kind, kind="native", fmi_version=fmi_version)
+            path = export_native_fmu(model, out_dir=args.out, name=name,
+                                     fmi_version=fmi_version, arrays=arrays)
+            print(f"wrote {path}")
+        print(f"wrote {export_fmu(model, out_dir=args.out, name=fmu_name(kind, kind='pythonfmu'), arrays=arrays)}")
     print()
     print("1-g modes below 25 Hz (large-displacement preload | linear preload)")
     large, linear = results["large"].modes, results["linear"].modes
@@ -53,8 +62,9 @@ def cmd_build(args: argparse.Namespace) -> int:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("build", help="the main job: modes next to the thesis tables, and both FMUs")
+    p = sub.add_parser("build", help="the main job: modes next to the thesis tables, and the FMUs of both models")
     deck_option(p)
     parameters_option(p)
-    p.add_argument("-o", "--out", default="fmus", help="where to write MACE_1g.fmu and MACE_0g.fmu (default ./fmus)")
+    p.add_argument("-o", "--out", default="fmus", help="where to write the FMUs: MACE_<1g|0g>_native.fmu (FMI 2.0), "
+                   "MACE_<1g|0g>_native_fmi3.fmu, MACE_<1g|0g>_pythonfmu.fmu (default ./fmus)")
     p.set_defaults(func=cmd_build)

@@ -25,16 +25,13 @@ from pythonfmu.builder import FmuBuilder
 
 from mace_fmu.atomic import atomic_path
 from mace_fmu.fmu.naming import fmu_name
+from mace_fmu.fmu.variables import DEFAULT_EXPERIMENT, model_summary, variable_unit
 from mace_fmu.iomodel import modal_core, parametric, reanalysis
-from mace_fmu.iomodel.motion import motion_unit, parse_motion_output
 from mace_fmu.iomodel.parametric_data import parametric_arrays
 from mace_fmu.iomodel.volts import VoltsModel
 from modelica_like import algebra
 
 SLAVE_SOURCE = Path(__file__).with_name("slave.py")
-DEFAULT_EXPERIMENT = {"startTime": "0.0", "stopTime": "10.0", "stepSize": "0.002"}
-_UNITS = (("E_", "Pa"), ("k_", "N/m"), ("delay_", "s"), ("damping_mode_", "1"), ("K_a", "V/deg"),
-          ("K_r", "V/(deg/s)"), ("K_f", "1"), ("K_b", "1"), ("frequency_mode_", "Hz"))
 
 
 def _patch_model_description(fmu: Path, *, description: str, version: str,
@@ -50,14 +47,7 @@ def _patch_model_description(fmu: Path, *, description: str, version: str,
     root.set("generationTool", f"mace-fmu {version} ({root.get('generationTool', 'PythonFMU')})")
     used = set()
     for var in root.iter("ScalarVariable"):
-        name = var.get("name")
-        motion = parse_motion_output(name)
-        if motion is not None:
-            unit = motion_unit(motion[1])
-        elif var.get("causality") in ("input", "output"):
-            unit = "V"
-        else:
-            unit = next((u for prefix, u in _UNITS if name.startswith(prefix)), None)
+        unit = variable_unit(var.get("name"), var.get("causality"))
         if unit is not None:
             var.find("Real").set("unit", unit)
             used.add(unit)
@@ -130,8 +120,10 @@ def _entry_script(name: str, description: str) -> str:
                                   prefix=_CACHE_PREFIX)
 
 
-def export_fmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str | None = None) -> Path:
-    """Write ``out_dir/<name>.fmu`` (default name from ``fmu_name``: MACE_1g, MACE_1g_motion, ...); returns its path."""
+def export_fmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str | None = None,
+               arrays: dict[str, np.ndarray] | None = None) -> Path:
+    """Write ``out_dir/<name>.fmu`` (default name from ``fmu_name``: MACE_1g, MACE_1g_motion, ...) and return its path; ``arrays``:
+    the model's parametric arrays if already computed."""
     kind = model.structure_modes.structure.kind
     name = name or fmu_name(kind, motion_grids=model.plant.motion_grids,
                             all_grids=model.structure_modes.model.dofs.grid_ids)
@@ -139,10 +131,8 @@ def export_fmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str | None
         raise ValueError(f"FMU name must be a Python/C identifier (it names the model class), got {name!r}")
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    sys_ = model.system
-    description = (f"MACE {kind} volts-volts model: {sys_.nstates} states; servos {'closed' if model.servos else 'open'}, "
-                   f"Bessel filters {model.bessel}, delays {'on' if model.delays else 'off'}")
-    arrays = parametric_arrays(model)
+    description = model_summary(model)
+    arrays = parametric_arrays(model) if arrays is None else arrays
     final = out / f"{name}.fmu"
     with tempfile.TemporaryDirectory(prefix="mace_fmu_") as tmp, atomic_path(final) as part:
         tmp = Path(tmp)

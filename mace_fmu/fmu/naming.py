@@ -8,14 +8,16 @@ from collections.abc import Sequence
 LISTED_GRIDS = 6
 
 
-def fmu_name(structure: str, *, motion_grids: Sequence[int] = (), all_grids: Sequence[int] = ()) -> str:
-    """Model name (and .fmu file stem) of a MACE FMU, e.g. MACE_1g, MACE_1g_motion, MACE_0g_motion_1_7.
+def fmu_name(structure: str, *, kind: str | None = None, fmi_version: int = 2, motion_grids: Sequence[int] = (),
+             all_grids: Sequence[int] = ()) -> str:
+    """Model name (and .fmu file stem) of a MACE FMU, e.g. MACE_1g_native, MACE_1g_native_fmi3,
+    MACE_1g_pythonfmu, MACE_0g_native_motion_1_7 (MACE_1g, MACE_1g_motion without ``kind``).
 
-    No motion outputs: ``MACE_<structure>``; the motion of every grid in ``all_grids``:
-    ``MACE_<structure>_motion``; a few grids: their IDs; more than ``LISTED_GRIDS``:
-    ``MACE_<structure>_motion_<count>_grids``.
+    The kind ("native", "pythonfmu") and FMI 3 come first; then no motion outputs: nothing; the
+    motion of every grid in ``all_grids``: ``_motion``; a few grids: their IDs; more than
+    ``LISTED_GRIDS``: ``_motion_<count>_grids``.
     """
-    base = f"MACE_{structure}"
+    base = f"MACE_{structure}" + (f"_{kind}" if kind else "") + ("_fmi3" if fmi_version == 3 else "")
     grids = sorted(set(int(g) for g in motion_grids))
     if not grids:
         return base

@@ -18,6 +18,7 @@ from mace_fmu.fe.assembly import FEModel, bar_section
 from mace_fmu.fe.beam import natural_stiffness
 from mace_fmu.fe.corotational import BarState, tangent
 from mace_fmu.fe.preload import Preload
+from mace_fmu.iomodel.modal_core import ZERO_HZ
 from mace_fmu.iomodel.modal_ss import modal_data
 from mace_fmu.iomodel.motion import motion_unit, parse_motion_output
 from mace_fmu.iomodel.volts import VoltsModel
@@ -148,7 +149,14 @@ def physical_sensitivities(model: VoltsModel, shapes: np.ndarray, *, only: Seque
         parameters.append((f"k_{label}", float(k), f"stiffness of {label} (CELAS2 {sid}) [N/m]; reanalysis"))
         sensitivities.append(k * np.outer(v, v))
     n = shapes.shape[1]
-    return parameters, np.array(sensitivities).reshape(len(parameters), n, n)
+    dk = np.array(sensitivities).reshape(len(parameters), n, n)
+    # Rigid-body and mechanism modes carry no strain energy: their computed sensitivities (3e-9
+    # of the largest, the round-off of the mechanism shapes) are noise, which the reanalysis
+    # would couple into the flexible modes (up to 6e-7 of an output's range for E x 0.5).
+    zero = np.abs(model.structure_modes.modes.frequencies_hz[:n]) < ZERO_HZ
+    dk[:, zero, :] = 0.0
+    dk[:, :, zero] = 0.0
+    return parameters, dk
 
 
 def parameter_range(name: str) -> tuple[float, float]:

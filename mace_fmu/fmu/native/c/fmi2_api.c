@@ -1,0 +1,360 @@
+/* FMI 2.0 co-simulation and model exchange API of the MACE FMU runtime (see mace_instance.h). */
+#include <stdlib.h>
+#include <string.h>
+
+#include "fmi2Functions.h"
+#include "mace_instance.h"
+
+typedef struct Host2 {
+    fmi2CallbackLogger logger;
+    fmi2ComponentEnvironment env;
+} Host2;
+
+typedef struct Fmi2Instance {
+    MiInstance *inst; /* first: the wrappers cast between the two */
+    Host2 host;
+} Fmi2Instance;
+
+static void host_log(void *host, const char *instance, MiStatus status, const char *category, const char *message) {
+    const Host2 *h = (const Host2 *)host;
+    char escaped[4 * MACE_ERR_LEN];
+    size_t o = 0;
+    if (!h->logger) return;
+    for (; *message && o + 2 < sizeof(escaped); message++) { /* the logger's message is a format string */
+        if (*message == '%') escaped[o++] = '%';
+        escaped[o++] = *message;
+    }
+    escaped[o] = '\0';
+    h->logger(h->env, instance, (fmi2Status)status, category, escaped);
+}
+
+#define INST(c) (((Fmi2Instance *)(c))->inst)
+#define CHECK(c)                                         \
+    do {                                                 \
+        if (!(c)) return fmi2Error; /* no instance to log through */ \
+    } while (0)
+
+const char *fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }
+const char *fmi2GetVersion(void) { return fmi2Version; }
+
+fmi2Status fmi2SetDebugLogging(fmi2Component c, fmi2Boolean loggingOn, size_t nCategories,
+                               const fmi2String categories[]) {
+    (void)nCategories;
+    (void)categories;
+    CHECK(c);
+    INST(c)->logging_on = loggingOn != fmi2False;
+    return fmi2OK;
+}
+
+fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2String fmuGUID,
+                              fmi2String fmuResourceLocation, const fmi2CallbackFunctions *functions,
+                              fmi2Boolean visible, fmi2Boolean loggingOn) {
+    MaceAlloc al;
+    Fmi2Instance *w;
+    Host2 host;
+    char *path;
+    (void)visible;
+    al.calloc = (functions && functions->allocateMemory) ? functions->allocateMemory : calloc;
+    al.free = (functions && functions->freeMemory) ? functions->freeMemory : free;
+    host.logger = functions ? functions->logger : NULL;
+    host.env = functions ? functions->componentEnvironment : NULL;
+    if (fmuType != fmi2CoSimulation && fmuType != fmi2ModelExchange) {
+        host_log(&host, instanceName, MI_ERROR, "logStatusError", "fmi2Instantiate: unknown FMU type");
+        return NULL;
+    }
+    w = (Fmi2Instance *)al.calloc(1, sizeof(Fmi2Instance));
+    if (!w) return NULL;
+    w->host = host;
+    path = mi_uri_to_path(&al, fmuResourceLocation);
+    if (!path) {
+        host_log(&host, instanceName, MI_ERROR, "logStatusError",
+             "fmi2Instantiate: the resource location is not a file URI");
+        al.free(w);
+        return NULL;
+    }
+    w->inst = mi_create(instanceName, fmuType == fmi2CoSimulation ? MACE_CO_SIMULATION : MACE_MODEL_EXCHANGE, path,
+                        fmuGUID, &al, host_log, &w->host, loggingOn != fmi2False, "fmi2");
+    al.free(path);
+    if (!w->inst) {
+        al.free(w);
+        return NULL;
+    }
+    return w;
+}
+
+void fmi2FreeInstance(fmi2Component c) {
+    MaceAlloc al;
+    if (!c) return;
+    al = INST(c)->al;
+    mi_free(INST(c));
+    al.free(c);
+}
+
+fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fmi2Real tolerance,
+                               fmi2Real startTime, fmi2Boolean stopTimeDefined, fmi2Real stopTime) {
+    (void)toleranceDefined;
+    (void)tolerance;
+    (void)stopTimeDefined;
+    (void)stopTime;
+    CHECK(c);
+    if (!mi_allowed(INST(c), "SetupExperiment", MI_IN(PH_INSTANTIATED))) return fmi2Error;
+    mace_set_time(INST(c)->model, startTime);
+    return fmi2OK;
+}
+
+fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
+    CHECK(c);
+    return (fmi2Status)mi_enter_initialization(INST(c), mace_time(INST(c)->model), "EnterInitializationMode");
+}
+
+fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
+    CHECK(c);
+    return (fmi2Status)mi_exit_initialization(INST(c), "ExitInitializationMode");
+}
+
+fmi2Status fmi2Terminate(fmi2Component c) {
+    CHECK(c);
+    return (fmi2Status)mi_terminate(INST(c), "Terminate");
+}
+
+fmi2Status fmi2Reset(fmi2Component c) {
+    CHECK(c);
+    return (fmi2Status)mi_reset(INST(c), "Reset");
+}
+
+fmi2Status fmi2GetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Real value[]) {
+    CHECK(c);
+    return (fmi2Status)mi_get_reals(INST(c), vr, nvr, value, "GetReal");
+}
+
+fmi2Status fmi2SetReal(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Real value[]) {
+    CHECK(c);
+    return (fmi2Status)mi_set_reals(INST(c), vr, nvr, value, "SetReal");
+}
+
+fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Integer value[]) {
+    (void)vr;
+    (void)value;
+    CHECK(c);
+    return (fmi2Status)mi_no_variables(INST(c), nvr, "Integer", "GetInteger");
+}
+
+fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Boolean value[]) {
+    (void)vr;
+    (void)value;
+    CHECK(c);
+    return (fmi2Status)mi_no_variables(INST(c), nvr, "Boolean", "GetBoolean");
+}
+
+fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2String value[]) {
+    (void)vr;
+    (void)value;
+    CHECK(c);
+    return (fmi2Status)mi_no_variables(INST(c), nvr, "String", "GetString");
+}
+
+fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Integer value[]) {
+    (void)vr;
+    (void)value;
+    CHECK(c);
+    return (fmi2Status)mi_no_variables(INST(c), nvr, "Integer", "SetInteger");
+}
+
+fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Boolean value[]) {
+    (void)vr;
+    (void)value;
+    CHECK(c);
+    return (fmi2Status)mi_no_variables(INST(c), nvr, "Boolean", "SetBoolean");
+}
+
+fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2String value[]) {
+    (void)vr;
+    (void)value;
+    CHECK(c);
+    return (fmi2Status)mi_no_variables(INST(c), nvr, "String", "SetString");
+}
+
+fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
+    CHECK(c);
+    return (fmi2Status)mi_get_state(INST(c), FMUstate, "GetFMUstate");
+}
+
+fmi2Status fmi2SetFMUstate(fmi2Component c, fmi2FMUstate FMUstate) {
+    CHECK(c);
+    return (fmi2Status)mi_set_state(INST(c), FMUstate, "SetFMUstate");
+}
+
+fmi2Status fmi2FreeFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
+    CHECK(c);
+    return (fmi2Status)mi_free_state(INST(c), FMUstate, "FreeFMUstate");
+}
+
+fmi2Status fmi2SerializedFMUstateSize(fmi2Component c, fmi2FMUstate FMUstate, size_t *size) {
+    CHECK(c);
+    return (fmi2Status)mi_state_size(INST(c), FMUstate, size, "SerializedFMUstateSize");
+}
+
+fmi2Status fmi2SerializeFMUstate(fmi2Component c, fmi2FMUstate FMUstate, fmi2Byte serializedState[], size_t size) {
+    CHECK(c);
+    return (fmi2Status)mi_serialize(INST(c), FMUstate, (unsigned char *)serializedState, size, "SerializeFMUstate");
+}
+
+fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedState[], size_t size,
+                                   fmi2FMUstate *FMUstate) {
+    CHECK(c);
+    return (fmi2Status)mi_deserialize(INST(c), (const unsigned char *)serializedState, size, FMUstate,
+                                      "DeSerializeFMUstate");
+}
+
+fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference vUnknown_ref[], size_t nUnknown,
+                                        const fmi2ValueReference vKnown_ref[], size_t nKnown,
+                                        const fmi2Real dvKnown[], fmi2Real dvUnknown[]) {
+    (void)vUnknown_ref;
+    (void)nUnknown;
+    (void)vKnown_ref;
+    (void)nKnown;
+    (void)dvKnown;
+    (void)dvUnknown;
+    CHECK(c);
+    return (fmi2Status)mi_error(INST(c), "fmi2GetDirectionalDerivative: not provided by this FMU");
+}
+
+/* ---- co-simulation --------------------------------------------------------------------------- */
+
+fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                                       const fmi2Integer order[], const fmi2Real value[]) {
+    (void)vr;
+    (void)order;
+    (void)value;
+    CHECK(c);
+    if (nvr == 0) return fmi2OK;
+    return (fmi2Status)mi_error(INST(c), "fmi2SetRealInputDerivatives: inputs are held constant over a step "
+                                "(canInterpolateInputs is false)");
+}
+
+fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
+                                        const fmi2Integer order[], fmi2Real value[]) {
+    (void)vr;
+    (void)order;
+    (void)value;
+    CHECK(c);
+    if (nvr == 0) return fmi2OK;
+    return (fmi2Status)mi_error(INST(c), "fmi2GetRealOutputDerivatives: not provided (maxOutputDerivativeOrder 0)");
+}
+
+fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2Real communicationStepSize,
+                      fmi2Boolean noSetFMUStatePriorToCurrentPoint) {
+    (void)noSetFMUStatePriorToCurrentPoint;
+    CHECK(c);
+    return (fmi2Status)mi_do_step(INST(c), currentCommunicationPoint, communicationStepSize, "DoStep");
+}
+
+fmi2Status fmi2CancelStep(fmi2Component c) {
+    CHECK(c);
+    return (fmi2Status)mi_error(INST(c), "fmi2CancelStep: steps are never asynchronous here");
+}
+
+fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status *value) {
+    (void)s;
+    (void)value;
+    CHECK(c);
+    return (fmi2Status)mi_error(INST(c), "fmi2GetStatus: no step is ever pending");
+}
+
+fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *value) {
+    CHECK(c);
+    if (s != fmi2LastSuccessfulTime) return (fmi2Status)mi_error(INST(c), "fmi2GetRealStatus: unknown status kind");
+    *value = mace_time(INST(c)->model);
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Integer *value) {
+    (void)s;
+    (void)value;
+    CHECK(c);
+    return (fmi2Status)mi_error(INST(c), "fmi2GetIntegerStatus: no integer status");
+}
+
+fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean *value) {
+    CHECK(c);
+    if (s != fmi2Terminated) return (fmi2Status)mi_error(INST(c), "fmi2GetBooleanStatus: unknown status kind");
+    *value = fmi2False;
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2String *value) {
+    (void)s;
+    (void)value;
+    CHECK(c);
+    return (fmi2Status)mi_error(INST(c), "fmi2GetStringStatus: no string status");
+}
+
+/* ---- model exchange -------------------------------------------------------------------------- */
+
+fmi2Status fmi2EnterEventMode(fmi2Component c) {
+    CHECK(c);
+    if (!mi_allowed(INST(c), "EnterEventMode", MI_IN(PH_EVENT) | MI_IN(PH_CONTINUOUS))) return fmi2Error;
+    INST(c)->phase = PH_EVENT;
+    return fmi2OK;
+}
+
+fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *eventInfo) {
+    CHECK(c);
+    if (!mi_allowed(INST(c), "NewDiscreteStates", MI_IN(PH_EVENT))) return fmi2Error;
+    eventInfo->newDiscreteStatesNeeded = fmi2False;
+    eventInfo->terminateSimulation = fmi2False;
+    eventInfo->nominalsOfContinuousStatesChanged = fmi2False;
+    eventInfo->valuesOfContinuousStatesChanged = fmi2False;
+    eventInfo->nextEventTimeDefined = fmi2False;
+    eventInfo->nextEventTime = 0.0;
+    return fmi2OK;
+}
+
+fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c) {
+    CHECK(c);
+    if (!mi_allowed(INST(c), "EnterContinuousTimeMode", MI_IN(PH_EVENT))) return fmi2Error;
+    INST(c)->phase = PH_CONTINUOUS;
+    return fmi2OK;
+}
+
+fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetFMUStatePriorToCurrentPoint,
+                                       fmi2Boolean *enterEventMode, fmi2Boolean *terminateSimulation) {
+    (void)noSetFMUStatePriorToCurrentPoint;
+    CHECK(c);
+    if (!mi_allowed(INST(c), "CompletedIntegratorStep", MI_IN(PH_CONTINUOUS))) return fmi2Error;
+    *enterEventMode = fmi2False;
+    *terminateSimulation = fmi2False;
+    return fmi2OK;
+}
+
+fmi2Status fmi2SetTime(fmi2Component c, fmi2Real time) {
+    CHECK(c);
+    return (fmi2Status)mi_set_time(INST(c), time, "SetTime");
+}
+
+fmi2Status fmi2SetContinuousStates(fmi2Component c, const fmi2Real x[], size_t nx) {
+    CHECK(c);
+    return (fmi2Status)mi_set_states(INST(c), x, nx, "SetContinuousStates");
+}
+
+fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real derivatives[], size_t nx) {
+    CHECK(c);
+    return (fmi2Status)mi_get_derivatives(INST(c), derivatives, nx, "GetDerivatives");
+}
+
+fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real eventIndicators[], size_t ni) {
+    (void)eventIndicators;
+    CHECK(c);
+    if (ni == 0) return fmi2OK;
+    return (fmi2Status)mi_error(INST(c), "fmi2GetEventIndicators: this model has no event indicators");
+}
+
+fmi2Status fmi2GetContinuousStates(fmi2Component c, fmi2Real x[], size_t nx) {
+    CHECK(c);
+    return (fmi2Status)mi_get_states(INST(c), x, nx, "GetContinuousStates");
+}
+
+fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component c, fmi2Real x_nominal[], size_t nx) {
+    CHECK(c);
+    return (fmi2Status)mi_get_nominals(INST(c), x_nominal, nx, "GetNominalsOfContinuousStates");
+}

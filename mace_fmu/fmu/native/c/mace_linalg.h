@@ -1,0 +1,60 @@
+/* Dense linear algebra for the MACE FMU runtime: libc and libm only, no LAPACK.
+ *
+ * Matrices are row-major: a[i * ncols + j] is row i, column j. Functions that need scratch
+ * memory take the instance's allocator (FMI 2 hosts provide one) and return -1 when it fails.
+ */
+#ifndef MACE_LINALG_H
+#define MACE_LINALG_H
+
+#include <stddef.h>
+
+typedef struct MaceAlloc {
+    void *(*calloc)(size_t nobj, size_t size);
+    void (*free)(void *obj);
+} MaceAlloc;
+
+/* n zeroed doubles from the allocator (NULL if it fails; n == 0 gives a valid 1-element block). */
+double *ml_zeros(const MaceAlloc *al, size_t n);
+
+/* out (r x c) = a (r x k) b (k x c); out must not alias a or b. Zero entries of a are skipped. */
+void ml_matmul(size_t r, size_t k, size_t c, const double *a, const double *b, double *out);
+/* out (r x c) += a (r x k) b (k x c). */
+void ml_matmul_acc(size_t r, size_t k, size_t c, const double *a, const double *b, double *out);
+
+/* LU factorisation with partial pivoting, in place. Returns 0, or -1 for an exactly singular matrix. */
+int ml_lu(double *a, size_t n, size_t *piv);
+/* Solves (LU) x = b for nrhs right-hand sides; b is n x nrhs and is overwritten by x. */
+void ml_lu_solve(const double *lu, size_t n, const size_t *piv, double *b, size_t nrhs);
+/* inverse of a (n x n) into out; -1 if singular. */
+int ml_inverse(const MaceAlloc *al, const double *a, size_t n, double *out);
+/* 1-norm (largest absolute column sum). */
+double ml_norm1(const double *a, size_t r, size_t c);
+
+/* Symmetric eigen-solution by cyclic Jacobi rotations (small relative errors, also for graded
+ * matrices): a (n x n, symmetric) is destroyed, w gets the eigenvalues (unsorted), the columns
+ * of v the orthonormal eigenvectors. Returns 0, or -1 if 100 sweeps did not converge. */
+int ml_jacobi_eigh(double *a, size_t n, double *w, double *v);
+
+/* One-to-one assignment rows -> columns that maximises the sum of score[i][col[i]] (square,
+ * Hungarian algorithm with potentials). Returns 0 or -1 (allocation). */
+int ml_assign_max(const MaceAlloc *al, const double *score, size_t n, size_t *col);
+
+/* Diagonal scaling by powers of 2 (LAPACK 3.11+ dgebal, job 'S': 2-norms, no permutation):
+ * a <- D^-1 a D in place, scale = diag(D). Returns 0 or -1 for a non-finite entry. */
+int ml_balance(double *a, size_t n, double *scale);
+
+/* Real eigen-decomposition of a general matrix (Householder reduction to Hessenberg form and
+ * the shifted QR algorithm with eigenvectors, EISPACK orthes/hqr2 by Martin and Wilkinson, as in
+ * the public-domain JAMA package): h (n x n) is destroyed; wr, wi get the eigenvalues; v the
+ * real eigenvector matrix with a v = v d, d block diagonal with [[wr, wi], [-wi, wr]] (wi > 0)
+ * for each complex pair and wr for a real eigenvalue. Returns 0, or -1 if QR did not converge. */
+int ml_eig(const MaceAlloc *al, double *h, size_t n, double *wr, double *wi, double *v);
+
+/* Matrix exponential by scaling and squaring with the [13/13] Pade approximant (Higham 2005). */
+int ml_expm(const MaceAlloc *al, const double *a, size_t n, double *out);
+
+/* Solves a x = b for a small system (n <= 8) by Gaussian elimination with partial pivoting;
+ * a and b are overwritten. Returns -1 when a pivot is below 1e-13 of the largest entry. */
+int ml_solve_small(double *a, size_t n, double *b);
+
+#endif

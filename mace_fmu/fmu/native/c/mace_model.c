@@ -1,0 +1,854 @@
+/* The model core of the MACE FMU runtime (see mace_model.h).
+ *
+ * mace_build follows mace_fmu.iomodel.parametric.ParametricSystem.build step by step:
+ * reanalysis of the physical parameters (reanalysis.py), the modal structure block
+ * (modal_core.py, with the zero-frequency cluster already reduced in the data), the Pade delay,
+ * gain and PD blocks, and the interconnection of all blocks (modelica_like/algebra.py).
+ */
+#include "mace_model.h"
+
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "mace_data.h"
+#include "mace_zoh.h"
+
+#define ZERO_HZ 0.01 /* mace_fmu.iomodel.modal_core.ZERO_HZ */
+#define TWO_PI (2.0 * 3.14159265358979323846)
+
+enum { BLOCK_STRUCTURE = 0, BLOCK_CONST, BLOCK_DELAY, BLOCK_GAIN, BLOCK_PD };
+enum { PARAM_DAMPING = 0, PARAM_DELAY, PARAM_GAIN, PARAM_PHYSICAL };
+enum {
+    COUNT_IN = 0, COUNT_OUT, COUNT_PAR, COUNT_MODES, COUNT_FLEX, COUNT_BLOCKS, COUNT_PADE, COUNT_STATES,
+    COUNT_SO, COUNT_MS, COUNT_PHYS, COUNT_UB, COUNT_YB, N_COUNTS
+};
+enum { INFO_KIND = 0, INFO_NX, INFO_NU, INFO_NY, INFO_P0, INFO_P1, N_INFO };
+
+static const char STATE_MAGIC[8] = {'M', 'A', 'C', 'E', 'S', 'T', 'A', '1'};
+#define STATE_HEADER 7 /* magic, phase, built, coordinates, n_par, n_in, n */
+
+struct MaceModel {
+    MaceAlloc al;
+    MaceKind kind;
+    MaceFile file;
+    size_t n_in, n_out, n_par, n_modes, n_flex, n_blocks, pade, n, n_so, m_s, n_phys, n_ub, n_yb;
+    const double *par_nominal, *par_min, *par_max, *freq0, *dk, *wiring, *entry, *exit_, *modal_b, *rows;
+    const int64_t *par_kind, *par_index, *block_info, *flex, *keep_disp, *keep_rate, *row_is_rate;
+    const double **blk;   /* 4 per block: A, B, C, D of a constant block */
+    const char **names;   /* inputs, outputs, parameters */
+    const char *guid;     /* of the FMU the data belong to */
+    size_t *damping_of;   /* parameter index of each mode's damping ratio */
+    double *params, *built_params, *freq, *u;
+    int built, y_valid, x_valid;
+    int params_changed; /* set since the last build */
+    double time;
+    double *a, *b, *c, *d; /* the continuous system of the last build */
+    MaceZoh *zoh;          /* co-simulation: the step; model exchange: the states' nominal values */
+    double *nominal;       /* of the states, for model exchange solvers */
+    double *s;             /* co-simulation: stepping coordinates; model exchange: x */
+    double *x, *y;
+};
+
+/* ---- creation -------------------------------------------------------------------------------- */
+
+static const void *entry_1d(MaceModel *m, const char *name, unsigned type, size_t n, char *err) {
+    return mace_file_get(&m->file, name, type, 1, &n, err);
+}
+
+static const void *entry_2d(MaceModel *m, const char *name, unsigned type, size_t r, size_t c, char *err) {
+    size_t dims[2];
+    dims[0] = r;
+    dims[1] = c;
+    return mace_file_get(&m->file, name, type, 2, dims, err);
+}
+
+static int load(MaceModel *m, const char *resource_dir, char *err) {
+    char path[4096];
+    size_t len = strlen(resource_dir), k, sum_x = 0, sum_u = 0, sum_y = 0;
+    const int64_t *counts, *version;
+    size_t dims[3], count_dims = N_COUNTS;
+    const char *sep = (len && (resource_dir[len - 1] == '/' || resource_dir[len - 1] == '\\')) ? "" : "/";
+    if (len + sizeof(MACE_DATA_FILE) + 2 > sizeof(path)) {
+        snprintf(err, MACE_ERR_LEN, "resource path too long");
+        return -1;
+    }
+    snprintf(path, sizeof(path), "%s%s%s", resource_dir, sep, MACE_DATA_FILE);
+    if (mace_file_read(&m->file, path, &m->al, err) != 0) return -1;
+    if (!(version = (const int64_t *)entry_1d(m, "format_version", MACE_I64, 1, err))) return -1;
+    if (version[0] != 1) {
+        snprintf(err, MACE_ERR_LEN, "%.900s: data format %lld, this runtime reads format 1", path, (long long)version[0]);
+        return -1;
+    }
+    if (!(counts = (const int64_t *)mace_file_get(&m->file, "counts", MACE_I64, 1, &count_dims, err))) return -1;
+    for (k = 0; k < N_COUNTS; k++) {
+        if (counts[k] < 0 || counts[k] > 1000000) {
+            snprintf(err, MACE_ERR_LEN, "%.900s: count %lu out of range", path, (unsigned long)k);
+            return -1;
+        }
+    }
+    m->n_in = (size_t)counts[COUNT_IN];
+    m->n_out = (size_t)counts[COUNT_OUT];
+    m->n_par = (size_t)counts[COUNT_PAR];
+    m->n_modes = (size_t)counts[COUNT_MODES];
+    m->n_flex = (size_t)counts[COUNT_FLEX];
+    m->n_blocks = (size_t)counts[COUNT_BLOCKS];
+    m->pade = (size_t)counts[COUNT_PADE];
+    m->n = (size_t)counts[COUNT_STATES];
+    m->n_so = (size_t)counts[COUNT_SO];
+    m->m_s = (size_t)counts[COUNT_MS];
+    m->n_phys = (size_t)counts[COUNT_PHYS];
+    m->n_ub = (size_t)counts[COUNT_UB];
+    m->n_yb = (size_t)counts[COUNT_YB];
+    if (m->pade < 1 || m->pade > 10 || m->n_flex > m->n_modes) {
+        snprintf(err, MACE_ERR_LEN, "%.900s: inconsistent counts", path);
+        return -1;
+    }
+    dims[0] = m->n_phys;
+    dims[1] = dims[2] = m->n_flex;
+    if (!(m->par_nominal = (const double *)entry_1d(m, "param_nominal", MACE_F64, m->n_par, err)) ||
+        !(m->par_min = (const double *)entry_1d(m, "param_min", MACE_F64, m->n_par, err)) ||
+        !(m->par_max = (const double *)entry_1d(m, "param_max", MACE_F64, m->n_par, err)) ||
+        !(m->par_kind = (const int64_t *)entry_1d(m, "param_kind", MACE_I64, m->n_par, err)) ||
+        !(m->par_index = (const int64_t *)entry_1d(m, "param_index", MACE_I64, m->n_par, err)) ||
+        !(m->freq0 = (const double *)entry_1d(m, "frequencies_hz", MACE_F64, m->n_modes, err)) ||
+        !(m->dk = (const double *)mace_file_get(&m->file, "physical_dk", MACE_F64, 3, dims, err)) ||
+        !(m->block_info = (const int64_t *)entry_2d(m, "block_info", MACE_I64, m->n_blocks, N_INFO, err)) ||
+        !(m->wiring = (const double *)entry_2d(m, "wiring", MACE_F64, m->n_ub, m->n_yb, err)) ||
+        !(m->entry = (const double *)entry_2d(m, "entry", MACE_F64, m->n_ub, m->n_in, err)) ||
+        !(m->exit_ = (const double *)entry_2d(m, "exit", MACE_F64, m->n_out, m->n_yb, err)) ||
+        !(m->modal_b = (const double *)entry_2d(m, "modal_b", MACE_F64, m->n_modes, m->m_s, err)) ||
+        !(m->rows = (const double *)entry_2d(m, "struct_rows", MACE_F64, m->n_so, m->n_modes, err)) ||
+        !(m->row_is_rate = (const int64_t *)entry_1d(m, "struct_row_is_rate", MACE_I64, m->n_so, err)) ||
+        !(m->keep_disp = (const int64_t *)entry_1d(m, "keep_disp", MACE_I64, m->n_modes, err)) ||
+        !(m->keep_rate = (const int64_t *)entry_1d(m, "keep_rate", MACE_I64, m->n_modes, err)) ||
+        !(m->flex = (const int64_t *)entry_1d(m, "flexible", MACE_I64, m->n_flex, err)))
+        return -1;
+    m->names = (const char **)m->al.calloc(m->n_in + m->n_out + m->n_par + 1, sizeof(char *));
+    m->blk = (const double **)m->al.calloc(4 * m->n_blocks + 1, sizeof(double *));
+    m->damping_of = (size_t *)m->al.calloc(m->n_modes + 1, sizeof(size_t));
+    if (!m->names || !m->blk || !m->damping_of) {
+        snprintf(err, MACE_ERR_LEN, "out of memory");
+        return -1;
+    }
+    if (mace_file_strings(&m->file, "guid", 1, &m->guid, err) ||
+        mace_file_strings(&m->file, "input_names", m->n_in, m->names, err) ||
+        mace_file_strings(&m->file, "output_names", m->n_out, m->names + m->n_in, err) ||
+        mace_file_strings(&m->file, "param_names", m->n_par, m->names + m->n_in + m->n_out, err))
+        return -1;
+    for (k = 0; k < m->n_modes; k++) m->damping_of[k] = m->n_par;
+    for (k = 0; k < m->n_par; k++) {
+        const int64_t kind = m->par_kind[k], index = m->par_index[k];
+        if (kind == PARAM_DAMPING && index >= 0 && (size_t)index < m->n_modes) {
+            m->damping_of[index] = k;
+        } else if (kind == PARAM_PHYSICAL && !(index >= 0 && (size_t)index < m->n_phys)) {
+            snprintf(err, MACE_ERR_LEN, "model data: physical parameter %lu has no sensitivity", (unsigned long)k);
+            return -1;
+        } else if (kind < PARAM_DAMPING || kind > PARAM_PHYSICAL) {
+            snprintf(err, MACE_ERR_LEN, "model data: parameter %lu has the unknown kind %lld", (unsigned long)k,
+                     (long long)kind);
+            return -1;
+        }
+    }
+    for (k = 0; k < m->n_modes; k++) {
+        if (m->damping_of[k] == m->n_par) {
+            snprintf(err, MACE_ERR_LEN, "model data: mode %lu has no damping parameter", (unsigned long)(k + 1));
+            return -1;
+        }
+    }
+    for (k = 0; k < m->n_flex; k++) {
+        if (m->flex[k] < 0 || (size_t)m->flex[k] >= m->n_modes) {
+            snprintf(err, MACE_ERR_LEN, "model data: flexible mode index out of range");
+            return -1;
+        }
+    }
+    for (k = 0; k < m->n_blocks; k++) {
+        const int64_t *info = m->block_info + k * N_INFO;
+        const size_t nx = (size_t)info[INFO_NX], nu = (size_t)info[INFO_NU], ny = (size_t)info[INFO_NY];
+        int ok = info[INFO_NX] >= 0 && info[INFO_NU] >= 0 && info[INFO_NY] >= 0;
+        switch (info[INFO_KIND]) {
+            case BLOCK_STRUCTURE: ok = ok && nu == m->m_s && ny == m->n_so; break;
+            case BLOCK_DELAY: ok = ok && nx == m->pade && nu == 1 && ny == 1 && info[INFO_P0] >= 0; break;
+            case BLOCK_GAIN: ok = ok && nx == 0 && nu == 1 && ny == 1 && info[INFO_P0] >= 0; break;
+            case BLOCK_PD: ok = ok && nx == 0 && nu == 2 && ny == 1 && info[INFO_P0] >= 0 && info[INFO_P1] >= 0; break;
+            case BLOCK_CONST: {
+                char name[64];
+                const size_t shapes[4][2] = {{nx, nx}, {nx, nu}, {ny, nx}, {ny, nu}};
+                int q;
+                for (q = 0; q < 4 && ok; q++) {
+                    snprintf(name, sizeof(name), "block%lu_%c", (unsigned long)k, "ABCD"[q]);
+                    m->blk[4 * k + q] = (const double *)entry_2d(m, name, MACE_F64, shapes[q][0], shapes[q][1], err);
+                    if (!m->blk[4 * k + q]) return -1;
+                }
+                break;
+            }
+            default: ok = 0;
+        }
+        if (ok && (info[INFO_P0] >= (int64_t)m->n_par || info[INFO_P1] >= (int64_t)m->n_par)) ok = 0;
+        if (!ok) {
+            snprintf(err, MACE_ERR_LEN, "model data: block %lu is inconsistent", (unsigned long)k);
+            return -1;
+        }
+        sum_x += nx;
+        sum_u += nu;
+        sum_y += ny;
+    }
+    {
+        size_t structure_states = 0;
+        for (k = 0; k < m->n_modes; k++) structure_states += (size_t)(m->keep_disp[k] != 0) + (m->keep_rate[k] != 0);
+        for (k = 0; k < m->n_blocks; k++)
+            if (m->block_info[k * N_INFO + INFO_KIND] == BLOCK_STRUCTURE &&
+                (size_t)m->block_info[k * N_INFO + INFO_NX] != structure_states)
+                sum_x = m->n + 1;
+    }
+    if (sum_x != m->n || sum_u != m->n_ub || sum_y != m->n_yb) {
+        snprintf(err, MACE_ERR_LEN, "model data: block sizes do not add up to the system's");
+        return -1;
+    }
+    return 0;
+}
+
+MaceModel *mace_create(const char *resource_dir, MaceKind kind, const MaceAlloc *al, char *err) {
+    MaceModel *m = (MaceModel *)al->calloc(1, sizeof(MaceModel));
+    if (!m) {
+        snprintf(err, MACE_ERR_LEN, "out of memory");
+        return NULL;
+    }
+    m->al = *al;
+    m->kind = kind;
+    if (load(m, resource_dir, err) != 0) {
+        mace_destroy(m);
+        return NULL;
+    }
+    m->params = ml_zeros(al, m->n_par);
+    m->built_params = ml_zeros(al, m->n_par);
+    m->freq = ml_zeros(al, m->n_modes);
+    m->u = ml_zeros(al, m->n_in);
+    m->a = ml_zeros(al, m->n * m->n);
+    m->b = ml_zeros(al, m->n * m->n_in);
+    m->c = ml_zeros(al, m->n_out * m->n);
+    m->d = ml_zeros(al, m->n_out * m->n_in);
+    m->s = ml_zeros(al, m->n);
+    m->x = ml_zeros(al, m->n);
+    m->y = ml_zeros(al, m->n_out);
+    m->nominal = ml_zeros(al, m->n);
+    m->zoh = zoh_create(al, m->n, m->n_in, m->n_out);
+    if (!m->params || !m->built_params || !m->freq || !m->u || !m->a || !m->b || !m->c || !m->d || !m->s || !m->x ||
+        !m->y || !m->nominal || !m->zoh) {
+        snprintf(err, MACE_ERR_LEN, "out of memory");
+        mace_destroy(m);
+        return NULL;
+    }
+    mace_reset(m);
+    return m;
+}
+
+void mace_destroy(MaceModel *m) {
+    if (!m) return;
+    zoh_destroy(m->zoh);
+    mace_file_free(&m->file, &m->al);
+    m->al.free(m->names);
+    m->al.free(m->blk);
+    m->al.free(m->damping_of);
+    m->al.free(m->params);
+    m->al.free(m->built_params);
+    m->al.free(m->freq);
+    m->al.free(m->u);
+    m->al.free(m->a);
+    m->al.free(m->b);
+    m->al.free(m->c);
+    m->al.free(m->d);
+    m->al.free(m->s);
+    m->al.free(m->x);
+    m->al.free(m->y);
+    m->al.free(m->nominal);
+    m->al.free(m);
+}
+
+void mace_reset(MaceModel *m) {
+    memcpy(m->params, m->par_nominal, m->n_par * sizeof(double));
+    m->params_changed = 1;
+    memset(m->u, 0, m->n_in * sizeof(double));
+    memset(m->s, 0, m->n * sizeof(double));
+    m->time = 0.0;
+    m->y_valid = m->x_valid = 0;
+}
+
+/* ---- variables ------------------------------------------------------------------------------ */
+
+MaceGroup mace_variable(const MaceModel *m, unsigned long long vr, size_t *index) {
+    const size_t sizes[7] = {m->n_in, m->n_out, m->n_par, m->n_modes, m->n, m->n, 1};
+    int g;
+    for (g = 0; g < 7; g++) {
+        if (vr < sizes[g]) {
+            *index = (size_t)vr;
+            return (MaceGroup)g;
+        }
+        vr -= sizes[g];
+    }
+    return MACE_VAR_UNKNOWN;
+}
+
+const char *mace_name(const MaceModel *m, MaceGroup group, size_t index) {
+    switch (group) {
+        case MACE_VAR_INPUT: return index < m->n_in ? m->names[index] : "?";
+        case MACE_VAR_OUTPUT: return index < m->n_out ? m->names[m->n_in + index] : "?";
+        case MACE_VAR_PARAMETER: return index < m->n_par ? m->names[m->n_in + m->n_out + index] : "?";
+        case MACE_VAR_FREQUENCY: return "frequency_mode_<k>";
+        case MACE_VAR_STATE: return "a continuous state";
+        case MACE_VAR_DERIVATIVE: return "a state derivative";
+        case MACE_VAR_TIME: return "time";
+        default: return "?";
+    }
+}
+
+const char *mace_guid(const MaceModel *m) { return m->guid; }
+size_t mace_n_states(const MaceModel *m) { return m->n; }
+size_t mace_n_inputs(const MaceModel *m) { return m->n_in; }
+size_t mace_n_outputs(const MaceModel *m) { return m->n_out; }
+double mace_time(const MaceModel *m) { return m->time; }
+int mace_fast_form(const MaceModel *m) { return m->zoh ? zoh_is_fast(m->zoh) : 0; }
+double mace_fast_form_condition(const MaceModel *m) { return zoh_condition(m->zoh); }
+
+void mace_set_input(MaceModel *m, size_t k, double value) {
+    m->u[k] = value;
+    m->y_valid = 0;
+}
+
+void mace_set_parameter(MaceModel *m, size_t k, double value) {
+    m->params[k] = value;
+    m->params_changed = 1;
+}
+
+/* ---- parameters ----------------------------------------------------------------------------- */
+
+static int check_parameters(const MaceModel *m, char *err) {
+    size_t k;
+    for (k = 0; k < m->n_par; k++) {
+        const double v = m->params[k], lo = m->par_min[k], hi = m->par_max[k];
+        const char *name = m->names[m->n_in + m->n_out + k];
+        if (!isfinite(v)) {
+            snprintf(err, MACE_ERR_LEN, "parameter %s = %g is not a finite number", name, v);
+            return -1;
+        }
+        if (v < lo || v > hi) {
+            snprintf(err, MACE_ERR_LEN, "parameter %s = %.17g is outside its range [%g, %g]", name, v, lo, hi);
+            return -1;
+        }
+        if (m->par_kind[k] == PARAM_DAMPING && !(v >= 0.0 && v < 1.0)) {
+            snprintf(err, MACE_ERR_LEN, "damping ratio %s = %.17g must be >= 0 and < 1 (a critically damped mode is "
+                     "not a vibration mode)", name, v);
+            return -1;
+        }
+        if (m->par_kind[k] == PARAM_DELAY && v < 0.0) {
+            snprintf(err, MACE_ERR_LEN, "delay %s = %.17g s must be >= 0", name, v);
+            return -1;
+        }
+        if (m->par_kind[k] == PARAM_PHYSICAL && !(m->par_nominal[k] > 0.0)) {
+            snprintf(err, MACE_ERR_LEN, "model data: physical parameter %s has no positive nominal value", name);
+            return -1;
+        }
+    }
+    return 0;
+}
+
+static double signed_omega2(double f) {
+    const double w = TWO_PI * f;
+    return (f > 0.0 ? 1.0 : (f < 0.0 ? -1.0 : 0.0)) * (w * w);
+}
+
+static double signed_frequency_hz(double w2) {
+    const double sgn = w2 > 0.0 ? 1.0 : (w2 < 0.0 ? -1.0 : 0.0);
+    return sgn * sqrt(fabs(w2)) / TWO_PI;
+}
+
+/* New frequencies of all modes (m->freq) and the flexible modes' Ritz vectors phi_r (n_flex x
+ * n_flex, column k: new mode k over the nominal flexible modes); *changed = 0 means identity. */
+static int reanalyse(MaceModel *m, double *phi_r, int *changed, char *err) {
+    const size_t nf = m->n_flex;
+    double *rel = ml_zeros(&m->al, m->n_phys), *k_r = NULL, *w = NULL, *v = NULL, *score = NULL;
+    size_t *col = NULL, i, j, q;
+    int status = -1;
+    *changed = 0;
+    if (!rel) goto oom;
+    for (q = 0; q < m->n_par; q++) {
+        if (m->par_kind[q] == PARAM_PHYSICAL) {
+            rel[m->par_index[q]] = m->params[q] / m->par_nominal[q] - 1.0;
+            if (rel[m->par_index[q]] != 0.0) *changed = 1;
+        }
+    }
+    for (i = 0; i < m->n_modes; i++) m->freq[i] = signed_frequency_hz(signed_omega2(m->freq0[i]));
+    if (*changed) {
+        k_r = ml_zeros(&m->al, nf * nf);
+        w = ml_zeros(&m->al, nf);
+        v = ml_zeros(&m->al, nf * nf);
+        score = ml_zeros(&m->al, nf * nf);
+        col = (size_t *)m->al.calloc(nf + 1, sizeof(size_t));
+        if (!k_r || !w || !v || !score || !col) goto oom;
+        for (i = 0; i < nf; i++) k_r[i * nf + i] = signed_omega2(m->freq0[m->flex[i]]);
+        for (q = 0; q < m->n_phys; q++) {
+            const double *dk = m->dk + q * nf * nf;
+            if (rel[q] == 0.0) continue;
+            for (i = 0; i < nf * nf; i++) k_r[i] += rel[q] * dk[i];
+        }
+        for (i = 0; i < nf; i++)
+            for (j = 0; j < i; j++) k_r[i * nf + j] = k_r[j * nf + i] = 0.5 * (k_r[i * nf + j] + k_r[j * nf + i]);
+        if (ml_jacobi_eigh(k_r, nf, w, v) != 0) {
+            snprintf(err, MACE_ERR_LEN, "the reanalysis eigen-solution did not converge");
+            goto done;
+        }
+        for (i = 0; i < nf * nf; i++) score[i] = v[i] * v[i];
+        if (ml_assign_max(&m->al, score, nf, col) != 0) goto oom;
+        for (i = 0; i < nf; i++) { /* new mode i continues nominal mode i */
+            m->freq[m->flex[i]] = signed_frequency_hz(w[col[i]]);
+            for (j = 0; j < nf; j++) phi_r[j * nf + i] = v[j * nf + col[i]];
+        }
+    }
+    for (i = 0; i < nf; i++) {
+        const double f = m->freq[m->flex[i]];
+        if (fabs(f) < ZERO_HZ) {
+            snprintf(err, MACE_ERR_LEN, "after the reanalysis flexible mode %lu is at %g Hz, below the %g Hz of the "
+                     "zero-frequency cluster, which a native FMU reduces once at export (the pythonfmu FMU "
+                     "re-reduces it)", (unsigned long)(m->flex[i] + 1), f, ZERO_HZ);
+            goto done;
+        }
+    }
+    status = 0;
+    goto done;
+oom:
+    snprintf(err, MACE_ERR_LEN, "out of memory in the reanalysis");
+done:
+    m->al.free(rel);
+    m->al.free(k_r);
+    m->al.free(w);
+    m->al.free(v);
+    m->al.free(score);
+    m->al.free(col);
+    return status;
+}
+
+/* ---- blocks --------------------------------------------------------------------------------- */
+
+/* The modal structure block into the block-diagonal matrices at state offset ox, input offset
+ * ou, output offset oy (eq. 3.5-3.6; states: kept displacements, then kept rates, by mode). */
+static int structure_block(MaceModel *m, const double *phi_r, int changed, double *ab, double *bb, double *cb,
+                           size_t N, size_t NU, size_t ox, size_t ou, size_t oy) {
+    const size_t nm = m->n_modes, nf = m->n_flex;
+    size_t j, k, o, q, nd = 0, pos;
+    size_t *dpos = (size_t *)m->al.calloc(nm + 1, sizeof(size_t)), *rpos = (size_t *)m->al.calloc(nm + 1, sizeof(size_t));
+    double *mb = ml_zeros(&m->al, nm * m->m_s), *rows = ml_zeros(&m->al, m->n_so * nm);
+    int status = -1;
+    if (!dpos || !rpos || !mb || !rows) goto done;
+    memcpy(mb, m->modal_b, nm * m->m_s * sizeof(double));
+    memcpy(rows, m->rows, m->n_so * nm * sizeof(double));
+    if (changed) { /* Phi_R^T modal_b and rows Phi_R on the flexible modes */
+        for (k = 0; k < nf; k++) {
+            for (q = 0; q < m->m_s; q++) {
+                double acc = 0.0;
+                for (j = 0; j < nf; j++) acc += phi_r[j * nf + k] * m->modal_b[m->flex[j] * m->m_s + q];
+                mb[m->flex[k] * m->m_s + q] = acc;
+            }
+            for (o = 0; o < m->n_so; o++) {
+                double acc = 0.0;
+                for (j = 0; j < nf; j++) acc += m->rows[o * nm + m->flex[j]] * phi_r[j * nf + k];
+                rows[o * nm + m->flex[k]] = acc;
+            }
+        }
+    }
+    for (j = 0; j < nm; j++)
+        if (m->keep_disp[j]) dpos[j] = nd++;
+    pos = nd;
+    for (j = 0; j < nm; j++)
+        if (m->keep_rate[j]) rpos[j] = pos++;
+    for (j = 0; j < nm; j++) {
+        const double f = fabs(m->freq[j]) < ZERO_HZ ? 0.0 : m->freq[j];
+        const double w2 = signed_omega2(f), w = TWO_PI * fabs(f), zeta = m->params[m->damping_of[j]];
+        if (m->keep_disp[j]) {
+            ab[(ox + dpos[j]) * N + ox + rpos[j]] = 1.0;
+            ab[(ox + rpos[j]) * N + ox + dpos[j]] = -w2;
+        }
+        if (m->keep_rate[j]) {
+            ab[(ox + rpos[j]) * N + ox + rpos[j]] = -2.0 * zeta * w;
+            for (q = 0; q < m->m_s; q++) bb[(ox + rpos[j]) * NU + ou + q] = mb[j * m->m_s + q];
+        }
+    }
+    for (o = 0; o < m->n_so; o++) {
+        for (j = 0; j < nm; j++) {
+            if (m->row_is_rate[o] ? m->keep_rate[j] : m->keep_disp[j])
+                cb[(oy + o) * N + ox + (m->row_is_rate[o] ? rpos[j] : dpos[j])] = rows[o * nm + j];
+        }
+    }
+    status = 0;
+done:
+    m->al.free(dpos);
+    m->al.free(rpos);
+    m->al.free(mb);
+    m->al.free(rows);
+    return status;
+}
+
+/* [order/order] Pade approximation of exp(-s delay), as modelica_like.algebra.pade: companion
+ * form in s * delay, divided by the delay, balanced. delay 0: unit feedthrough, inert states. */
+static int pade_block(size_t n, double delay, double *a, double *b, double *c, double *d) {
+    double coef[11], den[11], num[11], scale[10], dd;
+    size_t k, i;
+    memset(a, 0, n * n * sizeof(double));
+    memset(b, 0, n * sizeof(double));
+    memset(c, 0, n * sizeof(double));
+    if (delay == 0.0) {
+        *d = 1.0;
+        return 0;
+    }
+    for (k = 0; k <= n; k++) { /* C(n, k) / ((2n)(2n-1)...(2n-k+1)): exact integers for n <= 10 */
+        double binom = 1.0, falling = 1.0;
+        for (i = 0; i < k; i++) {
+            binom = binom * (double)(n - i) / (double)(i + 1);
+            falling *= (double)(2 * n - i);
+        }
+        coef[k] = binom / falling;
+    }
+    for (k = 0; k <= n; k++) {
+        den[k] = coef[k] / coef[n];
+        num[k] = (k % 2 ? -coef[k] : coef[k]) / coef[n];
+    }
+    dd = num[n];
+    for (i = 0; i + 1 < n; i++) a[i * n + i + 1] = 1.0;
+    for (k = 0; k < n; k++) a[(n - 1) * n + k] = -den[k];
+    b[n - 1] = 1.0;
+    for (k = 0; k < n; k++) c[k] = num[k] - dd * den[k];
+    for (k = 0; k < n * n; k++) a[k] = a[k] / delay;
+    for (k = 0; k < n; k++) b[k] = b[k] / delay;
+    if (ml_balance(a, n, scale) != 0) return -1;
+    for (k = 0; k < n; k++) {
+        b[k] /= scale[k];
+        c[k] *= scale[k];
+    }
+    *d = dd;
+    return 0;
+}
+
+/* ---- the system ----------------------------------------------------------------------------- */
+
+static int assemble(MaceModel *m, const double *phi_r, int changed, char *err) {
+    const size_t N = m->n, NU = m->n_ub, NY = m->n_yb, ni = m->n_in, no = m->n_out;
+    double *ab = ml_zeros(&m->al, N * N), *bb = ml_zeros(&m->al, N * NU), *cb = ml_zeros(&m->al, NY * N);
+    double *db = ml_zeros(&m->al, NY * NU), *w = ml_zeros(&m->al, NU * NU), *rhs = ml_zeros(&m->al, NU * (N + ni));
+    double *t = ml_zeros(&m->al, (NY > NU ? NY : NU) * (N + ni));
+    size_t *piv = (size_t *)m->al.calloc(NU + 1, sizeof(size_t));
+    size_t k, i, j, ox = 0, ou = 0, oy = 0;
+    int status = -1;
+    if (!ab || !bb || !cb || !db || !w || !rhs || !t || !piv) {
+        snprintf(err, MACE_ERR_LEN, "out of memory building the system");
+        goto done;
+    }
+    for (k = 0; k < m->n_blocks; k++) {
+        const int64_t *info = m->block_info + k * N_INFO;
+        const size_t nx = (size_t)info[INFO_NX], nu = (size_t)info[INFO_NU], ny = (size_t)info[INFO_NY];
+        switch (info[INFO_KIND]) {
+            case BLOCK_STRUCTURE:
+                if (structure_block(m, phi_r, changed, ab, bb, cb, N, NU, ox, ou, oy) != 0) {
+                    snprintf(err, MACE_ERR_LEN, "out of memory building the structure block");
+                    goto done;
+                }
+                break;
+            case BLOCK_DELAY: {
+                double pa[100], pb[10], pc[10], pd;
+                if (pade_block(nx, m->params[info[INFO_P0]], pa, pb, pc, &pd) != 0) {
+                    snprintf(err, MACE_ERR_LEN, "the Pade realisation of %s failed", mace_name(m, MACE_VAR_PARAMETER,
+                             (size_t)info[INFO_P0]));
+                    goto done;
+                }
+                for (i = 0; i < nx; i++) {
+                    for (j = 0; j < nx; j++) ab[(ox + i) * N + ox + j] = pa[i * nx + j];
+                    bb[(ox + i) * NU + ou] = pb[i];
+                    cb[oy * N + ox + i] = pc[i];
+                }
+                db[oy * NU + ou] = pd;
+                break;
+            }
+            case BLOCK_GAIN: db[oy * NU + ou] = m->params[info[INFO_P0]]; break;
+            case BLOCK_PD:
+                db[oy * NU + ou] = m->params[info[INFO_P0]];
+                db[oy * NU + ou + 1] = m->params[info[INFO_P1]];
+                break;
+            default: { /* constant block */
+                const double *a = m->blk[4 * k], *b = m->blk[4 * k + 1], *c = m->blk[4 * k + 2], *d = m->blk[4 * k + 3];
+                for (i = 0; i < nx; i++) {
+                    for (j = 0; j < nx; j++) ab[(ox + i) * N + ox + j] = a[i * nx + j];
+                    for (j = 0; j < nu; j++) bb[(ox + i) * NU + ou + j] = b[i * nu + j];
+                }
+                for (i = 0; i < ny; i++) {
+                    for (j = 0; j < nx; j++) cb[(oy + i) * N + ox + j] = c[i * nx + j];
+                    for (j = 0; j < nu; j++) db[(oy + i) * NU + ou + j] = d[i * nu + j];
+                }
+            }
+        }
+        ox += nx;
+        ou += nu;
+        oy += ny;
+    }
+    /* u_b = wiring y_b + entry r: with W = (I - wiring D_b)^-1, A = A_b + B_b W wiring C_b,
+       B = B_b W entry, C = exit (C_b + D_b W wiring C_b), D = exit D_b W entry */
+    ml_matmul(NU, NY, NU, m->wiring, db, w);
+    for (i = 0; i < NU * NU; i++) w[i] = -w[i];
+    for (i = 0; i < NU; i++) w[i * NU + i] += 1.0;
+    ml_matmul(NU, NY, N, m->wiring, cb, t); /* t: NU x N, scratch */
+    for (i = 0; i < NU; i++) {
+        memcpy(rhs + i * (N + ni), t + i * N, N * sizeof(double));
+        memcpy(rhs + i * (N + ni) + N, m->entry + i * ni, ni * sizeof(double));
+    }
+    if (ml_lu(w, NU, piv) != 0) {
+        snprintf(err, MACE_ERR_LEN, "the block diagram has an algebraic loop (I - wiring D is singular)");
+        goto done;
+    }
+    ml_lu_solve(w, NU, piv, rhs, N + ni); /* rhs = W [wiring C_b | entry] */
+    memcpy(m->a, ab, N * N * sizeof(double));
+    memset(m->b, 0, N * ni * sizeof(double));
+    for (i = 0; i < N; i++) {
+        for (k = 0; k < NU; k++) {
+            const double f = bb[i * NU + k];
+            const double *row = rhs + k * (N + ni);
+            if (f == 0.0) continue;
+            for (j = 0; j < N; j++) m->a[i * N + j] += f * row[j];
+            for (j = 0; j < ni; j++) m->b[i * ni + j] += f * row[N + j];
+        }
+    }
+    ml_matmul(NY, NU, N + ni, db, rhs, t); /* D_b W [wiring C_b | entry] */
+    for (i = 0; i < NY; i++)
+        for (j = 0; j < N; j++) t[i * (N + ni) + j] += cb[i * N + j];
+    memset(m->c, 0, no * N * sizeof(double));
+    memset(m->d, 0, no * ni * sizeof(double));
+    for (i = 0; i < no; i++) {
+        for (k = 0; k < NY; k++) {
+            const double f = m->exit_[i * NY + k];
+            if (f == 0.0) continue;
+            for (j = 0; j < N; j++) m->c[i * N + j] += f * t[k * (N + ni) + j];
+            for (j = 0; j < ni; j++) m->d[i * ni + j] += f * t[k * (N + ni) + N + j];
+        }
+    }
+    status = 0;
+done:
+    m->al.free(ab);
+    m->al.free(bb);
+    m->al.free(cb);
+    m->al.free(db);
+    m->al.free(w);
+    m->al.free(rhs);
+    m->al.free(t);
+    m->al.free(piv);
+    return status;
+}
+
+int mace_build(MaceModel *m, char *err) {
+    double *phi_r;
+    int changed, status = -1;
+    if (m->built && !m->params_changed) return 0;
+    if (check_parameters(m, err) != 0) return -1;
+    m->params_changed = 0;
+    if (m->built && memcmp(m->params, m->built_params, m->n_par * sizeof(double)) == 0) return 0;
+    m->built = 0;
+    phi_r = ml_zeros(&m->al, m->n_flex * m->n_flex);
+    if (!phi_r) {
+        snprintf(err, MACE_ERR_LEN, "out of memory");
+        return -1;
+    }
+    if (reanalyse(m, phi_r, &changed, err) == 0 && assemble(m, phi_r, changed, err) == 0 &&
+        zoh_prepare(m->zoh, m->a, m->b, m->c, m->d, err) == 0) {
+        size_t i;
+        if (m->kind == MACE_MODEL_EXCHANGE && zoh_state_scales(m->zoh, m->nominal) != 0)
+            for (i = 0; i < m->n; i++) m->nominal[i] = 1.0;
+        memcpy(m->built_params, m->params, m->n_par * sizeof(double));
+        memset(m->s, 0, m->n * sizeof(double));
+        m->built = 1;
+        m->y_valid = m->x_valid = 0;
+        status = 0;
+    }
+    m->al.free(phi_r);
+    return status;
+}
+
+/* ---- values --------------------------------------------------------------------------------- */
+
+static const double *model_states(MaceModel *m) {
+    if (m->kind == MACE_MODEL_EXCHANGE) return m->s;
+    if (!m->x_valid) {
+        zoh_to_x(m->zoh, m->s, m->x);
+        m->x_valid = 1;
+    }
+    return m->x;
+}
+
+static const double *outputs(MaceModel *m) {
+    size_t i, k;
+    if (m->y_valid) return m->y;
+    if (m->kind == MACE_CO_SIMULATION) {
+        zoh_output(m->zoh, m->s, m->u, m->y);
+    } else {
+        for (i = 0; i < m->n_out; i++) {
+            double acc = 0.0;
+            for (k = 0; k < m->n; k++) acc += m->c[i * m->n + k] * m->s[k];
+            for (k = 0; k < m->n_in; k++) acc += m->d[i * m->n_in + k] * m->u[k];
+            m->y[i] = acc;
+        }
+    }
+    m->y_valid = 1;
+    return m->y;
+}
+
+static double derivative(MaceModel *m, const double *x, size_t i) {
+    double acc = 0.0;
+    size_t k;
+    for (k = 0; k < m->n; k++) acc += m->a[i * m->n + k] * x[k];
+    for (k = 0; k < m->n_in; k++) acc += m->b[i * m->n_in + k] * m->u[k];
+    return acc;
+}
+
+int mace_get(MaceModel *m, MaceGroup group, size_t k, double *value, char *err) {
+    if (group == MACE_VAR_INPUT) {
+        *value = m->u[k];
+        return 0;
+    }
+    if (group == MACE_VAR_PARAMETER) {
+        *value = m->params[k];
+        return 0;
+    }
+    if (group == MACE_VAR_TIME) {
+        *value = m->time;
+        return 0;
+    }
+    if (mace_build(m, err) != 0) return -1;
+    switch (group) {
+        case MACE_VAR_OUTPUT: *value = outputs(m)[k]; break;
+        case MACE_VAR_FREQUENCY: *value = m->freq[k]; break;
+        case MACE_VAR_STATE: *value = model_states(m)[k]; break;
+        case MACE_VAR_DERIVATIVE: *value = derivative(m, model_states(m), k); break;
+        default: snprintf(err, MACE_ERR_LEN, "unknown variable"); return -1;
+    }
+    return 0;
+}
+
+static int inputs_finite(const MaceModel *m, double t, char *err) {
+    size_t k, used;
+    int bad = 0;
+    for (k = 0; k < m->n_in; k++)
+        if (!isfinite(m->u[k])) bad = 1;
+    if (!bad) return 0;
+    used = (size_t)snprintf(err, MACE_ERR_LEN, "non-finite input value(s) at t = %g s:", t);
+    for (k = 0; k < m->n_in && used < MACE_ERR_LEN; k++)
+        if (!isfinite(m->u[k]))
+            used += (size_t)snprintf(err + used, MACE_ERR_LEN - used, " %s = %g", m->names[k], m->u[k]);
+    return -1;
+}
+
+int mace_do_step(MaceModel *m, double t, double h, char *err) {
+    if (!m->built) {
+        snprintf(err, MACE_ERR_LEN, "the model is not initialised");
+        return -1;
+    }
+    if (!(isfinite(t) && isfinite(h) && h >= 0.0)) {
+        snprintf(err, MACE_ERR_LEN, "step from t = %g s over %g s: need a finite time and a step >= 0", t, h);
+        return -1;
+    }
+    if (inputs_finite(m, t, err) != 0) return -1;
+    if (h > 0.0 && zoh_step(m->zoh, m->s, m->u, t, h, err) != 0) return -1;
+    m->time = t + h;
+    m->y_valid = m->x_valid = 0;
+    return 0;
+}
+
+void mace_set_time(MaceModel *m, double t) { m->time = t; }
+
+void mace_set_states(MaceModel *m, const double *x) {
+    memcpy(m->s, x, m->n * sizeof(double));
+    m->y_valid = 0;
+}
+
+void mace_get_states(MaceModel *m, double *x) { memcpy(x, m->s, m->n * sizeof(double)); }
+
+void mace_get_nominals(MaceModel *m, double *nominal) {
+    size_t i;
+    for (i = 0; i < m->n; i++) nominal[i] = m->built ? m->nominal[i] : 1.0;
+}
+
+int mace_get_derivatives(MaceModel *m, double *dx, char *err) {
+    size_t i;
+    if (mace_build(m, err) != 0) return -1;
+    if (inputs_finite(m, m->time, err) != 0) return -1;
+    for (i = 0; i < m->n; i++) dx[i] = derivative(m, m->s, i);
+    return 0;
+}
+
+/* ---- FMU state ------------------------------------------------------------------------------ */
+
+static int coordinates(const MaceModel *m) { /* 0: model states x; 1: the fast form's */
+    return m->kind == MACE_CO_SIMULATION && m->built && zoh_is_fast(m->zoh);
+}
+
+size_t mace_state_size(const MaceModel *m) {
+    return 8 * (STATE_HEADER + 1 + m->n_par + m->n_in + 2 * m->n);
+}
+
+static void put(unsigned char *buf, size_t *pos, const void *src, size_t bytes) {
+    memcpy(buf + *pos, src, bytes);
+    *pos += bytes;
+}
+
+void mace_state_save(MaceModel *m, int phase, unsigned char *buffer) {
+    uint64_t header[STATE_HEADER - 1];
+    size_t pos = 0;
+    header[0] = (uint64_t)phase;
+    header[1] = (uint64_t)m->built;
+    header[2] = (uint64_t)coordinates(m);
+    header[3] = m->n_par;
+    header[4] = m->n_in;
+    header[5] = m->n;
+    put(buffer, &pos, STATE_MAGIC, 8);
+    put(buffer, &pos, header, sizeof(header));
+    put(buffer, &pos, &m->time, 8);
+    put(buffer, &pos, m->params, 8 * m->n_par);
+    put(buffer, &pos, m->u, 8 * m->n_in);
+    put(buffer, &pos, m->s, 8 * m->n);
+    put(buffer, &pos, m->built ? model_states(m) : m->s, 8 * m->n);
+}
+
+int mace_state_load(MaceModel *m, const unsigned char *buffer, size_t size, int *phase, char *err) {
+    uint64_t header[STATE_HEADER - 1];
+    size_t pos = 8 + sizeof(header);
+    const unsigned char *vec;
+    if (size != mace_state_size(m) || memcmp(buffer, STATE_MAGIC, 8) != 0) {
+        snprintf(err, MACE_ERR_LEN, "not an FMU state of this model (%lu bytes)", (unsigned long)size);
+        return -1;
+    }
+    memcpy(header, buffer + 8, sizeof(header));
+    if (header[3] != m->n_par || header[4] != m->n_in || header[5] != m->n) {
+        snprintf(err, MACE_ERR_LEN, "not an FMU state of this model (other dimensions)");
+        return -1;
+    }
+    memcpy(&m->time, buffer + pos, 8);
+    pos += 8;
+    memcpy(m->params, buffer + pos, 8 * m->n_par);
+    m->params_changed = 1;
+    pos += 8 * m->n_par;
+    memcpy(m->u, buffer + pos, 8 * m->n_in);
+    pos += 8 * m->n_in;
+    vec = buffer + pos;
+    m->y_valid = m->x_valid = 0;
+    if (header[1]) {
+        if (mace_build(m, err) != 0) return -1;
+        if ((int)header[2] == coordinates(m)) {
+            memcpy(m->s, vec, 8 * m->n);
+        } else {
+            memcpy(m->x, vec + 8 * m->n, 8 * m->n);
+            if (m->kind == MACE_CO_SIMULATION) {
+                zoh_from_x(m->zoh, m->x, m->s);
+            } else {
+                memcpy(m->s, m->x, 8 * m->n);
+            }
+        }
+    } else {
+        memset(m->s, 0, 8 * m->n);
+    }
+    *phase = (int)header[0];
+    return 0;
+}

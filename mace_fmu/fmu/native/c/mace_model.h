@@ -1,0 +1,82 @@
+/* The model core of the MACE FMU runtime, independent of the FMI version.
+ *
+ * A model is the data file resources/mace_model.bin written by mace_fmu.fmu.native.resource:
+ * the blocks and wiring of a volts-volts block diagram, the retained modes and their stiffness
+ * sensitivities. mace_build turns the parameter vector into (A, B, C, D) as
+ * mace_fmu.iomodel.parametric.ParametricSystem does, then prepares the exact zero-order-hold
+ * step (co-simulation) or the derivatives (model exchange).
+ *
+ * Functions that can fail return 0 or -1 and write a one-line reason into err (MACE_ERR_LEN).
+ */
+#ifndef MACE_MODEL_H
+#define MACE_MODEL_H
+
+#include <stddef.h>
+
+#include "mace_linalg.h"
+
+#define MACE_ERR_LEN 1024
+#define MACE_RUNTIME_VERSION "1.0"
+#define MACE_DATA_FILE "mace_model.bin"
+
+typedef enum { MACE_CO_SIMULATION = 0, MACE_MODEL_EXCHANGE = 1 } MaceKind;
+
+/* Variables by value reference: inputs, outputs, parameters, calculated frequencies,
+ * continuous states, their derivatives and the time (FMI 3's independent variable), in that order. */
+typedef enum {
+    MACE_VAR_UNKNOWN = -1,
+    MACE_VAR_INPUT = 0,
+    MACE_VAR_OUTPUT,
+    MACE_VAR_PARAMETER,
+    MACE_VAR_FREQUENCY,
+    MACE_VAR_STATE,
+    MACE_VAR_DERIVATIVE,
+    MACE_VAR_TIME
+} MaceGroup;
+
+typedef struct MaceModel MaceModel;
+
+MaceModel *mace_create(const char *resource_dir, MaceKind kind, const MaceAlloc *al, char *err);
+void mace_destroy(MaceModel *m);
+/* Back to the state after mace_create: nominal parameters, zero inputs and state, time 0. */
+void mace_reset(MaceModel *m);
+
+MaceGroup mace_variable(const MaceModel *m, unsigned long long vr, size_t *index);
+const char *mace_name(const MaceModel *m, MaceGroup group, size_t index);
+/* The GUID (FMI 2) or instantiation token (FMI 3) of the FMU the data were written for. */
+const char *mace_guid(const MaceModel *m);
+size_t mace_n_states(const MaceModel *m);
+size_t mace_n_inputs(const MaceModel *m);
+size_t mace_n_outputs(const MaceModel *m);
+
+void mace_set_input(MaceModel *m, size_t k, double value);
+void mace_set_parameter(MaceModel *m, size_t k, double value);
+/* Value of a variable; builds the system first if the parameters changed since the last build. */
+int mace_get(MaceModel *m, MaceGroup group, size_t k, double *value, char *err);
+
+/* Checks the parameters and rebuilds the system if they changed since the last build. */
+int mace_build(MaceModel *m, char *err);
+/* 1 if the stepping uses the decoupled modal form, 0 for the dense matrix exponential. */
+int mace_fast_form(const MaceModel *m);
+/* Condition number of the decoupled modal form's transformation (1 for the dense form). */
+double mace_fast_form_condition(const MaceModel *m);
+
+/* Co-simulation: the exact zero-order-hold step from t over h seconds with the held inputs. */
+int mace_do_step(MaceModel *m, double t, double h, char *err);
+double mace_time(const MaceModel *m);
+
+/* Model exchange. */
+void mace_set_time(MaceModel *m, double t);
+void mace_set_states(MaceModel *m, const double *x);
+void mace_get_states(MaceModel *m, double *x);
+int mace_get_derivatives(MaceModel *m, double *dx, char *err);
+/* Nominal values of the states (their typical size; 1 before the first build). */
+void mace_get_nominals(MaceModel *m, double *nominal);
+
+/* FMU state as a byte string: the caller's phase (its state machine), time, parameters,
+ * inputs and the state vector (in stepping and in model coordinates). */
+size_t mace_state_size(const MaceModel *m);
+void mace_state_save(MaceModel *m, int phase, unsigned char *buffer);
+int mace_state_load(MaceModel *m, const unsigned char *buffer, size_t size, int *phase, char *err);
+
+#endif

@@ -1,0 +1,92 @@
+"""Package a volts-volts model as a native FMU: the versioned C runtime plus the model as data.
+
+No code is generated per model: the runtime (``mace_fmu/fmu/native/c``, compiled once per
+process) reads ``resources/mace_model.bin`` (see :mod:`mace_fmu.fmu.native.resource`) and rebuilds
+the model for its parameters at initialisation. FMI 2.0 FMUs offer co-simulation and model
+exchange; FMI 3.0 FMUs co-simulation. Each carries ``binaries/`` for Linux x86-64 (and Windows
+x86-64 where a mingw-w64 cross-compiler is installed) and ``sources/`` so that a host on another
+platform can build its own binary (e.g. ``fmpy.build.build_platform_binary``).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import re
+import uuid
+import zipfile
+from importlib import metadata
+from pathlib import Path
+from typing import Literal
+
+import numpy as np
+
+from mace_fmu.atomic import atomic_path
+from mace_fmu.errors import MaceError
+from mace_fmu.fmu.native import compile as runtime
+from mace_fmu.fmu.native.model_description import (fmi2_model_description, fmi3_build_description,
+                                                   fmi3_model_description, fmu_variables)
+from mace_fmu.fmu.native.resource import resource_bytes, runtime_arrays
+from mace_fmu.fmu.variables import model_summary
+from mace_fmu.iomodel.parametric import ParametricSystem
+from mace_fmu.iomodel.parametric_data import parametric_arrays
+from mace_fmu.iomodel.volts import VoltsModel
+
+FmiVersion = Literal[2, 3]
+RESOURCE_NAME = "mace_model.bin"
+
+
+def _token(data: dict, fmi_version: int) -> str:
+    """A GUID / instantiation token that changes with the model data, the FMI version and the runtime."""
+    h = hashlib.sha256(f"fmi{fmi_version}".encode())
+    for path in runtime.source_files():
+        h.update(path.read_bytes())
+    h.update(resource_bytes(data))
+    return "{" + str(uuid.UUID(bytes=h.digest()[:16])) + "}"
+
+
+def export_native_fmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str | None = None,
+                      fmi_version: FmiVersion = 2, arrays: dict[str, np.ndarray] | None = None) -> Path:
+    """Write ``out_dir/<name>.fmu`` (default MACE_1g / MACE_0g), a native FMU, and return its path;
+    ``arrays``: the model's parametric arrays if already computed."""
+    kind = model.structure_modes.structure.kind
+    name = name or f"MACE_{kind}"
+    if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", name):
+        raise MaceError(f"FMU name must be a C identifier (it names the model and its binary), got {name!r}")
+    if fmi_version not in (2, 3):
+        raise MaceError(f"native FMUs are FMI 2 or FMI 3, got FMI version {fmi_version!r}")
+    arrays = parametric_arrays(model) if arrays is None else arrays
+    reference = ParametricSystem(arrays)
+    reference.build(reference.nominal)
+    data = runtime_arrays(arrays)
+    if int(data["counts"][7]) != len(reference.state_names):
+        raise MaceError(f"native FMU: the runtime data describe {int(data['counts'][7])} states, the model has "
+                        f"{len(reference.state_names)}")
+    token = _token(data, fmi_version)
+    data["guid"] = [token]
+    variables = fmu_variables(arrays, reference.state_names)
+    version = metadata.version("mace-fmu")
+    sources = runtime.source_files()
+    c_files = [p.name for p in sources if p.suffix == ".c"]
+    platforms = [p for p in (runtime.LINUX64, runtime.WIN64) if p is runtime.LINUX64 or runtime.available(p)]
+    binaries = runtime.compile_runtimes(platforms)
+    if fmi_version == 2:
+        description = fmi2_model_description(variables, model_identifier=name, guid=token,
+                                             description=model_summary(model), version=version, source_files=c_files)
+    else:
+        description = fmi3_model_description(variables, model_identifier=name, token=token,
+                                             description=model_summary(model), version=version)
+    out = Path(out_dir)
+    final = out / f"{name}.fmu"
+    with atomic_path(final) as part:
+        with zipfile.ZipFile(part, "w", zipfile.ZIP_DEFLATED) as z:
+            z.writestr("modelDescription.xml", description)
+            z.writestr(f"resources/{RESOURCE_NAME}", resource_bytes(data))
+            for platform, binary in binaries.items():
+                folder = platform.fmi2_folder if fmi_version == 2 else platform.fmi3_folder
+                z.writestr(f"binaries/{folder}/{name}{platform.suffix}", binary)
+            for path in sources:
+                z.write(path, f"sources/{path.name}")
+            if fmi_version == 3:
+                z.writestr("sources/buildDescription.xml",
+                           fmi3_build_description(model_identifier=name, source_files=c_files))
+    return final

@@ -1,0 +1,182 @@
+"""Model descriptions of native FMUs: FMI 2.0 (co-simulation and model exchange) and FMI 3.0 (co-simulation).
+
+Value references follow the runtime's order (mace_model.h): inputs, outputs, parameters,
+calculated frequencies, then (FMI 2, for model exchange) the continuous states and their
+derivatives. Names, units and descriptions are those of the pythonfmu FMU.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from xml.etree import ElementTree as ET
+
+import numpy as np
+
+from mace_fmu.fmu.variables import DEFAULT_EXPERIMENT, variable_unit
+
+LOG_CATEGORIES = (("logStatusError", "errors (always logged)"), ("logEvents", "debug information"))
+
+
+@dataclass(frozen=True)
+class FmuVariable:
+    """One scalar Real/Float64 variable of a native FMU."""
+
+    name: str
+    value_reference: int
+    causality: str  #: input, output, parameter, calculatedParameter or local
+    variability: str  #: continuous or fixed
+    description: str
+    initial: str | None = None
+    start: float | None = None
+    unit: str | None = None
+    minimum: float | None = None
+    maximum: float | None = None
+    derivative_of: int | None = None  #: 1-based index (FMI 2) of the state this is the derivative of
+
+
+def fmu_variables(arrays: Mapping[str, np.ndarray], state_names: Sequence[str]) -> list[FmuVariable]:
+    """All variables in value-reference order, from a ParametricSystem's arrays and its state names."""
+    out: list[FmuVariable] = []
+
+    def add(**kw) -> None:
+        name, causality = kw["name"], kw["causality"]
+        out.append(FmuVariable(value_reference=len(out), unit=variable_unit(name, causality), **kw))
+
+    for name, desc in zip(arrays["inputs"], arrays["input_descriptions"]):
+        add(name=str(name), causality="input", variability="continuous", description=str(desc), start=0.0)
+    for name, desc in zip(arrays["outputs"], arrays["output_descriptions"]):
+        add(name=str(name), causality="output", variability="continuous", description=str(desc))
+    for name, desc, value, lo, hi in zip(arrays["param_names"], arrays["param_descriptions"], arrays["param_values"],
+                                         arrays["param_min"], arrays["param_max"]):
+        add(name=str(name), causality="parameter", variability="fixed", description=str(desc), initial="exact",
+            start=float(value), minimum=float(lo) if np.isfinite(lo) else None,
+            maximum=float(hi) if np.isfinite(hi) else None)
+    for k, label in enumerate(arrays["mode_labels"]):
+        add(name=f"frequency_mode_{k + 1}", causality="calculatedParameter", variability="fixed", initial="calculated",
+            description=f"natural frequency [Hz] of mode {k + 1} ({label}) after reanalysis (the mode it continues "
+                        "into, not the k-th lowest)")
+    first_state = len(out)
+    for name in state_names:
+        add(name=str(name), causality="local", variability="continuous", initial="calculated",
+            description="continuous state (model exchange)")
+    for k, name in enumerate(state_names):
+        add(name=f"der({name})", causality="local", variability="continuous", initial="calculated",
+            description=f"time derivative of {name}", derivative_of=first_state + k + 1)
+    out.append(FmuVariable(name="time", value_reference=len(out), causality="independent", variability="continuous",
+                           description="simulation time", unit="s"))
+    return out
+
+
+def _number(value: float) -> str:
+    return repr(float(value))
+
+
+def _root(fmi_version: str, *, model_name: str, token_attribute: str, token: str, description: str,
+          version: str) -> ET.Element:
+    return ET.Element("fmiModelDescription", {
+        "fmiVersion": fmi_version, "modelName": model_name, token_attribute: token, "description": description,
+        "author": "mace-fmu", "version": version, "generationTool": f"mace-fmu {version} (native runtime)",
+        "variableNamingConvention": "flat"})
+
+
+def _common_elements(root: ET.Element, variables: Sequence[FmuVariable]) -> None:
+    units = ET.SubElement(root, "UnitDefinitions")
+    for unit in sorted({v.unit for v in variables if v.unit}):
+        ET.SubElement(units, "Unit", name=unit)
+    categories = ET.SubElement(root, "LogCategories")
+    for name, text in LOG_CATEGORIES:
+        ET.SubElement(categories, "Category", name=name, description=text)
+    ET.SubElement(root, "DefaultExperiment", DEFAULT_EXPERIMENT)
+
+
+def _attributes(v: FmuVariable) -> tuple[dict[str, str], dict[str, str]]:
+    """(variable attributes, attributes of its type element: unit, start, min, max, derivative)."""
+    attrs = {"name": v.name, "valueReference": str(v.value_reference), "description": v.description,
+             "causality": v.causality, "variability": v.variability}
+    if v.initial and not (v.causality == "parameter" and v.initial == "exact"):
+        attrs["initial"] = v.initial
+    values = {"start": v.start, "min": v.minimum, "max": v.maximum}
+    typed = {"unit": v.unit} if v.unit else {}
+    typed.update({k: _number(x) for k, x in values.items() if x is not None})
+    if v.derivative_of is not None:
+        typed["derivative"] = str(v.derivative_of)
+    return attrs, typed
+
+
+def fmi2_model_description(variables: Sequence[FmuVariable], *, model_identifier: str, guid: str, description: str,
+                           version: str, source_files: Sequence[str]) -> bytes:
+    """modelDescription.xml of an FMI 2.0 FMU with co-simulation and model exchange."""
+    variables = [v for v in variables if v.causality != "independent"]  # FMI 2: time is implicit
+    root = _root("2.0", model_name=model_identifier, token_attribute="guid", token=guid, description=description,
+                 version=version)
+    root.set("numberOfEventIndicators", "0")
+    capabilities = {"modelIdentifier": model_identifier, "canGetAndSetFMUstate": "true",
+                    "canSerializeFMUstate": "true", "canNotUseMemoryManagementFunctions": "false"}
+    interfaces = (("ModelExchange", {"completedIntegratorStepNotNeeded": "true"}),
+                  ("CoSimulation", {"canHandleVariableCommunicationStepSize": "true", "canInterpolateInputs": "false",
+                                    "maxOutputDerivativeOrder": "0"}))
+    for tag, extra in interfaces:
+        element = ET.SubElement(root, tag, {**capabilities, **extra})
+        sources = ET.SubElement(element, "SourceFiles")
+        for name in source_files:
+            ET.SubElement(sources, "File", name=name)
+    _common_elements(root, variables)
+    model_variables = ET.SubElement(root, "ModelVariables")
+    for v in variables:
+        attrs, typed = _attributes(v)
+        scalar = ET.SubElement(model_variables, "ScalarVariable", attrs)
+        ET.SubElement(scalar, "Real", typed)
+    structure = ET.SubElement(root, "ModelStructure")
+    index = {v.value_reference: k + 1 for k, v in enumerate(variables)}
+    outputs = ET.SubElement(structure, "Outputs")
+    for v in variables:
+        if v.causality == "output":
+            ET.SubElement(outputs, "Unknown", index=str(index[v.value_reference]))
+    derivatives = ET.SubElement(structure, "Derivatives")
+    for v in variables:
+        if v.derivative_of is not None:
+            ET.SubElement(derivatives, "Unknown", index=str(index[v.value_reference]))
+    initial = ET.SubElement(structure, "InitialUnknowns")
+    for v in variables:
+        if v.causality in ("output", "calculatedParameter", "local"):
+            ET.SubElement(initial, "Unknown", index=str(index[v.value_reference]))
+    ET.indent(root)
+    return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
+
+
+def fmi3_model_description(variables: Sequence[FmuVariable], *, model_identifier: str, token: str, description: str,
+                           version: str) -> bytes:
+    """modelDescription.xml of an FMI 3.0 co-simulation FMU (no continuous states exposed)."""
+    root = _root("3.0", model_name=model_identifier, token_attribute="instantiationToken", token=token,
+                 description=description, version=version)
+    ET.SubElement(root, "CoSimulation", {
+        "modelIdentifier": model_identifier, "canGetAndSetFMUState": "true", "canSerializeFMUState": "true",
+        "canHandleVariableCommunicationStepSize": "true", "providesIntermediateUpdate": "false",
+        "canReturnEarlyAfterIntermediateUpdate": "false", "hasEventMode": "false", "maxOutputDerivativeOrder": "0"})
+    scalars = [v for v in variables if v.causality != "local"]  # FMI 3: time (independent) included
+    _common_elements(root, scalars)
+    model_variables = ET.SubElement(root, "ModelVariables")
+    for v in scalars:
+        attrs, typed = _attributes(v)
+        ET.SubElement(model_variables, "Float64", {**attrs, **typed})
+    structure = ET.SubElement(root, "ModelStructure")
+    for v in scalars:
+        if v.causality == "output":
+            ET.SubElement(structure, "Output", valueReference=str(v.value_reference))
+    for v in scalars:
+        if v.causality in ("output", "calculatedParameter"):
+            ET.SubElement(structure, "InitialUnknown", valueReference=str(v.value_reference))
+    ET.indent(root)
+    return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
+
+
+def fmi3_build_description(*, model_identifier: str, source_files: Sequence[str]) -> bytes:
+    """sources/buildDescription.xml of an FMI 3.0 FMU: how to compile its C sources."""
+    root = ET.Element("fmiBuildDescription", fmiVersion="3.0")
+    configuration = ET.SubElement(root, "BuildConfiguration", modelIdentifier=model_identifier)
+    files = ET.SubElement(configuration, "SourceFileSet", language="C99")
+    for name in source_files:
+        ET.SubElement(files, "SourceFile", name=name)
+    ET.indent(root)
+    return ET.tostring(root, encoding="UTF-8", xml_declaration=True)

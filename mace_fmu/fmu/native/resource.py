@@ -1,0 +1,165 @@
+"""The data a native FMU's C runtime reads (``resources/mace_model.bin``), made from a model's arrays.
+
+The contract is the array set of :func:`mace_fmu.iomodel.parametric_data.parametric_arrays`,
+which :class:`~mace_fmu.iomodel.parametric.ParametricSystem` turns into (A, B, C, D). The runtime
+repeats that rebuild in C with one step done here, once: the zero-frequency cluster (rigid
+bodies, mechanisms) is rotated and reduced by the rules of :mod:`mace_fmu.iomodel.modal_core`.
+A stiffness change cannot move those modes (their sensitivities are zero in the arrays), so the
+reduction the reference recomputes at every build is the same each time.
+
+File layout (little-endian, see mace_data.c): ``MACEFMU1``, u32 format version, u32 entry count, then per entry
+u32 name length, name, u32 type (1 float64, 2 int64, 3 NUL-separated UTF-8 strings), u32 ndim,
+u64 dims, zero padding to 8 bytes, the data, zero padding to 8 bytes.
+"""
+
+from __future__ import annotations
+
+import struct
+from collections.abc import Mapping
+
+import numpy as np
+
+from mace_fmu.errors import MaceError
+from mace_fmu.iomodel.modal_core import ZERO_HZ, reduce_zero_cluster
+
+MAGIC = b"MACEFMU1"
+FORMAT_VERSION = 1
+MAX_PADE_ORDER = 10  #: the runtime's Pade coefficients are exact integer ratios up to this order
+BLOCK_KINDS = {"structure": 0, "const": 1, "delay": 2, "gain": 3, "pd": 4}
+PARAMETER_KINDS = {"damping": 0, "delay": 1, "gain": 2, "physical": 3}
+_FLOAT, _INT, _TEXT = 1, 2, 3
+
+
+def _zero_cluster_reduced(arrays: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """Modal input rows, structure output rows and kept states after the nominal zero-cluster reduction."""
+    freq = np.asarray(arrays["frequencies_hz"], dtype=float)
+    n = len(freq)
+    zero = np.flatnonzero(np.abs(freq) < ZERO_HZ)
+    disp = {str(k): np.asarray(v, dtype=float) for k, v in zip(arrays["disp_names"], arrays["disp_rows"])}
+    rate = {str(k): np.asarray(v, dtype=float) for k, v in zip(arrays["rate_names"], arrays["rate_rows"])}
+    motion = {str(k): np.asarray(v, dtype=float) for k, v in zip(arrays["motion_names"], arrays["motion_rows"])}
+    labels = tuple(str(x) for x in arrays["mode_labels"])
+    _, _, modal_b, n_ctrl, n_kept, _ = reduce_zero_cluster(zero, np.zeros((0, n)), labels,
+                                                           np.asarray(arrays["modal_b"], dtype=float),
+                                                           disp, rate, motion)
+    keep_disp, keep_rate = np.ones(n, dtype=np.int64), np.ones(n, dtype=np.int64)
+    keep_rate[zero[n_ctrl:]] = 0
+    keep_disp[zero[n_kept:]] = 0
+    rows, is_rate = [], []
+    for name in (str(x) for x in arrays["structure_outputs"]):
+        if name in disp or name in motion:
+            rows.append(disp[name] if name in disp else motion[name])
+            is_rate.append(0)
+        else:
+            rows.append(rate[name])
+            is_rate.append(1)
+    return {"modal_b": modal_b, "struct_rows": np.array(rows).reshape(len(rows), n),
+            "struct_row_is_rate": np.array(is_rate, dtype=np.int64), "keep_disp": keep_disp,
+            "keep_rate": keep_rate, "flexible": np.flatnonzero(np.abs(freq) >= ZERO_HZ).astype(np.int64)}
+
+
+def runtime_arrays(arrays: Mapping[str, np.ndarray]) -> dict[str, np.ndarray | list[str]]:
+    """The C runtime's arrays (see the module docstring) from a ParametricSystem's ``arrays``."""
+    names = [str(x) for x in arrays["param_names"]]
+    index = {name: k for k, name in enumerate(names)}
+    physical = [str(x) for x in arrays["physical_names"]]
+    pade_order = int(arrays["pade_order"])
+    if not 1 <= pade_order <= MAX_PADE_ORDER:
+        raise MaceError(f"native FMU: Pade order must be 1..{MAX_PADE_ORDER}, got {pade_order}")
+    n_modes = len(arrays["frequencies_hz"])
+    cluster = _zero_cluster_reduced(arrays)
+    flexible = cluster["flexible"]
+    n_states_structure = int(cluster["keep_disp"].sum() + cluster["keep_rate"].sum())
+
+    kinds = [str(k) for k in arrays["block_kinds"]]
+    info, blocks = [], {}
+    delay_params = set()
+    for i, (kind, param) in enumerate(zip(kinds, (str(p) for p in arrays["block_params"]))):
+        p0 = p1 = -1
+        if kind == "structure":
+            n_x, n_u, n_y = n_states_structure, cluster["modal_b"].shape[1], len(arrays["structure_outputs"])
+        elif kind == "delay":
+            n_x, n_u, n_y, p0 = pade_order, 1, 1, index[param]
+            delay_params.add(param)
+        elif kind == "gain":
+            n_x, n_u, n_y, p0 = 0, 1, 1, index[param]
+        elif kind == "pd":
+            n_x, n_u, n_y = 0, 2, 1
+            p0, p1 = (index[p] for p in param.split(","))
+        elif kind == "const":
+            n_y, n_u = np.asarray(arrays[f"block{i}_D"]).shape
+            n_x = int(np.asarray(arrays[f"block{i}_A"]).shape[0])
+            for m, shape in zip("ABCD", ((n_x, n_x), (n_x, n_u), (n_y, n_x), (n_y, n_u))):
+                blocks[f"block{i}_{m}"] = np.asarray(arrays[f"block{i}_{m}"], dtype=float).reshape(shape)
+        else:
+            raise MaceError(f"native FMU: block {i} has the unknown kind {kind!r}")
+        info.append([BLOCK_KINDS[kind], n_x, n_u, n_y, p0, p1])
+    info = np.array(info, dtype=np.int64)
+    if info[:, 2].sum() != arrays["wiring"].shape[0] or info[:, 3].sum() != arrays["wiring"].shape[1]:
+        raise MaceError("native FMU: block inputs/outputs do not match the wiring matrix")
+
+    par_kind, par_index = [], []
+    for name in names:
+        if name.startswith("damping_mode_"):
+            par_kind.append(PARAMETER_KINDS["damping"]), par_index.append(int(name.rsplit("_", 1)[1]) - 1)
+        elif name in physical:
+            par_kind.append(PARAMETER_KINDS["physical"]), par_index.append(physical.index(name))
+        elif name in delay_params:
+            par_kind.append(PARAMETER_KINDS["delay"]), par_index.append(-1)
+        else:
+            par_kind.append(PARAMETER_KINDS["gain"]), par_index.append(-1)
+    n_in, n_out = len(arrays["inputs"]), len(arrays["outputs"])
+    n_states = int(info[:, 1].sum())
+    dk = np.asarray(arrays["physical_dk"], dtype=float)[:, flexible][:, :, flexible]
+    counts = [n_in, n_out, len(names), n_modes, len(flexible), len(kinds), pade_order, n_states,
+              len(arrays["structure_outputs"]), cluster["modal_b"].shape[1], len(physical),
+              arrays["wiring"].shape[0], arrays["wiring"].shape[1]]
+    out: dict[str, np.ndarray | list[str]] = {
+        "format_version": np.array([FORMAT_VERSION], dtype=np.int64),
+        "counts": np.array(counts, dtype=np.int64),
+        "param_nominal": np.asarray(arrays["param_values"], dtype=float),
+        "param_min": np.asarray(arrays["param_min"], dtype=float),
+        "param_max": np.asarray(arrays["param_max"], dtype=float),
+        "param_kind": np.array(par_kind, dtype=np.int64), "param_index": np.array(par_index, dtype=np.int64),
+        "frequencies_hz": np.asarray(arrays["frequencies_hz"], dtype=float),
+        "physical_dk": dk.reshape(len(physical), len(flexible), len(flexible)),
+        "block_info": info, "wiring": np.asarray(arrays["wiring"], dtype=float),
+        "entry": np.asarray(arrays["entry"], dtype=float), "exit": np.asarray(arrays["exit"], dtype=float),
+        "input_names": [str(x) for x in arrays["inputs"]], "output_names": [str(x) for x in arrays["outputs"]],
+        "param_names": names,
+    }
+    out.update(cluster)
+    out.update(blocks)
+    return out
+
+
+def resource_bytes(arrays: Mapping[str, np.ndarray | list[str]]) -> bytes:
+    """``arrays`` (float64, int64 or lists of strings) in the runtime's file layout."""
+    chunks = [MAGIC, struct.pack("<II", FORMAT_VERSION, len(arrays))]
+    size = len(MAGIC) + 8
+
+    def add(data: bytes) -> None:
+        nonlocal size
+        chunks.append(data)
+        size += len(data)
+
+    def pad() -> None:
+        add(b"\0" * (-size % 8))
+
+    for name, value in arrays.items():
+        key = name.encode()
+        if isinstance(value, list):
+            kind, data, dims = _TEXT, b"".join(s.encode() + b"\0" for s in value), (len(value),)
+        else:
+            value = np.asarray(value)
+            kind = _FLOAT if value.dtype.kind == "f" else _INT
+            data = np.ascontiguousarray(value, dtype="<f8" if kind == _FLOAT else "<i8").tobytes()
+            dims = value.shape
+        add(struct.pack("<I", len(key)) + key + struct.pack("<II", kind, len(dims)))
+        add(struct.pack(f"<{len(dims)}Q", *dims))
+        if kind == _TEXT:
+            add(struct.pack("<Q", len(data)))  # byte length of the strings
+        pad()
+        add(data)
+        pad()
+    return b"".join(chunks)

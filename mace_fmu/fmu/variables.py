@@ -1,0 +1,27 @@
+"""What both FMU kinds (pythonfmu and native) say about a model: units, summary, default experiment."""
+
+from __future__ import annotations
+
+from mace_fmu.iomodel.motion import motion_unit, parse_motion_output
+from mace_fmu.iomodel.volts import VoltsModel
+
+DEFAULT_EXPERIMENT = {"startTime": "0.0", "stopTime": "10.0", "stepSize": "0.002"}
+_UNITS = (("E_", "Pa"), ("k_", "N/m"), ("delay_", "s"), ("damping_mode_", "1"), ("K_a", "V/deg"),
+          ("K_r", "V/(deg/s)"), ("K_f", "1"), ("K_b", "1"), ("frequency_mode_", "Hz"))
+
+
+def variable_unit(name: str, causality: str) -> str | None:
+    """Unit of an FMU variable: V for inputs and outputs, m/rad for motion outputs, SI for parameters."""
+    motion = parse_motion_output(name)
+    if motion is not None:
+        return motion_unit(motion[1])
+    if causality in ("input", "output"):
+        return "V"
+    return next((u for prefix, u in _UNITS if name.startswith(prefix)), None)
+
+
+def model_summary(model: VoltsModel) -> str:
+    """One-line description of a volts-volts model for an FMU's model description."""
+    kind, sys_ = model.structure_modes.structure.kind, model.system
+    return (f"MACE {kind} volts-volts model: {sys_.nstates} states; servos {'closed' if model.servos else 'open'}, "
+            f"Bessel filters {model.bessel}, delays {'on' if model.delays else 'off'}")

@@ -1,0 +1,94 @@
+"""Shared checks of FMUs (pythonfmu and native) against the models' exact zero-order-hold responses."""
+
+from __future__ import annotations
+
+import control as ct
+import fmpy
+import numpy as np
+from fmpy.fmi2 import FMU2Slave
+
+DURATION = 1.0
+
+
+def make_inputs(kind: str, t: np.ndarray, n_inputs: int) -> np.ndarray:
+    """(n_inputs, len(t)) test inputs [V], a different one on every channel."""
+    k = np.arange(n_inputs)[:, None]
+    if kind == "step":
+        return (0.1 + 0.05 * k) * (t[None, :] >= 0.01)
+    if kind == "chirp":  # 0.1 -> 250 Hz, linear sweep over the run
+        f0, f1 = 0.1, 250.0
+        phase = 2 * np.pi * (f0 * t + 0.5 * (f1 - f0) / DURATION * t**2)
+        return 0.2 * np.sin(phase[None, :] + k)
+    rng = np.random.default_rng(7)
+    freqs = np.geomspace(0.2, 200.0, 15)
+    phases = rng.uniform(0, 2 * np.pi, (n_inputs, len(freqs)))
+    return 0.1 * np.sum(np.sin(2 * np.pi * freqs[None, :, None] * t[None, None, :] + phases[:, :, None]), axis=1)
+
+
+def zoh_reference(model, t: np.ndarray, u: np.ndarray) -> np.ndarray:
+    """Exact ZOH response of the state-space model, sampled where the FMU reports."""
+    steps = np.diff(t)
+    if np.allclose(steps, steps[0]):
+        return ct.forced_response(ct.sample_system(model.system, steps[0], "zoh"), T=t, U=u).outputs
+    x = np.zeros(model.system.nstates)
+    y = [model.system.C @ x + model.system.D @ u[:, 0]]
+    for k, h in enumerate(steps):  # an independent discretization for every step size
+        d = ct.sample_system(model.system, h, "zoh")
+        x = d.A @ x + d.B @ u[:, k]
+        y.append(model.system.C @ x + model.system.D @ u[:, k])
+    return np.array(y).T
+
+
+def check_close(model, y: np.ndarray, ref: np.ndarray) -> None:
+    span = np.ptp(ref, axis=1, keepdims=True)
+    assert np.all(span > 0), "every output must move, or the comparison proves nothing"
+    assert np.max(np.abs(y - ref) / span) <= 1e-8
+
+
+def nominal_slave(model, unzipped, name="instance") -> FMU2Slave:
+    md = fmpy.read_model_description(unzipped)
+    fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzipped, modelIdentifier=md.coSimulation.modelIdentifier,
+                    instanceName=name)
+    fmu.instantiate()
+    fmu.setupExperiment(startTime=0.0)
+    fmu.enterInitializationMode()
+    fmu.exitInitializationMode()
+    return fmu
+
+
+def value_references(unzipped):
+    md = fmpy.read_model_description(unzipped)
+    return ({v.name: v.valueReference for v in md.modelVariables if v.causality == "input"},
+            {v.name: v.valueReference for v in md.modelVariables if v.causality == "output"})
+
+
+def run_steps(model, fmu, unzipped, t, u):
+    ins, outs = value_references(unzipped)
+    in_vr = [ins[n] for n in model.system.input_labels]
+    out_vr = [outs[n] for n in model.system.output_labels]
+    y = [fmu.getReal(out_vr)]
+    for k in range(len(t) - 1):
+        fmu.setReal(in_vr, list(u[:, k]))
+        fmu.doStep(currentCommunicationPoint=t[k], communicationStepSize=t[k + 1] - t[k])
+        y.append(fmu.getReal(out_vr))
+    return np.array(y).T
+
+
+def rss_bytes() -> int:
+    """Resident set size of this process (Linux)."""
+    with open("/proc/self/statm") as f:
+        return int(f.read().split()[1]) * __import__("os").sysconf("SC_PAGE_SIZE")
+
+
+def initialised_slave(model, unzipped, start: dict[str, float], name="params") -> FMU2Slave:
+    """An FMU instance initialised with the given parameter values."""
+    md = fmpy.read_model_description(unzipped)
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzipped, modelIdentifier=md.coSimulation.modelIdentifier,
+                    instanceName=name)
+    fmu.instantiate()
+    fmu.setupExperiment(startTime=0.0)
+    fmu.enterInitializationMode()
+    fmu.setReal([vr[k] for k in start], list(start.values()))
+    fmu.exitInitializationMode()
+    return fmu
