@@ -15,7 +15,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 from functools import cached_property
-from typing import Literal, Mapping, Sequence
+from typing import Literal, Sequence
 
 import control as ct
 import numpy as np

@@ -21,7 +21,7 @@ from mace_fmu.fe.preload import PreloadKind
 from mace_fmu.parameters import DAMPING_PREFIX, ParameterSet, Provenance, deck_fingerprint, now_utc, tool_version
 from mace_fmu.thesis import thesis_data
 from mace_fmu.threads import single_blas_thread
-from mace_fmu.updating.costs import ModalCost, scalar_cost
+from mace_fmu.updating.costs import ModalCost
 from mace_fmu.updating.data import MeasuredMode
 from mace_fmu.updating.mace_family import MaceFamily
 from mace_fmu.updating.selection import Selection, SelectionRule, select_parameters
@@ -328,7 +328,3 @@ def cost_history(outcome: MaceUpdate) -> list[tuple[str, float, float]]:
     """(stage/round/outer, cost before, predicted cost) per outer iteration."""
     return [(f"round {it.round + 1} {it.stage} #{it.outer + 1}", it.cost_before, it.cost_predicted)
             for it in outcome.result.history]
-
-
-def final_cost(outcome: MaceUpdate) -> float:
-    return scalar_cost(outcome.result.final_residual)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Mapping, Sequence
+from typing import Mapping
 
 import numpy as np
 
@@ -133,8 +133,3 @@ def plot_selection(selection: Selection, *, orthogonality_png: str | Path, stren
     fig.tight_layout()
     save_figure_atomic(fig, strength_png, dpi=110)
     return Path(orthogonality_png), Path(strength_png)
-
-
-def candidate_table(names: Sequence[str]) -> str:
-    """'1: E_lexan_end, 2: ...' for figure legends and reports."""
-    return ", ".join(f"{k + 1}: {n}" for k, n in enumerate(names))

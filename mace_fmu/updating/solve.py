@@ -31,10 +31,10 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from mace_fmu.errors import MaceError
+from mace_fmu.progress import ProgressCallback, Step
 from mace_fmu.threads import single_blas_thread
 from mace_fmu.updating.costs import Cost, scalar_cost
 from mace_fmu.updating.inclusion import ModelFamily, evaluator
-from mace_fmu.progress import ProgressCallback, Step
 from mace_fmu.updating.sensitivity import CostSensitivities, cost_sensitivities
 
 Method = Literal["cost-sensitivity", "full", "reanalysis", "modal-sensitivity"]
@@ -157,9 +157,9 @@ def update(family: ModelFamily, cost: Cost, *, start: Mapping[str, float], stage
         if max(abs(values[n] / before[n] - 1.0) for n in names_all) < settings.tolerance:
             break  # a whole round moved nothing: the sequence has converged
     touched = {n: values[n] for n in names_all}
-    return UpdateResult(start=dict(start), values=touched, initial_cost=initial,
-                        final_cost=scalar_cost(cost.residual(model)), initial_residual=j_start,
-                        final_residual=cost.residual(model), history=tuple(history), settings=settings,
+    j_final = cost.residual(model)
+    return UpdateResult(start=dict(start), values=touched, initial_cost=initial, final_cost=scalar_cost(j_final),
+                        initial_residual=j_start, final_residual=j_final, history=tuple(history), settings=settings,
                         seconds=time.perf_counter() - t_start, stage_seconds=stage_seconds)
 
 
@@ -223,11 +223,11 @@ def _linearise(family, cost, stage, settings, values, model, names, x_base, w, p
         scale = 1.0 / (1.0 + x_base)  # the sensitivities are per unit relative change of the base value
         jac = np.vstack([sens.matrix * scale[None, :], np.diag(w)])
 
-        def fun(x):
+        def linearised(x):
             return np.concatenate([sens.linearised((x - x_base) * scale), w * x])
 
         def solve(lo, hi):
-            sol = least_squares(fun, np.clip(x_base, lo, hi), jac=lambda x: jac, bounds=(lo, hi), loss=settings.loss,
+            sol = least_squares(linearised, np.clip(x_base, lo, hi), jac=lambda x: jac, bounds=(lo, hi), loss=settings.loss,
                                 f_scale=settings.loss_scale, x_scale=1.0)
             return sol, scalar_cost(sens.linearised((sol.x - x_base) * scale))
 
