@@ -114,7 +114,7 @@ def _kill_while_writing(folder: Path, signum: int) -> subprocess.Popen:
 
 @pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGINT, signal.SIGKILL], ids=["TERM", "INT", "KILL"])
 def test_a_build_killed_mid_way_keeps_the_previous_fmu(tmp_path: Path, signum: int) -> None:
-    final = tmp_path / "MACE_0g.fmu"
+    final = tmp_path / "MACE_0g_native.fmu"
     for _attempt in range(3):  # the temporary file exists for about a second; catch it
         final.write_bytes(PREVIOUS)
         proc = _kill_while_writing(tmp_path, signum)
@@ -125,7 +125,7 @@ def test_a_build_killed_mid_way_keeps_the_previous_fmu(tmp_path: Path, signum: i
     assert final.read_bytes() == PREVIOUS
     if signum == signal.SIGKILL:  # no chance to clean up: a hidden temporary file may stay, never the final name
         assert proc.returncode == -signal.SIGKILL
-        assert all(name.startswith(".MACE_0g.fmu.") for name in _leftovers(tmp_path))
+        assert all(name.startswith(".MACE_0g_native.fmu.") for name in _leftovers(tmp_path))
     else:
         assert proc.returncode == (128 + signum if signum == signal.SIGTERM else 130)
         assert _leftovers(tmp_path) == []
@@ -138,8 +138,8 @@ def test_two_builds_into_one_folder_leave_a_valid_fmu(tmp_path: Path) -> None:
     for proc in (first, second):
         _, err = proc.communicate(timeout=600)
         assert proc.returncode == 0, err
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["MACE_0g.fmu"]
-    with zipfile.ZipFile(tmp_path / "MACE_0g.fmu") as archive:
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["MACE_0g_native.fmu"]
+    with zipfile.ZipFile(tmp_path / "MACE_0g_native.fmu") as archive:
         assert archive.testzip() is None
-    description = read_model_description(str(tmp_path / "MACE_0g.fmu"))
-    assert description.modelName == "MACE_0g" and sum(v.causality == "input" for v in description.modelVariables) == 9
+    description = read_model_description(str(tmp_path / "MACE_0g_native.fmu"))
+    assert description.modelName == "MACE_0g_native" and sum(v.causality == "input" for v in description.modelVariables) == 9

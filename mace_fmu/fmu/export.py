@@ -47,7 +47,8 @@ def _patch_model_description(fmu: Path, *, description: str, version: str,
     root.set("generationTool", f"mace-fmu {version} ({root.get('generationTool', 'PythonFMU')})")
     used = set()
     for var in root.iter("ScalarVariable"):
-        unit = variable_unit(var.get("name"), var.get("causality"))
+        name = var.get("name")
+        unit = variable_unit(name, var.get("causality"))
         if unit is not None:
             var.find("Real").set("unit", unit)
             used.add(unit)
