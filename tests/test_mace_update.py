@@ -134,6 +134,25 @@ def test_bad_start_files_stop_before_any_work(tmp_path, capsys):
     assert not out.exists()
 
 
+def test_measured_tables_that_cannot_be_used_stop_before_any_work(tmp_path, capsys):
+    """A measured mode no model pole can be paired with, a bad number: one line naming it, status 2, nothing written."""
+    out = tmp_path / "out"
+    table = tmp_path / "modes.csv"
+    table.write_text("label,pattern,frequency_hz,damping\n1st Z bending,* Z bending,1.96,0.022\n"
+                     "2nd W bending,* W bending,9.0,0.01\n")
+    assert main(["update", "-o", str(out), "--measured", str(table)]) == 2
+    err = capsys.readouterr().err
+    assert "measured mode '2nd W bending' at 9.0 Hz: no model pole matches its pattern '* W bending'" in err
+    assert not out.exists()
+    table.write_text("label,pattern,frequency_hz,damping\n1st Z bending,* Z bending,nan,0.022\n")
+    assert main(["update", "-o", str(out), "--measured", str(table)]) == 2
+    assert "modes.csv:2: measured mode '1st Z bending': frequency must be a positive number" in capsys.readouterr().err
+    table.write_text("label,frequency_hz\nx,1.0\n")
+    assert main(["update", "-o", str(out), "--measured", str(table)]) == 2
+    assert "missing column(s) pattern, damping" in capsys.readouterr().err
+    assert not out.exists()
+
+
 def test_table_4_4_is_what_the_thesis_prints():
     assert thesis_data()["table_4_4"]["lexan_center"]["change_percent"] == -4.9
     assert np.isclose(table_4_4_moduli()["E_active_strut_piezo"], 3.783e9)

@@ -37,6 +37,7 @@ def cmd_update(args: argparse.Namespace) -> int:
         raise MaceError("say where to write the updated parameter set and the report: -o DIR "
                         "(or run --sample-problem)")
     from mace_fmu.parameters import ParameterSet
+    from mace_fmu.updating.data import read_measured_modes
     from mace_fmu.updating.mace_update import run_mace_update, format_mode_rows, mode_rows, scores
     from mace_fmu.updating.report import write_report
     from mace_fmu.updating.solve import UpdateSettings
@@ -48,10 +49,11 @@ def cmd_update(args: argparse.Namespace) -> int:
         raise MaceError(f"-o {out}: exists and is not a directory")
     deck = read_deck(args.deck)
     start = ParameterSet.read(args.start) if args.start else None
+    measured = read_measured_modes(args.measured) if args.measured else None
     settings = UpdateSettings(method=args.method, perturbation=args.perturbation, rounds=args.rounds)
     with progress_bar() as bar:
-        outcome = run_mace_update(start=start, preload=args.preload, settings=settings, deck=deck, progress=bar,
-                                  message=_say)
+        outcome = run_mace_update(start=start, measured=measured, preload=args.preload, settings=settings, deck=deck,
+                                  progress=bar, message=_say)
     _say(f"writing the report to {out}/")
     paths = write_report(outcome, out)
     s = scores(mode_rows(outcome))
@@ -77,6 +79,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--json", action="store_true", help="with --sample-problem: the tables as JSON")
     p.add_argument("--start", metavar="FILE", help="parameter set to start from (default: the pre-update moduli, "
                    "Table 4.4 back-computed)")
+    p.add_argument("--measured", metavar="FILE", help="measured modes (CSV: label, pattern, frequency_hz, damping "
+                   "[, weight]; pattern: which model pole labels a row can be, e.g. '* Y bending'); default: Table "
+                   "4.7's measurement model")
     p.add_argument("--method", choices=["cost-sensitivity", "full", "reanalysis", "modal-sensitivity"],
                    default="cost-sensitivity", help="how the parameters enter the cost (default: cost-sensitivity)")
     p.add_argument("--perturbation", choices=["reanalysis", "full"], default="reanalysis",

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Mapping
 
 import numpy as np
@@ -32,6 +33,46 @@ class MeasuredMode:
             raise MaceError(f"measured mode {self.label!r}: damping ratio must be in [0, 1), got {self.damping!r}")
         if not (math.isfinite(self.weight) and self.weight >= 0):
             raise MaceError(f"measured mode {self.label!r}: weight must be >= 0, got {self.weight!r}")
+
+
+MEASURED_COLUMNS = ("label", "pattern", "frequency_hz", "damping")
+
+
+def read_measured_modes(path: str | Path) -> tuple[MeasuredMode, ...]:
+    """A measurement model's modes from CSV: columns label, pattern, frequency_hz, damping [, weight].
+
+    ``pattern`` says which model poles a row can be paired with (fnmatch of pole labels, "a|b"
+    for either), e.g. "* Y bending"; errors name the file, the row and the column.
+    """
+    import csv
+
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise MaceError(f"{path}: no such measured-modes file") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise MaceError(f"{path}: cannot read the measured modes: {exc}") from None
+    rows = list(csv.DictReader(text.splitlines()))
+    expected = f"a header with columns {', '.join(MEASURED_COLUMNS)} [, weight]"
+    if not rows:
+        raise MaceError(f"{path}: no measured modes (expected {expected} and a row per mode)")
+    missing = [c for c in MEASURED_COLUMNS if c not in rows[0]]
+    if missing:
+        raise MaceError(f"{path}: missing column(s) {', '.join(missing)} (expected {expected})")
+    modes = []
+    for k, row in enumerate(rows, start=2):  # row 1 is the header
+        try:
+            numbers = {c: float(row[c]) for c in ("frequency_hz", "damping")}
+            weight = float(row["weight"]) if row.get("weight") not in (None, "") else 1.0
+        except (TypeError, ValueError):
+            raise MaceError(f"{path}:{k}: frequency_hz, damping and weight must be numbers, got "
+                            f"{row.get('frequency_hz')!r}, {row.get('damping')!r}, {row.get('weight')!r}") from None
+        try:
+            modes.append(MeasuredMode(label=row["label"], pattern=row["pattern"], weight=weight, **numbers))
+        except MaceError as exc:
+            raise MaceError(f"{path}:{k}: {exc}") from None
+    return tuple(modes)
 
 
 def _finite(name: str, values: np.ndarray, source: str) -> None:
