@@ -140,6 +140,86 @@ def test_bad_motion_grids_give_one_line_errors(capsys, tmp_path, value, message)
     assert code == 2 and last.startswith("mace-fmu: error: ") and message in last
 
 
-    assert code == 0 and out.strip() == f"wrote {tmp_path / 'MACE_0g_native_motion_1_7.fmu'}"
-    assert not (tmp_path / "MACE_0g_native.fmu").exists()  # the plain FMU's name stays the plain FMU's
-    md = fmpy.read_model_description(str(tmp_path / "MACE_0g_native_motion_1_7.fmu"))
+@pytest.mark.parametrize("options, stem, fmi_version", [([], "MACE_0g_native", "2.0"),
+                                                        (["--fmi-version", "3"], "MACE_0g_native_fmi3", "3.0"),
+                                                        (["--kind", "pythonfmu"], "MACE_0g_pythonfmu", "2.0")])
+def test_export_writes_the_kind_it_is_asked_for_under_a_name_that_says_so(capsys, tmp_path, options, stem,
+                                                                          fmi_version):
+    import fmpy
+
+    code, out, _ = _run(capsys, ["export", "0g", "-o", str(tmp_path), "--max-hz", "20", *options])
+    path = out.strip().splitlines()[-1].removeprefix("wrote ")
+    assert code == 0 and path.endswith(f"{stem}.fmu")
+    md = fmpy.read_model_description(path)
+    assert md.fmiVersion == fmi_version and md.coSimulation.modelIdentifier == stem
+    assert (md.modelExchange is not None) == (stem == "MACE_0g_native")  # native FMI 2.0: also model exchange
+
+
+def test_export_refuses_fmi3_for_pythonfmu(capsys, tmp_path):
+    code, _, err = _run(capsys, ["export", "0g", "-o", str(tmp_path), "--kind", "pythonfmu", "--fmi-version", "3"])
+    assert code == 2 and "--fmi-version 3 needs --kind native" in err.strip().splitlines()[-1]
+    assert not list(tmp_path.iterdir())
+
+
+def test_fmu_names_say_which_outputs_an_fmu_has():
+    from mace_fmu.fmu.naming import fmu_name
+
+    grids = list(range(1, 80))
+    assert fmu_name("1g") == "MACE_1g"
+    assert fmu_name("0g", motion_grids=grids, all_grids=grids) == "MACE_0g_motion"
+    assert fmu_name("0g", motion_grids=[7, 1, 7], all_grids=grids) == "MACE_0g_motion_1_7"
+    assert fmu_name("0g", motion_grids=grids[:10], all_grids=grids) == "MACE_0g_motion_10_grids"
+    assert fmu_name("1g", kind="native", fmi_version=3) == "MACE_1g_native_fmi3"
+    assert fmu_name("0g", kind="pythonfmu", motion_grids=[1], all_grids=grids) == "MACE_0g_pythonfmu_motion_1"
+
+
+def test_hz_text_shows_the_zero_frequency_cluster_as_zero():
+    from mace_fmu.text import hz_text
+
+    assert [hz_text(f, decimals=3) for f in (-4e-4, -1e-7, 0.0, 0.0099)] == ["0.000"] * 4
+    assert hz_text(-0.02, decimals=3) == "-0.020" and hz_text(2.0996, decimals=3) == "2.100"
+
+
+def test_view_response_checks_its_signals_before_any_work(capsys, tmp_path):
+    """Misspelled --input, bad --output, bad duration: status 2 at once, nothing exported or written."""
+    from mace_fmu.iomodel.instruments import load_instruments
+
+    page = str(tmp_path / "r.html")
+    with pytest.raises(SystemExit) as exc:
+        main(["view", "response", "0g", "--input", "rwa_zz", "--html", page])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert "argument --input: invalid choice: 'rwa_zz'" in err and "'active_strut_z'" in err
+    for argv, message in (
+            (["--input", "rwa_z", "--output", "gyro_payload_q"], "--output 'gyro_payload_q' is not an output of the "
+                                                                 "0g model: use a sensor (encoder_primary_x, "),
+            (["--input", "rwa_z", "--output", "grid_64_tx"], "grid_<id>_<tx|ty|tz|rx|ry|rz> for one of its 79 grids"),
+            (["--input", "rwa_z", "--duration", "0.1", "--step", "0.003"], "not a whole number of 0.003 s steps"),
+            (["--input", "rwa_z", "--signal", "chirp", "--chirp-hz", "-1", "5"], "chirp frequencies must be >= 0 Hz")):
+        code, out, err = _run(capsys, ["view", "response", "0g", *argv, "--html", page])
+        assert code == 2 and message in err, err
+        assert out == "" and list(tmp_path.iterdir()) == []  # no FMU, page or plot
+    with pytest.raises(SystemExit) as exc:
+        main(["view", "response", "--help"])
+    assert exc.value.code == 0
+    help_text = " ".join(capsys.readouterr().out.split())
+    instruments = load_instruments()
+    assert all(a.name in help_text for a in instruments.actuators)
+    assert all(s.name in help_text for s in instruments.sensors)
+
+
+def test_each_input_is_collocated_with_its_own_sensor():
+    """Servo partners for gimbals and wheels; the active strut's patches with strut 2's strain gauges."""
+    from mace_fmu.deck.geometry import grid_positions
+    from mace_fmu.deck.reader import read_deck
+    from mace_fmu.iomodel.collocation import collocated_sensor
+    from mace_fmu.iomodel.instruments import load_instruments
+    from mace_fmu.structure import bundled_deck_path
+
+    instruments = load_instruments()
+    positions = grid_positions(read_deck(bundled_deck_path()))
+    found = {a.name: collocated_sensor(instruments, a.name, positions) for a in instruments.actuators}
+    assert found == {**instruments.servos.gimbals, **instruments.servos.wheels,
+                     "active_strut_y": "strain_strut2_y", "active_strut_z": "strain_strut2_z"}
+    for axis in "yz":  # the data file's own words: strut 2 is the active strut
+        assert "active strut" in instruments.sensor(found[f"active_strut_{axis}"]).description
