@@ -46,6 +46,17 @@ def whole_update() -> list[str]:
     return lines
 
 
+def _difference(cost: ModalCost, j: np.ndarray, j_full: np.ndarray) -> str:
+    """Largest |j - j_full| over the frequency entries and over the damping entries, with the worst entry."""
+    labels = cost.entry_labels()
+    parts = []
+    for kind in ("f", "zeta"):
+        rows = [k for k, label in enumerate(labels) if label.split()[0] == kind]
+        k = rows[int(np.argmax(np.abs(j[rows] - j_full[rows])))]
+        parts.append(f"{kind}: max |j - j_full| {abs(j[k] - j_full[k]):.1e} ({labels[k]})")
+    return "; ".join(parts)
+
+
 def per_evaluation() -> list[str]:
     family = MaceFamily(base=pre_update_parameters())
     names = ("E_lexan_center", "E_active_strut_piezo", "E_cable_1")
@@ -55,18 +66,17 @@ def per_evaluation() -> list[str]:
     point = {**base, "E_lexan_center": base["E_lexan_center"] * 1.02}
     t_full, m_full = _time(lambda: cost.residual(family.full(point)))
     lines.append(f"| full re-solve (FE, preload, modes, volts model) + cost | {t_full:.2f} | one new physical point |")
-    t_basis, basis = _time(lambda: family.basis(base).model(base))
+    basis = family.basis(base)
+    t_basis, _ = _time(lambda: basis.model(base))  # the stiffness sensitivities are computed on first use
     lines.append(f"| reanalysis set-up (stiffness sensitivities projected on 80 modes) | {t_basis:.2f} | once per "
                  "base point |")
     t_re, m_re = _time(lambda: cost.residual(basis.model(point)))
-    lines.append(f"| reanalysis evaluation + cost | {t_re:.2f} | max |j - j_full| {np.max(np.abs(m_re - m_full)):.1e} "
-                 "(relative frequency units) |")
+    lines.append(f"| reanalysis evaluation + cost | {t_re:.2f} | {_difference(cost, m_re, m_full)} |")
     t_ms_setup, sens = _time(lambda: modal_sensitivity(family.basis(base), base, names, relative_step=1e-2))
     lines.append(f"| modal-sensitivity set-up ({len(names)} parameters: one FE modal solve each) | {t_ms_setup:.2f} | "
                  "once per base point |")
     t_ms, m_ms = _time(lambda: cost.residual(sens(point)))
-    lines.append(f"| modal-sensitivity evaluation + cost | {t_ms:.2f} | max |j - j_full| "
-                 f"{np.max(np.abs(m_ms - m_full)):.1e} |")
+    lines.append(f"| modal-sensitivity evaluation + cost | {t_ms:.2f} | {_difference(cost, m_ms, m_full)} |")
     return lines
 
 
