@@ -177,7 +177,7 @@ class TimeHistory:
         if np.any(dt <= 0):
             k = int(np.flatnonzero(dt <= 0)[0]) + 1
             raise DataError(f"{self.source}: time is not increasing at row {k}", source=self.source,
-                            what=f"time is not increasing ({t[k - 1]!r} s, then {t[k]!r} s)", row=k)
+                            what=f"time is not increasing ({float(t[k - 1])!r} s, then {float(t[k])!r} s)", row=k)
         if not np.allclose(dt, dt[0], rtol=1e-6, atol=0.0):
             k = int(np.argmax(np.abs(dt - dt[0]))) + 1
             raise DataError(f"{self.source}: samples are not uniformly spaced (step {dt[0]:.6g} s, but "

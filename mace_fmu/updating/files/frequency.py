@@ -220,7 +220,8 @@ def _write_uff(frd: FrequencyResponseData, path: Path) -> None:
     stored = _uff_abscissa(frd.frequencies_hz)
     if np.any(np.diff(stored) <= 0):
         k = int(np.flatnonzero(np.diff(stored) <= 0)[0]) + 1
-        raise MaceError(f"{path}: frequencies {frd.frequencies_hz[k - 1]!r} and {frd.frequencies_hz[k]!r} Hz (rows "
+        raise MaceError(f"{path}: frequencies {float(frd.frequencies_hz[k - 1])!r} and "
+                        f"{float(frd.frequencies_hz[k])!r} Hz (rows "
                         f"{k - 1}, {k}) are equal to the six digits UFF 58 keeps; write CSV instead")
     datasets = []
     for i, out in enumerate(frd.outputs):
