@@ -80,6 +80,14 @@ def test_frequency_response_csv_round_trip_is_exact(tmp_path):
     assert isinstance(read_measured_data(path), FrequencyResponseData)
 
 
+def test_h1_with_coherence_round_trips_through_csv(tmp_path):
+    frd = h1_estimate(_history(400), segment_length=64, band_hz=(5.0, 40.0))
+    path = write_frequency_response(frd, tmp_path / "h1.csv")
+    back = read_frequency_response(path)
+    assert np.array_equal(back.coherence, frd.coherence) and np.array_equal(back.response, frd.response)
+    assert path.read_text().splitlines()[0].endswith(",coherence:gyro_bus_x [1],coherence:gyro_payload_z [1]")
+
+
 @pytest.mark.parametrize("suffix", [".uff", ".unv"])
 def test_frequency_response_uff58_round_trip_to_the_digits_the_format_keeps(tmp_path, suffix):
     """Dataset 58 stores frequencies as E13.5 (6 significant digits), values as E20.11 (12 digits)."""
@@ -139,6 +147,19 @@ def test_uff_from_a_lab_read_through_a_channel_map(tmp_path):
     assert np.allclose(frd.frequencies_hz, f, rtol=5e-6, atol=0)
     assert np.allclose(frd.response[:, 0, 0], (2 + 1j) * f / 10 - f / 10, rtol=1e-11)  # (1 + 1j) f / 10
     assert np.allclose(frd.response[:, 0, 1], (2 + 1j) * f / 10, rtol=1e-11)
+
+
+def test_ignored_channels_drop_their_frequency_responses(tmp_path):
+    _lab_uff(tmp_path / "lab.uff")
+    cmap = _write_map(tmp_path / "map.csv", "101+Z,gyro_bus_z,output,V\n1+Z,gimbal_primary_z,input,V\n"
+                                            "2-X,,ignore,V\n")
+    frd = read_frequency_response(tmp_path / "lab.uff", channel_map=cmap)
+    assert frd.inputs == ("gimbal_primary_z",) and frd.response.shape == (10, 1, 1)
+    csv_path = write_frequency_response(read_frequency_response(tmp_path / "lab.uff", channel_map=_write_map(
+        tmp_path / "names.csv", "101+Z,y,output,V\n1+Z,u1,input,V\n2-X,u2,input,V\n")), tmp_path / "lab.csv")
+    cmap = _write_map(tmp_path / "csv_map.csv", "y,gyro_bus_z,output,V\nu1,,ignore,V\nu2,gimbal_secondary_x,input,V\n")
+    frd = read_frequency_response(csv_path, channel_map=cmap)
+    assert frd.inputs == ("gimbal_secondary_x",) and np.allclose(frd.response[:, 0, 0], frd.frequencies_hz * (0.2 + 0.1j))
 
 
 def test_time_history_through_a_channel_map(tmp_path):
@@ -446,3 +467,9 @@ def test_frequency_csv_errors_name_line_and_channel(tmp_path):
     half = _csv(tmp_path, "frequency [Hz],re:y/u [V/V]\n1,1\n", "half.csv")
     assert _error(lambda: read_frequency_response(half)).startswith(
         f"{half}:1: channel 'y'/'u': no column im:y/u")
+
+
+def test_bad_coherence_names_line_and_channel(tmp_path):
+    path = _csv(tmp_path, "frequency [Hz],re:y/u [V/V],im:y/u [V/V],coherence:y [1]\n1,1,0,0.5\n2,1,0,1.5\n")
+    assert _error(lambda: read_frequency_response(path)) == \
+        f"{path}:3: channel 'y': coherence 1.5, expected a number in [0, 1]"

@@ -150,6 +150,12 @@ class FrequencyResponseData:
             if c.shape != (f.size, len(self.outputs)):
                 raise MaceError(f"{self.source}: coherence has shape {c.shape}, expected ({f.size}, "
                                 f"{len(self.outputs)}) (frequency, output)")
+            bad = ~np.isfinite(c) | (c < 0) | (c > 1)
+            if bad.any():
+                k, i = (int(x) for x in np.argwhere(bad)[0])
+                what = f"coherence {float(c[k, i])!r}, expected a number in [0, 1]"
+                raise DataError(f"{self.source}: output {self.outputs[i]!r}: {what} at row {k}", source=self.source,
+                                what=what, channel=self.outputs[i], row=k)
             object.__setattr__(self, "coherence", c)
 
     def unit(self, signal: str) -> str:

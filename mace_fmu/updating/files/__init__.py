@@ -14,7 +14,7 @@ from mace_fmu.updating.data import FrequencyResponseData, TimeHistory
 from mace_fmu.updating.files.channels import Channel, ChannelMap, read_channel_map
 from mace_fmu.updating.files.frequency import FRF_SUFFIXES, read_frequency_response, write_frequency_response
 from mace_fmu.updating.files.h1 import h1_estimate
-from mace_fmu.updating.files.timehistory import TIME_SUFFIXES, read_csv_columns, read_time_history, write_time_history
+from mace_fmu.updating.files.timehistory import TIME_SUFFIXES, read_time_history, write_time_history
 
 __all__ = ["Channel", "ChannelMap", "read_channel_map", "read_time_history", "write_time_history",
            "read_frequency_response", "write_frequency_response", "h1_estimate", "read_measured_data"]
@@ -30,9 +30,22 @@ def read_measured_data(path: str | Path, *, channel_map: ChannelMap | None = Non
     if suffix == ".npz":
         return read_time_history(path, channel_map=channel_map, sample_time_s=sample_time_s)
     if suffix == ".csv":
-        labels = read_csv_columns(path)[0]
-        if labels[0].replace(" ", "").lower().startswith("frequency"):
+        if _first_label(path).startswith("frequency"):
             return read_frequency_response(path, channel_map=channel_map)
         return read_time_history(path, channel_map=channel_map, sample_time_s=sample_time_s)
     raise MaceError(f"{path}: unknown measured-data format {path.suffix!r} (expected one of "
                     f"{', '.join(sorted(set(TIME_SUFFIXES + FRF_SUFFIXES)))})")
+
+
+def _first_label(path: Path) -> str:
+    """The first column label of a CSV file (after '#' comment lines), lower case; "" when there is none."""
+    try:
+        with open(path, encoding="utf-8") as fh:
+            for line in fh:
+                if line.strip() and not line.lstrip().startswith("#"):
+                    return line.split(",")[0].strip().lower()
+    except FileNotFoundError:
+        raise MaceError(f"{path}: no such file") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise MaceError(f"{path}: cannot read: {exc}") from None
+    return ""

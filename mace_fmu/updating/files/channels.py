@@ -153,6 +153,8 @@ def resolve(label: Label, *, channel_map: ChannelMap | None, where: str) -> tupl
     if row is None:
         raise MaceError(f"{where}: channel {label.name!r} is not in the channel map {channel_map.source} "
                         "(add it, with role 'ignore' to skip it)")
+    if row.role == "ignore":
+        return row.signal, row.role, row.unit  # skipped: neither its role nor its unit matters
     if label.role is not None and label.role != row.role:
         raise MaceError(f"{where}: channel {label.name!r} is marked {label.role}, the channel map "
                         f"{channel_map.where(row)} says {row.role}")

@@ -15,6 +15,7 @@ from mace_fmu.updating.files.channels import (
 from mace_fmu.updating.files.timehistory import read_csv_columns
 
 FRF_SUFFIXES = (".csv", ".uff", ".unv")
+_COHERENCE = re.compile(r"^coherence:(.+?) \[1\]$")
 _PAIR = re.compile(r"^(re|im):(.+)/(.+?) \[([^/\[\]]*)/([^/\[\]]*)\]$")
 #: UFF dataset 58 function type of a frequency response function (FRF)
 UFF_FRF = 4
@@ -38,14 +39,22 @@ def _read_csv(path: Path, channel_map: ChannelMap | None) -> FrequencyResponseDa
     units: dict[str, str] = {}
     channel_of: dict[str, str] = {}
     found: set[str] = set()
+    coherence: dict[str, np.ndarray] = {}
     for text, values in zip(labels[1:], columns[1:]):
+        c = _COHERENCE.match(text)
+        if c:
+            coherence[c.group(1).strip()] = values  # by channel; matched to the outputs below
+            continue
         m = _PAIR.match(text)
         if not m:
-            raise MaceError(f"{at}: column label {text!r} is not 're:<output>/<input> [<unit>/<unit>]' or 'im:...'")
+            raise MaceError(f"{at}: column label {text!r} is not 're:<output>/<input> [<unit>/<unit>]', 'im:...' "
+                            "or 'coherence:<output> [1]'")
         part, out_channel, in_channel, out_unit, in_unit = (g.strip() for g in m.groups())
+        found |= {out_channel, in_channel}
         out = _signal(Label(out_channel, out_unit, "output"), channel_map, at, "output")
         inp = _signal(Label(in_channel, in_unit, "input"), channel_map, at, "input")
-        found |= {out_channel, in_channel}
+        if out is None or inp is None:
+            continue  # a pair with an ignored channel
         for signal, unit, channel, table in ((out, out_unit, out_channel, outputs), (inp, in_unit, in_channel, inputs)):
             if signal not in table:
                 table.append(signal)
@@ -55,6 +64,8 @@ def _read_csv(path: Path, channel_map: ChannelMap | None) -> FrequencyResponseDa
             raise MaceError(f"{at}: column {text!r} appears twice")
         parts[(out, inp)][part] = values
     check_present(found, channel_map=channel_map, where=at)
+    if not outputs:
+        raise MaceError(f"{at}: no response columns (expected 're:<output>/<input> [<unit>/<unit>]' and 'im:...')")
     response = np.empty((len(columns[0]), len(outputs), len(inputs)), dtype=complex)
     for i, out in enumerate(outputs):
         for j, inp in enumerate(inputs):
@@ -65,18 +76,28 @@ def _read_csv(path: Path, channel_map: ChannelMap | None) -> FrequencyResponseDa
                                 f"{' or '.join(f'{p}:{channel_of[out]}/{channel_of[inp]}' for p in missing)} "
                                 "(every output/input pair needs re: and im: columns)")
             response[:, i, j] = pair["re"] + 1j * pair["im"]
+    by_channel = {channel_of[out]: out for out in outputs}
+    unknown = sorted(set(coherence) - set(by_channel))
+    if unknown:
+        raise MaceError(f"{at}: channel {unknown[0]!r}: a coherence column for a channel with no response")
+    if coherence and len(coherence) != len(outputs):
+        raise MaceError(f"{at}: coherence columns for {len(coherence)} of {len(outputs)} outputs (all or none)")
+    gamma2 = np.column_stack([coherence[channel_of[out]] for out in outputs]) if coherence else None
     return _frd(columns[0], inputs, outputs, response, units, source=str(path),
-                row_at=lambda k: f"{path}:{lines[k]}", channel_of=channel_of)
+                row_at=lambda k: f"{path}:{lines[k]}", channel_of=channel_of, coherence=gamma2)
 
 
-def _signal(label: Label, channel_map: ChannelMap | None, at: str, role: str) -> str:
+def _signal(label: Label, channel_map: ChannelMap | None, at: str, role: str) -> str | None:
+    """The model signal of one end of a response, None for a channel the map ignores."""
     signal, mapped_role, _ = resolve(label, channel_map=channel_map, where=at)
+    if mapped_role == "ignore":
+        return None
     if mapped_role != role:
         raise MaceError(f"{at}: channel {label.name!r} is used as an {role} but the channel map says {mapped_role}")
     return signal
 
 
-def _frd(f, inputs, outputs, response, units, *, source, row_at, channel_of) -> FrequencyResponseData:
+def _frd(f, inputs, outputs, response, units, *, source, row_at, channel_of, coherence=None) -> FrequencyResponseData:
     # The response's NaN check, located per channel pair (FrequencyResponseData only knows the row).
     for i, out in enumerate(outputs):
         for j, inp in enumerate(inputs):
@@ -85,9 +106,11 @@ def _frd(f, inputs, outputs, response, units, *, source, row_at, channel_of) -> 
                 raise MaceError(f"{row_at(int(bad[0]))}: channel {channel_of[out]!r}/{channel_of[inp]!r}: the "
                                 f"response is not finite (NaN or inf) ({bad.size} rows in all)")
     try:
-        return FrequencyResponseData(f, tuple(inputs), tuple(outputs), response, source=source, units=units)
+        return FrequencyResponseData(f, tuple(inputs), tuple(outputs), response, source=source, units=units,
+                                     coherence=coherence)
     except DataError as exc:
-        raise MaceError(f"{row_at(exc.row)}: channel 'frequency': {exc.what}") from None
+        channel = "frequency" if exc.channel is None else channel_of.get(exc.channel, exc.channel)
+        raise MaceError(f"{row_at(exc.row)}: channel {channel!r}: {exc.what}") from None
 
 
 def _write_csv(frd: FrequencyResponseData, path: Path) -> None:
@@ -101,6 +124,10 @@ def _write_csv(frd: FrequencyResponseData, path: Path) -> None:
             for part, values in (("re", frd.response[:, i, j].real), ("im", frd.response[:, i, j].imag)):
                 labels.append(f"{part}:{out}/{inp} [{frd.unit(out)}/{frd.unit(inp)}]")
                 columns.append(values)
+    if frd.coherence is not None:
+        for i, out in enumerate(frd.outputs):
+            labels.append(f"coherence:{out} [1]")
+            columns.append(frd.coherence[:, i])
     with atomic_path(path) as tmp:
         np.savetxt(tmp, np.column_stack(columns), fmt="%.17g", delimiter=",", header=",".join(labels), comments="")
 
@@ -162,10 +189,10 @@ def _read_uff(path: Path, channel_map: ChannelMap | None) -> FrequencyResponseDa
     channel_of: dict[str, str] = {}
     found: set[str] = set()
     pairs: dict[tuple[str, str], tuple[int, np.ndarray]] = {}
-    k0, _, f0, _ = records[0]
+    k0, f0 = 0, np.empty(0)  # the first kept dataset: its frequencies are everyone's
     for k, dataset, f, h in records:
         at = f"{path}: dataset {k}"
-        ends = []
+        ends: list[str | None] = []
         for role, unit_key, table in (("output", "ordinate_axis_units_lab", outputs),
                                       ("input", "orddenom_axis_units_lab", inputs)):
             channel = _uff_channel(dataset, role)
@@ -175,17 +202,23 @@ def _read_uff(path: Path, channel_map: ChannelMap | None) -> FrequencyResponseDa
                                 f"units label (record 9/10), expected e.g. 'V'")
             signal = _signal(Label(channel, unit, role), channel_map, at, role)
             found.add(channel)
+            ends.append(signal)
+            if signal is None:
+                continue
             if signal not in table:
                 table.append(signal)
             elif units[signal] != unit:
                 raise MaceError(f"{at}: channel {channel!r}: unit {unit!r}, an earlier dataset says {units[signal]!r}")
             units[signal] = unit
             channel_of[signal] = channel
-            ends.append(signal)
+        if None in ends:
+            continue  # a pair with an ignored channel
         abscissa = _uff_unit(dataset, "abscissa_axis_units_lab")
         if abscissa and abscissa.lower() != "hz":
             raise MaceError(f"{at}: channel {channel_of[ends[0]]!r}/{channel_of[ends[1]]!r}: abscissa unit "
                             f"{abscissa!r}, expected 'Hz'")
+        if not k0:
+            k0, f0 = k, f
         if f.shape != f0.shape or not np.array_equal(f, f0):
             raise MaceError(f"{at}: channel {channel_of[ends[0]]!r}/{channel_of[ends[1]]!r}: frequencies differ "
                             f"from dataset {k0}'s ({f.size} points from {f[0]:.6g} Hz vs {f0.size} from {f0[0]:.6g} Hz)")
@@ -198,6 +231,8 @@ def _read_uff(path: Path, channel_map: ChannelMap | None) -> FrequencyResponseDa
                             f"{pairs[tuple(ends)][0]}")
         pairs[(ends[0], ends[1])] = (k, h)
     check_present(found, channel_map=channel_map, where=str(path))
+    if not pairs:
+        raise MaceError(f"{path}: every FRF dataset has a channel the channel map ignores")
     response = np.empty((f0.size, len(outputs), len(inputs)), dtype=complex)
     for i, out in enumerate(outputs):
         for j, inp in enumerate(inputs):
