@@ -356,7 +356,7 @@ def _error(call) -> str:
 def test_nan_names_file_channel_and_line(tmp_path):
     path = _csv(tmp_path, HEADER + "0,1,2\n0.01,1,2\n0.02,1,nan\n0.03,1,2\n")
     assert _error(lambda: read_time_history(path)) == \
-        f"{path}:4: channel 'gyro_bus_x': is not finite (NaN or inf) (1 rows in all)"
+        f"{path}:4: channel 'gyro_bus_x': value is NaN or inf (1 of 4 rows)"
 
 
 def test_nan_in_npz_names_channel_and_row(tmp_path):
@@ -365,7 +365,7 @@ def test_nan_in_npz_names_channel_and_row(tmp_path):
     path = tmp_path / "run.npz"
     np.savez(path, **{"time [s]": np.arange(5.0), "in:u [V]": np.zeros(5), "out:gyro_bus_x [V]": y})
     message = _error(lambda: read_time_history(path))
-    assert message.startswith(f"{path}: row 3: channel 'gyro_bus_x': is not finite")
+    assert message == f"{path}: row 3: channel 'gyro_bus_x': value is NaN or inf (1 of 5 rows)"
 
 
 def test_non_monotonic_time_names_the_line(tmp_path):
@@ -448,8 +448,8 @@ def test_uff_nan_and_unit_errors_name_dataset_channel_and_row(tmp_path):
     cmap = _write_map(tmp_path / "map.csv", "101+Z,gyro_bus_z,output,V\n1+Z,gimbal_primary_z,input,V\n"
                                             "2-X,gimbal_secondary_x,input,V\n")
     assert _error(lambda: read_frequency_response(tmp_path / "lab.uff", channel_map=cmap)) == (
-        f"{tmp_path / 'lab.uff'}: dataset 2: channel '101+Z'/'2-X': the response is not finite (NaN or inf) at "
-        "row 4 (1 rows in all)")
+        f"{tmp_path / 'lab.uff'}: dataset 2: channel '101+Z'/'2-X': the response is NaN or inf at "
+        "row 4 (1 of 10 rows)")
     _lab_uff(tmp_path / "mv.uff", units="mV")
     assert _error(lambda: read_frequency_response(tmp_path / "mv.uff", channel_map=cmap)) == (
         f"{tmp_path / 'mv.uff'}: dataset 1: channel '101+Z': unit 'mV', expected 'V' (channel map "
@@ -460,7 +460,7 @@ def test_frequency_csv_errors_name_line_and_channel(tmp_path):
     head = "frequency [Hz],re:y/u [V/V],im:y/u [V/V]\n"
     nan = _csv(tmp_path, head + "1,1,0\n2,nan,0\n", "frf.csv")
     assert _error(lambda: read_frequency_response(nan)) == \
-        f"{nan}:3: channel 'y'/'u': the response is not finite (NaN or inf) (1 rows in all)"
+        f"{nan}:3: channel 'y'/'u': the response is NaN or inf (1 of 2 rows)"
     order = _csv(tmp_path, head + "1,1,0\n3,1,0\n2,1,0\n", "order.csv")
     assert _error(lambda: read_frequency_response(order)) == \
         f"{order}:4: channel 'frequency': frequencies must be >= 0 and increasing"

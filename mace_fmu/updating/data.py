@@ -101,7 +101,7 @@ def _rebuild_data_error(message: str, source: str, what: str, channel: str | Non
 def _finite(name: str, values: np.ndarray, source: str, channel: str | None = None) -> None:
     bad = np.flatnonzero(~np.isfinite(values).reshape(values.shape[0], -1).all(axis=1))
     if bad.size:
-        what = f"is not finite (NaN or inf) ({bad.size} rows in all)"
+        what = f"value is NaN or inf ({bad.size} of {values.shape[0]} rows)"
         raise DataError(f"{source}: {name} is not finite (NaN or inf) at row {int(bad[0])} "
                         f"({bad.size} rows in all)", source=source, what=what, channel=channel, row=int(bad[0]))
 

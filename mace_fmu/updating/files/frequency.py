@@ -104,7 +104,7 @@ def _frd(f, inputs, outputs, response, units, *, source, row_at, channel_of, coh
             bad = np.flatnonzero(~np.isfinite(response[:, i, j]))
             if bad.size:
                 raise MaceError(f"{row_at(int(bad[0]))}: channel {channel_of[out]!r}/{channel_of[inp]!r}: the "
-                                f"response is not finite (NaN or inf) ({bad.size} rows in all)")
+                                f"response is NaN or inf ({bad.size} of {len(f)} rows)")
     try:
         return FrequencyResponseData(f, tuple(inputs), tuple(outputs), response, source=source, units=units,
                                      coherence=coherence)
@@ -224,8 +224,8 @@ def _read_uff(path: Path, channel_map: ChannelMap | None) -> FrequencyResponseDa
                             f"from dataset {k0}'s ({f.size} points from {f[0]:.6g} Hz vs {f0.size} from {f0[0]:.6g} Hz)")
         bad = np.flatnonzero(~np.isfinite(h))
         if bad.size:
-            raise MaceError(f"{at}: channel {channel_of[ends[0]]!r}/{channel_of[ends[1]]!r}: the response is not "
-                            f"finite (NaN or inf) at row {int(bad[0])} ({bad.size} rows in all)")
+            raise MaceError(f"{at}: channel {channel_of[ends[0]]!r}/{channel_of[ends[1]]!r}: the response is "
+                            f"NaN or inf at row {int(bad[0])} ({bad.size} of {h.size} rows)")
         if tuple(ends) in pairs:
             raise MaceError(f"{at}: channel {channel_of[ends[0]]!r}/{channel_of[ends[1]]!r}: same pair as dataset "
                             f"{pairs[tuple(ends)][0]}")
