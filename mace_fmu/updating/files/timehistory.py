@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import csv
-import io
 from pathlib import Path
 
 import numpy as np
@@ -95,22 +94,29 @@ def read_csv_columns(path: Path) -> tuple[list[str], list[np.ndarray], list[int]
         raise MaceError(f"{path}: no such file") from None
     except (OSError, UnicodeDecodeError) as exc:
         raise MaceError(f"{path}: cannot read: {exc}") from None
-    rows = [(k, row) for k, row in enumerate(csv.reader(io.StringIO(text)), start=1)
-            if row and any(c.strip() for c in row) and not row[0].lstrip().startswith("#")]
-    if not rows:
+    lines = text.splitlines()
+    numbers = [k for k, line in enumerate(lines, start=1)
+               if line.strip(" \t,") and not line.lstrip().startswith("#")]
+    if not numbers:
         raise MaceError(f"{path}: empty (expected a header of 'name [unit]' labels and a row per sample)")
-    header_line, header = rows[0]
-    labels = [c.strip() for c in header]
-    data = np.empty((len(rows) - 1, len(labels)))
-    for n, (k, row) in enumerate(rows[1:]):
-        if len(row) != len(labels):
-            raise MaceError(f"{path}:{k}: {len(row)} fields, the header has {len(labels)}")
-        for j, cell in enumerate(row):
-            try:
-                data[n, j] = float(cell)
-            except ValueError:
-                raise MaceError(f"{path}:{k}: channel {labels[j]!r}: {cell!r} is not a number") from None
-    return labels, [data[:, j] for j in range(len(labels))], [k for k, _ in rows[1:]], header_line
+    header_line, data_lines = numbers[0], numbers[1:]
+    labels = [c.strip() for c in next(csv.reader([lines[header_line - 1]]))]
+    for k in data_lines:
+        if lines[k - 1].count(",") != len(labels) - 1:
+            raise MaceError(f"{path}:{k}: {lines[k - 1].count(',') + 1} fields, the header has {len(labels)}")
+    try:  # numpy's parser reads the whole table at once; quoted cells or a bad one need the slow route
+        data = np.loadtxt([lines[k - 1] for k in data_lines], delimiter=",", dtype=float, ndmin=2,
+                          comments=None).reshape(len(data_lines), len(labels)) if data_lines else \
+            np.empty((0, len(labels)))
+    except ValueError:
+        data = np.empty((len(data_lines), len(labels)))
+        for n, k in enumerate(data_lines):
+            for j, (label, cell) in enumerate(zip(labels, next(csv.reader([lines[k - 1]])))):
+                try:
+                    data[n, j] = float(cell)
+                except ValueError:
+                    raise MaceError(f"{path}:{k}: channel {label!r}: {cell!r} is not a number") from None
+    return labels, [data[:, j] for j in range(len(labels))], data_lines, header_line
 
 
 def _read_npz_columns(path: Path) -> tuple[list[str], list[np.ndarray]]:
