@@ -492,3 +492,30 @@ def test_example_measured_data(tmp_path):
     assert result.max_error_away_from_mode < 4 * 0.0086
     assert result.uff_frequency_error <= 5e-6
     assert "1024-sample segments (5.12 s, 0.195312 Hz resolution), hann window, 50% overlap" in result.source
+
+
+# --- mace-fmu data ------------------------------------------------------------------------------
+
+def test_cli_data_check_and_h1(tmp_path, capsys):
+    from mace_fmu.cli import main
+    history = _history(2048)
+    path = write_time_history(history, tmp_path / "run.npz")
+    assert main(["data", "check", str(path), "--sample-time", "0.01"]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert out == [f"{path}: ok", "  time history: 2048 samples, 0 to 20.47 s, sample time 0.01 s (100 Hz)",
+                   "  inputs: gimbal_primary_x [V]", "  outputs: gyro_bus_x [V], gyro_payload_z [V]"]
+    frf = tmp_path / "h1.csv"
+    assert main(["data", "h1", str(path), "--segment", "256", "--band", "1", "20", "-o", str(frf)]) == 0
+    capsys.readouterr()
+    expected = h1_estimate(history, segment_length=256, band_hz=(1.0, 20.0))
+    back = read_frequency_response(frf)
+    assert np.array_equal(back.response, expected.response) and np.array_equal(back.coherence, expected.coherence)
+
+
+def test_cli_data_check_bad_file_is_one_line_and_status_2(tmp_path, capsys):
+    from mace_fmu.cli import main
+    path = _csv(tmp_path, HEADER + "0,1,2\n0.01,1,2\n0.02,1,nan\n")
+    assert main(["data", "check", str(path)]) == 2
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    assert captured.err == f"mace-fmu: error: {path}:4: channel 'gyro_bus_x': value is NaN or inf (1 of 3 rows)\n"
