@@ -438,6 +438,11 @@ def test_malformed_uff_names_the_file_and_dataset(tmp_path):
     path.write_text("    -1\n    58\nnot a dataset 58 header\n    -1\n")
     message = _error(lambda: read_frequency_response(path))
     assert message.startswith(f"{path}: dataset 1 (type 58): malformed")
+    lines = write_frequency_response(_frd(), tmp_path / "frf.uff").read_text().splitlines()
+    (tmp_path / "cut.uff").write_text("\n".join(lines[:20] + lines[25:]) + "\n")  # 5 lines of dataset 1's data
+    assert _error(lambda: read_frequency_response(tmp_path / "cut.uff")) == (
+        f"{tmp_path / 'cut.uff'}: dataset 1 (type 58): 32 data points, its header (record 7) says 37: a truncated "
+        "or malformed data block")
     empty = tmp_path / "none.uff"
     empty.write_text("nothing here\n")
     assert _error(lambda: read_frequency_response(empty)).startswith(f"{empty}: no frequency response")

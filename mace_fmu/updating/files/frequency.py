@@ -177,6 +177,9 @@ def _read_uff(path: Path, channel_map: ChannelMap | None) -> FrequencyResponseDa
             continue  # auto-spectra, coherence, time records next to the FRFs
         if f.shape != h.shape or f.ndim != 1:
             raise MaceError(f"{path}: dataset {k} (type 58): {f.size} frequencies but {h.size} values")
+        if int(dataset.get("num_pts", f.size)) != f.size:
+            raise MaceError(f"{path}: dataset {k} (type 58): {f.size} data points, its header (record 7) says "
+                            f"{int(dataset['num_pts'])}: a truncated or malformed data block")
         if not np.iscomplexobj(h):
             raise MaceError(f"{path}: dataset {k} (type 58): real ordinate data, expected a complex FRF")
         records.append((k, dataset, f, h))

@@ -37,7 +37,7 @@ def h1_estimate(history: TimeHistory, *, segment_length: int, window: str = "han
         # scipy's csd(x, y) = E[conj(X) Y]: s_uu[a, b] = E[conj(U_a) U_b], s_uy[a, c] = E[conj(U_a) Y_c].
         f, s_uu = signal.csd(u[:, None, :], u[None, :, :], **options)
         _, s_uy = signal.csd(u[:, None, :], y[None, :, :], **options)
-        _, s_yy = signal.welch(y, **{k: v for k, v in options.items()})
+        _, s_yy = signal.welch(y, **options)
     except ValueError as exc:
         raise MaceError(f"H1 estimate of {history.source}: {exc}") from None
     keep = (f > 0) if band_hz is None else (f >= band_hz[0]) & (f <= band_hz[1])
@@ -57,7 +57,9 @@ def h1_estimate(history: TimeHistory, *, segment_length: int, window: str = "han
     response = np.transpose(h_t, (0, 2, 1))  # (k, p, m)
     # Multiple coherence of each output with all inputs: (S_yu S_uu^-1 S_uy)_cc / S_yy,cc.
     explained = np.einsum("kac,kac->kc", np.conj(s_uy), h_t).real
-    coherence = np.clip(explained / s_yy, 0.0, 1.0)
+    # an output with no power there (all zeros) has nothing to explain: coherence 0, not 0/0
+    ratio = np.divide(explained, s_yy, out=np.zeros_like(s_yy), where=s_yy > 0)
+    coherence = np.clip(ratio, 0.0, 1.0)
     settings = (f"Welch: {segment_length}-sample segments ({segment_length * history.sample_time_s:.6g} s, "
                 f"{fs / segment_length:.6g} Hz resolution), {window} window, {overlap:.0%} overlap")
     return FrequencyResponseData(f[keep], tuple(inputs), tuple(outputs), response,
