@@ -459,6 +459,9 @@ def test_uff_nan_and_unit_errors_name_dataset_channel_and_row(tmp_path):
     assert _error(lambda: read_frequency_response(tmp_path / "mv.uff", channel_map=cmap)) == (
         f"{tmp_path / 'mv.uff'}: dataset 1: channel '101+Z': unit 'mV', expected 'V' (channel map "
         f"{tmp_path / 'map.csv'}:2)")
+    _lab_uff(tmp_path / "none.uff", units="NONE")
+    assert _error(lambda: read_frequency_response(tmp_path / "none.uff", channel_map=cmap)) == (
+        f"{tmp_path / 'none.uff'}: dataset 1: channel '101+Z': no units label in record 9 (ordinate), expected e.g. 'V'")
 
 
 def test_frequency_csv_errors_name_line_and_channel(tmp_path):

@@ -199,15 +199,17 @@ def _read_uff(path: Path, channel_map: ChannelMap | None) -> FrequencyResponseDa
         for role, unit_key, table in (("output", "ordinate_axis_units_lab", outputs),
                                       ("input", "orddenom_axis_units_lab", inputs)):
             channel = _uff_channel(dataset, role)
+            found.add(channel)
+            row = channel_map.find(channel) if channel_map is not None else None
+            if row is not None and row.role == "ignore":
+                ends.append(None)
+                continue
             unit = _uff_unit(dataset, unit_key)
             if not unit:
-                raise MaceError(f"{at}: channel {channel!r}: no unit in the {'ordinate' if role == 'output' else 'ordinate denominator'} "
-                                f"units label (record 9/10), expected e.g. 'V'")
+                record = "9 (ordinate)" if role == "output" else "10 (ordinate denominator)"
+                raise MaceError(f"{at}: channel {channel!r}: no units label in record {record}, expected e.g. 'V'")
             signal = _signal(Label(channel, unit, role), channel_map, at, role)
-            found.add(channel)
             ends.append(signal)
-            if signal is None:
-                continue
             if signal not in table:
                 table.append(signal)
             elif units[signal] != unit:
