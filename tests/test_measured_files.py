@@ -159,7 +159,8 @@ def test_ignored_channels_drop_their_frequency_responses(tmp_path):
         tmp_path / "names.csv", "101+Z,y,output,V\n1+Z,u1,input,V\n2-X,u2,input,V\n")), tmp_path / "lab.csv")
     cmap = _write_map(tmp_path / "csv_map.csv", "y,gyro_bus_z,output,V\nu1,,ignore,V\nu2,gimbal_secondary_x,input,V\n")
     frd = read_frequency_response(csv_path, channel_map=cmap)
-    assert frd.inputs == ("gimbal_secondary_x",) and np.allclose(frd.response[:, 0, 0], frd.frequencies_hz * (0.2 + 0.1j))
+    assert frd.inputs == ("gimbal_secondary_x",)
+    assert np.allclose(frd.response[:, 0, 0], frd.frequencies_hz * (0.2 + 0.1j))
 
 
 def test_time_history_through_a_channel_map(tmp_path):
@@ -303,7 +304,7 @@ def test_matrix_h1_recovers_both_columns_of_a_two_input_system(correlated):
 
 
 def test_h1_coherence_with_output_noise_is_the_analytic_value():
-    """White input, white output noise of std s: gamma^2 = |H|^2 / (|H|^2 + s^2), H1 error ~ eps_r (Bendat & Piersol)."""
+    """White input, output noise of std s: gamma^2 = |H|^2 / (|H|^2 + s^2); H1 error ~ eps_r (Bendat & Piersol)."""
     sys_d = _oscillator()
     rng = np.random.default_rng(2)
     n, segment = 2**15, 1024
@@ -461,7 +462,8 @@ def test_uff_nan_and_unit_errors_name_dataset_channel_and_row(tmp_path):
         f"{tmp_path / 'map.csv'}:2)")
     _lab_uff(tmp_path / "none.uff", units="NONE")
     assert _error(lambda: read_frequency_response(tmp_path / "none.uff", channel_map=cmap)) == (
-        f"{tmp_path / 'none.uff'}: dataset 1: channel '101+Z': no units label in record 9 (ordinate), expected e.g. 'V'")
+        f"{tmp_path / 'none.uff'}: dataset 1: channel '101+Z': no units label in record 9 (ordinate), "
+        "expected e.g. 'V'")
 
 
 def test_frequency_csv_errors_name_line_and_channel(tmp_path):
@@ -527,3 +529,43 @@ def test_cli_data_check_bad_file_is_one_line_and_status_2(tmp_path, capsys):
     captured = capsys.readouterr()
     assert captured.out == ""
     assert captured.err == f"mace-fmu: error: {path}:4: channel 'gyro_bus_x': value is NaN or inf (1 of 3 rows)\n"
+
+
+def _uff_pairs(path, pairs, *, frequencies=None) -> None:
+    """Dataset-58 FRFs written by pyuff, one per (output, input, frequencies) with our ID lines."""
+    import pyuff
+    datasets = []
+    for k, (out, inp) in enumerate(pairs):
+        f = np.linspace(1.0, 5.0, 5) if frequencies is None else frequencies[k]
+        datasets.append(pyuff.prepare_58(
+            binary=0, func_type=4, id4=f"output: {out}", id5=f"input: {inp}", rsp_node=1, rsp_dir=0, ref_node=1,
+            ref_dir=0, data=(1 + 1j) * f, x=f, abscissa_spacing=0, abscissa_spec_data_type=18,
+            ordinate_spec_data_type=1, orddenom_spec_data_type=1, ordinate_axis_units_lab="V",
+            orddenom_axis_units_lab="V"))
+    pyuff.UFF(str(path)).write_sets(datasets, mode="overwrite")
+
+
+def test_uff_incomplete_or_inconsistent_matrices_name_dataset_and_channels(tmp_path):
+    path = tmp_path / "three.uff"
+    _uff_pairs(path, [("y1", "u1"), ("y2", "u1"), ("y1", "u2")])
+    assert _error(lambda: read_frequency_response(path)) == (
+        f"{path}: channel 'y2'/'u2': no FRF dataset for this output/input pair (every output needs one per input)")
+    path = tmp_path / "grid.uff"
+    _uff_pairs(path, [("y1", "u1"), ("y1", "u2")], frequencies=[np.linspace(1.0, 5.0, 5), np.linspace(1.0, 6.0, 5)])
+    assert _error(lambda: read_frequency_response(path)) == (
+        f"{path}: dataset 2: channel 'y1'/'u2': frequency 2.25 Hz at row 1, dataset 1 has 2 Hz (every FRF needs the "
+        "same frequencies)")
+    path = tmp_path / "twice.uff"
+    _uff_pairs(path, [("y1", "u1"), ("y1", "u1")])
+    assert _error(lambda: read_frequency_response(path)) == f"{path}: dataset 2: channel 'y1'/'u1': same pair as dataset 1"
+
+
+def test_unknown_formats_and_missing_files_are_named(tmp_path):
+    assert _error(lambda: read_time_history(tmp_path / "run.mat")) == \
+        f"{tmp_path / 'run.mat'}: unknown time-history format '.mat' (expected one of .csv, .npz)"
+    assert _error(lambda: read_measured_data(tmp_path / "run.tdms")).startswith(
+        f"{tmp_path / 'run.tdms'}: unknown measured-data format '.tdms'")
+    assert _error(lambda: read_time_history(tmp_path / "gone.csv")) == f"{tmp_path / 'gone.csv'}: no such file"
+    assert _error(lambda: read_frequency_response(tmp_path / "gone.uff")) == f"{tmp_path / 'gone.uff'}: no such file"
+    assert _error(lambda: read_channel_map(tmp_path / "gone.csv")) == \
+        f"{tmp_path / 'gone.csv'}: no such channel-map file"

@@ -22,7 +22,7 @@ __all__ = ["Channel", "ChannelMap", "read_channel_map", "read_time_history", "wr
 
 def read_measured_data(path: str | Path, *, channel_map: ChannelMap | None = None,
                        sample_time_s: float | None = None) -> TimeHistory | FrequencyResponseData:
-    """A time history (``.npz``, CSV starting ``time [s]``) or a frequency response (UFF, CSV starting ``frequency [Hz]``)."""
+    """A time history (``.npz``, CSV from ``time [s]``) or a frequency response (UFF, CSV from ``frequency [Hz]``)."""
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix in (".uff", ".unv"):

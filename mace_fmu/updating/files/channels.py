@@ -104,8 +104,8 @@ def read_channel_map(path: str | Path) -> ChannelMap:
         empty = [c for c in MAP_COLUMNS if not row[c] and not (c == "signal" and row["role"] == "ignore")]
         if empty:
             raise MaceError(f"{path}:{number}: empty {', '.join(empty)} (every channel needs {', '.join(MAP_COLUMNS)})")
-        channels.append(Channel(channel=row["channel"], signal=row["signal"], role=row["role"],  # type: ignore[arg-type]
-                                unit=row["unit"], line=number))
+        channels.append(Channel(channel=row["channel"], signal=row["signal"],
+                                role=row["role"], unit=row["unit"], line=number))  # type: ignore[arg-type]
     if not channels:
         raise MaceError(f"{path}: no channels (expected {expected})")
     return ChannelMap(tuple(channels), source=str(path))

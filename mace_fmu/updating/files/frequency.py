@@ -136,7 +136,8 @@ def _write_csv(frd: FrequencyResponseData, path: Path) -> None:
 
 def _uff_channel(dataset: dict, role: str) -> str:
     """The channel name of one end of a dataset 58: the ID-line name, else "<node><sign><axis>", e.g. "101+Z"."""
-    id_line, prefix = (dataset.get("id4", ""), UFF_OUTPUT_ID) if role == "output" else (dataset.get("id5", ""), UFF_INPUT_ID)
+    id_line, prefix = ((dataset.get("id4", ""), UFF_OUTPUT_ID) if role == "output"
+                       else (dataset.get("id5", ""), UFF_INPUT_ID))
     if str(id_line).startswith(prefix):
         return str(id_line)[len(prefix):].strip()
     node, direction = (dataset["rsp_node"], dataset["rsp_dir"]) if role == "output" else \
@@ -225,8 +226,12 @@ def _read_uff(path: Path, channel_map: ChannelMap | None) -> FrequencyResponseDa
         if not k0:
             k0, f0 = k, f
         if f.shape != f0.shape or not np.array_equal(f, f0):
-            raise MaceError(f"{at}: channel {channel_of[ends[0]]!r}/{channel_of[ends[1]]!r}: frequencies differ "
-                            f"from dataset {k0}'s ({f.size} points from {f[0]:.6g} Hz vs {f0.size} from {f0[0]:.6g} Hz)")
+            pair = f"{at}: channel {channel_of[ends[0]]!r}/{channel_of[ends[1]]!r}"
+            if f.shape != f0.shape:
+                raise MaceError(f"{pair}: {f.size} frequencies, dataset {k0} has {f0.size}")
+            row = int(np.flatnonzero(f != f0)[0])
+            raise MaceError(f"{pair}: frequency {f[row]:.6g} Hz at row {row}, dataset {k0} has {f0[row]:.6g} Hz "
+                            "(every FRF needs the same frequencies)")
         bad = np.flatnonzero(~np.isfinite(h))
         if bad.size:
             raise MaceError(f"{at}: channel {channel_of[ends[0]]!r}/{channel_of[ends[1]]!r}: the response is "
