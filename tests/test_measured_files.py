@@ -35,7 +35,7 @@ def _frd(seed: int = 0) -> FrequencyResponseData:
     rng = np.random.default_rng(seed)
     f = np.sort(rng.uniform(0.1, 40.0, 37))
     h = rng.standard_normal((37, 2, 3)) + 1j * rng.standard_normal((37, 2, 3))
-    return FrequencyResponseData(f, ("gimbal_primary_x", "gimbal_primary_y", "gimbal_secondary_z"),
+    return FrequencyResponseData(f, ("gimbal_primary_x", "gimbal_primary_z", "gimbal_secondary_z"),
                                  ("gyro_bus_x", "gyro_payload_z"), h * np.logspace(-6, 2, 37)[:, None, None])
 
 
@@ -102,7 +102,7 @@ def test_frequency_response_uff58_round_trip_to_the_digits_the_format_keeps(tmp_
     import pyuff
     datasets = pyuff.UFF(str(path)).read_sets()
     assert len(datasets) == 6 and {d["func_type"] for d in datasets} == {4}
-    assert (datasets[1]["id4"], datasets[1]["id5"]) == ("output: gyro_bus_x", "input: gimbal_primary_y")
+    assert (datasets[1]["id4"], datasets[1]["id5"]) == ("output: gyro_bus_x", "input: gimbal_primary_z")
     assert isinstance(read_measured_data(path), FrequencyResponseData)
 
 
@@ -569,3 +569,20 @@ def test_unknown_formats_and_missing_files_are_named(tmp_path):
     assert _error(lambda: read_frequency_response(tmp_path / "gone.uff")) == f"{tmp_path / 'gone.uff'}: no such file"
     assert _error(lambda: read_channel_map(tmp_path / "gone.csv")) == \
         f"{tmp_path / 'gone.csv'}: no such channel-map file"
+
+
+def test_measured_signals_are_checked_against_the_model(tmp_path):
+    from mace_fmu.updating.files import check_model_signals
+    # names of the 0-g volts-volts model (volts_model("0g").system.input_labels / output_labels), in part
+    inputs = ["gimbal_primary_x", "gimbal_primary_z", "gimbal_secondary_x", "gimbal_secondary_z"]
+    outputs = ["gyro_payload_x", "gyro_payload_z", "gyro_bus_x", "gyro_bus_y", "gyro_bus_z"]
+    path = write_time_history(_history(), tmp_path / "run.npz")
+    history = read_time_history(path)
+    check_model_signals(history, model_inputs=inputs, model_outputs=outputs)
+    typo = TimeHistory(np.arange(3.0), {"gimbal_primary_x": np.zeros(3)}, {"gyro_payload_y": np.zeros(3)},
+                       source="run.csv")
+    assert _error(lambda: check_model_signals(typo, model_inputs=inputs, model_outputs=outputs)) == \
+        "run.csv: signal 'gyro_payload_y' is not a model output; did you mean gyro_payload_z, gyro_payload_x?"
+    swapped = TimeHistory(np.arange(3.0), {"gyro_bus_x": np.zeros(3)}, {"gyro_bus_y": np.zeros(3)}, source="run.csv")
+    assert _error(lambda: check_model_signals(swapped, model_inputs=inputs, model_outputs=outputs)) == \
+        "run.csv: signal 'gyro_bus_x' is measured as an input but is a model output"

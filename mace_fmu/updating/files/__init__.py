@@ -14,10 +14,12 @@ from mace_fmu.updating.data import FrequencyResponseData, TimeHistory
 from mace_fmu.updating.files.channels import Channel, ChannelMap, read_channel_map
 from mace_fmu.updating.files.frequency import FRF_SUFFIXES, read_frequency_response, write_frequency_response
 from mace_fmu.updating.files.h1 import h1_estimate
+from mace_fmu.updating.files.signals import check_model_signals
 from mace_fmu.updating.files.timehistory import TIME_SUFFIXES, read_time_history, write_time_history
 
 __all__ = ["Channel", "ChannelMap", "read_channel_map", "read_time_history", "write_time_history",
-           "read_frequency_response", "write_frequency_response", "h1_estimate", "read_measured_data"]
+           "read_frequency_response", "write_frequency_response", "h1_estimate", "read_measured_data",
+           "check_model_signals"]
 
 
 def read_measured_data(path: str | Path, *, channel_map: ChannelMap | None = None,
