@@ -184,8 +184,9 @@ class TimeHistory:
             k = int(np.flatnonzero(dt <= 0)[0]) + 1
             raise DataError(f"{self.source}: time is not increasing at row {k}", source=self.source,
                             what=f"time is not increasing ({float(t[k - 1])!r} s, then {float(t[k])!r} s)", row=k)
-        if not np.allclose(dt, dt[0], rtol=1e-6, atol=0.0):
-            k = int(np.argmax(np.abs(dt - dt[0]))) + 1
+        uneven = ~np.isclose(dt, dt[0], rtol=1e-6, atol=0.0)
+        if uneven.any():
+            k = int(np.flatnonzero(uneven)[0]) + 1  # the first sample off the grid, as a file reader reports it
             raise DataError(f"{self.source}: samples are not uniformly spaced (step {dt[0]:.6g} s, but "
                             f"{dt[k - 1]:.6g} s at row {k})", source=self.source, row=k,
                             what=f"samples are not uniformly spaced (step {dt[0]:.6g} s, but {dt[k - 1]:.6g} s here)")
