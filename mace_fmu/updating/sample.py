@@ -18,13 +18,13 @@ from dataclasses import dataclass, field
 from typing import Mapping
 
 import numpy as np
-import scipy.signal as signal
 
 from mace_fmu.thesis import thesis_data
 from mace_fmu.threads import single_blas_thread
 from mace_fmu.two_mass import TwoMassSystem
 from mace_fmu.updating.costs import Cost, FrequencyResponseCost, ModalCost, TimeResponseCost
 from mace_fmu.updating.data import FrequencyResponseData, MeasuredMode, TimeHistory
+from mace_fmu.updating.files import h1_estimate
 from mace_fmu.updating.model import simulate_discrete, zoh_transition
 from mace_fmu.updating.sample_family import MODE_LABELS, TwoMassFamily
 from mace_fmu.updating.solve import Bounds, Stage, UpdateResult, UpdateSettings, update
@@ -77,22 +77,10 @@ def generate_data(settings: SampleSettings = SampleSettings(), actual: TwoMassSy
     y = y + settings.noise_fraction * np.std(y) * rng.standard_normal(n)
     times = dt * np.arange(n)
     record = TimeHistory(times, {"force_1": u}, {"displacement_1": y}, source="sample problem (simulated)")
-    frf = h1_estimate(record, segment=settings.segment, band_hz=settings.band_hz)
+    frf = h1_estimate(record, segment_length=settings.segment, band_hz=settings.band_hz)
     approx = actual.modes()[0] / (2 * np.pi)
     return SampleData(actual=actual, time=record, frf=frf, measurement_model=fit_measurement_model(frf, approx),
                       settings=settings)
-
-
-def h1_estimate(record: TimeHistory, *, segment: int, band_hz: tuple[float, float]) -> FrequencyResponseData:
-    """H1 = S_uy / S_uu of the first input and output (Welch averages, Hann window, half overlap)."""
-    (u_name, u), = record.inputs.items()
-    (y_name, y), = record.outputs.items()
-    fs = 1.0 / record.sample_time_s
-    f, s_uy = signal.csd(u, y, fs=fs, nperseg=segment, window="hann")
-    _, s_uu = signal.welch(u, fs=fs, nperseg=segment, window="hann")
-    keep = (f >= band_hz[0]) & (f <= band_hz[1])
-    return FrequencyResponseData(f[keep], (u_name,), (y_name,), (s_uy / s_uu)[keep][:, None, None],
-                                 source=f"H1 estimate of {record.source} (Welch, Hann, {segment} samples per segment)")
 
 
 def fit_measurement_model(frf: FrequencyResponseData, approx_hz: np.ndarray) -> MeasurementModel:
