@@ -31,6 +31,13 @@ class ParameterBox:
     nominal: np.ndarray  #: (n,) the FMU's start values
     low: np.ndarray  #: (n,)
     high: np.ndarray  #: (n,)
+    descriptions: tuple[str, ...] = ()  #: the model description's text of each
+
+    def label(self, index: int) -> str:
+        """Short name of parameter ``index``: the mode label in its description's parentheses, else its name."""
+        text = self.descriptions[index] if index < len(self.descriptions) else ""
+        start, end = text.find("("), text.find(")")
+        return text[start + 1:end] if 0 <= start < end else self.names[index]
 
 
 @dataclass(frozen=True)
@@ -40,6 +47,12 @@ class SweepPoint:
     kind: PointKind
     values: tuple[float, ...]  #: in the order of ParameterBox.names
     note: str = ""  #: screen: "<name> low|high"; corner: the critical parameters' signs
+
+
+def short_name(name: str) -> str:
+    """"mode 14" for frequency_scale_mode_14, else the name itself (for notes and summaries)."""
+    prefix = DEFAULT_PATTERN.rstrip("*")
+    return f"mode {name[len(prefix):]}" if name.startswith(prefix) else name
 
 
 def read_box(fmu: str | os.PathLike, *, pattern: str = DEFAULT_PATTERN,
@@ -53,7 +66,7 @@ def read_box(fmu: str | os.PathLike, *, pattern: str = DEFAULT_PATTERN,
     unknown = [n for n in ranges if n not in real]
     if unknown:
         raise MaceError(f"{os.fspath(fmu)}: no real parameter(s) {', '.join(unknown)} to give a range")
-    names, nominal, low, high = [], [], [], []
+    names, nominal, low, high, texts = [], [], [], [], []
     for name, var in real.items():
         start = float(var.start)
         if name in ranges:
@@ -68,10 +81,12 @@ def read_box(fmu: str | os.PathLike, *, pattern: str = DEFAULT_PATTERN,
             raise MaceError(f"{os.fspath(fmu)}: parameter {name}: range [{lo:g}, {hi:g}] must be finite, "
                             f"increasing and hold its start value {start:g}")
         names.append(name), nominal.append(start), low.append(lo), high.append(hi)
+        texts.append(var.description or "")
     if not names:
         raise MaceError(f"{os.fspath(fmu)} has no real parameter matching {pattern!r} with finite, distinct min and "
                         "max, and none was given a range: export the 0-g FMU with its frequency bounds")
-    return ParameterBox(names=tuple(names), nominal=np.array(nominal), low=np.array(low), high=np.array(high))
+    return ParameterBox(names=tuple(names), nominal=np.array(nominal), low=np.array(low), high=np.array(high),
+                        descriptions=tuple(texts))
 
 
 def nominal_point(box: ParameterBox) -> SweepPoint:
@@ -86,7 +101,7 @@ def screening_points(box: ParameterBox) -> list[SweepPoint]:
         for end, value in (("low", box.low[i]), ("high", box.high[i])):
             v = box.nominal.copy()
             v[i] = value
-            points.append(SweepPoint(kind="screen", values=tuple(v.tolist()), note=f"{name} {end}"))
+            points.append(SweepPoint(kind="screen", values=tuple(v.tolist()), note=f"{short_name(name)} {end}"))
     return points
 
 
@@ -97,7 +112,7 @@ def corner_points(box: ParameterBox, critical: list[int]) -> list[SweepPoint]:
         v = box.nominal.copy()
         for i, end in zip(critical, ends):
             v[i] = box.high[i] if end else box.low[i]
-        note = " ".join(f"{box.names[i]}{'+' if end else '-'}" for i, end in zip(critical, ends))
+        note = ", ".join(f"{short_name(box.names[i])} {'high' if end else 'low'}" for i, end in zip(critical, ends))
         points.append(SweepPoint(kind="corner", values=tuple(v.tolist()), note=note))
     return points
 
