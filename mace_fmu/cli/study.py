@@ -192,7 +192,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     o.add_argument("--rho", type=float, default=0.01, help="LQG control weighting (default 0.01)")
     o.add_argument("--theta", type=float, default=0.1, help="LQG sensor noise intensity (default 0.1)")
     o.add_argument("--states", type=int, default=30, help="states of the reduced design model (default 30)")
-    o.add_argument("--duration", type=float, default=3.0, help="simulated time of each run [s] (default 3)")
+    o.add_argument("--duration", type=float, default=4.0, help="simulated time of each run [s]: 1 s of disturbance, "
+                   "then settling (default 4)")
     o.add_argument("--scheduler", help="address of a Dask scheduler, e.g. tcp://host:8786 (default: a local cluster)")
     o.add_argument("--workers", type=int, default=None, help="local cluster workers (default: the machine's cores)")
     o.add_argument("--serial", action="store_true", help="run in this process, no Dask")

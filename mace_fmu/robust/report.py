@@ -23,8 +23,8 @@ def format_summary(result: SweepResult, design: RobustDesign | None = None, *, d
     loop, box = result.loop, result.box
     nominal, open_cost = result.nominal.cost_rms_v, result.open_loop.cost_rms_v
     lines = [f"loop: {loop.control_input} <- K <- {loop.measurement}; disturbance {loop.disturbance_amplitude_v:g} V "
-             f"square wave, period {loop.disturbance_period_s:g} s, on {loop.disturbance_input}; "
-             f"{loop.duration_s:g} s at {1e3 * loop.step_s:g} ms"]
+             f"square wave on {loop.disturbance_input}, {loop.disturbance_periods} x {loop.disturbance_period_s:g} s, "
+             f"then 0; {loop.duration_s:g} s at {1e3 * loop.step_s:g} ms"]
     if design is not None:
         lines.append(f"design: nominal model ({design.channels.nstates} states), balanced truncation to "
                      f"{design.reduced.nstates} states; LQG rho = {design.weights.rho:g}, theta = {design.weights.theta:g}"
