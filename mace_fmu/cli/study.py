@@ -115,10 +115,11 @@ def _bounds(args: argparse.Namespace) -> tuple[object, dict[int, float], str]:
     except ImportError:
         raise MaceError("the updated nominal 0-g model with Table 5.3's bounds is not in this build; give the "
                         "bounds with --bound MODE=PERCENT") from None
-    progress("updated nominal 0-g model and Table 5.3 bounds")
+    from mace_fmu.robust.study import prediction_bounds
+
+    progress("updated nominal 0-g model and Table 5.3 bounds (about a minute)")
     prediction = predict_zero_g()
-    bounds = {row.mode: row.bound for row in prediction.rows if row.mode is not None}
-    return prediction.model, bounds, "Table 5.3 (updated nominal 0-g model)"
+    return prediction.model, prediction_bounds(prediction), "Table 5.3 (updated nominal 0-g model)"
 
 
 def cmd_robust_0g(args: argparse.Namespace) -> int:

@@ -51,6 +51,12 @@ class RobustStudy:
     cross_checks: tuple[CrossCheck, ...]  #: nominal and worst point
 
 
+def prediction_bounds(prediction) -> dict[int, float]:
+    """1-based open-loop mode -> relative frequency bound of a ``zero_g.ZeroGPrediction`` (Table 5.3's rows
+    that fall on a flexible mode; the gimbal pendulum rows are servo poles, not modes the FMU can scale)."""
+    return {row.mode: row.bound for row in prediction.rows if row.mode is not None}
+
+
 def cross_check(model: VoltsModel, sweep: SweepResult, design: RobustDesign, *, point: int) -> CrossCheck:
     """Sweep point ``point`` again through the Python model in a sampled state-space loop."""
     from mace_fmu.iomodel.parametric import ParametricSystem
