@@ -68,6 +68,8 @@ def test_box_is_the_fmus_declared_frequency_bounds(bounded_fmu):
     assert set(more.names) == {*SCALES, "damping_mode_17"} and (more.low[k], more.high[k]) == (0.001, 0.05)
     with pytest.raises(MaceError, match="hold its start value"):
         read_box(bounded_fmu, ranges={"damping_mode_17": (0.5, 0.6)})
+    with pytest.raises(MaceError, match=r"range \[0.9, 1.1\] leaves its declared \[0.975, 1.025\]"):
+        read_box(bounded_fmu, ranges={"frequency_scale_mode_17": (0.9, 1.1)})
     with pytest.raises(MaceError, match="no real parameter matching 'K_\\*'"):
         read_box(bounded_fmu, pattern="K_*")
 
@@ -135,6 +137,17 @@ def test_fmu_co_simulation_equals_the_state_space_closed_loop(unzipped, design, 
     # the frequency scale reached the FMU: the nominal run differs
     nominal = run_fmu_loop(unzipped, loop=loop, compensator=SampledCompensator.of(design.compensator), parameters={})
     assert abs(nominal.verdict.cost_rms_v / run.verdict.cost_rms_v - 1) > 1e-3
+
+
+def test_a_refused_run_is_reported_not_printed(unzipped, design, capfd):
+    """The FMU's own error (a value outside the declared bound) comes back in the run, not on the console."""
+    from mace_fmu.robust.cosim import SampledCompensator, run_fmu_loop
+
+    run = run_fmu_loop(unzipped, loop=LoopSpec(), compensator=SampledCompensator.of(design.compensator),
+                       parameters={"frequency_scale_mode_17": 0.5})
+    assert "frequency_scale_mode_17 = 0.5 is outside its range [0.975, 1.025]" in run.failure
+    assert not run.verdict.stable and run.verdict.cost_rms_v == float("inf")
+    assert capfd.readouterr() == ("", "")
 
 
 def test_growth_test_finds_the_unstable_loop_the_eigenvalues_find(unzipped, model_0g, reference, design):

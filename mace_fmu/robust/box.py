@@ -71,6 +71,10 @@ def read_box(fmu: str | os.PathLike, *, pattern: str = DEFAULT_PATTERN,
         start = float(var.start)
         if name in ranges:
             lo, hi = (float(x) for x in ranges[name])
+            declared = (float(var.min) if var.min is not None else -np.inf, float(var.max) if var.max is not None else np.inf)
+            if lo < declared[0] or hi > declared[1]:
+                raise MaceError(f"{os.fspath(fmu)}: parameter {name}: range [{lo:g}, {hi:g}] leaves its declared "
+                                f"[{declared[0]:g}, {declared[1]:g}], which the FMU enforces")
         elif fnmatch.fnmatchcase(name, pattern) and var.min is not None and var.max is not None:
             lo, hi = float(var.min), float(var.max)
             if not (np.isfinite(lo) and np.isfinite(hi) and lo < hi):

@@ -47,9 +47,18 @@ def run_fmu_loop(unzipped: str | os.PathLike, *, loop: LoopSpec, compensator: Sa
                  parameters: dict[str, float]) -> LoopRun:
     """Close ``compensator`` around the extracted FMU in ``unzipped`` with ``parameters`` set; see the module."""
     import fmpy
+    from fmpy import calloc, free
     from fmpy.fmi1 import FMICallException
-    from fmpy.fmi2 import FMU2Slave
+    from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
+                           fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
 
+    # the FMU's messages are kept for the failure text, not printed (fmpy's default logger prints)
+    messages: list[str] = []
+    callbacks = fmi2CallbackFunctions()
+    callbacks.logger = fmi2CallbackLoggerTYPE(
+        lambda env, instance, status, category, message: messages.append(message.decode(errors="replace")))
+    callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+    callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
     unzipped = os.fspath(unzipped)
     md = fmpy.read_model_description(unzipped)
     vr = {v.name: v.valueReference for v in md.modelVariables}
@@ -62,7 +71,7 @@ def run_fmu_loop(unzipped: str | os.PathLike, *, loop: LoopSpec, compensator: Sa
     failure = ""
     # one BLAS thread: the compensator's products then sum in one order, serial or on a Dask worker
     with threadpool_limits(limits=1, user_api="blas"):
-        fmu.instantiate()
+        fmu.instantiate(callbacks=callbacks)
         try:
             fmu.setupExperiment(startTime=0.0)
             fmu.enterInitializationMode()
@@ -80,7 +89,7 @@ def run_fmu_loop(unzipped: str | os.PathLike, *, loop: LoopSpec, compensator: Sa
                 fmu.doStep(currentCommunicationPoint=k * loop.step_s, communicationStepSize=loop.step_s)
             fmu.terminate()
         except FMICallException as exc:  # e.g. the FMU refuses a state that overflowed: the loop diverged
-            failure = str(exc)
+            failure = " ".join([str(exc), *messages[-3:]])
         finally:
             fmu.freeInstance()
     return LoopRun(measurement_v=y_out, control_v=u_out, verdict=judge(y_out, loop), failure=failure)
