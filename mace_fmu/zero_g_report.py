@@ -5,6 +5,7 @@ from __future__ import annotations
 import csv
 import io
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -126,3 +127,37 @@ def write_prediction(prediction: ZeroGPrediction, out_dir: str | Path) -> dict[s
             "toml": write_text_atomic(out / "table_5_3.toml", as_toml(prediction)),
             "text": write_text_atomic(out / "table_5_3.txt", format_table(prediction) + "\n"),
             "parameters": prediction.parameters.write(out / "zero_g_nominal.toml")}
+
+
+def read_frequency_bounds(path: str | Path, *, mode_labels: Sequence[str]) -> dict[int, float]:
+    """The FMU frequency bounds (1-based open-loop mode -> relative bound) of a table_5_3.toml written by
+    :func:`write_prediction`, checked against the open-loop ``mode_labels`` of the model they are for (the same
+    mode numbers must name the same modes); rows without an FMU mode (servo mechanisms) carry none."""
+    import tomllib
+
+    from mace_fmu.errors import MaceError
+
+    try:
+        data = tomllib.loads(Path(path).read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise MaceError(f"{path}: no such frequency-bounds file") from None
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
+        raise MaceError(f"{path}: not a predict-0g table (TOML): {exc}") from None
+    rows = data.get("mode")
+    if not isinstance(rows, list) or not rows:
+        raise MaceError(f"{path}: no [[mode]] rows (expected the table_5_3.toml of mace-fmu predict-0g)")
+    bounds: dict[int, float] = {}
+    for k, row in enumerate(rows, start=1):
+        if "mode" not in row:
+            continue
+        mode, percent = row.get("mode"), row.get("bound_percent")
+        if isinstance(mode, bool) or not isinstance(mode, int) or mode < 1 or isinstance(percent, bool) \
+                or not isinstance(percent, (int, float)) or not 0.0 <= percent < 100.0:
+            raise MaceError(f"{path}: [[mode]] {k}: expected a mode number >= 1 and bound_percent in [0, 100), got "
+                            f"mode = {mode!r}, bound_percent = {percent!r}")
+        if mode > len(mode_labels) or mode_labels[mode - 1] != row.get("mode_label"):
+            have = mode_labels[mode - 1] if mode <= len(mode_labels) else "no such mode"
+            raise MaceError(f"{path}: [[mode]] {k}: mode {mode} is {row.get('mode_label')!r} there but {have!r} in "
+                            "this model (made with other options or parameters?)")
+        bounds[mode] = percent / 100.0
+    return bounds

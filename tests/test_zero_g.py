@@ -255,3 +255,22 @@ def test_measured_modes_that_cannot_be_paired_are_refused(rows, column, message,
     err = capsys.readouterr().err.splitlines()[-1]
     assert err.startswith("mace-fmu: error:") and message in err, err
     assert not out.exists()
+
+
+def test_export_with_the_nominal_set_and_bounds_gives_the_same_fmu_variables(run, tmp_path, capsys):
+    """`mace-fmu export 0g --parameters zero_g_nominal.toml --frequency-bounds table_5_3.toml` = predict-0g --fmu."""
+    _, out = run
+    assert main(["export", "0g", "--parameters", str(out / "zero_g_nominal.toml"), "--frequency-bounds",
+                 str(out / "table_5_3.toml"), "-o", str(tmp_path)]) == 0
+    exported = {v.name: v for v in fmpy.read_model_description(str(tmp_path / "MACE_0g_native.fmu")).modelVariables}
+    predicted = {v.name: v for v in fmpy.read_model_description(
+        str(out / "MACE_0g_native_nominal.fmu")).modelVariables}
+    assert exported.keys() == predicted.keys()
+    for name, v in predicted.items():
+        if v.causality == "parameter":
+            assert (exported[name].start, exported[name].min, exported[name].max) == (v.start, v.min, v.max), name
+    # bounds made for another model (modes up to 30 Hz only): refused before anything is written
+    assert main(["export", "0g", "--max-hz", "30", "--frequency-bounds", str(out / "table_5_3.toml"), "-o",
+                 str(tmp_path / "other")]) == 2
+    assert "no such mode" in capsys.readouterr().err
+    assert not (tmp_path / "other").exists()
