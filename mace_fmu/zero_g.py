@@ -35,6 +35,7 @@ from mace_fmu.iomodel.volts import VoltsModel, volts_model
 from mace_fmu.parameters import (DAMPING_PREFIX, FREQUENCY_SCALE_PREFIX, ParameterSet, Provenance,
                                  deck_fingerprint, now_utc, tool_version)
 from mace_fmu.thesis import thesis_data
+from mace_fmu.threads import single_blas_thread
 from mace_fmu.updating.data import MeasuredMode, read_measured_modes
 from mace_fmu.updating.mace_update import measured_modes
 from mace_fmu.updating.pairing import REAL_POLE_DAMPING, pair_poles
@@ -148,8 +149,10 @@ def _pair(modes: Sequence[tuple[str, str, float]], poles: Sequence[ClosedLoopPol
     missing = [f"{label!r} ({hz:.3f} Hz, pattern {pattern!r})" for (label, pattern, hz), i in zip(modes, index)
                if i is None]
     if missing:
-        raise MaceError(f"measured mode(s) {', '.join(missing)} pair with no pole of {what}; poles: "
-                        + ", ".join(sorted({p.label for p in poles if p.damping < REAL_POLE_DAMPING})))
+        low, high = min(hz for *_, hz in modes) / 2, max(hz for *_, hz in modes) * 2
+        near = sorted({p.label for p in poles if p.damping < REAL_POLE_DAMPING and low <= p.frequency_hz <= high})
+        raise MaceError(f"measured mode(s) {', '.join(missing)} pair with no pole of {what}; its poles from "
+                        f"{low:.3g} to {high:.3g} Hz: {', '.join(near)}")
     return [int(i) for i in index]
 
 
@@ -247,6 +250,7 @@ def _deck_provenance(parameters: ParameterSet | None, deck: Deck | None, *, sour
                       notes=f"from a {base.structure or 'parameter'} set made {base.created} ({base.method})".strip())
 
 
+@single_blas_thread
 def predict_zero_g(*, parameters: ParameterSet | None = None, measured: Sequence[MeasuredMode] | None = None,
                    zero_g_patterns: Sequence[str | None] | None = None, rule: BoundRule = BoundRule(),
                    deck: Deck | None = None, source: str = "Table 4.7 measurement model",
