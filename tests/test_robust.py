@@ -218,6 +218,18 @@ def test_cli_robust_0g_writes_the_figure_runs_and_summary(tmp_path, capsys):
     diffs = [float(x) for x in re.findall(r"rel\. diff ([0-9.e+-]+)\)", printed)]
     assert len(diffs) == 2 and max(diffs) < 1e-9  # nominal and worst point, FMU against state space
     assert np.asarray(Image.open(tmp_path / "robust_0g.png").convert("L"), dtype=float).std() > 10.0
+    # the same bounds from a predict-0g table (mode numbers checked against the model's labels)
+    table = tmp_path / "table_5_3.toml"
+    table.write_text('[[mode]]\nmode = 15\nmode_label = "1st Y bending"\nbound_percent = 1.1\n\n'
+                     '[[mode]]\nmode = 17\nmode_label = "2nd Z bending"\nbound_percent = 2.5\n')
+    again = tmp_path / "again"
+    assert main(["study", "robust-0g", "--frequency-bounds", str(table), "--samples", "0", "--critical", "1",
+                 "--serial", "--duration", "3", "-o", str(again)]) == 0
+    capsys.readouterr()
+    first = (tmp_path / "robust_0g_runs.csv").read_text().splitlines()
+    assert (again / "robust_0g_runs.csv").read_text().splitlines() == first[:1 + 1 + 4 + 2]  # same runs, bit for bit
+    assert main(["study", "robust-0g", "--frequency-bounds", str(table), "--bound", "15=1", "-o", str(again)]) == 2
+    assert "either with --bound or with --frequency-bounds" in capsys.readouterr().err
     assert main(["study", "robust-0g", "--bound", "17", "-o", str(tmp_path)]) == 2
     assert "--bound takes MODE=PERCENT" in capsys.readouterr().err
     assert main(["study", "robust-0g", "--bound", "999=1.0", "--serial", "-o", str(tmp_path)]) == 2

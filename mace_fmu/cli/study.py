@@ -98,8 +98,21 @@ def cmd_reduced_order(args: argparse.Namespace) -> int:
 
 def _bounds(args: argparse.Namespace) -> tuple[object, dict[int, float], str]:
     """(nominal 0-g volts model, 1-based mode -> relative bound, where the bounds come from)."""
+    from mace_fmu.cli.common import parameters
     from mace_fmu.iomodel.volts import volts_model
 
+    if args.bound and args.frequency_bounds:
+        raise MaceError("give the bounds either with --bound or with --frequency-bounds, not both")
+    if args.frequency_bounds and not Path(args.frequency_bounds).is_file():
+        raise MaceError(f"--frequency-bounds {args.frequency_bounds}: no such file")
+    if args.bound or args.frequency_bounds:
+        params = parameters(args)
+        progress("0-g volts model" + (f" with {args.parameters}" if params is not None else " (nominal, not updated)"))
+        model = volts_model("0g", parameters=params)
+    if args.frequency_bounds:
+        from mace_fmu.zero_g_report import read_frequency_bounds
+
+        return model, read_frequency_bounds(args.frequency_bounds, mode_labels=model.plant.labels), args.frequency_bounds
     if args.bound:
         bounds = {}
         for text in args.bound:
@@ -108,16 +121,14 @@ def _bounds(args: argparse.Namespace) -> tuple[object, dict[int, float], str]:
                 bounds[int(mode)] = float(percent) / 100.0
             except ValueError:
                 raise MaceError(f"--bound takes MODE=PERCENT (e.g. 17=2.5 for mode 17 within +-2.5 %), got {text!r}") from None
-        progress("nominal 0-g volts model (bounds from --bound)")
-        return volts_model("0g"), bounds, "--bound"
-    try:
-        from mace_fmu.zero_g import predict_zero_g
-    except ImportError:
-        raise MaceError("the updated nominal 0-g model with Table 5.3's bounds is not in this build; give the "
-                        "bounds with --bound MODE=PERCENT") from None
+        return model, bounds, "--bound"
+    if args.parameters:
+        raise MaceError("--parameters needs its bounds: --frequency-bounds table_5_3.toml or --bound MODE=PERCENT")
     from mace_fmu.robust.study import prediction_bounds
+    from mace_fmu.zero_g import predict_zero_g
 
-    progress("updated nominal 0-g model and Table 5.3 bounds (about a minute)")
+    progress("updated nominal 0-g model and Table 5.3 bounds (about a minute; mace-fmu predict-0g -o DIR writes "
+             "them once for --parameters and --frequency-bounds)")
     prediction = predict_zero_g()
     return prediction.model, prediction_bounds(prediction), "Table 5.3 (updated nominal 0-g model)"
 
@@ -190,6 +201,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "cost most alone (default 4; all corners if there are at most N)")
     o.add_argument("--bound", action="append", metavar="MODE=PERCENT",
                    help="frequency bound of a mode, e.g. 17=2.5; repeat (default: Table 5.3's, updated nominal model)")
+    o.add_argument("--frequency-bounds", metavar="FILE", help="table_5_3.toml of mace-fmu predict-0g: its bounds")
+    o.add_argument("--parameters", metavar="FILE", help="parameter set of the 0-g model, e.g. zero_g_nominal.toml of "
+                   "mace-fmu predict-0g (with --frequency-bounds or --bound; default with neither: predict it)")
     o.add_argument("--rho", type=float, default=0.01, help="LQG control weighting (default 0.01)")
     o.add_argument("--theta", type=float, default=0.1, help="LQG sensor noise intensity (default 0.1)")
     o.add_argument("--states", type=int, default=30, help="states of the reduced design model (default 30)")
