@@ -48,7 +48,8 @@ def format_summary(result: SweepResult, design: RobustDesign | None = None, *, d
                      f"max {finite.max():.4f}")
     worst = result.worst
     run, point = result.runs[worst], result.points[worst]
-    where = point.note if point.kind == "corner" else f"sample {worst - result.points.index(next(p for p in result.points if p.kind == 'sample'))}"
+    first_sample = next((i for i, p in enumerate(result.points) if p.kind == "sample"), worst)
+    where = point.note if point.kind == "corner" else f"sample {worst - first_sample} (0-based)"
     lines.append(f"worst: {run.cost_rms_v:.4f} ({100 * (run.cost_rms_v / nominal - 1):+.1f} % on nominal, "
                  f"{_db(run.cost_rms_v / open_cost)} on open loop), {point.kind} {where}"
                  + ("" if run.stable else " - UNSTABLE"))

@@ -138,7 +138,8 @@ def robust_sweep(fmu: str | os.PathLike, *, compensator, loop: LoopSpec = LoopSp
         first_runs = list(runner(run, [p.values for p in first]))
         nominal = first_runs[0].cost_rms_v
         screen = np.array([r.cost_rms_v for r in first_runs[1:]]).reshape(len(box.names), 2)
-        effect = np.max(np.abs(np.nan_to_num(screen - nominal, posinf=np.inf)), axis=1)
+        # a failed run (inf) is the strongest effect; an unstable nominal point (inf - inf) leaves no ranking
+        effect = np.nan_to_num(np.abs(screen - nominal), nan=0.0).max(axis=1)
         if len(box.names) <= critical_count:
             critical = list(range(len(box.names)))
         else:  # stable sort: ties keep the box's order
