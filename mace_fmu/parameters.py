@@ -10,7 +10,10 @@ A parameter set maps names to values in SI units. The names are the FMUs' own:
   delay (Table 4.6), e.g. ``delay_gimbal_primary_x``, ``delay_gyro_bus_y``;
 - ``K_a`` [V/deg], ``K_r`` [V/(deg/s)] gimbal servo gains, ``K_f``, ``K_b`` wheel speed loop gains;
 - ``damping:<mode label>`` open-loop modal damping ratio of the modes with that label, e.g.
-  ``damping:1st Z bending``.
+  ``damping:1st Z bending``;
+- ``frequency_scale:<mode label>`` [-] factor on the open-loop natural frequency of the modes with
+  that label, after the FE analysis (the updated nominal 0-g model of thesis 5.3 is made of these
+  and damping ratios, see mace_fmu.zero_g).
 
 Names not given keep the deck's and the data file's values.
 """
@@ -31,11 +34,12 @@ from mace_fmu.atomic import write_text_atomic
 from mace_fmu.datafile import data_file_path, read_data_file
 from mace_fmu.errors import MaceError
 
-ParameterKind = Literal["modulus", "spring", "delay", "gain", "damping"]
+ParameterKind = Literal["modulus", "spring", "delay", "gain", "damping", "frequency_scale"]
 DAMPING_PREFIX = "damping:"
+FREQUENCY_SCALE_PREFIX = "frequency_scale:"
 SERVO_GAINS = {"K_a": "gimbal_angle_gain", "K_r": "gimbal_rate_gain", "K_f": "wheel_forward_gain",
                "K_b": "wheel_backward_gain"}
-UNITS = {"modulus": "Pa", "spring": "N/m", "delay": "s", "damping": "1"}
+UNITS = {"modulus": "Pa", "spring": "N/m", "delay": "s", "damping": "1", "frequency_scale": "1"}
 
 
 def parameter_kind(name: str) -> ParameterKind:
@@ -50,8 +54,11 @@ def parameter_kind(name: str) -> ParameterKind:
         return "gain"
     if name.startswith(DAMPING_PREFIX) and len(name) > len(DAMPING_PREFIX):
         return "damping"
+    if name.startswith(FREQUENCY_SCALE_PREFIX) and len(name) > len(FREQUENCY_SCALE_PREFIX):
+        return "frequency_scale"
     raise MaceError(f"parameter {name!r}: unknown kind of name; expected E_<material>, k_<spring>, "
-                    f"delay_<channel>, {', '.join(SERVO_GAINS)} or {DAMPING_PREFIX}<mode label>")
+                    f"delay_<channel>, {', '.join(SERVO_GAINS)}, {DAMPING_PREFIX}<mode label> or "
+                    f"{FREQUENCY_SCALE_PREFIX}<mode label>")
 
 
 def parameter_unit(name: str) -> str:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import base64
+import html as html_text
 import os
 import re
 import subprocess
@@ -431,3 +432,150 @@ def test_cli_view_response_exports_its_own_motion_fmu(tmp_path, capsys):
     assert f"wrote {fmu}" in capsys.readouterr().out and out.exists() and (tmp_path / "step_signals.png").exists()
     outputs = [v for v in fmpy.read_model_description(str(fmu)).modelVariables if v.causality == "output"]
     assert len(outputs) == 20 + 6 * 79
+
+
+# --- mace-fmu view pairs: Table 5.1's 1-g and 0-g modes side by side ---
+
+@pytest.fixture(scope="module")
+def modes_1g_table():
+    return compute_modes(structure="1g", max_hz=60.0)  # Table 5.1 reaches 53 Hz in 1-g
+
+
+@pytest.fixture(scope="module")
+def pairs_anim(modes_1g_table, modes_0g):
+    from viewer import animate_pairs
+
+    return animate_pairs(modes_1g_table, modes_0g, frames_per_cycle=8)
+
+
+def test_pairs_change_from_1g_to_0g_as_table_5_1(pairs_anim):
+    """Each pair's 1-g -> 0-g frequency change against the thesis's own columns of Table 5.1.
+
+    Tolerance 1.0 percentage point: our 1-g column (large preload) is within 0.92 % and the 0-g
+    one within 0.12 % of the thesis (README), so the change can differ by their sum at most.
+    The suspension's signature, 1st Y bending 14.7 % lower in 0-g, must show.
+    """
+    from mace_fmu.thesis import thesis_data
+
+    table = thesis_data()["table_5_1"]
+    assert [p.label for p in pairs_anim.pairs] == [r["label"] for r in table]
+    for pair, row in zip(pairs_anim.pairs, table):
+        thesis_change = 100.0 * (row["g0"] - row["g1"]) / row["g1"]
+        assert pair.change_percent == pytest.approx(thesis_change, abs=1.0), pair.label
+        assert pair.hz_1g == pytest.approx(row["g1"], rel=0.015) and pair.hz_0g == pytest.approx(row["g0"], rel=0.005)
+        assert pair.mac >= 0.83  # README: the pairing MACs are 0.84 and up (2nd Y bending: 0.8398)
+    first_y = pairs_anim.pairs[1]
+    assert first_y.label == "1st Y bending" and first_y.change_percent == pytest.approx(-14.72, abs=0.5)
+    # the legend carries both frequencies and the change, as printed
+    assert pairs_anim.frames.clips[1].title == (
+        f"1st Y bending: 1-g {first_y.hz_1g:.3f} Hz (mode {first_y.index_1g}) -> 0-g {first_y.hz_0g:.3f} Hz "
+        f"(mode {first_y.index_0g}), {first_y.change_percent:+.1f} %, MAC {first_y.mac:.2f}")
+
+
+def test_pairs_move_in_phase(pairs_anim):
+    """Turned by the mass-weighted sign, the two copies' drawn translations on their common grids point
+    the same way (plain cosine of the translation fields > 0.9 at a quarter cycle of every clip)."""
+    one, zero = pairs_anim.one_g, pairs_anim.zero_g
+    common = [g for g in zero.scene.grid_ids if g in set(one.scene.grid_ids)]
+    r1 = [one.scene.grid_ids.index(g) for g in common]
+    r0 = [zero.scene.grid_ids.index(g) for g in common]
+    for k, clip in enumerate(pairs_anim.frames.clips):
+        frame = k * 8 + 2  # 8 frames per cycle: the quarter-cycle peak
+        d1 = one.frames.displacements[frame][r1, :3].ravel()
+        d0 = zero.frames.displacements[frame][r0, :3].ravel()
+        assert d1 @ d0 / np.linalg.norm(d1) / np.linalg.norm(d0) > 0.9, clip.title
+    # each copy's largest drawn translation is 8 % of the article's size, as on the mode pages
+    for anim in (one, zero):
+        peak = np.linalg.norm(anim.frames.displacements[2, :, :3], axis=1).max()
+        assert peak == pytest.approx(0.08 * anim.scene.length_m, rel=1e-12)
+
+
+def test_pair_page_places_both_copies_and_animates_every_body(pairs_anim):
+    """Decoded page: the copies' article centres sit one above the other (deck Y), gap 0.25 article
+    lengths; one set_animation moves both copies' masses by their own frames; the camera frames both."""
+    from viewer import pair_commands
+    from viewer.camera import framing_position
+
+    html = standalone_html(pair_commands(pairs_anim), title="t", clips=pairs_anim.frames.clips)
+    commands = _decoded_commands(html)
+    transforms = {c["path"]: np.array(c["matrix"], dtype=float).reshape(4, 4).T
+                  for c in commands if c["type"] == "set_transform"}
+    from viewer.meshcat_scene import Y_UP_TO_Z_UP
+
+    np.testing.assert_array_equal(transforms["/meshcat/mace"], Y_UP_TO_Z_UP)  # no shift: the pair's box centre
+    centres = {}
+    for kind, anim, name in (("1g", pairs_anim.one_g, "one_g"), ("0g", pairs_anim.zero_g, "zero_g")):
+        placed = transforms[f"/meshcat/mace/{name}"] @ np.append(anim.scene.centre_m, 1.0)
+        centres[kind] = placed[:3]
+    step = centres["1g"] - centres["0g"]
+    height = max(pairs_anim.one_g.scene.extent_m[1], pairs_anim.zero_g.scene.extent_m[1])
+    np.testing.assert_allclose(step, [0.0, height + 0.25 * pairs_anim.length_m, 0.0], atol=1e-12)
+    np.testing.assert_allclose(centres["1g"] + centres["0g"], 0.0, atol=1e-12)
+    animations = [c for c in commands if c["type"] == "set_animation"]
+    assert len(animations) == 1  # meshcat's animator keeps one timeline: both copies are in it
+    n_frames = pairs_anim.frames.times_s.size
+    for name, anim in (("one_g", pairs_anim.one_g), ("zero_g", pairs_anim.zero_g)):
+        for body in anim.scene.masses[::4]:
+            got = _track_values(animations[0], f"{name}/{body.name}", "position").reshape(n_frames, 3)
+            want = anim.scene.positions_m[body.row] + anim.frames.displacements[:, body.row, :3]
+            np.testing.assert_allclose(got, want, atol=2e-7)
+    camera = next(c for c in commands if c["type"] == "set_property" and c["path"].startswith("/Cameras"))
+    np.testing.assert_allclose(camera["value"], framing_position(pairs_anim.extent_m, length_m=pairs_anim.length_m,
+                                                                 view="iso"))
+
+
+def test_pairs_stack_along_the_pictures_up(modes_1g_table, modes_0g):
+    """Seen from above (--camera y) the copies stack along deck Z, so they do not hide each other."""
+    from viewer import animate_pairs
+
+    anim = animate_pairs(modes_1g_table, modes_0g, labels=["1st Y", "torsion"], view="y", frames_per_cycle=4)
+    assert [p.label for p in anim.pairs] == ["1st Y bending", "torsion, secondary end", "torsion, primary end"]
+    assert anim.offsets_m["1g"][1] == 0.0 and anim.offsets_m["1g"][2] < 0.0  # picture's up is -Z from above
+    with pytest.raises(MaceError, match="no Table 5.1 mode starts with 'twist'"):
+        animate_pairs(modes_1g_table, modes_0g, labels=["twist"])
+
+
+@needs_chromium
+def test_pair_page_shows_two_articles_and_marks_the_pair(modes_1g_table, modes_0g, tmp_path):
+    """In Chromium: the reaction-wheel pixels form two blobs one above the other (the two copies), and the
+    legend marks the pair whose span holds the animator's time."""
+    from PIL import Image
+
+    from viewer import animate_pairs
+
+    pairs_anim = animate_pairs(modes_1g_table, modes_0g, labels=["1st Z", "1st Y", "2nd Y"], frames_per_cycle=8)
+    page = tmp_path / "pairs.html"
+    write_animation_html(pairs_anim, page, title="pairs")
+    shot = BUILD / "viewer_pairs_1200x800.png"
+    write_still(page, shot, width_px=1200, height_px=800)
+    pixels = np.asarray(Image.open(shot).convert("RGB"), dtype=float)
+    wheels = _component_mask(pixels, _ARTICLE_HUES["reaction_wheels"])
+    rows = np.nonzero(wheels)[0]
+    gaps = np.diff(np.unique(rows))
+    split = np.unique(rows)[np.argmax(gaps)]
+    upper, lower = (rows <= split).sum(), (rows > split).sum()
+    assert gaps.max() > 20 and min(upper, lower) > 300, f"wheel pixels {upper} above, {lower} below, gap {gaps.max()}"
+    dom = subprocess.run([chromium_executable(), "--headless", "--no-sandbox", "--disable-gpu",
+                          "--enable-unsafe-swiftshader", "--use-angle=swiftshader", "--no-first-run",
+                          f"--user-data-dir={tmp_path / 'profile'}", "--virtual-time-budget=4500", "--dump-dom",
+                          page.as_uri()], check=True, capture_output=True, text=True, timeout=240).stdout
+    time_s = float(re.search(r'id="mace-legend" data-time="([0-9.e-]+)"', dom).group(1))
+    playing = re.findall(r'<tr [^>]*class="playing"><td>[^<]*</td><td>([^<]*)</td>', dom)
+    holding = [c.title for c in pairs_anim.frames.clips if c.start_s <= time_s < c.end_s]
+    assert time_s > 0.0 and [html_text.unescape(t) for t in playing] == holding and len(holding) == 1
+
+
+def test_cli_view_pairs(tmp_path, capsys):
+    from mace_fmu.cli import main
+
+    out = tmp_path / "pairs.html"
+    assert main(["view", "pairs", "--mode", "1st Y", "--mode", "torsion, primary", "--preload", "linear",
+                 "--html", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "1st Y bending: 1-g 3.595 Hz" in printed and "-> 0-g 3.074 Hz" in printed and "-14.5 %" in printed
+    assert "torsion, primary end: 1-g 11.871 Hz" in printed and "+4.6 %" in printed
+    commands = _decoded_commands(out.read_text())
+    assert {c["path"].split("/")[3] for c in commands if c["type"] == "set_object"
+            and c["path"].count("/") > 3} >= {"one_g", "zero_g"}
+    assert main(["view", "pairs", "--mode", "twist", "--html", str(out)]) == 2
+    assert "no Table 5.1 mode starts with 'twist'" in capsys.readouterr().err

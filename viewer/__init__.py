@@ -5,18 +5,26 @@ from viewer.frames import BodyMotion, Clip, Frames, body_motion
 from viewer.html import standalone_html, write_html
 from viewer.meshcat_scene import scene_commands, send_to_visualizer
 from viewer.modes import ModeAnimation, animate_mode, animate_modes, mode_index
+from viewer.pairs import ModePair, PairAnimation, animate_pairs, pair_commands, table_5_1_pairs
 from viewer.response import ResponseAnimation, animate_response, grid_motion, plot_response
 from viewer.scene import Scene, build_scene
 from viewer.still import chromium_executable, write_still
 
-__all__ = ["CAMERA_VIEWS", "BodyMotion", "Clip", "Frames", "ModeAnimation", "ResponseAnimation", "Scene",
-           "animate_mode", "animate_modes", "animate_response", "body_motion", "build_scene", "camera_position",
-           "chromium_executable", "grid_motion", "mode_index", "plot_response", "scene_commands", "send_to_visualizer",
-           "standalone_html", "write_animation_html", "write_html", "write_still"]
+__all__ = ["CAMERA_VIEWS", "BodyMotion", "Clip", "Frames", "ModeAnimation", "ModePair", "PairAnimation",
+           "ResponseAnimation", "Scene", "animate_mode", "animate_modes", "animate_pairs", "animate_response",
+           "animation_commands", "body_motion", "build_scene", "camera_position", "chromium_executable",
+           "grid_motion", "mode_index", "pair_commands", "plot_response", "scene_commands", "send_to_visualizer",
+           "standalone_html", "table_5_1_pairs", "write_animation_html", "write_html", "write_still"]
 
 
-def write_animation_html(animation: ModeAnimation | ResponseAnimation, path, *, title: str,
+def animation_commands(animation: ModeAnimation | ResponseAnimation | PairAnimation, *, camera: str = "iso") -> list:
+    """The meshcat commands of any of the viewer's animations, seen from ``camera``."""
+    if isinstance(animation, PairAnimation):
+        return pair_commands(animation, camera=camera)
+    return scene_commands(animation.scene, animation.frames, camera=camera)
+
+
+def write_animation_html(animation: ModeAnimation | ResponseAnimation | PairAnimation, path, *, title: str,
                          camera: str = "iso") -> int:
-    """Write a mode or response animation as one standalone HTML file; returns its size in bytes."""
-    return write_html(path, scene_commands(animation.scene, animation.frames, camera=camera), title=title,
-                      clips=animation.frames.clips)
+    """Write a mode, response or mode-pair animation as one standalone HTML file; returns its size in bytes."""
+    return write_html(path, animation_commands(animation, camera=camera), title=title, clips=animation.frames.clips)

@@ -27,6 +27,16 @@ FRAME_FILL = 0.8
 NEAR_CLEARANCE = 0.45
 
 
+def camera_axes(view: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Unit vectors (towards the camera, picture right, picture up) of a CAMERA_VIEWS view, deck axes."""
+    if view not in CAMERA_VIEWS:
+        raise MaceError(f"camera view must be one of {', '.join(CAMERA_VIEWS)}, got {view!r}")
+    towards = CAMERA_VIEWS[view] / np.linalg.norm(CAMERA_VIEWS[view])
+    right = np.cross(-towards, [0.0, 1.0, 0.0])
+    right /= np.linalg.norm(right)
+    return towards, right, np.cross(right, -towards)
+
+
 def camera_position(scene: Scene, view: str = "iso") -> np.ndarray:
     """Camera position [m] relative to the article's centre, deck axes, so the article fills the frame.
 
@@ -34,18 +44,19 @@ def camera_position(scene: Scene, view: str = "iso") -> np.ndarray:
     within ``FRAME_FILL`` of the half-width and half-height of a ``FRAMED_ASPECT`` picture, and
     the box's nearest face is ``NEAR_CLEARANCE`` article lengths away or more.
     """
-    if view not in CAMERA_VIEWS:
-        raise MaceError(f"camera view must be one of {', '.join(CAMERA_VIEWS)}, got {view!r}")
-    towards = CAMERA_VIEWS[view] / np.linalg.norm(CAMERA_VIEWS[view])
-    right = np.cross(-towards, [0.0, 1.0, 0.0])
-    right /= np.linalg.norm(right)
-    up = np.cross(right, -towards)
-    half = 0.5 * np.maximum(scene.extent_m, 1e-3 * scene.length_m)
+    return framing_position(scene.extent_m, length_m=scene.length_m, view=view)
+
+
+def framing_position(extent_m: np.ndarray, *, length_m: float, view: str) -> np.ndarray:
+    """Camera position [m] relative to a box's centre that frames the box of size ``extent_m`` (deck axes);
+    ``length_m`` sets the least clearance (see ``camera_position``)."""
+    towards, right, up = camera_axes(view)
+    half = 0.5 * np.maximum(np.asarray(extent_m, dtype=float), 1e-3 * length_m)
     corners = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]) * half
     tan_v = np.tan(np.radians(CAMERA_VERTICAL_FOV_DEG) / 2) * FRAME_FILL
     tan_h = tan_v * FRAMED_ASPECT
     # a corner at depth (distance - towards.p) projects to |right.p| / depth of the tangent
     distance = max(np.max(corners @ towards + np.abs(corners @ right) / tan_h),
                    np.max(corners @ towards + np.abs(corners @ up) / tan_v),
-                   np.max(corners @ towards) + NEAR_CLEARANCE * scene.length_m)
+                   np.max(corners @ towards) + NEAR_CLEARANCE * length_m)
     return distance * towards

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
 from mace_fmu.cli.common import deck_option, model_options, progress, volts
 from mace_fmu.errors import MaceError
@@ -12,19 +13,27 @@ from mace_fmu.fmu.naming import fmu_name
 def cmd_export(args: argparse.Namespace) -> int:
     if args.kind == "pythonfmu" and args.fmi_version != 2:
         raise MaceError("--fmi-version 3 needs --kind native (pythonfmu FMUs are FMI 2.0)")
+    if args.frequency_bounds and not Path(args.frequency_bounds).is_file():
+        raise MaceError(f"--frequency-bounds {args.frequency_bounds}: no such file")
     progress(f"{args.structure} volts-volts model")
     model = volts(args)
+    bounds = None
+    if args.frequency_bounds:
+        from mace_fmu.zero_g_report import read_frequency_bounds
+
+        bounds = read_frequency_bounds(args.frequency_bounds, mode_labels=model.plant.labels)
     name = fmu_name(args.structure, kind=args.kind, fmi_version=args.fmi_version,
                     motion_grids=model.plant.motion_grids, all_grids=model.structure_modes.modes.dofs.grid_ids)
     progress(f"{args.kind} FMU {name}.fmu")
     if args.kind == "native":
         from mace_fmu.fmu.native.export import export_native_fmu
 
-        path = export_native_fmu(model, out_dir=args.out, name=name, fmi_version=args.fmi_version)
+        path = export_native_fmu(model, out_dir=args.out, name=name, fmi_version=args.fmi_version,
+                                 frequency_bounds=bounds)
     else:
         from mace_fmu.fmu.export import export_fmu
 
-        path = export_fmu(model, out_dir=args.out, name=name)
+        path = export_fmu(model, out_dir=args.out, name=name, frequency_bounds=bounds)
     print(f"wrote {path}")
     return 0
 
@@ -40,5 +49,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                         "(default); pythonfmu: FMI 2.0 co-simulation through Python")
     p.add_argument("--fmi-version", type=int, choices=[2, 3], default=2,
                    help="FMI version of a native FMU: 2 (co-simulation and model exchange) or 3 (co-simulation)")
+    p.add_argument("--frequency-bounds", metavar="FILE",
+                   help="table_5_3.toml of mace-fmu predict-0g: its bounds become the min/max of the modes' "
+                        "frequency_scale_mode_<k> (with --parameters zero_g_nominal.toml: the updated nominal 0-g FMU)")
     model_options(p)
     p.set_defaults(func=cmd_export)

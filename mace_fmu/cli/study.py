@@ -96,6 +96,84 @@ def cmd_reduced_order(args: argparse.Namespace) -> int:
     return 0
 
 
+def _bounds(args: argparse.Namespace) -> tuple[object, dict[int, float], str]:
+    """(nominal 0-g volts model, 1-based mode -> relative bound, where the bounds come from)."""
+    from mace_fmu.cli.common import parameters
+    from mace_fmu.iomodel.volts import volts_model
+
+    if args.bound and args.frequency_bounds:
+        raise MaceError("give the bounds either with --bound or with --frequency-bounds, not both")
+    if args.frequency_bounds and not Path(args.frequency_bounds).is_file():
+        raise MaceError(f"--frequency-bounds {args.frequency_bounds}: no such file")
+    if args.bound or args.frequency_bounds:
+        params = parameters(args)
+        progress("0-g volts model" + (f" with {args.parameters}" if params is not None else " (nominal, not updated)"))
+        model = volts_model("0g", parameters=params)
+    if args.frequency_bounds:
+        from mace_fmu.zero_g_report import read_frequency_bounds
+
+        return model, read_frequency_bounds(args.frequency_bounds, mode_labels=model.plant.labels), args.frequency_bounds
+    if args.bound:
+        bounds = {}
+        for text in args.bound:
+            try:
+                mode, percent = text.split("=")
+                bounds[int(mode)] = float(percent) / 100.0
+            except ValueError:
+                raise MaceError(f"--bound takes MODE=PERCENT (e.g. 17=2.5 for mode 17 within +-2.5 %), got {text!r}") from None
+        return model, bounds, "--bound"
+    if args.parameters:
+        raise MaceError("--parameters needs its bounds: --frequency-bounds table_5_3.toml or --bound MODE=PERCENT")
+    from mace_fmu.robust.study import prediction_bounds
+    from mace_fmu.zero_g import predict_zero_g
+
+    progress("updated nominal 0-g model and Table 5.3 bounds (about a minute; mace-fmu predict-0g -o DIR writes "
+             "them once for --parameters and --frequency-bounds)")
+    prediction = predict_zero_g()
+    return prediction.model, prediction_bounds(prediction), "Table 5.3 (updated nominal 0-g model)"
+
+
+def cmd_robust_0g(args: argparse.Namespace) -> int:
+    from mace_fmu.atomic import write_text_atomic
+    from mace_fmu.cli.common import progress_bar
+    from mace_fmu.control_studies.lqg import LqgWeights
+    from mace_fmu.robust.loop import LoopSpec
+    from mace_fmu.robust.report import format_summary, sweep_figure
+    from mace_fmu.robust.study import format_cross_checks, robust_0g_study, write_runs_csv
+
+    if args.samples < 0 or args.critical < 0:
+        raise MaceError(f"--samples and --critical must be 0 or more, got {args.samples} and {args.critical}")
+    loop = LoopSpec(duration_s=args.duration)
+    weights = LqgWeights(rho=args.rho, theta=args.theta)
+    model, bounds, source = _bounds(args)
+    out = Path(args.out)
+    runner = map
+    if not args.serial:
+        from mace_fmu.runner import DaskRunner
+
+        runner = DaskRunner(scheduler=args.scheduler, workers=args.workers, task="closed-loop runs")
+        progress(f"Dask: {runner.workers} workers" + (f" at {args.scheduler}" if args.scheduler else " (local)"))
+    try:
+        with progress_bar() as bar:
+            if not args.serial:
+                runner.progress = bar
+            study = robust_0g_study(model, frequency_bounds=bounds, out_dir=out, loop=loop, weights=weights,
+                                    reduced_states=args.states, samples=args.samples, seed=args.seed,
+                                    critical_count=args.critical, runner=runner, progress=None)
+    finally:
+        if not args.serial:
+            runner.close()
+    summary = "\n".join([f"Robustness of the LQG compensator on {study.fmu.name} (bounds: {source})",
+                         format_summary(study.sweep, study.design),
+                         format_cross_checks(study.cross_checks, study.sweep)])
+    print(f"wrote {study.fmu}")
+    print(f"wrote {write_runs_csv(study.sweep, out / 'robust_0g_runs.csv')}")
+    print(f"wrote {sweep_figure(study.sweep, path=out / 'robust_0g.png')}")
+    print(f"wrote {write_text_atomic(out / 'robust_0g.txt', summary + chr(10))}")
+    print(summary)
+    return 0
+
+
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("study", help="modelling-for-control studies of thesis Appendix A (PNG figures and a table)")
     studies = p.add_subparsers(dest="study", required=True)
@@ -114,3 +192,24 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="rho = theta (default: the value giving the thesis's J_full = 7.58e-6)")
     r.add_argument("--quiet", action="store_true", help="print only the written paths")
     r.set_defaults(func=cmd_reduced_order)
+    o = studies.add_parser("robust-0g", help="LQG on the nominal 0-g model closed around the 0-g FMU over its frequency "
+                           "bounds: corners and a Monte Carlo sample on Dask (PNG, CSV and a summary)")
+    o.add_argument("-o", "--out", default="study", help="output directory (default ./study)")
+    o.add_argument("--samples", type=int, default=100, help="Monte Carlo samples, uniform in the bounds (default 100)")
+    o.add_argument("--seed", type=int, default=1, help="seed of the sample (default 1)")
+    o.add_argument("--critical", type=int, default=4, help="parameters whose 2^N corners are run: the N that move the "
+                   "cost most alone (default 4; all corners if there are at most N)")
+    o.add_argument("--bound", action="append", metavar="MODE=PERCENT",
+                   help="frequency bound of a mode, e.g. 17=2.5; repeat (default: Table 5.3's, updated nominal model)")
+    o.add_argument("--frequency-bounds", metavar="FILE", help="table_5_3.toml of mace-fmu predict-0g: its bounds")
+    o.add_argument("--parameters", metavar="FILE", help="parameter set of the 0-g model, e.g. zero_g_nominal.toml of "
+                   "mace-fmu predict-0g (with --frequency-bounds or --bound; default with neither: predict it)")
+    o.add_argument("--rho", type=float, default=0.01, help="LQG control weighting (default 0.01)")
+    o.add_argument("--theta", type=float, default=0.1, help="LQG sensor noise intensity (default 0.1)")
+    o.add_argument("--states", type=int, default=30, help="states of the reduced design model (default 30)")
+    o.add_argument("--duration", type=float, default=4.0, help="simulated time of each run [s]: 1 s of disturbance, "
+                   "then settling (default 4)")
+    o.add_argument("--scheduler", help="address of a Dask scheduler, e.g. tcp://host:8786 (default: a local cluster)")
+    o.add_argument("--workers", type=int, default=None, help="local cluster workers (default: the machine's cores)")
+    o.add_argument("--serial", action="store_true", help="run in this process, no Dask")
+    o.set_defaults(func=cmd_robust_0g)

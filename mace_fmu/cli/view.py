@@ -18,7 +18,7 @@ def _show(animation, args: argparse.Namespace, *, title: str) -> None:
     """Write the animation to --html, a still of it to --png, and/or serve it live until Ctrl-C."""
     import tempfile
 
-    from viewer import scene_commands, send_to_visualizer, write_animation_html, write_still  # meshcat only here
+    from viewer import animation_commands, send_to_visualizer, write_animation_html, write_still  # meshcat only here
 
     if args.html:
         size = write_animation_html(animation, args.html, title=title, camera=args.camera)
@@ -36,7 +36,7 @@ def _show(animation, args: argparse.Namespace, *, title: str) -> None:
         import meshcat
 
         visualizer = meshcat.Visualizer()
-        send_to_visualizer(visualizer, scene_commands(animation.scene, animation.frames, camera=args.camera))
+        send_to_visualizer(visualizer, animation_commands(animation, camera=args.camera))
         print(f"meshcat server at {visualizer.url()} - Ctrl-C to stop", flush=True)
         try:
             while True:
@@ -162,6 +162,25 @@ def cmd_view(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_view_pairs(args: argparse.Namespace) -> int:
+    from viewer import animate_pairs
+
+    _need_target(args)
+    deck = read_deck(args.deck)
+    progress("0-g modes")
+    zero_g = compute_modes(deck, structure="0g", max_hz=args.max_hz)
+    progress(f"1-g modes ({args.preload} gravity preload)")
+    with progress_bar() as bar:
+        one_g = compute_modes(deck, structure="1g", preload=args.preload, max_hz=args.max_hz, progress=bar)
+    animation = animate_pairs(one_g, zero_g, labels=args.mode, view=args.camera, cycles=args.cycles,
+                              seconds_per_cycle=args.seconds_per_cycle)
+    print("Table 5.1 pairs (1-g above, 0-g below; change = 0-g vs 1-g)")
+    for clip in animation.frames.clips:
+        print(f"  {clip.start_s:6.1f}-{clip.end_s:6.1f} s  {clip.title}")
+    _show(animation, args, title=f"MACE 1-g (top, {args.preload} preload) and 0-g (bottom) modes of Table 5.1")
+    return 0
+
+
 def _output_options(p: argparse.ArgumentParser, *, html: str) -> None:
     """Where the animation goes and from where it is seen (both view commands)."""
     p.add_argument("--html", help=html)
@@ -188,6 +207,19 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--seconds-per-cycle", type=float, default=1.0, help="playback time of one cycle [s]")
     _output_options(p, html="write a standalone HTML file (opens in any browser, no server)")
     p.set_defaults(func=cmd_view)
+
+    p = view.add_parser("pairs", help="Table 5.1's 1-g and 0-g modes, paired by MAC, side by side (1-g above)")
+    deck_option(p)
+    p.add_argument("--mode", action="append", help="a Table 5.1 mode by label prefix, e.g. '1st Y'; repeat for "
+                   "several (default: all 14)")
+    p.add_argument("--preload", choices=["large", "linear"], default="large",
+                   help="1-g gravity preload (default large, as mace-fmu build's FMUs)")
+    p.add_argument("--max-hz", type=float, default=60.0,
+                   help="highest mode computed [Hz] (default 60: Table 5.1 ends at 54 Hz)")
+    p.add_argument("--cycles", type=int, default=1, help="vibration cycles per mode (default 1)")
+    p.add_argument("--seconds-per-cycle", type=float, default=1.0, help="playback time of one cycle [s]")
+    _output_options(p, html="write a standalone HTML file (opens in any browser, no server)")
+    p.set_defaults(func=cmd_view_pairs)
 
     p = view.add_parser("response", help="an FMU's time response to one input, played on the mesh (fmpy)")
     p.add_argument("structure", choices=["1g", "0g"])

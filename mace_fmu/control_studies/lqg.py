@@ -46,13 +46,19 @@ def _check_siso_plant(model: ct.StateSpace, what: str) -> None:
                         f"{model.ninputs} inputs, {model.noutputs} outputs, D = {np.asarray(model.D).tolist()}")
 
 
-def design_lqg(model: ct.StateSpace, weights: LqgWeights) -> LqgDesign:
-    """LQG compensator of ``model`` (force [N] in, displacement [m] out) for ``weights``."""
+def design_lqg(model: ct.StateSpace, weights: LqgWeights, *, noise_input: np.ndarray | None = None) -> LqgDesign:
+    """LQG compensator of ``model`` (force [N] in, displacement [m] out) for ``weights``.
+
+    ``noise_input`` (n_states x 1): where the unit-intensity process noise enters the Kalman
+    filter's model; default the control input's column B (thesis eq. A.1). A disturbance that
+    enters elsewhere (another actuator) is better modelled through its own column.
+    """
     _check_siso_plant(model, "LQG design model")
     a, b, c = model.A, model.B, model.C
+    g = b if noise_input is None else np.asarray(noise_input, dtype=float).reshape(a.shape[0], 1)
     try:
         k, _, _ = ct.lqr(a, b, c.T @ c, weights.rho * np.eye(1))
-        ell, _, _ = ct.lqe(a, b, c, np.eye(1), weights.theta * np.eye(1))
+        ell, _, _ = ct.lqe(a, g, c, np.eye(1), weights.theta * np.eye(1))
     except (ArithmeticError, ValueError, np.linalg.LinAlgError) as exc:  # slycot's errors are ArithmeticErrors
         raise MaceError(f"LQG design of {model.name!r} failed for rho = {weights.rho:g}, theta = {weights.theta:g}: "
                         f"{' '.join(str(exc).split())}") from None

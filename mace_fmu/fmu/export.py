@@ -16,6 +16,7 @@ import shutil
 import sys
 import tempfile
 import zipfile
+from collections.abc import Mapping
 from importlib import metadata
 from pathlib import Path
 from xml.etree import ElementTree as ET
@@ -27,7 +28,7 @@ from mace_fmu.atomic import atomic_path
 from mace_fmu.fmu.naming import fmu_name
 from mace_fmu.fmu.variables import DEFAULT_EXPERIMENT, model_summary, variable_unit
 from mace_fmu.iomodel import modal_core, parametric, reanalysis
-from mace_fmu.iomodel.parametric_data import parametric_arrays
+from mace_fmu.iomodel.parametric_data import parametric_arrays, with_frequency_bounds
 from mace_fmu.iomodel.volts import VoltsModel
 from modelica_like import algebra
 
@@ -122,9 +123,10 @@ def _entry_script(name: str, description: str) -> str:
 
 
 def export_fmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str | None = None,
-               arrays: dict[str, np.ndarray] | None = None) -> Path:
+               arrays: dict[str, np.ndarray] | None = None, frequency_bounds: Mapping[int, float] | None = None) -> Path:
     """Write ``out_dir/<name>.fmu`` (default name from ``fmu_name``: MACE_1g, MACE_1g_motion, ...) and return its path; ``arrays``:
-    the model's parametric arrays if already computed."""
+    the model's parametric arrays if already computed; ``frequency_bounds`` (1-based mode -> relative bound) the
+    min/max of the modes' ``frequency_scale_mode_<k>``, 1 -+ bound."""
     kind = model.structure_modes.structure.kind
     name = name or fmu_name(kind, motion_grids=model.plant.motion_grids,
                             all_grids=model.structure_modes.model.dofs.grid_ids)
@@ -134,6 +136,8 @@ def export_fmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str | None
     out.mkdir(parents=True, exist_ok=True)
     description = model_summary(model)
     arrays = parametric_arrays(model) if arrays is None else arrays
+    if frequency_bounds:
+        arrays = with_frequency_bounds(arrays, frequency_bounds)
     final = out / f"{name}.fmu"
     with tempfile.TemporaryDirectory(prefix="mace_fmu_") as tmp, atomic_path(final) as part:
         tmp = Path(tmp)

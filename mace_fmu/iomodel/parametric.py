@@ -6,6 +6,7 @@ projected stiffness sensitivities of the physical parameters. ``build`` turns a 
 into (A, B, C, D):
 - physical parameters (Young's moduli, spring stiffnesses) by Ritz reanalysis on the retained
   modes (mace_fmu.iomodel.reanalysis);
+- modal frequency scales: each mode's frequency after the reanalysis times its scale;
 - modal damping ratios, time delays (Pade), servo gains: the blocks they belong to.
 
 Used by the updating engine and copied verbatim into FMUs (with modal_core, reanalysis and
@@ -41,6 +42,10 @@ class ParametricSystem:
         self._physical = np.array([k for k, n in enumerate(self.parameter_names) if n in physical], dtype=int)
         self._damping = np.array([self._index[f"damping_mode_{k + 1}"] for k in range(len(self.mode_labels))],
                                  dtype=int)
+        # arrays written before the frequency scales existed have none: those modes keep their frequencies
+        self._scaled = np.array([k for k in range(len(self.mode_labels))
+                                 if f"frequency_scale_mode_{k + 1}" in self._index], dtype=int)
+        self._scale = np.array([self._index[f"frequency_scale_mode_{k + 1}"] for k in self._scaled], dtype=int)
         self.frequencies_hz = np.asarray(data["frequencies_hz"], dtype=np.float64)  #: after the last build
         self.state_names: list[str] = []  #: "block.state" of the last build
         #: labels of the modes behind the structure's states in the last build (zero cluster rotated)
@@ -48,12 +53,15 @@ class ParametricSystem:
 
     def parameter_problems(self, params: np.ndarray) -> list[str]:
         """Why parameter values cannot be used, one sentence each (empty when all can): not finite, below
-        the declared minimum, above the declared maximum, or at a maximum that is excluded."""
+        the declared minimum, above the declared maximum, at a maximum that is excluded, or a frequency
+        scale <= 0."""
         problems = []
         for name, value, low, high, open_high in zip(self.parameter_names, np.asarray(params, dtype=np.float64),
                                                       self.minimum, self.maximum, self.maximum_excluded):
             if not np.isfinite(value):
                 problems.append(f"{name} = {value} is not a finite number")
+            elif name.startswith("frequency_scale_mode_") and not value > 0.0:
+                problems.append(f"{name} = {value:g} must be > 0 (a frequency scale)")
             elif value < low or value > high or (open_high and value == high):
                 upper = f"{high:g})" if open_high else f"{high:g}]"
                 problems.append(f"{name} = {value:g} is outside its range [{low:g}, {upper}")
@@ -72,10 +80,13 @@ class ParametricSystem:
 
     def structure(self, params: np.ndarray, *, frequencies_hz: np.ndarray | None = None,
                   phi_r: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[str]]:
-        """(A, B, C, state names) of the modal structure block; modes by reanalysis unless given."""
+        """(A, B, C, state names) of the modal structure block; modes by reanalysis unless given, then
+        scaled by the frequency scales."""
         d = self.data
         if frequencies_hz is None:
             frequencies_hz, phi_r = self.modes(params)
+        frequencies_hz = np.array(frequencies_hz, dtype=np.float64)
+        frequencies_hz[self._scaled] *= params[self._scale]
         self.frequencies_hz = frequencies_hz
         zeta = params[self._damping]
         disp = {str(name): row @ phi_r for name, row in zip(d["disp_names"], d["disp_rows"])}

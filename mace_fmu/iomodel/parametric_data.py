@@ -1,19 +1,21 @@
 """The arrays of a :class:`~mace_fmu.iomodel.parametric.ParametricSystem` made from a volts-volts model.
 
 Blocks and wiring of the diagram, the retained modes projected on the instruments, the tunable
-parameters (modal damping ratios, delays, servo gains, physical parameters) with their nominal
-values and descriptions, and the physical parameters' projected stiffness sensitivities. FMUs
+parameters (modal damping ratios, modal frequency scales, delays, servo gains, physical
+parameters) with their nominal values, declared ranges and descriptions, and the physical
+parameters' projected stiffness sensitivities. FMUs
 carry these arrays as ``resources/model.npz``; the updating engine re-analyses with them.
 """
 
 from __future__ import annotations
 
 import dataclasses
-from typing import Sequence
+from typing import Mapping, Sequence
 
 import numpy as np
 
 from mace_fmu.datafile import data_file_path, read_data_file
+from mace_fmu.errors import MaceError
 from mace_fmu.fe.assembly import FEModel, bar_section
 from mace_fmu.fe.beam import natural_stiffness
 from mace_fmu.fe.corotational import BarState, tangent
@@ -24,6 +26,7 @@ from mace_fmu.iomodel.motion import motion_unit, parse_motion_output
 from mace_fmu.iomodel.volts import VoltsModel
 from modelica_like import PD, Gain, PadeDelay
 
+FREQUENCY_SCALE_PREFIX = "frequency_scale_mode_"  #: + 1-based mode number
 _RELATIVE_STEP = 1e-3  # the material stiffness is linear in E and k: the difference quotient is exact
 
 
@@ -163,11 +166,14 @@ def parameter_range(name: str) -> tuple[float, float]:
     """Declared [min, max] of a tunable parameter (inf: unbounded); FMUs declare and check them.
 
     Damping ratios in [0, 1] (1 itself is refused at initialisation: critically damped modes
-    are not vibration modes), delays in [0, 1] s, moduli and spring stiffnesses >= 0; servo
-    gains are signed and unbounded.
+    are not vibration modes), delays in [0, 1] s, moduli and spring stiffnesses >= 0, frequency
+    scales >= 0 until bounds are given (:func:`with_frequency_bounds`); servo gains are signed and
+    unbounded.
     """
     if name.startswith("damping_mode_"):
         return 0.0, 1.0
+    if name.startswith(FREQUENCY_SCALE_PREFIX):
+        return 0.0, np.inf
     if name.startswith("delay_"):
         return 0.0, 1.0
     if name.startswith(("E_", "k_")):
@@ -180,12 +186,15 @@ def maximum_is_excluded(name: str) -> bool:
     return name.startswith("damping_mode_")
 
 
-def parametric_arrays(model: VoltsModel, *, physical: bool | Sequence[str] = True) -> dict[str, np.ndarray]:
+def parametric_arrays(model: VoltsModel, *, physical: bool | Sequence[str] = True,
+                      frequency_bounds: Mapping[int, float] | None = None) -> dict[str, np.ndarray]:
     """Everything a ParametricSystem (and an FMU) needs to rebuild ``model`` for new parameter values.
 
     ``physical=False`` leaves out the moduli and springs and their stiffness sensitivities (the
-    costly part): the system then rebuilds for new damping ratios, delays and gains only; a list
-    of names keeps just those (see also :func:`with_physical`).
+    costly part): the system then rebuilds for new damping ratios, frequency scales, delays and
+    gains only; a list of names keeps just those (see also :func:`with_physical`).
+    ``frequency_bounds`` (1-based mode number -> relative bound, 0.011 for +-1.1 %) declares the
+    range [1 - b, 1 + b] of those modes' ``frequency_scale_mode_<k>`` (:func:`with_frequency_bounds`).
     """
     sys_ = model.system
     ins, outs = signal_descriptions(model)
@@ -195,6 +204,9 @@ def parametric_arrays(model: VoltsModel, *, physical: bool | Sequence[str] = Tru
     arrays, parameters = _blocks(model)
     damping = [(f"damping_mode_{k + 1}", float(z), f"open-loop damping ratio of mode {k + 1}: {label}")
                for k, (z, label) in enumerate(zip(model.plant.damping, data.labels))]
+    scales = [(f"{FREQUENCY_SCALE_PREFIX}{k + 1}", 1.0, f"open-loop natural frequency of mode {k + 1} ({label}) "
+               "relative to the model's, after reanalysis [-]; its min/max are the mode's frequency bounds when declared")
+              for k, label in enumerate(data.labels)]
     n = len(data.labels)
     arrays.update(
         inputs=np.array(sys_.input_labels), outputs=np.array(sys_.output_labels), input_descriptions=np.array(ins),
@@ -205,11 +217,32 @@ def parametric_arrays(model: VoltsModel, *, physical: bool | Sequence[str] = Tru
         motion_names=np.array(list(data.motion_out), dtype=str),
         motion_rows=np.array(list(data.motion_out.values())).reshape(len(data.motion_out), len(data.labels)),
         structure_outputs=np.array(data.output_order))
-    arrays = _with_parameters(arrays, damping + parameters)
+    arrays = _with_parameters(arrays, damping + scales + parameters)
+    if frequency_bounds:
+        arrays = with_frequency_bounds(arrays, frequency_bounds)
     if physical is False:
         return arrays
     entries, dk = physical_sensitivities(model, data.shapes, only=None if physical is True else physical)
     return with_physical(arrays, entries, dk)
+
+
+def with_frequency_bounds(arrays: Mapping[str, np.ndarray], bounds: Mapping[int, float]) -> dict[str, np.ndarray]:
+    """``arrays`` with ``frequency_scale_mode_<k>`` declared in [1 - b, 1 + b] for each 1-based mode k -> bound b.
+
+    A MaceError for a mode the arrays lack or a bound that is not a number in [0, 1)."""
+    out = dict(arrays)
+    names = [str(n) for n in out["param_names"]]
+    low, high = np.array(out["param_min"], dtype=float), np.array(out["param_max"], dtype=float)
+    for mode, bound in bounds.items():
+        name = f"{FREQUENCY_SCALE_PREFIX}{mode}"
+        if name not in names:
+            raise MaceError(f"frequency bounds: the model has no mode {mode!r} (modes 1..{len(out['mode_labels'])})")
+        if isinstance(bound, bool) or not isinstance(bound, (int, float, np.floating)) or not 0.0 <= bound < 1.0:
+            raise MaceError(f"frequency bounds: mode {mode}: {bound!r} is not a relative bound in [0, 1) "
+                            "(0.011 for +-1.1 %)")
+        low[names.index(name)], high[names.index(name)] = 1.0 - float(bound), 1.0 + float(bound)
+    out.update(param_min=low, param_max=high)
+    return out
 
 
 def _with_parameters(arrays: dict[str, np.ndarray], parameters: Sequence[tuple[str, float, str]]) -> dict:

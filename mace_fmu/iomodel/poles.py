@@ -37,6 +37,8 @@ class ClosedLoopPole:
     label: str
     share: float  #: participation of the naming group (0-1)
     eigenvalue: complex
+    #: 0-based index into the mode labels of the open-loop structural mode that participates most (None: none does)
+    mode: int | None = None
 
 
 def _group(state: str, mode_labels: Sequence[str]) -> str:
@@ -97,6 +99,10 @@ def label_poles(a: np.ndarray, *, state_names: Sequence[str], mode_labels: Seque
     share = np.zeros((len(names), len(lam)))
     np.add.at(share, np.array([names.index(g) for g in groups]), part)
     share /= share.sum(axis=0, keepdims=True)
+    mode_of = [int(m.group(1)) - 1 if (m := _MODE_STATE.match(s)) else -1 for s in state_names]
+    structural = np.flatnonzero(np.array(mode_of) >= 0)
+    by_mode = np.zeros((len(mode_labels), len(lam)))
+    np.add.at(by_mode, np.array(mode_of, dtype=int)[structural], part[structural])
     keep = np.flatnonzero(lam.imag >= -1e-9 * np.maximum(np.abs(lam), 1.0))
     keep = keep[np.argsort(np.abs(lam[keep]))]
     poles, counters = [], {"Y": 0, "Z": 0}
@@ -110,5 +116,6 @@ def label_poles(a: np.ndarray, *, state_names: Sequence[str], mode_labels: Seque
             label = f"{ordinal(counters[bending.group(1)])} {bending.group(1)} bending"
         poles.append(ClosedLoopPole(frequency_hz=float(mag / (2 * np.pi)), damping=float(-lam[k].real / mag)
                                     if mag > 0 else 0.0, label=label, share=float(share[top, k]),
-                                    eigenvalue=complex(lam[k])))
+                                    eigenvalue=complex(lam[k]),
+                                    mode=int(np.argmax(by_mode[:, k])) if by_mode[:, k].any() else None))
     return [p for p in poles if max_hz is None or p.frequency_hz <= max_hz]

@@ -29,7 +29,7 @@ from mace_fmu.iomodel.instruments import Instruments, load_instruments
 from mace_fmu.iomodel.modal_core import ZERO_HZ
 from mace_fmu.iomodel.modal_ss import ModalPlant, modal_plant
 from mace_fmu.iomodel.motion import parse_motion_output
-from mace_fmu.parameters import DAMPING_PREFIX, SERVO_GAINS, ParameterSet, fe_overrides
+from mace_fmu.parameters import DAMPING_PREFIX, FREQUENCY_SCALE_PREFIX, SERVO_GAINS, ParameterSet, fe_overrides
 from mace_fmu.pipeline import StructureModes, compute_modes
 from mace_fmu.structure import StructureKind
 from mace_fmu.threads import single_blas_thread
@@ -219,8 +219,9 @@ def volts_model(structure: StructureKind = "1g", *, parameters: ParameterSet | N
     ``parameters`` (a :class:`~mace_fmu.parameters.ParameterSet`) replaces moduli and spring
     stiffnesses (in the FE model, unless ``modes`` are given, which must then have been computed
     with them), delays (defaults: Tables 4.5 and 4.6 from the instrument file), servo gains and
-    open-loop damping ratios by mode label (as in ``compute_modes(...).modes.labels``, e.g.
-    "1st Z bending"). ``motion_grids`` (grid IDs, or "all") adds each grid's
+    open-loop damping ratios and frequency scales by mode label (as in
+    ``compute_modes(...).modes.labels``, e.g. "1st Z bending"; the scales multiply the FE
+    frequencies, given ``modes`` or not). ``motion_grids`` (grid IDs, or "all") adds each grid's
     translations [m] and rotations [rad] in basic axes as outputs ``grid_<id>_<tx|ty|tz|rx|ry|rz>``
     after the sensors, for animation.
     """
@@ -232,6 +233,7 @@ def volts_model(structure: StructureKind = "1g", *, parameters: ParameterSet | N
     try:
         fe_overrides(parameters)  # the moduli and springs must name cards, whether or not modes were given
         instruments = apply_parameters(instruments, parameters, modes.modes.labels, structure=structure)
+        modes = scale_frequencies(modes, parameters, structure=structure)
     except MaceError as exc:
         raise ValueError(str(exc)) from None
     flexible = modes.modes.frequencies_hz[np.abs(modes.modes.frequencies_hz) >= ZERO_HZ]
@@ -298,6 +300,32 @@ def apply_parameters(instruments: Instruments, parameters: ParameterSet | None, 
     return replace(instruments, electronics=replace(el, actuator_delays_s=actuators, sensor_delays_s=sensors),
                    servos=replace(sv, **gains),
                    damping=replace(instruments.damping, by_label={**instruments.damping.by_label, **damping}))
+
+
+def scale_frequencies(modes: StructureModes, parameters: ParameterSet | None, *, structure: str = "") -> StructureModes:
+    """``modes`` with each ``frequency_scale:<label>`` of the set multiplying the frequencies [Hz] of that label's modes.
+
+    Shapes are kept: the scale is a modal adjustment of the open-loop model (thesis 5.3), not an FE
+    change. Labels are checked as for damping ratios (:func:`apply_parameters`); a scale must be > 0.
+    """
+    scales = parameters.of_kind("frequency_scale") if parameters is not None else {}
+    if not scales:
+        return modes
+    labels = modes.modes.labels
+    prov = parameters.provenance
+    other_structure = prov is not None and prov.structure not in ("", structure)
+    frequencies = np.array(modes.modes.frequencies_hz, dtype=float)
+    for name, value in scales.items():
+        label = name.removeprefix(FREQUENCY_SCALE_PREFIX)
+        if label not in labels and other_structure:
+            continue
+        if label not in labels:
+            raise MaceError(f"parameter {name!r}: no mode labelled {label!r} in the {structure} structure; labels: "
+                            f"{', '.join(sorted(set(labels)))}")
+        if not value > 0.0:
+            raise MaceError(f"parameter {name!r}: a frequency scale must be > 0, got {value}")
+        frequencies[[k for k, x in enumerate(labels) if x == label]] *= value
+    return replace(modes, modes=replace(modes.modes, frequencies_hz=frequencies))
 
 
 def select_signals(system: ct.StateSpace, *, inputs: Sequence[str] | None = None,

@@ -15,6 +15,7 @@ import re
 import uuid
 import zipfile
 from importlib import metadata
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Literal
 
@@ -28,7 +29,7 @@ from mace_fmu.fmu.native.model_description import (fmi2_model_description, fmi3_
 from mace_fmu.fmu.native.resource import resource_bytes, runtime_arrays
 from mace_fmu.fmu.variables import model_summary
 from mace_fmu.iomodel.parametric import ParametricSystem
-from mace_fmu.iomodel.parametric_data import parametric_arrays
+from mace_fmu.iomodel.parametric_data import parametric_arrays, with_frequency_bounds
 from mace_fmu.iomodel.volts import VoltsModel
 
 FmiVersion = Literal[2, 3]
@@ -45,9 +46,11 @@ def _token(data: dict, fmi_version: int) -> str:
 
 
 def export_native_fmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str | None = None,
-                      fmi_version: FmiVersion = 2, arrays: dict[str, np.ndarray] | None = None) -> Path:
+                      fmi_version: FmiVersion = 2, arrays: dict[str, np.ndarray] | None = None,
+                      frequency_bounds: Mapping[int, float] | None = None) -> Path:
     """Write ``out_dir/<name>.fmu`` (default MACE_1g / MACE_0g), a native FMU, and return its path;
-    ``arrays``: the model's parametric arrays if already computed."""
+    ``arrays``: the model's parametric arrays if already computed; ``frequency_bounds`` (1-based mode ->
+    relative bound): the min/max of the modes' ``frequency_scale_mode_<k>``, 1 -+ bound."""
     kind = model.structure_modes.structure.kind
     name = name or f"MACE_{kind}"
     if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", name):
@@ -55,6 +58,8 @@ def export_native_fmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str
     if fmi_version not in (2, 3):
         raise MaceError(f"native FMUs are FMI 2 or FMI 3, got FMI version {fmi_version!r}")
     arrays = parametric_arrays(model) if arrays is None else arrays
+    if frequency_bounds:
+        arrays = with_frequency_bounds(arrays, frequency_bounds)
     reference = ParametricSystem(arrays)
     reference.build(reference.nominal)
     data = runtime_arrays(arrays)

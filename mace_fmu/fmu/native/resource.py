@@ -21,12 +21,13 @@ import numpy as np
 
 from mace_fmu.errors import MaceError
 from mace_fmu.iomodel.modal_core import ZERO_HZ, reduce_zero_cluster
+from mace_fmu.iomodel.parametric_data import FREQUENCY_SCALE_PREFIX
 
 MAGIC = b"MACEFMU1"
 FORMAT_VERSION = 1
 MAX_PADE_ORDER = 10  #: the runtime's Pade coefficients are exact integer ratios up to this order
 BLOCK_KINDS = {"structure": 0, "const": 1, "delay": 2, "gain": 3, "pd": 4}
-PARAMETER_KINDS = {"damping": 0, "delay": 1, "gain": 2, "physical": 3}
+PARAMETER_KINDS = {"damping": 0, "delay": 1, "gain": 2, "physical": 3, "frequency_scale": 4}
 _FLOAT, _INT, _TEXT = 1, 2, 3
 
 
@@ -102,6 +103,8 @@ def runtime_arrays(arrays: Mapping[str, np.ndarray]) -> dict[str, np.ndarray | l
     for name in names:
         if name.startswith("damping_mode_"):
             par_kind.append(PARAMETER_KINDS["damping"]), par_index.append(int(name.rsplit("_", 1)[1]) - 1)
+        elif name.startswith(FREQUENCY_SCALE_PREFIX):
+            par_kind.append(PARAMETER_KINDS["frequency_scale"]), par_index.append(int(name.rsplit("_", 1)[1]) - 1)
         elif name in physical:
             par_kind.append(PARAMETER_KINDS["physical"]), par_index.append(physical.index(name))
         elif name in delay_params:

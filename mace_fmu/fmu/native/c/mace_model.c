@@ -19,7 +19,7 @@
 #define TWO_PI (2.0 * 3.14159265358979323846)
 
 enum { BLOCK_STRUCTURE = 0, BLOCK_CONST, BLOCK_DELAY, BLOCK_GAIN, BLOCK_PD };
-enum { PARAM_DAMPING = 0, PARAM_DELAY, PARAM_GAIN, PARAM_PHYSICAL };
+enum { PARAM_DAMPING = 0, PARAM_DELAY, PARAM_GAIN, PARAM_PHYSICAL, PARAM_FREQUENCY_SCALE };
 enum {
     COUNT_IN = 0, COUNT_OUT, COUNT_PAR, COUNT_MODES, COUNT_FLEX, COUNT_BLOCKS, COUNT_PADE, COUNT_STATES,
     COUNT_SO, COUNT_MS, COUNT_PHYS, COUNT_UB, COUNT_YB, N_COUNTS
@@ -40,6 +40,7 @@ struct MaceModel {
     const char **names;   /* inputs, outputs, parameters */
     const char *guid;     /* of the FMU the data belong to */
     size_t *damping_of;   /* parameter index of each mode's damping ratio */
+    size_t *scale_of;     /* parameter index of each mode's frequency scale (n_par: none) */
     double *params, *built_params, *freq, *u;
     int built, y_valid, x_valid;
     int params_changed; /* set since the last build */
@@ -128,7 +129,8 @@ static int load(MaceModel *m, const char *resource_dir, char *err) {
     m->names = (const char **)m->al.calloc(m->n_in + m->n_out + m->n_par + 1, sizeof(char *));
     m->blk = (const double **)m->al.calloc(4 * m->n_blocks + 1, sizeof(double *));
     m->damping_of = (size_t *)m->al.calloc(m->n_modes + 1, sizeof(size_t));
-    if (!m->names || !m->blk || !m->damping_of) {
+    m->scale_of = (size_t *)m->al.calloc(m->n_modes + 1, sizeof(size_t));
+    if (!m->names || !m->blk || !m->damping_of || !m->scale_of) {
         snprintf(err, MACE_ERR_LEN, "out of memory");
         return -1;
     }
@@ -137,15 +139,20 @@ static int load(MaceModel *m, const char *resource_dir, char *err) {
         mace_file_strings(&m->file, "output_names", m->n_out, m->names + m->n_in, err) ||
         mace_file_strings(&m->file, "param_names", m->n_par, m->names + m->n_in + m->n_out, err))
         return -1;
-    for (k = 0; k < m->n_modes; k++) m->damping_of[k] = m->n_par;
+    for (k = 0; k < m->n_modes; k++) m->damping_of[k] = m->scale_of[k] = m->n_par;
     for (k = 0; k < m->n_par; k++) {
         const int64_t kind = m->par_kind[k], index = m->par_index[k];
         if (kind == PARAM_DAMPING && index >= 0 && (size_t)index < m->n_modes) {
             m->damping_of[index] = k;
+        } else if (kind == PARAM_FREQUENCY_SCALE && index >= 0 && (size_t)index < m->n_modes) {
+            m->scale_of[index] = k;
+        } else if (kind == PARAM_FREQUENCY_SCALE) {
+            snprintf(err, MACE_ERR_LEN, "model data: frequency scale %lu names no mode", (unsigned long)k);
+            return -1;
         } else if (kind == PARAM_PHYSICAL && !(index >= 0 && (size_t)index < m->n_phys)) {
             snprintf(err, MACE_ERR_LEN, "model data: physical parameter %lu has no sensitivity", (unsigned long)k);
             return -1;
-        } else if (kind < PARAM_DAMPING || kind > PARAM_PHYSICAL) {
+        } else if (kind < PARAM_DAMPING || kind > PARAM_FREQUENCY_SCALE) {
             snprintf(err, MACE_ERR_LEN, "model data: parameter %lu has the unknown kind %lld", (unsigned long)k,
                      (long long)kind);
             return -1;
@@ -251,6 +258,7 @@ void mace_destroy(MaceModel *m) {
     m->al.free(m->names);
     m->al.free(m->blk);
     m->al.free(m->damping_of);
+    m->al.free(m->scale_of);
     m->al.free(m->params);
     m->al.free(m->built_params);
     m->al.free(m->freq);
@@ -341,6 +349,10 @@ static int check_parameters(const MaceModel *m, char *err) {
                      "not a vibration mode)", name, v);
             return -1;
         }
+        if (m->par_kind[k] == PARAM_FREQUENCY_SCALE && !(v > 0.0)) {
+            snprintf(err, MACE_ERR_LEN, "frequency scale %s = %.17g must be > 0", name, v);
+            return -1;
+        }
         if (m->par_kind[k] == PARAM_DELAY && v < 0.0) {
             snprintf(err, MACE_ERR_LEN, "delay %s = %.17g s must be >= 0", name, v);
             return -1;
@@ -364,7 +376,8 @@ static double signed_frequency_hz(double w2) {
 }
 
 /* New frequencies of all modes (m->freq) and the flexible modes' Ritz vectors phi_r (n_flex x
- * n_flex, column k: new mode k over the nominal flexible modes); *changed = 0 means identity. */
+ * n_flex, column k: new mode k over the nominal flexible modes); *changed = 0 means identity.
+ * Each mode's frequency scale multiplies its frequency after the reanalysis (shapes unchanged). */
 static int reanalyse(MaceModel *m, double *phi_r, int *changed, char *err) {
     const size_t nf = m->n_flex;
     double *rel = ml_zeros(&m->al, m->n_phys), *k_r = NULL, *w = NULL, *v = NULL, *score = NULL;
@@ -405,10 +418,12 @@ static int reanalyse(MaceModel *m, double *phi_r, int *changed, char *err) {
             for (j = 0; j < nf; j++) phi_r[j * nf + i] = v[j * nf + col[i]];
         }
     }
+    for (i = 0; i < m->n_modes; i++)
+        if (m->scale_of[i] < m->n_par) m->freq[i] *= m->params[m->scale_of[i]];
     for (i = 0; i < nf; i++) {
         const double f = m->freq[m->flex[i]];
         if (fabs(f) < ZERO_HZ) {
-            snprintf(err, MACE_ERR_LEN, "after the reanalysis flexible mode %lu is at %g Hz, below the %g Hz of the "
+            snprintf(err, MACE_ERR_LEN, "after the reanalysis and frequency scales flexible mode %lu is at %g Hz, below the %g Hz of the "
                      "zero-frequency cluster, which a native FMU reduces once at export (the pythonfmu FMU "
                      "re-reduces it)", (unsigned long)(m->flex[i] + 1), f, ZERO_HZ);
             goto done;
