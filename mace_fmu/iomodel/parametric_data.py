@@ -205,7 +205,7 @@ def parametric_arrays(model: VoltsModel, *, physical: bool | Sequence[str] = Tru
     damping = [(f"damping_mode_{k + 1}", float(z), f"open-loop damping ratio of mode {k + 1}: {label}")
                for k, (z, label) in enumerate(zip(model.plant.damping, data.labels))]
     scales = [(f"{FREQUENCY_SCALE_PREFIX}{k + 1}", 1.0, f"open-loop natural frequency of mode {k + 1} ({label}) "
-               "relative to the model's, after reanalysis [-]; its min/max are the mode's frequency bounds when declared")
+               "relative to the model's, after reanalysis [-]; min/max: the mode's frequency bounds when declared")
               for k, label in enumerate(data.labels)]
     n = len(data.labels)
     arrays.update(

@@ -303,7 +303,7 @@ def apply_parameters(instruments: Instruments, parameters: ParameterSet | None, 
 
 
 def scale_frequencies(modes: StructureModes, parameters: ParameterSet | None, *, structure: str = "") -> StructureModes:
-    """``modes`` with each ``frequency_scale:<label>`` of the set multiplying the frequencies [Hz] of that label's modes.
+    """``modes`` with each ``frequency_scale:<label>`` of the set multiplying its label's frequencies [Hz].
 
     Shapes are kept: the scale is a modal adjustment of the open-loop model (thesis 5.3), not an FE
     change. Labels are checked as for damping ratios (:func:`apply_parameters`); a scale must be > 0.
