@@ -22,6 +22,7 @@ from fmpy.validation import validate_fmu
 from fmu_checks import initialised_slave, make_inputs, run_steps, zoh_reference
 from mace_fmu.cli import main
 from mace_fmu.fmu.export import export_fmu
+from mace_fmu.iomodel.parametric import ParametricSystem
 from mace_fmu.iomodel.parametric_data import parametric_arrays
 from mace_fmu.iomodel.poles import closed_loop_poles
 from mace_fmu.iomodel.volts import volts_model
@@ -274,3 +275,23 @@ def test_export_with_the_nominal_set_and_bounds_gives_the_same_fmu_variables(run
                  str(tmp_path / "other")]) == 2
     assert "no such mode" in capsys.readouterr().err
     assert not (tmp_path / "other").exists()
+
+
+def test_scales_outside_their_bounds_are_named_by_the_rebuild_the_pythonfmu_slave_checks(run, nominal):
+    """The pythonfmu slave refuses what ParametricSystem.parameter_problems names (the native runtime: test_native_fmu)."""
+    bounds = {int(k): v for k, v in run[0]["frequency_bounds"].items()}
+    system = ParametricSystem(parametric_arrays(nominal, physical=False, frequency_bounds=bounds))
+    mode, bound = next(iter(bounds.items()))
+    name = f"frequency_scale_mode_{mode}"
+    for value, reason in ((1.0 + 1.01 * bound, "outside its range"), (1.0 - 1.01 * bound, "outside its range"),
+                          (1.0 + bound, None)):
+        params = system.nominal.copy()
+        params[system.index(name)] = value
+        problems = system.parameter_problems(params)
+        assert (problems == []) if reason is None else (len(problems) == 1 and name in problems[0]
+                                                         and reason in problems[0]), problems
+    free = next(n for n in system.parameter_names if n.startswith("frequency_scale_mode_")
+                and int(n.rsplit("_", 1)[1]) not in bounds)
+    params = system.nominal.copy()
+    params[system.index(free)] = 0.0
+    assert system.parameter_problems(params) == [f"{free} = 0 must be > 0 (a frequency scale)"]
