@@ -295,3 +295,27 @@ def test_scales_outside_their_bounds_are_named_by_the_rebuild_the_pythonfmu_slav
     params = system.nominal.copy()
     params[system.index(free)] = 0.0
     assert system.parameter_problems(params) == [f"{free} = 0 must be > 0 (a frequency scale)"]
+
+
+def test_a_1g_parameter_set_from_an_update_is_carried_to_0g(run):
+    """A set like `mace-fmu update` writes (1-g provenance, a modulus, damping of suspension modes the 0-g
+    structure lacks): the modulus reaches the 0-g modes, the 1-g-only damping is dropped, the deck is kept."""
+    from mace_fmu.parameters import deck_fingerprint, parameter_kind
+    from mace_fmu.structure import bundled_deck_path
+    from mace_fmu.zero_g import predict_zero_g
+
+    deck = bundled_deck_path()
+    start = ParameterSet({"E_lexan_center": 2.3e9, "damping:Y suspension twist (Y rotation)": 0.09,
+                          "damping:1st Z bending": 0.02},
+                         Provenance(created="2026-01-01T00:00:00+00:00", tool="test", deck=deck.name,
+                                    deck_sha256=deck_fingerprint(deck), structure="1g"))
+    prediction = predict_zero_g(parameters=start)
+    values = prediction.parameters.values
+    assert values["E_lexan_center"] == 2.3e9 and "damping:Y suspension twist (Y rotation)" not in values
+    assert {parameter_kind(n) for n in values} == {"modulus", "damping", "frequency_scale"}
+    prov = prediction.parameters.provenance
+    assert (prov.structure, prov.deck_sha256) == ("0g", deck_fingerprint(deck))
+    default = {r["label"]: r for r in _rows(run)}
+    first = next(r for r in prediction.rows if r.label == "1st Y bending")
+    assert abs(first.unaltered_hz / default["1st Y bending"]["unaltered_hz"] - 1) > 1e-4  # the modulus acts in 0-g
+    assert abs(first.nominal_hz / first.unaltered_hz / (first.measured_1g_hz / first.model_1g_hz) - 1) < 1e-6
