@@ -261,6 +261,11 @@ def predict_zero_g(*, parameters: ParameterSet | None = None, measured: Sequence
     None: no 0-g counterpart) to Table 5.2's rows; ``message`` receives one line per stage.
     """
     say = message or (lambda _: None)
+    if parameters is not None and parameters.of_kind("frequency_scale"):
+        # frequency scales act on whichever structure the set is used with: a 1-g model must not get them
+        raise MaceError(f"the parameter set has frequency scales ({', '.join(parameters.of_kind('frequency_scale'))}):"
+                        " predict-0g starts from physical parameters (e.g. from mace-fmu update), not from an "
+                        "updated nominal 0-g set")
     if measured is None:
         measured, zero_g_patterns = measured_modes(band_hz=None), table_4_7_zero_g_patterns()
     if zero_g_patterns is None or len(zero_g_patterns) != len(measured):

@@ -230,6 +230,14 @@ def test_negative_or_absurd_bound_rules_are_refused(options, message, tmp_path, 
     assert not out.exists()
 
 
+def test_an_updated_nominal_set_is_no_starting_point(run, tmp_path, capsys):
+    """Its frequency scales would act on the 1-g model too (thesis 5.3: 1-g frequencies are never adjusted)."""
+    out = tmp_path / "out"
+    assert main(["predict-0g", "--parameters", str(run[1] / "zero_g_nominal.toml"), "-o", str(out)]) == 2
+    assert "predict-0g starts from physical parameters" in capsys.readouterr().err
+    assert not out.exists()
+
+
 def test_a_parameter_file_for_another_deck_is_refused(tmp_path, capsys):
     path = ParameterSet({"E_lexan_center": 2.3e9}, Provenance(created="2026-01-01T00:00:00+00:00", tool="test",
                                                               deck="other.bdf", deck_sha256="0" * 64)).write(
