@@ -188,6 +188,24 @@ class _Adjuster:
         return out
 
 
+def _adjustable_modes(model: VoltsModel, poles: Sequence[tuple[str, ClosedLoopPole]]) -> list[int]:
+    """The open-loop mode (0-based) behind each (measured label, 0-g pole); a MaceError where it cannot be
+    adjusted alone: no structural vibration mode, shared by two measured modes, or a label other modes carry."""
+    modes = [pole.mode for _, pole in poles]
+    labels = model.structure_modes.modes.labels
+    for (label, pole), m in zip(poles, modes):
+        what = f"measured mode {label!r}: its 0-g pole ({pole.label})"
+        if m is None or abs(model.plant.frequencies_hz[m]) < ZERO_HZ:
+            raise MaceError(f"{what} is no structural vibration mode; its frequency cannot be adjusted")
+        if modes.count(m) > 1:
+            raise MaceError(f"{what} and another measured mode both live mostly in open-loop mode {m + 1} "
+                            f"({model.plant.labels[m]}): one open-loop mode cannot take two corrections")
+        if labels.count(model.plant.labels[m]) > 1:
+            raise MaceError(f"{what} lives in open-loop mode {m + 1}, whose label {model.plant.labels[m]!r} other "
+                            "modes share: a correction by label would move them too")
+    return modes
+
+
 def _solve_adjustment(adjuster: _Adjuster, target_hz: np.ndarray, target_zeta: np.ndarray
                       ) -> tuple[np.ndarray, np.ndarray]:
     """(unknowns, damping pinned) that put the adjusted modes' closed-loop poles on their targets [Hz, -].
@@ -285,18 +303,8 @@ def predict_zero_g(*, parameters: ParameterSet | None = None, measured: Sequence
                what="the 0-g model")
     heavy = [measured[k].damping >= rule.heavy_damping for k in kept]
     adjusted = [j for j, h in enumerate(heavy) if rule.correct_heavy or not h]
-    modes = [p0[i0[j]].mode for j in adjusted]
+    modes = _adjustable_modes(v0, [(measured[kept[j]].label, p0[i0[j]]) for j in adjusted])
     labels = v0.structure_modes.modes.labels
-    for j, m in zip(adjusted, modes):
-        what = f"measured mode {measured[kept[j]].label!r}: its 0-g pole ({p0[i0[j]].label})"
-        if m is None or abs(v0.plant.frequencies_hz[m]) < ZERO_HZ:
-            raise MaceError(f"{what} is no structural vibration mode; its frequency cannot be adjusted")
-        if modes.count(m) > 1:
-            raise MaceError(f"{what} and another measured mode both live mostly in open-loop mode {m + 1} "
-                            f"({v0.plant.labels[m]}): one open-loop mode cannot take two corrections")
-        if labels.count(v0.plant.labels[m]) > 1:
-            raise MaceError(f"{what} lives in open-loop mode {m + 1}, whose label {v0.plant.labels[m]!r} other "
-                            "modes share: a correction by label would move them too")
 
     say(f"adjusting {len(adjusted)} open-loop 0-g modes")
     target_hz = np.array([p0[i0[j]].frequency_hz * measured[kept[j]].frequency_hz / p1[i1[kept[j]]].frequency_hz
