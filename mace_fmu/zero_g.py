@@ -19,7 +19,7 @@ from __future__ import annotations
 import csv
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -92,6 +92,8 @@ class ZeroGRow:
     open_loop_damping: float  #: that mode's open-loop damping ratio in the nominal model
     adjusted: bool  #: the residual 1-g errors were taken out (lightly damped modes, as in the thesis)
     damping_reached: bool = True  #: False: servo damping alone exceeds the damping target (open-loop damping 0)
+    #: relative change of the closed-loop frequency with the mode's frequency scale at 1 - bound and 1 + bound
+    closed_loop_shift: tuple[float, float] | None = None
 
     @property
     def frequency_error(self) -> float:
@@ -253,6 +255,28 @@ def _solve_adjustment(adjuster: _Adjuster, target_hz: np.ndarray, target_zeta: n
     return x, pinned
 
 
+def _with_closed_loop_shifts(rows: Sequence[ZeroGRow], core: VoltsModel) -> list[ZeroGRow]:
+    """``rows`` with the closed-loop shift of each bounded mode's pole, its frequency scale at 1 -+ bound, by
+    rebuilding ``core`` (the nominal model without output filters) as the FMUs do."""
+    system = ParametricSystem(parametric_arrays(core, physical=False))
+    out = []
+    for row in rows:
+        if row.mode is None:
+            out.append(row)
+            continue
+        shift = []
+        for side in (-1.0, 1.0):
+            params = system.nominal.copy()
+            params[system.index(f"frequency_scale_mode_{row.mode}")] = 1.0 + side * row.bound
+            a, *_ = system.build(params)
+            poles = [p for p in label_poles(a, state_names=system.state_names, mode_labels=system.state_mode_labels)
+                     if p.mode == row.mode - 1 and p.damping < REAL_POLE_DAMPING]
+            pole = min(poles, key=lambda p: abs(p.frequency_hz - row.nominal_hz * (1.0 + side * row.bound)))
+            shift.append(pole.frequency_hz / row.nominal_hz - 1.0)
+        out.append(replace(row, closed_loop_shift=(shift[0], shift[1])))
+    return out
+
+
 def _deck_provenance(parameters: ParameterSet | None, deck: Deck | None, *, source: str) -> Provenance:
     """Provenance of the nominal 0-g set: the input's (same deck), marked 0-g and thesis 5.3."""
     base = parameters.provenance if parameters is not None else None
@@ -352,6 +376,8 @@ def predict_zero_g(*, parameters: ParameterSet | None = None, measured: Sequence
             if mode is not None else 1.0,
             open_loop_damping=float(nominal.plant.damping[mode]) if mode is not None else math.nan,
             adjusted=j in adjusted, damping_reached=j not in adjusted or not pinned[adjusted.index(j)]))
+    core = volts_model("0g", parameters=nominal_set, modes=v0.structure_modes, bessel="none")
+    rows = _with_closed_loop_shifts(rows, core)
     return ZeroGPrediction(rows=tuple(rows), parameters=nominal_set, model=nominal, rule=rule, source=source,
                            dropped=tuple(measured[k].label for k, p in enumerate(zero_g_patterns) if not p))
 
