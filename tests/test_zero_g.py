@@ -163,6 +163,20 @@ def test_fmus_declare_each_bound_as_the_min_max_of_a_frequency_scale(run, fmus):
         assert free and all(float(v.min) == 0.0 and v.max is None for v in free), kind
 
 
+@pytest.mark.parametrize("side", [-1.0, 1.0])
+def test_every_scale_at_its_bound_moves_its_open_loop_frequency_by_the_bound(run, nominal, fmus, side):
+    bounds = {int(k): v for k, v in run[0]["frequency_bounds"].items()}
+    start = {f"frequency_scale_mode_{k}": 1.0 + side * b for k, b in bounds.items()}
+    expected = np.array([nominal.plant.frequencies_hz[k - 1] * (1.0 + side * b) for k, b in bounds.items()])
+    for kind, (_, folder) in fmus.items():
+        fmu = initialised_slave(nominal, folder, start, name=f"all{kind}{side}")
+        vr = {v.name: v.valueReference for v in fmpy.read_model_description(folder).modelVariables}
+        got = np.array(fmu.getReal([vr[f"frequency_mode_{k}"] for k in bounds]))
+        fmu.terminate()
+        fmu.freeInstance()
+        assert np.max(np.abs(got / expected - 1)) <= 1e-6, kind
+
+
 def test_fmutool_finds_no_error_in_the_nominal_fmus(fmus):
     fmutool = Path(sys.executable).with_name("fmutool")
     for kind, (path, _) in fmus.items():
