@@ -343,3 +343,20 @@ def test_a_1g_parameter_set_from_an_update_is_carried_to_0g(run):
     first = next(r for r in prediction.rows if r.label == "1st Y bending")
     assert abs(first.unaltered_hz / default["1st Y bending"]["unaltered_hz"] - 1) > 1e-4  # the modulus acts in 0-g
     assert abs(first.nominal_hz / first.unaltered_hz / (first.measured_1g_hz / first.model_1g_hz) - 1) < 1e-6
+
+
+def test_frequency_scales_of_a_0g_set_leave_a_1g_model_alone(run, nominal):
+    """scale_frequencies applies a set's scales to the structure its provenance names, and only to that one."""
+    from mace_fmu.iomodel.volts import scale_frequencies
+
+    nominal_set = ParameterSet.read(run[1] / "zero_g_nominal.toml")
+    modes = nominal.structure_modes
+    assert scale_frequencies(modes, nominal_set, structure="1g") is modes
+    label, factor = next((n.split(":", 1)[1], v) for n, v in nominal_set.values.items()
+                         if n.startswith("frequency_scale:"))
+    scaled = scale_frequencies(modes, nominal_set, structure="0g")
+    k = modes.modes.labels.index(label)
+    assert scaled.modes.frequencies_hz[k] == modes.modes.frequencies_hz[k] * factor
+    others = np.array([n for n in range(len(modes.modes.labels))
+                       if f"frequency_scale:{modes.modes.labels[n]}" not in nominal_set])
+    assert np.array_equal(scaled.modes.frequencies_hz[others], modes.modes.frequencies_hz[others])
