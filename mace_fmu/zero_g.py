@@ -19,7 +19,7 @@ from __future__ import annotations
 import csv
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -92,6 +92,8 @@ class ZeroGRow:
     open_loop_damping: float  #: that mode's open-loop damping ratio in the nominal model
     adjusted: bool  #: the residual 1-g errors were taken out (lightly damped modes, as in the thesis)
     damping_reached: bool = True  #: False: servo damping alone exceeds the damping target (open-loop damping 0)
+    #: relative change of the closed-loop frequency with the mode's frequency scale at 1 - bound and 1 + bound
+    closed_loop_shift: tuple[float, float] | None = None
 
     @property
     def frequency_error(self) -> float:
@@ -188,6 +190,24 @@ class _Adjuster:
         return out
 
 
+def _adjustable_modes(model: VoltsModel, poles: Sequence[tuple[str, ClosedLoopPole]]) -> list[int]:
+    """The open-loop mode (0-based) behind each (measured label, 0-g pole); a MaceError where it cannot be
+    adjusted alone: no structural vibration mode, shared by two measured modes, or a label other modes carry."""
+    modes = [pole.mode for _, pole in poles]
+    labels = model.structure_modes.modes.labels
+    for (label, pole), m in zip(poles, modes):
+        what = f"measured mode {label!r}: its 0-g pole ({pole.label})"
+        if m is None or abs(model.plant.frequencies_hz[m]) < ZERO_HZ:
+            raise MaceError(f"{what} is no structural vibration mode; its frequency cannot be adjusted")
+        if modes.count(m) > 1:
+            raise MaceError(f"{what} and another measured mode both live mostly in open-loop mode {m + 1} "
+                            f"({model.plant.labels[m]}): one open-loop mode cannot take two corrections")
+        if labels.count(model.plant.labels[m]) > 1:
+            raise MaceError(f"{what} lives in open-loop mode {m + 1}, whose label {model.plant.labels[m]!r} other "
+                            "modes share: a correction by label would move them too")
+    return modes
+
+
 def _solve_adjustment(adjuster: _Adjuster, target_hz: np.ndarray, target_zeta: np.ndarray
                       ) -> tuple[np.ndarray, np.ndarray]:
     """(unknowns, damping pinned) that put the adjusted modes' closed-loop poles on their targets [Hz, -].
@@ -235,6 +255,28 @@ def _solve_adjustment(adjuster: _Adjuster, target_hz: np.ndarray, target_zeta: n
     return x, pinned
 
 
+def _with_closed_loop_shifts(rows: Sequence[ZeroGRow], core: VoltsModel) -> list[ZeroGRow]:
+    """``rows`` with the closed-loop shift of each bounded mode's pole, its frequency scale at 1 -+ bound, by
+    rebuilding ``core`` (the nominal model without output filters) as the FMUs do."""
+    system = ParametricSystem(parametric_arrays(core, physical=False))
+    out = []
+    for row in rows:
+        if row.mode is None:
+            out.append(row)
+            continue
+        shift = []
+        for side in (-1.0, 1.0):
+            params = system.nominal.copy()
+            params[system.index(f"frequency_scale_mode_{row.mode}")] = 1.0 + side * row.bound
+            a, *_ = system.build(params)
+            poles = [p for p in label_poles(a, state_names=system.state_names, mode_labels=system.state_mode_labels)
+                     if p.mode == row.mode - 1 and p.damping < REAL_POLE_DAMPING]
+            pole = min(poles, key=lambda p: abs(p.frequency_hz - row.nominal_hz * (1.0 + side * row.bound)))
+            shift.append(pole.frequency_hz / row.nominal_hz - 1.0)
+        out.append(replace(row, closed_loop_shift=(shift[0], shift[1])))
+    return out
+
+
 def _deck_provenance(parameters: ParameterSet | None, deck: Deck | None, *, source: str) -> Provenance:
     """Provenance of the nominal 0-g set: the input's (same deck), marked 0-g and thesis 5.3."""
     base = parameters.provenance if parameters is not None else None
@@ -261,6 +303,11 @@ def predict_zero_g(*, parameters: ParameterSet | None = None, measured: Sequence
     None: no 0-g counterpart) to Table 5.2's rows; ``message`` receives one line per stage.
     """
     say = message or (lambda _: None)
+    if parameters is not None and parameters.of_kind("frequency_scale"):
+        # frequency scales act on whichever structure the set is used with: a 1-g model must not get them
+        raise MaceError(f"the parameter set has frequency scales ({', '.join(parameters.of_kind('frequency_scale'))}):"
+                        " predict-0g starts from physical parameters (e.g. from mace-fmu update), not from an "
+                        "updated nominal 0-g set")
     if measured is None:
         measured, zero_g_patterns = measured_modes(band_hz=None), table_4_7_zero_g_patterns()
     if zero_g_patterns is None or len(zero_g_patterns) != len(measured):
@@ -280,18 +327,8 @@ def predict_zero_g(*, parameters: ParameterSet | None = None, measured: Sequence
                what="the 0-g model")
     heavy = [measured[k].damping >= rule.heavy_damping for k in kept]
     adjusted = [j for j, h in enumerate(heavy) if rule.correct_heavy or not h]
-    modes = [p0[i0[j]].mode for j in adjusted]
+    modes = _adjustable_modes(v0, [(measured[kept[j]].label, p0[i0[j]]) for j in adjusted])
     labels = v0.structure_modes.modes.labels
-    for j, m in zip(adjusted, modes):
-        what = f"measured mode {measured[kept[j]].label!r}: its 0-g pole ({p0[i0[j]].label})"
-        if m is None or abs(v0.plant.frequencies_hz[m]) < ZERO_HZ:
-            raise MaceError(f"{what} is no structural vibration mode; its frequency cannot be adjusted")
-        if modes.count(m) > 1:
-            raise MaceError(f"{what} and another measured mode both live mostly in open-loop mode {m + 1} "
-                            f"({v0.plant.labels[m]}): one open-loop mode cannot take two corrections")
-        if labels.count(v0.plant.labels[m]) > 1:
-            raise MaceError(f"{what} lives in open-loop mode {m + 1}, whose label {v0.plant.labels[m]!r} other "
-                            "modes share: a correction by label would move them too")
 
     say(f"adjusting {len(adjusted)} open-loop 0-g modes")
     target_hz = np.array([p0[i0[j]].frequency_hz * measured[kept[j]].frequency_hz / p1[i1[kept[j]]].frequency_hz
@@ -339,6 +376,8 @@ def predict_zero_g(*, parameters: ParameterSet | None = None, measured: Sequence
             if mode is not None else 1.0,
             open_loop_damping=float(nominal.plant.damping[mode]) if mode is not None else math.nan,
             adjusted=j in adjusted, damping_reached=j not in adjusted or not pinned[adjusted.index(j)]))
+    core = volts_model("0g", parameters=nominal_set, modes=v0.structure_modes, bessel="none")
+    rows = _with_closed_loop_shifts(rows, core)
     return ZeroGPrediction(rows=tuple(rows), parameters=nominal_set, model=nominal, rule=rule, source=source,
                            dropped=tuple(measured[k].label for k, p in enumerate(zero_g_patterns) if not p))
 

@@ -15,7 +15,8 @@ from mace_fmu.zero_g import ZeroGPrediction, ZeroGRow
 
 CSV_COLUMNS = ("label", "nominal_hz", "damping", "bound_percent", "heavy", "adjusted", "damping_reached", "mode",
                "mode_label", "frequency_scale", "open_loop_damping", "unaltered_hz", "unaltered_damping",
-               "measured_1g_hz", "measured_1g_damping", "model_1g_hz", "model_1g_damping", "pole_label")
+               "measured_1g_hz", "measured_1g_damping", "model_1g_hz", "model_1g_damping", "pole_label",
+               "shift_at_lower_bound_percent", "shift_at_upper_bound_percent")
 
 
 @dataclass(frozen=True)
@@ -60,28 +61,36 @@ def rows_as_data(prediction: ZeroGPrediction) -> list[dict]:
                     "open_loop_damping": None if math.isnan(r.open_loop_damping) else r.open_loop_damping,
                     "unaltered_hz": r.unaltered_hz, "unaltered_damping": r.unaltered_damping,
                     "measured_1g_hz": r.measured_1g_hz, "measured_1g_damping": r.measured_1g_damping,
-                    "model_1g_hz": r.model_1g_hz, "model_1g_damping": r.model_1g_damping, "pole_label": r.pole_label})
+                    "model_1g_hz": r.model_1g_hz, "model_1g_damping": r.model_1g_damping, "pole_label": r.pole_label,
+                    "shift_at_lower_bound_percent": None if r.closed_loop_shift is None
+                    else 100.0 * r.closed_loop_shift[0],
+                    "shift_at_upper_bound_percent": None if r.closed_loop_shift is None
+                    else 100.0 * r.closed_loop_shift[1]})
     return out
 
 
 def format_table(prediction: ZeroGPrediction) -> str:
     """Plain-text table: ours (nominal Hz, zeta, bound %) beside Table 5.3, with the 1-g residual errors."""
     head = (f"{'mode':15s} {'Hz':>8s} {'zeta':>7s} {'bound %':>7s} | {'T5.3 Hz':>7s} {'zeta':>6s} {'bound %':>7s} | "
-            f"{'err Hz %':>8s} {'1-g err %':>9s}  open-loop mode adjusted")
+            f"{'err Hz %':>8s} {'1-g err %':>9s} {'FMU k':>5s} {'shift % -b/+b':>13s}  open-loop mode adjusted")
     lines = [f"Updated nominal 0-g model and frequency bounds (thesis Table 5.3); residual 1-g errors from the "
              f"{prediction.source}", head, "-" * len(head)]
     for row, ref in beside_table_5_3(prediction.rows):
         thesis = (f"{ref.hz:7.2f} {ref.zeta:6.3f} {ref.bound_percent:7.1f}" if ref is not None else f"{'-':>7s} "
                   f"{'-':>6s} {'-':>7s}")
         diff = f"{100 * (row.nominal_hz / ref.hz - 1):8.2f}" if ref is not None else f"{'-':>8s}"
-        how = (f"{row.mode} {row.mode_label} x{row.frequency_scale:.4f}, zeta {row.open_loop_damping:.4f}"
+        how = (f"{row.mode_label} x{row.frequency_scale:.4f}, zeta {row.open_loop_damping:.4f}"
                if row.adjusted else "(heavily damped: not adjusted)")
         note = "" if row.damping_reached else " (damping target out of reach)"
+        fmu = (f"{row.mode:5d} {100 * row.closed_loop_shift[0]:6.2f}/{100 * row.closed_loop_shift[1]:+.2f}"
+               if row.closed_loop_shift is not None else f"{'-':>5s} {'-':>13s}")
         lines.append(f"{row.label:15s} {row.nominal_hz:8.3f} {row.nominal_damping:7.4f} {bound_text(row.bound):>7s} | "
-                     f"{thesis} | {diff} {100 * row.frequency_error:9.2f}  {how}{note}")
+                     f"{thesis} | {diff} {100 * row.frequency_error:9.2f} {fmu}  {how}{note}")
     rule = prediction.rule
     lines.append(f"bounds: zeta < {rule.heavy_damping:g}: max({100 * rule.minimum_bound:g} %, {rule.error_fraction:g} "
                  f"|1-g error|); heavily damped: {100 * rule.heavy_bound:g} %")
+    lines.append("FMU k: the mode's frequency_scale_mode_<k>, min/max 1 -+ bound; shift: of the closed-loop pole "
+                 "with the scale at 1 - bound / 1 + bound (gimbal rows: servo mechanisms, no structural frequency)")
     if prediction.dropped:
         lines.append(f"no 0-g counterpart: {', '.join(prediction.dropped)}")
     return "\n".join(lines)

@@ -435,6 +435,8 @@ def test_non_finite_input_is_an_error_with_a_logged_reason(fmus):
     ("damping_mode_20", -0.1, "outside its range"),
     ("delay_gimbal_primary_x", -1e-3, "outside its range"),
     ("E_lexan_center", -1.0, "outside its range"),
+    ("frequency_scale_mode_20", 0.0, "must be > 0"),
+    ("frequency_scale_mode_20", -0.5, "outside its range"),
 ])
 def test_invalid_parameters_fail_initialisation_with_a_logged_reason(fmus, name, value, reason):
     messages = Messages()

@@ -123,7 +123,8 @@ def _entry_script(name: str, description: str) -> str:
 
 
 def export_fmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str | None = None,
-               arrays: dict[str, np.ndarray] | None = None, frequency_bounds: Mapping[int, float] | None = None) -> Path:
+               arrays: dict[str, np.ndarray] | None = None,
+               frequency_bounds: Mapping[int, float] | None = None) -> Path:
     """Write ``out_dir/<name>.fmu`` (default name from ``fmu_name``: MACE_1g, MACE_1g_motion, ...) and return its path; ``arrays``:
     the model's parametric arrays if already computed; ``frequency_bounds`` (1-based mode -> relative bound) the
     min/max of the modes' ``frequency_scale_mode_<k>``, 1 -+ bound."""

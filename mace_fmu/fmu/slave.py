@@ -73,8 +73,9 @@ class MaceSlave(Fmi2Slave):
         for k, label in enumerate(data["mode_labels"]):
             self.register_variable(Real(f"frequency_mode_{k + 1}", causality=Fmi2Causality.calculatedParameter,
                                         variability=Fmi2Variability.fixed,
-                                        description=f"natural frequency [Hz] of mode {k + 1} ({label}) after reanalysis "
-                                                "(the mode it continues into, not the k-th lowest)",
+                                        description=f"natural frequency [Hz] of mode {k + 1} ({label}) after "
+                                                "reanalysis and frequency scale (the mode it continues into, not the "
+                                                "k-th lowest)",
                                         getter=self._frequency_getter(k)))
 
         self._input_of_vr = {vr: self._inputs.index(v.name) for vr, v in self.vars.items()

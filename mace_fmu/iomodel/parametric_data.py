@@ -205,8 +205,9 @@ def parametric_arrays(model: VoltsModel, *, physical: bool | Sequence[str] = Tru
     damping = [(f"damping_mode_{k + 1}", float(z), f"open-loop damping ratio of mode {k + 1}: {label}")
                for k, (z, label) in enumerate(zip(model.plant.damping, data.labels))]
     scales = [(f"{FREQUENCY_SCALE_PREFIX}{k + 1}", 1.0, f"open-loop natural frequency of mode {k + 1} ({label}) "
-               "relative to the model's, after reanalysis [-]; its min/max are the mode's frequency bounds when declared")
-              for k, label in enumerate(data.labels)]
+               "relative to the model's, after reanalysis [-]; min/max: the mode's frequency bounds when declared")
+              for k, label in enumerate(data.labels)
+              if abs(data.frequencies_hz[k]) >= ZERO_HZ]  # rigid bodies and mechanisms have no frequency to scale
     n = len(data.labels)
     arrays.update(
         inputs=np.array(sys_.input_labels), outputs=np.array(sys_.output_labels), input_descriptions=np.array(ins),
@@ -236,7 +237,9 @@ def with_frequency_bounds(arrays: Mapping[str, np.ndarray], bounds: Mapping[int,
     for mode, bound in bounds.items():
         name = f"{FREQUENCY_SCALE_PREFIX}{mode}"
         if name not in names:
-            raise MaceError(f"frequency bounds: the model has no mode {mode!r} (modes 1..{len(out['mode_labels'])})")
+            scaled = [int(n.rsplit("_", 1)[1]) for n in names if n.startswith(FREQUENCY_SCALE_PREFIX)]
+            raise MaceError(f"frequency bounds: the model has no frequency scale for mode {mode!r} (modes "
+                            f"{min(scaled)}..{max(scaled)}; rigid-body and mechanism modes have none)")
         if isinstance(bound, bool) or not isinstance(bound, (int, float, np.floating)) or not 0.0 <= bound < 1.0:
             raise MaceError(f"frequency bounds: mode {mode}: {bound!r} is not a relative bound in [0, 1) "
                             "(0.011 for +-1.1 %)")

@@ -303,22 +303,21 @@ def apply_parameters(instruments: Instruments, parameters: ParameterSet | None, 
 
 
 def scale_frequencies(modes: StructureModes, parameters: ParameterSet | None, *, structure: str = "") -> StructureModes:
-    """``modes`` with each ``frequency_scale:<label>`` of the set multiplying the frequencies [Hz] of that label's modes.
+    """``modes`` with each ``frequency_scale:<label>`` of the set multiplying its label's frequencies [Hz].
 
     Shapes are kept: the scale is a modal adjustment of the open-loop model (thesis 5.3), not an FE
-    change. Labels are checked as for damping ratios (:func:`apply_parameters`); a scale must be > 0.
+    change. A set made for the other structure (its provenance says so) scales nothing: an updated
+    nominal 0-g set leaves the 1-g model's frequencies alone, as the thesis never changes them.
+    Labels are checked as for damping ratios (:func:`apply_parameters`); a scale must be > 0.
     """
     scales = parameters.of_kind("frequency_scale") if parameters is not None else {}
-    if not scales:
+    prov = parameters.provenance if parameters is not None else None
+    if not scales or (prov is not None and prov.structure not in ("", structure)):
         return modes
     labels = modes.modes.labels
-    prov = parameters.provenance
-    other_structure = prov is not None and prov.structure not in ("", structure)
     frequencies = np.array(modes.modes.frequencies_hz, dtype=float)
     for name, value in scales.items():
         label = name.removeprefix(FREQUENCY_SCALE_PREFIX)
-        if label not in labels and other_structure:
-            continue
         if label not in labels:
             raise MaceError(f"parameter {name!r}: no mode labelled {label!r} in the {structure} structure; labels: "
                             f"{', '.join(sorted(set(labels)))}")

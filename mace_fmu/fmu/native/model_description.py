@@ -54,8 +54,8 @@ def fmu_variables(arrays: Mapping[str, np.ndarray], state_names: Sequence[str]) 
             maximum=float(hi) if np.isfinite(hi) else None)
     for k, label in enumerate(arrays["mode_labels"]):
         add(name=f"frequency_mode_{k + 1}", causality="calculatedParameter", variability="fixed", initial="calculated",
-            description=f"natural frequency [Hz] of mode {k + 1} ({label}) after reanalysis (the mode it continues "
-                        "into, not the k-th lowest)")
+            description=f"natural frequency [Hz] of mode {k + 1} ({label}) after reanalysis and frequency scale (the "
+                        "mode it continues into, not the k-th lowest)")
     first_state = len(out)
     for name in state_names:
         add(name=str(name), causality="local", variability="continuous", initial="calculated",
