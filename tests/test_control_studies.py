@@ -236,12 +236,16 @@ def test_balanced_truncation_equals_control_balred_where_slycot_is_installed(bea
     assert np.abs(ours - theirs).max() <= 1e-6 * np.abs(theirs).max()
 
 
-def test_balanced_truncation_refuses_unstable_and_uncontrollable_models():
+def test_balanced_truncation_refuses_unstable_models_and_orders_beyond_the_minimal_one():
     with pytest.raises(MaceError, match="not asymptotically stable"):
         balanced_model(ct.ss([[0.0, 1.0], [-1.0, 0.0]], [[0.0], [1.0]], [[1.0, 0.0]], 0), states=1)
     uncontrollable = ct.ss(np.diag([-1.0, -2.0]), [[1.0], [0.0]], [[1.0, 1.0]], 0)
-    with pytest.raises(MaceError, match="uncontrollable"):
-        balanced_model(uncontrollable, states=1)
+    with pytest.raises(MaceError, match="states must be 1-1 .*1 of its 2 states are uncontrollable"):
+        balanced_model(uncontrollable, states=2)
+    # within the numerical order it reduces: the controllable part is 1 / (s + 1) exactly
+    reduced = balanced_model(uncontrollable, states=1)[0]
+    np.testing.assert_allclose(np.linalg.eigvals(reduced.A), [-1.0], rtol=1e-12)
+    np.testing.assert_allclose((reduced.C @ reduced.B)[0, 0], 1.0, rtol=1e-12)
 
 
 @pytest.fixture(scope="module")

@@ -233,7 +233,7 @@ def test_cli_robust_0g_writes_the_figure_runs_and_summary(tmp_path, capsys):
     assert main(["study", "robust-0g", "--bound", "17", "-o", str(tmp_path)]) == 2
     assert "--bound takes MODE=PERCENT" in capsys.readouterr().err
     assert main(["study", "robust-0g", "--bound", "999=1.0", "--serial", "-o", str(tmp_path)]) == 2
-    assert "the model has no mode 999" in capsys.readouterr().err
+    assert "the model has no frequency scale for mode 999" in capsys.readouterr().err
 
 
 def test_loop_timing_is_checked():

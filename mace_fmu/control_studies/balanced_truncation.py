@@ -26,27 +26,34 @@ class BalancedTruncation:
     hankel_singular_values: np.ndarray
 
 
-def _gramian_factor(a: np.ndarray, rhs: np.ndarray, what: str) -> np.ndarray:
-    """Lower Cholesky factor L of the gramian W solving A W + W A^T + rhs = 0 (W = L L^T)."""
+def _gramian_factor(a: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+    """L with L L^T = W, the (semidefinite) gramian solving A W + W A^T + rhs = 0, from W's eigen-decomposition.
+
+    Not a Cholesky factor: that refuses the uncontrollable or unobservable states a model's
+    channels often have; the square-root method needs only L L^T = W.
+    """
     w = sla.solve_continuous_lyapunov(a, -rhs)
-    try:
-        return sla.cholesky(0.5 * (w + w.T), lower=True)
-    except np.linalg.LinAlgError:
-        raise MaceError(f"balanced truncation: the {what} gramian is not positive definite (the model has "
-                        f"{what.replace('controllability', 'uncontrollable').replace('observability', 'unobservable')}"
-                        " states; remove them first)") from None
+    w, v = np.linalg.eigh(0.5 * (w + w.T))
+    return v * np.sqrt(np.clip(w, 0.0, None))
 
 
 def balanced_truncation(system: ct.StateSpace, *, states: int) -> BalancedTruncation:
-    """Keep the ``states`` largest Hankel singular values of the stable, minimal ``system`` (D kept)."""
+    """Keep the ``states`` largest Hankel singular values of the stable ``system`` (D kept).
+
+    ``states`` may not exceed the numerical order (Hankel singular values above 1e-12 of the
+    largest): beyond it the balancing transformation does not exist.
+    """
     a, b, c = system.A, system.B, system.C
-    if not 0 < states <= a.shape[0]:
-        raise MaceError(f"balanced truncation: states must be 1-{a.shape[0]}, got {states}")
     if np.max(np.linalg.eigvals(a).real) >= 0.0:
         raise MaceError("balanced truncation: the model is not asymptotically stable")
-    lc = _gramian_factor(a, b @ b.T, "controllability")
-    lo = _gramian_factor(a.T, c.T @ c, "observability")
+    lc = _gramian_factor(a, b @ b.T)
+    lo = _gramian_factor(a.T, c.T @ c)
     u, hsv, vt = sla.svd(lo.T @ lc)
+    order = int(np.sum(hsv > 1e-12 * hsv[0]))
+    if not 0 < states <= order:
+        raise MaceError(f"balanced truncation: states must be 1-{order} (the model's numerical order: "
+                        f"{a.shape[0] - order} of its {a.shape[0]} states are uncontrollable or unobservable), "
+                        f"got {states}")
     scale = hsv[:states] ** -0.5
     right = lc @ vt[:states].T * scale  # x = right z
     left = (scale[:, None] * u[:, :states].T) @ lo.T  # z = left x, left right = I

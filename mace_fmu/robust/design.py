@@ -17,8 +17,8 @@ from dataclasses import dataclass
 
 import control as ct
 import numpy as np
-import scipy.linalg as sla
 
+from mace_fmu.control_studies.balanced_truncation import balanced_truncation
 from mace_fmu.control_studies.lqg import LqgDesign, LqgWeights, design_lqg
 from mace_fmu.errors import MaceError
 from mace_fmu.robust.loop import LoopSpec
@@ -58,38 +58,14 @@ def loop_channels(system: ct.StateSpace, loop: LoopSpec) -> ct.StateSpace:
                  inputs=[loop.control_input, loop.disturbance_input], outputs=[loop.measurement], name="channels")
 
 
-def _factor(gramian: np.ndarray) -> np.ndarray:
-    """L with L L^T = the (semidefinite) gramian, from its eigen-decomposition."""
-    w, v = np.linalg.eigh(0.5 * (gramian + gramian.T))
-    return v * np.sqrt(np.clip(w, 0.0, None))
-
-
-def balanced_reduction(system: ct.StateSpace, *, states: int) -> tuple[ct.StateSpace, np.ndarray]:
-    """Square-root balanced truncation of a stable, possibly non-minimal ``system``; and its Hankel singular values."""
-    a, b, c = system.A, system.B, system.C
-    if np.max(np.linalg.eigvals(a).real) >= 0.0:
-        raise MaceError("balanced reduction: the nominal model is not asymptotically stable")
-    lc = _factor(sla.solve_continuous_lyapunov(a, -b @ b.T))
-    lo = _factor(sla.solve_continuous_lyapunov(a.T, -c.T @ c))
-    u, hsv, vt = sla.svd(lo.T @ lc)
-    if not 0 < states <= a.shape[0] or hsv[states - 1] <= 1e-12 * hsv[0]:
-        rank = int(np.sum(hsv > 1e-12 * hsv[0]))
-        raise MaceError(f"balanced reduction: states must be 1-{rank} (the channels' numerical order), got {states}")
-    scale = hsv[:states] ** -0.5
-    right = lc @ vt[:states].T * scale
-    left = (scale[:, None] * u[:, :states].T) @ lo.T
-    reduced = ct.ss(left @ a @ right, left @ b, c @ right, system.D, inputs=list(system.input_labels),
-                    outputs=list(system.output_labels), name="reduced")
-    return reduced, hsv
-
-
 def design_compensator(system: ct.StateSpace, *, loop: LoopSpec = LoopSpec(), weights: LqgWeights = DEFAULT_WEIGHTS,
                        reduced_states: int = DEFAULT_REDUCED_STATES) -> RobustDesign:
     """LQG compensator of the nominal volts model ``system`` for ``loop`` (see the module docstring)."""
     channels = loop_channels(system, loop)
     if np.any(channels.D != 0):
         raise MaceError("the loop's channels have a direct feedthrough; the co-simulation assumes none")
-    both, hsv = balanced_reduction(channels, states=reduced_states)
+    truncation = balanced_truncation(channels, states=reduced_states)
+    both, hsv = truncation.reduced, truncation.hankel_singular_values
     reduced = ct.ss(both.A, both.B[:, :1], both.C, np.zeros((1, 1)), inputs=[loop.control_input],
                     outputs=[loop.measurement], name="design_model")
     lqg = design_lqg(reduced, weights, noise_input=both.B[:, 1:])
