@@ -579,3 +579,25 @@ def test_cli_view_pairs(tmp_path, capsys):
             and c["path"].count("/") > 3} >= {"one_g", "zero_g"}
     assert main(["view", "pairs", "--mode", "twist", "--html", str(out)]) == 2
     assert "no Table 5.1 mode starts with 'twist'" in capsys.readouterr().err
+
+
+def test_cli_view_response_takes_a_native_motion_fmu(motion_fmu_0g, tmp_path, capsys):
+    """The default kind of `mace-fmu export` (native) is accepted by --fmu, and its page's frames come
+    from the same motion outputs as the pythonfmu FMU's (same model, 1e-9 of the largest motion)."""
+    from mace_fmu.cli import main
+    from mace_fmu.fmu.native.export import export_native_fmu
+    from mace_fmu.fmu.simulate import simulate_input_response
+
+    model, python_fmu, _ = motion_fmu_0g
+    native = export_native_fmu(model, out_dir=tmp_path, name="MACE_0g_native_motion")
+    out = tmp_path / "native.html"
+    assert main(["view", "response", "0g", "--input", "rwa_z", "--duration", "0.1", "--fmu", str(native),
+                 "--html", str(out)]) == 0
+    assert "frames at" in capsys.readouterr().out
+    runs = [simulate_input_response(fmu, input_name="rwa_z", signal="impulse", duration_s=0.1)
+            for fmu in (native, python_fmu)]
+    motion = [k for k in runs[1].outputs if k.startswith("grid_")]
+    scale = max(np.abs(runs[1].outputs[k]).max() for k in motion)
+    assert scale > 0
+    for k in motion:
+        np.testing.assert_allclose(runs[0].outputs[k], runs[1].outputs[k], rtol=0, atol=1e-9 * scale)

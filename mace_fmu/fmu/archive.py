@@ -18,7 +18,9 @@ from xml.etree import ElementTree as ET
 from mace_fmu.errors import MaceError
 
 MAX_UNPACKED_BYTES = 1 << 30  #: a MACE FMU unpacks to a few MB; anything near this is not one
-_OURS = "resources/model.npz"  #: the data every MACE FMU carries
+#: the data a MACE FMU carries: the pythonfmu kind's arrays, or the native runtime's model file
+_OURS = ("resources/model.npz", "resources/mace_model.bin")
+_OURS_TEXT = " or ".join(_OURS)
 
 
 def _unsafe(info: zipfile.ZipInfo) -> str | None:
@@ -54,8 +56,8 @@ def check_fmu(path: str | os.PathLike) -> Path:
     where = os.fspath(path)
     if path.is_dir():
         description = path / "modelDescription.xml"
-        if not description.is_file() or not (path / _OURS).is_file():
-            raise MaceError(f"{where}: not an unpacked FMU (expected modelDescription.xml and {_OURS} in it)")
+        if not description.is_file() or not any((path / name).is_file() for name in _OURS):
+            raise MaceError(f"{where}: not an unpacked FMU (expected modelDescription.xml and {_OURS_TEXT} in it)")
         _check_description(description.read_bytes(), where)
         return path
     if not path.is_file():
@@ -72,8 +74,9 @@ def check_fmu(path: str | os.PathLike) -> Path:
             if sum(info.file_size for info in infos) > MAX_UNPACKED_BYTES:
                 raise MaceError(f"{where}: unpacks to more than {MAX_UNPACKED_BYTES >> 20} MB: refused")
             names = {info.filename for info in infos}
-            if "modelDescription.xml" not in names or _OURS not in names:
-                raise MaceError(f"{where}: not a MACE FMU (expected modelDescription.xml and {_OURS} in the archive)")
+            if "modelDescription.xml" not in names or names.isdisjoint(_OURS):
+                raise MaceError(f"{where}: not a MACE FMU (expected modelDescription.xml and {_OURS_TEXT} in the "
+                                "archive)")
             damaged = archive.testzip()
             if damaged is not None:
                 raise MaceError(f"{where}: entry {damaged!r} is damaged (CRC mismatch)")
