@@ -46,7 +46,7 @@ def h1_estimate(history: TimeHistory, *, segment_length: int, window: str = "han
         raise MaceError(f"{history.source}: segment length must be 8 to {n} samples (the record), got {segment_length}")
     fs = 1.0 / history.sample_time_s
     kw = dict(fs=fs, window=window, nperseg=segment_length, noverlap=int(round(overlap * segment_length)),
-              detrend=False)
+              detrend="constant")
     f, _ = signal.csd(history.inputs[inputs[0]], history.inputs[inputs[0]], **kw)
     keep = np.ones(f.size, bool) if band_hz is None else (f >= band_hz[0]) & (f <= band_hz[1])
     if not keep.any():
@@ -79,7 +79,7 @@ def log_h1_weights(history: TimeHistory, estimate: FrequencyResponseData, *, seg
     """
     fs = 1.0 / history.sample_time_s
     kw = dict(fs=fs, window=window, nperseg=segment_length, noverlap=int(round(overlap * segment_length)),
-              detrend=False)
+              detrend="constant")
     f = signal.csd(history.inputs[estimate.inputs[0]], history.inputs[estimate.inputs[0]], **kw)[0]
     keep = np.isin(np.round(f, 9), np.round(estimate.frequencies_hz, 9))
     if keep.sum() != estimate.frequencies_hz.size:
