@@ -135,3 +135,81 @@ def test_unknown_parameter_and_channel_are_refused_naming_them(fmu):
                    stages=[["E_unobtainium"]])
     with pytest.raises(MaceError, match="gyro_nowhere"):
         family.interface.check_signals(inputs=GIMBALS, outputs=["gyro_nowhere"], where="data.csv")
+
+
+# --- the CLI: mace-fmu update --fmu ... (files from mace_fmu.updating.files) -----------------------------------
+
+def _cli(capsys, argv: list[str]) -> tuple[int, str, str]:
+    from mace_fmu.cli import main
+
+    code = main(argv)
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+@pytest.fixture(scope="module")
+def data_csv(fmu, tmp_path_factory):
+    from mace_fmu.updating.files import write_time_history
+
+    return write_time_history(_measured(fmu, 4.0), tmp_path_factory.mktemp("fmu_data") / "measured.csv")
+
+
+@pytest.mark.parametrize("change, expected", [
+    ({"--fmu": "nowhere.fmu"}, "nowhere.fmu: no such FMU file"),
+    ({"--data": "nowhere.csv"}, "nowhere.csv: no such measured-data file"),
+    ({"--update": "E_lexan_center,E_unobtainium"}, "no parameter(s) E_unobtainium"),
+    ({"--cost": "log-frf", "--segment-s": "-1"}, "--segment-s must be > 0"),
+])
+def test_cli_checks_arguments_before_any_simulation_exit_2(capsys, fmu, data_csv, tmp_path, change, expected):
+    args = {"--fmu": str(fmu), "--data": str(data_csv), "--update": "E_lexan_center", "--cost": "time",
+            "-o": str(tmp_path / "out")}
+    args.update(change)
+    code, out, err = _cli(capsys, ["update"] + [x for kv in args.items() for x in kv])
+    assert code == 2 and expected in err and not (tmp_path / "out").exists()
+
+
+def test_cli_refuses_data_channels_the_fmu_lacks(capsys, fmu, tmp_path):
+    from mace_fmu.updating.files import write_time_history
+
+    t = np.arange(200) * STEP
+    bad = write_time_history(TimeHistory(t, {"gimbal_primary_x": np.sin(t)}, {"gyro_elsewhere": np.cos(t)}),
+                             tmp_path / "bad.csv")
+    code, _, err = _cli(capsys, ["update", "--fmu", str(fmu), "--data", str(bad), "--update", "E_lexan_center",
+                                 "-o", str(tmp_path / "out")])
+    assert code == 2 and "output 'gyro_elsewhere'" in err
+
+
+def test_cli_updates_an_fmu_parameter_and_writes_it_by_the_fmus_name(capsys, fmu, data_csv, tmp_path):
+    import tomllib
+
+    start = tmp_path / "start.toml"
+    start.write_text(f"[values]\nE_lexan_center = {pre_update_parameters()['E_lexan_center']!r}\n")
+    code, out, err = _cli(capsys, ["update", "--fmu", str(fmu), "--data", str(data_csv), "--update", "E_lexan_center",
+                                   "--cost", "time", "--start", str(start), "--workers", "1", "-o", str(tmp_path / "o")])
+    assert code == 0, err
+    values = tomllib.loads((tmp_path / "o" / "parameters.toml").read_text())["values"]
+    assert abs(values["E_lexan_center"] / table_4_4_moduli()["E_lexan_center"] - 1.0) < 0.002
+    assert "E_lexan_center" in out and "% lower" in out
+
+
+def test_example_update_from_test_data_quick(tmp_path):
+    """examples/update_from_test_data.py --quick (8 s record, the two lexan moduli, two delays, serial): the
+    full run (20 s, 8 moduli, 9 delays) is the benchmark's (benchmarks/RESULTS.md)."""
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "examples" / "update_from_test_data.py"
+    spec = importlib.util.spec_from_file_location("update_from_test_data", path)
+    example = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(example)
+    summary = example.main(["--out", str(tmp_path), "--quick", "--workers", "0"])
+    for name, u in summary["updates"].items():
+        assert u["reduction_percent"] >= 90.0, (name, u["reduction_percent"])
+        if name.startswith("moduli"):
+            assert max(abs(e) for e in u["final_error_percent"].values()) < 1.0, (name, u["final_error_percent"])
+            assert max(u["frf_max_db"].values()) < 0.5, (name, u["frf_max_db"])
+        else:
+            assert max(abs(e) for e in u["final_error_ms"].values()) < 0.1, (name, u["final_error_ms"])
+    png = tmp_path / "overlay.png"
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 20_000
+    assert "E_lexan_center" in (tmp_path / "parameters.toml").read_text()
