@@ -20,7 +20,7 @@ import numpy as np
 
 from mace_fmu.errors import MaceError
 from mace_fmu.updating.data import FrequencyResponseData, TimeHistory
-from mace_fmu.updating.fmu_model import FmuFamily
+from mace_fmu.updating.fmu_model import FmuFamily, FmuModel
 from mace_fmu.updating.simulated_frf import H1Estimator
 
 GIMBALS = ("gimbal_primary_x", "gimbal_primary_z", "gimbal_secondary_x", "gimbal_secondary_z")
@@ -99,10 +99,11 @@ class FrfComparison:
     bins_total: int
 
 
-def compare_frfs(family: FmuFamily, *, truth: Mapping[str, float], updated: Mapping[str, float],
+def compare_frfs(family: FmuFamily, *, truth: Mapping[str, float], updated: Mapping[str, float] | FmuModel,
                  history: TimeHistory, estimator: H1Estimator,
                  pairs: Sequence[tuple[str, str]] = CHECKED_FRFS, zero_depth_db: float = 10.0) -> FrfComparison:
-    """Noise-free H1 of the FMU at ``truth`` and at ``updated`` (same inputs, same estimator) compared in dB.
+    """Noise-free H1 of the FMU at ``truth`` and at ``updated`` (values of the same FMU, or another FMU's
+    model) with the same inputs and estimator, compared in dB.
 
     "Away from the zeros": bins where the truth's magnitude is more than ``zero_depth_db`` below its
     median over +-2 Hz are left out (an antiresonance's depth is not a model property the update
@@ -110,8 +111,8 @@ def compare_frfs(family: FmuFamily, *, truth: Mapping[str, float], updated: Mapp
     """
     outs = sorted({o for _, o in pairs})
     h = []
-    for values in (truth, updated):
-        y = family.full(values).time_response(history.times_s, history.inputs, outputs=outs)
+    for model in (family.full(truth), updated if isinstance(updated, FmuModel) else family.full(updated)):
+        y = model.time_response(history.times_s, history.inputs, outputs=outs)
         h.append(estimator(TimeHistory(history.times_s, history.inputs, {o: y[:, k] for k, o in enumerate(outs)})))
     f = h[0].frequencies_hz
     max_db, used = {}, {}
