@@ -213,3 +213,20 @@ def test_example_update_from_test_data_quick(tmp_path):
     png = tmp_path / "overlay.png"
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 20_000
     assert "E_lexan_center" in (tmp_path / "parameters.toml").read_text()
+
+
+def test_pythonfmu_fmus_are_not_loaded_in_the_main_process(fmu, monkeypatch):
+    """pythonfmu FMUs have corrupted the heap of the process that loaded them (mace_fmu/fmu/simulate.py): outside
+    a Dask worker they are refused before any load."""
+    import dataclasses
+
+    from mace_fmu.updating import fmu_model
+
+    real = fmu_model.read_fmu_interface(fmu)
+    fake = dataclasses.replace(real, generation_tool="mace-fmu 0.1.0 (PythonFMU 0.7)")
+    monkeypatch.setattr(fmu_model, "read_fmu_interface", lambda path: fake)
+    fmu_model._loaded.cache_clear()
+    t, u = _noise_inputs(0.1)
+    with pytest.raises(MaceError, match="worker processes only"):
+        fmu_model.FmuModel(interface=fake, values={}).time_response(t, u, outputs=GYROS)
+    fmu_model._loaded.cache_clear()
