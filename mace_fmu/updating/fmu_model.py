@@ -94,6 +94,18 @@ def _in_worker_process() -> bool:
     return True
 
 
+def _extraction_folder() -> str:
+    """A fresh folder under <tmp>/mace_fmu_cost/ named by this process; folders of processes that are gone
+    (a worker killed, a test run that skipped interpreter exit) are removed here, so none pile up."""
+    parent = Path(tempfile.gettempdir()) / "mace_fmu_cost"
+    parent.mkdir(exist_ok=True)
+    for old in parent.glob("pid*-*"):
+        pid = old.name[3:].split("-", 1)[0]
+        if pid.isdigit() and not Path(f"/proc/{pid}").exists() and os.path.exists("/proc/self"):
+            shutil.rmtree(old, ignore_errors=True)
+    return tempfile.mkdtemp(prefix=f"pid{os.getpid()}-", dir=parent)
+
+
 class _LoadedFmu:
     """One extracted and instantiated FMU of this process, run again and again with ``fmi2Reset`` between runs."""
 
@@ -103,7 +115,7 @@ class _LoadedFmu:
 
         self.interface = interface
         self.messages: list[str] = []
-        folder = tempfile.mkdtemp(prefix="mace_fmu_cost_")
+        folder = _extraction_folder()
         weakref.finalize(self, shutil.rmtree, folder, True)
         extract(interface.path, unzipdir=folder)
         self.slave = FMU2Slave(guid=interface.guid, unzipDirectory=folder, modelIdentifier=interface.model_identifier,
