@@ -107,6 +107,18 @@ def test_log_frf_cost_is_zero_for_the_truth_without_noise_and_grows_away_from_it
     assert np.max(np.abs(cost.residual(family.full({"E_lexan_center": 2.4e9})))) > 0.1
 
 
+def _fmu_loads() -> int:
+    from mace_fmu.updating.fmu_model import _loaded
+
+    return _loaded.cache_info().misses
+
+
+def _fmu_runs() -> int:
+    from mace_fmu.updating.fmu_model import _loaded
+
+    return _loaded.cache_info().hits + _loaded.cache_info().misses
+
+
 def test_sensitivities_on_a_two_worker_local_cluster_are_the_serial_ones_bit_for_bit(fmu):
     from mace_fmu.runner import DaskRunner
 
@@ -122,6 +134,9 @@ def test_sensitivities_on_a_two_worker_local_cluster_are_the_serial_ones_bit_for
                                       runner=runner)
         again = update_fmu(family=family, cost=cost, start={"E_lexan_center": 2.45e9}, stages=[["E_lexan_center"]],
                            runner=runner)
+        loads = runner.client.run(_fmu_loads)  # per worker: FMU instances made (each then reset between runs)
+        runs = runner.client.run(_fmu_runs)
+    assert all(n <= 1 for n in loads.values()) and sum(runs.values()) >= sum(loads.values()) + 3, (loads, runs)
     assert np.array_equal(serial.matrix, parallel.matrix) and np.array_equal(serial.j0, parallel.j0)
     assert [s.done for s in steps[:3]] == [1, 2, 3]
     alone = update_fmu(family=family, cost=cost, start={"E_lexan_center": 2.45e9}, stages=[["E_lexan_center"]])
