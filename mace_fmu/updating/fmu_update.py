@@ -42,7 +42,7 @@ def fmu_cost(kind: CostKind, *, history: TimeHistory, frequency_data: FrequencyR
 
     ``time``: outputs normalised by their RMS (eq. 4.3). ``log-frf``: ``frequency_data`` (default: the
     ``estimator``'s H1 of ``history``) against the same estimator's H1 of the FMU's response to the
-    measured inputs, over ``pairs`` (default: the principal pairs, same axis and X to Y). ``weighting``
+    measured inputs, over ``pairs`` (default: the principal pairs, same axis and X to Y, where the names say the axis; else every pair). ``weighting``
     "noise" divides each log error by its standard deviation estimated from ``history`` (bins where
     the measurement noise buries the response weigh little), "none" is eq. 4.17 as printed.
     """
@@ -53,10 +53,8 @@ def fmu_cost(kind: CostKind, *, history: TimeHistory, frequency_data: FrequencyR
     if estimator is None:
         raise MaceError("the log-FRF cost needs an H1 estimator (segment length, window, band)")
     data = frequency_data if frequency_data is not None else estimator(history)
-    chosen = tuple(pairs) or principal_pairs(data.inputs, data.outputs)
-    if not chosen:
-        raise MaceError(f"{data.source}: no input-output pairs to compare (inputs {data.inputs}, outputs "
-                        f"{data.outputs})")
+    chosen = tuple(pairs) or principal_pairs(data.inputs, data.outputs) or \
+        tuple((i, o) for i in data.inputs for o in data.outputs)
     if weighting not in WEIGHTINGS:
         raise MaceError(f"weighting must be one of {', '.join(WEIGHTINGS)}, got {weighting!r}")
     weights = None
