@@ -42,7 +42,8 @@ def fmu_cost(kind: CostKind, *, history: TimeHistory, frequency_data: FrequencyR
 
     ``time``: outputs normalised by their RMS (eq. 4.3). ``log-frf``: ``frequency_data`` (default: the
     ``estimator``'s H1 of ``history``) against the same estimator's H1 of the FMU's response to the
-    measured inputs, over ``pairs`` (default: the principal pairs, same axis and X to Y, where the names say the axis; else every pair). ``weighting``
+    measured inputs, over ``pairs`` (default: the principal pairs, same axis and X to Y, where the names
+    say the axis; else every pair). ``weighting``
     "noise" divides each log error by its standard deviation estimated from ``history`` (bins where
     the measurement noise buries the response weigh little), "none" is eq. 4.17 as printed.
     """
