@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Mapping
 
@@ -75,11 +75,43 @@ def read_measured_modes(path: str | Path) -> tuple[MeasuredMode, ...]:
     return tuple(modes)
 
 
-def _finite(name: str, values: np.ndarray, source: str) -> None:
+class DataError(MaceError):
+    """Bad samples in measured data, located by ``channel`` and ``row`` (the 0-based sample index).
+
+    File readers catch it and say where the sample sits in the file (line, dataset); ``what`` is
+    the message without the location, e.g. "is not finite (NaN or inf)".
+    """
+
+    def __init__(self, message: str, *, source: str, what: str, channel: str | None = None,
+                 row: int | None = None) -> None:
+        self.source = source
+        self.what = what  #: the problem, without the location
+        self.channel = channel  #: the channel or signal, None for the time or frequency column
+        self.row = row  #: 0-based sample index, None when not about one sample
+        super().__init__(message)
+
+    def __reduce__(self):  # keep keyword-only arguments picklable
+        return (_rebuild_data_error, (str(self), self.source, self.what, self.channel, self.row))
+
+
+def _rebuild_data_error(message: str, source: str, what: str, channel: str | None, row: int | None) -> DataError:
+    return DataError(message, source=source, what=what, channel=channel, row=row)
+
+
+def _finite(name: str, values: np.ndarray, source: str, channel: str | None = None) -> None:
     bad = np.flatnonzero(~np.isfinite(values).reshape(values.shape[0], -1).all(axis=1))
     if bad.size:
-        raise MaceError(f"{source}: {name} is not finite (NaN or inf) at row {int(bad[0])} "
-                        f"({bad.size} rows in all)")
+        what = f"value is NaN or inf ({bad.size} of {values.shape[0]} rows)"
+        raise DataError(f"{source}: {name} is not finite (NaN or inf) at row {int(bad[0])} "
+                        f"({bad.size} rows in all)", source=source, what=what, channel=channel, row=int(bad[0]))
+
+
+def _units(units: Mapping[str, str], signals: tuple[str, ...], source: str) -> dict[str, str]:
+    """Every signal's unit, "V" (the model boundary) where ``units`` does not say."""
+    unknown = sorted(set(units) - set(signals))
+    if unknown:
+        raise MaceError(f"{source}: units given for unknown signal(s) {', '.join(unknown)}")
+    return {name: str(units.get(name, "V")) for name in signals}
 
 
 @dataclass(frozen=True)
@@ -91,6 +123,8 @@ class FrequencyResponseData:
     outputs: tuple[str, ...]
     response: np.ndarray  #: complex (k, output, input)
     source: str = "<memory>"
+    units: Mapping[str, str] = field(default_factory=dict)  #: signal -> unit; "V" where not given
+    coherence: np.ndarray | None = None  #: (k, output) multiple coherence of each output with all inputs
 
     def __post_init__(self) -> None:
         f = np.asarray(self.frequencies_hz, dtype=float)
@@ -104,11 +138,29 @@ class FrequencyResponseData:
         _finite("frequency", f, self.source)
         if np.any(np.diff(f) <= 0) or f[0] < 0:
             k = int(np.flatnonzero(np.diff(f) <= 0)[0]) + 1 if np.any(np.diff(f) <= 0) else 0
-            raise MaceError(f"{self.source}: frequencies must be >= 0 and increasing (row {k})")
+            raise DataError(f"{self.source}: frequencies must be >= 0 and increasing (row {k})", source=self.source,
+                            what="frequencies must be >= 0 and increasing", row=k)
         if h.shape != (f.size, len(self.outputs), len(self.inputs)):
             raise MaceError(f"{self.source}: response has shape {h.shape}, expected "
                             f"({f.size}, {len(self.outputs)}, {len(self.inputs)}) (frequency, output, input)")
         _finite("the response", h, self.source)
+        object.__setattr__(self, "units", _units(self.units, self.outputs + self.inputs, self.source))
+        if self.coherence is not None:
+            c = np.asarray(self.coherence, dtype=float)
+            if c.shape != (f.size, len(self.outputs)):
+                raise MaceError(f"{self.source}: coherence has shape {c.shape}, expected ({f.size}, "
+                                f"{len(self.outputs)}) (frequency, output)")
+            bad = ~np.isfinite(c) | (c < 0) | (c > 1)
+            if bad.any():
+                k, i = (int(x) for x in np.argwhere(bad)[0])
+                what = f"coherence {float(c[k, i])!r}, expected a number in [0, 1]"
+                raise DataError(f"{self.source}: output {self.outputs[i]!r}: {what} at row {k}", source=self.source,
+                                what=what, channel=self.outputs[i], row=k)
+            object.__setattr__(self, "coherence", c)
+
+    def unit(self, signal: str) -> str:
+        """The unit of an input or output signal, e.g. "V"; the response's unit is output unit / input unit."""
+        return self.units[signal]
 
 
 @dataclass(frozen=True)
@@ -119,6 +171,7 @@ class TimeHistory:
     inputs: Mapping[str, np.ndarray]
     outputs: Mapping[str, np.ndarray]
     source: str = "<memory>"
+    units: Mapping[str, str] = field(default_factory=dict)  #: signal -> unit; "V" where not given
 
     def __post_init__(self) -> None:
         t = np.asarray(self.times_s, dtype=float)
@@ -128,20 +181,32 @@ class TimeHistory:
         _finite("time", t, self.source)
         dt = np.diff(t)
         if np.any(dt <= 0):
-            raise MaceError(f"{self.source}: time is not increasing at row {int(np.flatnonzero(dt <= 0)[0]) + 1}")
-        if not np.allclose(dt, dt[0], rtol=1e-6, atol=0.0):
-            k = int(np.argmax(np.abs(dt - dt[0]))) + 1
-            raise MaceError(f"{self.source}: samples are not uniformly spaced (step {dt[0]:.6g} s, but "
-                            f"{dt[k - 1]:.6g} s at row {k})")
+            k = int(np.flatnonzero(dt <= 0)[0]) + 1
+            raise DataError(f"{self.source}: time is not increasing at row {k}", source=self.source,
+                            what=f"time is not increasing ({float(t[k - 1])!r} s, then {float(t[k])!r} s)", row=k)
+        uneven = ~np.isclose(dt, dt[0], rtol=1e-6, atol=0.0)
+        if uneven.any():
+            k = int(np.flatnonzero(uneven)[0]) + 1  # the first sample off the grid, as a file reader reports it
+            raise DataError(f"{self.source}: samples are not uniformly spaced (step {dt[0]:.6g} s, but "
+                            f"{dt[k - 1]:.6g} s at row {k})", source=self.source, row=k,
+                            what=f"samples are not uniformly spaced (step {dt[0]:.6g} s, but {dt[k - 1]:.6g} s here)")
         for table in ("inputs", "outputs"):
             signals = {name: np.asarray(v, dtype=float) for name, v in getattr(self, table).items()}
             for name, v in signals.items():
                 if v.shape != t.shape:
                     raise MaceError(f"{self.source}: channel {name!r} has {v.size} samples, time has {t.size}")
-                _finite(f"channel {name!r}", v, self.source)
+                _finite(f"channel {name!r}", v, self.source, channel=name)
             object.__setattr__(self, table, signals)
         if not self.outputs:
             raise MaceError(f"{self.source}: no output channels")
+        both = set(self.inputs) & set(self.outputs)
+        if both:
+            raise MaceError(f"{self.source}: signal(s) {', '.join(sorted(both))} are both input and output")
+        object.__setattr__(self, "units", _units(self.units, tuple(self.inputs) + tuple(self.outputs), self.source))
+
+    def unit(self, signal: str) -> str:
+        """The unit of an input or output signal, e.g. "V"."""
+        return self.units[signal]
 
     @property
     def sample_time_s(self) -> float:
@@ -151,4 +216,4 @@ class TimeHistory:
         """The first ``samples`` samples of the record."""
         return TimeHistory(self.times_s[:samples], {k: v[:samples] for k, v in self.inputs.items()},
                            {k: v[:samples] for k, v in self.outputs.items()},
-                           source=f"{self.source} (first {samples} samples)")
+                           source=f"{self.source} (first {samples} samples)", units=self.units)

@@ -1,0 +1,332 @@
+"""Frequency responses in CSV (real and imaginary part per output/input pair) and UFF dataset 58 files."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+
+from mace_fmu.atomic import atomic_path
+from mace_fmu.errors import MaceError
+from mace_fmu.updating.data import DataError, FrequencyResponseData
+from mace_fmu.updating.files.channels import (
+    ChannelMap, Label, check_present, format_label, parse_label, resolve)
+from mace_fmu.updating.files.timehistory import read_csv_columns
+
+FRF_SUFFIXES = (".csv", ".uff", ".unv")
+_COHERENCE = re.compile(r"^coherence:(.+?) \[1\]$")
+_PAIR = re.compile(r"^(re|im):(.+)/(.+?) \[([^/\[\]]*)/([^/\[\]]*)\]$")
+#: UFF dataset 58 function type of a frequency response function (FRF)
+UFF_FRF = 4
+#: UFF direction codes (record 6, fields 7 and 10) and the axis names used for channels named by node
+UFF_DIRECTIONS = {1: "X", 2: "Y", 3: "Z", 4: "RX", 5: "RY", 6: "RZ"}
+#: the ID lines (4 and 5) that carry the model's signal names, so that a file reads back by name
+UFF_OUTPUT_ID, UFF_INPUT_ID = "output: ", "input: "
+
+
+# --- CSV ----------------------------------------------------------------------------------------
+
+def _read_csv(path: Path, channel_map: ChannelMap | None) -> FrequencyResponseData:
+    labels, columns, lines, header_line = read_csv_columns(path)
+    at = f"{path}:{header_line}"
+    first = parse_label(labels[0], where=at)
+    if first.name != "frequency" or first.role is not None or first.unit != "Hz":
+        raise MaceError(f"{at}: the first column is {labels[0]!r}, expected 'frequency [Hz]'")
+    parts: dict[tuple[str, str], dict[str, np.ndarray]] = {}
+    outputs: list[str] = []
+    inputs: list[str] = []
+    units: dict[str, str] = {}
+    channel_of: dict[str, str] = {}
+    found: set[str] = set()
+    coherence: dict[str, np.ndarray] = {}
+    for text, values in zip(labels[1:], columns[1:]):
+        c = _COHERENCE.match(text)
+        if c:
+            coherence[c.group(1).strip()] = values  # by channel; matched to the outputs below
+            continue
+        m = _PAIR.match(text)
+        if not m:
+            raise MaceError(f"{at}: column label {text!r} is not 're:<output>/<input> [<unit>/<unit>]', 'im:...' "
+                            "or 'coherence:<output> [1]'")
+        part, out_channel, in_channel, out_unit, in_unit = (g.strip() for g in m.groups())
+        found |= {out_channel, in_channel}
+        out = _signal(Label(out_channel, out_unit, "output"), channel_map, at, "output")
+        inp = _signal(Label(in_channel, in_unit, "input"), channel_map, at, "input")
+        if out is None or inp is None:
+            continue  # a pair with an ignored channel
+        for signal, unit, channel, table in ((out, out_unit, out_channel, outputs), (inp, in_unit, in_channel, inputs)):
+            if signal not in table:
+                table.append(signal)
+            units[signal] = units.get(signal, unit)
+            channel_of[signal] = channel
+        if part in parts.setdefault((out, inp), {}):
+            raise MaceError(f"{at}: column {text!r} appears twice")
+        parts[(out, inp)][part] = values
+    check_present(found, channel_map=channel_map, where=at)
+    if not outputs:
+        raise MaceError(f"{at}: no response columns (expected 're:<output>/<input> [<unit>/<unit>]' and 'im:...')")
+    response = np.empty((len(columns[0]), len(outputs), len(inputs)), dtype=complex)
+    for i, out in enumerate(outputs):
+        for j, inp in enumerate(inputs):
+            pair = parts.get((out, inp), {})
+            missing = [p for p in ("re", "im") if p not in pair]
+            if missing:
+                raise MaceError(f"{at}: channel {channel_of[out]!r}/{channel_of[inp]!r}: no column "
+                                f"{' or '.join(f'{p}:{channel_of[out]}/{channel_of[inp]}' for p in missing)} "
+                                "(every output/input pair needs re: and im: columns)")
+            response[:, i, j] = pair["re"] + 1j * pair["im"]
+    by_channel = {channel_of[out]: out for out in outputs}
+    unknown = sorted(set(coherence) - set(by_channel))
+    if unknown:
+        raise MaceError(f"{at}: channel {unknown[0]!r}: a coherence column for a channel with no response")
+    if coherence and len(coherence) != len(outputs):
+        raise MaceError(f"{at}: coherence columns for {len(coherence)} of {len(outputs)} outputs (all or none)")
+    gamma2 = np.column_stack([coherence[channel_of[out]] for out in outputs]) if coherence else None
+    return _frd(columns[0], inputs, outputs, response, units, source=str(path),
+                row_at=lambda k: f"{path}:{lines[k]}", channel_of=channel_of, coherence=gamma2)
+
+
+def _signal(label: Label, channel_map: ChannelMap | None, at: str, role: str) -> str | None:
+    """The model signal of one end of a response, None for a channel the map ignores."""
+    signal, mapped_role, _ = resolve(label, channel_map=channel_map, where=at)
+    if mapped_role == "ignore":
+        return None
+    if mapped_role != role:
+        raise MaceError(f"{at}: channel {label.name!r} is used as an {role} but the channel map says {mapped_role}")
+    return signal
+
+
+def _frd(f, inputs, outputs, response, units, *, source, row_at, channel_of, coherence=None) -> FrequencyResponseData:
+    # The response's NaN check, located per channel pair (FrequencyResponseData only knows the row).
+    for i, out in enumerate(outputs):
+        for j, inp in enumerate(inputs):
+            bad = np.flatnonzero(~np.isfinite(response[:, i, j]))
+            if bad.size:
+                raise MaceError(f"{row_at(int(bad[0]))}: channel {channel_of[out]!r}/{channel_of[inp]!r}: the "
+                                f"response is NaN or inf ({bad.size} of {len(f)} rows)")
+    try:
+        return FrequencyResponseData(f, tuple(inputs), tuple(outputs), response, source=source, units=units,
+                                     coherence=coherence)
+    except DataError as exc:
+        channel = "frequency" if exc.channel is None else channel_of.get(exc.channel, exc.channel)
+        raise MaceError(f"{row_at(exc.row)}: channel {channel!r}: {exc.what}") from None
+
+
+def _write_csv(frd: FrequencyResponseData, path: Path) -> None:
+    labels = ["frequency [Hz]"]
+    columns = [frd.frequencies_hz]
+    for i, out in enumerate(frd.outputs):
+        for j, inp in enumerate(frd.inputs):
+            format_label(out, "V"), format_label(inp, "V")  # the names must fit the label grammar
+            if "/" in out or "/" in inp:
+                raise MaceError(f"signal names {out!r}, {inp!r} cannot be written as a CSV pair label (no '/')")
+            for part, values in (("re", frd.response[:, i, j].real), ("im", frd.response[:, i, j].imag)):
+                labels.append(f"{part}:{out}/{inp} [{frd.unit(out)}/{frd.unit(inp)}]")
+                columns.append(values)
+    if frd.coherence is not None:
+        for i, out in enumerate(frd.outputs):
+            labels.append(f"coherence:{out} [1]")
+            columns.append(frd.coherence[:, i])
+    with atomic_path(path) as tmp:
+        np.savetxt(tmp, np.column_stack(columns), fmt="%.17g", delimiter=",", header=",".join(labels), comments="")
+
+
+# --- UFF dataset 58 -----------------------------------------------------------------------------
+
+def _uff_channel(dataset: dict, role: str) -> str:
+    """The channel name of one end of a dataset 58: the ID-line name, else "<node><sign><axis>", e.g. "101+Z"."""
+    id_line, prefix = ((dataset.get("id4", ""), UFF_OUTPUT_ID) if role == "output"
+                       else (dataset.get("id5", ""), UFF_INPUT_ID))
+    if str(id_line).startswith(prefix):
+        return str(id_line)[len(prefix):].strip()
+    node, direction = (dataset["rsp_node"], dataset["rsp_dir"]) if role == "output" else \
+        (dataset["ref_node"], dataset["ref_dir"])
+    if direction == 0:
+        return str(node)
+    axis = UFF_DIRECTIONS.get(abs(int(direction)), str(abs(int(direction))))
+    return f"{node}{'+' if direction > 0 else '-'}{axis}"
+
+
+def _uff_unit(dataset: dict, key: str) -> str:
+    unit = str(dataset.get(key, "")).strip()
+    return "" if unit.upper() == "NONE" else unit
+
+
+def _read_uff(path: Path, channel_map: ChannelMap | None) -> FrequencyResponseData:
+    import pyuff
+
+    if not path.is_file():
+        raise MaceError(f"{path}: no such file")
+    try:
+        uff = pyuff.UFF(str(path))
+        types = list(uff.get_set_types())
+    except Exception as exc:  # pyuff raises bare Exception on files it cannot parse
+        raise MaceError(f"{path}: malformed UFF file ({exc})") from None
+    records = []
+    for k, kind in enumerate(types, start=1):
+        if int(kind) != 58:
+            continue
+        try:
+            dataset = uff.read_sets(k - 1)
+            f = np.asarray(dataset["x"], dtype=float)
+            h = np.asarray(dataset["data"])
+            func_type = int(dataset["func_type"])
+        except Exception as exc:  # noqa: BLE001 -- pyuff's errors are bare Exceptions or KeyErrors
+            raise MaceError(f"{path}: dataset {k} (type 58): malformed ({exc or type(exc).__name__})") from None
+        if func_type != UFF_FRF:
+            continue  # auto-spectra, coherence, time records next to the FRFs
+        if f.shape != h.shape or f.ndim != 1:
+            raise MaceError(f"{path}: dataset {k} (type 58): {f.size} frequencies but {h.size} values")
+        if int(dataset.get("num_pts", f.size)) != f.size:
+            raise MaceError(f"{path}: dataset {k} (type 58): {f.size} data points, its header (record 7) says "
+                            f"{int(dataset['num_pts'])}: a truncated or malformed data block")
+        if not np.iscomplexobj(h):
+            raise MaceError(f"{path}: dataset {k} (type 58): real ordinate data, expected a complex FRF")
+        records.append((k, dataset, f, h))
+    if not records:
+        raise MaceError(f"{path}: no frequency response (dataset 58 with function type {UFF_FRF}) in "
+                        f"{len(types)} dataset(s) of types {sorted(set(int(t) for t in types))}")
+    outputs: list[str] = []
+    inputs: list[str] = []
+    units: dict[str, str] = {}
+    channel_of: dict[str, str] = {}
+    found: set[str] = set()
+    pairs: dict[tuple[str, str], tuple[int, np.ndarray]] = {}
+    k0, f0 = 0, np.empty(0)  # the first kept dataset: its frequencies are everyone's
+    for k, dataset, f, h in records:
+        at = f"{path}: dataset {k}"
+        ends: list[str | None] = []
+        for role, unit_key, table in (("output", "ordinate_axis_units_lab", outputs),
+                                      ("input", "orddenom_axis_units_lab", inputs)):
+            channel = _uff_channel(dataset, role)
+            found.add(channel)
+            row = channel_map.find(channel) if channel_map is not None else None
+            if row is not None and row.role == "ignore":
+                ends.append(None)
+                continue
+            unit = _uff_unit(dataset, unit_key)
+            if not unit:
+                record = "9 (ordinate)" if role == "output" else "10 (ordinate denominator)"
+                raise MaceError(f"{at}: channel {channel!r}: no units label in record {record}, expected e.g. 'V'")
+            signal = _signal(Label(channel, unit, role), channel_map, at, role)
+            ends.append(signal)
+            if signal not in table:
+                table.append(signal)
+            elif units[signal] != unit:
+                raise MaceError(f"{at}: channel {channel!r}: unit {unit!r}, an earlier dataset says {units[signal]!r}")
+            units[signal] = unit
+            channel_of[signal] = channel
+        if None in ends:
+            continue  # a pair with an ignored channel
+        abscissa = _uff_unit(dataset, "abscissa_axis_units_lab")
+        if abscissa and abscissa.lower() != "hz":
+            raise MaceError(f"{at}: channel {channel_of[ends[0]]!r}/{channel_of[ends[1]]!r}: abscissa unit "
+                            f"{abscissa!r}, expected 'Hz'")
+        if not k0:
+            k0, f0 = k, f
+        if f.shape != f0.shape or not np.array_equal(f, f0):
+            pair = f"{at}: channel {channel_of[ends[0]]!r}/{channel_of[ends[1]]!r}"
+            if f.shape != f0.shape:
+                raise MaceError(f"{pair}: {f.size} frequencies, dataset {k0} has {f0.size}")
+            row = int(np.flatnonzero(f != f0)[0])
+            raise MaceError(f"{pair}: frequency {f[row]:.6g} Hz at row {row}, dataset {k0} has {f0[row]:.6g} Hz "
+                            "(every FRF needs the same frequencies)")
+        bad = np.flatnonzero(~np.isfinite(h))
+        if bad.size:
+            raise MaceError(f"{at}: channel {channel_of[ends[0]]!r}/{channel_of[ends[1]]!r}: the response is "
+                            f"NaN or inf at row {int(bad[0])} ({bad.size} of {h.size} rows)")
+        if tuple(ends) in pairs:
+            raise MaceError(f"{at}: channel {channel_of[ends[0]]!r}/{channel_of[ends[1]]!r}: same pair as dataset "
+                            f"{pairs[tuple(ends)][0]}")
+        pairs[(ends[0], ends[1])] = (k, h)
+    check_present(found, channel_map=channel_map, where=str(path))
+    if not pairs:
+        raise MaceError(f"{path}: every FRF dataset has a channel the channel map ignores")
+    response = np.empty((f0.size, len(outputs), len(inputs)), dtype=complex)
+    for i, out in enumerate(outputs):
+        for j, inp in enumerate(inputs):
+            if (out, inp) not in pairs:
+                raise MaceError(f"{path}: channel {channel_of[out]!r}/{channel_of[inp]!r}: no FRF dataset for this "
+                                "output/input pair (every output needs one per input)")
+            response[:, i, j] = pairs[(out, inp)][1]
+    return _frd(f0, inputs, outputs, response, units, source=str(path),
+                row_at=lambda row: f"{path}: dataset {k0} row {row}", channel_of=channel_of)
+
+
+def _uff_abscissa(f: np.ndarray) -> np.ndarray:
+    """The frequencies as dataset 58 stores them (E13.5: six significant digits)."""
+    return np.array([float(f"{x:13.5e}") for x in f])
+
+
+def _write_uff(frd: FrequencyResponseData, path: Path) -> None:
+    import pyuff
+
+    stored = _uff_abscissa(frd.frequencies_hz)
+    if np.any(np.diff(stored) <= 0):
+        k = int(np.flatnonzero(np.diff(stored) <= 0)[0]) + 1
+        raise MaceError(f"{path}: frequencies {float(frd.frequencies_hz[k - 1])!r} and "
+                        f"{float(frd.frequencies_hz[k])!r} Hz (rows "
+                        f"{k - 1}, {k}) are equal to the six digits UFF 58 keeps; write CSV instead")
+    datasets = []
+    for i, out in enumerate(frd.outputs):
+        for j, inp in enumerate(frd.inputs):
+            for name, prefix in ((out, UFF_OUTPUT_ID), (inp, UFF_INPUT_ID)):
+                if len(prefix + name) > 80 or "\n" in name:
+                    raise MaceError(f"{path}: signal name {name!r} does not fit an 80-character UFF ID line")
+            for unit in (frd.unit(out), frd.unit(inp)):
+                if len(unit) > 20 or not unit or unit.upper() == "NONE":
+                    raise MaceError(f"{path}: unit {unit!r} does not fit a UFF units label (1 to 20 characters)")
+            dataset = pyuff.prepare_58(
+                binary=0, id1="frequency response function", id2=frd.source[:80], id3="NONE",
+                id4=UFF_OUTPUT_ID + out, id5=UFF_INPUT_ID + inp, func_type=UFF_FRF,
+                rsp_node=i + 1, rsp_dir=0, ref_node=j + 1, ref_dir=0,
+                data=frd.response[:, i, j].astype(complex), x=frd.frequencies_hz, abscissa_spacing=0,
+                abscissa_spec_data_type=18, abscissa_axis_units_lab="Hz",  # 18: frequency
+                ordinate_spec_data_type=1, ordinate_axis_units_lab=frd.unit(out),  # 1: general (volts has no code)
+                orddenom_spec_data_type=1, orddenom_axis_units_lab=frd.unit(inp))
+            # The axis labels are optional fields that prepare_58 does not take but the writer does.
+            dataset.update(abscissa_axis_lab="frequency", ordinate_axis_lab=out[:20], orddenom_axis_lab=inp[:20])
+            datasets.append(dataset)
+    with atomic_path(path) as tmp:
+        pyuff.UFF(str(tmp)).write_sets(datasets, mode="overwrite")
+
+
+# --- public -------------------------------------------------------------------------------------
+
+def read_frequency_response(path: str | Path, *, channel_map: ChannelMap | None = None) -> FrequencyResponseData:
+    """A measured frequency response H[k, output, input] from ``.csv`` or UFF dataset 58 (``.uff``/``.unv``).
+
+    CSV: ``frequency [Hz]``, then ``re:<output>/<input> [<unit>/<unit>]`` and ``im:...`` columns
+    for every output/input pair. UFF: one dataset 58 with function type 4 (FRF) per pair; the
+    channel names come from ID lines 4 and 5 (``output: <name>``, ``input: <name>``, as
+    :func:`write_frequency_response` writes them), else from node and direction, e.g. ``101+Z``;
+    units from the ordinate (numerator and denominator) unit labels. Without a channel map the
+    names are the model's signals and units must be V; with one the map translates and checks.
+    """
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix == ".csv":
+        return _read_csv(path, channel_map)
+    if suffix in (".uff", ".unv"):
+        return _read_uff(path, channel_map)
+    raise MaceError(f"{path}: unknown frequency-response format {path.suffix!r} (expected one of "
+                    f"{', '.join(FRF_SUFFIXES)})")
+
+
+def write_frequency_response(frd: FrequencyResponseData, path: str | Path) -> Path:
+    """Write ``frd`` to ``.csv`` ('%.17g': exact) or UFF dataset 58 ASCII (``.uff``/``.unv``), atomically.
+
+    UFF 58 keeps six significant digits of each frequency (E13.5) and twelve of each real and
+    imaginary part (pyuff writes E20.11); the signal names travel in ID lines 4 and 5.
+    """
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix == ".csv":
+        _write_csv(frd, path)
+    elif suffix in (".uff", ".unv"):
+        _write_uff(frd, path)
+    else:
+        raise MaceError(f"{path}: unknown frequency-response format {path.suffix!r} (expected one of "
+                        f"{', '.join(FRF_SUFFIXES)})")
+    return path
