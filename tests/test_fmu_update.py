@@ -12,7 +12,8 @@ from mace_fmu.updating.fmu_model import fmu_family
 from mace_fmu.updating.fmu_update import fmu_cost, update_fmu
 from mace_fmu.updating.mace_update import pre_update_parameters, table_4_4_moduli
 from mace_fmu.updating.sensitivity import cost_sensitivities
-from mace_fmu.updating.simulated_frf import H1Estimator, h1_estimate
+from mace_fmu.updating.files import h1_estimate
+from mace_fmu.updating.simulated_frf import H1Estimator
 
 GIMBALS = ("gimbal_primary_x", "gimbal_primary_z", "gimbal_secondary_x", "gimbal_secondary_z")
 GYROS = ("gyro_payload_x", "gyro_payload_z", "gyro_bus_x", "gyro_bus_y", "gyro_bus_z")

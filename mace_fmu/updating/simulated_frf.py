@@ -16,12 +16,14 @@ import scipy.signal as signal
 
 from mace_fmu.errors import MaceError
 from mace_fmu.updating.data import FrequencyResponseData, TimeHistory
+from mace_fmu.updating.files.h1 import h1_estimate
 
 
 @dataclass(frozen=True)
 class H1Estimator:
-    """H1 = S_yu S_uu^-1 (all inputs at once) from Welch cross-spectra: ``segment_length`` samples per
-    segment, ``window``, ``overlap`` (fraction), kept within ``band_hz`` [Hz] (None: every bin)."""
+    """The settings of :func:`~mace_fmu.updating.files.h1_estimate` (H1 = S_yu S_uu^-1, all inputs at once):
+    ``segment_length`` samples per segment, ``window``, ``overlap`` (fraction), ``band_hz`` [Hz] (None: every bin
+    above 0 Hz). One object for the measured data and the model's simulated response alike."""
 
     segment_length: int
     window: str = "hann"
@@ -32,41 +34,6 @@ class H1Estimator:
         """The frequency response estimated from ``history`` (inputs and outputs in their units)."""
         return h1_estimate(history, segment_length=self.segment_length, window=self.window, overlap=self.overlap,
                            band_hz=self.band_hz)
-
-
-def h1_estimate(history: TimeHistory, *, segment_length: int, window: str = "hann", overlap: float = 0.5,
-                band_hz: tuple[float, float] | None = None) -> FrequencyResponseData:
-    """H[k, output, input] = S_yu S_uu^-1 at the Welch bins within ``band_hz`` [Hz]; inputs driven together
-    must be uncorrelated enough for S_uu to be invertible at every kept bin."""
-    inputs, outputs = list(history.inputs), list(history.outputs)
-    if not inputs:
-        raise MaceError(f"{history.source}: an H1 estimate needs at least one input channel")
-    n = len(history.times_s)
-    if not 8 <= segment_length <= n:
-        raise MaceError(f"{history.source}: segment length must be 8 to {n} samples (the record), got {segment_length}")
-    fs = 1.0 / history.sample_time_s
-    kw = dict(fs=fs, window=window, nperseg=segment_length, noverlap=int(round(overlap * segment_length)),
-              detrend="constant")
-    f, _ = signal.csd(history.inputs[inputs[0]], history.inputs[inputs[0]], **kw)
-    keep = np.ones(f.size, bool) if band_hz is None else (f >= band_hz[0]) & (f <= band_hz[1])
-    if not keep.any():
-        raise MaceError(f"{history.source}: no frequency bin in {band_hz} Hz at {fs / segment_length:g} Hz resolution")
-    # scipy's csd(x, y) averages conj(X) Y: S_uu[j, i] = E[U_j U_i*] = csd(u_i, u_j), S_yu[o, i] = csd(u_i, y_o)
-    suu = np.empty((keep.sum(), len(inputs), len(inputs)), complex)
-    syu = np.empty((keep.sum(), len(outputs), len(inputs)), complex)
-    for i, a in enumerate(inputs):
-        for j, b in enumerate(inputs):
-            suu[:, j, i] = signal.csd(history.inputs[a], history.inputs[b], **kw)[1][keep]
-        for o, b in enumerate(outputs):
-            syu[:, o, i] = signal.csd(history.inputs[a], history.outputs[b], **kw)[1][keep]
-    cond = np.linalg.cond(suu)
-    if not np.all(cond < 1e8):
-        k = int(np.argmax(cond))
-        raise MaceError(f"{history.source}: the inputs are not independent enough at {f[keep][k]:.4g} Hz "
-                        f"(condition number of S_uu {cond[k]:.3g}): drive them with uncorrelated signals")
-    h = np.linalg.solve(np.swapaxes(suu, 1, 2), np.swapaxes(syu, 1, 2))  # H S_uu = S_yu, solved as S_uu^T H^T = S_yu^T
-    return FrequencyResponseData(frequencies_hz=f[keep], inputs=tuple(inputs), outputs=tuple(outputs),
-                                 response=np.swapaxes(h, 1, 2), source=f"H1 of {history.source}")
 
 
 def log_h1_weights(history: TimeHistory, estimate: FrequencyResponseData, *, segment_length: int,
