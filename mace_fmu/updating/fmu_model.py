@@ -110,8 +110,9 @@ class _LoadedFmu:
     """One extracted and instantiated FMU of this process, run again and again with ``fmi2Reset`` between runs."""
 
     def __init__(self, interface: FmuInterface):
-        from fmpy import extract
-        from fmpy.fmi2 import FMU2Slave
+        from fmpy import calloc, extract, free
+        from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
+                               fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
 
         self.interface = interface
         self.messages: list[str] = []
@@ -126,11 +127,7 @@ class _LoadedFmu:
                 self.messages.append(f"{_STATUS[status] if status < len(_STATUS) else status}: "
                                      f"{(message or b'').decode('utf-8', 'replace')}")
 
-        from fmpy import calloc, free
-        from fmpy.fmi2 import (fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE, fmi2CallbackFunctions,
-                               fmi2CallbackLoggerTYPE)
-
-        callbacks = fmi2CallbackFunctions()
+        callbacks = fmi2CallbackFunctions()  # errors reach this instance's messages, not stdout
         callbacks.logger = fmi2CallbackLoggerTYPE(log)
         callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
         callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
