@@ -145,7 +145,19 @@ class _LoadedFmu:
     def run(self, values: Mapping[str, float], times_s: np.ndarray, u: np.ndarray, inputs: Sequence[str],
             outputs: Sequence[str]) -> np.ndarray:
         """Outputs y[k, output] at ``times_s`` with inputs u[k, input] held from t_k to t_k+1 and the
-        parameters ``values`` set before initialisation."""
+        parameters ``values`` set before initialisation; a failing FMI call raises MaceError with the FMU's log."""
+        from fmpy.fmi1 import FMICallException
+
+        try:
+            return self._run(values, times_s, u, inputs, outputs)
+        except FMICallException as exc:  # fmpy checks every call's status itself
+            text = " | ".join(self.messages[-5:])
+            self.messages.clear()
+            values_text = ", ".join(f"{n} = {v:g}" for n, v in values.items())
+            raise MaceError(f"{self.interface.path}: {exc} with {values_text or 'its start values'}"
+                            + (f" (FMU log: {text})" if text else "")) from None
+
+    def _run(self, values, times_s, u, inputs, outputs) -> np.ndarray:
         from fmpy.fmi2 import fmi2Real, fmi2ValueReference
 
         s, ref = self.slave, self.interface.references
