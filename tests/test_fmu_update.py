@@ -255,3 +255,26 @@ def test_an_fmu_that_refuses_a_value_raises_with_its_log_and_runs_again_after(fm
         family.full({"E_lexan_center": -1.0}).time_response(t, u, outputs=GYROS)
     good = family.full({}).time_response(t, u, outputs=GYROS)
     assert np.array_equal(good, fmu_family(fmu).full({"E_lexan_center": 2.335e9}).time_response(t, u, outputs=GYROS))
+
+
+def test_any_tools_fmi2_cosimulation_fmu_is_accepted_and_a_non_fmu_refused(fmu, tmp_path):
+    """The FMU route asks nothing of mace-fmu's own FMUs: the same FMU relabelled as another tool's runs alike."""
+    import zipfile
+
+    other = tmp_path / "Other.fmu"
+    with zipfile.ZipFile(fmu) as src, zipfile.ZipFile(other, "w", zipfile.ZIP_DEFLATED) as dst:
+        for item in src.infolist():
+            data = src.read(item.filename)
+            if item.filename == "modelDescription.xml":
+                data = data.replace(b'generationTool="mace-fmu', b'generationTool="SomeOtherTool')
+            if not item.filename.startswith("resources/model.npz"):
+                dst.writestr(item, data)
+    family = fmu_family(other)
+    assert family.interface.generation_tool.startswith("SomeOtherTool")
+    t, u = _noise_inputs(0.2)
+    assert np.array_equal(family.full({}).time_response(t, u, outputs=GYROS),
+                          fmu_family(fmu).full({}).time_response(t, u, outputs=GYROS))
+    text = tmp_path / "not.fmu"
+    text.write_text("not a zip")
+    with pytest.raises(MaceError, match="not a zip archive"):
+        fmu_family(text)
