@@ -30,7 +30,77 @@ def cmd_sample(args: argparse.Namespace) -> int:
     return 0
 
 
+def _read_start(path: str) -> dict[str, float]:
+    """Start values from a parameter TOML file ([values] table), names as the FMU's."""
+    import tomllib
+
+    try:
+        table = tomllib.loads(Path(path).read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise MaceError(f"{path}: no such start-value file") from None
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
+        raise MaceError(f"{path}: not a readable parameter TOML file: {exc}") from None
+    values = table.get("values")
+    if not isinstance(values, dict) or not all(isinstance(v, (int, float)) and not isinstance(v, bool)
+                                               for v in values.values()):
+        raise MaceError(f"{path}: expected a [values] table of numbers (name = value)")
+    return {k: float(v) for k, v in values.items()}
+
+
+def cmd_fmu_update(args: argparse.Namespace) -> int:
+    """``--fmu``: update FMU parameters against measured-data files, every argument checked before any run."""
+    from mace_fmu.runner import DaskRunner
+    from mace_fmu.updating.fmu_problem import fmu_problem
+    from mace_fmu.updating.fmu_update import fmu_parameters, update_fmu
+
+    if args.sample_problem or args.measured:
+        raise MaceError("--fmu updates an FMU against --data files; it does not combine with --sample-problem or "
+                        "--measured")
+    if not args.data or not args.update:
+        raise MaceError("--fmu needs --data FILE (measured time history [, frequency response]) and --update "
+                        "NAME[,NAME...]")
+    if args.out is None:
+        raise MaceError("say where to write parameters.toml: -o DIR")
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise MaceError(f"-o {out}: exists and is not a directory")
+    if args.workers is not None and args.workers < 1:
+        raise MaceError(f"--workers must be >= 1, got {args.workers}")
+    if args.scheduler and args.workers is not None:
+        raise MaceError("--workers sizes a local cluster; with --scheduler the cluster's own workers run")
+    if not args.segment_s > 0:
+        raise MaceError(f"--segment-s must be > 0 s, got {args.segment_s}")
+    names = [n.strip() for part in args.update for n in part.split(",") if n.strip()]
+    problem = fmu_problem(fmu=args.fmu, data=args.data, names=names, cost=args.cost,
+                          start=_read_start(args.start) if args.start else None, channel_map=args.map,
+                          segment_s=args.segment_s, weighting=args.weighting)
+    where = f"the Dask cluster at {args.scheduler}" if args.scheduler else \
+        f"{args.workers or 'one per core'} local worker processes"
+    _say(f"updating {len(problem.names)} parameter(s) of {Path(args.fmu).name} on the {args.cost} cost; FMU runs on "
+         f"{where}")
+    with progress_bar() as bar:
+        with DaskRunner(scheduler=args.scheduler, workers=args.workers, progress=bar, task="FMU runs") as runner:
+            result = update_fmu(family=problem.family, cost=problem.cost, start=problem.start, stages=[problem.names],
+                                runner=runner, progress=bar)
+    params = fmu_parameters(result, family=problem.family, data=", ".join(problem.data_files), cost=problem.cost)
+    out.mkdir(parents=True, exist_ok=True)
+    path = params.write(out / "parameters.toml")
+    units = problem.family.interface.units
+    print(f"{'parameter':<28} {'start':>14} {'updated':>14}  change")
+    for n in problem.names:
+        v0, v = problem.start[n], result.values[n]
+        print(f"{n:<28} {v0:>14.6g} {v:>14.6g}  {100 * (v / v0 - 1):+.2f} %  [{units.get(n, '')}]")
+    print(f"cost {result.initial_cost:.5g} -> {result.final_cost:.5g} ({100 * result.reduction:.1f} % lower) in "
+          f"{result.seconds:.1f} s, {len(result.history)} outer iterations")
+    print(f"wrote {path}")
+    return 0
+
+
 def cmd_update(args: argparse.Namespace) -> int:
+    if args.fmu is not None:
+        return cmd_fmu_update(args)
+    if args.data or args.update:
+        raise MaceError("--data and --update belong to an FMU update: add --fmu FILE")
     if args.sample_problem:
         return cmd_sample(args)
     if args.out is None:
@@ -78,7 +148,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="run the two-mass sample problem (thesis 4.3) and print Tables 4.2 and 4.3 beside the thesis")
     p.add_argument("--json", action="store_true", help="with --sample-problem: the tables as JSON")
     p.add_argument("--start", metavar="FILE", help="parameter set to start from (default: the pre-update moduli, "
-                   "Table 4.4 back-computed)")
+                   "Table 4.4 back-computed; with --fmu: the FMU's own start values)")
     p.add_argument("--measured", metavar="FILE", help="measured modes (CSV: label, pattern, frequency_hz, damping "
                    "[, weight]; pattern: which model pole labels a row can be, e.g. '* Y bending'); default: Table "
                    "4.7's measurement model")
@@ -88,4 +158,20 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="how the cost-sensitivity method makes its perturbed models (default: reanalysis)")
     p.add_argument("--rounds", type=int, default=2, help="repeats of physical, delays, damping (default 2)")
     p.add_argument("--preload", choices=["large", "linear"], default="large", help="1-g gravity preload")
+    fmu = p.add_argument_group("updating through FMU simulation (any FMI 2.0 co-simulation FMU)")
+    fmu.add_argument("--fmu", metavar="FILE", help="the FMU whose parameters are updated (set through FMI)")
+    fmu.add_argument("--data", metavar="FILE", action="append", default=[],
+                     help="measured data: a time history (CSV/npz; its inputs drive the FMU) and, for --cost log-frf, "
+                          "optionally a frequency response (UFF 58/CSV); repeat the option")
+    fmu.add_argument("--update", metavar="NAME[,NAME...]", action="append", default=[],
+                     help="FMU parameters to update (repeatable)")
+    fmu.add_argument("--cost", choices=["time", "log-frf"], default="time",
+                     help="time: output errors (eq. 4.3); log-frf: log ratio of H1 estimates (eq. 4.5/4.17)")
+    fmu.add_argument("--scheduler", metavar="ADDRESS", help="run the FMU simulations on this Dask cluster "
+                     "(default: local worker processes)")
+    fmu.add_argument("--workers", type=int, default=None, help="local worker processes (default: one per core)")
+    fmu.add_argument("--map", metavar="FILE", help="channel map: data channel names and units to the FMU's signals")
+    fmu.add_argument("--segment-s", type=float, default=2.0, help="H1 segment length [s] of the log-frf cost (default 2)")
+    fmu.add_argument("--weighting", choices=["noise", "none"], default="noise",
+                     help="log-frf: each bin's log error over its noise standard deviation (default), or unweighted")
     p.set_defaults(func=cmd_update)

@@ -84,3 +84,43 @@ def check_fmu(path: str | os.PathLike) -> Path:
     except (zipfile.BadZipFile, EOFError, zlib.error, OSError, NotImplementedError) as exc:
         raise MaceError(f"{where}: damaged or truncated zip archive ({exc})") from None
     return path
+
+
+def check_cosimulation_fmu(path: str | os.PathLike) -> Path:
+    """``path`` if it is a safe FMI 2.0 co-simulation FMU file from any tool; MaceError saying why not.
+
+    The archive checks of :func:`check_fmu` (entries, size, CRC) without asking for mace-fmu's own data.
+    """
+    path = Path(path)
+    where = os.fspath(path)
+    if not path.is_file():
+        raise MaceError(f"{where}: no such FMU file")
+    if not zipfile.is_zipfile(path):
+        raise MaceError(f"{where}: not a zip archive (an FMU is one; the file may be truncated)")
+    try:
+        with zipfile.ZipFile(path) as archive:
+            infos = archive.infolist()
+            for info in infos:
+                reason = _unsafe(info)
+                if reason is not None:
+                    raise MaceError(f"{where}: entry {info.filename!r} {reason}: refused (nothing was extracted)")
+            if sum(info.file_size for info in infos) > MAX_UNPACKED_BYTES:
+                raise MaceError(f"{where}: unpacks to more than {MAX_UNPACKED_BYTES >> 20} MB: refused")
+            if "modelDescription.xml" not in {info.filename for info in infos}:
+                raise MaceError(f"{where}: not an FMU (no modelDescription.xml in the archive)")
+            damaged = archive.testzip()
+            if damaged is not None:
+                raise MaceError(f"{where}: entry {damaged!r} is damaged (CRC mismatch)")
+            text = archive.read("modelDescription.xml")
+    except (zipfile.BadZipFile, EOFError, zlib.error, OSError, NotImplementedError) as exc:
+        raise MaceError(f"{where}: damaged or truncated zip archive ({exc})") from None
+    try:
+        root = ET.fromstring(text)
+    except ET.ParseError as exc:
+        raise MaceError(f"{where}: modelDescription.xml is not valid XML ({exc})") from None
+    if root.tag != "fmiModelDescription" or root.get("fmiVersion") != "2.0":
+        raise MaceError(f"{where}: not an FMI 2.0 model description (root <{root.tag}>, fmiVersion "
+                        f"{root.get('fmiVersion')!r})")
+    if root.find("CoSimulation") is None:
+        raise MaceError(f"{where}: the FMU has no co-simulation interface (FMI 2.0 co-simulation expected)")
+    return path

@@ -1,0 +1,297 @@
+"""An FMI 2.0 co-simulation FMU as the model inside a cost: parameters set through FMI, responses simulated.
+
+:class:`FmuModel` offers what the time-domain and frequency-response costs call of a model
+(``time_response``), so the updating engine needs no FE code: a MACE FMU re-analyses its own
+physical parameters at initialisation, any other FMU does whatever it does with its parameters.
+:class:`FmuFamily` maps parameter values to such a model (the engine's ``ModelFamily``).
+
+Each process loads (extracts and instantiates) an FMU once and reuses the instance, resetting it
+between runs (``fmi2Reset``): a Dask worker pays the load once however many runs it gets. FMUs
+written by pythonfmu are run only in worker processes (see :mod:`mace_fmu.fmu.simulate` for the
+heap corruption they have caused in the process that loaded them); native FMUs run anywhere.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import functools
+import hashlib
+import os
+import shutil
+import tempfile
+import weakref
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Mapping, Sequence
+
+import numpy as np
+
+from mace_fmu.errors import MaceError
+from mace_fmu.fmu.archive import check_cosimulation_fmu
+
+_STATUS = ("OK", "warning", "discard", "error", "fatal", "pending")  #: fmi2Status names, by value
+
+
+@dataclass(frozen=True)
+class FmuInterface:
+    """What a host needs to know of an FMU to drive it: signals, parameters and their start values."""
+
+    path: str  #: the .fmu file
+    guid: str
+    model_identifier: str
+    generation_tool: str
+    inputs: tuple[str, ...]  #: Real inputs
+    outputs: tuple[str, ...]  #: Real outputs
+    parameters: Mapping[str, float]  #: Real parameters (fixed or tunable) and their start values
+    references: Mapping[str, int]  #: value reference of every input, output and parameter
+    units: Mapping[str, str]  #: unit of each of them ("" when the FMU declares none)
+
+    @property
+    def written_by_pythonfmu(self) -> bool:
+        return "pythonfmu" in self.generation_tool.lower()
+
+    def check_parameters(self, names: Sequence[str]) -> None:
+        """MaceError naming every ``names`` entry the FMU has no Real parameter of."""
+        unknown = [n for n in names if n not in self.parameters]
+        if unknown:
+            raise MaceError(f"{self.path}: no parameter(s) {', '.join(unknown)}; the FMU's parameters: "
+                            f"{', '.join(sorted(self.parameters))}")
+
+    def check_signals(self, *, inputs: Sequence[str], outputs: Sequence[str], where: str) -> None:
+        """MaceError naming every input and output channel of ``where`` the FMU does not have."""
+        bad = [f"input {n!r}" for n in inputs if n not in self.inputs] + \
+            [f"output {n!r}" for n in outputs if n not in self.outputs]
+        if bad:
+            raise MaceError(f"{where}: channel(s) {', '.join(bad)} not in {self.path} (inputs: "
+                            f"{', '.join(self.inputs)}; outputs: {', '.join(self.outputs)})")
+
+
+def read_fmu_interface(path: str | os.PathLike) -> FmuInterface:
+    """The interface of the FMI 2.0 co-simulation FMU at ``path`` (checked as an archive first)."""
+    import fmpy
+
+    path = check_cosimulation_fmu(path)
+    md = fmpy.read_model_description(os.fspath(path))
+    real = [v for v in md.modelVariables if v.type == "Real"]
+    parameters = {v.name: float(v.start) for v in real
+                  if v.causality == "parameter" and v.variability in ("fixed", "tunable") and v.start is not None}
+    used = [v for v in real if v.causality in ("input", "output") or v.name in parameters]
+    return FmuInterface(path=os.fspath(path), guid=md.guid, model_identifier=md.coSimulation.modelIdentifier,
+                        generation_tool=md.generationTool or "",
+                        inputs=tuple(v.name for v in real if v.causality == "input"),
+                        outputs=tuple(v.name for v in real if v.causality == "output"),
+                        parameters=parameters, references={v.name: int(v.valueReference) for v in used},
+                        units={v.name: v.unit or "" for v in used})
+
+
+def _in_worker_process() -> bool:
+    try:
+        from distributed import get_worker
+
+        get_worker()
+    except (ImportError, ValueError):
+        return False
+    return True
+
+
+def _extraction_folder() -> str:
+    """A fresh folder under <tmp>/mace_fmu_cost/ named by this process; folders of processes that are gone
+    (a worker killed, a test run that skipped interpreter exit) are removed here, so none pile up."""
+    parent = Path(tempfile.gettempdir()) / "mace_fmu_cost"
+    parent.mkdir(exist_ok=True)
+    for old in parent.glob("pid*-*"):
+        pid = old.name[3:].split("-", 1)[0]
+        if pid.isdigit() and not Path(f"/proc/{pid}").exists() and os.path.exists("/proc/self"):
+            shutil.rmtree(old, ignore_errors=True)
+    return tempfile.mkdtemp(prefix=f"pid{os.getpid()}-", dir=parent)
+
+
+class _LoadedFmu:
+    """One extracted and instantiated FMU of this process, run again and again with ``fmi2Reset`` between runs."""
+
+    def __init__(self, interface: FmuInterface):
+        from fmpy import calloc, extract, free
+        from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
+                               fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
+
+        self.interface = interface
+        self.messages: list[str] = []
+        folder = _extraction_folder()
+        weakref.finalize(self, shutil.rmtree, folder, True)
+        extract(interface.path, unzipdir=folder)
+        self.slave = FMU2Slave(guid=interface.guid, unzipDirectory=folder, modelIdentifier=interface.model_identifier,
+                               instanceName="mace_fmu_cost")
+
+        def log(component, instance, status, category, message) -> None:
+            if status >= 1:
+                self.messages.append(f"{_STATUS[status] if status < len(_STATUS) else status}: "
+                                     f"{(message or b'').decode('utf-8', 'replace')}")
+
+        callbacks = fmi2CallbackFunctions()  # errors reach this instance's messages, not stdout
+        callbacks.logger = fmi2CallbackLoggerTYPE(log)
+        callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+        callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+        self._callbacks = callbacks  # kept alive as long as the instance
+        self.slave.instantiate(callbacks=callbacks)
+        self._fresh = True
+
+    def _check(self, status: int, call: str) -> None:
+        if status > 1:
+            text = " | ".join(self.messages[-5:])
+            self.messages.clear()
+            raise MaceError(f"{self.interface.path}: {call} returned {_STATUS[status] if status < 6 else status}"
+                            + (f" (FMU log: {text})" if text else ""))
+
+    def run(self, values: Mapping[str, float], times_s: np.ndarray, u: np.ndarray, inputs: Sequence[str],
+            outputs: Sequence[str]) -> np.ndarray:
+        """Outputs y[k, output] at ``times_s`` with inputs u[k, input] held from t_k to t_k+1 and the
+        parameters ``values`` set before initialisation; a failing FMI call raises MaceError with the FMU's log."""
+        from fmpy.fmi1 import FMICallException
+
+        try:
+            return self._run(values, times_s, u, inputs, outputs)
+        except FMICallException as exc:  # fmpy checks every call's status itself
+            text = " | ".join(self.messages[-5:])
+            self.messages.clear()
+            values_text = ", ".join(f"{n} = {v:g}" for n, v in values.items())
+            raise MaceError(f"{self.interface.path}: {exc} with {values_text or 'its start values'}"
+                            + (f" (FMU log: {text})" if text else "")) from None
+
+    def _run(self, values, times_s, u, inputs, outputs) -> np.ndarray:
+        from fmpy.fmi2 import fmi2Real, fmi2ValueReference
+
+        s, ref = self.slave, self.interface.references
+        if not self._fresh:
+            self._check(s.fmi2Reset(s.component), "fmi2Reset")
+        self._fresh = False
+        self.messages.clear()
+        t0, dt = float(times_s[0]), float(times_s[1] - times_s[0])
+        self._check(s.fmi2SetupExperiment(s.component, 0, 0.0, t0, 0, 0.0), "fmi2SetupExperiment")
+        if values:
+            names = list(values)
+            vr = (fmi2ValueReference * len(names))(*[ref[n] for n in names])
+            v = (fmi2Real * len(names))(*[float(values[n]) for n in names])
+            self._check(s.fmi2SetReal(s.component, vr, len(names), v), "fmi2SetReal (parameters)")
+        self._check(s.fmi2EnterInitializationMode(s.component), "fmi2EnterInitializationMode")
+        self._check(s.fmi2ExitInitializationMode(s.component), "fmi2ExitInitializationMode")
+        n_in, n_out = len(inputs), len(outputs)
+        vr_in = (fmi2ValueReference * n_in)(*[ref[n] for n in inputs])
+        vr_out = (fmi2ValueReference * n_out)(*[ref[n] for n in outputs])
+        u = np.ascontiguousarray(u, dtype=np.float64)
+        y = np.empty((len(times_s), n_out), dtype=np.float64)
+        in_ptr, out_ptr = u.ctypes.data, y.ctypes.data
+        row_in, row_out = 8 * n_in, 8 * n_out
+        real_p = ctypes.POINTER(fmi2Real)
+        set_real, get_real, do_step, c = s.fmi2SetReal, s.fmi2GetReal, s.fmi2DoStep, s.component
+        last = len(times_s) - 1
+        for k in range(len(times_s)):  # the time points are t0 + k dt exactly, as the data's are
+            if n_in:
+                status = set_real(c, vr_in, n_in, ctypes.cast(in_ptr + k * row_in, real_p))
+                if status > 1:
+                    self._check(status, f"fmi2SetReal (inputs) at t = {times_s[k]:g} s")
+            status = get_real(c, vr_out, n_out, ctypes.cast(out_ptr + k * row_out, real_p))
+            if status > 1:
+                self._check(status, f"fmi2GetReal at t = {times_s[k]:g} s")
+            if k < last:
+                status = do_step(c, t0 + k * dt, dt, 1)
+                if status > 1:
+                    self._check(status, f"fmi2DoStep at t = {times_s[k]:g} s")
+        return y
+
+
+@functools.lru_cache(maxsize=4)
+def _loaded(path: str, guid: str) -> _LoadedFmu:
+    """This process's instance of the FMU (one per process: a Dask worker loads it at its first run)."""
+    interface = read_fmu_interface(path)
+    if interface.guid != guid:
+        raise MaceError(f"{path}: the FMU changed while in use (GUID {interface.guid}, expected {guid})")
+    if interface.written_by_pythonfmu and not _in_worker_process():
+        raise MaceError(f"{path}: FMUs written by pythonfmu are simulated in worker processes only (they "
+                        "have corrupted the heap of the process that loaded them): pass a Dask runner (CLI: "
+                        "--workers N or --scheduler ADDRESS), or export a native FMU")
+    return _LoadedFmu(interface)
+
+
+def _digest(*arrays: np.ndarray) -> str:
+    h = hashlib.sha1()
+    for a in arrays:
+        h.update(np.ascontiguousarray(a).tobytes())
+    return h.hexdigest()
+
+
+@dataclass(frozen=True, eq=False)
+class FmuModel:
+    """The FMU with parameter ``values`` [FMU units] set through FMI before initialisation."""
+
+    interface: FmuInterface
+    values: Mapping[str, float]
+    _memo: dict = field(default_factory=dict, repr=False, compare=False)
+
+    @property
+    def inputs(self) -> tuple[str, ...]:
+        return self.interface.inputs
+
+    @property
+    def outputs(self) -> tuple[str, ...]:
+        return self.interface.outputs
+
+    def time_response(self, times_s: np.ndarray, inputs: Mapping[str, np.ndarray], *,
+                      outputs: Sequence[str] | None = None) -> np.ndarray:
+        """Outputs y[k, output] [FMU units] simulated from the FMU's initial state, inputs held over each
+        sample (zero-order hold); ``times_s`` uniformly spaced, inputs not given are zero.
+
+        The same model asked the same question again (the engine asks for the base point's residual
+        more than once) answers from memory.
+        """
+        t = np.asarray(times_s, dtype=float)
+        dt = np.diff(t)
+        if t.ndim != 1 or len(t) < 2 or dt[0] <= 0 or not np.allclose(dt, dt[0], rtol=1e-9, atol=0.0):
+            raise MaceError("time_response: times must be increasing and uniformly spaced")
+        outs = list(self.outputs if outputs is None else outputs)
+        self.interface.check_signals(inputs=list(inputs), outputs=outs, where="time_response")
+        names = list(inputs)
+        u = np.column_stack([np.asarray(inputs[n], dtype=float) for n in names]) if names else np.zeros((len(t), 0))
+        if u.shape[0] != len(t):
+            raise MaceError(f"time_response: inputs have {u.shape[0]} samples, times have {len(t)}")
+        key = (_digest(t, u), tuple(names), tuple(outs))
+        if key not in self._memo:
+            y = _loaded(self.interface.path, self.interface.guid).run(self.values, t, u, names, outs)
+            self._memo.clear()  # one answer kept: the engine repeats only its last question
+            self._memo[key] = y
+        return self._memo[key].copy()
+
+
+@dataclass(frozen=True)
+class _NoBasis:
+    """An FMU has no modal basis to reanalyse on: its "reanalysis" is its own initialisation."""
+
+    family: FmuFamily
+    physical: tuple[str, ...] = ()
+
+    def model(self, values: Mapping[str, float], **_: object) -> FmuModel:
+        return self.family.full(values)
+
+    def modes_of(self, values: Mapping[str, float]):
+        raise MaceError("an FMU gives no modes: update FMU parameters with the cost-sensitivity method or 'full'")
+
+
+@dataclass(frozen=True)
+class FmuFamily:
+    """Parameter values -> the FMU with them set (the engine's ModelFamily); ``fixed`` values are set on every run."""
+
+    interface: FmuInterface
+    fixed: Mapping[str, float] = field(default_factory=dict)
+
+    def full(self, values: Mapping[str, float]) -> FmuModel:
+        """The FMU at ``values`` (names the FMU has no parameter of are refused)."""
+        merged = {**self.fixed, **values}
+        self.interface.check_parameters(list(merged))
+        return FmuModel(interface=self.interface, values=merged)
+
+    def basis(self, values: Mapping[str, float]) -> _NoBasis:
+        return _NoBasis(self)
+
+
+def fmu_family(path: str | os.PathLike, *, fixed: Mapping[str, float] | None = None) -> FmuFamily:
+    """The family of the FMU at ``path`` (interface read and checked once)."""
+    return FmuFamily(interface=read_fmu_interface(Path(path)), fixed=dict(fixed or {}))

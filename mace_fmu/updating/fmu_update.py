@@ -1,0 +1,125 @@
+"""Updating an FMU's parameters against measured time histories: the engine's update with the FMU in the cost.
+
+The cost is the time-domain output error (eq. 4.3) or the log-FRF error (eq. 4.5/4.17) of the
+FMU's simulated response; the update is the engine's cost-sensitivity method (N + 1 FMU
+simulations per linearisation, handed to the ``runner``: ``map`` serially, a
+:class:`~mace_fmu.runner.DaskRunner` on local processes or a cluster). The perturbed models are
+the FMU itself with one parameter changed ("full" perturbations): the FMU re-analyses its own
+physical parameters at initialisation.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable, Literal, Mapping, Sequence
+
+from mace_fmu.atomic import write_text_atomic
+from mace_fmu.errors import MaceError
+from mace_fmu.parameters import Provenance, _toml_key, _toml_value, now_utc, tool_version
+from mace_fmu.progress import ProgressCallback
+from mace_fmu.updating.costs import Cost, TimeResponseCost
+from mace_fmu.updating.data import FrequencyResponseData, TimeHistory
+from mace_fmu.updating.fmu_model import FmuFamily
+from mace_fmu.updating.mace_update import default_bounds
+from mace_fmu.updating.simulated_frf import (H1Estimator, SimulatedFrequencyResponseCost, log_h1_weights,
+                                             principal_pairs)
+from mace_fmu.updating.solve import Stage, UpdateResult, UpdateSettings, update
+
+CostKind = Literal["time", "log-frf"]
+COST_KINDS: tuple[str, ...] = ("time", "log-frf")
+Weighting = Literal["noise", "none"]
+WEIGHTINGS: tuple[str, ...] = ("noise", "none")
+#: the FMU is the model: perturbed models are FMU runs, and the truth needs no penalty to hold it near the start
+FMU_SETTINGS = UpdateSettings(method="cost-sensitivity", perturbation="full", penalty=False, max_outer=8)
+
+
+def fmu_cost(kind: CostKind, *, history: TimeHistory, frequency_data: FrequencyResponseData | None = None,
+             estimator: H1Estimator | None = None, pairs: Sequence[tuple[str, str]] = (),
+             weighting: Weighting = "noise") -> Cost:
+    """The cost ``kind`` of an FMU against ``history`` (measured inputs and outputs).
+
+    ``time``: outputs normalised by their RMS (eq. 4.3). ``log-frf``: ``frequency_data`` (default: the
+    ``estimator``'s H1 of ``history``) against the same estimator's H1 of the FMU's response to the
+    measured inputs, over ``pairs`` (default: the principal pairs, same axis and X to Y, where the names
+    say the axis; else every pair). ``weighting``
+    "noise" divides each log error by its standard deviation estimated from ``history`` (bins where
+    the measurement noise buries the response weigh little), "none" is eq. 4.17 as printed.
+    """
+    if kind == "time":
+        return TimeResponseCost(history)
+    if kind != "log-frf":
+        raise MaceError(f"cost must be one of {', '.join(COST_KINDS)}, got {kind!r}")
+    if estimator is None:
+        raise MaceError("the log-FRF cost needs an H1 estimator (segment length, window, band)")
+    data = frequency_data if frequency_data is not None else estimator(history)
+    chosen = tuple(pairs) or principal_pairs(data.inputs, data.outputs) or \
+        tuple((i, o) for i in data.inputs for o in data.outputs)
+    if weighting not in WEIGHTINGS:
+        raise MaceError(f"weighting must be one of {', '.join(WEIGHTINGS)}, got {weighting!r}")
+    weights = None
+    if weighting == "noise":
+        weights = log_h1_weights(history, data, segment_length=estimator.segment_length, window=estimator.window,
+                                 overlap=estimator.overlap)
+    return SimulatedFrequencyResponseCost(data=data, excitation=history, estimator=estimator, pairs=chosen,
+                                          weights=weights)
+
+
+def update_fmu(*, family: FmuFamily, cost: Cost, start: Mapping[str, float], stages: Sequence[Sequence[str]],
+               settings: UpdateSettings = FMU_SETTINGS, runner: Callable = map,
+               progress: ProgressCallback | None = None) -> UpdateResult:
+    """Update the FMU parameters of ``stages`` (one tuple of names per stage, in order) from ``start``
+    [FMU units] to lower ``cost``; bounds by kind of name (moduli x0.5-1.5, delays x0.2-3, others x0.2-5)."""
+    names = [n for s in stages for n in s]
+    if not names:
+        raise MaceError("name at least one FMU parameter to update")
+    family.interface.check_parameters(names)
+    missing = [n for n in names if n not in start]
+    if missing:
+        raise MaceError(f"no start value for {', '.join(missing)}")
+    bad = [n for n in names if not start[n] > 0]
+    if bad:
+        raise MaceError(f"update parameters must start positive (they move in relative terms): "
+                        + ", ".join(f"{n} = {start[n]:g}" for n in bad))
+    plan = [Stage(name=f"stage {k + 1}", parameters=tuple(s)) for k, s in enumerate(stages)]
+    return update(family, cost, start=dict(start), stages=plan, bounds=default_bounds(names, start),
+                  settings=settings, runner=runner, progress=progress)
+
+
+@dataclass(frozen=True)
+class FmuParameters:
+    """Updated values of an FMU's parameters by its own names, and where they come from."""
+
+    values: Mapping[str, float]
+    units: Mapping[str, str]
+    provenance: Provenance
+
+    def to_toml(self) -> str:
+        """[provenance] and [values] tables as in :class:`~mace_fmu.parameters.ParameterSet` files."""
+        lines = ["# mace-fmu: FMU parameters after an update (names and units as the FMU declares them)", "",
+                 "[provenance]"]
+        for key in ("created", "tool", "data", "cost", "method", "initial_cost", "final_cost", "notes"):
+            value = getattr(self.provenance, key)
+            if value is not None and value != "":
+                lines.append(f"{key} = {_toml_value(value)}")
+        lines += ["", "[values]"]
+        lines += [f"{_toml_key(n)} = {_toml_value(v)}" + (f"  # [{self.units[n]}]" if self.units.get(n) else "")
+                  for n, v in self.values.items()]
+        return "\n".join(lines) + "\n"
+
+    def write(self, path: str | os.PathLike) -> Path:
+        """Write the TOML atomically."""
+        return write_text_atomic(path, self.to_toml())
+
+
+def fmu_parameters(result: UpdateResult, *, family: FmuFamily, data: str, cost: Cost) -> FmuParameters:
+    """The updated values of ``result`` with their provenance (FMU file, data files, cost, method)."""
+    s = result.settings
+    prov = Provenance(created=now_utc(), tool=tool_version(), data=data,
+                      cost=f"{cost.name} of the simulated response of {Path(family.interface.path).name}",
+                      method=f"{s.method} ({s.perturbation} FMU runs, step {s.relative_step}), penalty "
+                             f"{'on' if s.penalty else 'off'}, {len(result.history)} outer iterations",
+                      initial_cost=result.initial_cost, final_cost=result.final_cost)
+    return FmuParameters(values=dict(result.values), units={n: family.interface.units.get(n, "") for n in result.values},
+                         provenance=prov)
