@@ -146,11 +146,11 @@ class ParameterSet:
             for f in dataclasses.fields(Provenance):
                 value = getattr(self.provenance, f.name)
                 if value is not None and value != "":
-                    lines.append(f"{f.name} = {_toml_value(value)}")
+                    lines.append(f"{f.name} = {toml_value(value)}")
             lines.append("")
         lines.append("[values]")
         for name, value in self.values.items():
-            lines.append(f"{_toml_key(name)} = {_toml_value(value)}  # [{parameter_unit(name)}]")
+            lines.append(f"{toml_key(name)} = {toml_value(value)}  # [{parameter_unit(name)}]")
         return "\n".join(lines) + "\n"
 
     @classmethod
@@ -196,11 +196,13 @@ class ParameterSet:
         return cls.from_toml(text, source=str(path))
 
 
-def _toml_key(name: str) -> str:
+def toml_key(name: str) -> str:
+    """``name`` as a TOML key (quoted unless bare)."""
     return name if all(c.isalnum() or c in "_-" for c in name) else '"' + name.replace('"', '\\"') + '"'
 
 
-def _toml_value(value: Any) -> str:
+def toml_value(value: Any) -> str:
+    """A string or a number as a TOML value (numbers as floats, to the last digit)."""
     if isinstance(value, str):
         return '"' + value.replace("\\", "\\\\").replace('"', '\\"').replace("\n", "\\n") + '"'
     return repr(float(value))

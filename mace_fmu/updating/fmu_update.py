@@ -17,7 +17,7 @@ from typing import Callable, Literal, Mapping, Sequence
 
 from mace_fmu.atomic import write_text_atomic
 from mace_fmu.errors import MaceError
-from mace_fmu.parameters import Provenance, _toml_key, _toml_value, now_utc, tool_version
+from mace_fmu.parameters import Provenance, toml_key, toml_value, now_utc, tool_version
 from mace_fmu.progress import ProgressCallback
 from mace_fmu.updating.costs import Cost, TimeResponseCost
 from mace_fmu.updating.data import FrequencyResponseData, TimeHistory
@@ -102,9 +102,9 @@ class FmuParameters:
         for key in ("created", "tool", "data", "cost", "method", "initial_cost", "final_cost", "notes"):
             value = getattr(self.provenance, key)
             if value is not None and value != "":
-                lines.append(f"{key} = {_toml_value(value)}")
+                lines.append(f"{key} = {toml_value(value)}")
         lines += ["", "[values]"]
-        lines += [f"{_toml_key(n)} = {_toml_value(v)}" + (f"  # [{self.units[n]}]" if self.units.get(n) else "")
+        lines += [f"{toml_key(n)} = {toml_value(v)}" + (f"  # [{self.units[n]}]" if self.units.get(n) else "")
                   for n, v in self.values.items()]
         return "\n".join(lines) + "\n"
 
