@@ -196,12 +196,26 @@ def test_cli_refuses_data_channels_the_fmu_lacks(capsys, fmu, tmp_path):
 
 
 def test_cli_updates_an_fmu_parameter_and_writes_it_by_the_fmus_name(capsys, fmu, data_csv, tmp_path):
+    """Through a channel map (--map): the data file names its channels as a logger would (ai0, ai1, ...)."""
     import tomllib
 
+    from mace_fmu.updating.files import read_time_history
+
+    measured = read_time_history(data_csv)
+    signals = [("input", k) for k in measured.inputs] + [("output", k) for k in measured.outputs]
+    logger = {name: f"ai{k}" for k, (_, name) in enumerate(signals)}
+    columns = [measured.times_s] + [{**measured.inputs, **measured.outputs}[name] for _, name in signals]
+    logged = tmp_path / "logger.csv"
+    np.savetxt(logged, np.column_stack(columns), delimiter=",", fmt="%.17g", comments="",
+               header=",".join(["time [s]"] + [f"{logger[name]} [V]" for _, name in signals]))
+    channel_map = tmp_path / "channels.csv"
+    channel_map.write_text("channel,signal,role,unit\n" + "".join(f"{logger[name]},{name},{role},V\n"
+                                                                  for role, name in signals))
     start = tmp_path / "start.toml"
     start.write_text(f"[values]\nE_lexan_center = {pre_update_parameters()['E_lexan_center']!r}\n")
-    code, out, err = _cli(capsys, ["update", "--fmu", str(fmu), "--data", str(data_csv), "--update", "E_lexan_center",
-                                   "--cost", "time", "--start", str(start), "--workers", "1", "-o", str(tmp_path / "o")])
+    code, out, err = _cli(capsys, ["update", "--fmu", str(fmu), "--data", str(logged), "--map", str(channel_map),
+                                   "--update", "E_lexan_center", "--cost", "time", "--start", str(start),
+                                   "--workers", "1", "-o", str(tmp_path / "o")])
     assert code == 0, err
     values = tomllib.loads((tmp_path / "o" / "parameters.toml").read_text())["values"]
     assert abs(values["E_lexan_center"] / table_4_4_moduli()["E_lexan_center"] - 1.0) < 0.002
