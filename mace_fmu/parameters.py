@@ -33,6 +33,7 @@ from typing import Any, Literal, Mapping
 from mace_fmu.atomic import write_text_atomic
 from mace_fmu.datafile import data_file_path, read_data_file
 from mace_fmu.errors import MaceError
+from mace_fmu.textfile import read_text
 
 ParameterKind = Literal["modulus", "spring", "delay", "gain", "damping", "frequency_scale"]
 DAMPING_PREFIX = "damping:"
@@ -187,13 +188,7 @@ class ParameterSet:
     @classmethod
     def read(cls, path: str | Path) -> ParameterSet:
         """Read a parameter set written by :meth:`write` (or by hand)."""
-        try:
-            text = Path(path).read_text(encoding="utf-8")
-        except FileNotFoundError:
-            raise MaceError(f"{path}: no such parameter file") from None
-        except (OSError, UnicodeDecodeError) as exc:
-            raise MaceError(f"{path}: cannot read the parameter file: {exc}") from None
-        return cls.from_toml(text, source=str(path))
+        return cls.from_toml(read_text(path, what="parameter"), source=str(path))
 
 
 def toml_key(name: str) -> str:

@@ -11,6 +11,7 @@ from pathlib import Path
 
 from mace_fmu.atomic import write_text_atomic
 from mace_fmu.thesis import thesis_data
+from mace_fmu.textfile import read_toml
 from mace_fmu.zero_g import ZeroGPrediction, ZeroGRow
 
 CSV_COLUMNS = ("label", "nominal_hz", "damping", "bound_percent", "heavy", "adjusted", "damping_reached", "mode",
@@ -142,16 +143,9 @@ def read_frequency_bounds(path: str | Path, *, mode_labels: Sequence[str]) -> di
     """The FMU frequency bounds (1-based open-loop mode -> relative bound) of a table_5_3.toml written by
     :func:`write_prediction`, checked against the open-loop ``mode_labels`` of the model they are for (the same
     mode numbers must name the same modes); rows without an FMU mode (servo mechanisms) carry none."""
-    import tomllib
-
     from mace_fmu.errors import MaceError
 
-    try:
-        data = tomllib.loads(Path(path).read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise MaceError(f"{path}: no such frequency-bounds file") from None
-    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
-        raise MaceError(f"{path}: not a predict-0g table (TOML): {exc}") from None
+    data = read_toml(path, what="frequency-bounds")
     rows = data.get("mode")
     if not isinstance(rows, list) or not rows:
         raise MaceError(f"{path}: no [[mode]] rows (expected the table_5_3.toml of mace-fmu predict-0g)")

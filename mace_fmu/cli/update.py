@@ -10,6 +10,7 @@ from pathlib import Path
 from mace_fmu.cli.common import deck_option, progress_bar
 from mace_fmu.deck.reader import read_deck
 from mace_fmu.errors import MaceError
+from mace_fmu.textfile import read_toml
 
 
 def _say(message: str) -> None:
@@ -32,14 +33,7 @@ def cmd_sample(args: argparse.Namespace) -> int:
 
 def _read_start(path: str) -> dict[str, float]:
     """Start values from a parameter TOML file ([values] table), names as the FMU's."""
-    import tomllib
-
-    try:
-        table = tomllib.loads(Path(path).read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise MaceError(f"{path}: no such start-value file") from None
-    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
-        raise MaceError(f"{path}: not a readable parameter TOML file: {exc}") from None
+    table = read_toml(path, what="start-value")
     values = table.get("values")
     if not isinstance(values, dict) or not all(isinstance(v, (int, float)) and not isinstance(v, bool)
                                                for v in values.values()):

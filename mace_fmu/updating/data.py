@@ -10,6 +10,7 @@ from typing import Mapping
 import numpy as np
 
 from mace_fmu.errors import MaceError
+from mace_fmu.textfile import read_text
 
 
 @dataclass(frozen=True)
@@ -47,12 +48,7 @@ def read_measured_modes(path: str | Path) -> tuple[MeasuredMode, ...]:
     import csv
 
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise MaceError(f"{path}: no such measured-modes file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise MaceError(f"{path}: cannot read the measured modes: {exc}") from None
+    text = read_text(path, what="measured-modes")
     rows = list(csv.DictReader(text.splitlines()))
     expected = f"a header with columns {', '.join(MEASURED_COLUMNS)} [, weight]"
     if not rows:

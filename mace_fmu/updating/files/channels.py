@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import Literal
 
 from mace_fmu.errors import MaceError
+from mace_fmu.textfile import read_text
 
 Role = Literal["input", "output", "ignore"]
 ROLES: tuple[str, ...] = ("input", "output", "ignore")
@@ -77,12 +78,7 @@ class ChannelMap:
 def read_channel_map(path: str | Path) -> ChannelMap:
     """A channel map from CSV with columns channel, signal, role (input|output|ignore), unit."""
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise MaceError(f"{path}: no such channel-map file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise MaceError(f"{path}: cannot read the channel map: {exc}") from None
+    text = read_text(path, what="channel-map")
     lines = [(k, line) for k, line in enumerate(text.splitlines(), start=1)
              if line.strip() and not line.lstrip().startswith("#")]
     expected = f"a header with columns {', '.join(MAP_COLUMNS)} and a row per channel"

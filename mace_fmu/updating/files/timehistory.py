@@ -9,6 +9,7 @@ import numpy as np
 
 from mace_fmu.atomic import atomic_path
 from mace_fmu.errors import MaceError
+from mace_fmu.textfile import read_text
 from mace_fmu.updating.data import DataError, TimeHistory
 from mace_fmu.updating.files.channels import ChannelMap, check_present, format_label, parse_label, resolve
 
@@ -88,12 +89,7 @@ def _check_step(times_s: np.ndarray, sample_time_s: float, row_at) -> None:
 
 def read_csv_columns(path: Path) -> tuple[list[str], list[np.ndarray], list[int], int]:
     """Column labels, columns, each sample's line number and the header's; '#' lines and blank lines skipped."""
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise MaceError(f"{path}: no such file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise MaceError(f"{path}: cannot read: {exc}") from None
+    text = read_text(path)
     lines = text.splitlines()
     numbers = [k for k, line in enumerate(lines, start=1)
                if line.strip(" \t,") and not line.lstrip().startswith("#")]
