@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import statistics
 import subprocess
 import sys
 import tempfile
@@ -32,16 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from common import machine_line
-
-
-def _median_time(fn, runs: int) -> tuple[float, float, object]:
-    times, out = [], None
-    for _ in range(runs):
-        t0 = time.perf_counter()
-        out = fn()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times), min(times), out
+from common import machine_line, timed
 
 
 def main() -> None:
@@ -83,18 +73,18 @@ def main() -> None:
     load = os.getloadavg()[0]
     serial_run = single_blas_thread(lambda: list(map(residual, points)))
     serial_run()  # this process loads the FMU once, as the workers do at their warm-up
-    t_serial, t_serial_min, j_serial = _median_time(serial_run, args.runs)
-    one_sim, _, _ = _median_time(lambda: family.full({**base, "E_cable_1": base["E_cable_1"] * 1.02}).time_response(
+    t_serial, t_serial_min, j_serial = timed(serial_run, args.runs)
+    one_sim, _, _ = timed(lambda: family.full({**base, "E_cable_1": base["E_cable_1"] * 1.02}).time_response(
         article.history.times_s, article.history.inputs, outputs=list(article.history.outputs)), args.runs)
     with DaskRunner(workers=2) as runner:
         t0 = time.perf_counter()
         runner(residual, points)  # warm-up: each worker loads the FMU
         t_first = time.perf_counter() - t0
-        t_dask, t_dask_min, j_dask = _median_time(lambda: runner(residual, points), args.runs)
+        t_dask, t_dask_min, j_dask = timed(lambda: runner(residual, points), args.runs)
         identical = all(np.array_equal(a, b) for a, b in zip(j_serial, j_dask))
         n_tasks = 200
         runner(lambda k: k, range(20))
-        t_trivial, _, _ = _median_time(lambda: runner(lambda k: k, range(n_tasks)), args.runs)
+        t_trivial, _, _ = timed(lambda: runner(lambda k: k, range(n_tasks)), args.runs)
     task_bytes = len(cloudpickle.dumps(residual))
     overhead = t_trivial / n_tasks
 

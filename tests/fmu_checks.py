@@ -92,3 +92,29 @@ def initialised_slave(model, unzipped, start: dict[str, float], name="params") -
     fmu.setReal([vr[k] for k in start], list(start.values()))
     fmu.exitInitializationMode()
     return fmu
+
+
+def run_in_libcosim(fmu, *, model, u: np.ndarray, step_s: float, exchange) -> np.ndarray:
+    """Outputs y[output, k] of ``fmu`` driven by ``u[input, k]`` in libcosim, run in its own process.
+
+    Its own process: libcosim unpacks the FMU into a cache it deletes when the execution ends, and
+    deleting a loaded pythonfmu FMU's folder in a process that goes on loading pythonfmu FMUs has
+    aborted Python at exit. ``exchange`` is the .npz file that carries the data across.
+    """
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    names, outputs = list(model.system.input_labels), list(model.system.output_labels)
+    np.savez(exchange, u=u, names=np.array(names), outputs=np.array(outputs))
+    script = ("import sys, numpy as np\n"
+              "sys.path.insert(0, sys.argv[3])\n"
+              "from libcosim_import import run\n"
+              "d = np.load(sys.argv[2])\n"
+              "y = run(sys.argv[1], inputs={str(k): d['u'][i] for i, k in enumerate(d['names'])},\n"
+              "        outputs=[str(k) for k in d['outputs']], step_s=float(sys.argv[4]))\n"
+              "np.save(sys.argv[2] + '.y.npy', y)\n")
+    examples = Path(__file__).resolve().parents[1] / "examples"
+    subprocess.run([sys.executable, "-c", script, str(fmu), str(exchange), str(examples), repr(step_s)],
+                   check=True, capture_output=True, timeout=300)
+    return np.load(str(exchange) + ".y.npy")

@@ -14,8 +14,8 @@ import pytest
 from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 
-from fmu_checks import (DURATION, check_close, initialised_slave, make_inputs, nominal_slave, rss_bytes, run_steps,
-                        value_references, zoh_reference)
+from fmu_checks import (DURATION, check_close, initialised_slave, make_inputs, nominal_slave, rss_bytes,
+                        run_in_libcosim, run_steps, value_references, zoh_reference)
 from mace_fmu.fmu.export import export_fmu
 from mace_fmu.iomodel.motion import MOTION_COMPONENTS
 from mace_fmu.iomodel.volts import volts_model
@@ -108,32 +108,14 @@ def test_non_finite_input_is_an_error_not_garbage(built):
 
 def test_libcosim_gives_the_same_outputs_as_fmpy(built):
     """The Open Simulation Platform's libcosim (libcosimpy) as a second, independent FMI host."""
-    # libcosim runs in its own process: it unpacks the FMU into a cache it deletes when the
-    # execution ends, and deleting a loaded pythonfmu FMU's folder in a process that goes on
-    # loading pythonfmu FMUs has aborted Python at exit (the pitfall the FMU issue names).
-    import subprocess
-    import sys
     from pathlib import Path
 
     model, fmu, unzipped = built
     step, n = 2e-3, 200
     t = np.arange(n + 1) * step
     u = make_inputs("multisine", t, model.system.ninputs)
-    names = list(model.system.input_labels)
-    outputs = list(model.system.output_labels)
-    exchange = Path(unzipped).parent / "libcosim_io.npz"
-    np.savez(exchange, u=u[:, :n], names=np.array(names), outputs=np.array(outputs))
-    script = ("import sys, numpy as np\n"
-              "sys.path.insert(0, sys.argv[3])\n"
-              "from libcosim_import import run\n"
-              "d = np.load(sys.argv[2])\n"
-              "y = run(sys.argv[1], inputs={str(k): d['u'][i] for i, k in enumerate(d['names'])},\n"
-              "        outputs=[str(k) for k in d['outputs']], step_s=float(sys.argv[4]))\n"
-              "np.save(sys.argv[2] + '.y.npy', y)\n")
-    examples = Path(__file__).resolve().parents[1] / "examples"
-    subprocess.run([sys.executable, "-c", script, str(fmu), str(exchange), str(examples), repr(step)],
-                   check=True, capture_output=True, timeout=300)
-    y_cosim = np.load(str(exchange) + ".y.npy")
+    y_cosim = run_in_libcosim(fmu, model=model, u=u[:, :n], step_s=step,
+                              exchange=Path(unzipped).parent / "libcosim_io.npz")
     fmu_fmpy = nominal_slave(model, unzipped, "fmpy")
     y_fmpy = run_steps(model, fmu_fmpy, unzipped, t, u)[:, 1:]
     fmu_fmpy.terminate()

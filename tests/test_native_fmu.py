@@ -28,8 +28,8 @@ from fmpy.fmi2 import (FMU2Model, FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi
                        fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
 from fmpy.validation import validate_fmu
 
-from fmu_checks import (check_close, initialised_slave, make_inputs, nominal_slave, rss_bytes, run_steps,
-                        value_references, zoh_reference)
+from fmu_checks import (check_close, initialised_slave, make_inputs, nominal_slave, rss_bytes, run_in_libcosim,
+                        run_steps, value_references, zoh_reference)
 from mace_fmu.errors import MaceError
 from mace_fmu.fmu.export import export_fmu
 from mace_fmu.fmu.native import compile as runtime
@@ -601,20 +601,8 @@ def test_libcosim_gives_the_same_outputs_as_fmpy(fmus):
     step, n = 2e-3, 200
     t = np.arange(n + 1) * step
     u = make_inputs("multisine", t, model.system.ninputs)
-    names, outputs = list(model.system.input_labels), list(model.system.output_labels)
-    exchange = Path(fmus.dir2).parent / f"libcosim_{Path(fmus.dir2).name}.npz"
-    np.savez(exchange, u=u[:, :n], names=np.array(names), outputs=np.array(outputs))
-    script = ("import sys, numpy as np\n"
-              "sys.path.insert(0, sys.argv[3])\n"
-              "from libcosim_import import run\n"
-              "d = np.load(sys.argv[2])\n"
-              "y = run(sys.argv[1], inputs={str(k): d['u'][i] for i, k in enumerate(d['names'])},\n"
-              "        outputs=[str(k) for k in d['outputs']], step_s=float(sys.argv[4]))\n"
-              "np.save(sys.argv[2] + '.y.npy', y)\n")
-    examples = Path(__file__).resolve().parents[1] / "examples"
-    subprocess.run([sys.executable, "-c", script, str(fmus.fmi2), str(exchange), str(examples), repr(step)],
-                   check=True, capture_output=True, timeout=300)
-    y_cosim = np.load(str(exchange) + ".y.npy")
+    y_cosim = run_in_libcosim(fmus.fmi2, model=model, u=u[:, :n], step_s=step,
+                              exchange=Path(fmus.dir2).parent / f"libcosim_{Path(fmus.dir2).name}.npz")
     fmu = nominal_slave(model, fmus.dir2)
     y_fmpy = run_steps(model, fmu, fmus.dir2, t, u)[:, 1:]
     fmu.freeInstance()

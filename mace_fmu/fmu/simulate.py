@@ -23,9 +23,9 @@ import numpy as np
 
 from mace_fmu.errors import MaceError
 from mace_fmu.fmu.archive import check_fmu
+from mace_fmu.fmu.host import status_name
 
 log = logging.getLogger(__name__)
-_STATUS = ("OK", "warning", "discard", "error", "fatal", "pending")  #: fmi2Status names, by value
 
 SignalKind = Literal["step", "chirp", "impulse"]
 SIGNALS: tuple[str, ...] = ("step", "chirp", "impulse")
@@ -124,7 +124,7 @@ def _simulate(fmu: str, table: np.ndarray, outputs: list[str], step_s: float) ->
     def collect(component, instance, status, category, message) -> None:
         if status >= 1:
             text = (message or b"").decode("utf-8", "replace")
-            messages.append(f"{_STATUS[status] if status < len(_STATUS) else status}: {text}")
+            messages.append(f"{status_name(status)}: {text}")
             log.log(logging.WARNING if status == 1 else logging.ERROR, "%s: %s", fmu, text)
 
     try:

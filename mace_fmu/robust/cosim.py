@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 from threadpoolctl import threadpool_limits
 
+from mace_fmu.fmu.host import collecting_callbacks
 from mace_fmu.robust.loop import LoopSpec, LoopVerdict, judge
 
 
@@ -47,18 +48,11 @@ def run_fmu_loop(unzipped: str | os.PathLike, *, loop: LoopSpec, compensator: Sa
                  parameters: dict[str, float]) -> LoopRun:
     """Close ``compensator`` around the extracted FMU in ``unzipped`` with ``parameters`` set; see the module."""
     import fmpy
-    from fmpy import calloc, free
     from fmpy.fmi1 import FMICallException
-    from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
-                           fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
+    from fmpy.fmi2 import FMU2Slave
 
-    # the FMU's messages are kept for the failure text, not printed (fmpy's default logger prints)
-    messages: list[str] = []
-    callbacks = fmi2CallbackFunctions()
-    callbacks.logger = fmi2CallbackLoggerTYPE(
-        lambda env, instance, status, category, message: messages.append(message.decode(errors="replace")))
-    callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
-    callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+    messages: list[str] = []  # the FMU's messages are kept for the failure text, not printed
+    callbacks = collecting_callbacks(messages)
     unzipped = os.fspath(unzipped)
     md = fmpy.read_model_description(unzipped)
     vr = {v.name: v.valueReference for v in md.modelVariables}

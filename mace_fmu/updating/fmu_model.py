@@ -28,8 +28,8 @@ import numpy as np
 
 from mace_fmu.errors import MaceError
 from mace_fmu.fmu.archive import check_cosimulation_fmu
+from mace_fmu.fmu.host import collecting_callbacks, status_name
 
-_STATUS = ("OK", "warning", "discard", "error", "fatal", "pending")  #: fmi2Status names, by value
 
 
 @dataclass(frozen=True)
@@ -110,9 +110,8 @@ class _LoadedFmu:
     """One extracted and instantiated FMU of this process, run again and again with ``fmi2Reset`` between runs."""
 
     def __init__(self, interface: FmuInterface):
-        from fmpy import calloc, extract, free
-        from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
-                               fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
+        from fmpy import extract
+        from fmpy.fmi2 import FMU2Slave
 
         self.interface = interface
         self.messages: list[str] = []
@@ -122,15 +121,7 @@ class _LoadedFmu:
         self.slave = FMU2Slave(guid=interface.guid, unzipDirectory=folder, modelIdentifier=interface.model_identifier,
                                instanceName="mace_fmu_cost")
 
-        def log(component, instance, status, category, message) -> None:
-            if status >= 1:
-                self.messages.append(f"{_STATUS[status] if status < len(_STATUS) else status}: "
-                                     f"{(message or b'').decode('utf-8', 'replace')}")
-
-        callbacks = fmi2CallbackFunctions()  # errors reach this instance's messages, not stdout
-        callbacks.logger = fmi2CallbackLoggerTYPE(log)
-        callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
-        callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+        callbacks = collecting_callbacks(self.messages)  # errors reach this instance's messages, not stdout
         self._callbacks = callbacks  # kept alive as long as the instance
         self.slave.instantiate(callbacks=callbacks)
         self._fresh = True
@@ -139,7 +130,7 @@ class _LoadedFmu:
         if status > 1:
             text = " | ".join(self.messages[-5:])
             self.messages.clear()
-            raise MaceError(f"{self.interface.path}: {call} returned {_STATUS[status] if status < 6 else status}"
+            raise MaceError(f"{self.interface.path}: {call} returned {status_name(status)}"
                             + (f" (FMU log: {text})" if text else ""))
 
     def run(self, values: Mapping[str, float], times_s: np.ndarray, u: np.ndarray, inputs: Sequence[str],
