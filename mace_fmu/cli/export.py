@@ -15,6 +15,10 @@ def cmd_export(args: argparse.Namespace) -> int:
         raise MaceError("--fmi-version 3 needs --kind native (pythonfmu FMUs are FMI 2.0)")
     if args.frequency_bounds and not Path(args.frequency_bounds).is_file():
         raise MaceError(f"--frequency-bounds {args.frequency_bounds}: no such file")
+    if args.ssp:
+        from mace_fmu.cli.ssp import export_ssp
+
+        return export_ssp(args)
     progress(f"{args.structure} volts-volts model")
     model = volts(args)
     bounds = None
@@ -52,5 +56,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--frequency-bounds", metavar="FILE",
                    help="table_5_3.toml of mace-fmu predict-0g: its bounds become the min/max of the modes' "
                         "frequency_scale_mode_<k> (with --parameters zero_g_nominal.toml: the updated nominal 0-g FMU)")
+    p.add_argument("--ssp", metavar="FILE.ssp",
+                   help="write an SSP 1.0 package instead of a bare FMU: the plant FMU (FMI 2.0) with the moduli and "
+                        "springs of --parameters built in, and the set's damping ratios, frequency scales, delays and "
+                        "gains as an SSV file bound to it")
     model_options(p)
     p.set_defaults(func=cmd_export)

@@ -1,0 +1,51 @@
+"""``mace-fmu export --ssp``: the plant FMU and its parameter set as one SSP 1.0 package."""
+
+from __future__ import annotations
+
+import argparse
+import tempfile
+from pathlib import Path
+
+from mace_fmu.cli.common import parameters, progress, volts
+from mace_fmu.errors import MaceError
+
+
+def export_ssp(args: argparse.Namespace) -> int:
+    """Build the plant FMU (FE part of --parameters built in) and write it with the rest of the set as an SSV."""
+    from mace_fmu.fmu.naming import fmu_name
+    from mace_fmu.ssp import SspComponent, write_ssp
+    from mace_fmu.ssp.binding import fmu_start_values, split_parameters
+
+    if args.fmi_version != 2:
+        raise MaceError("--ssp: SSP 1.0 importers (fmpy, ecos) take FMI 2.0 FMUs: leave out --fmi-version 3")
+    if not str(args.ssp).endswith(".ssp"):
+        raise MaceError(f"--ssp {args.ssp}: the package's name must end in .ssp")
+    split = split_parameters(parameters(args))
+    progress(f"{args.structure} volts-volts model")
+    model = volts(args, parameters=split.built_in)
+    bounds = None
+    if args.frequency_bounds:
+        from mace_fmu.zero_g_report import read_frequency_bounds
+
+        bounds = read_frequency_bounds(args.frequency_bounds, mode_labels=model.plant.labels)
+    name = fmu_name(args.structure, kind=args.kind, fmi_version=2, motion_grids=model.plant.motion_grids,
+                    all_grids=model.structure_modes.modes.dofs.grid_ids)
+    with tempfile.TemporaryDirectory(prefix="mace_ssp_") as tmp:
+        progress(f"{args.kind} FMU {name}.fmu")
+        if args.kind == "native":
+            from mace_fmu.fmu.native.export import export_native_fmu
+
+            fmu = export_native_fmu(model, out_dir=tmp, name=name, fmi_version=2, frequency_bounds=bounds)
+        else:
+            from mace_fmu.fmu.export import export_fmu
+
+            fmu = export_fmu(model, out_dir=tmp, name=name, frequency_bounds=bounds)
+        import fmpy
+
+        tunable = [v.name for v in fmpy.read_model_description(str(fmu)).modelVariables
+                   if v.causality == "parameter"]
+        start = fmu_start_values(split.start_values, mode_labels=model.plant.labels, fmu_parameters=tunable)
+        path = write_ssp(args.ssp, components=[SspComponent(name="plant", fmu=Path(fmu), start_values=start)],
+                         system_name=f"MACE_{args.structure}")
+    print(f"wrote {path} (plant {name}.fmu, {len(start)} start values bound)")
+    return 0

@@ -1,0 +1,75 @@
+"""Which part of a parameter set is built into a plant FMU and which part an SSV binds to it.
+
+Moduli and spring stiffnesses change the finite-element model: an FMU applies them only by
+first-order reanalysis in its modal basis, so an SSP package builds them into the FMU with a full
+re-solve (as ``mace-fmu export --parameters`` does). Damping ratios, frequency scales, delays and
+servo gains are exact as FMU parameters: they become the SSV's start values, so the package's
+model equals ``volts_model(parameters=set)`` and a colleague can change them without rebuilding.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Sequence
+
+from mace_fmu.errors import MaceError
+from mace_fmu.iomodel.parametric_data import FREQUENCY_SCALE_PREFIX as FMU_FREQUENCY_SCALE_PREFIX
+from mace_fmu.parameters import DAMPING_PREFIX, FREQUENCY_SCALE_PREFIX, ParameterSet
+
+_BUILT_IN = ("modulus", "spring")
+
+
+@dataclass(frozen=True)
+class SplitParameters:
+    """A set split into what an FMU build takes and what its SSV binds."""
+
+    built_in: ParameterSet | None  #: moduli and springs (with the set's provenance); None when there are none
+    start_values: ParameterSet  #: damping ratios, frequency scales, delays, servo gains
+
+
+def split_parameters(parameters: ParameterSet | None) -> SplitParameters:
+    """Split ``parameters`` into the FE part (built into the FMU) and the rest (bound by an SSV)."""
+    if parameters is None:
+        return SplitParameters(built_in=None, start_values=ParameterSet({}))
+    physical = parameters.of_kind(*_BUILT_IN)
+    rest = {n: v for n, v in parameters.values.items() if n not in physical}
+    return SplitParameters(built_in=ParameterSet(physical, parameters.provenance) if physical else None,
+                           start_values=ParameterSet(rest, parameters.provenance))
+
+
+def fmu_start_values(parameters: ParameterSet, *, mode_labels: Sequence[str],
+                     fmu_parameters: Sequence[str]) -> dict[str, float]:
+    """The FMU variable values that give the set's damping ratios, frequency scales, delays and gains.
+
+    Parameters
+    ----------
+    parameters
+        Values by set name (``damping:<label>``, ``frequency_scale:<label>``, ``delay_<channel>``, ``K_a`` ...).
+    mode_labels
+        The FMU's open-loop mode labels, mode 1 first (a label names every mode that carries it).
+    fmu_parameters
+        The FMU's tunable parameter names.
+
+    Returns
+    -------
+    dict
+        FMU variable name -> value [SI]; a label becomes ``damping_mode_<k>`` / ``frequency_scale_mode_<k>``
+        of each mode k that carries it. A MaceError names a set entry the FMU has nothing for.
+    """
+    available = set(fmu_parameters)
+    out: dict[str, float] = {}
+    for name, value in parameters.values.items():
+        if name.startswith((DAMPING_PREFIX, FREQUENCY_SCALE_PREFIX)):
+            damping = name.startswith(DAMPING_PREFIX)
+            label = name.removeprefix(DAMPING_PREFIX if damping else FREQUENCY_SCALE_PREFIX)
+            prefix = "damping_mode_" if damping else FMU_FREQUENCY_SCALE_PREFIX
+            targets = [f"{prefix}{k + 1}" for k, x in enumerate(mode_labels) if x == label]
+            targets = [t for t in targets if t in available]
+            if not targets:
+                raise MaceError(f"parameter {name!r}: the FMU has no mode labelled {label!r} with such a parameter")
+            out.update({t: value for t in targets})
+        elif name in available:
+            out[name] = value
+        else:
+            raise MaceError(f"parameter {name!r}: the FMU has no parameter of that name")
+    return out

@@ -1,0 +1,213 @@
+"""SSP 1.0 packages: FMUs, their wiring by signal name and their parameter values in one archive.
+
+An ``.ssp`` file is a zip with ``SystemStructure.ssd`` (the system: components, their connectors,
+the connections between them, parameter bindings) and the files it names under ``resources/``
+(the FMUs and one SSV file of start values per component that has any). SSP 1.0 is the version
+ecos, OMSimulator and ``fmpy.simulate_ssp`` read.
+
+Importers differ (checked with ecospy 0.7 and fmpy 0.3.32): fmpy simulates FMI 2.0 FMUs only,
+ignores the parameter bindings (pass the values as ``parameter_set=``) and fails on a system
+without connections; ecos applies a parameter set only when it is named at initialisation and
+rejects connections to the system's own boundary. So the packages written here wire components
+to each other only, and every SSV binds to one component by its FMU variable names.
+"""
+
+from __future__ import annotations
+
+import os
+import xml.etree.ElementTree as ET
+import zipfile
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Mapping, Sequence
+
+from mace_fmu.atomic import atomic_path
+from mace_fmu.errors import MaceError
+from mace_fmu.ssp.ssv import SSC, SSV, units_element, values_ssv
+
+SSD = "http://ssp-standard.org/SSP1/SystemStructureDescription"
+ET.register_namespace("ssd", SSD)
+
+#: FMI causality -> SSP connector kind (the variables an SSP shows of a component)
+_KINDS = {"input": "input", "output": "output", "parameter": "parameter"}
+
+
+@dataclass(frozen=True)
+class SspComponent:
+    """One FMU in a system, with the start values an SSV binds to it (FMU variable names, SI units)."""
+
+    name: str  #: instance name in the system, e.g. "plant"
+    fmu: Path  #: the FMU file (copied into the archive's resources/)
+    start_values: Mapping[str, float] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class SspConnection:
+    """A signal from one component's output to another's input, by names."""
+
+    from_component: str
+    from_signal: str
+    to_component: str
+    to_signal: str
+
+
+@dataclass(frozen=True)
+class _Variable:
+    name: str
+    causality: str
+    unit: str | None
+
+
+def _variables(fmu: Path) -> dict[str, _Variable]:
+    import fmpy
+
+    try:
+        md = fmpy.read_model_description(str(fmu), validate=False)
+    except Exception as exc:  # fmpy raises bare Exceptions for damaged archives
+        raise MaceError(f"{fmu}: cannot read the FMU's model description: {exc}") from None
+    if md.fmiVersion != "2.0":
+        raise MaceError(f"{fmu}: FMI {md.fmiVersion}; SSP 1.0 importers (fmpy, ecos) take FMI 2.0 FMUs: export with "
+                        "--fmi-version 2")
+    out = {}
+    for v in md.modelVariables:
+        if v.causality in _KINDS and v.type == "Real":
+            unit = v.declaredType.unit if v.unit is None and v.declaredType is not None else v.unit
+            out[v.name] = _Variable(v.name, v.causality, unit)
+    return out
+
+
+def _checked(components: Sequence[SspComponent], connections: Sequence[SspConnection]) -> dict[str, dict]:
+    """Each component's variables; MaceError naming the component, signal and what was expected."""
+    names = [c.name for c in components]
+    if not components:
+        raise MaceError("SSP: no components")
+    if len(set(names)) != len(names):
+        raise MaceError(f"SSP: component names must be unique, got {names}")
+    variables = {c.name: _variables(Path(c.fmu)) for c in components}
+    for c in components:
+        for key in c.start_values:
+            v = variables[c.name].get(key)
+            if v is None or v.causality != "parameter":
+                raise MaceError(f"SSP component {c.name!r} ({Path(c.fmu).name}): no tunable parameter {key!r}")
+    fed: dict[tuple[str, str], SspConnection] = {}
+    for k in connections:
+        for comp, sig, causality in ((k.from_component, k.from_signal, "output"),
+                                     (k.to_component, k.to_signal, "input")):
+            if comp not in variables:
+                raise MaceError(f"SSP connection {k.from_component}.{k.from_signal} -> {k.to_component}.{k.to_signal}: "
+                                f"no component {comp!r} (components: {', '.join(names)})")
+            v = variables[comp].get(sig)
+            if v is None or v.causality != causality:
+                raise MaceError(f"SSP connection {k.from_component}.{k.from_signal} -> {k.to_component}.{k.to_signal}: "
+                                f"component {comp!r} has no {causality} {sig!r}")
+        if (k.to_component, k.to_signal) in fed:
+            raise MaceError(f"SSP: input {k.to_component}.{k.to_signal} is connected twice")
+        fed[(k.to_component, k.to_signal)] = k
+    return variables
+
+
+def system_structure(components: Sequence[SspComponent], connections: Sequence[SspConnection], *,
+                     system_name: str, stop_time_s: float | None = None, step_size_s: float | None = None) -> str:
+    """``SystemStructure.ssd`` text (SSP 1.0) of ``components`` wired by ``connections``.
+
+    Every component lists its inputs, outputs and tunable parameters as connectors with their
+    units; a component with start values binds ``resources/<name>.ssv``.
+    """
+    variables = _checked(components, connections)
+    root = ET.Element(f"{{{SSD}}}SystemStructureDescription", version="1.0", name=system_name,
+                      generationTool="mace-fmu")
+    system = ET.SubElement(root, f"{{{SSD}}}System", name=system_name)
+    elements = ET.SubElement(system, f"{{{SSD}}}Elements")
+    units: set[str] = set()
+    for c in components:
+        comp = ET.SubElement(elements, f"{{{SSD}}}Component", name=c.name,
+                             type="application/x-fmu-sharedlibrary", source=f"resources/{c.name}.fmu")
+        connectors = ET.SubElement(comp, f"{{{SSD}}}Connectors")
+        for v in variables[c.name].values():
+            conn = ET.SubElement(connectors, f"{{{SSD}}}Connector", name=v.name, kind=_KINDS[v.causality])
+            real = ET.SubElement(conn, f"{{{SSC}}}Real")
+            if v.unit:
+                real.set("unit", v.unit)
+                units.add(v.unit)
+        if c.start_values:
+            bindings = ET.SubElement(comp, f"{{{SSD}}}ParameterBindings")
+            ET.SubElement(bindings, f"{{{SSD}}}ParameterBinding", type="application/x-ssp-parameter-set",
+                          source=f"resources/{c.name}.ssv")
+    if connections:
+        wires = ET.SubElement(system, f"{{{SSD}}}Connections")
+        for k in connections:
+            ET.SubElement(wires, f"{{{SSD}}}Connection", startElement=k.from_component, startConnector=k.from_signal,
+                          endElement=k.to_component, endConnector=k.to_signal)
+    if units:
+        declared = units_element(units)
+        declared.tag = f"{{{SSD}}}Units"
+        root.append(declared)
+    if stop_time_s is not None:
+        ET.SubElement(root, f"{{{SSD}}}DefaultExperiment", startTime="0.0", stopTime=repr(float(stop_time_s)))
+    del step_size_s  # SSP 1.0 has no step size in DefaultExperiment; the importer's own setting decides
+    ET.indent(root)
+    return '<?xml version="1.0" encoding="UTF-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
+
+
+def component_ssv(component: SspComponent) -> str:
+    """The SSV text binding ``component.start_values`` to its FMU (FMU variable names and units)."""
+    variables = _variables(Path(component.fmu))
+    return values_ssv(dict(component.start_values), name=f"{component.name} parameters",
+                      units={k: variables[k].unit for k in component.start_values})
+
+
+def write_ssp(path: str | os.PathLike, *, components: Sequence[SspComponent],
+              connections: Sequence[SspConnection] = (), system_name: str = "system",
+              stop_time_s: float | None = None) -> Path:
+    """Write an SSP 1.0 archive of ``components`` wired by ``connections`` (atomically).
+
+    Parameters
+    ----------
+    path
+        The ``.ssp`` file to write.
+    components
+        The FMUs (FMI 2.0) with the start values to bind to each (FMU variable names, SI units).
+    connections
+        Output-to-input wiring by component and signal names.
+    system_name
+        Name of the system (and of the SSD).
+    stop_time_s
+        Default experiment stop time [s], if any.
+
+    Returns
+    -------
+    Path
+        ``path``. Nothing is written when a component, signal or parameter is unknown (MaceError).
+    """
+    ssd = system_structure(components, connections, system_name=system_name, stop_time_s=stop_time_s)
+    ssvs = {c.name: component_ssv(c) for c in components if c.start_values}
+    with atomic_path(path) as tmp:
+        with zipfile.ZipFile(tmp, "w", compression=zipfile.ZIP_DEFLATED) as z:
+            z.writestr("SystemStructure.ssd", ssd)
+            for c in components:
+                z.write(c.fmu, f"resources/{c.name}.fmu")
+                if c.name in ssvs:
+                    z.writestr(f"resources/{c.name}.ssv", ssvs[c.name])
+    return Path(path)
+
+
+def _schema_dir() -> Path:
+    import fmpy
+
+    return Path(fmpy.__file__).parent / "ssp" / "schema"
+
+
+def schema_problems(text: str | bytes, *, kind: str) -> list[str]:
+    """Problems of an SSD (``kind="ssd"``) or SSV (``kind="ssv"``) text against the SSP 1.0 schemas.
+
+    The XSDs are the Modelica Association's, as fmpy ships them (BSD 2-clause, the licence text is in
+    each file). An empty list means the file is valid.
+    """
+    from lxml import etree
+
+    schema_file = {"ssd": "SystemStructureDescription.xsd", "ssv": "SystemStructureParameterValues.xsd"}[kind]
+    schema = etree.XMLSchema(etree.parse(str(_schema_dir() / schema_file)))
+    document = etree.fromstring(text.encode() if isinstance(text, str) else text)
+    if schema.validate(document):
+        return []
+    return [f"line {e.line}: {e.message}" for e in schema.error_log]
