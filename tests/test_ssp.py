@@ -136,3 +136,91 @@ def test_package_with_an_unknown_parameter_or_signal_writes_nothing(plant_ssp, t
         write_ssp(out, components=[SspComponent("plant", fmu), SspComponent("other", fmu)],
                   connections=[SspConnection("other", "gyro_bus_x", "plant", "no_such_input")])
     assert not out.exists()
+
+
+@pytest.fixture(scope="module")
+def closed_loop_ssp(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("loop")
+    assert main(["export-controller", "--lqg", "-o", str(folder)]) == 0
+    ssp = folder / "loop.ssp"
+    assert main(["export", "0g", "--ssp", str(ssp), "--controller", str(folder / "controller.fmu")]) == 0
+    return ssp
+
+
+def _state_space_loop(steps: int, step_s: float, disturbance_v: float, *, closed: bool) -> np.ndarray:
+    """gyro_payload_z [V] at t_0..t_steps of the sampled loop (plant ZOH, LQG controller), by hand."""
+    import control as ct
+
+    from mace_fmu.cli.controller import lqg_controller
+    from mace_fmu.iomodel.volts import volts_model
+
+    plant = volts_model("0g").system
+    sampled = ct.sample_system(plant, step_s, "zoh")
+    k = lqg_controller(step_s=step_s)
+    assert np.all(k.d == 0) and np.all(plant.D == 0)  # no feedthrough: every stepping order closes this loop
+    ins, outs = list(plant.input_labels), list(plant.output_labels)
+    iu, iw, iy = ins.index("gimbal_primary_z"), ins.index("gimbal_secondary_z"), outs.index("gyro_payload_z")
+    xp, xc, out = np.zeros(plant.nstates), np.zeros(k.a.shape[0]), []
+    for _ in range(steps + 1):
+        y = sampled.C[iy] @ xp
+        out.append(y)
+        u = np.zeros(len(ins))
+        u[iu], u[iw] = (k.c[0] @ xc) if closed else 0.0, disturbance_v
+        xp = sampled.A @ xp + sampled.B @ u
+        xc = k.a @ xc + k.b[:, 0] * y
+    return np.array(out)
+
+
+def test_closed_loop_package_runs_in_ecos_and_fmpy_as_the_state_space_loop(closed_loop_ssp, tmp_path, monkeypatch):
+    """The 0-g plant with the Appendix A LQG controller, a 0.5 V step on the secondary gimbal's servo command."""
+    ecospy = pytest.importorskip("ecospy")
+    from fmpy.ssp.simulation import simulate_ssp
+    from fmpy.ssp.ssd import Parameter, ParameterSet as FmpySet
+
+    monkeypatch.setenv("TMPDIR", str(tmp_path))  # ecos extracts the package there
+    h, n, w = 0.002, 1000, 0.5
+    ref = _state_space_loop(n, h, w, closed=True)
+    open_loop = _state_space_loop(n, h, w, closed=False)
+    span = np.ptp(ref)
+    assert np.max(np.abs(open_loop - ref)) > 0.05 * span  # the controller acts: the check can tell the loops apart
+
+    with zipfile.ZipFile(closed_loop_ssp) as z:
+        assert schema_problems(z.read("SystemStructure.ssd"), kind="ssd") == []
+    y = []
+    with ecospy.EcosSimulation(ssp_path=str(closed_loop_ssp), step_size=h) as sim:
+        assert sim.init()
+        sim.set_real("plant::gimbal_secondary_z", w)  # an unconnected input keeps what it is given
+        for k in range(n + 1):
+            if k:
+                sim.step()
+            y.append(sim.get_real("plant::gyro_payload_z"))
+    assert np.max(np.abs(np.array(y) - ref)) <= 1e-9 * span
+
+    # fmpy: the disturbance as a start value (its parameter sets name variables by component path);
+    # each row is recorded after the step that starts at its time, so row k holds t_{k+1}
+    rows = simulate_ssp(str(closed_loop_ssp), stop_time=n * h, step_size=h,
+                        parameter_set=FmpySet(parameters=[Parameter(name="plant.gimbal_secondary_z", value=w)]))
+    fmpy_y = rows["plant.gyro_payload_z"]
+    assert len(fmpy_y) >= n - 1
+    assert np.max(np.abs(fmpy_y - ref[1:len(fmpy_y) + 1])) <= 1e-9 * span
+
+
+def test_controller_with_another_sample_time_or_signal_is_refused(closed_loop_ssp, tmp_path, capsys):
+    from mace_fmu.fmu.controller import DiscreteController, export_controller_fmu
+
+    with zipfile.ZipFile(closed_loop_ssp) as z:
+        z.extract("resources/plant.fmu", tmp_path)
+    base = dict(a=[[0.5]], b=[[1.0]], c=[[1.0]], d=[[0.0]])
+    slow = export_controller_fmu(DiscreteController(**base, sample_time_s=0.004, inputs=("gyro_payload_z",),
+                                                    outputs=("gimbal_primary_z",)), out_dir=tmp_path, name="slow")
+    alien = export_controller_fmu(DiscreteController(**base, sample_time_s=0.002, inputs=("gyro_nowhere",),
+                                                     outputs=("gimbal_primary_z",)), out_dir=tmp_path, name="alien")
+    for fmu, message in ((slow, "slow.fmu: <DefaultExperiment stepSize> .* 0.004 s is not the plant's communication "
+                                "step 0.002 s"),
+                         (alien, "alien.fmu: controller input 'gyro_nowhere' is not an output of the plant")):
+        out = tmp_path / f"{fmu.stem}.ssp"
+        assert main(["export", "0g", "--ssp", str(out), "--controller", str(fmu)]) == 2
+        import re
+
+        assert re.search(message, capsys.readouterr().err)
+        assert not out.exists()

@@ -15,6 +15,8 @@ def cmd_export(args: argparse.Namespace) -> int:
         raise MaceError("--fmi-version 3 needs --kind native (pythonfmu FMUs are FMI 2.0)")
     if args.frequency_bounds and not Path(args.frequency_bounds).is_file():
         raise MaceError(f"--frequency-bounds {args.frequency_bounds}: no such file")
+    if args.controller and not args.ssp:
+        raise MaceError("--controller needs --ssp FILE.ssp (the controller is wired to the plant inside a package)")
     if args.ssp:
         from mace_fmu.cli.ssp import export_ssp
 
@@ -60,5 +62,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="write an SSP 1.0 package instead of a bare FMU: the plant FMU (FMI 2.0) with the moduli and "
                         "springs of --parameters built in, and the set's damping ratios, frequency scales, delays and "
                         "gains as an SSV file bound to it")
+    p.add_argument("--controller", metavar="FILE.fmu",
+                   help="with --ssp: a controller FMU (mace-fmu export-controller) wired to the plant by signal names "
+                        "(its inputs read the plant outputs of those names, its outputs drive the plant inputs)")
     model_options(p)
     p.set_defaults(func=cmd_export)

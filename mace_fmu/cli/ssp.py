@@ -14,12 +14,15 @@ def export_ssp(args: argparse.Namespace) -> int:
     """Build the plant FMU (FE part of --parameters built in) and write it with the rest of the set as an SSV."""
     from mace_fmu.fmu.naming import fmu_name
     from mace_fmu.ssp import SspComponent, write_ssp
+    from mace_fmu.ssp.package import wiring_by_name
     from mace_fmu.ssp.binding import fmu_start_values, split_parameters
 
     if args.fmi_version != 2:
         raise MaceError("--ssp: SSP 1.0 importers (fmpy, ecos) take FMI 2.0 FMUs: leave out --fmi-version 3")
     if not str(args.ssp).endswith(".ssp"):
         raise MaceError(f"--ssp {args.ssp}: the package's name must end in .ssp")
+    if args.controller and not Path(args.controller).is_file():
+        raise MaceError(f"--controller {args.controller}: no such file")
     split = split_parameters(parameters(args))
     progress(f"{args.structure} volts-volts model")
     model = volts(args, parameters=split.built_in)
@@ -45,7 +48,13 @@ def export_ssp(args: argparse.Namespace) -> int:
         tunable = [v.name for v in fmpy.read_model_description(str(fmu)).modelVariables
                    if v.causality == "parameter"]
         start = fmu_start_values(split.start_values, mode_labels=model.plant.labels, fmu_parameters=tunable)
-        path = write_ssp(args.ssp, components=[SspComponent(name="plant", fmu=Path(fmu), start_values=start)],
-                         system_name=f"MACE_{args.structure}")
-    print(f"wrote {path} (plant {name}.fmu, {len(start)} start values bound)")
+        plant = SspComponent(name="plant", fmu=Path(fmu), start_values=start)
+        components, wires = [plant], []
+        if args.controller:
+            controller = SspComponent(name="controller", fmu=Path(args.controller))
+            wires = wiring_by_name(plant=plant, controller=controller)
+            components.append(controller)
+        path = write_ssp(args.ssp, components=components, connections=wires, system_name=f"MACE_{args.structure}")
+    loop = f", closed by {Path(args.controller).name} through {len(wires)} connections" if args.controller else ""
+    print(f"wrote {path} (plant {name}.fmu, {len(start)} start values bound{loop})")
     return 0

@@ -110,8 +110,10 @@ def system_structure(components: Sequence[SspComponent], connections: Sequence[S
                      system_name: str, stop_time_s: float | None = None, step_size_s: float | None = None) -> str:
     """``SystemStructure.ssd`` text (SSP 1.0) of ``components`` wired by ``connections``.
 
-    Every component lists its inputs, outputs and tunable parameters as connectors with their
-    units; a component with start values binds ``resources/<name>.ssv``.
+    Every component lists its connected inputs, its outputs and its tunable parameters as
+    connectors with their units (an unconnected input is left out, so that a host keeps the start
+    value it was given: fmpy sets every declared input connector at each step); a component with
+    start values binds ``resources/<name>.ssv``.
     """
     variables = _checked(components, connections)
     root = ET.Element(f"{{{SSD}}}SystemStructureDescription", version="1.0", name=system_name,
@@ -123,7 +125,10 @@ def system_structure(components: Sequence[SspComponent], connections: Sequence[S
         comp = ET.SubElement(elements, f"{{{SSD}}}Component", name=c.name,
                              type="application/x-fmu-sharedlibrary", source=f"resources/{c.name}.fmu")
         connectors = ET.SubElement(comp, f"{{{SSD}}}Connectors")
+        fed = {k.to_signal for k in connections if k.to_component == c.name}
         for v in variables[c.name].values():
+            if v.causality == "input" and v.name not in fed:
+                continue  # fmpy sets every declared input each step (0 when unconnected): keep start values
             conn = ET.SubElement(connectors, f"{{{SSD}}}Connector", name=v.name, kind=_KINDS[v.causality])
             real = ET.SubElement(conn, f"{{{SSC}}}Real")
             if v.unit:
@@ -211,3 +216,38 @@ def schema_problems(text: str | bytes, *, kind: str) -> list[str]:
     if schema.validate(document):
         return []
     return [f"line {e.line}: {e.message}" for e in schema.error_log]
+
+
+def _default_step(fmu: Path) -> float | None:
+    import fmpy
+
+    md = fmpy.read_model_description(str(fmu), validate=False)
+    step = md.defaultExperiment.stepSize if md.defaultExperiment is not None else None
+    return float(step) if step is not None else None
+
+
+def wiring_by_name(*, plant: SspComponent, controller: SspComponent) -> list[SspConnection]:
+    """Connections of a controller to a plant by signal names: each controller input reads the plant
+    output of that name, each controller output drives the plant input of that name.
+
+    A MaceError names the controller's file and signal that has no counterpart, and a controller
+    whose sample time (its default experiment's step) is not the plant's communication step.
+    """
+    pv, cv = _variables(Path(plant.fmu)), _variables(Path(controller.fmu))
+    wires = []
+    for v in cv.values():
+        if v.causality == "input":
+            if pv.get(v.name) is None or pv[v.name].causality != "output":
+                raise MaceError(f"{Path(controller.fmu).name}: controller input {v.name!r} is not an output of the plant "
+                                f"{Path(plant.fmu).name}")
+            wires.append(SspConnection(plant.name, v.name, controller.name, v.name))
+        elif v.causality == "output":
+            if pv.get(v.name) is None or pv[v.name].causality != "input":
+                raise MaceError(f"{Path(controller.fmu).name}: controller output {v.name!r} is not an input of the plant "
+                                f"{Path(plant.fmu).name}")
+            wires.append(SspConnection(controller.name, v.name, plant.name, v.name))
+    plant_step, controller_step = _default_step(Path(plant.fmu)), _default_step(Path(controller.fmu))
+    if plant_step is None or controller_step is None or abs(plant_step - controller_step) > 1e-12 * plant_step:
+        raise MaceError(f"{Path(controller.fmu).name}: <DefaultExperiment stepSize> (the sample time) {controller_step} s "
+                        f"is not the plant's communication step {plant_step} s ({Path(plant.fmu).name})")
+    return wires

@@ -36,13 +36,32 @@ FmiVersion = Literal[2, 3]
 RESOURCE_NAME = "mace_model.bin"
 
 
-def _token(data: dict, fmi_version: int) -> str:
-    """A GUID / instantiation token that changes with the model data, the FMI version and the runtime."""
-    h = hashlib.sha256(f"fmi{fmi_version}".encode())
-    for path in runtime.source_files():
+def runtime_token(data: dict, *, salt: str, sources: list[Path]) -> str:
+    """A GUID / instantiation token that changes with the model data, ``salt`` (FMI version, kind) and the runtime."""
+    h = hashlib.sha256(salt.encode())
+    for path in sources:
         h.update(path.read_bytes())
     h.update(resource_bytes(data))
     return "{" + str(uuid.UUID(bytes=h.digest()[:16])) + "}"
+
+
+def write_native_fmu(final: Path, *, name: str, fmi_version: int, description: bytes, data: dict,
+                     binaries: dict, sources: list[Path]) -> Path:
+    """Zip a native FMU atomically: its model description, runtime data, binaries and C sources."""
+    c_files = [p.name for p in sources if p.suffix == ".c"]
+    with atomic_path(final) as part:
+        with zipfile.ZipFile(part, "w", zipfile.ZIP_DEFLATED) as z:
+            z.writestr("modelDescription.xml", description)
+            z.writestr(f"resources/{RESOURCE_NAME}", resource_bytes(data))
+            for platform, binary in binaries.items():
+                folder = platform.fmi2_folder if fmi_version == 2 else platform.fmi3_folder
+                z.writestr(f"binaries/{folder}/{name}{platform.suffix}", binary)
+            for path in sources:
+                z.write(path, f"sources/{path.name}")
+            if fmi_version == 3:
+                z.writestr("sources/buildDescription.xml",
+                           fmi3_build_description(model_identifier=name, source_files=c_files))
+    return final
 
 
 def export_native_fmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str | None = None,
@@ -66,7 +85,7 @@ def export_native_fmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str
     if int(data["counts"][7]) != len(reference.state_names):
         raise MaceError(f"native FMU: the runtime data describe {int(data['counts'][7])} states, the model has "
                         f"{len(reference.state_names)}")
-    token = _token(data, fmi_version)
+    token = runtime_token(data, salt=f"fmi{fmi_version}", sources=runtime.source_files())
     data["guid"] = [token]
     variables = fmu_variables(arrays, reference.state_names)
     version = metadata.version("mace-fmu")
@@ -80,18 +99,5 @@ def export_native_fmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str
     else:
         description = fmi3_model_description(variables, model_identifier=name, token=token,
                                              description=model_summary(model), version=version)
-    out = Path(out_dir)
-    final = out / f"{name}.fmu"
-    with atomic_path(final) as part:
-        with zipfile.ZipFile(part, "w", zipfile.ZIP_DEFLATED) as z:
-            z.writestr("modelDescription.xml", description)
-            z.writestr(f"resources/{RESOURCE_NAME}", resource_bytes(data))
-            for platform, binary in binaries.items():
-                folder = platform.fmi2_folder if fmi_version == 2 else platform.fmi3_folder
-                z.writestr(f"binaries/{folder}/{name}{platform.suffix}", binary)
-            for path in sources:
-                z.write(path, f"sources/{path.name}")
-            if fmi_version == 3:
-                z.writestr("sources/buildDescription.xml",
-                           fmi3_build_description(model_identifier=name, source_files=c_files))
-    return final
+    return write_native_fmu(Path(out_dir) / f"{name}.fmu", name=name, fmi_version=fmi_version,
+                            description=description, data=data, binaries=binaries, sources=sources)

@@ -80,14 +80,17 @@ def _root(fmi_version: str, *, model_name: str, token_attribute: str, token: str
         "variableNamingConvention": "flat"})
 
 
-def _common_elements(root: ET.Element, variables: Sequence[FmuVariable]) -> None:
+def _common_elements(root: ET.Element, variables: Sequence[FmuVariable], step_size_s: float | None) -> None:
     units = ET.SubElement(root, "UnitDefinitions")
     for unit in sorted({v.unit for v in variables if v.unit}):
         ET.SubElement(units, "Unit", name=unit)
     categories = ET.SubElement(root, "LogCategories")
     for name, text in LOG_CATEGORIES:
         ET.SubElement(categories, "Category", name=name, description=text)
-    ET.SubElement(root, "DefaultExperiment", DEFAULT_EXPERIMENT)
+    experiment = dict(DEFAULT_EXPERIMENT)
+    if step_size_s is not None:
+        experiment["stepSize"] = _number(step_size_s)
+    ET.SubElement(root, "DefaultExperiment", experiment)
 
 
 def _attributes(v: FmuVariable) -> tuple[dict[str, str], dict[str, str]]:
@@ -105,8 +108,10 @@ def _attributes(v: FmuVariable) -> tuple[dict[str, str], dict[str, str]]:
 
 
 def fmi2_model_description(variables: Sequence[FmuVariable], *, model_identifier: str, guid: str, description: str,
-                           version: str, source_files: Sequence[str]) -> bytes:
-    """modelDescription.xml of an FMI 2.0 FMU with co-simulation and model exchange."""
+                           version: str, source_files: Sequence[str], model_exchange: bool = True,
+                           step_size_s: float | None = None) -> bytes:
+    """modelDescription.xml of an FMI 2.0 FMU with co-simulation and (``model_exchange``) model exchange;
+    ``step_size_s``: the default experiment's step [s] (default: the plants' 2 ms)."""
     variables = [v for v in variables if v.causality != "independent"]  # FMI 2: time is implicit
     root = _root("2.0", model_name=model_identifier, token_attribute="guid", token=guid, description=description,
                  version=version)
@@ -117,11 +122,13 @@ def fmi2_model_description(variables: Sequence[FmuVariable], *, model_identifier
                   ("CoSimulation", {"canHandleVariableCommunicationStepSize": "true", "canInterpolateInputs": "false",
                                     "maxOutputDerivativeOrder": "0"}))
     for tag, extra in interfaces:
+        if tag == "ModelExchange" and not model_exchange:
+            continue
         element = ET.SubElement(root, tag, {**capabilities, **extra})
         sources = ET.SubElement(element, "SourceFiles")
         for name in source_files:
             ET.SubElement(sources, "File", name=name)
-    _common_elements(root, variables)
+    _common_elements(root, variables, step_size_s)
     model_variables = ET.SubElement(root, "ModelVariables")
     for v in variables:
         attrs, typed = _attributes(v)
@@ -133,10 +140,11 @@ def fmi2_model_description(variables: Sequence[FmuVariable], *, model_identifier
     for v in variables:
         if v.causality == "output":
             ET.SubElement(outputs, "Unknown", index=str(index[v.value_reference]))
-    derivatives = ET.SubElement(structure, "Derivatives")
-    for v in variables:
-        if v.derivative_of is not None:
-            ET.SubElement(derivatives, "Unknown", index=str(index[v.value_reference]))
+    if any(v.derivative_of is not None for v in variables):  # the schema refuses an empty <Derivatives>
+        derivatives = ET.SubElement(structure, "Derivatives")
+        for v in variables:
+            if v.derivative_of is not None:
+                ET.SubElement(derivatives, "Unknown", index=str(index[v.value_reference]))
     initial = ET.SubElement(structure, "InitialUnknowns")
     for v in variables:
         if v.causality in ("output", "calculatedParameter", "local"):
@@ -146,8 +154,9 @@ def fmi2_model_description(variables: Sequence[FmuVariable], *, model_identifier
 
 
 def fmi3_model_description(variables: Sequence[FmuVariable], *, model_identifier: str, token: str, description: str,
-                           version: str) -> bytes:
-    """modelDescription.xml of an FMI 3.0 co-simulation FMU (no continuous states exposed)."""
+                           version: str, step_size_s: float | None = None) -> bytes:
+    """modelDescription.xml of an FMI 3.0 co-simulation FMU (no continuous states exposed);
+    ``step_size_s``: the default experiment's step [s] (default: the plants' 2 ms)."""
     root = _root("3.0", model_name=model_identifier, token_attribute="instantiationToken", token=token,
                  description=description, version=version)
     ET.SubElement(root, "CoSimulation", {
@@ -155,7 +164,7 @@ def fmi3_model_description(variables: Sequence[FmuVariable], *, model_identifier
         "canHandleVariableCommunicationStepSize": "true", "providesIntermediateUpdate": "false",
         "canReturnEarlyAfterIntermediateUpdate": "false", "hasEventMode": "false", "maxOutputDerivativeOrder": "0"})
     scalars = [v for v in variables if v.causality != "local"]  # FMI 3: time (independent) included
-    _common_elements(root, scalars)
+    _common_elements(root, scalars, step_size_s)
     model_variables = ET.SubElement(root, "ModelVariables")
     for v in scalars:
         attrs, typed = _attributes(v)
