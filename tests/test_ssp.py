@@ -87,9 +87,10 @@ def test_exported_package_is_schema_valid_and_binds_the_set(plant_ssp):
         assert schema_problems(z.read("SystemStructure.ssd"), kind="ssd") == []
         assert schema_problems(z.read("resources/plant.ssv"), kind="ssv") == []
         ssv = z.read("resources/plant.ssv").decode()
-    # the label-named entries became the FMU's per-mode parameters; the modulus is built in, not bound
-    assert 'name="delay_gimbal_primary_x"' in ssv and 'name="K_a"' in ssv
-    assert "damping_mode_" in ssv and "frequency_scale_mode_" in ssv and "E_lexan_end" not in ssv
+    # a label-named damping ratio became the FMU's per-mode parameter; the modulus and the frequency
+    # scale are built in (the FMU's own scales are relative to the model it was built from)
+    assert 'name="delay_gimbal_primary_x"' in ssv and 'name="K_a"' in ssv and "damping_mode_" in ssv
+    assert "frequency_scale_mode_" not in ssv and "E_lexan_end" not in ssv
 
 
 def test_ecos_runs_the_package_as_our_state_space_model(plant_ssp):
@@ -130,6 +131,8 @@ def test_package_with_an_unknown_parameter_or_signal_writes_nothing(plant_ssp, t
     out = tmp_path / "x.ssp"
     with pytest.raises(MaceError, match=r"component 'plant' \(plant.fmu\): no tunable parameter 'E_nothing'"):
         write_ssp(out, components=[SspComponent("plant", fmu, {"E_nothing": 1.0})])
+    with pytest.raises(MaceError, match=r"damping_mode_7 = 1.5 is outside the declared range \[0.0, 1.0\]"):
+        write_ssp(out, components=[SspComponent("plant", fmu, {"damping_mode_7": 1.5})])
     from mace_fmu.ssp import SspConnection
 
     with pytest.raises(MaceError, match="component 'plant' has no input 'no_such_input'"):
@@ -147,62 +150,45 @@ def closed_loop_ssp(tmp_path_factory):
     return ssp
 
 
-def _state_space_loop(steps: int, step_s: float, disturbance_v: float, *, closed: bool) -> np.ndarray:
-    """gyro_payload_z [V] at t_0..t_steps of the sampled loop (plant ZOH, LQG controller), by hand."""
-    import control as ct
+def _example():
+    import importlib.util
+    from pathlib import Path
 
-    from mace_fmu.cli.controller import lqg_controller
-    from mace_fmu.iomodel.volts import volts_model
-
-    plant = volts_model("0g").system
-    sampled = ct.sample_system(plant, step_s, "zoh")
-    k = lqg_controller(step_s=step_s)
-    assert np.all(k.d == 0) and np.all(plant.D == 0)  # no feedthrough: every stepping order closes this loop
-    ins, outs = list(plant.input_labels), list(plant.output_labels)
-    iu, iw, iy = ins.index("gimbal_primary_z"), ins.index("gimbal_secondary_z"), outs.index("gyro_payload_z")
-    xp, xc, out = np.zeros(plant.nstates), np.zeros(k.a.shape[0]), []
-    for _ in range(steps + 1):
-        y = sampled.C[iy] @ xp
-        out.append(y)
-        u = np.zeros(len(ins))
-        u[iu], u[iw] = (k.c[0] @ xc) if closed else 0.0, disturbance_v
-        xp = sampled.A @ xp + sampled.B @ u
-        xc = k.a @ xc + k.b[:, 0] * y
-    return np.array(out)
+    path = Path(__file__).resolve().parents[1] / "examples" / "closed_loop_ssp.py"
+    spec = importlib.util.spec_from_file_location("closed_loop_ssp_example", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
 
 
 def test_closed_loop_package_runs_in_ecos_and_fmpy_as_the_state_space_loop(closed_loop_ssp, tmp_path, monkeypatch):
     """The 0-g plant with the Appendix A LQG controller, a 0.5 V step on the secondary gimbal's servo command."""
-    ecospy = pytest.importorskip("ecospy")
-    from fmpy.ssp.simulation import simulate_ssp
-    from fmpy.ssp.ssd import Parameter, ParameterSet as FmpySet
-
+    pytest.importorskip("ecospy")
+    example = _example()
     monkeypatch.setenv("TMPDIR", str(tmp_path))  # ecos extracts the package there
     h, n, w = 0.002, 1000, 0.5
-    ref = _state_space_loop(n, h, w, closed=True)
-    open_loop = _state_space_loop(n, h, w, closed=False)
+    ref = example.state_space_loop(parameters=None, steps=n, step_s=h, disturbance_v=w)
+    open_loop = example.state_space_loop(parameters=None, steps=n, step_s=h, disturbance_v=w, closed=False)
     span = np.ptp(ref)
     assert np.max(np.abs(open_loop - ref)) > 0.05 * span  # the controller acts: the check can tell the loops apart
-
     with zipfile.ZipFile(closed_loop_ssp) as z:
         assert schema_problems(z.read("SystemStructure.ssd"), kind="ssd") == []
-    y = []
-    with ecospy.EcosSimulation(ssp_path=str(closed_loop_ssp), step_size=h) as sim:
-        assert sim.init()
-        sim.set_real("plant::gimbal_secondary_z", w)  # an unconnected input keeps what it is given
-        for k in range(n + 1):
-            if k:
-                sim.step()
-            y.append(sim.get_real("plant::gyro_payload_z"))
-    assert np.max(np.abs(np.array(y) - ref)) <= 1e-9 * span
+    ecos = example.run_in_ecos(closed_loop_ssp, steps=n, step_s=h, disturbance_v=w, parameter_set=None)
+    assert np.max(np.abs(ecos - ref)) <= 1e-9 * span
+    fmpy_y = example.run_in_fmpy(closed_loop_ssp, steps=n, step_s=h, disturbance_v=w)  # holds t_1..t_n
+    assert len(fmpy_y) == n and np.max(np.abs(fmpy_y - ref[1:])) <= 1e-9 * span
 
-    # fmpy: the disturbance as a start value (its parameter sets name variables by component path);
-    # each row is recorded after the step that starts at its time, so row k holds t_{k+1}
-    rows = simulate_ssp(str(closed_loop_ssp), stop_time=n * h, step_size=h,
-                        parameter_set=FmpySet(parameters=[Parameter(name="plant.gimbal_secondary_z", value=w)]))
-    fmpy_y = rows["plant.gyro_payload_z"]
-    assert len(fmpy_y) >= n - 1
-    assert np.max(np.abs(fmpy_y - ref[1:len(fmpy_y) + 1])) <= 1e-9 * span
+
+def test_example_from_the_updated_model_to_a_package_other_tools_run(tmp_path, monkeypatch):
+    """examples/closed_loop_ssp.py: predict-0g's updated nominal model with its bounds, the LQG controller,
+    one package; ecos and fmpy run it as the state-space loop."""
+    pytest.importorskip("ecospy")
+    monkeypatch.setenv("TMPDIR", str(tmp_path))
+    errors = _example().main(tmp_path / "out", quick=False)
+    assert set(errors) == {"ecos", "fmpy"} and max(errors.values()) <= 1e-9
+    with zipfile.ZipFile(tmp_path / "out" / "closed_loop.ssp") as z:
+        ssv = z.read("resources/plant.ssv").decode()
+    assert ssv.count("damping_mode_") >= 5  # Table 5.3's damping ratios travel in the SSV
 
 
 def test_controller_with_another_sample_time_or_signal_is_refused(closed_loop_ssp, tmp_path, capsys):

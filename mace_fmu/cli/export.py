@@ -59,9 +59,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="table_5_3.toml of mace-fmu predict-0g: its bounds become the min/max of the modes' "
                         "frequency_scale_mode_<k> (with --parameters zero_g_nominal.toml: the updated nominal 0-g FMU)")
     p.add_argument("--ssp", metavar="FILE.ssp",
-                   help="write an SSP 1.0 package instead of a bare FMU: the plant FMU (FMI 2.0) with the moduli and "
-                        "springs of --parameters built in, and the set's damping ratios, frequency scales, delays and "
-                        "gains as an SSV file bound to it")
+                   help="write an SSP 1.0 package instead of a bare FMU: the plant FMU (FMI 2.0) with the moduli, "
+                        "springs and frequency scales of --parameters built in, and the set's damping ratios, delays "
+                        "and gains as an SSV file bound to it")
     p.add_argument("--controller", metavar="FILE.fmu",
                    help="with --ssp: a controller FMU (mace-fmu export-controller) wired to the plant by signal names "
                         "(its inputs read the plant outputs of those names, its outputs drive the plant inputs)")

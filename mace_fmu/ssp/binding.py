@@ -2,9 +2,12 @@
 
 Moduli and spring stiffnesses change the finite-element model: an FMU applies them only by
 first-order reanalysis in its modal basis, so an SSP package builds them into the FMU with a full
-re-solve (as ``mace-fmu export --parameters`` does). Damping ratios, frequency scales, delays and
-servo gains are exact as FMU parameters: they become the SSV's start values, so the package's
-model equals ``volts_model(parameters=set)`` and a colleague can change them without rebuilding.
+re-solve (as ``mace-fmu export --parameters`` does). Frequency scales are built in too: the FMU's
+``frequency_scale_mode_<k>`` is relative to the model it was built from, and Table 5.3's bounds
+(its min/max) are relative to the nominal model, so the FMU is built at the nominal scales and its
+own scales stay 1 within 1 -+ bound. Damping ratios, delays and servo gains are exact as FMU
+parameters: they become the SSV's start values, so the package's model equals
+``volts_model(parameters=set)`` and a colleague can change them without rebuilding.
 """
 
 from __future__ import annotations
@@ -16,19 +19,19 @@ from mace_fmu.errors import MaceError
 from mace_fmu.iomodel.parametric_data import FREQUENCY_SCALE_PREFIX as FMU_FREQUENCY_SCALE_PREFIX
 from mace_fmu.parameters import DAMPING_PREFIX, FREQUENCY_SCALE_PREFIX, ParameterSet
 
-_BUILT_IN = ("modulus", "spring")
+_BUILT_IN = ("modulus", "spring", "frequency_scale")
 
 
 @dataclass(frozen=True)
 class SplitParameters:
     """A set split into what an FMU build takes and what its SSV binds."""
 
-    built_in: ParameterSet | None  #: moduli and springs (with the set's provenance); None when there are none
-    start_values: ParameterSet  #: damping ratios, frequency scales, delays, servo gains
+    built_in: ParameterSet | None  #: moduli, springs, frequency scales (with the set's provenance); None if none
+    start_values: ParameterSet  #: damping ratios, delays, servo gains
 
 
 def split_parameters(parameters: ParameterSet | None) -> SplitParameters:
-    """Split ``parameters`` into the FE part (built into the FMU) and the rest (bound by an SSV)."""
+    """Split ``parameters`` into the part built into the FMU and the part an SSV binds (module docstring)."""
     if parameters is None:
         return SplitParameters(built_in=None, start_values=ParameterSet({}))
     physical = parameters.of_kind(*_BUILT_IN)

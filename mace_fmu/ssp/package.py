@@ -56,6 +56,8 @@ class _Variable:
     name: str
     causality: str
     unit: str | None
+    minimum: float | None = None  #: declared min, None when the FMU declares none
+    maximum: float | None = None
 
 
 def _variables(fmu: Path) -> dict[str, _Variable]:
@@ -72,7 +74,8 @@ def _variables(fmu: Path) -> dict[str, _Variable]:
     for v in md.modelVariables:
         if v.causality in _KINDS and v.type == "Real":
             unit = v.declaredType.unit if v.unit is None and v.declaredType is not None else v.unit
-            out[v.name] = _Variable(v.name, v.causality, unit)
+            out[v.name] = _Variable(v.name, v.causality, unit, None if v.min is None else float(v.min),
+                                    None if v.max is None else float(v.max))
     return out
 
 
@@ -85,10 +88,13 @@ def _checked(components: Sequence[SspComponent], connections: Sequence[SspConnec
         raise MaceError(f"SSP: component names must be unique, got {names}")
     variables = {c.name: _variables(Path(c.fmu)) for c in components}
     for c in components:
-        for key in c.start_values:
+        for key, value in c.start_values.items():
             v = variables[c.name].get(key)
             if v is None or v.causality != "parameter":
                 raise MaceError(f"SSP component {c.name!r} ({Path(c.fmu).name}): no tunable parameter {key!r}")
+            if (v.minimum is not None and value < v.minimum) or (v.maximum is not None and value > v.maximum):
+                raise MaceError(f"SSP component {c.name!r} ({Path(c.fmu).name}): {key} = {value!r} is outside the "
+                                f"declared range [{v.minimum}, {v.maximum}]")
     fed: dict[tuple[str, str], SspConnection] = {}
     for k in connections:
         for comp, sig, causality in ((k.from_component, k.from_signal, "output"),
