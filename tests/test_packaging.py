@@ -33,7 +33,8 @@ def test_non_editable_install_runs_the_main_job_from_another_folder(tmp_path: Pa
         names = set(archive.namelist())
         metadata = archive.read(next(n for n in names if n.endswith(".dist-info/METADATA"))).decode()
     assert {"mace_fmu/data/mace_em.bdf", "mace_fmu/data/mace_em.toml", "mace_fmu/data/thesis.toml",
-            "mace_fmu/fmu/slave.py", "viewer/html.py", "modelica_like/system.py"} <= names
+            "mace_fmu/fmu/slave.py", "viewer/html.py", "modelica_like/system.py",
+            "mace_fmu/fmu/native/c/controller/mace_discrete.c"} <= names
     assert "License-Expression: MIT" in metadata.splitlines()
 
     venv = tmp_path / "venv"
