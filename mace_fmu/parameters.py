@@ -31,7 +31,6 @@ from types import MappingProxyType
 from typing import Any, Literal, Mapping
 
 from mace_fmu.atomic import write_text_atomic
-from mace_fmu.datafile import data_file_path, read_data_file
 from mace_fmu.errors import MaceError
 from mace_fmu.textfile import read_text
 
@@ -213,11 +212,28 @@ class ParameterNames:
 
 
 def load_parameter_names(path: str | Path | None = None) -> ParameterNames:
-    """The ``[parameters]`` table of the structure data file (default: the bundled mace_em.toml)."""
-    path = data_file_path(path)
-    table = read_data_file(path, what="parameter names").get("parameters", {})
+    """The ``[parameters]`` table of a structure file (default: the bundled mace_em.toml)."""
+    from mace_fmu.structure import bundled_structure_path, load_structure_file
+
+    return names_of_table(load_structure_file(path if path is not None else bundled_structure_path()).tables)
+
+
+def names_of_table(tables: Mapping[str, Any]) -> ParameterNames:
+    """ParameterNames of a structure file's parsed tables (its ``[parameters]``)."""
+    table = tables.get("parameters", {})
     return ParameterNames(materials={name: int(mid) for mid, name in table.get("materials", {}).items()},
                           springs={name: int(sid) for sid, name in table.get("springs", {}).items()})
+
+
+def parameter_names(deck, structure_file=None) -> ParameterNames:
+    """The E_ and k_ names of a deck: its structure file's ``[parameters]`` names, and for every MAT1 and
+    CELAS2 card that table does not name (or every card, without a structure file) ``mat<ID>`` and
+    ``celas<ID>`` (``E_mat2``, ``k_celas138``): a name never reaches a card of another deck."""
+    named = names_of_table(structure_file.tables) if structure_file is not None else ParameterNames({}, {})
+    materials = {**{f"mat{mid}": mid for mid in deck.mat1s if mid not in named.materials.values()},
+                 **named.materials}
+    springs = {**{f"celas{sid}": sid for sid in deck.celas2s if sid not in named.springs.values()}, **named.springs}
+    return ParameterNames(materials=materials, springs=springs)
 
 
 def deck_values(deck, names: ParameterNames | None = None) -> dict[str, float]:

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, Mapping
 
@@ -19,9 +19,10 @@ from mace_fmu.fe.constraints import build_constraints
 from mace_fmu.fe.labels import label_modes, rigid_body_vectors
 from mace_fmu.fe.modal import Modes, solve_modes
 from mace_fmu.fe.preload import Preload, PreloadKind, large_displacement_preload, linear_preload
-from mace_fmu.parameters import ParameterSet, deck_fingerprint, fe_overrides
+from mace_fmu.parameters import ParameterSet, deck_fingerprint, fe_overrides, parameter_names
 from mace_fmu.progress import ProgressCallback
-from mace_fmu.structure import Structure, StructureKind, StructureSpec, build_structure, bundled_deck_path
+from mace_fmu.structure import (Structure, StructureFile, StructureKind, StructureSpec, build_structure,
+                                bundled_deck_path, structure_file_for)
 from mace_fmu.threads import single_blas_thread
 
 DEFAULT_MAX_HZ = 250.0
@@ -82,12 +83,39 @@ def gravity_load(deck: Deck, model: FEModel, load_id: int) -> np.ndarray:
     return model.mass @ field.ravel()
 
 
-def _max_hz(deck: Deck, structure: Structure) -> float:
-    """Upper frequency of the modal subcase's EIGRL (the deck's own request), else 250 Hz."""
+def _eigrl(deck: Deck, structure: Structure):
+    """The EIGRL card the modal subcase's METHOD selects (None without one)."""
     method = structure.modal.method
-    if method is not None and method in deck.eigrls and deck.eigrls[method].v2 is not None:
-        return float(deck.eigrls[method].v2)
-    return DEFAULT_MAX_HZ
+    return deck.eigrls.get(method) if method is not None else None
+
+
+def _requested_modes(modes: Modes, deck: Deck, structure: Structure, max_hz: float | None) -> Modes:
+    """The modes the analysis asks for: up to ``max_hz`` when given, else as the deck's EIGRL asks
+    (NASTRAN's meaning: frequencies in [V1, V2], the lowest ND of them), else up to 250 Hz.
+
+    A MaceError when that leaves no mode, saying what was asked and where the modes are.
+    """
+    eigrl = _eigrl(deck, structure)
+    f = modes.frequencies_hz
+    if max_hz is not None:
+        keep, asked = f <= max_hz, f"up to {max_hz:g} Hz"
+    elif eigrl is not None and (eigrl.v1 is not None or eigrl.v2 is not None or eigrl.nd):
+        keep = np.ones(len(f), dtype=bool)
+        if eigrl.v1 is not None:
+            keep &= f >= eigrl.v1
+        if eigrl.v2 is not None:
+            keep &= f <= eigrl.v2
+        if eigrl.nd:
+            keep &= np.cumsum(keep) <= eigrl.nd
+        asked = (f"EIGRL {eigrl.sid} (V1 = {eigrl.v1}, V2 = {eigrl.v2}, ND = {eigrl.nd}; "
+                 f"{eigrl.source.file}:{eigrl.source.line})")
+    else:
+        keep, asked = f <= DEFAULT_MAX_HZ, f"up to {DEFAULT_MAX_HZ:g} Hz (no EIGRL in the deck)"
+    if not keep.any():
+        lowest = f"; its lowest mode is at {f.min():.6g} Hz" if len(f) else ""
+        raise MaceError(f"{deck.path}: no modes in the range asked for, {asked}{lowest} (set the range with "
+                        "max_hz / --max-hz, or the deck's EIGRL)")
+    return replace(modes, frequencies_hz=f[keep], shapes=modes.shapes[:, keep])
 
 
 def check_parameters_deck(parameters: ParameterSet, deck: Deck) -> None:
@@ -105,10 +133,15 @@ def compute_modes(deck: Deck | str | os.PathLike | None = None, *, structure: St
                   preload: PreloadKind = "large", mass: MassKind = "lumped", max_hz: float | None = None,
                   overrides: Mapping[tuple[str, int], Mapping[str, Any]] | None = None,
                   spec: StructureSpec | None = None, progress: ProgressCallback | None = None,
-                  parameters: ParameterSet | None = None) -> StructureModes:
+                  parameters: ParameterSet | None = None,
+                  structure_file: StructureFile | str | os.PathLike | None = None) -> StructureModes:
     """Modes [Hz] of the 1-g or 0-g structure of a deck (default: the bundled MACE deck).
 
-    ``max_hz`` defaults to the deck's EIGRL upper frequency. ``overrides`` replaces card fields
+    ``structure_file``: what the deck does not say (see :mod:`mace_fmu.structure`); default the
+    bundled one for the bundled deck and none for any other deck, which then keeps NASTRAN's
+    meaning (nothing removed; modes labelled by their motion, not by MACE's names).
+    ``max_hz`` [Hz]: the modes up to it; by default the deck's EIGRL decides (V1, V2, ND), else 250 Hz.
+    ``overrides`` replaces card fields
     (see :func:`mace_fmu.structure.apply_overrides`); ``parameters`` replaces moduli and spring
     stiffnesses by name (``E_<material>``, ``k_<spring>``; its other entries act later).
     ``progress`` is called after each preload increment; nothing is printed (the increments are
@@ -120,10 +153,11 @@ def compute_modes(deck: Deck | str | os.PathLike | None = None, *, structure: St
         raise ValueError(f"mass must be 'lumped' or 'consistent', got {mass!r}")
     if not isinstance(deck, Deck):
         deck = read_deck(deck if deck is not None else bundled_deck_path())
+    file = structure_file_for(deck, structure_file)
     if parameters is not None:
         check_parameters_deck(parameters, deck)
-        overrides = {**fe_overrides(parameters), **(overrides or {})}
-    struct = build_structure(deck, kind=structure, spec=spec, overrides=overrides)
+        overrides = {**fe_overrides(parameters, parameter_names(deck, file)), **(overrides or {})}
+    struct = build_structure(deck, kind=structure, spec=spec, overrides=overrides, structure_file=file)
     model = assemble(struct.deck, mass=mass)
     props = mass_properties(model, struct.deck)
     stiffness, pre = model.stiffness, None
@@ -141,8 +175,8 @@ def compute_modes(deck: Deck | str | os.PathLike | None = None, *, structure: St
         stiffness = pre.tangent_stiffness
     modal = build_constraints(struct.deck, model.dofs, model.cd_frames, spc_set=struct.modal.spc,
                               mpc_set=struct.modal.mpc)
-    modes = solve_modes(stiffness, model.mass, modal, model.dofs, model.cd_frames,
-                        max_hz=max_hz if max_hz is not None else _max_hz(struct.deck, struct))
+    modes = _requested_modes(solve_modes(stiffness, model.mass, modal, model.dofs, model.cd_frames),
+                             struct.deck, struct, max_hz)
     modes = label_modes(model, modes, struct.spec, reference=props.reference_point_m,
                         state=pre.state if pre is not None else None,
                         bar_forces=pre.bar_forces if pre is not None else None)

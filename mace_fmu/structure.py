@@ -1,33 +1,61 @@
-"""The 1-g (suspended) and 0-g (suspension removed) structures of one deck.
+"""The 1-g (suspended) and 0-g (suspension removed) structures of one deck, and the structure file.
 
-Which cards form the suspension, which grids form each named component and which MPC pairs are
-mechanisms is data (``mace_em.toml`` next to the deck), not code.
+A deck says what NASTRAN needs; a structure file (TOML) says what it does not: which cards form a
+suspension removed for the 0-g structure, which grids form named components (mode labels,
+viewer colours), which coincident grid pairs are mechanisms, and (for the later stages) the
+instruments, electronics, damping and parameter names. The bundled ``mace_em.toml`` belongs to
+the bundled MACE deck only: it applies when the deck's content is the bundled deck's, or when it
+is named (``structure_file=``, CLI ``--structure``). Any other deck without a structure file keeps
+NASTRAN's meaning: its modes as its own SPC, MPC and EIGRL define them, nothing removed.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import functools
+import hashlib
+import os
+import tomllib
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
+from types import MappingProxyType
 from typing import Any, Literal, Mapping
 
 import numpy as np
 
 from mace_fmu.deck.cards import Deck, Subcase
 from mace_fmu.deck.reader import check_deck
-from mace_fmu.datafile import data_file_path, read_data_file
 from mace_fmu.errors import DeckError, MaceError
+from mace_fmu.textfile import read_text
 
 StructureKind = Literal["1g", "0g"]
 
 _CARD_TABLES = {"GRID": "grids", "CBAR": "bars", "PBAR": "pbars", "MAT1": "mat1s", "CONM2": "conm2s",
                 "CELAS2": "celas2s", "CORD2R": "coords", "GRAV": "gravs"}
 
+#: the tables a structure file may hold, and what each is for (the schema, checked on loading)
+STRUCTURE_FILE_TABLES = {
+    "suspension": "grids and elements removed for the 0-g structure",
+    "components": "named groups of grids (mode labels, viewer colours)",
+    "mechanisms": "hinges: [dependent grid, independent grid, released component]",
+    "actuators": "actuators as weighted sums of grid DOFs",
+    "sensors": "sensors as weighted sums of grid DOFs",
+    "electronics": "filters and delays",
+    "servos": "wheel speed loops and gimbal servos",
+    "damping": "modal damping table",
+    "parameters": "names of the MAT1 and CELAS2 cards an update may change",
+}
+
 
 def bundled_deck_path() -> Path:
     """Path of the bundled MACE deck (Appendix B of the thesis)."""
     return Path(str(resources.files("mace_fmu") / "data" / "mace_em.bdf"))
+
+
+def bundled_structure_path() -> Path:
+    """Path of the bundled MACE structure file, ``mace_em.toml`` (it belongs to the bundled deck only)."""
+    return Path(str(resources.files("mace_fmu") / "data" / "mace_em.toml"))
 
 
 @dataclass(frozen=True)
@@ -50,6 +78,12 @@ class StructureSpec:
     mechanisms: tuple[Mechanism, ...]
     source: str
 
+    @classmethod
+    def empty(cls, source: str = "no structure file") -> StructureSpec:
+        """Nothing beyond the deck: no suspension, no components, no mechanisms (NASTRAN's meaning)."""
+        return cls(suspension_grids=frozenset(), suspension_elements=frozenset(), components={}, mechanisms=(),
+                   source=source)
+
     def component_of(self, *grids: int) -> str | None:
         """Name of the component that contains every one of ``grids`` (None when none does)."""
         for name, members in self.components.items():
@@ -58,11 +92,44 @@ class StructureSpec:
         return None
 
 
-def _id_set(values: list[Any], where: str) -> frozenset[int]:
+@dataclass(frozen=True)
+class StructureFile:
+    """A structure file read once: its path, its parsed tables and the structure part of them.
+
+    The later stages read their tables (``actuators``, ``sensors``, ``electronics``, ``servos``,
+    ``damping``, ``parameters``) from ``tables``, never from the file again.
+    """
+
+    path: Path
+    tables: Mapping[str, Any]  #: the parsed TOML (read-only)
+    spec: StructureSpec
+
+    def has(self, table: str) -> bool:
+        """Whether the file holds ``table`` (e.g. "actuators")."""
+        return table in self.tables
+
+
+def _line_of(text: str, key: str) -> int:
+    """1-based line where ``key`` is defined in a TOML text (a table header or a key), 0 if not found."""
+    for n, line in enumerate(text.splitlines(), start=1):
+        stripped = line.strip()
+        if stripped.startswith(("[" + key + "]", "[[" + key + "]]", key + " ", key + "=", f'"{key}"')):
+            return n
+    return 0
+
+
+def _where(path: Path, text: str, key: str) -> str:
+    line = _line_of(text, key.split(".")[-1].strip('"'))
+    return f"{path}:{line}: [{key}]" if line else f"{path}: [{key}]"
+
+
+def _id_set(values: Any, where: str) -> frozenset[int]:
     """IDs from a list of ints and "first-last" ranges."""
+    if not isinstance(values, list):
+        raise MaceError(f"{where}: expected a list of IDs and 'first-last' ranges, got {values!r}")
     ids: set[int] = set()
     for v in values:
-        if isinstance(v, int):
+        if isinstance(v, int) and not isinstance(v, bool) and v > 0:
             ids.add(v)
         elif isinstance(v, str) and v.count("-") == 1 and all(p.strip().isdigit() for p in v.split("-")):
             lo, hi = (int(p) for p in v.split("-"))
@@ -70,27 +137,117 @@ def _id_set(values: list[Any], where: str) -> frozenset[int]:
                 raise MaceError(f"{where}: range {v!r} runs backwards (expected 'first-last' with first <= last)")
             ids.update(range(lo, hi + 1))
         else:
-            raise MaceError(f"{where}: expected an ID or a 'first-last' range, got {v!r}")
+            raise MaceError(f"{where}: expected a positive ID or a 'first-last' range, got {v!r}")
     return frozenset(ids)
 
 
-def load_spec(path: str | Path | None = None) -> StructureSpec:
-    """Read the structure data file (default: the bundled ``mace_em.toml``)."""
-    path = data_file_path(path)
-    data = read_data_file(path, what="structure data file")
+def _spec_of(path: Path, text: str, data: Mapping[str, Any]) -> StructureSpec:
+    susp = data.get("suspension", {})
+    if not isinstance(susp, dict) or set(susp) - {"grids", "elements"}:
+        raise MaceError(f"{_where(path, text, 'suspension')}: expected the keys 'grids' and 'elements', got "
+                        f"{sorted(susp) if isinstance(susp, dict) else susp!r}")
+    components = data.get("components", {})
+    mechanisms = data.get("mechanisms", {})
+    if not isinstance(components, dict) or not isinstance(mechanisms, dict):
+        raise MaceError(f"{path}: [components] and [mechanisms] must be tables")
+    mechs = []
+    for name, v in mechanisms.items():
+        if not (isinstance(v, list) and len(v) == 3 and all(isinstance(x, int) and not isinstance(x, bool) for x in v)
+                and 1 <= v[2] <= 6):
+            raise MaceError(f"{_where(path, text, 'mechanisms.' + name)}: expected [dependent grid, independent grid, "
+                            f"component 1-6], got {v!r}")
+        mechs.append(Mechanism(name=name, dependent=v[0], independent=v[1], component=v[2]))
+    return StructureSpec(
+        suspension_grids=_id_set(susp.get("grids", []), _where(path, text, "suspension") + " grids"),
+        suspension_elements=_id_set(susp.get("elements", []), _where(path, text, "suspension") + " elements"),
+        components={name: _id_set(v, _where(path, text, "components") + f" {name}") for name, v in components.items()},
+        mechanisms=tuple(mechs), source=str(path))
+
+
+@functools.lru_cache(maxsize=16)
+def _load_structure_file(path: str, mtime_ns: int, size: int) -> StructureFile:
+    del mtime_ns, size  # cache keys: a file changed on disk is read again
+    file = Path(path)
+    text = read_text(file, what="structure")
     try:
-        susp = data["suspension"]
-        spec = StructureSpec(
-            suspension_grids=_id_set(susp["grids"], f"{path} [suspension] grids"),
-            suspension_elements=_id_set(susp["elements"], f"{path} [suspension] elements"),
-            components={name: _id_set(v, f"{path} [components] {name}") for name, v in data["components"].items()},
-            mechanisms=tuple(Mechanism(name=name, dependent=int(v[0]), independent=int(v[1]), component=int(v[2]))
-                             for name, v in data["mechanisms"].items()),
-            source=str(path),
-        )
-    except KeyError as exc:
-        raise MaceError(f"{path}: missing table or key {exc}") from None
-    return spec
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise MaceError(f"{file}: not a valid structure file (TOML): {exc}") from None
+    unknown = sorted(set(data) - set(STRUCTURE_FILE_TABLES))
+    if unknown:
+        raise MaceError(f"{_where(file, text, unknown[0])}: unknown table {unknown[0]!r}; a structure file has "
+                        + "; ".join(f"[{k}] ({v})" for k, v in STRUCTURE_FILE_TABLES.items()))
+    return StructureFile(path=file, tables=MappingProxyType(data), spec=_spec_of(file, text, data))
+
+
+def load_structure_file(path: str | os.PathLike) -> StructureFile:
+    """Read and check a structure file (errors name the file, the line and the table or key)."""
+    file = Path(path)
+    try:
+        st = file.stat()
+    except OSError:
+        raise MaceError(f"{file}: no such structure file") from None
+    return _load_structure_file(str(file.resolve()), st.st_mtime_ns, st.st_size)
+
+
+def load_spec(path: str | os.PathLike | None = None) -> StructureSpec:
+    """The structure part of a structure file (default: the bundled ``mace_em.toml``)."""
+    return load_structure_file(path if path is not None else bundled_structure_path()).spec
+
+
+@functools.lru_cache(maxsize=1)
+def _bundled_deck_sha256() -> str:
+    return hashlib.sha256(bundled_deck_path().read_bytes()).hexdigest()
+
+
+@functools.lru_cache(maxsize=64)
+def _file_sha256(path: str, mtime_ns: int, size: int) -> str:
+    del mtime_ns, size
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+def is_bundled_deck(deck: Deck) -> bool:
+    """Whether ``deck`` was read from a file whose content is the bundled MACE deck's."""
+    path = Path(deck.path)
+    try:
+        st = path.stat()
+    except OSError:
+        return False
+    return st.st_size == bundled_deck_path().stat().st_size and \
+        _file_sha256(str(path.resolve()), st.st_mtime_ns, st.st_size) == _bundled_deck_sha256()
+
+
+def structure_file_for(deck: Deck, structure_file: StructureFile | str | os.PathLike | None = None
+                       ) -> StructureFile | None:
+    """The structure file that goes with ``deck``: the one given, else the bundled one for the bundled
+    deck, else None (the deck's own meaning, nothing added or removed)."""
+    if isinstance(structure_file, StructureFile):
+        return structure_file
+    if structure_file is not None:
+        return load_structure_file(structure_file)
+    return load_structure_file(bundled_structure_path()) if is_bundled_deck(deck) else None
+
+
+def check_spec_against_deck(spec: StructureSpec, deck: Deck) -> None:
+    """A MaceError naming the structure file and the IDs when it names grids or elements the deck lacks."""
+    elements = set(deck.bars) | set(deck.conm2s) | set(deck.celas2s)
+    problems = []
+    for what, ids, have in (("[suspension] grids", spec.suspension_grids, deck.grids),
+                            ("[suspension] elements", spec.suspension_elements, elements)):
+        missing = sorted(i for i in ids if i not in have)
+        if missing:
+            problems.append(f"{what} {_ids_text(missing)}")
+    for name, grids in spec.components.items():
+        missing = sorted(g for g in grids if g not in deck.grids)
+        if missing:
+            problems.append(f"[components] {name}: grids {_ids_text(missing)}")
+    for m in spec.mechanisms:
+        missing = [g for g in (m.dependent, m.independent) if g not in deck.grids]
+        if missing:
+            problems.append(f"[mechanisms] {m.name!r}: grids {missing}")
+    if problems:
+        raise MaceError(f"{spec.source}: names IDs that {deck.path} lacks: " + "; ".join(problems)
+                        + " (is it the structure file of another deck?)")
 
 
 @dataclass(frozen=True)
@@ -101,7 +258,8 @@ class Structure:
     deck: Deck
     preload: Subcase | None  #: SPC/MPC/LOAD/NLPARM of the static preload; None for 0-g
     modal: Subcase  #: SPC/MPC of the eigen-solution
-    spec: StructureSpec
+    spec: StructureSpec  #: empty when the deck has no structure file
+    file: StructureFile | None = None  #: the structure file, None for a deck on its own
 
 
 def _ids_text(ids: list[int]) -> str:
@@ -201,17 +359,27 @@ def _subcases(deck: Deck) -> tuple[Subcase | None, Subcase]:
 
 
 def build_structure(deck: Deck, *, kind: StructureKind, spec: StructureSpec | None = None,
-                    overrides: Mapping[tuple[str, int], Mapping[str, Any]] | None = None) -> Structure:
-    """The 1-g structure (deck as is, preload subcase + modal subcase) or the 0-g structure."""
+                    overrides: Mapping[tuple[str, int], Mapping[str, Any]] | None = None,
+                    structure_file: StructureFile | str | os.PathLike | None = None) -> Structure:
+    """The 1-g structure (deck as is, preload subcase + modal subcase) or the 0-g structure.
+
+    The structure file is ``structure_file`` when given, else the bundled one for the bundled deck,
+    else none: then 0-g is the deck's own modal subcase with nothing removed (NASTRAN's SOL 103)
+    and 1-g adds the gravity preload of its LOAD subcase. ``spec`` (e.g. ``StructureSpec.empty()``)
+    replaces the file's structure part.
+    """
     if kind not in ("1g", "0g"):
         raise ValueError(f"kind must be '1g' or '0g', got {kind!r}")
-    spec = spec if spec is not None else load_spec()
+    file = structure_file_for(deck, structure_file)
+    spec = spec if spec is not None else (file.spec if file is not None else StructureSpec.empty())
+    check_spec_against_deck(spec, deck)
     deck = apply_overrides(deck, overrides or {})
     preload, modal = _subcases(deck)
     if kind == "1g":
         if preload is None:
             raise DeckError("the 1-g structure needs a subcase with a LOAD (gravity preload); none of the subcases "
-                            "selects one (expected LOAD = set ID in the preload subcase)", file=deck.path,
+                            "selects one (expected LOAD = set ID in the preload subcase; for the deck's plain modes "
+                            "ask for the 0-g structure)", file=deck.path,
                             line=modal.source.line, card=f"SUBCASE {modal.id}" if modal.id else "global case control")
-        return Structure(kind=kind, deck=deck, preload=preload, modal=modal, spec=spec)
-    return Structure(kind=kind, deck=remove_suspension(deck, spec), preload=None, modal=modal, spec=spec)
+        return Structure(kind=kind, deck=deck, preload=preload, modal=modal, spec=spec, file=file)
+    return Structure(kind=kind, deck=remove_suspension(deck, spec), preload=None, modal=modal, spec=spec, file=file)

@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from mace_fmu.datafile import read_data_file
+from mace_fmu.textfile import read_toml
 from mace_fmu.fe.pairing import pair_by_mac
 from mace_fmu.pipeline import StructureModes
 
@@ -18,7 +18,7 @@ from mace_fmu.pipeline import StructureModes
 @functools.cache
 def thesis_data() -> dict[str, Any]:
     """Tables 3.15, 4.4 and 5.1 and the 1-g suspension frequencies (mace_fmu/data/thesis.toml)."""
-    return read_data_file(Path(str(resources.files("mace_fmu") / "data" / "thesis.toml")), what="thesis tables")
+    return read_toml(Path(str(resources.files("mace_fmu") / "data" / "thesis.toml")), what="thesis tables")
 
 
 @dataclass(frozen=True)

@@ -185,12 +185,9 @@ def test_view_response_checks_its_signals_before_any_work(capsys, tmp_path):
     from mace_fmu.iomodel.instruments import load_instruments
 
     page = str(tmp_path / "r.html")
-    with pytest.raises(SystemExit) as exc:
-        main(["view", "response", "0g", "--input", "rwa_zz", "--html", page])
-    assert exc.value.code == 2
-    err = capsys.readouterr().err
-    assert "argument --input: invalid choice: 'rwa_zz'" in err and "'active_strut_z'" in err
     for argv, message in (
+            (["--input", "rwa_zz"], "--input 'rwa_zz' is not an actuator of "),  # the structure file's actuators
+            (["--input", "rwa_zz"], "use one of gimbal_primary_x, "),
             (["--input", "rwa_z", "--output", "gyro_payload_q"], "--output 'gyro_payload_q' is not an output of the "
                                                                  "0g model: use a sensor (encoder_primary_x, "),
             (["--input", "rwa_z", "--output", "grid_64_tx"], "grid_<id>_<tx|ty|tz|rx|ry|rz> for one of its 79 grids"),

@@ -43,6 +43,10 @@ def progress_bar() -> Iterator[ProgressCallback]:
 
 def deck_option(p: argparse.ArgumentParser) -> None:
     p.add_argument("--deck", default=str(bundled_deck_path()), help="NASTRAN bulk deck (default: bundled MACE deck)")
+    p.add_argument("--structure", metavar="FILE", default=None, dest="structure_file",
+                   help="structure file of the deck (TOML: suspension removed for 0-g, components, mechanisms, "
+                        "instruments; schema in mace_fmu/data/README.md). Default: the bundled mace_em.toml for the "
+                        "bundled deck, none for any other deck (its modes as NASTRAN defines them, nothing removed)")
 
 
 def model_options(p: argparse.ArgumentParser, *, motion: bool = True) -> None:
@@ -89,7 +93,8 @@ def volts(args: argparse.Namespace, **overrides):
 
     options = dict(servos=not args.no_servos, bessel=args.bessel, delays=not args.no_delays,
                    pade_order=args.pade_order, max_hz=args.max_hz, preload=args.preload, deck=read_deck(args.deck),
-                   motion_grids=motion_grids(getattr(args, "motion_grids", None)), parameters=parameters(args))
+                   motion_grids=motion_grids(getattr(args, "motion_grids", None)), parameters=parameters(args),
+                   structure_file=getattr(args, "structure_file", None))
     try:
         return volts_model(args.structure, **{**options, **overrides})
     except ValueError as exc:  # a bad option value: one message, not a traceback

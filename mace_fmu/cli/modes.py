@@ -19,6 +19,7 @@ def _modes_json(result: StructureModes) -> dict:
     return {
         "structure": result.structure.kind,
         "deck": result.structure.deck.path,
+        "structure_file": str(result.structure.file.path) if result.structure.file is not None else None,
         "preload": result.preload.kind if result.preload else None,
         "modes": [{"index": i + 1, "frequency_hz": float(f), "label": lab}
                   for i, (f, lab) in enumerate(zip(result.modes.frequencies_hz, result.modes.labels))],
@@ -34,6 +35,9 @@ def _modes_json(result: StructureModes) -> dict:
 def _print_modes(result: StructureModes) -> None:
     pre = f", {result.preload.kind} preload" if result.preload else ""
     print(f"{result.structure.kind} modes of {result.structure.deck.path}{pre}")
+    file = result.structure.file
+    print(f"structure file: {file.path}" if file is not None else
+          "structure file: none (the deck's own SPC, MPC and EIGRL; nothing removed; labels by motion)")
     print(f"{'mode':>4s} {'frequency Hz':>13s}  label")
     for i, (f, lab) in enumerate(zip(result.modes.frequencies_hz, result.modes.labels)):
         print(f"{i + 1:4d} {hz_text(f, decimals=4):>13s}  {lab}")
@@ -47,7 +51,7 @@ def cmd_modes(args: argparse.Namespace) -> int:
     deck = read_deck(args.deck)
     with progress_bar() as bar:
         result = compute_modes(deck, structure=args.structure, preload=args.preload, mass=args.mass,
-                               max_hz=args.max_hz, progress=bar)
+                               max_hz=args.max_hz, progress=bar, structure_file=args.structure_file)
     if args.json:
         json.dump(_modes_json(result), sys.stdout, indent=1)
         print()

@@ -67,16 +67,23 @@ def _check_signals(args: argparse.Namespace, deck) -> str:
     from mace_fmu.iomodel.collocation import collocated_sensor
     from mace_fmu.iomodel.instruments import load_instruments
     from mace_fmu.iomodel.motion import MOTION_COMPONENTS, parse_motion_output
-    from mace_fmu.structure import build_structure
+    from mace_fmu.structure import build_structure, structure_file_for
 
     input_signal(args.signal, communication_times(duration_s=args.duration, step_s=args.step),
                  amplitude_v=args.amplitude, chirp_hz=tuple(args.chirp_hz))
-    instruments = load_instruments()
+    file = structure_file_for(deck, args.structure_file)
+    if file is None or not file.has("actuators"):
+        raise MaceError(f"{deck.path}: a time response needs the actuators and sensors of a structure file "
+                        "(--structure FILE)")
+    instruments = load_instruments(file)
+    actuators = [a.name for a in instruments.actuators]
+    if args.input not in actuators:
+        raise MaceError(f"--input {args.input!r} is not an actuator of {file.path}: use one of {', '.join(actuators)}")
     if args.output is None:
         return collocated_sensor(instruments, args.input, grid_positions(deck))
     sensors = [s.name for s in instruments.sensors]
     motion = parse_motion_output(args.output)
-    grids = build_structure(deck, kind=args.structure).deck.grids
+    grids = build_structure(deck, kind=args.structure, structure_file=file).deck.grids
     if args.output in sensors or (motion is not None and motion[0] in grids):
         return args.output
     raise MaceError(f"--output {args.output!r} is not an output of the {args.structure} model: use a sensor "
@@ -118,7 +125,8 @@ def cmd_view_response(args: argparse.Namespace) -> int:
         fmu = _checked_fmu(args.fmu, args.structure)
         # only the scene is needed from the FE model: its lowest modes are enough
         with progress_bar() as bar:
-            modes = compute_modes(deck, structure=args.structure, preload=args.preload, max_hz=1.0, progress=bar)
+            modes = compute_modes(deck, structure=args.structure, preload=args.preload, max_hz=1.0, progress=bar,
+                                  structure_file=args.structure_file)
     else:
         progress(f"{args.structure} volts-volts model with the motion of every grid")
         model = volts(args, motion_grids="all")
@@ -152,7 +160,8 @@ def cmd_view(args: argparse.Namespace) -> int:
     deck = read_deck(args.deck)
     max_hz = args.max_hz if args.max_hz is not None else (None if args.mode else 60.0)
     with progress_bar() as bar:
-        result = compute_modes(deck, structure=args.structure, max_hz=max_hz, progress=bar)
+        result = compute_modes(deck, structure=args.structure, max_hz=max_hz, progress=bar,
+                               structure_file=args.structure_file)
     modes = args.mode or list(range(1, result.modes.frequencies_hz.size + 1))
     animation = animate_modes(result, modes, scale=args.scale, cycles=args.cycles,
                               seconds_per_cycle=args.seconds_per_cycle)
@@ -168,10 +177,11 @@ def cmd_view_pairs(args: argparse.Namespace) -> int:
     _need_target(args)
     deck = read_deck(args.deck)
     progress("0-g modes")
-    zero_g = compute_modes(deck, structure="0g", max_hz=args.max_hz)
+    zero_g = compute_modes(deck, structure="0g", max_hz=args.max_hz, structure_file=args.structure_file)
     progress(f"1-g modes ({args.preload} gravity preload)")
     with progress_bar() as bar:
-        one_g = compute_modes(deck, structure="1g", preload=args.preload, max_hz=args.max_hz, progress=bar)
+        one_g = compute_modes(deck, structure="1g", preload=args.preload, max_hz=args.max_hz, progress=bar,
+                              structure_file=args.structure_file)
     animation = animate_pairs(one_g, zero_g, labels=args.mode, view=args.camera, cycles=args.cycles,
                               seconds_per_cycle=args.seconds_per_cycle)
     print("Table 5.1 pairs (1-g above, 0-g below; change = 0-g vs 1-g)")
@@ -225,8 +235,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("structure", choices=["1g", "0g"])
     deck_option(p)
     instruments = load_instruments()
-    p.add_argument("--input", required=True, choices=[a.name for a in instruments.actuators], metavar="INPUT",
-                   help="the driven input: " + ", ".join(a.name for a in instruments.actuators))
+    p.add_argument("--input", required=True, metavar="INPUT",
+                   help="the driven input, an actuator of the structure file (MACE: "
+                        + ", ".join(a.name for a in instruments.actuators) + ")")
     p.add_argument("--signal", choices=["step", "chirp", "impulse"], default="step",
                    help="step from t = 0, chirp (see --chirp-hz), or a pulse over the first step (default step)")
     p.add_argument("--duration", type=float, default=2.0, help="simulated time [s] (default 2)")

@@ -17,6 +17,11 @@ Rules, in order:
    bending modes are numbered by frequency within their family, torsion modes by the end
    (primary at low x, secondary at high x) holding most of the torsional strain energy.
 
+A structure without components (a deck without a structure file) gets labels that are true of
+any structure instead: rigid-body names for the zero cluster, else the family that holds most of
+the mode's strain energy, numbered by frequency: "1st bending about Z", "2nd torsion", "1st
+axial", "1st spring mode" (bending assigned to the basic axis each bar's bending axis is closest to).
+
 Every label of a model is unique: a violin mode shared by two cables says whether they swing in
 phase or in antiphase, and any label that still repeats is numbered in frequency order, the
 first keeping the plain label (Table 5.1's "torsion, primary end", then "2nd torsion, primary end").
@@ -68,14 +73,16 @@ def _grid_mask(model: FEModel, grids: frozenset[int]) -> np.ndarray:
 class _Energies:
     """Per-mode energy bookkeeping shared by the rules."""
 
-    def __init__(self, model: FEModel, modes: Modes, spec: StructureSpec, state: BarState):
+    def __init__(self, model: FEModel, modes: Modes, spec: StructureSpec, state: BarState,
+                 bus_bar: np.ndarray | None = None):
         self.model, self.modes, self.spec = model, modes, spec
         phi = modes.shapes
         n_grid = len(model.positions)
         self.ke = (phi * (model.mass @ phi)).reshape(n_grid, 6, -1)  # sums to 1 per mode
-        bus = spec.components.get("bus", frozenset())
-        bus_bar = np.array([model.dofs.grid_ids[a] in bus and model.dofs.grid_ids[b] in bus
-                            for a, b in zip(model.bars.node_a, model.bars.node_b)])
+        if bus_bar is None:
+            bus = spec.components.get("bus", frozenset())
+            bus_bar = np.array([model.dofs.grid_ids[a] in bus and model.dofs.grid_ids[b] in bus
+                                for a, b in zip(model.bars.node_a, model.bars.node_b)], dtype=bool)
         _, b, _ = deformation_derivatives(model.bars, state)
         d = np.einsum("nki,nim->nkm", b, phi[bar_dof_indices(model.bars)])[bus_bar]
         kn = model.bars.k_natural[bus_bar]
@@ -99,7 +106,13 @@ class _Energies:
                 else:
                     about_z += energy
         self.bus_bending = {"Y": about_y, "Z": about_z}
-        self.bus_strain = self.bus_torsion.sum(0) + about_y + about_z + part([0]).sum(0)
+        self.bus_stretch = part([0]).sum(0)
+        self.bus_strain = self.bus_torsion.sum(0) + about_y + about_z + self.bus_stretch
+        # the same plane energies by the basic axis each bar's bending axis lies closest to
+        self.bending_about = np.zeros((3, phi.shape[1]))
+        for k in range(len(frames)):
+            for energy, axis in ((plane_z[k], frames[k][2]), (plane_y[k], frames[k][1])):
+                self.bending_about[int(np.argmax(np.abs(axis)))] += energy
         xa = model.positions[model.bars.node_a[bus_bar], 0]
         self.torsion_x = (self.bus_torsion * xa[:, None]).sum(0) / np.maximum(self.bus_torsion.sum(0), 1e-300)
 
@@ -225,6 +238,33 @@ def unique_labels(labels: list[str], frequencies_hz: np.ndarray) -> tuple[str, .
     return tuple(out)
 
 
+def _generic_labels(model: FEModel, modes: Modes, state: BarState, zero: np.ndarray, labels: list[str],
+                    bar_forces: np.ndarray | None) -> list[str]:
+    """Labels that are true of any structure: the family holding most of a mode's strain energy.
+
+    Families: axial, torsion and bending about the basic X, Y or Z axis (bar strain energy, each
+    bar's bending plane assigned to the basic axis its bending axis lies closest to), and spring
+    (CELAS energy), numbered by frequency within the family: "1st bending about Z", "2nd torsion".
+    Zero-frequency modes keep the names the cluster rotation gave them (rigid bodies).
+    """
+    out = list(labels)
+    if not len(model.bars.ids) and not len(model.spring_ids):
+        return [x or f"mode {m + 1}" for m, x in enumerate(out)]
+    en = _Energies(model, modes, StructureSpec.empty(), state, bus_bar=np.ones(len(model.bars.ids), dtype=bool))
+    springs = (0.5 * model.spring_constants[:, None] * (model.spring_vectors @ modes.shapes) ** 2).sum(0)
+    families = {"axial": en.bus_stretch, "torsion": en.bus_torsion.sum(0), "bending about X": en.bending_about[0],
+                "bending about Y": en.bending_about[1], "bending about Z": en.bending_about[2], "spring": springs}
+    del bar_forces  # the families split the elastic energy; the preload's share is not a family of its own
+    counters = dict.fromkeys(families, 0)
+    for m in np.argsort(modes.frequencies_hz, kind="stable"):
+        if zero[m]:
+            continue
+        family = max(families, key=lambda f: families[f][m])
+        counters[family] += 1
+        out[m] = f"{ordinal(counters[family])} {family}" + (" mode" if family == "spring" else "")
+    return out
+
+
 def label_modes(model: FEModel, modes: Modes, spec: StructureSpec, *, reference: np.ndarray,
                 state: BarState | None = None, bar_forces: np.ndarray | None = None,
                 zero_hz: float = ZERO_HZ) -> Modes:
@@ -251,6 +291,9 @@ def label_modes(model: FEModel, modes: Modes, spec: StructureSpec, *, reference:
     modes = replace(modes, shapes=shapes)
     if state is None:
         state = BarState(model.positions, np.broadcast_to(np.eye(3), (len(model.positions), 3, 3)))
+    if not spec.components:
+        return replace(modes, labels=unique_labels(_generic_labels(model, modes, state, zero, labels, bar_forces),
+                                                   modes.frequencies_hz))
     en = _Energies(model, modes, spec, state)
     cable_names = sorted(n for n in spec.components if n.startswith("cable_"))
     ke_cable = {n: en.component_ke(lambda c, n=n: c == n) for n in cable_names}

@@ -13,7 +13,7 @@ from typing import Any, Literal, Mapping
 
 import numpy as np
 
-from mace_fmu.datafile import data_file_path, read_data_file
+from mace_fmu.structure import StructureFile, bundled_structure_path, load_structure_file
 from mace_fmu.errors import MaceError
 from mace_fmu.fe.assembly import cd_component_vector
 from mace_fmu.fe.dofs import DofMap
@@ -141,10 +141,12 @@ def _dofs(entry: Mapping[str, Any], where: str) -> tuple[Dof, ...]:
     return tuple(out)
 
 
-def load_instruments(path: str | Path | None = None) -> Instruments:
-    """Read instruments, electronics, servos and damping (default: the bundled mace_em.toml)."""
-    path = data_file_path(path)
-    data = read_data_file(path, what="instrument data")
+def load_instruments(structure_file: StructureFile | str | Path | None = None) -> Instruments:
+    """Instruments, electronics, servos and damping of a structure file (read once; see
+    :class:`~mace_fmu.structure.StructureFile`), or of the file at a path; default: the bundled mace_em.toml."""
+    if not isinstance(structure_file, StructureFile):
+        structure_file = load_structure_file(structure_file if structure_file is not None else bundled_structure_path())
+    path, data = structure_file.path, structure_file.tables
     try:
         actuators = tuple(Actuator(name=a["name"], description=a["description"], dofs=_dofs(a, f"{path} actuator "
                                    f"{a['name']}"), gain=float(a["gain"])) for a in data["actuators"])

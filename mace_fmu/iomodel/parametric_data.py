@@ -14,7 +14,6 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-from mace_fmu.datafile import data_file_path, read_data_file
 from mace_fmu.errors import MaceError
 from mace_fmu.fe.assembly import FEModel, bar_section
 from mace_fmu.fe.beam import natural_stiffness
@@ -24,6 +23,7 @@ from mace_fmu.iomodel.modal_core import ZERO_HZ
 from mace_fmu.iomodel.modal_ss import modal_data
 from mace_fmu.iomodel.motion import motion_unit, parse_motion_output
 from mace_fmu.iomodel.volts import VoltsModel
+from mace_fmu.parameters import parameter_names
 from modelica_like import PD, Gain, PadeDelay
 
 FREQUENCY_SCALE_PREFIX = "frequency_scale_mode_"  #: + 1-based mode number
@@ -130,14 +130,16 @@ def material_sensitivity(fe: FEModel, deck, preload: Preload | None, mid: int) -
 def physical_sensitivities(model: VoltsModel, shapes: np.ndarray, *, only: Sequence[str] | None = None
                            ) -> tuple[list[tuple[str, float, str]], np.ndarray]:
     """Physical parameters (name, value, description) and Phi0^T dK/d(ln p) Phi0 for each (or for ``only``)."""
-    names = read_data_file(data_file_path(), what="parameter names").get("parameters", {})
     deck, fe = model.structure_modes.structure.deck, model.structure_modes.model
+    names = parameter_names(deck, model.structure_modes.structure.file)
+    material_name = {mid: name for name, mid in names.materials.items()}
+    spring_name = {sid: name for name, sid in names.springs.items()}
     used = sorted({deck.pbars[b.pid].mid for b in deck.bars.values()})
     pre = model.structure_modes.preload
     parameters, sensitivities = [], []
     for mid in used:
         e = deck.mat1s[mid].youngs_modulus
-        label = names.get("materials", {}).get(str(mid), f"mat{mid}")
+        label = material_name[mid]
         if only is not None and f"E_{label}" not in only:
             continue
         dk = material_sensitivity(fe, deck, pre, mid)
@@ -145,7 +147,7 @@ def physical_sensitivities(model: VoltsModel, shapes: np.ndarray, *, only: Seque
                                             "reanalysis on the retained modes"))
         sensitivities.append(shapes.T @ dk @ shapes)
     for row, (sid, k) in enumerate(zip(fe.spring_ids, fe.spring_constants)):
-        label = names.get("springs", {}).get(str(sid), f"spring{sid}")
+        label = spring_name[sid]
         if only is not None and f"k_{label}" not in only:
             continue
         v = fe.spring_vectors[row] @ shapes

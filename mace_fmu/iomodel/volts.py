@@ -13,6 +13,7 @@ is a commanded relative angle (1 V = 1 deg) and the computational delay sits ins
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass, replace
 from functools import cached_property
 from typing import Literal, Sequence
@@ -29,9 +30,10 @@ from mace_fmu.iomodel.instruments import Instruments, load_instruments
 from mace_fmu.iomodel.modal_core import ZERO_HZ
 from mace_fmu.iomodel.modal_ss import ModalPlant, modal_plant
 from mace_fmu.iomodel.motion import parse_motion_output
-from mace_fmu.parameters import DAMPING_PREFIX, FREQUENCY_SCALE_PREFIX, SERVO_GAINS, ParameterSet, fe_overrides
+from mace_fmu.parameters import (DAMPING_PREFIX, FREQUENCY_SCALE_PREFIX, SERVO_GAINS, ParameterSet, fe_overrides,
+                                 parameter_names)
 from mace_fmu.pipeline import StructureModes, compute_modes
-from mace_fmu.structure import StructureKind
+from mace_fmu.structure import StructureFile, StructureKind
 from mace_fmu.threads import single_blas_thread
 from modelica_like import BesselFilter, Gain, PadeDelay, PD, StateSpace, Sum, System
 
@@ -211,7 +213,8 @@ def volts_model(structure: StructureKind = "1g", *, parameters: ParameterSet | N
                 bessel: BesselKind = "full", delays: bool = True, pade_order: int = 3, max_hz: float = DEFAULT_MAX_HZ,
                 preload: PreloadKind = "large", deck: Deck | str | None = None, instruments: Instruments | None = None,
                 modes: StructureModes | None = None, inputs: Sequence[str] | None = None,
-                outputs: Sequence[str] | None = None, motion_grids: Sequence[int] | Literal["all"] = ()) -> VoltsModel:
+                outputs: Sequence[str] | None = None, motion_grids: Sequence[int] | Literal["all"] = (),
+                structure_file: StructureFile | str | os.PathLike | None = None) -> VoltsModel:
     """Volts-volts model of the 1-g or 0-g structure, modes up to ``max_hz`` [Hz].
 
     Inputs: gimbal commands (relative angle, 1 V = 1 deg, with servos; motor volts without),
@@ -223,15 +226,23 @@ def volts_model(structure: StructureKind = "1g", *, parameters: ParameterSet | N
     ``compute_modes(...).modes.labels``, e.g. "1st Z bending"; the scales multiply the FE
     frequencies, given ``modes`` or not). ``motion_grids`` (grid IDs, or "all") adds each grid's
     translations [m] and rotations [rad] in basic axes as outputs ``grid_<id>_<tx|ty|tz|rx|ry|rz>``
-    after the sensors, for animation.
+    after the sensors, for animation. ``structure_file`` declares the actuators and sensors (default:
+    the bundled one for the bundled deck; see :mod:`mace_fmu.structure`); ``instruments`` replaces them.
     """
     _check(structure in ("1g", "0g"), f"structure must be '1g' or '0g', got {structure!r}")
-    instruments = instruments if instruments is not None else load_instruments()
     if modes is None:
         modes = compute_modes(deck, structure=structure, preload=preload, max_hz=max(max_hz, 1.0),
-                              parameters=parameters)
+                              parameters=parameters, structure_file=structure_file)
+    file = modes.structure.file
+    if instruments is None:
+        if file is None or not file.has("actuators") or not file.has("sensors"):
+            raise MaceError(f"{modes.structure.deck.path}: a volts-volts model needs actuators and sensors, and this "
+                            "deck has no structure file declaring them (give one: structure_file=..., CLI --structure "
+                            "FILE; the bundled mace_em.toml belongs to the bundled MACE deck only)")
+        instruments = load_instruments(file)
     try:
-        fe_overrides(parameters)  # the moduli and springs must name cards, whether or not modes were given
+        # the moduli and springs must name cards, whether or not modes were given
+        fe_overrides(parameters, parameter_names(modes.structure.deck, file))
         instruments = apply_parameters(instruments, parameters, modes.modes.labels, structure=structure)
         modes = scale_frequencies(modes, parameters, structure=structure)
     except MaceError as exc:

@@ -1,0 +1,140 @@
+"""Another structure's deck keeps NASTRAN's meaning: nothing of MACE's structure file reaches it.
+
+The defect this guards against: a deck that was not MACE's lost MACE's suspension IDs (elements
+22-24, 38-40, 80-82, 103-126, 138-140 and grids 32-34, 63-92) on the way to its 0-g modes, so a
+beam whose tip mass was CONM2 22 silently lost it. The beam below uses exactly those IDs (bars
+100-119 include 103-105; the tip mass is CONM2 22) and is checked against the closed-form
+frequencies of a cantilever with a tip mass and against the same beam renumbered.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import scipy.optimize
+
+from decks import line_of_bars, r
+from mace_fmu.cli import main
+from mace_fmu.deck.reader import read_deck
+from mace_fmu.errors import MaceError
+from mace_fmu.pipeline import compute_modes
+
+E, NU, RHO, L, N = 7.0e10, 0.33, 2700.0, 2.0, 20
+D = 0.03
+AREA, INERTIA = math.pi * D**2 / 4, math.pi * D**4 / 64
+TIP_MASS = 0.6 * RHO * AREA * L  # kg: 60 % of the beam's mass
+
+
+def beam_deck(*, first_grid: int = 1, mass_id: int = 22, eigrl: str = "EIGRL,1,,,4", method: bool = True,
+              length: float = L) -> str:
+    """A cantilever along X, bending in the x-y plane only, with a tip mass (60 % of the beam's), as a SOL 103 deck."""
+    bulk = line_of_bars(n=N, length=length, e=E, nu=NU, rho=RHO, area=AREA, i=INERTIA, ps="345",
+                        first_grid=first_grid)
+    if first_grid != 1:  # renumber the bars too: no ID in common with the first beam
+        bulk = [c.replace("CBAR,1", "CBAR,5") if c.startswith("CBAR,1") else c for c in bulk]
+    tip = first_grid + N
+    bulk += [f"CONM2,{mass_id},{tip},,{r(TIP_MASS * length / L)}", f"SPC1,7,123456,{first_grid}", eigrl]
+    case = "SPC = 7\n" + ("METHOD = 1\n" if method else "")
+    return f"SOL 103\nCEND\n{case}BEGIN BULK\n" + "\n".join(bulk) + "\nENDDATA\n"
+
+
+def tip_mass_cantilever_hz(count: int) -> np.ndarray:
+    """Roots of 1 + cos(bL) cosh(bL) + mu bL (cos(bL) sinh(bL) - sin(bL) cosh(bL)) = 0, mu = M / (rho A L)."""
+    mu = TIP_MASS / (RHO * AREA * L)
+
+    def g(x: float) -> float:
+        return 1 + math.cos(x) * math.cosh(x) + mu * x * (math.cos(x) * math.sinh(x) - math.sin(x) * math.cosh(x))
+
+    grid = np.linspace(0.1, 15.0, 3000)
+    values = [g(x) for x in grid]
+    roots = [scipy.optimize.brentq(g, a, b) for a, b, ga, gb in zip(grid, grid[1:], values, values[1:]) if ga * gb < 0]
+    beta = np.array(roots[:count]) / L
+    return beta**2 * math.sqrt(E * INERTIA / (RHO * AREA)) / (2 * math.pi)
+
+
+@pytest.fixture()
+def beam(tmp_path):
+    path = tmp_path / "beam.bdf"
+    path.write_text(beam_deck())
+    return path
+
+
+def test_a_beam_numbered_like_mace_suspension_keeps_its_tip_mass(beam, tmp_path):
+    renumbered = tmp_path / "renumbered.bdf"
+    renumbered.write_text(beam_deck(first_grid=1001, mass_id=9022))
+    for kind in ("0g",):
+        ours = compute_modes(read_deck(beam), structure=kind)
+        other = compute_modes(read_deck(renumbered), structure=kind)
+        assert ours.structure.file is None and len(ours.structure.deck.conm2s) == 1
+        assert len(ours.structure.deck.bars) == N
+        np.testing.assert_allclose(ours.modes.frequencies_hz, other.modes.frequencies_hz, rtol=1e-12)
+    bending = [f for f, lab in zip(ours.modes.frequencies_hz, ours.modes.labels) if "bending" in lab]
+    # NASTRAN's lumped bar mass converges from below as (n pi / N)^2: 0.3 % covers the 2nd mode at 20 bars
+    np.testing.assert_allclose(bending[:2], tip_mass_cantilever_hz(2), rtol=3e-3)
+    assert ours.modes.labels[:2] == ("1st bending about Z", "2nd bending about Z")
+
+
+def test_cli_modes_of_another_deck_say_there_is_no_structure_file(beam, capsys):
+    assert main(["modes", "0g", "--deck", str(beam)]) == 0
+    out = capsys.readouterr().out
+    assert "structure file: none" in out and "1st bending about Z" in out and "X translation" not in out
+
+
+def test_eigrl_count_decides_when_no_range_is_given(tmp_path):
+    """EIGRL ND = 4 with V1, V2 blank: the four lowest modes, wherever they are (here all above 250 Hz,
+    where the 250 Hz default gave none and exited 0)."""
+    short = compute_modes(read_deck(_write(tmp_path / "short.bdf", beam_deck(length=L / 12))), structure="0g")
+    assert len(short.modes) == 4 and short.modes.frequencies_hz[0] > 250.0
+    # the same beam 12x longer (tip mass in proportion): bending frequencies 1/144 of these, exactly
+    long = compute_modes(read_deck(_write(tmp_path / "long.bdf", beam_deck())), structure="0g")
+
+    def bending(result):
+        return np.array([f for f, lab in zip(result.modes.frequencies_hz, result.modes.labels) if "bending" in lab])
+
+    np.testing.assert_allclose(bending(short)[:2] / 144.0, bending(long)[:2], rtol=1e-9)
+
+
+def _write(path, text):
+    path.write_text(text)
+    return path
+
+
+def test_eigrl_range_without_modes_is_an_error_not_an_empty_table(tmp_path, capsys):
+    path = tmp_path / "empty.bdf"
+    path.write_text(beam_deck(eigrl="EIGRL,1,,0.5"))
+    assert main(["modes", "0g", "--deck", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert "no modes in the range asked for, EIGRL 1 (V1 = None, V2 = 0.5" in err and "lowest mode is at" in err
+
+
+def test_a_volts_model_of_a_deck_without_instruments_is_refused_with_the_reason(beam, capsys):
+    assert main(["model", "0g", "--deck", str(beam)]) == 2
+    assert "needs actuators and sensors, and this deck has no structure file" in capsys.readouterr().err
+
+
+def test_a_structure_file_that_names_ids_the_deck_lacks_is_refused(beam, tmp_path):
+    spec = tmp_path / "beam.toml"
+    spec.write_text('[components]\nbeam = ["1-21"]\ntip = [99]\n')
+    with pytest.raises(MaceError, match=r"beam.toml: names IDs that .*beam.bdf lacks: \[components\] tip: grids 99"):
+        compute_modes(read_deck(beam), structure="0g", structure_file=spec)
+
+
+def test_a_structure_file_with_an_unknown_table_names_file_and_line(beam, tmp_path):
+    spec = tmp_path / "beam.toml"
+    spec.write_text('# a comment\n[components]\nbeam = ["1-21"]\n\n[sensor]\nname = "tip"\n')
+    with pytest.raises(MaceError, match=r"beam.toml:5: \[sensor\]: unknown table 'sensor'; a structure file has"):
+        compute_modes(read_deck(beam), structure="0g", structure_file=spec)
+
+
+def test_the_bundled_structure_file_applies_to_a_copy_of_the_bundled_deck(tmp_path):
+    from mace_fmu.structure import bundled_deck_path
+
+    copy = tmp_path / "copy.bdf"
+    copy.write_bytes(bundled_deck_path().read_bytes())
+    assert compute_modes(read_deck(copy), structure="0g").structure.file is not None
+    edited = tmp_path / "edited.bdf"
+    edited.write_text(bundled_deck_path().read_text() + "$ a comment\n")
+    result = compute_modes(read_deck(edited), structure="0g", max_hz=3.5)
+    assert result.structure.file is None and 22 in result.structure.deck.conm2s  # nothing removed
