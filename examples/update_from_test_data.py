@@ -99,7 +99,9 @@ def main(argv: list[str] | None = None) -> dict:
                 "final_error_percent": {n: 100 * (result.values[n] / truth[n] - 1) for n in moduli},
                 "initial_cost": result.initial_cost, "final_cost": result.final_cost,
                 "reduction_percent": 100 * result.reduction, "outer_iterations": len(result.history),
-                "fmu_runs": sum(1 + (len(moduli) if it.sensitivities is not None else 0) for it in result.history),
+                "fmu_runs": sum(1 + (len(moduli) * (2 if result.settings.difference == "central" else 1)
+                                     if it.sensitivities is not None else 0) for it in result.history),
+                **_verdict(result, problem.cost),
                 "frf_max_db": {f"{i} -> {o}": d for (i, o), d in frfs.max_db.items()},
                 "frf_bins_used": {f"{i} -> {o}": k for (i, o), k in frfs.bins_used.items()},
                 "seconds": result.seconds}
@@ -121,7 +123,7 @@ def main(argv: list[str] | None = None) -> dict:
                 "final_error_ms": {n: 1e3 * (result.values[n] - truth[n]) for n in delays},
                 "initial_cost": result.initial_cost, "final_cost": result.final_cost,
                 "reduction_percent": 100 * result.reduction, "outer_iterations": len(result.history),
-                "seconds": result.seconds}
+                "seconds": result.seconds, **_verdict(result, problem.cost)}
     finally:
         if runner_cm is not None:
             runner_cm.close()
@@ -138,6 +140,16 @@ def main(argv: list[str] | None = None) -> dict:
     (out / "summary.json").write_text(json.dumps(summary, indent=1))
     print(format_summary(summary))
     return summary
+
+
+def _verdict(result, cost) -> dict:
+    """Converged or not, and why (the noise-floor test for the time cost): what a user signs off on."""
+    from mace_fmu.updating.convergence import convergence_report, time_noise_floor
+    from mace_fmu.updating.costs import TimeResponseCost
+
+    floor = time_noise_floor(cost) if isinstance(cost, TimeResponseCost) else None
+    report = convergence_report(result, noise_floor=floor)
+    return {"converged": report.converged, "convergence": report.summary()}
 
 
 def overlay_plot(*, truth_fmu: Path, updated_fmu: Path, start: dict, history, estimator, path: Path) -> Path:
@@ -182,6 +194,7 @@ def format_summary(summary: dict) -> str:
         lines.append(f"\n{name}: cost {u['initial_cost']:.4g} -> {u['final_cost']:.4g} "
                      f"({u['reduction_percent']:.1f} % lower), {u['outer_iterations']} outer iterations, "
                      f"{u['seconds']:.1f} s")
+        lines.append(f"  {u['convergence']}")
         if "final_error_percent" in u:
             for n, e in u["final_error_percent"].items():
                 lines.append(f"  {n:<26} start {u['start_error_percent'][n]:+7.2f} %   updated {e:+8.3f} %")

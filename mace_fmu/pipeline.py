@@ -19,13 +19,13 @@ from mace_fmu.fe.constraints import build_constraints
 from mace_fmu.fe.labels import label_modes, rigid_body_vectors
 from mace_fmu.fe.modal import Modes, solve_modes
 from mace_fmu.fe.preload import Preload, PreloadKind, large_displacement_preload, linear_preload
+from mace_fmu.iomodel import DEFAULT_MAX_HZ
 from mace_fmu.parameters import ParameterSet, deck_fingerprint, fe_overrides, parameter_names
 from mace_fmu.progress import ProgressCallback
 from mace_fmu.structure import (Structure, StructureFile, StructureKind, StructureSpec, build_structure,
                                 bundled_deck_path, structure_file_for)
 from mace_fmu.threads import single_blas_thread
 
-DEFAULT_MAX_HZ = 250.0
 
 
 @dataclass(frozen=True)

@@ -4,11 +4,13 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import math
 import sys
 from typing import Iterator
 
 from mace_fmu.deck.reader import read_deck
 from mace_fmu.errors import MaceError
+from mace_fmu.iomodel import DEFAULT_MAX_HZ
 from mace_fmu.progress import ProgressCallback, Step
 from mace_fmu.structure import bundled_deck_path
 
@@ -41,6 +43,17 @@ def progress_bar() -> Iterator[ProgressCallback]:
             bar.close()
 
 
+def positive_hz(text: str) -> float:
+    """argparse type of a frequency option: a finite number > 0 [Hz] (-5 or nan would give an empty table)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a frequency in Hz, got {text!r}") from None
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"expected a finite frequency > 0 Hz, got {text!r}")
+    return value
+
+
 def deck_option(p: argparse.ArgumentParser) -> None:
     p.add_argument("--deck", default=str(bundled_deck_path()), help="NASTRAN bulk deck (default: bundled MACE deck)")
     p.add_argument("--structure", metavar="FILE", default=None, dest="structure_file",
@@ -51,7 +64,8 @@ def deck_option(p: argparse.ArgumentParser) -> None:
 
 def model_options(p: argparse.ArgumentParser, *, motion: bool = True) -> None:
     """Options of the volts-volts model (shared by model, export and view response)."""
-    p.add_argument("--max-hz", type=float, default=250.0, help="highest retained mode [Hz] (default 250)")
+    p.add_argument("--max-hz", type=positive_hz, default=DEFAULT_MAX_HZ,
+                   help=f"highest retained mode [Hz] (default {DEFAULT_MAX_HZ:g})")
     p.add_argument("--bessel", choices=["full", "delay", "none"], default="full",
                    help="Bessel filters as 8-pole filters, as their 2.44 ms Pade delay, or left out")
     p.add_argument("--no-servos", action="store_true", help="leave the wheel speed loops and gimbal servos open")

@@ -10,6 +10,15 @@ from mace_fmu.errors import MaceError
 from mace_fmu.fmu.naming import fmu_name
 
 
+def model_variant(args: argparse.Namespace) -> str:
+    """What sets this FMU's model apart from the plain one, for its name: the parameter set's file stem
+    and "bounded" with frequency bounds ("" for the plain model, which keeps the plain name)."""
+    parts = [Path(args.parameters).stem] if getattr(args, "parameters", None) else []
+    if getattr(args, "frequency_bounds", None):
+        parts.append("bounded")
+    return "_".join(parts)
+
+
 def cmd_export(args: argparse.Namespace) -> int:
     if args.kind == "pythonfmu" and args.fmi_version != 2:
         raise MaceError("--fmi-version 3 needs --kind native (pythonfmu FMUs are FMI 2.0)")
@@ -29,7 +38,8 @@ def cmd_export(args: argparse.Namespace) -> int:
 
         bounds = read_frequency_bounds(args.frequency_bounds, mode_labels=model.plant.labels)
     name = fmu_name(args.structure, kind=args.kind, fmi_version=args.fmi_version,
-                    motion_grids=model.plant.motion_grids, all_grids=model.structure_modes.modes.dofs.grid_ids)
+                    motion_grids=model.plant.motion_grids, all_grids=model.structure_modes.modes.dofs.grid_ids,
+                    variant=model_variant(args))
     progress(f"{args.kind} FMU {name}.fmu")
     if args.kind == "native":
         from mace_fmu.fmu.native.export import export_native_fmu
@@ -49,7 +59,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("structure", choices=["1g", "0g"])
     deck_option(p)
     p.add_argument("-o", "--out", default=".", help="output directory (writes e.g. MACE_1g_native.fmu; with "
-                   "--motion-grids MACE_1g_native_motion.fmu, ...)")
+                   "--motion-grids MACE_1g_native_motion.fmu; with --parameters P.toml MACE_1g_native_P.fmu, with "
+                   "--frequency-bounds too MACE_0g_native_P_bounded.fmu: never the plain model's name)")
     p.add_argument("--kind", choices=["native", "pythonfmu"], default="native",
                    help="native: C runtime, no Python needed in the host, FMI 2.0 co-simulation and model exchange "
                         "(default); pythonfmu: FMI 2.0 co-simulation through Python")

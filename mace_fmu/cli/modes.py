@@ -8,8 +8,9 @@ import sys
 
 import numpy as np
 
-from mace_fmu.cli.common import deck_option, progress_bar
+from mace_fmu.cli.common import deck_option, positive_hz, progress_bar
 from mace_fmu.deck.reader import read_deck
+from mace_fmu.iomodel.modal_core import ZERO_HZ
 from mace_fmu.pipeline import StructureModes, compute_modes
 from mace_fmu.text import hz_text
 
@@ -21,7 +22,9 @@ def _modes_json(result: StructureModes) -> dict:
         "deck": result.structure.deck.path,
         "structure_file": str(result.structure.file.path) if result.structure.file is not None else None,
         "preload": result.preload.kind if result.preload else None,
-        "modes": [{"index": i + 1, "frequency_hz": float(f), "label": lab}
+        # a rigid-body or mechanism mode reads 0 Hz; its eigenvalue (round-off, either sign) is kept apart
+        "modes": [{"index": i + 1, "frequency_hz": 0.0 if abs(f) < ZERO_HZ else float(f), "label": lab,
+                   "eigenvalue_rad2_per_s2": float(np.sign(f) * (2 * np.pi * f) ** 2)}
                   for i, (f, lab) in enumerate(zip(result.modes.frequencies_hz, result.modes.labels))],
         "mass_properties": {
             "mass_kg": props.mass_kg,
@@ -64,7 +67,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("modes", help="natural frequencies [Hz] and labels of the 1-g or 0-g structure")
     p.add_argument("structure", choices=["1g", "0g"])
     deck_option(p)
-    p.add_argument("--max-hz", type=float, default=None, help="upper frequency [Hz] (default: the deck's EIGRL)")
+    p.add_argument("--max-hz", type=positive_hz, default=None,
+                   help="upper frequency [Hz] (default: the deck's EIGRL, else 250)")
     p.add_argument("--preload", choices=["large", "linear"], default="large",
                    help="1-g gravity preload: large displacement (SOL 106, default) or linear")
     p.add_argument("--mass", choices=["lumped", "consistent"], default="lumped", help="bar mass matrix")

@@ -42,9 +42,10 @@ def cmd_lqg_sensitivity(args: argparse.Namespace) -> int:
         studies.append(study)
         fig = FIGURE_OF_AUTHORITY[name]
         title = f"Fig. {fig[0]}.{fig[1:]}: LQG sensitivity to stiffness errors, {name} authority"
-        print(sensitivity_contour(study.cost_map, minima=study.minima, path=out / f"figure_{fig}_{name}_authority.png",
-                                  title=title))
-    print(write_text_atomic(out / "lqg_sensitivity.txt", format_studies(studies)))
+        figure = sensitivity_contour(study.cost_map, minima=study.minima, title=title,
+                                     path=out / f"figure_{fig}_{name}_authority.png")
+        print(f"wrote {figure}")
+    print(f"wrote {write_text_atomic(out / 'lqg_sensitivity.txt', format_studies(studies))}")
     if not args.quiet:
         print(format_studies(studies))
     return 0
@@ -86,11 +87,12 @@ def cmd_reduced_order(args: argparse.Namespace) -> int:
              "|G K|", True),
             ("figure_A8_compensators.png", shapes.compensators, "Fig. A.8: LQG compensators",
              "|K| [N/m]", False)):
-        print(bode_overlay({labels[k]: v for k, v in data.items()}, frequencies_hz=f, title=title, ylabel=ylabel,
-                           path=out / name, unit_line=unit))
+        figure = bode_overlay({labels[k]: v for k, v in data.items()}, frequencies_hz=f, title=title, ylabel=ylabel,
+                              path=out / name, unit_line=unit)
+        print(f"wrote {figure}")
     table = format_table(study, crossover_hz=dereverberated_crossover_hz(shapes.loops["full"], f),
                          mode_frequencies_hz=beam.frequencies_hz, length_m=beam.length)
-    print(write_text_atomic(out / "table_A1.txt", table))
+    print(f"wrote {write_text_atomic(out / 'table_A1.txt', table)}")
     if not args.quiet:
         print(table)
     return 0

@@ -7,10 +7,14 @@ import json
 import sys
 from pathlib import Path
 
+from mace_fmu.atomic import write_text_atomic
 from mace_fmu.cli.common import deck_option, progress_bar
 from mace_fmu.deck.reader import read_deck
 from mace_fmu.errors import MaceError
 from mace_fmu.textfile import read_toml
+
+#: exit status of an update that wrote its results but did not converge (see ``mace-fmu update --help``)
+NOT_CONVERGED = 3
 
 
 def _say(message: str) -> None:
@@ -76,9 +80,19 @@ def cmd_fmu_update(args: argparse.Namespace) -> int:
         with DaskRunner(scheduler=args.scheduler, workers=args.workers, progress=bar, task="FMU runs") as runner:
             result = update_fmu(family=problem.family, cost=problem.cost, start=problem.start, stages=[problem.names],
                                 runner=runner, progress=bar)
-    params = fmu_parameters(result, family=problem.family, data=", ".join(problem.data_files), cost=problem.cost)
+    from mace_fmu.updating.convergence import convergence_report, time_noise_floor
+    from mace_fmu.updating.costs import TimeResponseCost
+
+    floor = None
+    if isinstance(problem.cost, TimeResponseCost):
+        floor = time_noise_floor(problem.cost, noise_rms_fraction=None if args.noise_rms_percent is None
+                                 else args.noise_rms_percent / 100.0)
+    report = convergence_report(result, noise_floor=floor)
+    params = fmu_parameters(result, family=problem.family, data=", ".join(problem.data_files), cost=problem.cost,
+                            convergence=report)
     out.mkdir(parents=True, exist_ok=True)
     path = params.write(out / "parameters.toml")
+    written = [path, write_text_atomic(out / "convergence.toml", report.to_toml())]
     units = problem.family.interface.units
     print(f"{'parameter':<28} {'start':>14} {'updated':>14}  change")
     for n in problem.names:
@@ -86,8 +100,10 @@ def cmd_fmu_update(args: argparse.Namespace) -> int:
         print(f"{n:<28} {v0:>14.6g} {v:>14.6g}  {100 * (v / v0 - 1):+.2f} %  [{units.get(n, '')}]")
     print(f"cost {result.initial_cost:.5g} -> {result.final_cost:.5g} ({100 * result.reduction:.1f} % lower) in "
           f"{result.seconds:.1f} s, {len(result.history)} outer iterations")
-    print(f"wrote {path}")
-    return 0
+    for written_path in written:
+        print(f"wrote {written_path}")
+    _say(report.summary())
+    return 0 if report.converged else NOT_CONVERGED
 
 
 def cmd_update(args: argparse.Namespace) -> int:
@@ -129,13 +145,23 @@ def cmd_update(args: argparse.Namespace) -> int:
     print(f"cost {res.initial_cost:.5g} -> {res.final_cost:.5g} ({100 * res.reduction:.1f} % lower) in "
           f"{res.seconds:.1f} s; RMS frequency error (zeta < 10 %) {s.rms_light_before:.2f} -> {s.rms_light_after:.2f} % "
           f"(thesis {s.rms_light_thesis:.2f} %)")
+    from mace_fmu.updating.convergence import convergence_report
+
+    report = convergence_report(res)
+    paths.append(write_text_atomic(out / "convergence.toml", report.to_toml()))
     for path in paths:
         print(f"wrote {path}")
-    return 0
+    _say(report.summary())
+    return 0 if report.converged else NOT_CONVERGED
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("update", help="model updating (thesis ch. 4): the MACE 1-g update or the sample problem")
+    p = sub.add_parser("update", help="model updating (thesis ch. 4): the MACE 1-g update or the sample problem",
+                       formatter_class=argparse.RawDescriptionHelpFormatter,
+                       epilog=f"exit status: 0 converged; 2 bad input (nothing written); {NOT_CONVERGED} the update "
+                              "stopped without converging (at its iteration cap, at a parameter bound, or with the "
+                              "time cost more than 3 standard deviations above the noise floor): the results are "
+                              "written all the same, with converged = false and the reasons in convergence.toml")
     deck_option(p)
     p.add_argument("-o", "--out", help="directory for parameters.toml, report.txt, summary.json and figures")
     p.add_argument("--sample-problem", action="store_true",
@@ -166,6 +192,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     fmu.add_argument("--workers", type=int, default=None, help="local worker processes (default: one per core)")
     fmu.add_argument("--map", metavar="FILE", help="channel map: data channel names and units to the FMU's signals")
     fmu.add_argument("--segment-s", type=float, default=2.0, help="H1 segment length [s] of the log-frf cost (default 2)")
+    fmu.add_argument("--noise-rms-percent", type=float, default=None, metavar="P",
+                     help="time cost: the measurement noise RMS as P %% of each output's RMS, for the noise-floor test "
+                          "(default: estimated from the outputs' spectra above the inputs' band)")
     fmu.add_argument("--weighting", choices=["noise", "none"], default="noise",
                      help="log-frf: each bin's log error over its noise standard deviation (default), or unweighted")
     p.set_defaults(func=cmd_update)

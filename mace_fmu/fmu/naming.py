@@ -9,15 +9,18 @@ LISTED_GRIDS = 6
 
 
 def fmu_name(structure: str, *, kind: str | None = None, fmi_version: int = 2, motion_grids: Sequence[int] = (),
-             all_grids: Sequence[int] = ()) -> str:
+             all_grids: Sequence[int] = (), variant: str = "") -> str:
     """Model name (and .fmu file stem) of a MACE FMU, e.g. MACE_1g_native, MACE_1g_native_fmi3,
     MACE_1g_pythonfmu, MACE_0g_native_motion_1_7 (MACE_1g, MACE_1g_motion without ``kind``).
 
     The kind ("native", "pythonfmu") and FMI 3 come first; then no motion outputs: nothing; the
     motion of every grid in ``all_grids``: ``_motion``; a few grids: their IDs; more than
-    ``LISTED_GRIDS``: ``_motion_<count>_grids``.
+    ``LISTED_GRIDS``: ``_motion_<count>_grids``. ``variant`` (e.g. the stem of the parameter set the model
+    was built from) follows the kind, so that an FMU of a changed model never takes the plain model's name.
     """
     base = f"MACE_{structure}" + (f"_{kind}" if kind else "") + ("_fmi3" if fmi_version == 3 else "")
+    if variant:
+        base += "_" + variant_identifier(variant)
     grids = sorted(set(int(g) for g in motion_grids))
     if not grids:
         return base
@@ -26,3 +29,11 @@ def fmu_name(structure: str, *, kind: str | None = None, fmi_version: int = 2, m
     if len(grids) <= LISTED_GRIDS:
         return f"{base}_motion_" + "_".join(str(g) for g in grids)
     return f"{base}_motion_{len(grids)}_grids"
+
+
+def variant_identifier(text: str) -> str:
+    """``text`` as a C-identifier fragment: letters, digits and underscores ("zero-g nominal" -> "zero_g_nominal")."""
+    out = "".join(c if c.isalnum() and c.isascii() else "_" for c in text).strip("_")
+    while "__" in out:
+        out = out.replace("__", "_")
+    return out or "variant"

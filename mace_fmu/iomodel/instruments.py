@@ -41,6 +41,7 @@ class Sensor:
     kind: SensorKind
     dofs: tuple[Dof, ...]
     gain: float  #: [V per strain, per rad/s, ...] (Table 3.12, notch DC gains of Table 3.13)
+    unit: str = ""  #: the physical quantity's unit: rad, m, rad/s, m/s, or "strain" (given in the structure file)
 
 
 @dataclass(frozen=True)
@@ -141,6 +142,15 @@ def _dofs(entry: Mapping[str, Any], where: str) -> tuple[Dof, ...]:
     return tuple(out)
 
 
+def _sensor_unit(kind: str, dofs: tuple[Dof, ...]) -> str:
+    """The unit a sensor reads when its structure file gives none: rad or m (per s for a rate sensor),
+    from its DOFs' components (a weighted sum of rotations reads radians)."""
+    rotational = all(c >= 4 for _, c, _ in dofs)
+    translational = all(c <= 3 for _, c, _ in dofs)
+    base = "rad" if rotational else "m" if translational else "physical unit"
+    return f"{base}/s" if kind == "rate" and base != "physical unit" else base
+
+
 def load_instruments(structure_file: StructureFile | str | Path | None = None) -> Instruments:
     """Instruments, electronics, servos and damping of a structure file (read once; see
     :class:`~mace_fmu.structure.StructureFile`), or of the file at a path; default: the bundled mace_em.toml."""
@@ -151,7 +161,8 @@ def load_instruments(structure_file: StructureFile | str | Path | None = None) -
         actuators = tuple(Actuator(name=a["name"], description=a["description"], dofs=_dofs(a, f"{path} actuator "
                                    f"{a['name']}"), gain=float(a["gain"])) for a in data["actuators"])
         sensors = tuple(Sensor(name=s["name"], description=s["description"], kind=s["kind"],
-                               dofs=_dofs(s, f"{path} sensor {s['name']}"), gain=float(s["gain"]))
+                               dofs=_dofs(s, f"{path} sensor {s['name']}"), gain=float(s["gain"]),
+                               unit=str(s.get("unit") or _sensor_unit(s["kind"], _dofs(s, f"{path} sensor {s['name']}"))))
                         for s in data["sensors"])
         el, sv, dm = data["electronics"], data["servos"], data["damping"]
         electronics = Electronics(bessel_order=int(el["bessel_order"]), bessel_cutoff_hz=float(el["bessel_cutoff_hz"]),

@@ -48,7 +48,8 @@ def signal_descriptions(model: VoltsModel) -> tuple[list[str], list[str]]:
     for name in model.system.output_labels:
         motion = parse_motion_output(name)
         if motion is None:
-            outs.append(f"{inst.sensor(name).description} [V], {inst.sensor(name).gain} V per physical unit")
+            sensor = inst.sensor(name)
+            outs.append(f"{sensor.description} [V], {sensor.gain} V per {sensor.unit}")
         else:
             grid, comp = motion
             what = "translation along" if comp.startswith("t") else "rotation about"

@@ -26,6 +26,7 @@ from mace_fmu.errors import MaceError
 from mace_fmu.fe.preload import PreloadKind
 from mace_fmu.iomodel.damping import modal_damping
 from mace_fmu.iomodel.frf import frequency_response
+from mace_fmu.iomodel import DEFAULT_MAX_HZ
 from mace_fmu.iomodel.instruments import Instruments, load_instruments
 from mace_fmu.iomodel.modal_core import ZERO_HZ
 from mace_fmu.iomodel.modal_ss import ModalPlant, modal_plant
@@ -204,8 +205,6 @@ def build_diagram(plant: ModalPlant, instruments: Instruments, *, servos: bool =
     return s
 
 
-#: Highest retained mode [Hz] of the volts-volts models (thesis 3.4: modes to 250 Hz).
-DEFAULT_MAX_HZ = 250.0
 
 
 @single_blas_thread

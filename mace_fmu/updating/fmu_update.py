@@ -31,8 +31,11 @@ CostKind = Literal["time", "log-frf"]
 COST_KINDS: tuple[str, ...] = ("time", "log-frf")
 Weighting = Literal["noise", "none"]
 WEIGHTINGS: tuple[str, ...] = ("noise", "none")
-#: the FMU is the model: perturbed models are FMU runs, and the truth needs no penalty to hold it near the start
-FMU_SETTINGS = UpdateSettings(method="cost-sensitivity", perturbation="full", penalty=False, max_outer=8)
+#: the FMU is the model: perturbed models are FMU runs, and the truth needs no penalty to hold it near the start.
+#: Central differences with a 1e-3 step: forward differences at 1e-2 misjudged the weak strut directions by
+#: an order of magnitude and let a run stop at its cap far above the noise. The cap is a safety net only.
+FMU_SETTINGS = UpdateSettings(method="cost-sensitivity", perturbation="full", penalty=False, max_outer=20,
+                              relative_step=1e-3, difference="central")
 
 
 def fmu_cost(kind: CostKind, *, history: TimeHistory, frequency_data: FrequencyResponseData | None = None,
@@ -113,13 +116,17 @@ class FmuParameters:
         return write_text_atomic(path, self.to_toml())
 
 
-def fmu_parameters(result: UpdateResult, *, family: FmuFamily, data: str, cost: Cost) -> FmuParameters:
-    """The updated values of ``result`` with their provenance (FMU file, data files, cost, method)."""
+def fmu_parameters(result: UpdateResult, *, family: FmuFamily, data: str, cost: Cost,
+                   convergence=None) -> FmuParameters:
+    """The updated values of ``result`` with their provenance (FMU file, data files, cost, method) and, given a
+    :class:`~mace_fmu.updating.convergence.ConvergenceReport`, its verdict in the notes."""
     s = result.settings
+    notes = convergence.summary() if convergence is not None else ""
     prov = Provenance(created=now_utc(), tool=tool_version(), data=data,
                       cost=f"{cost.name} of the simulated response of {Path(family.interface.path).name}",
-                      method=f"{s.method} ({s.perturbation} FMU runs, step {s.relative_step}), penalty "
+                      method=f"{s.method} ({s.perturbation} FMU runs, {s.difference} differences, step "
+                             f"{s.relative_step}), penalty "
                              f"{'on' if s.penalty else 'off'}, {len(result.history)} outer iterations",
-                      initial_cost=result.initial_cost, final_cost=result.final_cost)
+                      initial_cost=result.initial_cost, final_cost=result.final_cost, notes=notes)
     return FmuParameters(values=dict(result.values), units={n: family.interface.units.get(n, "") for n in result.values},
                          provenance=prov)

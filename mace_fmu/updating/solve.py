@@ -18,6 +18,13 @@ loop is a trust region: it moves to the new point when the full model there cost
 linearisation; a label flip or a mispairing far from the base cannot drag the update away.
 Stages run in order and the whole sequence ``rounds`` times (thesis 4.5: physical parameters,
 then delays, then damping, repeated).
+
+Each stage's outer loop ends on a stated test, and says which (:class:`StageOutcome`): the
+largest parameter step below ``tolerance``, the relative fall of the cost below
+``cost_tolerance``, first-order optimality (the cost's gradient with respect to relative changes
+below ``gradient_tolerance`` times the cost), or no better point within ``tolerance`` of the base
+(the trust region shrank to nothing). Reaching ``max_outer`` is only a safety net, and it is
+reported as not converged, as is ending with a parameter at a bound.
 """
 
 from __future__ import annotations
@@ -69,9 +76,12 @@ class UpdateSettings:
     method: Method = "cost-sensitivity"
     perturbation: Literal["full", "reanalysis"] = "reanalysis"  #: perturbed models of the cost-sensitivity method
     relative_step: float = 1e-2  #: finite-difference step, relative to each parameter
+    difference: Literal["forward", "central"] = "forward"  #: of the cost-sensitivity method's sensitivities
     penalty: bool = True  #: augment the cost with eq. 4.18's penalty
     tolerance: float = 1e-3  #: largest relative parameter change that ends the outer loop
-    max_outer: int = 6
+    cost_tolerance: float = 1e-6  #: relative fall of the (augmented) cost that ends it
+    gradient_tolerance: float = 1e-6  #: |d cost / d relative change| / cost that ends it (first-order optimality)
+    max_outer: int = 6  #: safety net only: a stage that reaches it has not converged
     rounds: int = 1  #: repeats of the stage sequence (fewer when a round moves nothing)
     loss: str = "linear"  #: least_squares loss ("soft_l1", "huber", "cauchy", "arctan": outliers count less)
     loss_scale: float = 1.0  #: residual size beyond which the loss treats an entry as an outlier (f_scale)
@@ -95,6 +105,17 @@ class Iteration:
 
 
 @dataclass(frozen=True)
+class StageOutcome:
+    """How one stage's outer loop ended."""
+
+    stage: str
+    round: int
+    outer_iterations: int
+    converged: bool
+    reason: str  #: the test that ended it, e.g. "largest step 2.1e-04 < tolerance 1e-03"
+
+
+@dataclass(frozen=True)
 class UpdateResult:
     """Where the update ended and how it got there."""
 
@@ -108,6 +129,19 @@ class UpdateResult:
     settings: UpdateSettings
     seconds: float
     stage_seconds: Mapping[str, float] = field(default_factory=dict)
+    outcomes: tuple[StageOutcome, ...] = ()  #: how each stage of each round ended
+
+    @property
+    def converged(self) -> bool:
+        """Whether the last round's stages all ended on a convergence test (not on the cap or at a bound)."""
+        last = max((o.round for o in self.outcomes), default=0)
+        return all(o.converged for o in self.outcomes if o.round == last)
+
+    @property
+    def reasons(self) -> tuple[str, ...]:
+        """Why each stage of the last round ended, "stage: reason"."""
+        last = max((o.round for o in self.outcomes), default=0)
+        return tuple(f"{o.stage}: {o.reason}" for o in self.outcomes if o.round == last)
 
     @property
     def reduction(self) -> float:
@@ -146,13 +180,15 @@ def update(family: ModelFamily, cost: Cost, *, start: Mapping[str, float], stage
     initial = scalar_cost(j_start)
     values = dict(start)
     history: list[Iteration] = []
+    outcomes: list[StageOutcome] = []
     stage_seconds: dict[str, float] = {}
     for rnd in range(settings.rounds):
         before = dict(values)
         for stage in stages:
             t_stage = time.perf_counter()
-            values, model = _run_stage(family, stage.cost or cost, stage, rnd, values, model, start, bounds,
-                                       settings, history, runner, progress)
+            values, model, outcome = _run_stage(family, stage.cost or cost, stage, rnd, values, model, start, bounds,
+                                                settings, history, runner, progress)
+            outcomes.append(outcome)
             stage_seconds[stage.name] = stage_seconds.get(stage.name, 0.0) + time.perf_counter() - t_stage
         if max(abs(values[n] / before[n] - 1.0) for n in names_all) < settings.tolerance:
             break  # a whole round moved nothing: the sequence has converged
@@ -160,12 +196,12 @@ def update(family: ModelFamily, cost: Cost, *, start: Mapping[str, float], stage
     j_final = cost.residual(model)
     return UpdateResult(start=dict(start), values=touched, initial_cost=initial, final_cost=scalar_cost(j_final),
                         initial_residual=j_start, final_residual=j_final, history=tuple(history), settings=settings,
-                        seconds=time.perf_counter() - t_start, stage_seconds=stage_seconds)
+                        seconds=time.perf_counter() - t_start, stage_seconds=stage_seconds, outcomes=tuple(outcomes))
 
 
 def _run_stage(family, cost, stage, rnd, values, model, start, bounds, settings, history, runner, progress):
     """The outer loop of one stage from ``values`` (``model``: the full model there); returns the new
-    values and the full model at them."""
+    values, the full model at them and how the loop ended."""
     names = list(stage.parameters)
     s = np.array([start[n] for n in names])  # relative changes are measured from the update's start
     lo = np.array([bounds[n].lower for n in names]) / s - 1.0
@@ -181,6 +217,7 @@ def _run_stage(family, cost, stage, rnd, values, model, start, bounds, settings,
 
     radius = np.inf  # trust region: largest step in x from the base point
     linearisation = None  # (x_base, fun builder) kept while the base point does not move
+    reason, converged, outer = f"iteration cap reached (max_outer = {settings.max_outer})", False, -1
     for outer in range(settings.max_outer):
         t0 = time.perf_counter()
         x_base = np.array([values[n] for n in names]) / s - 1.0
@@ -188,7 +225,12 @@ def _run_stage(family, cost, stage, rnd, values, model, start, bounds, settings,
         if linearisation is None:
             linearisation = _linearise(family, cost, stage, settings, values, model, names, x_base, w, point,
                                        runner, progress)
-        sens, solve = linearisation
+            optimality = _first_order_optimality(linearisation[2], x_base, lo, hi, best[0])
+            if optimality is not None and optimality < settings.gradient_tolerance:
+                reason, converged = (f"first-order optimality: |d cost / d relative change| = {optimality:.1e} x cost "
+                                     f"< {settings.gradient_tolerance:g}"), True
+                break
+        sens, solve, _ = linearisation
         sol, predicted = solve(lo_t, hi_t)
         new = point(sol.x)
         new_model = family.full(new)
@@ -200,17 +242,44 @@ def _run_stage(family, cost, stage, rnd, values, model, start, bounds, settings,
                                  cost_predicted=predicted, cost_after=scalar_cost(j_new), improved=improved,
                                  values={n: new[n] for n in names}, largest_change=change,
                                  seconds=time.perf_counter() - t0, sensitivities=sens))
+        fall = (best[0] - total) / best[0] if best[0] > 0 else 0.0
         if change < settings.tolerance or settings.method == "full":
             if improved:
                 best = (total, new, new_model)
+            reason, converged = (f"largest step {change:.1e} < tolerance {settings.tolerance:g}" if change <
+                                 settings.tolerance else "one least-squares solve on the full model"), True
             break
         if improved:
             best = (total, new, new_model)
             values, model, j_base = new, new_model, j_new
             linearisation = None
+            if fall < settings.cost_tolerance:
+                reason, converged = f"cost fell by {fall:.1e} of itself < {settings.cost_tolerance:g}", True
+                break
         else:  # the linearisation promised more than the model gives: shorter steps from the same point
             radius = 0.5 * float(np.max(np.abs(sol.x - x_base)))
-    return best[1], best[2]
+            if radius < settings.tolerance:
+                reason, converged = (f"no lower cost within a step of {radius:.1e} of the point (tolerance "
+                                     f"{settings.tolerance:g})"), True
+                break
+    x_end = np.array([best[1][n] for n in names]) / s - 1.0
+    at_bound = [f"{n} at its {'lower' if abs(x - a) <= abs(x - b) else 'upper'} bound"
+                for n, x, a, b in zip(names, x_end, lo, hi) if min(abs(x - a), abs(x - b)) <= 1e-9 * max(1.0, abs(x))]
+    if at_bound:
+        reason, converged = f"{reason}; but {', '.join(at_bound)}", False
+    return best[1], best[2], StageOutcome(stage=stage.name, round=rnd, outer_iterations=outer + 1,
+                                          converged=converged, reason=reason)
+
+
+def _first_order_optimality(gradient, x_base: np.ndarray, lo: np.ndarray, hi: np.ndarray, cost: float) -> float | None:
+    """max |projected gradient| / cost at ``x_base``: the cost's first-order change per unit relative
+    change of any one parameter, as a fraction of the cost (None when the method has no Jacobian)."""
+    if gradient is None or cost <= 0:
+        return None
+    g = np.array(gradient(x_base), dtype=float)
+    g[(x_base <= lo) & (g > 0)] = 0.0  # at a bound, a gradient pointing out of the box is no defect
+    g[(x_base >= hi) & (g < 0)] = 0.0
+    return float(np.max(np.abs(g))) / cost
 
 
 def _linearise(family, cost, stage, settings, values, model, names, x_base, w, point, runner, progress):
@@ -219,7 +288,7 @@ def _linearise(family, cost, stage, settings, values, model, names, x_base, w, p
         perturbed = family.full if settings.perturbation == "full" else family.basis(values).model
         sens = cost_sensitivities(cost, base_model=model, perturbed=perturbed, base=values, names=names,
                                   relative_step=settings.relative_step, perturbation=settings.perturbation,
-                                  runner=runner, progress=progress)
+                                  runner=runner, progress=progress, difference=settings.difference)
         scale = 1.0 / (1.0 + x_base)  # the sensitivities are per unit relative change of the base value
         jac = np.vstack([sens.matrix * scale[None, :], np.diag(w)])
 
@@ -231,7 +300,10 @@ def _linearise(family, cost, stage, settings, values, model, names, x_base, w, p
                                 f_scale=settings.loss_scale, x_scale=1.0)
             return sol, scalar_cost(sens.linearised((sol.x - x_base) * scale))
 
-        return sens, solve
+        def gradient(x):  # of the augmented cost [j; W x]^T [j; W x]
+            return 2.0 * jac.T @ linearised(x)
+
+        return sens, solve, gradient
     model_at = evaluator(family, settings.method, values, names, relative_step=settings.relative_step, runner=runner)
     calls = [0]
 
@@ -246,7 +318,7 @@ def _linearise(family, cost, stage, settings, values, model, names, x_base, w, p
                             f_scale=settings.loss_scale, diff_step=settings.relative_step, x_scale="jac")
         return sol, scalar_cost(sol.fun[:-len(names)])
 
-    return None, solve
+    return None, solve, None
 
 
 def _total(j: np.ndarray, w: np.ndarray, x: np.ndarray, settings: UpdateSettings) -> float:

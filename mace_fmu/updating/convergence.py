@@ -1,0 +1,135 @@
+"""Whether an update converged, and how far its cost ended above the measurement noise.
+
+Two questions a test engineer asks before signing an updated parameter set:
+
+1. Did the update stop on a convergence test, or on its iteration cap or at a bound? Each stage
+   says so (:class:`~mace_fmu.updating.solve.StageOutcome`).
+2. For the time-domain cost, is the fit as good as the noise allows? At the true parameters the
+   cost j^T j is a sum of squared noise samples: with each output's noise variance sigma_o^2
+   (normalised by the output's RMS, as the cost is), its mean is sum_o N_o sigma_o^2 and its
+   standard deviation sqrt(2 sum_o N_o sigma_o^4) (chi-square). A final cost several standard
+   deviations above that mean is a fit that stopped short, whatever the tests said.
+
+The noise is estimated from the data when the inputs are band-limited: above the inputs' band
+a linear structure's outputs hold only noise, so the mean of each output's Welch spectrum there,
+times the Nyquist frequency, is its (white) noise variance. Or it is given, as a fraction of each
+output's RMS.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.signal
+
+from mace_fmu.errors import MaceError
+from mace_fmu.updating.costs import TimeResponseCost
+from mace_fmu.updating.solve import UpdateResult
+
+#: a final cost more than this many standard deviations above the noise floor has not converged
+SIGMA_LIMIT = 3.0
+#: the inputs' band ends where their summed spectrum falls below this fraction of its peak
+BAND_EDGE = 1e-6
+
+
+@dataclass(frozen=True)
+class NoiseFloor:
+    """The time cost expected at the true parameters, from the measurement noise alone."""
+
+    expected_cost: float  #: mean of j^T j at the truth
+    standard_deviation: float  #: of j^T j at the truth (chi-square)
+    noise_rms_percent: dict  #: output -> noise RMS [% of the output's RMS]
+    source: str  #: how the noise was found
+
+    def sigmas_above(self, cost: float) -> float:
+        """How many standard deviations ``cost`` lies above the expected cost."""
+        return (cost - self.expected_cost) / self.standard_deviation if self.standard_deviation > 0 else math.inf
+
+
+def time_noise_floor(cost: TimeResponseCost, *, noise_rms_fraction: float | None = None) -> NoiseFloor | None:
+    """The noise floor of a time cost: from ``noise_rms_fraction`` (noise RMS / output RMS, every output)
+    when given, else estimated above the inputs' band; None when the inputs fill the band (no quiet
+    part of the spectrum to measure the noise in)."""
+    data = cost.data
+    outputs = list(data.outputs)
+    n = len(data.times_s)
+    if noise_rms_fraction is not None:
+        if not (math.isfinite(noise_rms_fraction) and noise_rms_fraction > 0):
+            raise MaceError(f"noise RMS must be a positive fraction of the output RMS, got {noise_rms_fraction!r}")
+        ratio = {o: noise_rms_fraction**2 for o in outputs}
+        source = f"given: {100 * noise_rms_fraction:g} % of each output's RMS"
+    else:
+        dt = float(np.median(np.diff(data.times_s)))
+        fs = 1.0 / dt
+        segment = min(n, 1024)
+        f, p_in = scipy.signal.welch(np.array(list(data.inputs.values())), fs=fs, nperseg=segment, axis=-1)
+        total = p_in.sum(axis=0)
+        edge = f[np.flatnonzero(total > BAND_EDGE * total.max())].max()
+        quiet = (f > 1.25 * edge) & (f < 0.95 * fs / 2)
+        if edge > 0.7 * fs / 2 or quiet.sum() < 5:
+            return None
+        ratio = {}
+        for o in outputs:
+            y = np.asarray(data.outputs[o], dtype=float)
+            _, p = scipy.signal.welch(y, fs=fs, nperseg=segment)
+            variance = float(np.mean(p[quiet])) * fs / 2  # white noise: flat density over [0, fs/2]
+            ratio[o] = variance / float(np.mean(y**2))
+        source = (f"estimated from the outputs' spectra above the inputs' band ({edge:.4g} Hz; "
+                  f"{1.25 * edge:.4g}-{0.95 * fs / 2:.4g} Hz)")
+    if not cost.normalise:
+        raise MaceError("the noise floor is defined for the normalised time cost")
+    expected = sum(n * r for r in ratio.values())
+    std = math.sqrt(sum(2 * n * r**2 for r in ratio.values()))
+    return NoiseFloor(expected_cost=expected, standard_deviation=std,
+                      noise_rms_percent={o: 100 * math.sqrt(r) for o, r in ratio.items()}, source=source)
+
+
+@dataclass(frozen=True)
+class ConvergenceReport:
+    """Whether an update may be trusted as an optimum, and why."""
+
+    converged: bool
+    reasons: tuple[str, ...]  #: the stages' stopping tests, and the noise-floor verdict when there is one
+    final_cost: float
+    noise_floor: NoiseFloor | None
+
+    def summary(self) -> str:
+        """One line for the terminal."""
+        head = "converged" if self.converged else "NOT CONVERGED"
+        return f"{head}: " + "; ".join(self.reasons)
+
+    def to_toml(self) -> str:
+        """The report as TOML (``convergence.toml`` beside the parameters)."""
+        def q(text: str) -> str:
+            return '"' + text.replace("\\", "\\\\").replace('"', '\\"') + '"'
+
+        lines = ["# mace-fmu: did the update converge, and how far above the noise did it end?", "",
+                 f"converged = {'true' if self.converged else 'false'}",
+                 "reasons = [" + ", ".join(q(r) for r in self.reasons) + "]", f"final_cost = {self.final_cost!r}"]
+        if self.noise_floor is not None:
+            nf = self.noise_floor
+            lines += ["", "[noise_floor]", f"expected_cost = {nf.expected_cost!r}",
+                      f"standard_deviation = {nf.standard_deviation!r}",
+                      f"sigmas_above = {nf.sigmas_above(self.final_cost)!r}", f"source = {q(nf.source)}",
+                      "noise_rms_percent = { " + ", ".join(f"{q(o)} = {v!r}" for o, v in nf.noise_rms_percent.items())
+                      + " }"]
+        return "\n".join(lines) + "\n"
+
+
+def convergence_report(result: UpdateResult, *, noise_floor: NoiseFloor | None = None,
+                       sigma_limit: float = SIGMA_LIMIT) -> ConvergenceReport:
+    """The verdict on ``result``: its stages' tests, and (with a noise floor) the final cost against it."""
+    reasons = list(result.reasons)
+    converged = result.converged
+    if noise_floor is not None:
+        k = noise_floor.sigmas_above(result.final_cost)
+        verdict = (f"final cost {result.final_cost:.6g} is {k:+.1f} standard deviations from the noise floor "
+                   f"{noise_floor.expected_cost:.6g} +- {noise_floor.standard_deviation:.3g}")
+        if k > sigma_limit:
+            converged = False
+            verdict += f" (more than {sigma_limit:g} above: the fit stopped short of the optimum)"
+        reasons.append(verdict)
+    return ConvergenceReport(converged=converged, reasons=tuple(reasons), final_cost=result.final_cost,
+                             noise_floor=noise_floor)

@@ -1,0 +1,126 @@
+"""An update converges or says it did not: stopping tests, bounds, and the time cost's noise floor.
+
+The problem is the thesis's two-mass system (k1 = 0.75, k2 = 1.20 N/m), started at k = 1.0, on the
+time-domain cost of a record with known white measurement noise: the noise floor is known exactly,
+so the verdicts can be checked against it.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from mace_fmu.cli import main
+from mace_fmu.two_mass import TwoMassSystem
+from mace_fmu.updating.convergence import convergence_report, time_noise_floor
+from mace_fmu.updating.costs import TimeResponseCost
+from mace_fmu.updating.data import TimeHistory
+from mace_fmu.updating.sample_family import MODE_LABELS, TwoMassFamily
+from mace_fmu.updating.solve import Bounds, Stage, UpdateSettings, update
+
+NOISE = 0.05  # noise RMS / noise-free output RMS
+SAMPLES = 2048
+STEP_S = 0.5
+
+
+def _record(*, band_limited: bool, seed: int = 3) -> TimeHistory:
+    """Force on mass 1 (white, or band-limited to 0.5 Hz of the 1 Hz Nyquist band), displacement of mass 1
+    plus white noise of NOISE times the noise-free output's RMS."""
+    from mace_fmu.updating.model import simulate_discrete, zoh_transition
+
+    rng = np.random.default_rng(seed)
+    u = rng.standard_normal(SAMPLES)
+    if band_limited:
+        spectrum = np.fft.rfft(u)
+        spectrum[np.fft.rfftfreq(SAMPLES, STEP_S) > 0.5] = 0.0
+        u = np.fft.irfft(spectrum, SAMPLES)
+    plant = TwoMassSystem().state_space(force_on=1, measured=1)
+    phi, gamma = zoh_transition(plant.A, plant.B, STEP_S)
+    y = simulate_discrete(phi, gamma, plant.C, plant.D, u[:, None])[:, 0]
+    y = y + NOISE * np.sqrt(np.mean(y**2)) * rng.standard_normal(SAMPLES)
+    return TimeHistory(STEP_S * np.arange(SAMPLES), {"force_1": u}, {"displacement_1": y}, source="test")
+
+
+def _update(cost, *, off: float = 0.02, **settings):
+    """k1 and k2 from ``off`` below and above the truth (a time cost over many cycles has a local minimum
+    at every cycle of phase drift: the start must be within about a quarter cycle)."""
+    family = TwoMassFamily(masses=TwoMassSystem())
+    actual = TwoMassSystem()
+    start = {"k_1": (1 - off) * actual.k1, "k_2": (1 + off) * actual.k2,
+             **{f"damping:{label}": z for label, z in zip(MODE_LABELS, _true_damping())}}
+    bounds = {n: Bounds(0.2 * start[n], 5.0 * start[n]) for n in start}
+    bounds.update(settings.pop("bounds", {}))
+    run = UpdateSettings(method="reanalysis", penalty=False, relative_step=1e-4, **settings)
+    return update(family, cost, start=start, stages=[Stage("stiffness", ("k_1", "k_2"))], bounds=bounds,
+                  settings=run)
+
+
+def _true_damping():
+    """Modal damping ratios of the actual system, lower mode first (the stiffness update's fixed damping)."""
+    eig = np.linalg.eigvals(TwoMassSystem().state_space().A)
+    eig = eig[eig.imag > 0]
+    eig = eig[np.argsort(np.abs(eig))]
+    return list(-eig.real / np.abs(eig))
+
+
+def test_a_converged_update_names_its_stopping_test_and_ends_on_the_noise_floor():
+    cost = TimeResponseCost(_record(band_limited=False))
+    result = _update(cost)
+    floor = time_noise_floor(cost, noise_rms_fraction=NOISE / math.sqrt(1 + NOISE**2))
+    report = convergence_report(result, noise_floor=floor)
+    assert result.converged and report.converged, report.summary()
+    assert any(test in result.reasons[0] for test in ("largest step", "cost fell", "first-order", "no lower cost"))
+    assert abs(floor.sigmas_above(result.final_cost)) < 3.0
+    np.testing.assert_allclose([result.values["k_1"], result.values["k_2"]], [0.75, 1.20], rtol=0.01)
+
+
+def test_a_local_minimum_is_caught_by_the_noise_floor_though_the_steps_stopped():
+    """From 10 % off, the time cost's phase-drift minima hold the update: its steps stop (a stated test),
+    and only the noise floor tells that the answer is wrong."""
+    cost = TimeResponseCost(_record(band_limited=False))
+    result = _update(cost, off=0.10)
+    report = convergence_report(result, noise_floor=time_noise_floor(cost, noise_rms_fraction=NOISE))
+    assert result.converged and not report.converged
+    assert "standard deviations from the noise floor" in report.reasons[-1] and "stopped short" in report.reasons[-1]
+
+
+def test_an_update_stopped_by_its_cap_says_so_in_the_result_and_the_written_report():
+    cost = TimeResponseCost(_record(band_limited=False))
+    result = _update(cost, max_outer=1)
+    floor = time_noise_floor(cost, noise_rms_fraction=NOISE / math.sqrt(1 + NOISE**2))
+    report = convergence_report(result, noise_floor=floor)
+    assert not result.converged and "iteration cap reached (max_outer = 1)" in result.reasons[0]
+    assert not report.converged and "NOT CONVERGED" in report.summary()
+    import tomllib
+
+    parsed = tomllib.loads(report.to_toml())
+    assert parsed["converged"] is False and "iteration cap" in parsed["reasons"][0]
+    assert parsed["noise_floor"]["sigmas_above"] == pytest.approx(floor.sigmas_above(result.final_cost))
+
+
+def test_an_update_that_ends_at_a_bound_is_not_converged():
+    cost = TimeResponseCost(_record(band_limited=False))
+    result = _update(cost, off=-0.02, bounds={"k_2": Bounds(0.5, 1.19)})  # from 1.176: the truth, 1.20, is outside
+    assert not result.converged and "k_2 at its upper bound" in result.reasons[0]
+
+
+def test_the_noise_is_estimated_from_the_spectrum_above_a_band_limited_input():
+    cost = TimeResponseCost(_record(band_limited=True))
+    floor = time_noise_floor(cost)
+    assert floor is not None and "above the inputs' band" in floor.source
+    # the output's RMS holds the noise too: its noise is NOISE / sqrt(1 + NOISE^2) of it
+    expected = 100 * NOISE / math.sqrt(1 + NOISE**2)
+    assert floor.noise_rms_percent["displacement_1"] == pytest.approx(expected, rel=0.1)
+
+
+def test_white_inputs_leave_no_quiet_band_to_measure_the_noise_in():
+    assert time_noise_floor(TimeResponseCost(_record(band_limited=False))) is None
+
+
+def test_help_documents_the_exit_status(capsys):
+    with pytest.raises(SystemExit):
+        main(["update", "--help"])
+    text = " ".join(capsys.readouterr().out.split())
+    assert "exit status: 0 converged; 2 bad input (nothing written); 3 the update stopped without converging" in text
