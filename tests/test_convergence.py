@@ -12,35 +12,20 @@ import math
 import numpy as np
 import pytest
 
+from two_mass_records import two_mass_record, true_damping
 from mace_fmu.cli import main
 from mace_fmu.two_mass import TwoMassSystem
 from mace_fmu.updating.convergence import convergence_report, time_noise_floor
 from mace_fmu.updating.costs import TimeResponseCost
-from mace_fmu.updating.data import TimeHistory
 from mace_fmu.updating.sample_family import MODE_LABELS, TwoMassFamily
 from mace_fmu.updating.solve import Bounds, Stage, UpdateSettings, update
 
 NOISE = 0.05  # noise RMS / noise-free output RMS
 SAMPLES = 2048
-STEP_S = 0.5
 
 
-def _record(*, band_limited: bool, seed: int = 3) -> TimeHistory:
-    """Force on mass 1 (white, or band-limited to 0.5 Hz of the 1 Hz Nyquist band), displacement of mass 1
-    plus white noise of NOISE times the noise-free output's RMS."""
-    from mace_fmu.updating.model import simulate_discrete, zoh_transition
-
-    rng = np.random.default_rng(seed)
-    u = rng.standard_normal(SAMPLES)
-    if band_limited:
-        spectrum = np.fft.rfft(u)
-        spectrum[np.fft.rfftfreq(SAMPLES, STEP_S) > 0.5] = 0.0
-        u = np.fft.irfft(spectrum, SAMPLES)
-    plant = TwoMassSystem().state_space(force_on=1, measured=1)
-    phi, gamma = zoh_transition(plant.A, plant.B, STEP_S)
-    y = simulate_discrete(phi, gamma, plant.C, plant.D, u[:, None])[:, 0]
-    y = y + NOISE * np.sqrt(np.mean(y**2)) * rng.standard_normal(SAMPLES)
-    return TimeHistory(STEP_S * np.arange(SAMPLES), {"force_1": u}, {"displacement_1": y}, source="test")
+def _record(*, band_limited: bool, seed: int = 3):
+    return two_mass_record(samples=SAMPLES, noise=NOISE, seed=seed, band_limited=band_limited)
 
 
 def _update(cost, *, off: float = 0.02, **settings):
@@ -49,20 +34,12 @@ def _update(cost, *, off: float = 0.02, **settings):
     family = TwoMassFamily(masses=TwoMassSystem())
     actual = TwoMassSystem()
     start = {"k_1": (1 - off) * actual.k1, "k_2": (1 + off) * actual.k2,
-             **{f"damping:{label}": z for label, z in zip(MODE_LABELS, _true_damping())}}
+             **{f"damping:{label}": z for label, z in zip(MODE_LABELS, true_damping())}}
     bounds = {n: Bounds(0.2 * start[n], 5.0 * start[n]) for n in start}
     bounds.update(settings.pop("bounds", {}))
     run = UpdateSettings(method="reanalysis", penalty=False, relative_step=1e-4, **settings)
     return update(family, cost, start=start, stages=[Stage("stiffness", ("k_1", "k_2"))], bounds=bounds,
                   settings=run)
-
-
-def _true_damping():
-    """Modal damping ratios of the actual system, lower mode first (the stiffness update's fixed damping)."""
-    eig = np.linalg.eigvals(TwoMassSystem().state_space().A)
-    eig = eig[eig.imag > 0]
-    eig = eig[np.argsort(np.abs(eig))]
-    return list(-eig.real / np.abs(eig))
 
 
 def test_a_converged_update_names_its_stopping_test_and_ends_on_the_noise_floor():

@@ -92,7 +92,13 @@ def cmd_fmu_update(args: argparse.Namespace) -> int:
                             convergence=report)
     out.mkdir(parents=True, exist_ok=True)
     path = params.write(out / "parameters.toml")
-    written = [path, write_text_atomic(out / "convergence.toml", report.to_toml())]
+    from mace_fmu.updating.uncertainty import format_uncertainty, stage_uncertainty, uncertainty_toml
+
+    # with a noise floor, the noise is the data's, not what the fit left over (which includes any misfit)
+    sigma2 = floor.expected_cost / result.final_residual.size if floor is not None else None
+    uncertainty = stage_uncertainty(result, noise_variance=sigma2)
+    written = [path, write_text_atomic(out / "convergence.toml", report.to_toml()),
+               write_text_atomic(out / "uncertainty.toml", uncertainty_toml(uncertainty))]
     units = problem.family.interface.units
     print(f"{'parameter':<28} {'start':>14} {'updated':>14}  change")
     for n in problem.names:
@@ -100,6 +106,7 @@ def cmd_fmu_update(args: argparse.Namespace) -> int:
         print(f"{n:<28} {v0:>14.6g} {v:>14.6g}  {100 * (v / v0 - 1):+.2f} %  [{units.get(n, '')}]")
     print(f"cost {result.initial_cost:.5g} -> {result.final_cost:.5g} ({100 * result.reduction:.1f} % lower) in "
           f"{result.seconds:.1f} s, {len(result.history)} outer iterations")
+    print(format_uncertainty(uncertainty))
     for written_path in written:
         print(f"wrote {written_path}")
     _say(report.summary())
@@ -147,8 +154,13 @@ def cmd_update(args: argparse.Namespace) -> int:
           f"(thesis {s.rms_light_thesis:.2f} %)")
     from mace_fmu.updating.convergence import convergence_report
 
+    from mace_fmu.updating.uncertainty import format_uncertainty, stage_uncertainty, uncertainty_toml
+
     report = convergence_report(res)
-    paths.append(write_text_atomic(out / "convergence.toml", report.to_toml()))
+    uncertainty = stage_uncertainty(res)
+    print(format_uncertainty(uncertainty))
+    paths += [write_text_atomic(out / "convergence.toml", report.to_toml()),
+              write_text_atomic(out / "uncertainty.toml", uncertainty_toml(uncertainty))]
     for path in paths:
         print(f"wrote {path}")
     _say(report.summary())
@@ -163,7 +175,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                               "time cost more than 3 standard deviations above the noise floor): the results are "
                               "written all the same, with converged = false and the reasons in convergence.toml")
     deck_option(p)
-    p.add_argument("-o", "--out", help="directory for parameters.toml, report.txt, summary.json and figures")
+    p.add_argument("-o", "--out", help="directory for parameters.toml, convergence.toml, uncertainty.toml, report.txt, "
+                   "summary.json and figures")
     p.add_argument("--sample-problem", action="store_true",
                    help="run the two-mass sample problem (thesis 4.3) and print Tables 4.2 and 4.3 beside the thesis")
     p.add_argument("--json", action="store_true", help="with --sample-problem: the tables as JSON")
