@@ -107,3 +107,14 @@ def test_examples_are_quiet_and_leave_no_unpacked_fmu(motion_fmu_0g, private_tmp
                            capture_output=True, text=True, timeout=300, check=True)
     assert cosim.stdout.count("payload Z gyro RMS") == 2 and cosim.stderr == ""
     assert list(private_tmp.iterdir()) == []
+
+
+def test_the_measurement_model_fit_draws_no_dependency_bar(capfd):
+    """sdypy-EMA's pole selection draws a tqdm bar of its own; the sample problem's fit must not let it out
+    (it reached redirected stderr as `0%| | 0/30 ... 100%| 30/30`)."""
+    from mace_fmu.updating.sample import generate_data
+
+    data = generate_data()
+    out, err = capfd.readouterr()
+    assert out == "" and err == ""
+    assert len(data.measurement_model.frequencies_hz) == 2

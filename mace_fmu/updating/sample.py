@@ -91,11 +91,15 @@ def fit_measurement_model(frf: FrequencyResponseData, approx_hz: np.ndarray) -> 
     not change with the scaling.
     """
     import warnings
+    from unittest import mock
 
     from sdypy import EMA
+    from sdypy.EMA import stabilization
 
     scale = 1000.0
-    with warnings.catch_warnings():
+    # select_closest_poles draws a tqdm bar of its own, unconditionally (sdypy-EMA 0.28): the library
+    # prints nothing, so the bar is swapped for the bare iterable for the length of the call
+    with warnings.catch_warnings(), mock.patch.object(stabilization, "tqdm", lambda iterable, **_: iterable):
         warnings.simplefilter("ignore")
         model = EMA.Model(frf=frf.response[:, 0, 0][None, :], freq=scale * frf.frequencies_hz,
                           lower=scale * frf.frequencies_hz[0], upper=scale * frf.frequencies_hz[-1], pol_order_high=30,
