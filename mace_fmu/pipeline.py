@@ -14,6 +14,7 @@ from mace_fmu.deck.geometry import coordinate_frames
 from mace_fmu.deck.reader import read_deck
 from mace_fmu.errors import MaceError
 from mace_fmu.fe.assembly import FEModel, assemble
+from mace_fmu.fe.autospc import autospc_enabled, constrain_singular_dofs
 from mace_fmu.fe.beam import MassKind
 from mace_fmu.fe.constraints import build_constraints
 from mace_fmu.fe.labels import label_modes, rigid_body_vectors
@@ -48,6 +49,8 @@ class StructureModes:
     modes: Modes
     mass_properties: MassProperties
     preload: Preload | None
+    #: (grid, component) DOFs constrained automatically (PARAM,AUTOSPC): neither stiffness nor mass
+    auto_constrained: tuple[tuple[int, int], ...] = ()
 
 
 def mass_properties(model: FEModel, deck: Deck) -> MassProperties:
@@ -161,9 +164,13 @@ def compute_modes(deck: Deck | str | os.PathLike | None = None, *, structure: St
     model = assemble(struct.deck, mass=mass)
     props = mass_properties(model, struct.deck)
     stiffness, pre = model.stiffness, None
+    auto = autospc_enabled(struct.deck)
+    removed: tuple[tuple[int, int], ...] = ()
     if struct.preload is not None:
         static = build_constraints(struct.deck, model.dofs, model.cd_frames, spc_set=struct.preload.spc,
                                    mpc_set=struct.preload.mpc)
+        if auto:  # statics: a DOF without stiffness is singular whatever its mass
+            static, removed = constrain_singular_dofs(static, model.stiffness)
         load = gravity_load(struct.deck, model, struct.preload.load)
         if preload == "linear":
             pre = linear_preload(model, static, load)
@@ -175,9 +182,13 @@ def compute_modes(deck: Deck | str | os.PathLike | None = None, *, structure: St
         stiffness = pre.tangent_stiffness
     modal = build_constraints(struct.deck, model.dofs, model.cd_frames, spc_set=struct.modal.spc,
                               mpc_set=struct.modal.mpc)
+    if auto:
+        modal, removed_modal = constrain_singular_dofs(modal, stiffness, model.mass)
+        removed = tuple(dict.fromkeys(removed + removed_modal))
     modes = _requested_modes(solve_modes(stiffness, model.mass, modal, model.dofs, model.cd_frames),
                              struct.deck, struct, max_hz)
     modes = label_modes(model, modes, struct.spec, reference=props.reference_point_m,
                         state=pre.state if pre is not None else None,
                         bar_forces=pre.bar_forces if pre is not None else None)
-    return StructureModes(structure=struct, model=model, modes=modes, mass_properties=props, preload=pre)
+    return StructureModes(structure=struct, model=model, modes=modes, mass_properties=props, preload=pre,
+                          auto_constrained=removed)

@@ -138,3 +138,19 @@ def test_the_bundled_structure_file_applies_to_a_copy_of_the_bundled_deck(tmp_pa
     edited.write_text(bundled_deck_path().read_text() + "$ a comment\n")
     result = compute_modes(read_deck(edited), structure="0g", max_hz=3.5)
     assert result.structure.file is None and 22 in result.structure.deck.conm2s  # nothing removed
+
+
+def test_a_grid_attached_to_nothing_is_constrained_automatically_and_reported(tmp_path, capsys):
+    """NASTRAN's AUTOSPC: grid 99 has neither stiffness nor mass; its 6 DOFs are constrained and listed, the
+    beam's frequencies are those without it. With PARAM,AUTOSPC,NO the grid is named in the error."""
+    text = beam_deck().replace("ENDDATA", "GRID,99,,5.0,5.0,5.0\nENDDATA")
+    free = _write(tmp_path / "free.bdf", text)
+    with_free = compute_modes(read_deck(free), structure="0g")
+    without = compute_modes(read_deck(_write(tmp_path / "beam.bdf", beam_deck())), structure="0g")
+    assert with_free.auto_constrained == tuple((99, c) for c in range(1, 7))
+    np.testing.assert_allclose(with_free.modes.frequencies_hz, without.modes.frequencies_hz, rtol=1e-10)
+    assert main(["modes", "0g", "--deck", str(free)]) == 0
+    assert "AUTOSPC: constrained 6 DOFs with neither stiffness nor mass: grid 99 (1-6)" in capsys.readouterr().out
+    strict = _write(tmp_path / "strict.bdf", text.replace("ENDDATA", "PARAM,AUTOSPC,NO\nENDDATA"))
+    assert main(["modes", "0g", "--deck", str(strict)]) == 2
+    assert "99-1" in capsys.readouterr().err

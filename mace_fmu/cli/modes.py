@@ -21,6 +21,7 @@ def _modes_json(result: StructureModes) -> dict:
         "structure": result.structure.kind,
         "deck": result.structure.deck.path,
         "structure_file": str(result.structure.file.path) if result.structure.file is not None else None,
+        "auto_constrained": [[int(g), int(c)] for g, c in result.auto_constrained],
         "preload": result.preload.kind if result.preload else None,
         # a rigid-body or mechanism mode reads 0 Hz; its eigenvalue (round-off, either sign) is kept apart
         "modes": [{"index": i + 1, "frequency_hz": 0.0 if abs(f) < ZERO_HZ else float(f), "label": lab,
@@ -41,6 +42,11 @@ def _print_modes(result: StructureModes) -> None:
     file = result.structure.file
     print(f"structure file: {file.path}" if file is not None else
           "structure file: none (the deck's own SPC, MPC and EIGRL; nothing removed; labels by motion)")
+    if result.auto_constrained:
+        from mace_fmu.fe.autospc import describe_dofs
+
+        print(f"AUTOSPC: constrained {len(result.auto_constrained)} DOFs with neither stiffness nor mass: "
+              f"{describe_dofs(result.auto_constrained)}")
     print(f"{'mode':>4s} {'frequency Hz':>13s}  label")
     for i, (f, lab) in enumerate(zip(result.modes.frequencies_hz, result.modes.labels)):
         print(f"{i + 1:4d} {hz_text(f, decimals=4):>13s}  {lab}")

@@ -69,9 +69,19 @@ def cmd_fmu_update(args: argparse.Namespace) -> int:
     if not args.segment_s > 0:
         raise MaceError(f"--segment-s must be > 0 s, got {args.segment_s}")
     names = [n.strip() for part in args.update for n in part.split(",") if n.strip()]
+    held = []
+    for item in (x for part in args.hold_input for x in part.split(",") if x.strip()):
+        name, _, value = item.partition("=")
+        try:
+            zero = float(value) == 0.0
+        except ValueError:
+            zero = False
+        if not name.strip() or not zero:
+            raise MaceError(f"--hold-input {item!r}: expected NAME=0 (an input the data lack, held at 0 V)")
+        held.append(name.strip())
     problem = fmu_problem(fmu=args.fmu, data=args.data, names=names, cost=args.cost,
                           start=_read_start(args.start) if args.start else None, channel_map=args.map,
-                          segment_s=args.segment_s, weighting=args.weighting)
+                          segment_s=args.segment_s, weighting=args.weighting, held_inputs=held)
     where = f"the Dask cluster at {args.scheduler}" if args.scheduler else \
         f"{args.workers or 'one per core'} local worker processes"
     _say(f"updating {len(problem.names)} parameter(s) of {Path(args.fmu).name} on the {args.cost} cost; FMU runs on "
@@ -205,6 +215,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     fmu.add_argument("--workers", type=int, default=None, help="local worker processes (default: one per core)")
     fmu.add_argument("--map", metavar="FILE", help="channel map: data channel names and units to the FMU's signals")
     fmu.add_argument("--segment-s", type=float, default=2.0, help="H1 segment length [s] of the log-frf cost (default 2)")
+    fmu.add_argument("--hold-input", metavar="NAME=0[,NAME=0...]", action="append", default=[],
+                     help="FMU inputs the data have no channel for, held at 0 V (repeatable); any other missing "
+                          "input is an error")
     fmu.add_argument("--noise-rms-percent", type=float, default=None, metavar="P",
                      help="time cost: the measurement noise RMS as P %% of each output's RMS, for the noise-floor test "
                           "(default: estimated from the outputs' spectra above the inputs' band)")

@@ -54,8 +54,12 @@ class FmuInterface:
         """MaceError naming every ``names`` entry the FMU has no Real parameter of."""
         unknown = [n for n in names if n not in self.parameters]
         if unknown:
-            raise MaceError(f"{self.path}: no parameter(s) {', '.join(unknown)}; the FMU's parameters: "
-                            f"{', '.join(sorted(self.parameters))}")
+            import difflib
+
+            close = sorted({c for n in unknown for c in difflib.get_close_matches(n, list(self.parameters), n=4)})
+            hint = f"; closest: {', '.join(close)}" if close else ""
+            raise MaceError(f"{self.path}: no parameter(s) {', '.join(unknown)}{hint} (all {len(self.parameters)} "
+                            f"parameters: fmpy info {self.path})")
 
     def check_signals(self, *, inputs: Sequence[str], outputs: Sequence[str], where: str) -> None:
         """MaceError naming every input and output channel of ``where`` the FMU does not have."""

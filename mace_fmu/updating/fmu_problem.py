@@ -35,13 +35,15 @@ class FmuProblem:
 
 def fmu_problem(*, fmu: str | os.PathLike, data: Sequence[str | os.PathLike], names: Sequence[str],
                 cost: CostKind, start: Mapping[str, float] | None = None, channel_map: str | os.PathLike | None = None,
-                segment_s: float = 2.0, weighting: Weighting = "noise") -> FmuProblem:
+                segment_s: float = 2.0, weighting: Weighting = "noise",
+                held_inputs: Sequence[str] = ()) -> FmuProblem:
     """Read and check everything an FMU update needs; no simulation runs.
 
     ``data``: one time history (CSV/npz: the measured inputs and outputs) and, for the log-FRF cost,
     optionally one frequency response (UFF 58/CSV) to compare with instead of the H1 of the time
     history; ``start``: values [FMU units] set on every run (default: the FMU's own start values);
-    ``segment_s``: H1 segment length [s].
+    ``segment_s``: H1 segment length [s]; ``held_inputs``: FMU inputs the data lack that are to be held at
+    0 (any other input the data lack is an error: a silently grounded input biases every parameter).
     """
     from mace_fmu.updating.files import read_channel_map, read_measured_data
 
@@ -75,6 +77,14 @@ def fmu_problem(*, fmu: str | os.PathLike, data: Sequence[str | os.PathLike], na
                         f"{history.source}, which drives the FMU")
     if not history.inputs:
         raise MaceError(f"{history.source}: no input channels: the FMU must be driven by the measured inputs")
+    unknown_held = [i for i in held_inputs if i not in interface.inputs]
+    if unknown_held:
+        raise MaceError(f"--hold-input: {', '.join(unknown_held)} is not an input of {interface.path} "
+                        f"(its inputs: {', '.join(interface.inputs)})")
+    absent = [i for i in interface.inputs if i not in history.inputs and i not in held_inputs]
+    if absent:
+        raise MaceError(f"{history.source}: no channel for the FMU input(s) {', '.join(absent)}; record them, or "
+                        "hold each at 0 explicitly (--hold-input NAME=0)")
     estimator = H1Estimator(segment_length=int(round(segment_s / history.sample_time_s)),
                             band_hz=(float(frd.frequencies_hz[0]), float(frd.frequencies_hz[-1])) if frd is not None
                             else None)
