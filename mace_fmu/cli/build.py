@@ -17,8 +17,6 @@ def cmd_build(args: argparse.Namespace) -> int:
     from mace_fmu.fmu.native.export import export_native_fmu
     from mace_fmu.iomodel.parametric_data import parametric_arrays
     from mace_fmu.iomodel.volts import DEFAULT_MAX_HZ, volts_model
-    from mace_fmu.thesis import (format_mass_rows, format_rows, format_side_by_side, table_3_15_comparison,
-                                 table_5_1_0g, table_5_1_1g)
 
     deck = read_deck(args.deck)
     params = parameters(args)
@@ -33,12 +31,7 @@ def cmd_build(args: argparse.Namespace) -> int:
         with progress_bar() as bar:
             results[kind] = compute_modes(deck, structure="1g", preload=kind, max_hz=DEFAULT_MAX_HZ, progress=bar,
                                           parameters=params)
-    print(format_rows(table_5_1_0g(m0), title="Table 5.1, 0-g column (flexible modes)"))
-    print()
-    print(format_side_by_side({kind: table_5_1_1g(m1, m0) for kind, m1 in results.items()},
-                              title="Table 5.1, 1-g column (structural modes paired with the 0-g ones by MAC)"))
-    print()
-    print(format_mass_rows(table_3_15_comparison(m0), title="Table 3.15, free-free mass properties about the centre node"))
+    print(thesis_tables(m0, results))
     print()
     for kind, modes in (("1g", results["large"]), ("0g", m0)):
         progress(f"{kind} volts-volts model and FMUs")
@@ -51,14 +44,36 @@ def cmd_build(args: argparse.Namespace) -> int:
             print(f"wrote {path}")
         print(f"wrote {export_fmu(model, out_dir=args.out, name=fmu_name(kind, kind='pythonfmu'), arrays=arrays)}")
     print()
-    print("1-g modes below 25 Hz (large-displacement preload | linear preload)")
+    print(low_modes(results))
+    return 0
+
+
+def thesis_tables(m0, results) -> str:
+    """Tables 5.1 (0-g, and 1-g for each preload) and 3.15 beside the thesis, as ``build`` prints them.
+
+    ``m0``: the 0-g modes; ``results``: preload kind ("large", "linear") -> 1-g modes. The README shows
+    this text; a test regenerates it from the code and compares.
+    """
+    from mace_fmu.thesis import (format_mass_rows, format_rows, format_side_by_side, table_3_15_comparison,
+                                 table_5_1_0g, table_5_1_1g)
+
+    return "\n\n".join([
+        format_rows(table_5_1_0g(m0), title="Table 5.1, 0-g column (flexible modes)"),
+        format_side_by_side({kind: table_5_1_1g(m1, m0) for kind, m1 in results.items()},
+                            title="Table 5.1, 1-g column (structural modes paired with the 0-g ones by MAC)"),
+        format_mass_rows(table_3_15_comparison(m0), title="Table 3.15, free-free mass properties about the centre node")])
+
+
+def low_modes(results) -> str:
+    """The 1-g modes below 25 Hz of both preloads side by side (by index: the preloads keep the mode order)."""
     large, linear = results["large"].modes, results["linear"].modes
-    for i in range(min(len(large), len(linear))):  # side by side by index: the two preloads keep the mode order
+    lines = ["1-g modes below 25 Hz (large-displacement preload | linear preload)"]
+    for i in range(min(len(large), len(linear))):
         if large.frequencies_hz[i] > 25.0:
             break
-        print(f"{i + 1:3d} {hz_text(large.frequencies_hz[i], decimals=3):>9s}  {large.labels[i]:46s} | "
-              f"{hz_text(linear.frequencies_hz[i], decimals=3):>9s}  {linear.labels[i]}")
-    return 0
+        lines.append(f"{i + 1:3d} {hz_text(large.frequencies_hz[i], decimals=3):>9s}  {large.labels[i]:46s} | "
+                     f"{hz_text(linear.frequencies_hz[i], decimals=3):>9s}  {linear.labels[i]}")
+    return "\n".join(lines)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
