@@ -79,9 +79,13 @@ def cmd_fmu_update(args: argparse.Namespace) -> int:
         if not name.strip() or not zero:
             raise MaceError(f"--hold-input {item!r}: expected NAME=0 (an input the data lack, held at 0 V)")
         held.append(name.strip())
+    if args.noise_rms_percent is not None and not args.noise_rms_percent > 0:
+        raise MaceError(f"--noise-rms-percent must be > 0, got {args.noise_rms_percent}")
+    noise_fraction = None if args.noise_rms_percent is None else args.noise_rms_percent / 100.0
     problem = fmu_problem(fmu=args.fmu, data=args.data, names=names, cost=args.cost,
                           start=_read_start(args.start) if args.start else None, channel_map=args.map,
-                          segment_s=args.segment_s, weighting=args.weighting, held_inputs=held)
+                          segment_s=args.segment_s, weighting=args.weighting, held_inputs=held,
+                          noise_rms_fraction=noise_fraction)
     where = f"the Dask cluster at {args.scheduler}" if args.scheduler else \
         f"{args.workers or 'one per core'} local worker processes"
     _say(f"updating {len(problem.names)} parameter(s) of {Path(args.fmu).name} on the {args.cost} cost; FMU runs on "
@@ -90,13 +94,9 @@ def cmd_fmu_update(args: argparse.Namespace) -> int:
         with DaskRunner(scheduler=args.scheduler, workers=args.workers, progress=bar, task="FMU runs") as runner:
             result = update_fmu(family=problem.family, cost=problem.cost, start=problem.start, stages=[problem.names],
                                 runner=runner, progress=bar)
-    from mace_fmu.updating.convergence import convergence_report, time_noise_floor
-    from mace_fmu.updating.costs import TimeResponseCost
+    from mace_fmu.updating.convergence import convergence_report, noise_floor
 
-    floor = None
-    if isinstance(problem.cost, TimeResponseCost):
-        floor = time_noise_floor(problem.cost, noise_rms_fraction=None if args.noise_rms_percent is None
-                                 else args.noise_rms_percent / 100.0)
+    floor = noise_floor(problem.cost, noise_rms_fraction=noise_fraction)
     report = convergence_report(result, noise_floor=floor)
     params = fmu_parameters(result, family=problem.family, data=", ".join(problem.data_files), cost=problem.cost,
                             convergence=report)
@@ -204,8 +204,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     fmu = p.add_argument_group("updating through FMU simulation (any FMI 2.0 co-simulation FMU)")
     fmu.add_argument("--fmu", metavar="FILE", help="the FMU whose parameters are updated (set through FMI)")
     fmu.add_argument("--data", metavar="FILE", action="append", default=[],
-                     help="measured data: a time history (CSV/npz; its inputs drive the FMU) and, for --cost log-frf, "
-                          "optionally a frequency response (UFF 58/CSV); repeat the option")
+                     help="measured data: a time history (CSV/npz; its inputs drive the FMU), one per test (repeat "
+                          "the option: several tests are summed, each in units of its own noise) and, with one test "
+                          "and --cost log-frf, optionally a frequency response (UFF 58/CSV)")
     fmu.add_argument("--update", metavar="NAME[,NAME...]", action="append", default=[],
                      help="FMU parameters to update (repeatable)")
     fmu.add_argument("--cost", choices=["time", "log-frf"], default="time",

@@ -86,6 +86,26 @@ def time_noise_floor(cost: TimeResponseCost, *, noise_rms_fraction: float | None
                       noise_rms_percent={o: 100 * math.sqrt(r) for o, r in ratio.items()}, source=source)
 
 
+def noise_floor(cost, *, noise_rms_fraction: float | None = None) -> NoiseFloor | None:
+    """The noise floor of a time cost, or of several tests' time costs summed with their weights
+    (:class:`~mace_fmu.updating.costs.SeveralTests`); None for other costs or when the noise is unknown."""
+    from mace_fmu.updating.costs import SeveralTests
+
+    if isinstance(cost, TimeResponseCost):
+        return time_noise_floor(cost, noise_rms_fraction=noise_rms_fraction)
+    if not isinstance(cost, SeveralTests) or not all(isinstance(c, TimeResponseCost) for c in cost.tests):
+        return None
+    floors = [time_noise_floor(c, noise_rms_fraction=noise_rms_fraction) for c in cost.tests]
+    if any(f is None for f in floors):
+        return None
+    percent = {f"{label}: {o}": v for f, label in zip(floors, cost.labels) for o, v in f.noise_rms_percent.items()}
+    return NoiseFloor(expected_cost=sum(w**2 * f.expected_cost for f, w in zip(floors, cost.weights)),
+                      standard_deviation=math.sqrt(sum(w**4 * f.standard_deviation**2
+                                                       for f, w in zip(floors, cost.weights))),
+                      noise_rms_percent=percent, source="; ".join(f"{label}: {f.source}"
+                                                                  for f, label in zip(floors, cost.labels)))
+
+
 @dataclass(frozen=True)
 class ConvergenceReport:
     """Whether an update may be trusted as an optimum, and why."""

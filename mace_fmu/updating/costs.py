@@ -152,6 +152,26 @@ class TimeResponseCost:
         return [f"{o} t={t:.4g} s" for o in self.data.outputs for t in self.data.times_s]
 
 
+@dataclass(frozen=True)
+class SeveralTests:
+    """The costs of several tests of one structure (a gimbal test, an active-strut test, ...) as one cost.
+
+    j = [w_1 j_1; w_2 j_2; ...]: each test's residual times its weight, 1 / (its noise standard
+    deviation per residual) when known, so that every test counts in units of its own noise.
+    """
+
+    tests: tuple  #: the tests' costs
+    weights: tuple[float, ...]  #: one per test
+    labels: tuple[str, ...]  #: one per test (its data file)
+    name: str = "several tests"
+
+    def residual(self, model: LinearModel) -> np.ndarray:
+        return np.concatenate([w * c.residual(model) for c, w in zip(self.tests, self.weights)])
+
+    def entry_labels(self) -> list[str]:
+        return [f"{label}: {e}" for c, label in zip(self.tests, self.labels) for e in c.entry_labels()]
+
+
 def scalar_cost(residual: np.ndarray) -> float:
     """j^T j."""
     return float(residual @ residual)

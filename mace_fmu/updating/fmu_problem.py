@@ -31,17 +31,20 @@ class FmuProblem:
     frequency_data: FrequencyResponseData | None
     cost: Cost
     data_files: tuple[str, ...]
+    histories: tuple[TimeHistory, ...] = ()  #: every test's time history (``history`` is the first)
 
 
 def fmu_problem(*, fmu: str | os.PathLike, data: Sequence[str | os.PathLike], names: Sequence[str],
                 cost: CostKind, start: Mapping[str, float] | None = None, channel_map: str | os.PathLike | None = None,
                 segment_s: float = 2.0, weighting: Weighting = "noise",
-                held_inputs: Sequence[str] = ()) -> FmuProblem:
+                held_inputs: Sequence[str] = (), noise_rms_fraction: float | None = None) -> FmuProblem:
     """Read and check everything an FMU update needs; no simulation runs.
 
-    ``data``: one time history (CSV/npz: the measured inputs and outputs) and, for the log-FRF cost,
-    optionally one frequency response (UFF 58/CSV) to compare with instead of the H1 of the time
-    history; ``start``: values [FMU units] set on every run (default: the FMU's own start values);
+    ``data``: one or more time histories (CSV/npz: the measured inputs and outputs of one test each;
+    several tests are summed, each in units of its own noise) and, with a single one and the log-FRF
+    cost, optionally one frequency response (UFF 58/CSV) to compare with instead of the H1 of the time
+    history; ``noise_rms_fraction``: the tests' noise RMS over their outputs' RMS, when it cannot be
+    estimated from the data; ``start``: values [FMU units] set on every run (default: the FMU's own start values);
     ``segment_s``: H1 segment length [s]; ``held_inputs``: FMU inputs the data lack that are to be held at
     0 (any other input the data lack is an error: a silently grounded input biases every parameter).
     """
@@ -57,6 +60,9 @@ def fmu_problem(*, fmu: str | os.PathLike, data: Sequence[str | os.PathLike], na
     start = dict(start or {})
     interface.check_parameters(list(start))
     mapping = read_channel_map(channel_map) if channel_map is not None else None
+    repeated = sorted({os.fspath(p) for p in data if [os.fspath(q) for q in data].count(os.fspath(p)) > 1})
+    if repeated:
+        raise MaceError(f"{repeated[0]}: given twice as --data (each test once)")
     histories, responses = [], []
     for path in data:
         if not Path(path).is_file():
@@ -64,37 +70,72 @@ def fmu_problem(*, fmu: str | os.PathLike, data: Sequence[str | os.PathLike], na
         item = read_measured_data(path, channel_map=mapping)
         interface.check_signals(inputs=list(item.inputs), outputs=list(item.outputs), where=os.fspath(path))
         (histories if isinstance(item, TimeHistory) else responses).append(item)
-    if len(histories) != 1 or len(responses) > 1:
-        raise MaceError(f"give one time history (the measured inputs drive the FMU) and at most one frequency "
-                        f"response; got {len(histories)} time histories and {len(responses)} frequency responses")
+    if not histories or len(responses) > 1 or (responses and len(histories) > 1):
+        raise MaceError(f"give one or more time histories (each a test whose measured inputs drive the FMU) and, with "
+                        f"a single one, at most one frequency response; got {len(histories)} time histories and "
+                        f"{len(responses)} frequency responses")
     if responses and cost != "log-frf":
         raise MaceError(f"{responses[0].source}: a frequency response is compared by the log-frf cost only "
                         f"(--cost log-frf), not by {cost!r}")
     history, frd = histories[0], (responses[0] if responses else None)
+    for other in histories[1:]:
+        if abs(other.sample_time_s - history.sample_time_s) > 1e-9 * history.sample_time_s:
+            raise MaceError(f"{other.source}: sample time {other.sample_time_s:g} s, but {history.source} has "
+                            f"{history.sample_time_s:g} s: the tests of one update share one sample time")
     missing = [i for i in (frd.inputs if frd is not None else ()) if i not in history.inputs]
     if missing:
         raise MaceError(f"{frd.source}: input(s) {', '.join(missing)} are not in the time history "
                         f"{history.source}, which drives the FMU")
-    if not history.inputs:
-        raise MaceError(f"{history.source}: no input channels: the FMU must be driven by the measured inputs")
     unknown_held = [i for i in held_inputs if i not in interface.inputs]
     if unknown_held:
         raise MaceError(f"--hold-input: {', '.join(unknown_held)} is not an input of {interface.path} "
                         f"(its inputs: {', '.join(interface.inputs)})")
-    absent = [i for i in interface.inputs if i not in history.inputs and i not in held_inputs]
-    if absent:
-        raise MaceError(f"{history.source}: no channel for the FMU input(s) {', '.join(absent)}; record them, or "
-                        "hold each at 0 explicitly (--hold-input NAME=0)")
+    for test in histories:
+        if not test.inputs:
+            raise MaceError(f"{test.source}: no input channels: the FMU must be driven by the measured inputs")
+        absent = [i for i in interface.inputs if i not in test.inputs and i not in held_inputs]
+        if absent:
+            raise MaceError(f"{test.source}: no channel for the FMU input(s) {', '.join(absent)}; record them, or "
+                            "hold each at 0 explicitly (--hold-input NAME=0)")
+    costs = [_test_cost(cost, test, frd, segment_s=segment_s, weighting=weighting) for test in histories]
+    the_cost = costs[0] if len(costs) == 1 else _several_tests(costs, histories, noise_rms_fraction)
+    values = {n: start.get(n, interface.parameters[n]) for n in names}
+    return FmuProblem(family=FmuFamily(interface=interface, fixed=start), names=names, start=values, history=history,
+                      frequency_data=frd, cost=the_cost, data_files=tuple(os.fspath(p) for p in data),
+                      histories=tuple(histories))
+
+
+def _test_cost(cost: CostKind, history: TimeHistory, frd: FrequencyResponseData | None, *, segment_s: float,
+               weighting: Weighting) -> Cost:
+    """The cost of one test (its time history, and a measured frequency response if given)."""
     estimator = H1Estimator(segment_length=int(round(segment_s / history.sample_time_s)),
                             band_hz=(float(frd.frequencies_hz[0]), float(frd.frequencies_hz[-1])) if frd is not None
                             else None)
     if cost == "log-frf" and frd is None:
         estimator = H1Estimator(segment_length=estimator.segment_length, band_hz=_default_band(history))
-    the_cost = fmu_cost(cost, history=history, frequency_data=frd, estimator=estimator,
-                        weighting=weighting if frd is None or _same_bins(frd, history, estimator) else "none")
-    values = {n: start.get(n, interface.parameters[n]) for n in names}
-    return FmuProblem(family=FmuFamily(interface=interface, fixed=start), names=names, start=values, history=history,
-                      frequency_data=frd, cost=the_cost, data_files=tuple(os.fspath(p) for p in data))
+    return fmu_cost(cost, history=history, frequency_data=frd, estimator=estimator,
+                    weighting=weighting if frd is None or _same_bins(frd, history, estimator) else "none")
+
+
+def _several_tests(costs: list[Cost], histories: list[TimeHistory], noise_rms_fraction: float | None) -> Cost:
+    """The tests' costs summed, each in units of its own noise: a time cost is divided by its noise's
+    standard deviation per residual (its noise floor, estimated above the inputs' band or given); a
+    noise-weighted log-FRF cost already is in those units."""
+    from mace_fmu.updating.convergence import time_noise_floor
+    from mace_fmu.updating.costs import SeveralTests, TimeResponseCost
+
+    weights = []
+    for c, test in zip(costs, histories):
+        if isinstance(c, TimeResponseCost):
+            floor = time_noise_floor(c, noise_rms_fraction=noise_rms_fraction)
+            if floor is None:
+                raise MaceError(f"{test.source}: the noise of this test cannot be estimated (its inputs fill the "
+                                "band); several tests are weighed by their noise: give --noise-rms-percent")
+            n = sum(len(v) for v in test.outputs.values())
+            weights.append(1.0 / (floor.expected_cost / n) ** 0.5)
+        else:
+            weights.append(1.0)
+    return SeveralTests(tests=tuple(costs), weights=tuple(weights), labels=tuple(h.source for h in histories))
 
 
 def _default_band(history: TimeHistory) -> tuple[float, float]:
