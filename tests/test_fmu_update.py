@@ -307,3 +307,22 @@ def test_any_tools_fmi2_cosimulation_fmu_is_accepted_and_a_non_fmu_refused(fmu, 
     text.write_text("not a zip")
     with pytest.raises(MaceError, match="not a zip archive"):
         fmu_family(text)
+
+
+def test_a_pythonfmu_fmu_is_updated_with_every_run_in_the_workers(capsys, data_csv, tmp_path):
+    """pythonfmu FMUs must not be loaded in the process that runs the update (heap corruption): the base
+    point's runs go to the Dask workers too, and the update gives the native FMU's answer."""
+    import tomllib
+
+    from mace_fmu.fmu.export import export_fmu
+    from mace_fmu.iomodel.volts import volts_model
+
+    fmu = export_fmu(volts_model("1g"), out_dir=tmp_path, name="MACE_1g_pythonfmu")
+    start = tmp_path / "start.toml"
+    start.write_text(f"[values]\nE_lexan_center = {pre_update_parameters()['E_lexan_center']!r}\n")
+    code, out, err = _cli(capsys, ["update", "--fmu", str(fmu), "--data", str(data_csv), "--update", "E_lexan_center",
+                                   "--start", str(start), "--workers", "2", "--hold-input", UNRECORDED,
+                                   "-o", str(tmp_path / "o")])
+    assert code in (0, 3), err
+    values = tomllib.loads((tmp_path / "o" / "parameters.toml").read_text())["values"]
+    assert abs(values["E_lexan_center"] / table_4_4_moduli()["E_lexan_center"] - 1.0) < 0.002

@@ -22,7 +22,7 @@ import tempfile
 import weakref
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Mapping, Sequence
+from typing import Callable, Mapping, Sequence
 
 import numpy as np
 
@@ -214,13 +214,32 @@ def _digest(*arrays: np.ndarray) -> str:
     return h.hexdigest()
 
 
+def _run_in_worker(path: str, guid: str, values: Mapping[str, float], t: np.ndarray, u: np.ndarray,
+                   names: Sequence[str], outs: Sequence[str]) -> np.ndarray:
+    """One FMU run where this function is executed (a Dask worker: see :class:`FmuModel`)."""
+    return _loaded(path, guid).run(values, t, u, names, outs)
+
+
+def _run_packed(args: tuple) -> np.ndarray:
+    return _run_in_worker(*args)
+
+
 @dataclass(frozen=True, eq=False)
 class FmuModel:
-    """The FMU with parameter ``values`` [FMU units] set through FMI before initialisation."""
+    """The FMU with parameter ``values`` [FMU units] set through FMI before initialisation.
+
+    ``runner`` (a map-like callable, e.g. a :class:`~mace_fmu.runner.DaskRunner`): where the runs of an
+    FMU that must not be loaded here go (pythonfmu FMUs run in worker processes only); it is not sent
+    along when the model itself travels to a worker.
+    """
 
     interface: FmuInterface
     values: Mapping[str, float]
     _memo: dict = field(default_factory=dict, repr=False, compare=False)
+    runner: Callable | None = field(default=None, repr=False, compare=False)
+
+    def __reduce__(self):
+        return FmuModel, (self.interface, self.values)
 
     @property
     def inputs(self) -> tuple[str, ...]:
@@ -250,7 +269,11 @@ class FmuModel:
             raise MaceError(f"time_response: inputs have {u.shape[0]} samples, times have {len(t)}")
         key = (_digest(t, u), tuple(names), tuple(outs))
         if key not in self._memo:
-            y = _loaded(self.interface.path, self.interface.guid).run(self.values, t, u, names, outs)
+            args = (self.interface.path, self.interface.guid, dict(self.values), t, u, names, outs)
+            if self.interface.written_by_pythonfmu and self.runner is not None and not _in_worker_process():
+                (y,) = list(self.runner(_run_packed, [args]))
+            else:
+                y = _run_in_worker(*args)
             self._memo.clear()  # one answer kept: the engine repeats only its last question
             self._memo[key] = y
         return self._memo[key].copy()
@@ -272,16 +295,23 @@ class _NoBasis:
 
 @dataclass(frozen=True)
 class FmuFamily:
-    """Parameter values -> the FMU with them set (the engine's ModelFamily); ``fixed`` values are set on every run."""
+    """Parameter values -> the FMU with them set (the engine's ModelFamily); ``fixed`` values are set on every run.
+
+    ``runner``: where the runs of a pythonfmu FMU go from this process (see :class:`FmuModel`).
+    """
 
     interface: FmuInterface
     fixed: Mapping[str, float] = field(default_factory=dict)
+    runner: Callable | None = field(default=None, repr=False, compare=False)
+
+    def __reduce__(self):
+        return FmuFamily, (self.interface, self.fixed)
 
     def full(self, values: Mapping[str, float]) -> FmuModel:
         """The FMU at ``values`` (names the FMU has no parameter of are refused)."""
         merged = {**self.fixed, **values}
         self.interface.check_parameters(list(merged))
-        return FmuModel(interface=self.interface, values=merged)
+        return FmuModel(interface=self.interface, values=merged, runner=self.runner)
 
     def basis(self, values: Mapping[str, float]) -> _NoBasis:
         return _NoBasis(self)

@@ -10,6 +10,7 @@ physical parameters at initialisation.
 
 from __future__ import annotations
 
+import dataclasses
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -85,6 +86,12 @@ def update_fmu(*, family: FmuFamily, cost: Cost, start: Mapping[str, float], sta
     if bad:
         raise MaceError(f"update parameters must start positive (they move in relative terms): "
                         + ", ".join(f"{n} = {start[n]:g}" for n in bad))
+    if family.interface.written_by_pythonfmu:
+        if runner is map:
+            raise MaceError(f"{family.interface.path}: FMUs written by pythonfmu run in worker processes only (they "
+                            "have corrupted the heap of the process that loaded them): pass a Dask runner "
+                            "(runner=DaskRunner(...); the CLI always uses one), or export a native FMU")
+        family = dataclasses.replace(family, runner=runner)  # every run of it, the base point's too, goes there
     plan = [Stage(name=f"stage {k + 1}", parameters=tuple(s)) for k, s in enumerate(stages)]
     return update(family, cost, start=dict(start), stages=plan, bounds=default_bounds(names, start),
                   settings=settings, runner=runner, progress=progress)
