@@ -28,6 +28,18 @@ static int host_is_little_endian(void) {
     return *(const unsigned char *)&one == 1;
 }
 
+int mace_resource_read(MaceFile *f, const char *resource_dir, const MaceAlloc *al, char *path, size_t path_size,
+                       char *err) {
+    size_t len = strlen(resource_dir);
+    const char *sep = (len && (resource_dir[len - 1] == '/' || resource_dir[len - 1] == '\\')) ? "" : "/";
+    if (len + sizeof(MACE_DATA_FILE) + 2 > path_size) {
+        snprintf(err, MACE_ERR_LEN, "resource path too long");
+        return -1;
+    }
+    snprintf(path, path_size, "%s%s%s", resource_dir, sep, MACE_DATA_FILE);
+    return mace_file_read(f, path, al, err);
+}
+
 int mace_file_read(MaceFile *f, const char *path, const MaceAlloc *al, char *err) {
     FILE *fp;
     long size;

@@ -27,6 +27,9 @@ typedef struct MaceFile {
 
 /* Reads and indexes the whole file; on failure the message names the file and what is wrong. */
 int mace_file_read(MaceFile *f, const char *path, const MaceAlloc *al, char *err);
+/* mace_file_read of resource_dir/MACE_DATA_FILE; the file's path goes into path (path_size bytes). */
+int mace_resource_read(MaceFile *f, const char *resource_dir, const MaceAlloc *al, char *path, size_t path_size,
+                       char *err);
 void mace_file_free(MaceFile *f, const MaceAlloc *al);
 /* The entry `name` with this type and shape (ndim dims), or NULL and a message. */
 const void *mace_file_get(const MaceFile *f, const char *name, unsigned type, size_t ndim, const size_t *dims,

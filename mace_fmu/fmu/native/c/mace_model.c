@@ -67,16 +67,10 @@ static const void *entry_2d(MaceModel *m, const char *name, unsigned type, size_
 
 static int load(MaceModel *m, const char *resource_dir, char *err) {
     char path[4096];
-    size_t len = strlen(resource_dir), k, sum_x = 0, sum_u = 0, sum_y = 0;
+    size_t k, sum_x = 0, sum_u = 0, sum_y = 0;
     const int64_t *counts, *version;
     size_t dims[3], count_dims = N_COUNTS;
-    const char *sep = (len && (resource_dir[len - 1] == '/' || resource_dir[len - 1] == '\\')) ? "" : "/";
-    if (len + sizeof(MACE_DATA_FILE) + 2 > sizeof(path)) {
-        snprintf(err, MACE_ERR_LEN, "resource path too long");
-        return -1;
-    }
-    snprintf(path, sizeof(path), "%s%s%s", resource_dir, sep, MACE_DATA_FILE);
-    if (mace_file_read(&m->file, path, &m->al, err) != 0) return -1;
+    if (mace_resource_read(&m->file, resource_dir, &m->al, path, sizeof(path), err) != 0) return -1;
     if (!(version = (const int64_t *)entry_1d(m, "format_version", MACE_I64, 1, err))) return -1;
     if (version[0] != 1) {
         snprintf(err, MACE_ERR_LEN, "%.900s: data format %lld, this runtime reads format 1", path, (long long)version[0]);

@@ -44,16 +44,10 @@ static const void *matrix(MaceModel *m, const char *name, size_t r, size_t c, ch
 
 static int load(MaceModel *m, const char *resource_dir, char *err) {
     char path[4096];
-    size_t len = strlen(resource_dir), one = 1, three = 3, k;
+    size_t one = 1, three = 3, k;
     const int64_t *version, *counts;
     const double *sample_time;
-    const char *sep = (len && (resource_dir[len - 1] == '/' || resource_dir[len - 1] == '\\')) ? "" : "/";
-    if (len + sizeof(MACE_DATA_FILE) + 2 > sizeof(path)) {
-        snprintf(err, MACE_ERR_LEN, "resource path too long");
-        return -1;
-    }
-    snprintf(path, sizeof(path), "%s%s%s", resource_dir, sep, MACE_DATA_FILE);
-    if (mace_file_read(&m->file, path, &m->al, err) != 0) return -1;
+    if (mace_resource_read(&m->file, resource_dir, &m->al, path, sizeof(path), err) != 0) return -1;
     if (!(version = (const int64_t *)mace_file_get(&m->file, "controller_format_version", MACE_I64, 1, &one, err)))
         return -1;
     if (version[0] != 1) {
