@@ -19,6 +19,16 @@ from mace_fmu.parameters import ParameterSet, Provenance
 from mace_fmu.ssp import (FrequencyBound, SspComponent, SsvContent, parameter_set_from_ssv, parameter_set_to_ssv,
                           schema_problems, write_ssp)
 
+def _ecospy():
+    """ecospy, or a skip that says what is missing (its library links against the libtbb12 system library,
+    which .ci/run installs)."""
+    try:
+        import ecospy
+    except (ImportError, OSError) as exc:
+        pytest.skip(f"ecospy cannot load ({exc}); install it and the libtbb12 system library")
+    return ecospy
+
+
 SET = {"E_lexan_end": 2.9e9, "damping:1st Z bending": 0.031, "frequency_scale:1st Y bending": 1.02,
        "delay_gimbal_primary_x": 0.0021, "K_a": 0.9}
 
@@ -94,7 +104,7 @@ def test_exported_package_is_schema_valid_and_binds_the_set(plant_ssp):
 
 
 def test_ecos_runs_the_package_as_our_state_space_model(plant_ssp):
-    ecospy = pytest.importorskip("ecospy")
+    ecospy = _ecospy()
     from fmu_checks import make_inputs, zoh_reference
 
     from mace_fmu.iomodel.volts import volts_model
@@ -163,7 +173,7 @@ def _example():
 
 def test_closed_loop_package_runs_in_ecos_and_fmpy_as_the_state_space_loop(closed_loop_ssp, tmp_path, monkeypatch):
     """The 0-g plant with the Appendix A LQG controller, a 0.5 V step on the secondary gimbal's servo command."""
-    pytest.importorskip("ecospy")
+    _ecospy()
     example = _example()
     monkeypatch.setenv("TMPDIR", str(tmp_path))  # ecos extracts the package there
     h, n, w = 0.002, 1000, 0.5
@@ -182,7 +192,7 @@ def test_closed_loop_package_runs_in_ecos_and_fmpy_as_the_state_space_loop(close
 def test_example_from_the_updated_model_to_a_package_other_tools_run(tmp_path, monkeypatch):
     """examples/closed_loop_ssp.py: predict-0g's updated nominal model with its bounds, the LQG controller,
     one package; ecos and fmpy run it as the state-space loop."""
-    pytest.importorskip("ecospy")
+    _ecospy()
     monkeypatch.setenv("TMPDIR", str(tmp_path))
     errors = _example().main(tmp_path / "out", quick=False)
     assert set(errors) == {"ecos", "fmpy"} and max(errors.values()) <= 1e-9
