@@ -81,6 +81,7 @@ class Provenance:
     initial_cost: float | None = None  #: j^T j at the start
     final_cost: float | None = None  #: j^T j at the end
     notes: str = ""
+    fitted_to: str = ""  #: the model file the values were fitted to (an FMU), "" for the engine's own models
 
 
 def deck_fingerprint(path: str | Path) -> str:

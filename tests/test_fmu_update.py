@@ -221,7 +221,9 @@ def test_cli_updates_an_fmu_parameter_and_writes_it_by_the_fmus_name(capsys, fmu
                                    "--update", "E_lexan_center", "--cost", "time", "--start", str(start),
                                    "--workers", "1", "-o", str(tmp_path / "o"), "--hold-input", UNRECORDED])
     assert code in (0, 3), err  # 3: written, but the verdict is not converged (see convergence.toml)
-    values = tomllib.loads((tmp_path / "o" / "parameters.toml").read_text())["values"]
+    written = tomllib.loads((tmp_path / "o" / "parameters.toml").read_text())
+    assert written["provenance"]["structure"] == "1g" and written["provenance"]["fitted_to"] == fmu.name
+    values = written["values"]
     assert abs(values["E_lexan_center"] / table_4_4_moduli()["E_lexan_center"] - 1.0) < 0.002
     assert "E_lexan_center" in out and "% lower" in out
 
@@ -326,3 +328,12 @@ def test_a_pythonfmu_fmu_is_updated_with_every_run_in_the_workers(capsys, data_c
     assert code in (0, 3), err
     values = tomllib.loads((tmp_path / "o" / "parameters.toml").read_text())["values"]
     assert abs(values["E_lexan_center"] / table_4_4_moduli()["E_lexan_center"] - 1.0) < 0.002
+
+
+def test_a_set_fitted_to_one_structures_fmu_is_refused_for_the_other(capsys, tmp_path):
+    """What `update --fmu` writes says which FMU it was fitted to; `model 1g` refuses a fit to the 0-g FMU."""
+    path = tmp_path / "fitted.toml"
+    path.write_text('[provenance]\ncreated = "2026-11-24T00:00:00+00:00"\ntool = "mace-fmu"\nstructure = "0g"\n'
+                    'fitted_to = "MACE_0g_native.fmu"\n\n[values]\nE_lexan_center = 2.4e9\n')
+    code, out, err = _cli(capsys, ["model", "1g", "--parameters", str(path)])
+    assert code == 2 and "fitted to the 0g FMU MACE_0g_native.fmu, not to the 1g model" in err

@@ -98,7 +98,17 @@ def parameters(args: argparse.Namespace):
     from mace_fmu.parameters import ParameterSet
 
     path = getattr(args, "parameters", None)
-    return ParameterSet.read(path) if path else None
+    if not path:
+        return None
+    parameters = ParameterSet.read(path)
+    prov, structure = parameters.provenance, getattr(args, "structure", None)
+    # a fit to one structure's FMU absorbed that structure's errors: it is not carried to the other
+    # (the engine's 1-g sets are, on purpose: predict-0g); the provenance says which kind a set is
+    if prov is not None and prov.fitted_to and prov.structure and structure in ("1g", "0g") \
+            and prov.structure != structure:
+        raise MaceError(f"{path}: fitted to the {prov.structure} FMU {prov.fitted_to}, not to the {structure} model; "
+                        f"refit it, or remove 'structure' from its [provenance] to use it anyway")
+    return parameters
 
 
 def volts(args: argparse.Namespace, **overrides):

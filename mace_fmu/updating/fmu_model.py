@@ -45,6 +45,13 @@ class FmuInterface:
     parameters: Mapping[str, float]  #: Real parameters (fixed or tunable) and their start values
     references: Mapping[str, int]  #: value reference of every input, output and parameter
     units: Mapping[str, str]  #: unit of each of them ("" when the FMU declares none)
+    description: str = ""  #: the model description's description attribute ("MACE 1g volts-volts model: ...")
+
+    @property
+    def structure(self) -> str:
+        """"1g" or "0g" for a MACE FMU (from its description), else ""."""
+        words = self.description.split()
+        return words[1] if len(words) > 1 and words[0] == "MACE" and words[1] in ("1g", "0g") else ""
 
     @property
     def written_by_pythonfmu(self) -> bool:
@@ -85,7 +92,7 @@ def read_fmu_interface(path: str | os.PathLike) -> FmuInterface:
                         inputs=tuple(v.name for v in real if v.causality == "input"),
                         outputs=tuple(v.name for v in real if v.causality == "output"),
                         parameters=parameters, references={v.name: int(v.valueReference) for v in used},
-                        units={v.name: v.unit or "" for v in used})
+                        units={v.name: v.unit or "" for v in used}, description=md.description or "")
 
 
 def _in_worker_process() -> bool:

@@ -109,7 +109,8 @@ class FmuParameters:
         """[provenance] and [values] tables as in :class:`~mace_fmu.parameters.ParameterSet` files."""
         lines = ["# mace-fmu: FMU parameters after an update (names and units as the FMU declares them)", "",
                  "[provenance]"]
-        for key in ("created", "tool", "data", "cost", "method", "initial_cost", "final_cost", "notes"):
+        for key in ("created", "tool", "structure", "fitted_to", "data", "cost", "method", "initial_cost",
+                    "final_cost", "notes"):
             value = getattr(self.provenance, key)
             if value is not None and value != "":
                 lines.append(f"{key} = {toml_value(value)}")
@@ -134,6 +135,7 @@ def fmu_parameters(result: UpdateResult, *, family: FmuFamily, data: str, cost: 
                       method=f"{s.method} ({s.perturbation} FMU runs, {s.difference} differences, step "
                              f"{s.relative_step}), penalty "
                              f"{'on' if s.penalty else 'off'}, {len(result.history)} outer iterations",
-                      initial_cost=result.initial_cost, final_cost=result.final_cost, notes=notes)
+                      initial_cost=result.initial_cost, final_cost=result.final_cost, notes=notes,
+                      structure=family.interface.structure, fitted_to=Path(family.interface.path).name)
     return FmuParameters(values=dict(result.values), units={n: family.interface.units.get(n, "") for n in result.values},
                          provenance=prov)
