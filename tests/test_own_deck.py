@@ -154,3 +154,69 @@ def test_a_grid_attached_to_nothing_is_constrained_automatically_and_reported(tm
     strict = _write(tmp_path / "strict.bdf", text.replace("ENDDATA", "PARAM,AUTOSPC,NO\nENDDATA"))
     assert main(["modes", "0g", "--deck", str(strict)]) == 2
     assert "99-1" in capsys.readouterr().err
+
+
+BEAM_STRUCTURE = """
+[components]
+beam = ["1-21"]
+
+[[actuators]]
+name = "tip_force_y"
+description = "force along Y at the beam's tip"
+dofs = [[21, 2, 1.0]]
+gain = 2.0   # N per V
+
+[[sensors]]
+name = "tip_y"
+description = "tip displacement along Y"
+kind = "displacement"
+dofs = [[21, 2, 1.0]]
+gain = 100.0   # V per m
+
+[[sensors]]
+name = "tip_rate_z"
+description = "tip rotation rate about Z"
+kind = "rate"
+dofs = [[21, 6, 1.0]]
+gain = 10.0   # V per rad/s
+"""
+
+
+def test_your_own_deck_with_a_structure_file_gives_a_volts_model_and_an_fmu(tmp_path):
+    """A structure file with only instruments (no electronics, loops or damping table): the model has
+    the declared gains and 1 % damping, its static gain is the beam's tip compliance, and its native
+    FMU (FMI 2 and 3) steps as the exact ZOH of its state space."""
+    import control as ct
+    import fmpy
+
+    from fmu_checks import check_close, make_inputs, zoh_reference
+    from mace_fmu.fmu.native.export import export_native_fmu
+    from mace_fmu.iomodel.volts import volts_model
+
+    deck = _write(tmp_path / "beam.bdf", beam_deck())
+    spec = _write(tmp_path / "beam.toml", BEAM_STRUCTURE)
+    model = volts_model("0g", deck=read_deck(deck), structure_file=spec, max_hz=200.0)
+    assert list(model.system.input_labels) == ["tip_force_y"]
+    assert list(model.system.output_labels) == ["tip_y", "tip_rate_z"]
+    assert model.structure_modes.structure.file.path.name == "beam.toml"
+    # static gain: V -> N (2) -> tip deflection of the retained modes -> V (100); within 2 % of the beam's
+    # exact tip compliance L^3 / (3 E I) (the truncated modes carry the rest)
+    dc = ct.dcgain(model.system)[0, 0] / (2.0 * 100.0)
+    np.testing.assert_allclose(dc, L**3 / (3 * E * INERTIA), rtol=0.02)
+    for version in (2, 3):
+        fmu = export_native_fmu(model, out_dir=tmp_path, name=f"beam_fmi{version}", fmi_version=version)
+        md = fmpy.read_model_description(str(fmu))
+        outputs = {v.name: v.description for v in md.modelVariables if v.causality == "output"}
+        assert set(outputs) == {"tip_y", "tip_rate_z"}
+        assert md.description.startswith("beam 0g volts-volts model")  # not MACE's
+        assert "100.0 V per m" in outputs["tip_y"] and "10.0 V per rad/s" in outputs["tip_rate_z"]
+    t = np.arange(0, 1.0 + 1e-12, 2e-3)
+    u = make_inputs("multisine", t, 1)
+    ref = zoh_reference(model, t, u)
+    inputs = np.zeros(len(t), dtype=[("time", float), ("tip_force_y", float)])
+    inputs["time"], inputs["tip_force_y"] = t, u[0]
+    run = fmpy.simulate_fmu(str(tmp_path / "beam_fmi2.fmu"), input=inputs, output=["tip_y", "tip_rate_z"],
+                            step_size=2e-3, output_interval=2e-3, stop_time=t[-1])
+    y = np.stack([run["tip_y"], run["tip_rate_z"]])[:, :len(t)]
+    span = np.ptp(ref, axis=1, keepdims=True)
+    assert np.all(span > 0) and np.max(np.abs(y - ref[:, :y.shape[1]]) / span) <= 1e-10

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 from mace_fmu.iomodel.motion import motion_unit, parse_motion_output
 from mace_fmu.iomodel.volts import VoltsModel
 
@@ -22,6 +24,12 @@ def variable_unit(name: str, causality: str) -> str | None:
 
 def model_summary(model: VoltsModel) -> str:
     """One-line description of a volts-volts model for an FMU's model description."""
-    kind, sys_ = model.structure_modes.structure.kind, model.system
-    return (f"MACE {kind} volts-volts model: {sys_.nstates} states; servos {'closed' if model.servos else 'open'}, "
+    structure, sys_ = model.structure_modes.structure, model.system
+    kind = structure.kind
+    # "MACE <kind>" names the bundled structure only (hosts and `view response` read it); another deck is
+    # named by its file
+    from mace_fmu.structure import is_bundled_deck
+
+    who = "MACE" if is_bundled_deck(structure.deck) else Path(structure.deck.path).stem
+    return (f"{who} {kind} volts-volts model: {sys_.nstates} states; servos {'closed' if model.servos else 'open'}, "
             f"Bessel filters {model.bessel}, delays {'on' if model.delays else 'off'}")

@@ -142,6 +142,10 @@ def _dofs(entry: Mapping[str, Any], where: str) -> tuple[Dof, ...]:
     return tuple(out)
 
 
+#: open-loop damping ratio of every flexible mode when the structure file gives no [damping] table
+DEFAULT_DAMPING = 0.01
+
+
 def _sensor_unit(kind: str, dofs: tuple[Dof, ...]) -> str:
     """The unit a sensor reads when its structure file gives none: rad or m (per s for a rate sensor),
     from its DOFs' components (a weighted sum of rotations reads radians)."""
@@ -164,19 +168,27 @@ def load_instruments(structure_file: StructureFile | str | Path | None = None) -
                                dofs=_dofs(s, f"{path} sensor {s['name']}"), gain=float(s["gain"]),
                                unit=str(s.get("unit") or _sensor_unit(s["kind"], _dofs(s, f"{path} sensor {s['name']}"))))
                         for s in data["sensors"])
-        el, sv, dm = data["electronics"], data["servos"], data["damping"]
-        electronics = Electronics(bessel_order=int(el["bessel_order"]), bessel_cutoff_hz=float(el["bessel_cutoff_hz"]),
-                                  bessel_equivalent_delay_s=float(el["bessel_equivalent_delay_s"]),
-                                  analog_sensors=tuple(el["analog_sensors"]), sensor_delays_s=dict(el["gyro_delays_s"]),
-                                  actuator_delays_s=dict(el["actuator_delays_s"]))
-        servos = Servos(wheel_forward_gain=float(sv["wheel_forward_gain"]),
-                        wheel_backward_gain=float(sv["wheel_backward_gain"]), wheels=dict(sv["wheels"]),
-                        gimbal_angle_gain=float(sv["gimbal_angle_gain"]), gimbal_rate_gain=float(sv["gimbal_rate_gain"]),
-                        gimbals=dict(sv["gimbals"]))
-        damping = DampingTable(default=float(dm["default"]), zero_frequency=float(dm["zero_frequency"]),
-                               by_label=dict(dm["by_label"]),
+        # electronics, servos and damping are optional: a structure without them has no filters, no
+        # delays, no local loops, and every mode DEFAULT_DAMPING (rigid-body and mechanism modes none)
+        el, sv, dm = data.get("electronics", {}), data.get("servos", {}), data.get("damping", {})
+        electronics = Electronics(bessel_order=int(el.get("bessel_order", 0)),
+                                  bessel_cutoff_hz=float(el.get("bessel_cutoff_hz", 0.0)),
+                                  bessel_equivalent_delay_s=float(el.get("bessel_equivalent_delay_s", 0.0)),
+                                  analog_sensors=tuple(el.get("analog_sensors", ())),
+                                  sensor_delays_s=dict(el.get("gyro_delays_s", {})),
+                                  actuator_delays_s=dict(el.get("actuator_delays_s", {})))
+        servos = Servos(wheel_forward_gain=float(sv.get("wheel_forward_gain", 0.0)),
+                        wheel_backward_gain=float(sv.get("wheel_backward_gain", 0.0)), wheels=dict(sv.get("wheels", {})),
+                        gimbal_angle_gain=float(sv.get("gimbal_angle_gain", 0.0)),
+                        gimbal_rate_gain=float(sv.get("gimbal_rate_gain", 0.0)), gimbals=dict(sv.get("gimbals", {})))
+        damping = DampingTable(default=float(dm.get("default", DEFAULT_DAMPING)),
+                               zero_frequency=float(dm.get("zero_frequency", 0.0)),
+                               by_label=dict(dm.get("by_label", {})),
                                violin_families=tuple(ViolinFamily(order=int(f["order"]), cables=frozenset(f["cables"]),
-                                                                  zeta=tuple(f["zeta"])) for f in dm["violin_families"]))
+                                                                  zeta=tuple(f["zeta"]))
+                                                     for f in dm.get("violin_families", ())))
+        if el.get("analog_sensors") and not (electronics.bessel_order > 0 and electronics.bessel_cutoff_hz > 0):
+            raise MaceError(f"{path}: [electronics] analog_sensors need bessel_order > 0 and bessel_cutoff_hz > 0")
     except KeyError as exc:
         raise MaceError(f"{path}: missing table or key {exc}") from None
     for s in sensors:

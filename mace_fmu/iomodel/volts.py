@@ -128,7 +128,7 @@ def build_diagram(plant: ModalPlant, instruments: Instruments, *, servos: bool =
     analog = list(instruments.analog_sensor_names)
     extra = {n: (el.sensor_delays_s.get(n, 0.0) if delays else 0.0) for n in analog}
     source = {n: f"sensor_gain.y[{n}]" for n in sen_names}
-    if bessel == "full":
+    if bessel == "full" and analog:  # a structure whose file names no analog sensors has no filter
         s.add(BesselFilter("bessel", el.bessel_order, el.bessel_cutoff_hz, size=len(analog), signals=analog))
         for n in analog:
             s.connect(source[n], f"bessel.u[{n}]")
