@@ -220,3 +220,12 @@ def test_your_own_deck_with_a_structure_file_gives_a_volts_model_and_an_fmu(tmp_
     y = np.stack([run["tip_y"], run["tip_rate_z"]])[:, :len(t)]
     span = np.ptp(ref, axis=1, keepdims=True)
     assert np.all(span > 0) and np.max(np.abs(y - ref[:, :y.shape[1]]) / span) <= 1e-10
+
+
+def test_export_of_another_deck_names_the_fmu_after_it(tmp_path, capsys):
+    deck = _write(tmp_path / "beam.bdf", beam_deck())
+    spec = _write(tmp_path / "beam.toml", BEAM_STRUCTURE)
+    assert main(["export", "0g", "--deck", str(deck), "--structure", str(spec), "--max-hz", "200",
+                 "-o", str(tmp_path / "fmus")]) == 0
+    assert [p.name for p in (tmp_path / "fmus").iterdir()] == ["beam_0g_native.fmu"]
+    assert "wrote" in capsys.readouterr().out

@@ -10,6 +10,14 @@ from mace_fmu.errors import MaceError
 from mace_fmu.fmu.naming import fmu_name
 
 
+def model_prefix(model) -> str:
+    """"MACE" for the bundled deck's models, else the deck's file stem (an FMU of another structure is not MACE's)."""
+    from mace_fmu.structure import is_bundled_deck
+
+    deck = model.structure_modes.structure.deck
+    return "MACE" if is_bundled_deck(deck) else Path(deck.path).stem
+
+
 def model_variant(args: argparse.Namespace) -> str:
     """What sets this FMU's model apart from the plain one, for its name: the parameter set's file stem
     and "bounded" with frequency bounds ("" for the plain model, which keeps the plain name)."""
@@ -39,7 +47,7 @@ def cmd_export(args: argparse.Namespace) -> int:
         bounds = read_frequency_bounds(args.frequency_bounds, mode_labels=model.plant.labels)
     name = fmu_name(args.structure, kind=args.kind, fmi_version=args.fmi_version,
                     motion_grids=model.plant.motion_grids, all_grids=model.structure_modes.modes.dofs.grid_ids,
-                    variant=model_variant(args))
+                    variant=model_variant(args), prefix=model_prefix(model))
     progress(f"{args.kind} FMU {name}.fmu")
     if args.kind == "native":
         from mace_fmu.fmu.native.export import export_native_fmu

@@ -31,10 +31,11 @@ def export_ssp(args: argparse.Namespace) -> int:
         from mace_fmu.zero_g_report import read_frequency_bounds
 
         bounds = read_frequency_bounds(args.frequency_bounds, mode_labels=model.plant.labels)
-    from mace_fmu.cli.export import model_variant
+    from mace_fmu.cli.export import model_prefix, model_variant
 
     name = fmu_name(args.structure, kind=args.kind, fmi_version=2, motion_grids=model.plant.motion_grids,
-                    all_grids=model.structure_modes.modes.dofs.grid_ids, variant=model_variant(args))
+                    all_grids=model.structure_modes.modes.dofs.grid_ids, variant=model_variant(args),
+                    prefix=model_prefix(model))
     with tempfile.TemporaryDirectory(prefix="mace_ssp_") as tmp:
         progress(f"{args.kind} FMU {name}.fmu")
         if args.kind == "native":

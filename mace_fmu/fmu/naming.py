@@ -9,7 +9,7 @@ LISTED_GRIDS = 6
 
 
 def fmu_name(structure: str, *, kind: str | None = None, fmi_version: int = 2, motion_grids: Sequence[int] = (),
-             all_grids: Sequence[int] = (), variant: str = "") -> str:
+             all_grids: Sequence[int] = (), variant: str = "", prefix: str = "MACE") -> str:
     """Model name (and .fmu file stem) of a MACE FMU, e.g. MACE_1g_native, MACE_1g_native_fmi3,
     MACE_1g_pythonfmu, MACE_0g_native_motion_1_7 (MACE_1g, MACE_1g_motion without ``kind``).
 
@@ -17,8 +17,9 @@ def fmu_name(structure: str, *, kind: str | None = None, fmi_version: int = 2, m
     motion of every grid in ``all_grids``: ``_motion``; a few grids: their IDs; more than
     ``LISTED_GRIDS``: ``_motion_<count>_grids``. ``variant`` (e.g. the stem of the parameter set the model
     was built from) follows the kind, so that an FMU of a changed model never takes the plain model's name.
+    ``prefix``: "MACE" for the bundled structure, another deck's file stem for its FMUs.
     """
-    base = f"MACE_{structure}" + (f"_{kind}" if kind else "") + ("_fmi3" if fmi_version == 3 else "")
+    base = f"{variant_identifier(prefix)}_{structure}" + (f"_{kind}" if kind else "") + ("_fmi3" if fmi_version == 3 else "")
     if variant:
         base += "_" + variant_identifier(variant)
     grids = sorted(set(int(g) for g in motion_grids))
