@@ -45,6 +45,7 @@ STRUCTURE_FILE_TABLES = {
     "servos": "wheel speed loops and gimbal servos",
     "damping": "modal damping table",
     "parameters": "names of the MAT1 and CELAS2 cards an update may change",
+    "labels": "rules = \"generic\" (default: by strain-energy family) or \"mace\" (MACE's bus, cable and gimbal names)",
 }
 
 
@@ -77,6 +78,7 @@ class StructureSpec:
     components: Mapping[str, frozenset[int]]  #: name -> grid IDs
     mechanisms: tuple[Mechanism, ...]
     source: str
+    label_rules: str = "generic"  #: "generic" (strain-energy families) or "mace" (MACE's component conventions)
 
     @classmethod
     def empty(cls, source: str = "no structure file") -> StructureSpec:
@@ -150,6 +152,10 @@ def _spec_of(path: Path, text: str, data: Mapping[str, Any]) -> StructureSpec:
     mechanisms = data.get("mechanisms", {})
     if not isinstance(components, dict) or not isinstance(mechanisms, dict):
         raise MaceError(f"{path}: [components] and [mechanisms] must be tables")
+    labels = data.get("labels", {})
+    rules = labels.get("rules", "generic") if isinstance(labels, dict) else labels
+    if rules not in ("generic", "mace") or (isinstance(labels, dict) and set(labels) - {"rules"}):
+        raise MaceError(f"{_where(path, text, 'labels')}: expected rules = \"generic\" or \"mace\", got {labels!r}")
     mechs = []
     for name, v in mechanisms.items():
         if not (isinstance(v, list) and len(v) == 3 and all(isinstance(x, int) and not isinstance(x, bool) for x in v)
@@ -161,7 +167,7 @@ def _spec_of(path: Path, text: str, data: Mapping[str, Any]) -> StructureSpec:
         suspension_grids=_id_set(susp.get("grids", []), _where(path, text, "suspension") + " grids"),
         suspension_elements=_id_set(susp.get("elements", []), _where(path, text, "suspension") + " elements"),
         components={name: _id_set(v, _where(path, text, "components") + f" {name}") for name, v in components.items()},
-        mechanisms=tuple(mechs), source=str(path))
+        mechanisms=tuple(mechs), source=str(path), label_rules=rules)
 
 
 @functools.lru_cache(maxsize=16)

@@ -229,3 +229,22 @@ def test_export_of_another_deck_names_the_fmu_after_it(tmp_path, capsys):
                  "-o", str(tmp_path / "fmus")]) == 0
     assert [p.name for p in (tmp_path / "fmus").iterdir()] == ["beam_0g_native.fmu"]
     assert "wrote" in capsys.readouterr().out
+
+
+def test_example_own_structure_spacecraft(tmp_path):
+    """examples/own_structure: a spacecraft the project wrote, on its test stand (1-g, gravity preload) and in
+    orbit (0-g, free): modes labelled by motion, its FMUs (FMI 2 and 3) equal to the exact ZOH, an animation."""
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "examples" / "own_structure" / "own_structure.py"
+    spec = importlib.util.spec_from_file_location("own_structure_example", path)
+    example = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(example)
+    summary = example.main(tmp_path)
+    assert all(e <= 1e-10 for e in summary["zoh_error"].values()) and set(summary["zoh_error"]) == {2, 3}
+    labels_0g = [label for _, label in summary["modes_0g"]]
+    assert sum(label.startswith("rigid body") for label in labels_0g) == 6  # free in orbit
+    assert not any(label.startswith("rigid body") for _, label in summary["modes_1g"])  # held by the stand
+    assert "1st bending about Y" in labels_0g and not any("violin" in x or "gimbal" in x for x in labels_0g)
+    assert (tmp_path / "spacecraft_0g_modes.html").stat().st_size > 10_000

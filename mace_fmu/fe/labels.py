@@ -17,8 +17,8 @@ Rules, in order:
    bending modes are numbered by frequency within their family, torsion modes by the end
    (primary at low x, secondary at high x) holding most of the torsional strain energy.
 
-A structure without components (a deck without a structure file) gets labels that are true of
-any structure instead: rigid-body names for the zero cluster, else the family that holds most of
+MACE's rules apply when the structure file asks for them (``[labels] rules = "mace"``, as the
+bundled mace_em.toml does). Any other structure gets labels that are true of any structure instead: rigid-body names for the zero cluster, else the family that holds most of
 the mode's strain energy, numbered by frequency: "1st bending about Z", "2nd torsion", "1st
 axial", "1st spring mode" (bending assigned to the basic axis each bar's bending axis is closest to).
 
@@ -291,7 +291,7 @@ def label_modes(model: FEModel, modes: Modes, spec: StructureSpec, *, reference:
     modes = replace(modes, shapes=shapes)
     if state is None:
         state = BarState(model.positions, np.broadcast_to(np.eye(3), (len(model.positions), 3, 3)))
-    if not spec.components:
+    if spec.label_rules != "mace":
         return replace(modes, labels=unique_labels(_generic_labels(model, modes, state, zero, labels, bar_forces),
                                                    modes.frequencies_hz))
     en = _Energies(model, modes, spec, state)
