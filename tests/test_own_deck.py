@@ -248,3 +248,47 @@ def test_example_own_structure_spacecraft(tmp_path):
     assert not any(label.startswith("rigid body") for _, label in summary["modes_1g"])  # held by the stand
     assert "1st bending about Y" in labels_0g and not any("violin" in x or "gimbal" in x for x in labels_0g)
     assert (tmp_path / "spacecraft_0g_modes.html").stat().st_size > 10_000
+
+
+def test_include_files_nested_and_relative_read_as_one_deck(tmp_path):
+    """INCLUDE 'path' (relative to the including file, nested): the same modes as the deck in one file;
+    an error inside an included file names that file and its line."""
+    whole = beam_deck()
+    head, bulk = whole.split("BEGIN BULK\n")
+    body = bulk.replace("ENDDATA\n", "").splitlines()
+    grids = [c for c in body if c.startswith("GRID")]
+    rest = [c for c in body if not c.startswith("GRID")]
+    (tmp_path / "parts").mkdir()
+    (tmp_path / "parts" / "grids.blk").write_text("\n".join(grids[:5]) + "\nINCLUDE 'more_grids.blk'\n")
+    (tmp_path / "parts" / "more_grids.blk").write_text("\n".join(grids[5:]) + "\n")
+    main_deck = _write(tmp_path / "main.bdf", head + "BEGIN BULK\n" + "\n".join(rest)
+                       + "\nINCLUDE 'parts/grids.blk'\nUSET,U2,1,123\nENDDATA\n")
+    one = compute_modes(read_deck(_write(tmp_path / "one.bdf", whole)), structure="0g")
+    split = compute_modes(read_deck(main_deck), structure="0g")
+    np.testing.assert_allclose(split.modes.frequencies_hz, one.modes.frequencies_hz, rtol=1e-14)
+    assert split.structure.deck.skipped == (("USET", 1, f"{main_deck}:{len((head + 'BEGIN BULK').splitlines()) + len(rest) + 2}"),)
+    (tmp_path / "parts" / "more_grids.blk").write_text("\n".join(grids[5:]) + "\nGRID,abc\n")
+    with pytest.raises(Exception, match=r"more_grids.blk:\d+: GRID"):
+        read_deck(main_deck)
+
+
+@pytest.mark.parametrize("include, message", [
+    ("INCLUDE 'nowhere.blk'", r"main.bdf:\d+: INCLUDE: INCLUDE 'nowhere.blk': no such file"),
+    ("INCLUDE 'self.blk'", r"INCLUDE 'self.blk' is circular"),
+    ("INCLUDE nowhere.blk", r"expected INCLUDE 'path'"),
+])
+def test_bad_includes_name_file_and_line(tmp_path, include, message):
+    (tmp_path / "self.blk").write_text("INCLUDE 'self.blk'\n")
+    deck = _write(tmp_path / "main.bdf", beam_deck().replace("ENDDATA", include + "\nENDDATA"))
+    with pytest.raises(Exception, match=message):
+        read_deck(deck)
+
+
+def test_every_card_we_cannot_model_is_listed_at_once(tmp_path, capsys):
+    text = beam_deck().replace("ENDDATA", "CQUAD4,1,1,1,2,3,4\nCQUAD4,2,1,2,3,4,5\nCBEAM,900,1,1,2,0.,0.,1.\n"
+                                          "FORCE,5,21,,1.0,0.,1.,0.\nENDDATA")
+    deck = _write(tmp_path / "many.bdf", text)
+    assert main(["modes", "0g", "--deck", str(deck)]) == 2
+    err = capsys.readouterr().err
+    assert "cards this reader cannot model: CQUAD4 (2x, first at" in err and "CBEAM (1x, first at" in err
+    assert "FORCE" not in err.split("(supported")[0]  # a load changes neither mass nor stiffness: read past

@@ -22,6 +22,7 @@ def _modes_json(result: StructureModes) -> dict:
         "deck": result.structure.deck.path,
         "structure_file": str(result.structure.file.path) if result.structure.file is not None else None,
         "auto_constrained": [[int(g), int(c)] for g, c in result.auto_constrained],
+        "skipped_cards": [{"card": n, "count": k, "first": where} for n, k, where in result.structure.deck.skipped],
         "preload": result.preload.kind if result.preload else None,
         # a rigid-body or mechanism mode reads 0 Hz; its eigenvalue (round-off, either sign) is kept apart
         "modes": [{"index": i + 1, "frequency_hz": 0.0 if abs(f) < ZERO_HZ else float(f), "label": lab,
@@ -42,6 +43,9 @@ def _print_modes(result: StructureModes) -> None:
     file = result.structure.file
     print(f"structure file: {file.path}" if file is not None else
           "structure file: none (the deck's own SPC, MPC and EIGRL; nothing removed; labels by motion)")
+    if result.structure.deck.skipped:
+        print("read past (no mass or stiffness): " + ", ".join(f"{n} ({k}x, first at {where})"
+                                                             for n, k, where in result.structure.deck.skipped))
     if result.auto_constrained:
         from mace_fmu.fe.autospc import describe_dofs
 

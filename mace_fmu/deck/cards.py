@@ -258,3 +258,5 @@ class Deck:
     params: Mapping[str, Param]
     subcases: Mapping[int, Subcase]  #: empty when the file has no case control
     global_case: Subcase | None = field(default=None)  #: selections above the first SUBCASE
+    #: cards read but not modelled because they change neither mass nor stiffness: (name, count, file:line of the first)
+    skipped: tuple[tuple[str, int, str], ...] = field(default=())

@@ -139,6 +139,7 @@ class RawCard:
     line: int  #: 1-based line of the card's first physical line
     fields: list[str] = field(default_factory=list)  #: stripped text of data fields 1, 2, ...
     lines: list[int] = field(default_factory=list)  #: physical line of each data field
+    file: str = ""  #: the file the card is in (an INCLUDEd file's own name; "" for the deck's)
 
 
 def _physical(text: str) -> tuple[str, list[str], bool]:
@@ -192,7 +193,7 @@ class Fields:
 
     def __init__(self, raw: RawCard, file: str) -> None:
         self.raw = raw
-        self.file = file
+        self.file = raw.file or file
         self.label = raw.name  #: becomes "NAME ID" once the ID is read
 
     def __len__(self) -> int:

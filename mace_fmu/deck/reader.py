@@ -50,14 +50,73 @@ def read_deck_text(text: str, *, name: str = "<string>") -> Deck:
     check_text(lines, name)
     case, bulk = split_sections(lines, name)
     global_case, subcases, selections = case_control(case, name) if case is not None else (None, {}, {})
-    raw_cards = split_cards(bulk, name)
+    raw_cards = _cards_with_includes(bulk, name, stack=(os.path.abspath(name),))
     if not raw_cards:
         raise DeckError("no bulk data cards (expected GRID, CBAR and the other cards before ENDDATA)", file=name,
                         line=min(bulk[-1][0] + 1, lines[-1][0]) if bulk else lines[-1][0])
-    tables = _bulk_tables(raw_cards, name)
-    deck = Deck(path=name, subcases=subcases, global_case=global_case, **tables)
+    tables, skipped = _bulk_tables(raw_cards, name)
+    deck = Deck(path=name, subcases=subcases, global_case=global_case, skipped=skipped, **tables)
     _validate(deck, selections)
     return deck
+
+
+_INCLUDE = re.compile(r"^\s*INCLUDE\s*'([^']+)'\s*$", re.IGNORECASE)
+
+
+def _cards_with_includes(lines: list, file: str, *, stack: tuple[str, ...]) -> list:
+    """The bulk cards of ``lines`` with each ``INCLUDE 'path'`` replaced by the cards of that file (a path
+    relative to the including file's folder, nested INCLUDEs too); every card keeps its own file and line."""
+    out, segment = [], []
+
+    def flush() -> None:
+        for raw in split_cards(segment, file):
+            raw.file = file
+            out.append(raw)
+        segment.clear()
+
+    for number, text in lines:
+        head = text.split("$", 1)[0]
+        if not head.strip().upper().startswith("INCLUDE"):
+            segment.append((number, text))
+            continue
+        match = _INCLUDE.match(head)
+        if not match:
+            raise DeckError("expected INCLUDE 'path' (the path in single quotes on one line)", file=file, line=number,
+                            card="INCLUDE")
+        flush()
+        target = Path(match.group(1))
+        if not target.is_absolute():
+            target = Path(file).parent / target
+        resolved = os.path.abspath(target)
+        if resolved in stack:
+            raise DeckError(f"INCLUDE {match.group(1)!r} is circular: {' -> '.join(stack)} -> {resolved}", file=file,
+                            line=number, card="INCLUDE")
+        try:
+            included = target.read_text(encoding="utf-8")
+        except FileNotFoundError:
+            raise DeckError(f"INCLUDE {match.group(1)!r}: no such file ({target})", file=file, line=number,
+                            card="INCLUDE") from None
+        except (OSError, UnicodeDecodeError) as exc:
+            raise DeckError(f"INCLUDE {match.group(1)!r}: cannot read {target} ({exc})", file=file, line=number,
+                            card="INCLUDE") from None
+        physical = included.removeprefix("\ufeff").split("\n")
+        numbered = [(k, line.rstrip("\r")) for k, line in enumerate(physical, start=1)]
+        check_text(numbered, str(target))
+        out += _cards_with_includes(numbered, str(target), stack=stack + (resolved,))
+    flush()
+    return out
+
+
+#: cards that change neither mass nor stiffness (loads, frequencies, output sets, aerodynamics, ...): read
+#: past and reported, never an error; any other card we cannot model is one
+NON_STRUCTURAL = frozenset({
+    "USET", "USET1", "FORCE", "FORCE1", "FORCE2", "MOMENT", "MOMENT1", "MOMENT2", "PLOAD", "PLOAD1", "PLOAD2",
+    "PLOAD4", "TEMP", "TEMPD", "DAREA", "DLOAD", "RLOAD1", "RLOAD2", "TLOAD1", "TLOAD2", "TABLED1", "TABLED2",
+    "TABLED3", "TABLED4", "FREQ", "FREQ1", "FREQ2", "FREQ3", "FREQ4", "FREQ5", "TSTEP", "TSTEPNL", "RANDPS",
+    "SET1", "SET2", "SET3", "CAERO1", "CAERO2", "PAERO1", "PAERO2", "SPLINE1", "SPLINE2", "SPLINE4", "SPLINE5",
+    "AERO", "AEROS", "MKAERO1", "MKAERO2", "FLFACT", "FLUTTER", "AESTAT", "AESURF", "TRIM", "DESVAR", "DRESP1",
+    "DCONSTR", "DVPREL1", "DOPTPRM", "EIGC", "TABDMP1", "PLOTEL", "ECHOOFF", "ECHOON",
+})
 
 
 # ----------------------------------------------------------------------------------------------
@@ -338,18 +397,34 @@ _TABLES = {"GRID": "grids", "CORD2R": "coords", "CBAR": "bars", "PBAR": "pbars",
 _ELEMENTS = ("CBAR", "CONM2", "CELAS2")  # one ID namespace in NASTRAN
 
 
-def _bulk_tables(raw_cards: list, file: str) -> dict[str, dict]:
-    """Cards keyed by ID (MPC and SPC1 by set ID), with duplicates rejected."""
+def _bulk_tables(raw_cards: list, file: str) -> tuple[dict[str, dict], tuple]:
+    """Cards keyed by ID (MPC and SPC1 by set ID), with duplicates rejected, and the non-structural cards
+    read past ((name, count, first file:line) each)."""
     tables: dict[str, dict] = {attr: {} for attr in _TABLES.values()}
     sets: dict[str, dict[int, list]] = {"mpcs": {}, "spc1s": {}}
     elements: dict[int, tuple[str, Any]] = {}
     thru: list[tuple[int, _Thru]] = []
+    unknown: dict[str, list] = {}
+    skipped: dict[str, list] = {}
     for raw in raw_cards:
-        parser = _PARSERS.get(raw.name)
-        if parser is None:
-            raise DeckError(f"unknown card {raw.name!r} (supported: {', '.join(sorted(_PARSERS))})",
-                            file=file, line=raw.line, card=raw.name)
-        card = parser(Fields(raw, file), Source(file, raw.line))
+        if raw.name not in _PARSERS:
+            (skipped if raw.name in NON_STRUCTURAL else unknown).setdefault(raw.name, []).append(raw)
+    if unknown:  # every card we cannot model, once each: card, count, first line
+        (name, first), *_ = sorted(((n, rs[0]) for n, rs in unknown.items()), key=lambda t: (t[1].file, t[1].line))
+        if len(unknown) == 1 and len(unknown[name]) == 1:
+            message = f"unknown card {name!r} (supported: {', '.join(sorted(_PARSERS))})"
+        else:
+            listed = ", ".join(f"{n} ({len(rs)}x, first at {rs[0].file or file}:{rs[0].line})"
+                               for n, rs in sorted(unknown.items(), key=lambda t: (t[1][0].file, t[1][0].line)))
+            message = (f"cards this reader cannot model: {listed} (supported: {', '.join(sorted(_PARSERS))}; "
+                       f"read past without a word, as changing neither mass nor stiffness: "
+                       f"{', '.join(sorted(NON_STRUCTURAL))})")
+        raise DeckError(message, file=first.file or file, line=first.line, card=name)
+    for raw in raw_cards:
+        if raw.name in NON_STRUCTURAL and raw.name not in _PARSERS:
+            continue
+        parser = _PARSERS[raw.name]
+        card = parser(Fields(raw, file), Source(raw.file or file, raw.line))
         if raw.name in ("MPC", "SPC1"):
             sid = card.card.sid if isinstance(card, _Thru) else card.sid
             group = sets["mpcs" if raw.name == "MPC" else "spc1s"].setdefault(sid, [])
@@ -361,13 +436,13 @@ def _bulk_tables(raw_cards: list, file: str) -> dict[str, dict]:
         table = tables[_TABLES[raw.name]]
         if key in table:
             raise DeckError(f"{raw.name} {key} defined twice: line {table[key].source.line} and line {raw.line}",
-                            file=file, line=raw.line, card=f"{raw.name} {key}")
+                            file=raw.file or file, line=raw.line, card=f"{raw.name} {key}")
         if raw.name in _ELEMENTS:
             if key in elements:
                 kind, other = elements[key]
                 raise DeckError(f"element ID {key} is used twice: {kind} at line {other.source.line} and {raw.name} "
                                 f"at line {raw.line} (CBAR, CONM2 and CELAS2 share one ID namespace)",
-                                file=file, line=raw.line, card=f"{raw.name} {key}")
+                                file=raw.file or file, line=raw.line, card=f"{raw.name} {key}")
             elements[key] = (raw.name, card)
         table[key] = card
     # MSC rule: grids of a THRU range that do not exist are skipped.
@@ -378,7 +453,9 @@ def _bulk_tables(raw_cards: list, file: str) -> dict[str, dict]:
             raise DeckError(f"no GRID exists in {item.first} THRU {item.last} (expected at least one)", file=file,
                             line=item.card.source.line, card=f"SPC1 {item.card.sid}", field="fields 4-6 (G1 THRU G2)")
         group[index] = replace(item.card, grids=grids)
-    return {**tables, **{name: {sid: tuple(cards) for sid, cards in group.items()} for name, group in sets.items()}}
+    report = tuple((n, len(rs), f"{rs[0].file or file}:{rs[0].line}") for n, rs in sorted(skipped.items()))
+    return {**tables, **{name: {sid: tuple(cards) for sid, cards in group.items()} for name, group in sets.items()}}, \
+        report
 
 
 # ----------------------------------------------------------------------------------------------
