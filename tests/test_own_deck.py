@@ -292,3 +292,13 @@ def test_every_card_we_cannot_model_is_listed_at_once(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "cards this reader cannot model: CQUAD4 (2x, first at" in err and "CBEAM (1x, first at" in err
     assert "FORCE" not in err.split("(supported")[0]  # a load changes neither mass nor stiffness: read past
+
+
+def test_spc_cards_fix_dofs_like_spc1(tmp_path):
+    """SPC (grid, components, 0.0 pairs) fixes the same DOFs as SPC1; an enforced displacement is refused."""
+    one = compute_modes(read_deck(_write(tmp_path / "spc1.bdf", beam_deck())), structure="0g")
+    spc = beam_deck().replace("SPC1,7,123456,1", "SPC,7,1,123,0.0,1,456")
+    two = compute_modes(read_deck(_write(tmp_path / "spc.bdf", spc)), structure="0g")
+    np.testing.assert_allclose(two.modes.frequencies_hz, one.modes.frequencies_hz, rtol=1e-14)
+    with pytest.raises(Exception, match="enforced displacement is not supported"):
+        read_deck(_write(tmp_path / "bad.bdf", beam_deck().replace("SPC1,7,123456,1", "SPC,7,1,123456,0.01")))

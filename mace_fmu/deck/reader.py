@@ -304,6 +304,26 @@ def _spc1(f: Fields, src: Source) -> Spc1 | _Thru:
     return Spc1(sid=sid, components=comps, grids=grids, source=src)
 
 
+def _spc(f: Fields, src: Source) -> tuple[Spc1, ...]:
+    """SPC: up to two (grid, components, enforced value) triples; a fixed DOF only (the value must be 0),
+    stored as SPC1 entries of the same set."""
+    sid = f.ident(1, "SID")
+    out = []
+    for k, d in enumerate((2, 5), start=1):
+        if not f.text(d):
+            if k == 1:
+                raise f.error("no grid (expected G1 C1 D1)", 2, "G1")
+            continue
+        grid = f.integer(d, f"G{k}", minimum=1)
+        comps = f.components(d + 1, f"C{k}")
+        if f.real(d + 2, f"D{k}", 0.0) != 0.0:
+            raise f.error("an enforced displacement is not supported (expected D blank or 0.0: a fixed DOF)",
+                          d + 2, f"D{k}")
+        out.append(Spc1(sid=sid, components=comps, grids=(grid,), source=src))
+    f.end(7)
+    return tuple(out)
+
+
 def _grav(f: Fields, src: Source) -> Grav:
     sid = f.ident(1, "SID")
     cid = f.integer(2, "CID", 0, minimum=0)
@@ -389,7 +409,7 @@ def _param(f: Fields, src: Source) -> Param:
 
 _PARSERS: dict[str, Callable[[Fields, Source], Any]] = {
     "GRID": _grid, "CORD2R": _cord2r, "CBAR": _cbar, "PBAR": _pbar, "MAT1": _mat1, "CONM2": _conm2,
-    "CELAS2": _celas2, "MPC": _mpc, "SPC1": _spc1, "GRAV": _grav, "LOAD": _load, "EIGRL": _eigrl,
+    "CELAS2": _celas2, "MPC": _mpc, "SPC1": _spc1, "SPC": _spc, "GRAV": _grav, "LOAD": _load, "EIGRL": _eigrl,
     "NLPARM": _nlparm, "PARAM": _param}
 _TABLES = {"GRID": "grids", "CORD2R": "coords", "CBAR": "bars", "PBAR": "pbars", "MAT1": "mat1s",
            "CONM2": "conm2s", "CELAS2": "celas2s", "GRAV": "gravs", "LOAD": "loads", "EIGRL": "eigrls",
@@ -425,6 +445,10 @@ def _bulk_tables(raw_cards: list, file: str) -> tuple[dict[str, dict], tuple]:
             continue
         parser = _PARSERS[raw.name]
         card = parser(Fields(raw, file), Source(raw.file or file, raw.line))
+        if raw.name == "SPC":  # one or two fixed DOFs: SPC1 entries of the same set
+            for entry in card:
+                sets["spc1s"].setdefault(entry.sid, []).append(entry)
+            continue
         if raw.name in ("MPC", "SPC1"):
             sid = card.card.sid if isinstance(card, _Thru) else card.sid
             group = sets["mpcs" if raw.name == "MPC" else "spc1s"].setdefault(sid, [])
