@@ -226,7 +226,7 @@ BROKEN = [
                  id="grdpnt-word"),
     pytest.param(base(sf("CORD2R", 1, -2, "0.0", "0.0", "0.0", "0.0", "0.0", "1.0"), CORD_LINE2), 6, "CORD2R 1",
                  "field 3 (RID): expected an integer >= 0, got '-2'", id="cord2r-negative-rid"),
-    pytest.param(base(sf("PARAM", "WTMASS", "0.00259")), 6, "PARAM WTMASS", "WTMASS '0.00259' is not supported",
+    pytest.param(base(sf("PARAM", "WTMASS", "-0.00259")), 6, "PARAM WTMASS", "WTMASS '-0.00259' must be a positive",
                  id="wtmass"),
     # --- text and sections
     pytest.param("", 1, "", "the file is empty", id="empty-file"),

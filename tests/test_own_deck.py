@@ -302,3 +302,16 @@ def test_spc_cards_fix_dofs_like_spc1(tmp_path):
     np.testing.assert_allclose(two.modes.frequencies_hz, one.modes.frequencies_hz, rtol=1e-14)
     with pytest.raises(Exception, match="enforced displacement is not supported"):
         read_deck(_write(tmp_path / "bad.bdf", beam_deck().replace("SPC1,7,123456,1", "SPC,7,1,123456,0.01")))
+
+
+def test_param_wtmass_scales_every_mass(tmp_path):
+    """A deck in weight units: densities and the tip mass 386.1 times larger, PARAM,WTMASS,1/386.1 (NASTRAN's
+    convention for lbf-in decks): the same modes as the deck in mass units."""
+    w = 1.0 / 386.1
+    text = beam_deck().replace(f"{r(RHO)}", f"{r(RHO / w)}").replace(f"{r(TIP_MASS)}", f"{r(TIP_MASS / w)}")
+    text = text.replace("ENDDATA", f"PARAM,WTMASS,{r(w)}\nENDDATA")
+    weighted = compute_modes(read_deck(_write(tmp_path / "weight.bdf", text)), structure="0g")
+    plain = compute_modes(read_deck(_write(tmp_path / "mass.bdf", beam_deck())), structure="0g")
+    # the decks print 11 significant digits: 1e-9 is their rounding, not the method's
+    assert weighted.mass_properties.mass_kg == pytest.approx(plain.mass_properties.mass_kg, rel=1e-9)
+    np.testing.assert_allclose(weighted.modes.frequencies_hz, plain.modes.frequencies_hz, rtol=1e-9)

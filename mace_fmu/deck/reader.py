@@ -401,9 +401,9 @@ def _param(f: Fields, src: Source) -> Param:
         raise f.error("required field is blank (expected a value)", 2, "V1")
     f.end(3)
     values = tuple(_param_value(f.text(d)) for d in (2, 3) if f.text(d))
-    if name == "WTMASS" and values != (1.0,):  # mass scaling is not applied: refuse rather than mislead
-        raise f.error(f"WTMASS {f.text(2)!r} is not supported by mace-fmu (expected 1.0: masses in consistent "
-                      "units)", 2, "V1")
+    if name == "WTMASS" and (len(values) != 1 or isinstance(values[0], str) or not values[0] > 0):
+        raise f.error(f"WTMASS {f.text(2)!r} must be a positive number (the factor on every mass, e.g. 0.00259 "
+                      "for a deck in lbf and inches)", 2, "V1")
     return Param(name=name, values=values, source=src)
 
 

@@ -69,6 +69,13 @@ def cd_component_vector(dofs: DofMap, cd_frames: np.ndarray, grid: int, componen
     return vec
 
 
+def mass_factor(deck: Deck) -> float:
+    """PARAM,WTMASS: NASTRAN multiplies every mass term by it (element and CONM2 masses alike), e.g. 1/386.1
+    for a deck in weight units (lbf, in); 1 without the parameter."""
+    param = deck.params.get("WTMASS")
+    return 1.0 if param is None else float(param.values[0])  # the reader checked it is a positive number
+
+
 def assemble(deck: Deck, *, mass: MassKind = "lumped") -> FEModel:
     """Assemble K and M of every CBAR, CONM2 and CELAS2 of ``deck`` (no constraints applied)."""
     frames = coordinate_frames(deck)
@@ -114,6 +121,7 @@ def assemble(deck: Deck, *, mass: MassKind = "lumped") -> FEModel:
     constants = np.array([sp.k for sp in springs])
     k_spring = vectors.T @ (constants[:, None] * vectors)
     k_glob += k_spring
+    m_glob *= mass_factor(deck)
 
     bars = Bars(ids=np.array(ids), node_a=np.array(na), node_b=np.array(nb), frames0=np.array(fr),
                 lengths0=np.array(ln), k_natural=np.array(kn))
