@@ -28,7 +28,6 @@ from mace_fmu.structure import (Structure, StructureFile, StructureKind, Structu
 from mace_fmu.threads import single_blas_thread
 
 
-
 @dataclass(frozen=True)
 class MassProperties:
     """Rigid-body mass properties of a structure (NASTRAN's grid point weight generator)."""

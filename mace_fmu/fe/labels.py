@@ -18,9 +18,10 @@ Rules, in order:
    (primary at low x, secondary at high x) holding most of the torsional strain energy.
 
 MACE's rules apply when the structure file asks for them (``[labels] rules = "mace"``, as the
-bundled mace_em.toml does). Any other structure gets labels that are true of any structure instead: rigid-body names for the zero cluster, else the family that holds most of
-the mode's strain energy, numbered by frequency: "1st bending about Z", "2nd torsion", "1st
-axial", "1st spring mode" (bending assigned to the basic axis each bar's bending axis is closest to).
+bundled mace_em.toml does). Any other structure gets labels that are true of any structure
+instead: rigid-body names for the zero cluster, else the family that holds most of the mode's
+strain energy, numbered by frequency: "1st bending about Z", "2nd torsion", "1st axial", "1st
+spring mode" (bending assigned to the basic axis each bar's bending axis is closest to).
 
 Every label of a model is unique: a violin mode shared by two cables says whether they swing in
 phase or in antiphase, and any label that still repeats is numbered in frequency order, the
@@ -238,8 +239,7 @@ def unique_labels(labels: list[str], frequencies_hz: np.ndarray) -> tuple[str, .
     return tuple(out)
 
 
-def _generic_labels(model: FEModel, modes: Modes, state: BarState, zero: np.ndarray, labels: list[str],
-                    bar_forces: np.ndarray | None) -> list[str]:
+def _generic_labels(model: FEModel, modes: Modes, state: BarState, zero: np.ndarray, labels: list[str]) -> list[str]:
     """Labels that are true of any structure: the family holding most of a mode's strain energy.
 
     Families: axial, torsion and bending about the basic X, Y or Z axis (bar strain energy, each
@@ -254,7 +254,6 @@ def _generic_labels(model: FEModel, modes: Modes, state: BarState, zero: np.ndar
     springs = (0.5 * model.spring_constants[:, None] * (model.spring_vectors @ modes.shapes) ** 2).sum(0)
     families = {"axial": en.bus_stretch, "torsion": en.bus_torsion.sum(0), "bending about X": en.bending_about[0],
                 "bending about Y": en.bending_about[1], "bending about Z": en.bending_about[2], "spring": springs}
-    del bar_forces  # the families split the elastic energy; the preload's share is not a family of its own
     counters = dict.fromkeys(families, 0)
     for m in np.argsort(modes.frequencies_hz, kind="stable"):
         if zero[m]:
@@ -292,7 +291,7 @@ def label_modes(model: FEModel, modes: Modes, spec: StructureSpec, *, reference:
     if state is None:
         state = BarState(model.positions, np.broadcast_to(np.eye(3), (len(model.positions), 3, 3)))
     if spec.label_rules != "mace":
-        return replace(modes, labels=unique_labels(_generic_labels(model, modes, state, zero, labels, bar_forces),
+        return replace(modes, labels=unique_labels(_generic_labels(model, modes, state, zero, labels),
                                                    modes.frequencies_hz))
     en = _Energies(model, modes, spec, state)
     cable_names = sorted(n for n in spec.components if n.startswith("cable_"))
