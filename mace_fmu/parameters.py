@@ -28,42 +28,31 @@ import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import MappingProxyType
-from typing import Any, Literal, Mapping
+from typing import Any, Mapping
 
 from mace_fmu.atomic import write_text_atomic
 from mace_fmu.errors import MaceError
+from mace_fmu.parameter_kinds import DAMPING, FREQUENCY_SCALE, MODULUS, SERVO_GAINS, KindName, kind_of_set_name, unit_of
 from mace_fmu.textfile import read_text
 
-ParameterKind = Literal["modulus", "spring", "delay", "gain", "damping", "frequency_scale"]
-DAMPING_PREFIX = "damping:"
-FREQUENCY_SCALE_PREFIX = "frequency_scale:"
-SERVO_GAINS = {"K_a": "gimbal_angle_gain", "K_r": "gimbal_rate_gain", "K_f": "wheel_forward_gain",
-               "K_b": "wheel_backward_gain"}
-UNITS = {"modulus": "Pa", "spring": "N/m", "delay": "s", "damping": "1", "frequency_scale": "1"}
+ParameterKind = KindName
 
 
 def parameter_kind(name: str) -> ParameterKind:
-    """What a parameter name refers to (by its prefix); a MaceError for a name of no known kind."""
-    if name.startswith("E_"):
-        return "modulus"
-    if name.startswith("k_"):
-        return "spring"
-    if name.startswith("delay_"):
-        return "delay"
-    if name in SERVO_GAINS:
-        return "gain"
-    if name.startswith(DAMPING_PREFIX) and len(name) > len(DAMPING_PREFIX):
-        return "damping"
-    if name.startswith(FREQUENCY_SCALE_PREFIX) and len(name) > len(FREQUENCY_SCALE_PREFIX):
-        return "frequency_scale"
-    raise MaceError(f"parameter {name!r}: unknown kind of name; expected E_<material>, k_<spring>, "
-                    f"delay_<channel>, {', '.join(SERVO_GAINS)}, {DAMPING_PREFIX}<mode label> or "
-                    f"{FREQUENCY_SCALE_PREFIX}<mode label>")
+    """What a parameter-set name refers to (:mod:`mace_fmu.parameter_kinds`); a MaceError for a name of no
+    known kind."""
+    kind = kind_of_set_name(name)
+    if kind is None:
+        raise MaceError(f"parameter {name!r}: unknown kind of name; expected E_<material>, k_<spring>, "
+                        f"delay_<channel>, {', '.join(SERVO_GAINS)}, {DAMPING.set_prefix}<mode label> or "
+                        f"{FREQUENCY_SCALE.set_prefix}<mode label>")
+    return kind.name
 
 
 def parameter_unit(name: str) -> str:
     """SI unit of a parameter, as the FMUs declare it."""
-    return {"K_a": "V/deg", "K_r": "V/(deg/s)"}.get(name, UNITS.get(parameter_kind(name), "1"))
+    kind = kind_of_set_name(name)
+    return "1" if kind is None else unit_of(kind, name)
 
 
 @dataclass(frozen=True)
@@ -253,8 +242,9 @@ def fe_overrides(parameters: ParameterSet | None, names: ParameterNames | None =
     names = names if names is not None else load_parameter_names()
     out: dict[tuple[str, int], dict[str, float]] = {}
     for name, value in parameters.of_kind("modulus", "spring").items():
-        table, card, key = ((names.materials, "MAT1", "e") if name.startswith("E_") else (names.springs, "CELAS2", "k"))
-        short = name[2:]
+        kind = kind_of_set_name(name)
+        table, card, key = ((names.materials, "MAT1", "e") if kind is MODULUS else (names.springs, "CELAS2", "k"))
+        short = name.removeprefix(kind.set_prefix)
         if short not in table:
             raise MaceError(f"parameter {name!r}: no such {'material' if card == 'MAT1' else 'spring'}; known: "
                             f"{', '.join(name[:2] + n for n in table)}")

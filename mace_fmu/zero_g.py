@@ -32,8 +32,8 @@ from mace_fmu.iomodel.parametric import ParametricSystem
 from mace_fmu.iomodel.parametric_data import parametric_arrays
 from mace_fmu.iomodel.poles import ClosedLoopPole, closed_loop_poles, label_poles
 from mace_fmu.iomodel.volts import VoltsModel, volts_model
-from mace_fmu.parameters import (DAMPING_PREFIX, FREQUENCY_SCALE_PREFIX, ParameterSet, Provenance,
-                                 deck_fingerprint, now_utc, tool_version)
+from mace_fmu.parameter_kinds import DAMPING, FREQUENCY_SCALE, kind_of_set_name, mode_label
+from mace_fmu.parameters import ParameterSet, Provenance, deck_fingerprint, now_utc, tool_version
 from mace_fmu.thesis import thesis_data
 from mace_fmu.threads import single_blas_thread
 from mace_fmu.updating.data import MeasuredMode, read_measured_modes
@@ -164,8 +164,8 @@ class _Adjuster:
     def __init__(self, model: VoltsModel, modes: Sequence[int]):
         self.system = ParametricSystem(parametric_arrays(model, physical=False))
         self.modes = list(modes)
-        self.scale = [self.system.index(f"frequency_scale_mode_{m + 1}") for m in self.modes]
-        self.damping = [self.system.index(f"damping_mode_{m + 1}") for m in self.modes]
+        self.scale = [self.system.index(FREQUENCY_SCALE.fmu_name(m + 1)) for m in self.modes]
+        self.damping = [self.system.index(DAMPING.fmu_name(m + 1)) for m in self.modes]
         self.open_damping = self.system.nominal[self.damping]
 
     def params(self, x: np.ndarray) -> np.ndarray:
@@ -267,7 +267,7 @@ def _with_closed_loop_shifts(rows: Sequence[ZeroGRow], core: VoltsModel) -> list
         shift = []
         for side in (-1.0, 1.0):
             params = system.nominal.copy()
-            params[system.index(f"frequency_scale_mode_{row.mode}")] = 1.0 + side * row.bound
+            params[system.index(FREQUENCY_SCALE.fmu_name(row.mode))] = 1.0 + side * row.bound
             a, *_ = system.build(params)
             poles = [p for p in label_poles(a, state_names=system.state_names, mode_labels=system.state_mode_labels)
                      if p.mode == row.mode - 1 and p.damping < REAL_POLE_DAMPING]
@@ -345,11 +345,11 @@ def predict_zero_g(*, parameters: ParameterSet | None = None, measured: Sequence
     params = adjuster.params(x)
     updates = {}
     for k, m in enumerate(modes):
-        updates[f"{FREQUENCY_SCALE_PREFIX}{v0.plant.labels[m]}"] = float(params[adjuster.scale[k]])
-        updates[f"{DAMPING_PREFIX}{v0.plant.labels[m]}"] = float(params[adjuster.damping[k]])
+        updates[FREQUENCY_SCALE.set_name(v0.plant.labels[m])] = float(params[adjuster.scale[k]])
+        updates[DAMPING.set_name(v0.plant.labels[m])] = float(params[adjuster.damping[k]])
     base = {name: value for name, value in (parameters.values if parameters is not None else {}).items()
-            if not name.startswith((DAMPING_PREFIX, FREQUENCY_SCALE_PREFIX))
-            or name.split(":", 1)[1] in set(labels)}  # 1-g only modes (suspension, violins) do not exist in 0-g
+            if not getattr(kind_of_set_name(name), "per_mode", False)
+            or mode_label(name) in set(labels)}  # 1-g only modes (suspension, violins) do not exist in 0-g
     nominal_set = ParameterSet({**base, **updates}, _deck_provenance(parameters, deck, source=source))
 
     say("updated nominal 0-g model")
@@ -372,7 +372,7 @@ def predict_zero_g(*, parameters: ParameterSet | None = None, measured: Sequence
             unaltered_damping=before.damping, nominal_hz=pole.frequency_hz, nominal_damping=pole.damping,
             bound=rule.bound(heavy=heavy[j], frequency_error=error), pole_label=pole.label,
             mode=None if mode is None else mode + 1, mode_label=nominal.plant.labels[mode] if mode is not None else "",
-            frequency_scale=float(params[adjuster.system.index(f"frequency_scale_mode_{mode + 1}")])
+            frequency_scale=float(params[adjuster.system.index(FREQUENCY_SCALE.fmu_name(mode + 1))])
             if mode is not None else 1.0,
             open_loop_damping=float(nominal.plant.damping[mode]) if mode is not None else math.nan,
             adjusted=j in adjusted, damping_reached=j not in adjusted or not pinned[adjusted.index(j)]))

@@ -25,15 +25,21 @@ def interconnect(blocks: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarr
     return a_b + b_b @ lc, b_b @ we, exit_ @ (c_b + d_b @ lc), exit_ @ d_b @ we
 
 
+#: Shortest delay [s] realised by a Pade approximation; shorter ones are no delay (1e-9 of a ms step).
+PADE_MIN_DELAY_S = 1e-12
+
+
 def pade(delay: float, order: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """State-space (A, B, C, D) of the [order/order] Pade approximation of exp(-s delay).
 
     Realised in the scaled variable s * delay (companion form), rescaled and balanced, which
-    keeps the matrices well conditioned for millisecond delays; delay = 0 is a unit feedthrough.
+    keeps the matrices well conditioned for millisecond delays. A delay below
+    :data:`PADE_MIN_DELAY_S` is a unit feedthrough: its poles (order / delay) would overflow the
+    realisation long before the delay itself mattered against any sample time.
     """
     if delay < 0.0 or order < 1:
         raise ValueError(f"Pade delay needs delay >= 0 and order >= 1, got {delay}, {order}")
-    if delay == 0.0:
+    if delay < PADE_MIN_DELAY_S:
         return np.zeros((0, 0)), np.zeros((0, 1)), np.zeros((1, 0)), np.ones((1, 1))
     n = order
     c = np.array([factorial(2 * n - k) * factorial(n) / (factorial(2 * n) * factorial(k) * factorial(n - k))

@@ -137,7 +137,7 @@ def test_model_descriptions_validate_and_match_the_pythonfmu_fmu(fmus):
         assert md.defaultExperiment.stepSize == "0.002" and md.description == mdp.description
     params = {v.name: v for v in md2.modelVariables if v.causality == "parameter"}
     assert params["damping_mode_20"].min == "0.0" and params["damping_mode_20"].max == "1.0"
-    assert params["E_lexan_center"].min == "0.0" and params["E_lexan_center"].max is None
+    assert params["E_lexan_center"].min == "0.0" and float(params["E_lexan_center"].max) == 100 * 2.335e9
     n_states = fmus.model.system.nstates
     assert len(md2.derivatives) == n_states
     with zipfile.ZipFile(fmus.fmi2) as z2, zipfile.ZipFile(fmus.fmi3) as z3:
@@ -431,12 +431,12 @@ def test_non_finite_input_is_an_error_with_a_logged_reason(fmus):
 @pytest.mark.parametrize("name, value, reason", [
     ("damping_mode_20", float("nan"), "not a finite number"),
     ("K_a", float("inf"), "not a finite number"),
-    ("damping_mode_20", 1.0, "must be >= 0 and < 1"),
-    ("damping_mode_20", -0.1, "outside its range"),
-    ("delay_gimbal_primary_x", -1e-3, "outside its range"),
-    ("E_lexan_center", -1.0, "outside its range"),
-    ("frequency_scale_mode_20", 0.0, "must be > 0"),
-    ("frequency_scale_mode_20", -0.5, "outside its range"),
+    ("damping_mode_20", np.nextafter(1.0, 2.0), "outside its declared range"),
+    ("damping_mode_20", -0.1, "outside its declared range"),
+    ("delay_gimbal_primary_x", -1e-3, "outside its declared range"),
+    ("E_lexan_center", -1.0, "outside its declared range"),
+    ("frequency_scale_mode_20", 0.0, "outside its declared range"),
+    ("frequency_scale_mode_20", 10.5, "outside its declared range"),
 ])
 def test_invalid_parameters_fail_initialisation_with_a_logged_reason(fmus, name, value, reason):
     messages = Messages()
@@ -451,6 +451,54 @@ def test_invalid_parameters_fail_initialisation_with_a_logged_reason(fmus, name,
     with pytest.raises(FMICallException):  # the instance is in the error state
         fmu.doStep(currentCommunicationPoint=0.0, communicationStepSize=1e-3)
     fmu.freeInstance()
+
+
+def test_every_parameter_runs_over_exactly_its_declared_range(fmus):
+    """The model description's min/max are the runtime's limits: every parameter at its declared min and
+    at its max initialises and steps with finite outputs (all inputs at 1 V), and the next double outside
+    either end is refused at initialisation; the pythonfmu kind (ParametricSystem) declares and
+    enforces the same ranges."""
+    md = fmpy.read_model_description(fmus.dir2)
+    params = [v for v in md.modelVariables if v.causality == "parameter"]
+    ins = [v.valueReference for v in md.modelVariables if v.causality == "input"]
+    outs = [v.valueReference for v in md.modelVariables if v.causality == "output"]
+    system = ParametricSystem(fmus.arrays)
+    bounded = [v for v in params if v.min is not None and v.max is not None]
+    assert {v.name for v in params} - {v.name for v in bounded} == {"K_a", "K_r", "K_f", "K_b"}  # gains: any value
+    fmu = _slave(fmus.dir2)
+    refused, failed = [], []
+    for v in bounded:
+        low, high = float(v.min), float(v.max)
+        k = system.index(v.name)
+        assert (system.minimum[k], system.maximum[k]) == (low, high), v.name
+        for value, accepted in ((low, True), (high, True), (np.nextafter(low, -np.inf), False),
+                                (np.nextafter(high, np.inf), False)):
+            vector = system.nominal.copy()
+            vector[k] = value
+            assert (system.parameter_problems(vector) == []) == accepted, (v.name, value)
+            fmu.reset()
+            fmu.setupExperiment(startTime=0.0)
+            fmu.enterInitializationMode()
+            fmu.setReal([v.valueReference], [value])
+            try:
+                fmu.exitInitializationMode()
+                fmu.setReal(ins, [1.0] * len(ins))
+                fmu.doStep(currentCommunicationPoint=0.0, communicationStepSize=2e-3)
+                fmu.doStep(currentCommunicationPoint=2e-3, communicationStepSize=2e-3)
+                ok = bool(np.all(np.isfinite(fmu.getReal(outs))))
+            except FMICallException:
+                ok = False
+            if ok != accepted:
+                (failed if accepted else refused).append((v.name, value))
+    fmu.freeInstance()
+    assert failed == [] and refused == [], (failed, refused)
+    # the pythonfmu kind's model at the ends of one parameter of each kind is finite too
+    for name in ("damping_mode_20", "frequency_scale_mode_20", "delay_gimbal_primary_x", "E_lexan_center"):
+        if name in system.parameter_names:
+            for end in (system.minimum, system.maximum):
+                vector = system.nominal.copy()
+                vector[system.index(name)] = end[system.index(name)]
+                assert all(np.all(np.isfinite(m)) for m in system.build(vector)), name
 
 
 def test_calls_out_of_order_are_errors_with_a_logged_reason(fmus):

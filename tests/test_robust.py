@@ -145,7 +145,7 @@ def test_a_refused_run_is_reported_not_printed(unzipped, design, capfd):
 
     run = run_fmu_loop(unzipped, loop=LoopSpec(), compensator=SampledCompensator.of(design.compensator),
                        parameters={"frequency_scale_mode_17": 0.5})
-    assert "frequency_scale_mode_17 = 0.5 is outside its range [0.975, 1.025]" in run.failure
+    assert "frequency_scale_mode_17 = 0.5 is outside its declared range [0.975, 1.025]" in run.failure
     assert not run.verdict.stable and run.verdict.cost_rms_v == float("inf")
     assert capfd.readouterr() == ("", "")
 

@@ -127,7 +127,7 @@ def test_bessel_delay_variant_and_open_loop_variant():
 @pytest.mark.parametrize(("kwargs", "message"), [
     (dict(outputs=["gyro_payload_q"]), "unknown output signal 'gyro_payload_q'; allowed: encoder_primary_x"),
     (dict(inputs=["gimbal_tertiary"]), "unknown input signal 'gimbal_tertiary'; allowed: gimbal_primary_x"),
-    (dict(parameters=ParameterSet({"delay_gimbal_primary_x": -1e-3})), "a delay must be >= 0 s"),
+    (dict(parameters=ParameterSet({"delay_gimbal_primary_x": -1e-3})), "= -0.001 is outside \\[0, 1\\] s, the range of every delay parameter"),
     (dict(parameters=ParameterSet({"delay_gyro_payload_y": 1e-3})), "no delayed channel 'gyro_payload_y'"),
     (dict(parameters=ParameterSet({"E_unobtainium": 1e9})), "no such material; known: E_lexan_end"),
     (dict(pade_order=0), "pade_order must be an integer >= 1"),
@@ -135,7 +135,7 @@ def test_bessel_delay_variant_and_open_loop_variant():
     (dict(bessel="elliptic"), "bessel must be 'full', 'delay' or 'none'"),
     (dict(parameters=ParameterSet({"damping:1st W bending": 0.02})),
      "no mode labelled '1st W bending' in the 0g structure"),
-    (dict(parameters=ParameterSet({"damping:1st Z bending": 1.5})), "must be >= 0 and < 1, got 1.5"),
+    (dict(parameters=ParameterSet({"damping:1st Z bending": 1.5})), "= 1.5 is outside \\[0, 1\\], the range of every damping parameter"),
     (dict(motion_grids=[1, 999999]), "999999] are not in the 0g model; it has grids 1..112"),
     (dict(motion_grids="some"), "motion_grids must be grid IDs or 'all'"),
     (dict(motion_grids=1), "motion_grids must be a list of grid IDs or 'all', got 1"),

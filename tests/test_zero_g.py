@@ -160,7 +160,8 @@ def test_fmus_declare_each_bound_as_the_min_max_of_a_frequency_scale(run, fmus):
             assert float(v.min) == 1.0 - bound and float(v.max) == 1.0 + bound, (kind, mode)
         free = [v for n, v in variables.items() if n.startswith("frequency_scale_mode_") and int(n.rsplit("_", 1)[1])
                 not in bounds]
-        assert free and all(float(v.min) == 0.0 and v.max is None for v in free), kind
+        # the others keep the range every frequency scale has (mace_fmu.parameter_kinds), raised for slow modes
+        assert free and all(0.1 <= float(v.min) < 1.0 and float(v.max) == 10.0 for v in free), kind
 
 
 @pytest.mark.parametrize("side", [-1.0, 1.0])
@@ -310,7 +311,8 @@ def test_scales_outside_their_bounds_are_named_by_the_rebuild_the_pythonfmu_slav
     system = ParametricSystem(parametric_arrays(nominal, physical=False, frequency_bounds=bounds))
     mode, bound = next(iter(bounds.items()))
     name = f"frequency_scale_mode_{mode}"
-    for value, reason in ((1.0 + 1.01 * bound, "outside its range"), (1.0 - 1.01 * bound, "outside its range"),
+    for value, reason in ((1.0 + 1.01 * bound, "outside its declared range"),
+                          (1.0 - 1.01 * bound, "outside its declared range"),
                           (1.0 + bound, None)):
         params = system.nominal.copy()
         params[system.index(name)] = value
@@ -320,8 +322,8 @@ def test_scales_outside_their_bounds_are_named_by_the_rebuild_the_pythonfmu_slav
     free = next(n for n in system.parameter_names if n.startswith("frequency_scale_mode_")
                 and int(n.rsplit("_", 1)[1]) not in bounds)
     params = system.nominal.copy()
-    params[system.index(free)] = 0.0
-    assert system.parameter_problems(params) == [f"{free} = 0 must be > 0 (a frequency scale)"]
+    params[system.index(free)] = 0.0  # below every scale's own minimum (0.1: mace_fmu.parameter_kinds)
+    assert system.parameter_problems(params) == [f"{free} = 0 is outside its declared range [0.1, 10]"]
 
 
 def test_a_1g_parameter_set_from_an_update_is_carried_to_0g(run):

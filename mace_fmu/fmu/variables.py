@@ -6,10 +6,9 @@ from pathlib import Path
 
 from mace_fmu.iomodel.motion import motion_unit, parse_motion_output
 from mace_fmu.iomodel.volts import VoltsModel
+from mace_fmu.parameter_kinds import kind_of_fmu_name, unit_of
 
 DEFAULT_EXPERIMENT = {"startTime": "0.0", "stopTime": "10.0", "stepSize": "0.002"}
-_UNITS = (("E_", "Pa"), ("k_", "N/m"), ("delay_", "s"), ("damping_mode_", "1"), ("frequency_scale_mode_", "1"),
-          ("K_a", "V/deg"), ("K_r", "V/(deg/s)"), ("K_f", "1"), ("K_b", "1"), ("frequency_mode_", "Hz"))
 
 
 def variable_unit(name: str, causality: str) -> str | None:
@@ -19,7 +18,10 @@ def variable_unit(name: str, causality: str) -> str | None:
         return motion_unit(motion[1])
     if causality in ("input", "output"):
         return "V"
-    return next((u for prefix, u in _UNITS if name.startswith(prefix)), None)
+    kind = kind_of_fmu_name(name)
+    if kind is not None:
+        return unit_of(kind, name)
+    return "Hz" if name.startswith("frequency_mode_") else None
 
 
 def model_summary(model: VoltsModel) -> str:

@@ -33,7 +33,6 @@ class ParametricSystem:
         self.nominal = np.asarray(data["param_values"], dtype=np.float64)
         self.minimum = np.asarray(data["param_min"], dtype=np.float64)  #: declared ranges (inf: none)
         self.maximum = np.asarray(data["param_max"], dtype=np.float64)
-        self.maximum_excluded = np.asarray(data["param_max_excluded"], dtype=bool)  #: the maximum itself refused
         self.inputs = [str(n) for n in data["inputs"]]
         self.outputs = [str(n) for n in data["outputs"]]
         self.mode_labels = tuple(str(x) for x in data["mode_labels"])
@@ -52,19 +51,15 @@ class ParametricSystem:
         self.state_mode_labels: tuple[str, ...] = self.mode_labels
 
     def parameter_problems(self, params: np.ndarray) -> list[str]:
-        """Why parameter values cannot be used, one sentence each (empty when all can): not finite, below
-        the declared minimum, above the declared maximum, at a maximum that is excluded, or a frequency
-        scale <= 0."""
+        """Why parameter values cannot be used, one sentence each (empty when all can): not finite, or
+        outside the declared [min, max] (the ranges carry every limit: mace_fmu.parameter_kinds)."""
         problems = []
-        for name, value, low, high, open_high in zip(self.parameter_names, np.asarray(params, dtype=np.float64),
-                                                      self.minimum, self.maximum, self.maximum_excluded):
+        for name, value, low, high in zip(self.parameter_names, np.asarray(params, dtype=np.float64),
+                                          self.minimum, self.maximum):
             if not np.isfinite(value):
                 problems.append(f"{name} = {value} is not a finite number")
-            elif name.startswith("frequency_scale_mode_") and not value > 0.0:
-                problems.append(f"{name} = {value:g} must be > 0 (a frequency scale)")
-            elif value < low or value > high or (open_high and value == high):
-                upper = f"{high:g})" if open_high else f"{high:g}]"
-                problems.append(f"{name} = {value:g} is outside its range [{low:g}, {upper}")
+            elif value < low or value > high:
+                problems.append(f"{name} = {value:.17g} is outside its declared range [{low:.15g}, {high:.15g}]")
         return problems
 
     def index(self, name: str) -> int:

@@ -23,10 +23,10 @@ from mace_fmu.iomodel.modal_core import ZERO_HZ
 from mace_fmu.iomodel.modal_ss import modal_data
 from mace_fmu.iomodel.motion import motion_unit, parse_motion_output
 from mace_fmu.iomodel.volts import VoltsModel
+from mace_fmu.parameter_kinds import DAMPING, DELAY, FREQUENCY_SCALE, declared_range, kind_of_fmu_name, mode_number
 from mace_fmu.parameters import parameter_names
 from modelica_like import PD, Gain, PadeDelay
 
-FREQUENCY_SCALE_PREFIX = "frequency_scale_mode_"  #: + 1-based mode number
 _RELATIVE_STEP = 1e-3  # the material stiffness is linear in E and k: the difference quotient is exact
 
 
@@ -70,7 +70,7 @@ def _blocks(model: VoltsModel) -> tuple[dict, list[tuple[str, float, str]]]:
             kinds.append("structure"), params.append("")
         elif isinstance(block, PadeDelay):
             kinds.append("delay"), params.append(name)
-            what = name.removeprefix("delay_")
+            what = name.removeprefix(DELAY.fmu_prefix)
             parameters.append((name, float(block.delay), f"time delay of {what} [s] (Pade order {model.pade_order})"))
         elif isinstance(block, Gain) and name.startswith(("kf_", "kb_")):
             gain = "K_f" if name.startswith("kf_") else "K_b"
@@ -165,30 +165,6 @@ def physical_sensitivities(model: VoltsModel, shapes: np.ndarray, *, only: Seque
     return parameters, dk
 
 
-def parameter_range(name: str) -> tuple[float, float]:
-    """Declared [min, max] of a tunable parameter (inf: unbounded); FMUs declare and check them.
-
-    Damping ratios in [0, 1] (1 itself is refused at initialisation: critically damped modes
-    are not vibration modes), delays in [0, 1] s, moduli and spring stiffnesses >= 0, frequency
-    scales >= 0 until bounds are given (:func:`with_frequency_bounds`); servo gains are signed and
-    unbounded.
-    """
-    if name.startswith("damping_mode_"):
-        return 0.0, 1.0
-    if name.startswith(FREQUENCY_SCALE_PREFIX):
-        return 0.0, np.inf
-    if name.startswith("delay_"):
-        return 0.0, 1.0
-    if name.startswith(("E_", "k_")):
-        return 0.0, np.inf
-    return -np.inf, np.inf
-
-
-def maximum_is_excluded(name: str) -> bool:
-    """True where the declared maximum itself is refused (damping ratio 1: not a vibration mode)."""
-    return name.startswith("damping_mode_")
-
-
 def parametric_arrays(model: VoltsModel, *, physical: bool | Sequence[str] = True,
                       frequency_bounds: Mapping[int, float] | None = None) -> dict[str, np.ndarray]:
     """Everything a ParametricSystem (and an FMU) needs to rebuild ``model`` for new parameter values.
@@ -205,9 +181,9 @@ def parametric_arrays(model: VoltsModel, *, physical: bool | Sequence[str] = Tru
     data = modal_data(model.structure_modes.modes, model.instruments, max_hz=max_hz,
                       motion_grids=list(model.plant.motion_grids))
     arrays, parameters = _blocks(model)
-    damping = [(f"damping_mode_{k + 1}", float(z), f"open-loop damping ratio of mode {k + 1}: {label}")
+    damping = [(DAMPING.fmu_name(k + 1), float(z), f"open-loop damping ratio of mode {k + 1}: {label}")
                for k, (z, label) in enumerate(zip(model.plant.damping, data.labels))]
-    scales = [(f"{FREQUENCY_SCALE_PREFIX}{k + 1}", 1.0, f"open-loop natural frequency of mode {k + 1} ({label}) "
+    scales = [(FREQUENCY_SCALE.fmu_name(k + 1), 1.0, f"open-loop natural frequency of mode {k + 1} ({label}) "
                "relative to the model's, after reanalysis [-]; min/max: the mode's frequency bounds when declared")
               for k, label in enumerate(data.labels)
               if abs(data.frequencies_hz[k]) >= ZERO_HZ]  # rigid bodies and mechanisms have no frequency to scale
@@ -221,7 +197,8 @@ def parametric_arrays(model: VoltsModel, *, physical: bool | Sequence[str] = Tru
         motion_names=np.array(list(data.motion_out), dtype=str),
         motion_rows=np.array(list(data.motion_out.values())).reshape(len(data.motion_out), len(data.labels)),
         structure_outputs=np.array(data.output_order))
-    arrays = _with_parameters(arrays, damping + scales + parameters)
+    frequencies = {FREQUENCY_SCALE.fmu_name(k + 1): float(f) for k, f in enumerate(data.frequencies_hz)}
+    arrays = _with_parameters(arrays, damping + scales + parameters, frequencies_hz=frequencies)
     if frequency_bounds:
         arrays = with_frequency_bounds(arrays, frequency_bounds)
     if physical is False:
@@ -238,32 +215,36 @@ def with_frequency_bounds(arrays: Mapping[str, np.ndarray], bounds: Mapping[int,
     names = [str(n) for n in out["param_names"]]
     low, high = np.array(out["param_min"], dtype=float), np.array(out["param_max"], dtype=float)
     for mode, bound in bounds.items():
-        name = f"{FREQUENCY_SCALE_PREFIX}{mode}"
+        name = FREQUENCY_SCALE.fmu_name(mode) if isinstance(mode, int) else str(mode)
         if name not in names:
-            scaled = [int(n.rsplit("_", 1)[1]) for n in names if n.startswith(FREQUENCY_SCALE_PREFIX)]
+            scaled = [mode_number(n) for n in names if kind_of_fmu_name(n) is FREQUENCY_SCALE]
             raise MaceError(f"frequency bounds: the model has no frequency scale for mode {mode!r} (modes "
                             f"{min(scaled)}..{max(scaled)}; rigid-body and mechanism modes have none)")
         if isinstance(bound, bool) or not isinstance(bound, (int, float, np.floating)) or not 0.0 <= bound < 1.0:
             raise MaceError(f"frequency bounds: mode {mode}: {bound!r} is not a relative bound in [0, 1) "
                             "(0.011 for +-1.1 %)")
-        low[names.index(name)], high[names.index(name)] = 1.0 - float(bound), 1.0 + float(bound)
+        k = names.index(name)
+        # never below the scale's own minimum (a mode pushed into the zero-frequency cluster)
+        low[k], high[k] = max(1.0 - float(bound), low[k]), 1.0 + float(bound)
     out.update(param_min=low, param_max=high)
     return out
 
 
-def _with_parameters(arrays: dict[str, np.ndarray], parameters: Sequence[tuple[str, float, str]]) -> dict:
-    """``arrays`` with (name, value, description) parameters appended, their declared ranges too."""
+def _with_parameters(arrays: dict[str, np.ndarray], parameters: Sequence[tuple[str, float, str]], *,
+                     frequencies_hz: Mapping[str, float] | None = None) -> dict:
+    """``arrays`` with (name, value, description) parameters appended, and the range each declares
+    (:func:`mace_fmu.parameter_kinds.declared_range`; ``frequencies_hz`` gives a frequency scale's mode
+    frequency [Hz])."""
     out = dict(arrays)
     old = list(out.get("param_names", []))
     new = [p[0] for p in parameters]
+    ranges = [declared_range(name, value, frequency_hz=(frequencies_hz or {}).get(name)) for name, value, _ in parameters]
     out.update(
         param_names=np.array(old + new), param_values=np.concatenate([out.get("param_values", []),
                                                                        [p[1] for p in parameters]]).astype(float),
         param_descriptions=np.array(list(out.get("param_descriptions", [])) + [p[2] for p in parameters]),
-        param_min=np.concatenate([out.get("param_min", []), [parameter_range(n)[0] for n in new]]).astype(float),
-        param_max=np.concatenate([out.get("param_max", []), [parameter_range(n)[1] for n in new]]).astype(float),
-        param_max_excluded=np.concatenate([out.get("param_max_excluded", []),
-                                           [maximum_is_excluded(n) for n in new]]).astype(bool))
+        param_min=np.concatenate([out.get("param_min", []), [r[0] for r in ranges]]).astype(float),
+        param_max=np.concatenate([out.get("param_max", []), [r[1] for r in ranges]]).astype(float))
     return out
 
 

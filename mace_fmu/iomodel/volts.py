@@ -31,8 +31,8 @@ from mace_fmu.iomodel.instruments import Instruments, load_instruments
 from mace_fmu.iomodel.modal_core import ZERO_HZ
 from mace_fmu.iomodel.modal_ss import ModalPlant, modal_plant
 from mace_fmu.iomodel.motion import parse_motion_output
-from mace_fmu.parameters import (DAMPING_PREFIX, FREQUENCY_SCALE_PREFIX, SERVO_GAINS, ParameterSet, fe_overrides,
-                                 parameter_names)
+from mace_fmu.parameter_kinds import DAMPING, DELAY, FREQUENCY_SCALE, SERVO_GAINS, ParameterKind, mode_label
+from mace_fmu.parameters import ParameterSet, fe_overrides, parameter_names
 from mace_fmu.pipeline import StructureModes, compute_modes
 from mace_fmu.structure import StructureFile, StructureKind
 from mace_fmu.threads import single_blas_thread
@@ -284,13 +284,12 @@ def apply_parameters(instruments: Instruments, parameters: ParameterSet | None, 
     el, sv = instruments.electronics, instruments.servos
     actuators, sensors = dict(el.actuator_delays_s), dict(el.sensor_delays_s)
     for name, value in parameters.of_kind("delay").items():
-        channel = name.removeprefix("delay_")
+        channel = name.removeprefix(DELAY.set_prefix)
         table = actuators if channel in actuators else sensors if channel in sensors else None
         if table is None:
             raise MaceError(f"parameter {name!r}: no delayed channel {channel!r}; known: "
-                            f"{', '.join('delay_' + c for c in [*actuators, *sensors])}")
-        if value < 0.0:
-            raise MaceError(f"parameter {name!r}: a delay must be >= 0 s, got {value}")
+                            f"{', '.join(DELAY.set_prefix + c for c in [*actuators, *sensors])}")
+        _check_range(name, value, DELAY)
         table[channel] = value
     gains = {SERVO_GAINS[name]: value for name, value in parameters.of_kind("gain").items()}
     known = set(mode_labels)
@@ -298,18 +297,26 @@ def apply_parameters(instruments: Instruments, parameters: ParameterSet | None, 
     other_structure = prov is not None and prov.structure not in ("", structure)
     damping = {}
     for name, value in parameters.of_kind("damping").items():
-        label = name.removeprefix(DAMPING_PREFIX)
+        label = mode_label(name)
         if label not in known and other_structure:
             continue
         if label not in known:
             raise MaceError(f"parameter {name!r}: no mode labelled {label!r} in the {structure} structure; labels: "
                             f"{', '.join(sorted(known))}")
-        if not 0.0 <= value < 1.0:
-            raise MaceError(f"parameter {name!r}: a damping ratio must be >= 0 and < 1, got {value}")
+        _check_range(name, value, DAMPING)
         damping[label] = value
     return replace(instruments, electronics=replace(el, actuator_delays_s=actuators, sensor_delays_s=sensors),
                    servos=replace(sv, **gains),
                    damping=replace(instruments.damping, by_label={**instruments.damping.by_label, **damping}))
+
+
+def _check_range(name: str, value: float, kind: ParameterKind) -> None:
+    """A MaceError unless ``value`` lies in the range every parameter of ``kind`` has (the FMUs' own)."""
+    low, high = kind.range_for(value)
+    if not low <= value <= high:
+        unit = "" if kind.unit == "1" else f" {kind.unit}"
+        raise MaceError(f"parameter {name!r} = {value:g} is outside [{low:g}, {high:g}]{unit}, the range of every "
+                        f"{kind.name.replace('_', ' ')} parameter")
 
 
 def scale_frequencies(modes: StructureModes, parameters: ParameterSet | None, *, structure: str = "") -> StructureModes:
@@ -327,12 +334,11 @@ def scale_frequencies(modes: StructureModes, parameters: ParameterSet | None, *,
     labels = modes.modes.labels
     frequencies = np.array(modes.modes.frequencies_hz, dtype=float)
     for name, value in scales.items():
-        label = name.removeprefix(FREQUENCY_SCALE_PREFIX)
+        label = mode_label(name)
         if label not in labels:
             raise MaceError(f"parameter {name!r}: no mode labelled {label!r} in the {structure} structure; labels: "
                             f"{', '.join(sorted(set(labels)))}")
-        if not value > 0.0:
-            raise MaceError(f"parameter {name!r}: a frequency scale must be > 0, got {value}")
+        _check_range(name, value, FREQUENCY_SCALE)
         frequencies[[k for k, x in enumerate(labels) if x == label]] *= value
     return replace(modes, modes=replace(modes.modes, frequencies_hz=frequencies))
 

@@ -2,7 +2,8 @@
 
 The box is read from the FMU's model description (fmpy): every real parameter whose name matches
 ``pattern`` (default the 0-g FMU's ``frequency_scale_mode_<k>``) and whose declared minimum and
-maximum are finite and distinct. ``ranges`` names the range of other parameters explicitly (an
+maximum are narrower, on both sides, than the range of every parameter of its kind (the validity
+limits of mace_fmu.parameter_kinds): a bound given at export. ``ranges`` names the range of other parameters explicitly (an
 FMU without declared bounds, e.g. ``damping_mode_<k>`` over a chosen interval).
 """
 
@@ -17,6 +18,7 @@ from typing import Literal, Mapping
 import numpy as np
 
 from mace_fmu.errors import MaceError
+from mace_fmu.parameter_kinds import FREQUENCY_SCALE, kind_of_fmu_name, mode_number
 
 PointKind = Literal["nominal", "screen", "corner", "sample"]
 #: The 0-g FMU's modal frequency scales; their min/max are Table 5.3's bounds.
@@ -51,8 +53,15 @@ class SweepPoint:
 
 def short_name(name: str) -> str:
     """"mode 14" for frequency_scale_mode_14, else the name itself (for notes and summaries)."""
-    prefix = DEFAULT_PATTERN.rstrip("*")
-    return f"mode {name[len(prefix):]}" if name.startswith(prefix) else name
+    return f"mode {mode_number(name)}" if kind_of_fmu_name(name) is FREQUENCY_SCALE else name
+
+
+def _is_uncertainty_bound(name: str, start: float, low: float, high: float) -> bool:
+    """True when a declared range is narrower, on both sides, than the range every parameter of its kind
+    has (mace_fmu.parameter_kinds): then it was given as a bound (Table 5.3's), not as a validity limit."""
+    kind = kind_of_fmu_name(name)
+    own_low, own_high = kind.range_for(start) if kind is not None else (-np.inf, np.inf)
+    return bool(np.isfinite(low) and np.isfinite(high) and own_low < low < high < own_high)
 
 
 def read_box(fmu: str | os.PathLike, *, pattern: str = DEFAULT_PATTERN,
@@ -77,8 +86,8 @@ def read_box(fmu: str | os.PathLike, *, pattern: str = DEFAULT_PATTERN,
                                 f"[{declared[0]:g}, {declared[1]:g}], which the FMU enforces")
         elif fnmatch.fnmatchcase(name, pattern) and var.min is not None and var.max is not None:
             lo, hi = float(var.min), float(var.max)
-            if not (np.isfinite(lo) and np.isfinite(hi) and lo < hi):
-                continue  # declared but not a bound (e.g. [0, inf)): not uncertain
+            if not _is_uncertainty_bound(name, start, lo, hi):
+                continue
         else:
             continue
         if not (np.isfinite(lo) and np.isfinite(hi) and lo <= start <= hi and lo < hi):

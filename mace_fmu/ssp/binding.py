@@ -16,8 +16,8 @@ from dataclasses import dataclass
 from typing import Sequence
 
 from mace_fmu.errors import MaceError
-from mace_fmu.iomodel.parametric_data import FREQUENCY_SCALE_PREFIX as FMU_FREQUENCY_SCALE_PREFIX
-from mace_fmu.parameters import DAMPING_PREFIX, FREQUENCY_SCALE_PREFIX, ParameterSet
+from mace_fmu.parameter_kinds import kind_of_set_name, mode_label
+from mace_fmu.parameters import ParameterSet
 
 _BUILT_IN = ("modulus", "spring", "frequency_scale")
 
@@ -62,11 +62,10 @@ def fmu_start_values(parameters: ParameterSet, *, mode_labels: Sequence[str],
     available = set(fmu_parameters)
     out: dict[str, float] = {}
     for name, value in parameters.values.items():
-        if name.startswith((DAMPING_PREFIX, FREQUENCY_SCALE_PREFIX)):
-            damping = name.startswith(DAMPING_PREFIX)
-            label = name.removeprefix(DAMPING_PREFIX if damping else FREQUENCY_SCALE_PREFIX)
-            prefix = "damping_mode_" if damping else FMU_FREQUENCY_SCALE_PREFIX
-            targets = [f"{prefix}{k + 1}" for k, x in enumerate(mode_labels) if x == label]
+        kind = kind_of_set_name(name)
+        if kind is not None and kind.per_mode:
+            label = mode_label(name)
+            targets = [kind.fmu_name(k + 1) for k, x in enumerate(mode_labels) if x == label]
             targets = [t for t in targets if t in available]
             if not targets:
                 raise MaceError(f"parameter {name!r}: the FMU has no mode labelled {label!r} with such a parameter")

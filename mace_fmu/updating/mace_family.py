@@ -24,7 +24,8 @@ from mace_fmu.fe.preload import PreloadKind
 from mace_fmu.iomodel.parametric import ParametricSystem
 from mace_fmu.iomodel.parametric_data import parametric_arrays, physical_sensitivities, with_physical
 from mace_fmu.iomodel.volts import DEFAULT_MAX_HZ, VoltsModel, volts_model
-from mace_fmu.parameters import DAMPING_PREFIX, ParameterSet, deck_values, parameter_kind
+from mace_fmu.parameter_kinds import DAMPING, kind_of_set_name, mode_label
+from mace_fmu.parameters import ParameterSet, deck_values, parameter_kind
 from mace_fmu.pipeline import StructureModes, compute_modes
 from mace_fmu.structure import StructureKind, bundled_deck_path
 from mace_fmu.updating.model import LinearModel
@@ -124,11 +125,11 @@ class MaceFamily:
         for name, value in self.parameter_set(values).values.items():
             kind = parameter_kind(name)
             if kind == "damping":
-                hits = np.flatnonzero(labels == name.removeprefix(DAMPING_PREFIX))
+                hits = np.flatnonzero(labels == mode_label(name))
                 if not hits.size:
                     raise MaceError(f"parameter {name!r}: no mode with that label in the {self.structure} model")
                 for k in hits:
-                    vec[system.index(f"damping_mode_{k + 1}")] = value
+                    vec[system.index(DAMPING.fmu_name(k + 1))] = value
             elif kind in ("modulus", "spring"):
                 if name in system.parameter_names:  # the reanalysis system; the others were solved with them
                     vec[system.index(name)] = value
@@ -158,11 +159,11 @@ class MaceFamily:
                 out[n] = self.base[n]
             elif n in self._deck_values:
                 out[n] = self._deck_values[n]
-            elif n.startswith(DAMPING_PREFIX):
-                hits = np.flatnonzero(labels == n.removeprefix(DAMPING_PREFIX))
+            elif kind_of_set_name(n) is DAMPING:
+                hits = np.flatnonzero(labels == mode_label(n))
                 if not hits.size:
                     raise MaceError(f"parameter {n!r}: no mode with that label in the {self.structure} model")
-                out[n] = float(sol.system.nominal[sol.system.index(f"damping_mode_{hits[0] + 1}")])
+                out[n] = float(sol.system.nominal[sol.system.index(DAMPING.fmu_name(hits[0] + 1))])
             elif n in sol.system.parameter_names:
                 out[n] = float(sol.system.nominal[sol.system.index(n)])
             else:
@@ -179,7 +180,7 @@ class MaceFamily:
         """
         system = self.solution(values).system
         vector = self.vector(system, values)
-        carried = np.array([vector[system.index(f"damping_mode_{k + 1}")] for k in range(len(system.mode_labels))])
+        carried = np.array([vector[system.index(DAMPING.fmu_name(k + 1))] for k in range(len(system.mode_labels))])
         out = dict(values)
         for _ in range(3):
             fresh = volts_model(self.structure, deck=self.deck, preload=self.preload, max_hz=self.max_hz,
@@ -187,7 +188,7 @@ class MaceFamily:
             differ = np.flatnonzero(fresh.damping != carried)
             if not differ.size:
                 return out
-            out.update({DAMPING_PREFIX + fresh.labels[k]: float(carried[k]) for k in differ})
+            out.update({DAMPING.set_name(fresh.labels[k]): float(carried[k]) for k in differ})
         raise MaceError("the updated damping ratios cannot be keyed by the labels of a fresh solve "
                         f"(modes {', '.join(fresh.labels[k] for k in differ)})")
 

@@ -18,7 +18,8 @@ from typing import Callable, Mapping, Sequence
 import numpy as np
 
 from mace_fmu.fe.preload import PreloadKind
-from mace_fmu.parameters import DAMPING_PREFIX, ParameterSet, Provenance, deck_fingerprint, now_utc, tool_version
+from mace_fmu.parameter_kinds import DAMPING, DELAY, MODULUS, SPRING, kind_of_set_name
+from mace_fmu.parameters import ParameterSet, Provenance, deck_fingerprint, now_utc, tool_version
 from mace_fmu.thesis import thesis_data
 from mace_fmu.threads import single_blas_thread
 from mace_fmu.updating.costs import ModalCost
@@ -95,13 +96,14 @@ def default_bounds(names: Sequence[str], start: Mapping[str, float]) -> dict[str
     out = {}
     for n in names:
         v = start[n]
-        if n.startswith("E_"):
+        kind = kind_of_set_name(n)
+        if kind is MODULUS:
             out[n] = Bounds(0.5 * v, 1.5 * v, gamma_percent=10.0)
-        elif n.startswith("k_"):
+        elif kind is SPRING:
             out[n] = Bounds(0.2 * v, 5.0 * v, gamma_percent=50.0)
-        elif n.startswith("delay_"):
+        elif kind is DELAY:
             out[n] = Bounds(0.2 * v, 3.0 * v, gamma_percent=50.0)
-        elif n.startswith(DAMPING_PREFIX):
+        elif kind is DAMPING:
             out[n] = Bounds(0.1 * v, min(4.0 * v, 0.95), gamma_percent=100.0)
         else:
             out[n] = Bounds(min(0.2 * v, 5 * v), max(0.2 * v, 5 * v), gamma_percent=50.0)
@@ -160,7 +162,7 @@ def run_mace_update(*, start: ParameterSet | None = None, measured: Sequence[Mea
     seconds["selection"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
-    damp = tuple(DAMPING_PREFIX + label for label in damping_labels(family))
+    damp = tuple(DAMPING.set_name(label) for label in damping_labels(family))
     # stiffness dominates the closed-loop frequencies, damping ratios and servo delays the damping
     # (thesis 4.3): the stiffness stage sees the frequency errors only
     frequencies_only = ModalCost(measured=cost.measured, damping_weight=0.0)

@@ -21,7 +21,7 @@ import numpy as np
 
 from mace_fmu.errors import MaceError
 from mace_fmu.iomodel.modal_core import ZERO_HZ, reduce_zero_cluster
-from mace_fmu.iomodel.parametric_data import FREQUENCY_SCALE_PREFIX
+from mace_fmu.parameter_kinds import kind_of_fmu_name, mode_number
 
 MAGIC = b"MACEFMU1"
 FORMAT_VERSION = 1
@@ -101,10 +101,9 @@ def runtime_arrays(arrays: Mapping[str, np.ndarray]) -> dict[str, np.ndarray | l
 
     par_kind, par_index = [], []
     for name in names:
-        if name.startswith("damping_mode_"):
-            par_kind.append(PARAMETER_KINDS["damping"]), par_index.append(int(name.rsplit("_", 1)[1]) - 1)
-        elif name.startswith(FREQUENCY_SCALE_PREFIX):
-            par_kind.append(PARAMETER_KINDS["frequency_scale"]), par_index.append(int(name.rsplit("_", 1)[1]) - 1)
+        kind = kind_of_fmu_name(name)
+        if kind is not None and kind.per_mode:
+            par_kind.append(PARAMETER_KINDS[kind.name]), par_index.append(mode_number(name) - 1)
         elif name in physical:
             par_kind.append(PARAMETER_KINDS["physical"]), par_index.append(physical.index(name))
         elif name in delay_params:

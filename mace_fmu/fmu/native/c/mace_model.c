@@ -334,21 +334,11 @@ static int check_parameters(const MaceModel *m, char *err) {
             snprintf(err, MACE_ERR_LEN, "parameter %s = %g is not a finite number", name, v);
             return -1;
         }
+        /* the declared range is the whole check (mace_fmu.parameter_kinds): what the model
+           description allows runs, what it does not is refused */
         if (v < lo || v > hi) {
-            snprintf(err, MACE_ERR_LEN, "parameter %s = %.17g is outside its range [%g, %g]", name, v, lo, hi);
-            return -1;
-        }
-        if (m->par_kind[k] == PARAM_DAMPING && !(v >= 0.0 && v < 1.0)) {
-            snprintf(err, MACE_ERR_LEN, "damping ratio %s = %.17g must be >= 0 and < 1 (a critically damped mode is "
-                     "not a vibration mode)", name, v);
-            return -1;
-        }
-        if (m->par_kind[k] == PARAM_FREQUENCY_SCALE && !(v > 0.0)) {
-            snprintf(err, MACE_ERR_LEN, "frequency scale %s = %.17g must be > 0", name, v);
-            return -1;
-        }
-        if (m->par_kind[k] == PARAM_DELAY && v < 0.0) {
-            snprintf(err, MACE_ERR_LEN, "delay %s = %.17g s must be >= 0", name, v);
+            snprintf(err, MACE_ERR_LEN, "parameter %s = %.17g is outside its declared range [%.15g, %.15g]", name, v,
+                     lo, hi);
             return -1;
         }
         if (m->par_kind[k] == PARAM_PHYSICAL && !(m->par_nominal[k] > 0.0)) {
@@ -498,14 +488,16 @@ done:
 }
 
 /* [order/order] Pade approximation of exp(-s delay), as modelica_like.algebra.pade: companion
- * form in s * delay, divided by the delay, balanced. delay 0: unit feedthrough, inert states. */
+ * form in s * delay, divided by the delay, balanced. A delay below PADE_MIN_DELAY_S: unit
+ * feedthrough, inert states. */
+#define PADE_MIN_DELAY_S 1e-12 /* modelica_like.algebra.PADE_MIN_DELAY_S */
 static int pade_block(size_t n, double delay, double *a, double *b, double *c, double *d) {
     double coef[11], den[11], num[11], scale[10], dd;
     size_t k, i;
     memset(a, 0, n * n * sizeof(double));
     memset(b, 0, n * sizeof(double));
     memset(c, 0, n * sizeof(double));
-    if (delay == 0.0) {
+    if (delay < PADE_MIN_DELAY_S) {
         *d = 1.0;
         return 0;
     }

@@ -1,0 +1,159 @@
+"""One record per kind of model parameter: its names, its SI unit and the range every FMU declares.
+
+A parameter has two spellings. In a :class:`~mace_fmu.parameters.ParameterSet` a modal
+parameter is named by its mode's label (``damping:1st Z bending``), so that a set fits any model
+that has such a mode; in an FMU it is named by the mode's number (``damping_mode_14``), because an
+FMU's variables are fixed. Physical parameters, delays and gains are spelled the same in both.
+This module is the only place that decodes a name: every other module asks it.
+
+The range is what both FMU kinds declare as ``min``/``max`` and refuse outside, so that a host
+that honours the model description never meets a refusal (:func:`declared_range`). Ranges are
+physical limits plus the reach of the models behind them:
+
+- Young's moduli and spring stiffnesses: [0, 100 x nominal]. Zero removes the element's stiffness;
+  the reanalysis is a projection on the retained modes, and a hundred times stiffer moves a
+  frequency by ten, far beyond what it can represent (and where a frequency would overflow the
+  matrix exponential of a step).
+- delays: [0, 1] s (a millisecond-sampled loop with a second of delay is meaningless).
+- damping ratios: [0, 1]; 1 is a critically damped mode, still a linear system.
+- frequency scales: [0.1, 10], or the bounds given at export (Table 5.3's for the 0-g model).
+  The lower end is raised for a mode below 0.1 Hz so that no scale moves a flexible mode into the
+  zero-frequency cluster, which a native FMU reduces once at export.
+- servo gains: any finite value (a gain can make a loop unstable; a run of it then ends with an
+  overflow the FMU reports, as a real loop would saturate).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from types import MappingProxyType
+from typing import Literal, Mapping
+
+from mace_fmu.iomodel.modal_core import ZERO_HZ  # the zero-frequency cluster's edge [Hz]
+
+KindName = Literal["modulus", "spring", "delay", "gain", "damping", "frequency_scale"]
+
+
+@dataclass(frozen=True)
+class ParameterKind:
+    """How one kind of parameter is named, in which unit, and over which range it is valid.
+
+    ``minimum`` and ``maximum`` are absolute, or factors on the nominal value where
+    ``relative_to_nominal`` is set.
+    """
+
+    name: KindName
+    set_prefix: str  #: prefix of the name in a ParameterSet ("" for the gains, named in full)
+    fmu_prefix: str  #: prefix of the name in an FMU
+    unit: str  #: SI unit ("1" for dimensionless)
+    minimum: float
+    maximum: float
+    relative_to_nominal: bool = False
+    per_mode: bool = False  #: named by mode label in a set and by 1-based mode number in an FMU
+    exact_names: Mapping[str, str] = field(default_factory=dict)  #: name -> unit, for kinds without a prefix
+    description: str = ""
+
+    def range_for(self, nominal: float) -> tuple[float, float]:
+        """[min, max] of a parameter of this kind with nominal value ``nominal`` (SI)."""
+        if self.relative_to_nominal:
+            return self.minimum * abs(nominal), self.maximum * abs(nominal)
+        return self.minimum, self.maximum
+
+    def fmu_name(self, mode: int) -> str:
+        """FMU name of this per-mode kind for 1-based mode number ``mode``."""
+        if not self.per_mode:
+            raise ValueError(f"{self.name} parameters are not per mode")
+        return f"{self.fmu_prefix}{mode}"
+
+    def set_name(self, label: str) -> str:
+        """Parameter-set name of this per-mode kind for the modes labelled ``label``."""
+        if not self.per_mode:
+            raise ValueError(f"{self.name} parameters are not per mode")
+        return f"{self.set_prefix}{label}"
+
+
+MODULUS = ParameterKind("modulus", "E_", "E_", "Pa", 0.0, 100.0, relative_to_nominal=True,
+                        description="Young's modulus of a MAT1 card")
+SPRING = ParameterKind("spring", "k_", "k_", "N/m", 0.0, 100.0, relative_to_nominal=True,
+                       description="stiffness of a CELAS2 card")
+DELAY = ParameterKind("delay", "delay_", "delay_", "s", 0.0, 1.0, description="time delay of a channel")
+GAIN = ParameterKind("gain", "", "", "1", -math.inf, math.inf,
+                     exact_names=MappingProxyType({"K_a": "V/deg", "K_r": "V/(deg/s)", "K_f": "1", "K_b": "1"}),
+                     description="servo loop gain")
+DAMPING = ParameterKind("damping", "damping:", "damping_mode_", "1", 0.0, 1.0, per_mode=True,
+                        description="open-loop modal damping ratio")
+FREQUENCY_SCALE = ParameterKind("frequency_scale", "frequency_scale:", "frequency_scale_mode_", "1", 0.1, 10.0,
+                                per_mode=True, description="factor on an open-loop natural frequency")
+
+KINDS: tuple[ParameterKind, ...] = (MODULUS, SPRING, DELAY, GAIN, DAMPING, FREQUENCY_SCALE)
+#: the servo gains' names and what they are
+SERVO_GAINS = MappingProxyType({"K_a": "gimbal_angle_gain", "K_r": "gimbal_rate_gain", "K_f": "wheel_forward_gain",
+                                "K_b": "wheel_backward_gain"})
+
+
+def _match(name: str, prefix_of) -> ParameterKind | None:
+    for kind in KINDS:
+        if name in kind.exact_names:
+            return kind
+        prefix = prefix_of(kind)
+        if prefix and name.startswith(prefix) and len(name) > len(prefix):
+            if kind.per_mode and prefix_of is _fmu_prefix and not name[len(prefix):].isdigit():
+                continue
+            return kind
+    return None
+
+
+def _set_prefix(kind: ParameterKind) -> str:
+    return kind.set_prefix
+
+
+def _fmu_prefix(kind: ParameterKind) -> str:
+    return kind.fmu_prefix
+
+
+def kind_of_set_name(name: str) -> ParameterKind | None:
+    """The kind of a parameter-set name (``E_lexan_end``, ``damping:1st Z bending``), None if unknown."""
+    return _match(name, _set_prefix)
+
+
+def kind_of_fmu_name(name: str) -> ParameterKind | None:
+    """The kind of an FMU parameter name (``E_lexan_end``, ``damping_mode_14``), None if unknown."""
+    return _match(name, _fmu_prefix)
+
+
+def mode_number(name: str) -> int:
+    """1-based mode number of a per-mode FMU parameter name (``frequency_scale_mode_7`` -> 7)."""
+    kind = kind_of_fmu_name(name)
+    if kind is None or not kind.per_mode:
+        raise ValueError(f"{name!r} is not a per-mode FMU parameter name")
+    return int(name[len(kind.fmu_prefix):])
+
+
+def mode_label(name: str) -> str:
+    """Mode label of a per-mode parameter-set name (``damping:1st Z bending`` -> ``1st Z bending``)."""
+    kind = kind_of_set_name(name)
+    if kind is None or not kind.per_mode:
+        raise ValueError(f"{name!r} is not a per-mode parameter-set name")
+    return name[len(kind.set_prefix):]
+
+
+def unit_of(kind: ParameterKind, name: str) -> str:
+    """SI unit of parameter ``name`` of ``kind`` (a gain's unit is its own)."""
+    return kind.exact_names.get(name, kind.unit)
+
+
+def declared_range(name: str, nominal: float, *, frequency_hz: float | None = None) -> tuple[float, float]:
+    """[min, max] an FMU declares and enforces for its parameter ``name`` with nominal value ``nominal``.
+
+    ``frequency_hz`` (a frequency scale's mode, nominal) raises the scale's minimum so that the mode
+    stays above :data:`ZERO_HZ`. Names of no kind are unbounded.
+    """
+    kind = kind_of_fmu_name(name)
+    if kind is None:
+        return -math.inf, math.inf
+    low, high = kind.range_for(nominal)
+    if kind is FREQUENCY_SCALE and frequency_hz is not None and frequency_hz != 0.0:
+        # a scale that would land the mode just on the cluster's edge is refused: keep a 1e-9 margin
+        low = max(low, ZERO_HZ / abs(frequency_hz) * (1.0 + 1e-9))
+    return low, high
