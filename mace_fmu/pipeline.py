@@ -91,6 +91,18 @@ def _eigrl(deck: Deck, structure: Structure):
     return deck.eigrls.get(method) if method is not None else None
 
 
+def _modes_to_find(deck: Deck, structure: Structure, max_hz: float | None) -> tuple[float | None, int | None]:
+    """(frequency [Hz], count) the eigen-solution must reach for :func:`_requested_modes` to pick from."""
+    eigrl = _eigrl(deck, structure)
+    if max_hz is not None:
+        return max_hz, None
+    if eigrl is not None and (eigrl.v2 is not None or eigrl.nd):
+        # with V1 too, the sparse route finds the lowest ND and V1 then drops some: NASTRAN would shift
+        # to V1 instead; a large model with V1 and ND but no V2 may get fewer than ND modes
+        return eigrl.v2, eigrl.nd or None
+    return DEFAULT_MAX_HZ, None
+
+
 def _requested_modes(modes: Modes, deck: Deck, structure: Structure, max_hz: float | None) -> Modes:
     """The modes the analysis asks for: up to ``max_hz`` when given, else as the deck's EIGRL asks
     (NASTRAN's meaning: frequencies in [V1, V2], the lowest ND of them), else up to 250 Hz.
@@ -184,7 +196,9 @@ def compute_modes(deck: Deck | str | os.PathLike | None = None, *, structure: St
     if auto:
         modal, removed_modal = constrain_singular_dofs(modal, stiffness, model.mass)
         removed = tuple(dict.fromkeys(removed + removed_modal))
-    modes = _requested_modes(solve_modes(stiffness, model.mass, modal, model.dofs, model.cd_frames),
+    wanted_hz, wanted_count = _modes_to_find(struct.deck, struct, max_hz)
+    modes = _requested_modes(solve_modes(stiffness, model.mass, modal, model.dofs, model.cd_frames,
+                                         wanted_hz=wanted_hz, wanted_count=wanted_count),
                              struct.deck, struct, max_hz)
     modes = label_modes(model, modes, struct.spec, reference=props.reference_point_m,
                         state=pre.state if pre is not None else None,

@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy import sparse
 
 from mace_fmu.deck.cards import Deck
 from mace_fmu.deck.geometry import bar_orientation, coordinate_frames, grid_positions
@@ -32,12 +33,12 @@ class FEModel:
     dofs: DofMap
     positions: np.ndarray  #: (n_grid, 3) undeformed grid positions [m]
     cd_frames: np.ndarray  #: (n_grid, 3, 3) columns = displacement-system axes in basic
-    stiffness: np.ndarray  #: linear K [N/m, N, N m/rad]
-    mass: np.ndarray  #: M [kg, kg m, kg m^2]
+    stiffness: sparse.csr_array  #: linear K [N/m, N, N m/rad], sparse: memory grows with DOFs, not DOFs^2
+    mass: sparse.csr_array  #: M [kg, kg m, kg m^2]
     bars: Bars
-    spring_stiffness: np.ndarray  #: the CELAS2 part of ``stiffness``
+    spring_stiffness: sparse.csr_array  #: the CELAS2 part of ``stiffness``
     spring_ids: tuple[int, ...]  #: CELAS2 IDs
-    spring_vectors: np.ndarray  #: (n_spring, n_dof) spring elongation per unit DOF
+    spring_vectors: sparse.csr_array  #: (n_spring, n_dof) spring elongation per unit DOF
     spring_constants: np.ndarray  #: (n_spring,) [N/m or N m/rad]
 
 
@@ -60,13 +61,42 @@ def _conm2_matrix(mass: float, offset: np.ndarray, inertia_cg: np.ndarray) -> np
     return m
 
 
-def cd_component_vector(dofs: DofMap, cd_frames: np.ndarray, grid: int, component: int) -> np.ndarray:
-    """Row vector that picks component 1-6 of ``grid``, measured in its CD system, from basic DOFs."""
-    vec = np.zeros(dofs.size)
+def cd_component_entries(dofs: DofMap, cd_frames: np.ndarray, grid: int, component: int
+                         ) -> tuple[np.ndarray, np.ndarray]:
+    """(DOF indices, coefficients) of the row vector that picks component 1-6 of ``grid``, measured in
+    its CD system, from basic DOFs."""
     row = dofs.grid_index(grid)
     block = 6 * row + (0 if component <= 3 else 3)
-    vec[block:block + 3] = cd_frames[row][:, (component - 1) % 3]
+    return np.arange(block, block + 3), cd_frames[row][:, (component - 1) % 3]
+
+
+def cd_component_vector(dofs: DofMap, cd_frames: np.ndarray, grid: int, component: int) -> np.ndarray:
+    """Dense row vector that picks component 1-6 of ``grid``, measured in its CD system, from basic DOFs."""
+    vec = np.zeros(dofs.size)
+    idx, coefficients = cd_component_entries(dofs, cd_frames, grid, component)
+    vec[idx] = coefficients
     return vec
+
+
+class _Triplets:
+    """Element matrices gathered as (row, column, value) triplets; duplicates add up in the sparse matrix."""
+
+    def __init__(self) -> None:
+        self.rows: list[np.ndarray] = []
+        self.cols: list[np.ndarray] = []
+        self.values: list[np.ndarray] = []
+
+    def add(self, idx: np.ndarray, block: np.ndarray) -> None:
+        """Add the square ``block`` at DOFs ``idx`` (rows and columns)."""
+        self.rows.append(np.repeat(idx, len(idx)))
+        self.cols.append(np.tile(idx, len(idx)))
+        self.values.append(np.asarray(block, dtype=float).ravel())
+
+    def matrix(self, n: int) -> sparse.csr_array:
+        if not self.values:
+            return sparse.csr_array((n, n))
+        return sparse.coo_array((np.concatenate(self.values), (np.concatenate(self.rows), np.concatenate(self.cols))),
+                                shape=(n, n)).tocsr()
 
 
 def mass_factor(deck: Deck) -> float:
@@ -77,15 +107,15 @@ def mass_factor(deck: Deck) -> float:
 
 
 def assemble(deck: Deck, *, mass: MassKind = "lumped") -> FEModel:
-    """Assemble K and M of every CBAR, CONM2 and CELAS2 of ``deck`` (no constraints applied)."""
+    """Assemble K and M of every CBAR, CONM2 and CELAS2 of ``deck`` (no constraints applied), as sparse
+    matrices."""
     frames = coordinate_frames(deck)
     pos = grid_positions(deck)
     dofs = DofMap(tuple(sorted(deck.grids)))
     n = dofs.size
     positions = np.array([pos[g] for g in dofs.grid_ids])
     cd_frames = np.array([frames[deck.grids[g].cd][1] for g in dofs.grid_ids])
-    k_glob = np.zeros((n, n))
-    m_glob = np.zeros((n, n))
+    k_glob, m_glob = _Triplets(), _Triplets()
 
     ids, na, nb, fr, ln, kn = [], [], [], [], [], []
     for bar in sorted(deck.bars.values(), key=lambda b: b.id):
@@ -94,8 +124,8 @@ def assemble(deck: Deck, *, mass: MassKind = "lumped") -> FEModel:
         frame = local_frame(axis, bar_orientation(deck, bar, pos, frames))
         sec = bar_section(deck, bar.pid)
         idx = np.concatenate([dofs.indices(bar.ga), dofs.indices(bar.gb)])
-        k_glob[np.ix_(idx, idx)] += to_basic(local_stiffness(sec, length), frame)
-        m_glob[np.ix_(idx, idx)] += to_basic(local_mass(sec, length, mass), frame)
+        k_glob.add(idx, to_basic(local_stiffness(sec, length), frame))
+        m_glob.add(idx, to_basic(local_mass(sec, length, mass), frame))
         ids.append(bar.id)
         na.append(dofs.grid_index(bar.ga))
         nb.append(dofs.grid_index(bar.gb))
@@ -110,21 +140,27 @@ def assemble(deck: Deck, *, mass: MassKind = "lumped") -> FEModel:
         i11, i21, i22, i31, i32, i33 = cm.inertia
         inertia = np.array([[i11, -i21, -i31], [-i21, i22, -i32], [-i31, -i32, i33]])
         idx = dofs.indices(cm.grid)
-        m_glob[np.ix_(idx, idx)] += _conm2_matrix(cm.mass, rot @ np.array(cm.offset), rot @ inertia @ rot.T)
+        m_glob.add(idx, _conm2_matrix(cm.mass, rot @ np.array(cm.offset), rot @ inertia @ rot.T))
 
     springs = sorted(deck.celas2s.values(), key=lambda sp: sp.id)
-    vectors = np.zeros((len(springs), n))
+    rows, cols, values = [], [], []
     for row, sp in enumerate(springs):
-        vectors[row] = cd_component_vector(dofs, cd_frames, sp.g1, sp.c1)
-        if sp.g2 is not None:
-            vectors[row] -= cd_component_vector(dofs, cd_frames, sp.g2, sp.c2)
-    constants = np.array([sp.k for sp in springs])
-    k_spring = vectors.T @ (constants[:, None] * vectors)
-    k_glob += k_spring
-    m_glob *= mass_factor(deck)
+        ends = [(sp.g1, sp.c1, 1.0)] + ([(sp.g2, sp.c2, -1.0)] if sp.g2 is not None else [])
+        for grid, component, sign in ends:
+            idx, coefficients = cd_component_entries(dofs, cd_frames, grid, component)
+            rows.append(np.full(3, row)), cols.append(idx), values.append(sign * coefficients)
+    vectors = sparse.coo_array((np.concatenate(values) if values else np.zeros(0),
+                                (np.concatenate(rows) if rows else np.zeros(0, int),
+                                 np.concatenate(cols) if cols else np.zeros(0, int))),
+                               shape=(len(springs), n)).tocsr()
+    constants = np.array([sp.k for sp in springs], dtype=float)
+    k_spring = sparse.csr_array(vectors.T @ sparse.diags_array(constants) @ vectors) if springs else \
+        sparse.csr_array((n, n))
+    stiffness = sparse.csr_array(k_glob.matrix(n) + k_spring)
+    mass_matrix = sparse.csr_array(m_glob.matrix(n) * mass_factor(deck))
 
     bars = Bars(ids=np.array(ids), node_a=np.array(na), node_b=np.array(nb), frames0=np.array(fr),
                 lengths0=np.array(ln), k_natural=np.array(kn))
-    return FEModel(dofs=dofs, positions=positions, cd_frames=cd_frames, stiffness=k_glob, mass=m_glob,
+    return FEModel(dofs=dofs, positions=positions, cd_frames=cd_frames, stiffness=stiffness, mass=mass_matrix,
                    bars=bars, spring_stiffness=k_spring, spring_ids=tuple(sp.id for sp in springs),
                    spring_vectors=vectors, spring_constants=constants)

@@ -31,10 +31,10 @@ def constrain_singular_dofs(constraints: Constraints, stiffness, mass=None
                             ) -> tuple[Constraints, tuple[tuple[int, int], ...]]:
     """``constraints`` without the independent DOFs that have zero stiffness (and zero mass, when ``mass``
     is given), and those DOFs as (grid, component)."""
-    k = np.diag(constraints.reduce(stiffness))
+    k = constraints.reduce_sparse(stiffness).diagonal()
     singular = np.abs(k) <= RELATIVE_ZERO * max(float(np.abs(k).max()), 1e-300)
     if mass is not None:
-        m = np.diag(constraints.reduce(mass))
+        m = constraints.reduce_sparse(mass).diagonal()
         singular &= np.abs(m) <= RELATIVE_ZERO * max(float(np.abs(m).max()), 1e-300)
     if not singular.any():
         return constraints, ()

@@ -28,6 +28,11 @@ class Constraints:
             return (t.T @ matrix @ t).toarray()
         return (t.T @ (t.T @ matrix).T).T
 
+    def reduce_sparse(self, matrix: np.ndarray | sparse.sparray) -> sparse.csr_array:
+        """T^T A T as a sparse (CSR) array, for a dense or a sparse A."""
+        t = self.transform
+        return sparse.csr_array(t.T @ sparse.csr_array(matrix) @ t)
+
 
 def cd_rotation(cd_frames: np.ndarray) -> np.ndarray:
     """Block-diagonal Lambda with u_basic = Lambda @ u_cd (translations and rotations per grid)."""
@@ -63,15 +68,17 @@ def build_constraints(deck: Deck, dofs: DofMap, cd_frames: np.ndarray, *, spc_se
 
     independent = [i for i in range(n) if not fixed[i] and i not in equations]
     column = {i: k for k, i in enumerate(independent)}
-    t_cd = np.zeros((n, len(independent)))
-    for i, k in column.items():
-        t_cd[i, k] = 1.0
+    # T in the CD systems, built as triplets: a unit entry per independent DOF, the MPC coefficients
+    # of each dependent one (its terms are independent DOFs, so their rows are unit rows)
+    rows, cols, values = list(column), list(column.values()), [1.0] * len(column)
     for d, terms in equations.items():
         for i, a in terms:
             if i in equations:
                 raise MaceError(f"{sources[d]}: MPC {mpc_set}: DOF {dofs.label(i)} is dependent in another "
                                 f"equation and cannot be used as an independent term")
-            t_cd[d] += a * t_cd[i]
-    transform = sparse.csr_array(cd_rotation(cd_frames) @ sparse.csr_array(t_cd))
+            if i in column:  # a fixed DOF contributes nothing
+                rows.append(d), cols.append(column[i]), values.append(a)
+    t_cd = sparse.coo_array((values, (rows, cols)), shape=(n, len(independent))).tocsr()  # sums repeated terms
+    transform = sparse.csr_array(cd_rotation(cd_frames) @ t_cd)
     return Constraints(transform=transform, independent=tuple(dofs.label(i) for i in independent),
                        spc_set=spc_set, mpc_set=mpc_set)

@@ -35,7 +35,7 @@ from dataclasses import replace
 import numpy as np
 
 from mace_fmu.fe.assembly import FEModel
-from mace_fmu.fe.corotational import BarState, bar_dof_indices, bar_energies, deformation_derivatives
+from mace_fmu.fe.corotational import BarState, bar_dof_indices, bar_energies, deformation_jacobian
 from mace_fmu.fe.modal import Modes
 from mace_fmu.iomodel.modal_core import ZERO_HZ
 from mace_fmu.structure import StructureSpec
@@ -84,7 +84,7 @@ class _Energies:
             bus = spec.components.get("bus", frozenset())
             bus_bar = np.array([model.dofs.grid_ids[a] in bus and model.dofs.grid_ids[b] in bus
                                 for a, b in zip(model.bars.node_a, model.bars.node_b)], dtype=bool)
-        _, b, _ = deformation_derivatives(model.bars, state)
+        _, b = deformation_jacobian(model.bars, state)
         d = np.einsum("nki,nim->nkm", b, phi[bar_dof_indices(model.bars)])[bus_bar]
         kn = model.bars.k_natural[bus_bar]
 
@@ -286,7 +286,7 @@ def label_modes(model: FEModel, modes: Modes, spec: StructureSpec, *, reference:
         # ones are so only to the accuracy of the zero cluster (~1e-7), so purify them.
         flex = shapes[:, ~zero]
         flex -= rotated @ (rotated.T @ model.mass @ flex)
-        shapes[:, ~zero] = flex / np.sqrt(np.einsum("im,ij,jm->m", flex, model.mass, flex))
+        shapes[:, ~zero] = flex / np.sqrt(np.einsum("im,im->m", flex, model.mass @ flex))
     modes = replace(modes, shapes=shapes)
     if state is None:
         state = BarState(model.positions, np.broadcast_to(np.eye(3), (len(model.positions), 3, 3)))
@@ -312,7 +312,7 @@ def label_modes(model: FEModel, modes: Modes, spec: StructureSpec, *, reference:
     article = ~_grid_mask(model, frozenset().union(*(spec.components[n] for n in cable_names))) \
         if cable_names else np.ones(len(model.positions), dtype=bool)
     rows = np.repeat(article, 6)
-    m_art = model.mass[np.ix_(rows, rows)]
+    m_art = model.mass[np.ix_(np.flatnonzero(rows), np.flatnonzero(rows))].toarray()
     d_art = rigid[rows]
     m_rigid = d_art.T @ m_art @ d_art
     # lstsq: a line of point masses has no inertia about its own axis

@@ -1,10 +1,12 @@
-"""Eigen-solution of a constrained (K, M) pair with massless DOFs condensed out exactly.
+"""Eigen-solution of a constrained (K, M) pair: dense for small models, sparse Lanczos for large ones.
 
 NASTRAN's lumped CBAR mass has no rotary inertia and several grids carry no mass at all, so M
-is singular. Those DOFs are removed by static condensation, which is exact for massless DOFs
-(their inertia forces are zero, so their motion is the static response to the others). The
-remaining M is positive definite, so one dense generalised eigen-solution handles rigid-body and
-mechanism modes without a shift: they come out as the cluster of (near) zero eigenvalues.
+is singular. On the dense route those DOFs are removed by static condensation, which is exact
+for massless DOFs (their inertia forces are zero, so their motion is the static response to the
+others); the remaining M is positive definite, so one dense generalised eigen-solution handles
+rigid-body and mechanism modes without a shift: they come out as the cluster of (near) zero
+eigenvalues. Large models take the sparse route (shift-invert Lanczos about a small negative
+shift), whose cost grows about linearly with the DOFs where the dense one grows with their cube.
 """
 
 from __future__ import annotations
@@ -13,12 +15,19 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.linalg as sla
+from scipy import sparse
+from scipy.sparse.linalg import LinearOperator, eigsh, splu
 
 from mace_fmu.errors import MaceError
 from mace_fmu.fe.constraints import Constraints
 from mace_fmu.fe.dofs import DofMap
 
 MASSLESS_RELATIVE_TOLERANCE = 1e-12
+#: Largest number of independent DOFs solved densely (every mode at once); above it the sparse route
+#: (benchmarks/bench_fe_scale.py measured where the two cross).
+DENSE_MAX_DOF = 2000
+#: Modes the sparse route looks for first when only a frequency range is given.
+SPARSE_FIRST_BATCH = 40
 
 
 @dataclass(frozen=True)
@@ -52,16 +61,39 @@ class Modes:
         return self.shapes[self.dofs.indices(grid)]
 
 
-def solve_modes(stiffness: np.ndarray, mass: np.ndarray, constraints: Constraints, dofs: DofMap,
-                cd_frames: np.ndarray, *, max_hz: float | None = None) -> Modes:
-    """All modes with frequency <= ``max_hz`` (all when None) of the constrained system."""
-    t = constraints.transform
-    k = constraints.reduce(stiffness)
-    m = constraints.reduce(mass)
-    k = 0.5 * (k + k.T)
-    m = 0.5 * (m + m.T)
+def solve_modes(stiffness: np.ndarray | sparse.sparray, mass: np.ndarray | sparse.sparray, constraints: Constraints,
+                dofs: DofMap, cd_frames: np.ndarray, *, max_hz: float | None = None,
+                wanted_hz: float | None = None, wanted_count: int | None = None) -> Modes:
+    """Modes of the constrained system, those with frequency <= ``max_hz`` [Hz] when given.
+
+    Up to :data:`DENSE_MAX_DOF` independent DOFs: one dense eigen-solution gives every mode (the
+    massless DOFs condensed out). Above it, sparse shift-invert Lanczos (ARPACK) finds the lowest
+    modes only: at least those up to ``wanted_hz`` [Hz] (or ``max_hz``) and at least the lowest
+    ``wanted_count``; the caller picks among them (an EIGRL's V1, V2, ND).
+    """
+    k = constraints.reduce_sparse(stiffness)
+    m = constraints.reduce_sparse(mass)
+    k = sparse.csr_array(0.5 * (k + k.T))
+    m = sparse.csr_array(0.5 * (m + m.T))
+    if k.shape[0] <= DENSE_MAX_DOF:
+        freq, phi = _dense_modes(k.toarray(), m.toarray(), constraints)
+    else:
+        freq, phi = _sparse_modes(k, m, constraints, up_to_hz=wanted_hz if wanted_hz is not None else max_hz,
+                                  count=wanted_count)
+    keep = np.ones_like(freq, dtype=bool) if max_hz is None else freq <= max_hz
+    return Modes(frequencies_hz=freq[keep], shapes=constraints.transform @ phi[:, keep], dofs=dofs,
+                 cd_frames=cd_frames)
+
+
+def _massless(m_diag: np.ndarray) -> np.ndarray:
+    return m_diag <= MASSLESS_RELATIVE_TOLERANCE * max(float(m_diag.max()), 1e-300)
+
+
+def _dense_modes(k: np.ndarray, m: np.ndarray, constraints: Constraints) -> tuple[np.ndarray, np.ndarray]:
+    """Every mode (signed frequencies [Hz], shapes over the independent DOFs) by static condensation of
+    the massless DOFs and one dense generalised eigen-solution."""
     diag = np.diag(m)
-    massless = diag <= MASSLESS_RELATIVE_TOLERANCE * diag.max()
+    massless = _massless(diag)
     a, o = np.flatnonzero(~massless), np.flatnonzero(massless)
     k_oo = k[np.ix_(o, o)]
     if len(o) == 0:
@@ -77,12 +109,51 @@ def solve_modes(stiffness: np.ndarray, mass: np.ndarray, constraints: Constraint
     k_cond = 0.5 * (k_cond + k_cond.T)
     eigval, vec = sla.eigh(k_cond, m[np.ix_(a, a)])
     freq = np.sign(eigval) * np.sqrt(np.abs(eigval)) / (2.0 * np.pi)
-    keep = np.ones_like(freq, dtype=bool) if max_hz is None else freq <= max_hz
-    vec = vec[:, keep]
     phi = np.zeros((len(diag), vec.shape[1]))
     phi[a] = vec
     phi[o] = -coupling @ vec
-    return Modes(frequencies_hz=freq[keep], shapes=t @ phi, dofs=dofs, cd_frames=cd_frames)
+    return freq, phi
+
+
+def _sparse_modes(k: sparse.csr_array, m: sparse.csr_array, constraints: Constraints, *, up_to_hz: float | None,
+                  count: int | None) -> tuple[np.ndarray, np.ndarray]:
+    """The lowest modes by shift-invert Lanczos about a small negative shift: (K - sigma M)^-1 M maps
+    every eigenvalue above the shift, rigid-body modes included, to a large one in order, and the
+    massless DOFs' infinite eigenvalues to zero, so they need no condensation. With ``count`` that
+    many are found at least; the number found doubles until one lies above ``up_to_hz`` too."""
+    n = k.shape[0]
+    if count is None and up_to_hz is None:
+        raise MaceError(f"a model of {n} independent DOFs is solved for its lowest modes only: give a frequency "
+                        "range (max_hz, --max-hz, or the deck's EIGRL V2) or a number of modes (EIGRL ND)")
+    massive = int(np.count_nonzero(~_massless(m.diagonal())))
+    # the shift sits below every eigenvalue: minus (2 pi 0.01 Hz)^2 times a unit of the model's scale
+    scale = float(np.median(k.diagonal()[k.diagonal() > 0]) / np.median(m.diagonal()[m.diagonal() > 0]))
+    sigma = -1e-6 * scale
+    try:
+        factor = splu(sparse.csc_array(k - sigma * m))
+    except RuntimeError:
+        raise MaceError(_unrestrained_message_sparse(k, m, constraints)) from None
+    op = LinearOperator((n, n), matvec=lambda x: factor.solve(np.asarray(x, dtype=float).ravel()), dtype=float)
+    wanted = min(max(count or 0, SPARSE_FIRST_BATCH if up_to_hz is not None else 1), massive - 1)
+    while True:
+        eigval, vec = eigsh(k, k=wanted, M=m, sigma=sigma, which="LM", OPinv=op, tol=0.0)
+        order = np.argsort(eigval)
+        eigval, vec = eigval[order], vec[:, order]
+        freq = np.sign(eigval) * np.sqrt(np.abs(eigval)) / (2.0 * np.pi)
+        if (up_to_hz is None or freq[-1] > up_to_hz) or wanted >= massive - 1:
+            break
+        wanted = min(2 * wanted, massive - 1)
+    vec = vec / np.sqrt(np.einsum("im,im->m", vec, m @ vec))  # mass-normalised, as the dense route
+    return freq, vec
+
+
+def _unrestrained_message_sparse(k: sparse.csr_array, m: sparse.csr_array, constraints: Constraints) -> str:
+    """Name the DOFs that have neither mass nor stiffness on the diagonal (the sparse route's singular case)."""
+    kd, md = k.diagonal(), m.diagonal()
+    free = np.flatnonzero((np.abs(kd) <= 1e-12 * np.abs(kd).max()) & _massless(md))
+    names = ", ".join(f"{g}-{c}" for g, c in (constraints.independent[i] for i in free[:12]))
+    return ("K - sigma M is singular: some DOFs have neither mass nor stiffness"
+            + (f" ({names})" if names else "") + "; connect them, give them mass, or constrain them with an SPC")
 
 
 def _unrestrained_message(k_oo: np.ndarray, o: np.ndarray, constraints: Constraints) -> str:

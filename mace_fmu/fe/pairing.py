@@ -13,7 +13,7 @@ def mac_matrix(reference: Modes, reference_model: FEModel, other: Modes) -> np.n
     common = [g for g in reference.dofs.grid_ids if g in set(other.dofs.grid_ids)]
     rows_ref = np.concatenate([reference.dofs.indices(g) for g in common])
     rows_other = np.concatenate([other.dofs.indices(g) for g in common])
-    w = reference_model.mass[np.ix_(rows_ref, rows_ref)]
+    w = reference_model.mass[np.ix_(rows_ref, rows_ref)].toarray()
     a = reference.shapes[rows_ref]
     b = other.shapes[rows_other]
     cross = a.T @ w @ b

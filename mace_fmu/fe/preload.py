@@ -22,7 +22,8 @@ from scipy.sparse.linalg import splu
 from mace_fmu.errors import MaceError
 from mace_fmu.fe.assembly import FEModel
 from mace_fmu.fe.constraints import Constraints
-from mace_fmu.fe.corotational import (BarState, bar_dof_indices, deformation_derivatives, internal_force,
+from mace_fmu.fe.modal import DENSE_MAX_DOF
+from mace_fmu.fe.corotational import (BarState, bar_dof_indices, deformation_jacobian, internal_force,
                                       rotation_matrix, tangent)
 from mace_fmu.progress import ProgressCallback, Step
 
@@ -36,7 +37,7 @@ class Preload:
 
     kind: PreloadKind
     displacements: np.ndarray  #: (n_dof,) translations [m] and rotation vectors [rad], basic
-    tangent_stiffness: np.ndarray  #: K_T = K_material + K_geometric (+ springs), basic
+    tangent_stiffness: sparse.csr_array  #: K_T = K_material + K_geometric (+ springs), basic
     bar_forces: np.ndarray  #: (n_bar, 7) natural forces: axial [N], end moments [N m] (local)
     increments: int
     iterations: int  #: total Newton iterations
@@ -44,10 +45,13 @@ class Preload:
     state: BarState  #: configuration the tangent is about (undeformed for the linear preload)
 
 
-def _solve(k: np.ndarray, r: np.ndarray) -> np.ndarray:
-    """Solve the reduced static system (positive definite about a stable state), or explain."""
+def _solve(k: sparse.sparray, r: np.ndarray) -> np.ndarray:
+    """Solve the reduced static system (positive definite about a stable state), or explain: dense
+    Cholesky for a small system, sparse LU for a large one."""
+    if k.shape[0] > DENSE_MAX_DOF:
+        return _factor(k)(r)
     try:
-        return sla.cho_solve(sla.cho_factor(k), r)
+        return sla.cho_solve(sla.cho_factor(k.toarray()), r)
     except (sla.LinAlgError, np.linalg.LinAlgError):
         raise MaceError("the preload stiffness is singular: the static subcase leaves a mechanism or rigid-body "
                         "motion free (check its SPC and MPC sets)") from None
@@ -62,17 +66,16 @@ def _state(model: FEModel, u: np.ndarray) -> BarState:
 def linear_preload(model: FEModel, constraints: Constraints, load: np.ndarray) -> Preload:
     """Linear static solution, then K + K_sigma from its bar forces on the undeformed geometry."""
     t = constraints.transform
-    u = t @ _solve(constraints.reduce(model.stiffness), t.T @ load)
+    u = t @ _solve(constraints.reduce_sparse(model.stiffness), t.T @ load)
     n = model.dofs.size
     undeformed = _state(model, np.zeros(n))
-    _, b, _ = deformation_derivatives(model.bars, undeformed)
+    _, b = deformation_jacobian(model.bars, undeformed)
     idx = bar_dof_indices(model.bars)
     d_lin = np.einsum("nki,ni->nk", b, u[idx])
     forces = np.einsum("nij,nj->ni", model.bars.k_natural, d_lin)
     _, k_bars, _ = tangent(model.bars, undeformed, n, natural_forces=forces)
-    k_bars = k_bars.toarray()
     residual = np.linalg.norm(t.T @ (load - model.stiffness @ u)) / np.linalg.norm(t.T @ load)
-    return Preload(kind="linear", displacements=u, tangent_stiffness=k_bars + model.spring_stiffness,
+    return Preload(kind="linear", displacements=u, tangent_stiffness=sparse.csr_array(k_bars + model.spring_stiffness),
                    bar_forces=forces, increments=1, iterations=1, residual_ratio=float(residual),
                    state=undeformed)
 
@@ -100,7 +103,7 @@ def large_displacement_preload(model: FEModel, constraints: Constraints, load: n
     t = constraints.transform
     n = model.dofs.size
     u = np.zeros(n)  # translations and accumulated spins, for the springs and the report
-    k_springs = sparse.csr_array(model.spring_stiffness)
+    k_springs = model.spring_stiffness
     state = BarState(model.positions.copy(), np.broadcast_to(np.eye(3), (len(model.positions), 3, 3)).copy())
     total_iterations = 0
     last_increment = np.zeros(n)
@@ -143,12 +146,12 @@ def large_displacement_preload(model: FEModel, constraints: Constraints, load: n
             progress(Step(task="gravity preload", done=step, total=increments, detail=detail))
     f_int, k_bars, forces = tangent(model.bars, state, n)
     ratio = np.linalg.norm(t.T @ (load - f_int - model.spring_stiffness @ u)) / np.linalg.norm(t.T @ load)
-    return Preload(kind="large", displacements=u, tangent_stiffness=k_bars.toarray() + model.spring_stiffness,
+    return Preload(kind="large", displacements=u, tangent_stiffness=sparse.csr_array(k_bars + model.spring_stiffness),
                    bar_forces=forces, increments=increments, iterations=total_iterations, residual_ratio=float(ratio),
                    state=state)
 
 
-def geometric_stiffness(model: FEModel, constraints: Constraints, load: np.ndarray) -> np.ndarray:
+def geometric_stiffness(model: FEModel, constraints: Constraints, load: np.ndarray) -> sparse.csr_array:
     """K_sigma of the linear static solution under ``load`` (undeformed geometry), basic DOFs.
 
     Buckling load factors lambda solve (K + lambda K_sigma) phi = 0.

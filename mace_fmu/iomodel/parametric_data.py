@@ -151,7 +151,7 @@ def physical_sensitivities(model: VoltsModel, shapes: np.ndarray, *, only: Seque
         label = spring_name[sid]
         if only is not None and f"k_{label}" not in only:
             continue
-        v = fe.spring_vectors[row] @ shapes
+        v = (fe.spring_vectors[[row]] @ shapes)[0]
         parameters.append((f"k_{label}", float(k), f"stiffness of {label} (CELAS2 {sid}) [N/m]; reanalysis"))
         sensitivities.append(k * np.outer(v, v))
     n = shapes.shape[1]
