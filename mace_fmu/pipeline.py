@@ -9,7 +9,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from mace_fmu.deck.cards import Deck
+from mace_fmu.deck.cards import Deck, Eigr
 from mace_fmu.deck.geometry import coordinate_frames
 from mace_fmu.deck.reader import read_deck
 from mace_fmu.errors import MaceError
@@ -86,9 +86,17 @@ def gravity_load(deck: Deck, model: FEModel, load_id: int) -> np.ndarray:
 
 
 def _eigrl(deck: Deck, structure: Structure):
-    """The EIGRL card the modal subcase's METHOD selects (None without one)."""
+    """The EIGRL (or EIGR) card the modal subcase's METHOD selects (None without one)."""
     method = structure.modal.method
-    return deck.eigrls.get(method) if method is not None else None
+    if method is None:
+        return None
+    return deck.eigrls.get(method) or deck.eigrs.get(method)
+
+
+#: EIGR methods that reduce to a tridiagonal matrix and find every root: NASTRAN prints them all, and ND, when
+#: given, is the number of lowest roots whose vectors it computes whatever F1 and F2 say (QRG, EIGR remarks;
+#: MSC's pt145 run, tests/data/nastran/pt145: F2 = 0.1 Hz and ND = 6 gave the six lowest modes, up to 1153 Hz)
+_TRIDIAGONAL = ("GIV", "MGIV", "HOU", "MHOU", "AHOU")
 
 
 def _requested_modes(modes: Modes, deck: Deck, structure: Structure, max_hz: float | None) -> Modes:
@@ -97,20 +105,25 @@ def _requested_modes(modes: Modes, deck: Deck, structure: Structure, max_hz: flo
 
     A MaceError when that leaves no mode, saying what was asked and where the modes are.
     """
-    eigrl = _eigrl(deck, structure)
+    card = _eigrl(deck, structure)
     f = modes.frequencies_hz
+    if isinstance(card, Eigr):  # EIGR: F1, F2, ND
+        name, v1, v2, nd = f"EIGR {card.sid} {card.method}", card.f1, card.f2, card.nd
+        if card.method in _TRIDIAGONAL and nd:
+            v1 = v2 = None
+    elif card is not None:
+        name, v1, v2, nd = f"EIGRL {card.sid}", card.v1, card.v2, card.nd
     if max_hz is not None:
         keep, asked = f <= max_hz, f"up to {max_hz:g} Hz"
-    elif eigrl is not None and (eigrl.v1 is not None or eigrl.v2 is not None or eigrl.nd):
+    elif card is not None and (v1 is not None or v2 is not None or nd):
         keep = np.ones(len(f), dtype=bool)
-        if eigrl.v1 is not None:
-            keep &= f >= eigrl.v1
-        if eigrl.v2 is not None:
-            keep &= f <= eigrl.v2
-        if eigrl.nd:
-            keep &= np.cumsum(keep) <= eigrl.nd
-        asked = (f"EIGRL {eigrl.sid} (V1 = {eigrl.v1}, V2 = {eigrl.v2}, ND = {eigrl.nd}; "
-                 f"{eigrl.source.file}:{eigrl.source.line})")
+        if v1 is not None:
+            keep &= f >= v1
+        if v2 is not None:
+            keep &= f <= v2
+        if nd:
+            keep &= np.cumsum(keep) <= nd
+        asked = f"{name} (V1 = {v1}, V2 = {v2}, ND = {nd}; {card.source.file}:{card.source.line})"
     else:
         keep, asked = f <= DEFAULT_MAX_HZ, f"up to {DEFAULT_MAX_HZ:g} Hz (no EIGRL in the deck)"
     if not keep.any():

@@ -11,6 +11,7 @@ from mace_fmu.deck.geometry import bar_orientation, coordinate_frames, grid_posi
 from mace_fmu.errors import MaceError
 from mace_fmu.fe.beam import BeamSection, MassKind, local_frame, local_mass, local_stiffness, natural_stiffness, to_basic
 from mace_fmu.fe.dofs import DofMap
+from mace_fmu.fe.elements import add_elements, bar_mass, coupled_mass
 
 
 @dataclass(frozen=True)
@@ -77,7 +78,12 @@ def mass_factor(deck: Deck) -> float:
 
 
 def assemble(deck: Deck, *, mass: MassKind = "lumped") -> FEModel:
-    """Assemble K and M of every CBAR, CONM2 and CELAS2 of ``deck`` (no constraints applied)."""
+    """Assemble K and M of every element of ``deck`` (no constraints applied).
+
+    ``mass``: "lumped" (NASTRAN's default) or "consistent"; a deck's PARAM,COUPMASS > 0 asks for the coupled
+    (consistent) mass, as in NASTRAN.
+    """
+    mass = coupled_mass(deck, mass)
     frames = coordinate_frames(deck)
     pos = grid_positions(deck)
     dofs = DofMap(tuple(sorted(deck.grids)))
@@ -95,7 +101,7 @@ def assemble(deck: Deck, *, mass: MassKind = "lumped") -> FEModel:
         sec = bar_section(deck, bar.pid)
         idx = np.concatenate([dofs.indices(bar.ga), dofs.indices(bar.gb)])
         k_glob[np.ix_(idx, idx)] += to_basic(local_stiffness(sec, length), frame)
-        m_glob[np.ix_(idx, idx)] += to_basic(local_mass(sec, length, mass), frame)
+        m_glob[np.ix_(idx, idx)] += to_basic(bar_mass(sec, length, mass, deck), frame)
         ids.append(bar.id)
         na.append(dofs.grid_index(bar.ga))
         nb.append(dofs.grid_index(bar.gb))
@@ -121,6 +127,7 @@ def assemble(deck: Deck, *, mass: MassKind = "lumped") -> FEModel:
     constants = np.array([sp.k for sp in springs])
     k_spring = vectors.T @ (constants[:, None] * vectors)
     k_glob += k_spring
+    add_elements(deck, dofs, pos, frames, cd_frames, k_glob, m_glob, mass)  # CBEAM, CROD, CMASS (fe/elements.py)
     m_glob *= mass_factor(deck)
 
     bars = Bars(ids=np.array(ids), node_a=np.array(na), node_b=np.array(nb), frames0=np.array(fr),
