@@ -77,8 +77,8 @@ BROKEN = [
     # --- duplicates
     pytest.param(base(sf("GRID", 1, "", "5.0")), 6, "GRID 1", "GRID 1 defined twice: line 1 and line 6",
                  id="duplicate-grid"),
-    pytest.param(base(sf("CONM2", 10, 1, "", "1.0")), 6, "CONM2 10",
-                 "element ID 10 is used twice: CBAR at line 5 and CONM2 at line 6", id="duplicate-element-id"),
+    pytest.param(base(sf("CBEAM", 10, 1, 1, 2, "0.0", "1.0", "0.0")), 6, "CBEAM 10",
+                 "element ID 10 is used twice: CBAR at line 5 and CBEAM at line 6", id="duplicate-element-id"),
     pytest.param(base(sf("CELAS2", 11, "1.0", 1, 1), sf("CBAR", 11, 1, 1, 2, "0.0", "1.0")), 7, "CBAR 11",
                  "element ID 11 is used twice: CELAS2 at line 6 and CBAR at line 7", id="duplicate-celas2-cbar"),
     pytest.param(base("PARAM,POST,0", sf("PARAM", "POST", -1)), 7, "PARAM POST", "defined twice",

@@ -37,6 +37,9 @@ DECKS = {
     # SOL 145, MSC Nastran: CBAR, CONM2, RBE2 and a chain of four RBARs, two rigid-body modes, INCLUDE,
     # a repeated BEGIN BULK; EIGR LAN ND = 8
     "bah_plane": ("bah_plane.bdf", 8),
+    # SOL 103, MSC Nastran (HA144D): CBARs of a massless material, CONM2s (one with a CBAR's ID), six RBARs,
+    # SUPORT (3 rigid-body modes), PARAM,WTMASS; EIGR MGIV ND = 24 of which the structure has 21
+    "ha144ds": ("ha144ds.bdf", 21),
 }
 
 

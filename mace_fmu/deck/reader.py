@@ -716,8 +716,9 @@ _TABLES = {"GRID": "grids", "CORD2R": "coords", "CBAR": "bars", "PBAR": "pbars",
            "NLPARM": "nlparms", "PARAM": "params", "PBARL": "pbars", "PBEAML": "pbeams", "PBEAM": "pbeams",
            "CBEAM": "beams", "CROD": "rods", "CONROD": "rods", "PROD": "prods", "CMASS1": "scalar_masses",
            "CMASS2": "scalar_masses", "PMASS": "pmasses", "RBAR": "rigids", "RBE2": "rigids", "EIGR": "eigrs"}
-#: one element ID namespace in NASTRAN
-_ELEMENTS = ("CBAR", "CONM2", "CELAS2", "CBEAM", "CROD", "CONROD", "CMASS1", "CMASS2", "RBAR", "RBE2")
+#: one element ID namespace in NASTRAN. CONM2 has its own: MSC Nastran ran HA144D with CBAR 100 and CONM2 100
+#: (its sorted bulk echo is in the .f06 of tests/data/nastran/ha144ds), so a deck may reuse a CBAR's ID on a CONM2
+_ELEMENTS = ("CBAR", "CELAS2", "CBEAM", "CROD", "CONROD", "CMASS1", "CMASS2", "RBAR", "RBE2")
 
 
 def _bulk_tables(raw_cards: list, file: str) -> tuple[dict[str, dict], tuple]:
