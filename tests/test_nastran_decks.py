@@ -40,6 +40,9 @@ DECKS = {
     # SOL 103, MSC Nastran (HA144D): CBARs of a massless material, CONM2s (one with a CBAR's ID), six RBARs,
     # SUPORT (3 rigid-body modes), PARAM,WTMASS; EIGR MGIV ND = 24 of which the structure has 21
     "ha144ds": ("ha144ds.bdf", 21),
+    # SOL 145, MSC Nastran 2012: the BAH wing of bah_plane as pyNastran's MATLAB example has it (its own copy of
+    # the structure, free-field comments after '$'); EIGR LAN ND = 10
+    "BAH_Plane": ("BAH_Plane.bdf", 10),
 }
 
 
