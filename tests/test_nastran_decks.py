@@ -101,6 +101,24 @@ def test_cbeam_lumped_mass_carries_the_torsional_inertia_nastran_reports():
     assert result.mass_properties.inertia_about_reference_kgm2[0, 0] == pytest.approx(3.765757e-03, rel=1e-6)
 
 
+@pytest.mark.parametrize("kind, dims, nastran", [
+    # (A, I1, I2, J, K1, K2) as NASTRAN prints them in user information message 4379, which replaces each
+    # PBARL/PBEAML by a PBAR/PBEAM: beam_modes.f06 (Simcenter) for ROD; fmondsp.f06 (MSC, pyNastran's
+    # models/aero, a deck with tapered beams that cannot be run here) for TUBE and BOX
+    ("ROD", (1.0,), (3.1416e+00, 7.8540e-01, 7.8540e-01, 1.5708e+00, 0.9, 0.9)),
+    ("TUBE", (0.2, 0.195), (6.2047e-03, 1.2103e-04, 1.2103e-04, 2.4206e-04, 0.5, 0.5)),
+    ("TUBE", (0.4, 0.395), (1.2488e-02, 9.8662e-04, 9.8662e-04, 1.9732e-03, 0.5, 0.5)),
+    ("BOX", (0.6, 0.2, 0.0025, 0.0025), (3.9750e-03, 3.2346e-05, 1.7702e-04, 8.7582e-05, 2.4528e-01, 7.4843e-01)),
+    ("BOX", (0.05, 0.5, 0.001, 0.001), (1.0960e-03, 2.6809e-05, 6.1877e-07, 2.1819e-06, 9.0876e-01, 8.7591e-02)),
+])
+def test_pbarl_sections_are_the_pbar_nastran_makes(kind, dims, nastran):
+    from mace_fmu.deck.sections import section_properties
+
+    p = section_properties(kind, dims)
+    # NASTRAN prints 5 significant digits
+    np.testing.assert_allclose((p.area, p.i1, p.i2, p.j, p.k1, p.k2), nastran, rtol=6e-5)
+
+
 def test_deck_reports_what_it_read_past(tmp_path):
     deck = read_deck(DATA / "bah_plane" / "bah_plane.bdf")
     skipped = {name for name, _, _ in deck.skipped}
@@ -136,6 +154,8 @@ ENDDATA
     ("RBAR,5,1,2,123,,456", r"deck.bdf:9: RBAR 5, fields 5-8 \(CNA-CMB\): CNA 123, CNB blank, CMA 456"),
     ("RBE2,6,1,123456", r"deck.bdf:9: RBE2 6, field 5 \(GM1\): no dependent grid"),
     ("EIGR,2,QR,0.,10.", r"deck.bdf:9: EIGR 2, field 3 \(METHOD\): expected one of LAN"),
+    ("PBARL,7,1,,BOX\n,0.1,0.2,0.11,0.01", r"deck.bdf:10: PBARL 7, continuation 1 fields 2-5 \(DIM1-DIM4\): BOX: "
+                                         r"the walls fill the box"),
     ("CROD,8,9,1,1", r"deck.bdf:9: CROD 8, fields 4-5 \(G1, G2\): G1 and G2 are both grid 1"),
 ])
 def test_malformed_new_card_is_one_error_naming_file_line_card_and_field(tmp_path, card, message):

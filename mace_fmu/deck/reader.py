@@ -437,6 +437,10 @@ def _section_dims(f: Fields, first: int, kind: str) -> tuple[tuple[float, ...], 
     count = SECTIONS[kind][0]
     dims = tuple(f.real(first + k, f"DIM{k + 1}", above=0.0) for k in range(count))
     nsm = f.real(first + count, "NSM", 0.0, minimum=0.0)
+    try:
+        section_properties(kind, dims)
+    except ValueError as exc:
+        raise f.error(f"{kind}: {exc}", first, f"DIM1-DIM{count}", first + count - 1) from None
     return dims, nsm, first + count
 
 
