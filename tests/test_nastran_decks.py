@@ -173,3 +173,61 @@ def test_undefined_property_and_rigid_cycle_are_named():
     with pytest.raises(MaceError, match=r"x.bdf:10: RBAR 6: dependent DOF 1-1 is already dependent in RBAR 5|"
                                         r"depends on itself"):
         compute_modes(deck, structure="0g")
+
+
+# ----------------------------------------------------------------------------------------------
+# The other new cards, each against the card it stands for or against a closed form
+
+def _modes(tmp_path, bulk: list[str], name: str, case: str = "SPC = 7\n") -> np.ndarray:
+    path = tmp_path / f"{name}.bdf"
+    path.write_text(f"SOL 103\nCEND\n{case}METHOD = 1\nBEGIN BULK\nEIGRL,1,,,6\n" + "\n".join(bulk) + "\nENDDATA\n")
+    return compute_modes(read_deck(path), structure="0g").modes.frequencies_hz
+
+
+def _cantilever(ps: str = "345", grdset: str | None = None) -> list[str]:
+    from decks import line_of_bars
+
+    cards = line_of_bars(n=8, length=2.0, e=7.0e10, nu=0.33, rho=2700.0, area=7e-4, i=4e-8, ps=ps)
+    return cards + ([grdset] if grdset else []) + ["SPC1,7,123456,1"]
+
+
+def test_grdset_gives_blank_grid_fields_its_values(tmp_path):
+    explicit = _modes(tmp_path, _cantilever(), "explicit")
+    defaulted = _modes(tmp_path, _cantilever(ps="", grdset="GRDSET,,,,,,,345"), "grdset")
+    np.testing.assert_allclose(defaulted, explicit, rtol=1e-12)
+    assert not np.allclose(_modes(tmp_path, _cantilever(ps=""), "free")[:4], explicit[:4])  # the PS matters
+
+
+def test_celas1_pelas_cmass1_pmass_conm1_stand_for_celas2_cmass2_conm2(tmp_path):
+    base = _cantilever()
+    tip = 9  # the free end
+    two = base + [f"CELAS2,900,3.0e4,{tip},2", f"CMASS2,901,0.7,{tip},1", f"CONM2,902,{tip},,1.5\n,0.01,,0.02,,,0.03"]
+    one = base + [f"CELAS1,900,50,{tip},2", "PELAS,50,3.0e4,,,51,1.0", f"CMASS1,901,60,{tip},1", "PMASS,60,0.7",
+                  f"CONM1,902,{tip},,1.5,,1.5\n,1.5,,,,0.01\n,,0.02,,,,,,0.03"]
+    np.testing.assert_allclose(_modes(tmp_path, one, "one"), _modes(tmp_path, two, "two"), rtol=1e-12)
+    assert not np.allclose(_modes(tmp_path, base, "base"), _modes(tmp_path, two, "two"))  # they matter
+
+
+def test_spcadd_and_mpcadd_are_the_union_of_their_sets(tmp_path):
+    base = [c for c in _cantilever() if not c.startswith("SPC1")]
+    direct = base + ["SPC1,7,123,1", "SPC1,7,456,1", "MPC,8,9,2,1.0,8,2,-1.0"]
+    added = base + ["SPC1,2,123,1", "SPC1,3,456,1", "SPCADD,7,2,3", "MPC,4,9,2,1.0,8,2,-1.0", "MPCADD,8,4"]
+    case = "SPC = 7\nMPC = 8\n"
+    np.testing.assert_allclose(_modes(tmp_path, added, "added", case), _modes(tmp_path, direct, "direct", case),
+                               rtol=1e-12)
+    with pytest.raises(DeckError, match=r"SPCADD 7, S2: set 5 is not defined \(expected an SPC or SPC1 set ID\)"):
+        read_deck_text(BASE.format(card="SPC1,2,123,1\nSPCADD,7,2,5"), name="x.bdf")
+
+
+def test_conrod_chain_gives_the_lumped_chain_closed_form(tmp_path):
+    """A fixed-free chain of n CONRODs with NASTRAN's lumped rod mass (m/2 at each end of each rod): masses m
+    at the inner grids and m/2 at the tip give omega_j = 2 sqrt(k/m) sin((2j - 1) pi / (4n)), k = E A / L_e."""
+    n, length, e, area, rho = 10, 3.0, 2.0e11, 1e-4, 7800.0
+    cards = [f"MAT1,1,{e:.6e},,0.3,{rho:.6e}"]
+    cards += [f"GRID,{k + 1},,{k * length / n:.10e},0.,0.,,23456" for k in range(n + 1)]
+    cards += [f"CONROD,{k + 1},{k + 1},{k + 2},1,{area:.6e}" for k in range(n)]
+    cards += ["CROD,99,98,1,2", "PROD,98,1,0.0", "SPC1,7,1,1"]  # a CROD of no area changes nothing
+    ours = _modes(tmp_path, cards, "rods", case="SPC = 7\n")
+    k_e, m = e * area / (length / n), rho * area * length / n
+    exact = [2 * np.sqrt(k_e / m) * np.sin((2 * j - 1) * np.pi / (4 * n)) / (2 * np.pi) for j in range(1, 7)]
+    np.testing.assert_allclose(ours, exact, rtol=1e-10)

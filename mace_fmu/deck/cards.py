@@ -169,6 +169,27 @@ class PMass:
 
 
 @dataclass(frozen=True)
+class Conm1:
+    """CONM1: a symmetric 6x6 mass matrix at grid ``grid``, in system ``cid``."""
+
+    id: int
+    grid: int
+    cid: int
+    matrix: tuple[float, ...]  #: M11 M21 M22 M31 ... M66, the lower triangle row by row [kg, kg m, kg m^2]
+    source: Source
+
+
+@dataclass(frozen=True)
+class SetUnion:
+    """SPCADD or MPCADD: set ``sid`` is the union of ``sets`` (expanded by the reader)."""
+
+    sid: int
+    card: str
+    sets: tuple[int, ...]
+    source: Source
+
+
+@dataclass(frozen=True)
 class Rigid:
     """RBAR or RBE2 as NASTRAN reads it: components ``components`` of each dependent grid follow the
     rigid-body motion of independent grid ``independent`` (all six of its DOFs)."""
@@ -384,3 +405,4 @@ class Deck:
     pmasses: Mapping[int, PMass] = field(default_factory=dict)
     rigids: Mapping[int, Rigid] = field(default_factory=dict)  #: RBAR and RBE2 (always in force, like NASTRAN's)
     eigrs: Mapping[int, Eigr] = field(default_factory=dict)
+    conm1s: Mapping[int, Conm1] = field(default_factory=dict)

@@ -14,7 +14,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from mace_fmu.deck.cards import (CBar, CBeam, Celas2, Conm2, Cord2R, Deck, Eigr, Eigrl, Grav, Grid, Load, Mat1, Mpc,
+from mace_fmu.deck.cards import (CBar, CBeam, Celas2, Conm1, Conm2, SetUnion, Cord2R, Deck, Eigr, Eigrl, Grav, Grid, Load, Mat1, Mpc,
                                  MpcTerm, Nlparm, Param, PBar, PBeam, PMass, PRod, Rigid, Rod, ScalarMass, Source, Spc1)
 from mace_fmu.deck.fields import (Fields, Selections, case_control, check_text, parse_int, parse_real, split_cards,
                                   split_sections)
@@ -135,12 +135,13 @@ def _vec(f: Fields, d: int, names: tuple[str, str, str]) -> tuple[float, float, 
     return (f.real(d, names[0], 0.0), f.real(d + 1, names[1], 0.0), f.real(d + 2, names[2], 0.0))
 
 
-def _grid(f: Fields, src: Source) -> Grid:
+def _grid(f: Fields, src: Source, defaults: tuple[int, int, str] = (0, 0, "")) -> Grid:
+    """GRID; blank CP, CD and PS take the GRDSET values ``defaults`` (QRG GRDSET), else 0, 0 and none."""
     gid = f.ident(1, "ID")
-    cp = f.integer(2, "CP", 0, minimum=0)
+    cp = f.integer(2, "CP", defaults[0], minimum=0)
     xyz = _vec(f, 3, ("X1", "X2", "X3"))
-    cd = f.integer(6, "CD", 0, minimum=0)
-    ps = f.components(7, "PS", "")
+    cd = f.integer(6, "CD", defaults[1], minimum=0)
+    ps = f.components(7, "PS", defaults[2])
     f.blank(8, "SEID")
     f.end(8)
     return Grid(id=gid, cp=cp, xyz=xyz, cd=cd, ps=ps, source=src)
@@ -709,20 +710,95 @@ def _eigr(f: Fields, src: Source) -> Eigr:
     return Eigr(sid=sid, method=method, f1=f1, f2=f2, ne=ne, nd=nd or None, norm=norm, source=src)
 
 
+def _grdset(f: Fields, src: Source) -> tuple[int, int, str]:
+    """GRDSET (QRG): defaults of GRID's CP (field 3), CD (field 7) and PS (field 8)."""
+    f.blank(1, "unused")
+    cp = f.integer(2, "CP", 0, minimum=0)
+    for d in (3, 4, 5):
+        f.blank(d, "unused")
+    cd = f.integer(6, "CD", 0, minimum=0)
+    ps = f.components(7, "PS", "")
+    f.blank(8, "SEID")
+    f.end(8)
+    return cp, cd, ps
+
+
+def _celas1(f: Fields, src: Source) -> tuple[int, int, int, int, int | None, int | None]:
+    """CELAS1 (QRG): EID PID G1 C1 G2 C2 (PID defaults to EID); becomes a CELAS2 once its PELAS is known."""
+    eid = f.ident(1, "EID")
+    pid = f.integer(2, "PID", eid, minimum=1)
+    g1, c1, g2, c2 = _scalar_ends(f, 3)
+    return eid, pid, g1, c1, g2, c2
+
+
+def _pelas(f: Fields, src: Source) -> tuple[tuple[int, float, Source], ...]:
+    """PELAS (QRG): up to two PIDi Ki GEi Si groups; (PID, K, source) each."""
+    out = []
+    for k, d in enumerate((1, 5), start=1):
+        if not any(f.text(d + i) for i in range(4)):
+            if k == 1:
+                raise f.error("required field is blank (expected PID1 K1)", 1, "PID1")
+            continue
+        pid = f.integer(d, f"PID{k}", minimum=1)
+        f.label = f"PELAS {pid}"
+        out.append((pid, f.real(d + 1, f"K{k}"), src))
+        f.real(d + 2, f"GE{k}", None)
+        f.real(d + 3, f"S{k}", None)
+    f.end(8)
+    return tuple(out)
+
+
+def _conm1(f: Fields, src: Source) -> Conm1:
+    """CONM1 (QRG): EID G CID M11 M21 M22 M31 M32 M33; M41 ... M66: the lower triangle of a symmetric 6x6 mass
+    matrix in system CID at grid G."""
+    eid = f.ident(1, "EID")
+    grid = f.integer(2, "G", minimum=1)
+    cid = f.integer(3, "CID", 0, minimum=0)
+    values, names = [], []
+    d = 4
+    for row in range(1, 7):
+        for col in range(1, row + 1):
+            names.append(f"M{row}{col}")
+            values.append(f.real(d, names[-1], 0.0))
+            d += 1
+    f.end(d - 1)
+    matrix = np.zeros((6, 6))
+    matrix[np.tril_indices(6)] = values
+    matrix = matrix + np.tril(matrix, -1).T
+    smallest = float(np.linalg.eigvalsh(matrix)[0])
+    if smallest < -1e-12 * max(float(np.abs(matrix).max()), np.finfo(float).tiny):
+        raise f.error(f"the mass matrix is not positive semi-definite (eigenvalue {smallest:.3g})", 4, "M11-M66",
+                      d - 1)
+    return Conm1(id=eid, grid=grid, cid=cid, matrix=tuple(values), source=src)  # type: ignore[arg-type]
+
+
+def _spcadd(f: Fields, src: Source) -> SetUnion:
+    """SPCADD / MPCADD (QRG): SID S1 S2 ...: the union of the listed sets."""
+    sid = f.ident(1, "SID")
+    sets = tuple(f.integer(d, f"S{d - 1}", minimum=1) for d in range(2, len(f) + 1) if f.text(d))
+    if not sets:
+        raise f.error("no sets listed (expected S1 ...)", 2, "S1")
+    if sid in sets:
+        raise f.error(f"set {sid} lists itself (expected other set IDs)", 2 + sets.index(sid), f"S{sets.index(sid) + 1}")
+    return SetUnion(sid=sid, card=f.raw.name, sets=sets, source=src)
+
+
 _PARSERS: dict[str, Callable[[Fields, Source], Any]] = {
     "GRID": _grid, "CORD2R": _cord2r, "CBAR": _cbar, "PBAR": _pbar, "MAT1": _mat1, "CONM2": _conm2,
     "CELAS2": _celas2, "MPC": _mpc, "SPC1": _spc1, "SPC": _spc, "GRAV": _grav, "LOAD": _load, "EIGRL": _eigrl,
     "NLPARM": _nlparm, "PARAM": _param, "PBARL": _pbarl, "PBEAML": _pbeaml, "PBEAM": _pbeam, "CBEAM": _cbeam,
     "CROD": _crod, "CONROD": _conrod, "PROD": _prod, "CMASS1": _cmass1, "CMASS2": _cmass2, "PMASS": _pmass,
-    "RBAR": _rbar, "RBE2": _rbe2, "EIGR": _eigr}
+    "RBAR": _rbar, "RBE2": _rbe2, "EIGR": _eigr, "GRDSET": _grdset, "CELAS1": _celas1, "PELAS": _pelas,
+    "CONM1": _conm1, "SPCADD": _spcadd, "MPCADD": _spcadd}
 _TABLES = {"GRID": "grids", "CORD2R": "coords", "CBAR": "bars", "PBAR": "pbars", "MAT1": "mat1s",
            "CONM2": "conm2s", "CELAS2": "celas2s", "GRAV": "gravs", "LOAD": "loads", "EIGRL": "eigrls",
            "NLPARM": "nlparms", "PARAM": "params", "PBARL": "pbars", "PBEAML": "pbeams", "PBEAM": "pbeams",
            "CBEAM": "beams", "CROD": "rods", "CONROD": "rods", "PROD": "prods", "CMASS1": "scalar_masses",
-           "CMASS2": "scalar_masses", "PMASS": "pmasses", "RBAR": "rigids", "RBE2": "rigids", "EIGR": "eigrs"}
+           "CMASS2": "scalar_masses", "PMASS": "pmasses", "RBAR": "rigids", "RBE2": "rigids", "EIGR": "eigrs",
+           "CONM1": "conm1s"}
 #: one element ID namespace in NASTRAN. CONM2 has its own: MSC Nastran ran HA144D with CBAR 100 and CONM2 100
 #: (its sorted bulk echo is in the .f06 of tests/data/nastran/ha144ds), so a deck may reuse a CBAR's ID on a CONM2
-_ELEMENTS = ("CBAR", "CELAS2", "CBEAM", "CROD", "CONROD", "CMASS1", "CMASS2", "RBAR", "RBE2")
+_ELEMENTS = ("CBAR", "CELAS1", "CELAS2", "CBEAM", "CROD", "CONROD", "CMASS1", "CMASS2", "RBAR", "RBE2")
 
 
 def _bulk_tables(raw_cards: list, file: str) -> tuple[dict[str, dict], tuple]:
@@ -748,11 +824,45 @@ def _bulk_tables(raw_cards: list, file: str) -> tuple[dict[str, dict], tuple]:
                        f"read past without a word, as changing neither mass nor stiffness: "
                        f"{', '.join(sorted(NON_STRUCTURAL))})")
         raise DeckError(message, file=first.file or file, line=first.line, card=name)
+    grdsets = [raw for raw in raw_cards if raw.name == "GRDSET"]
+    if len(grdsets) > 1:
+        raise DeckError(f"GRDSET defined twice: line {grdsets[0].line} and line {grdsets[1].line} (expected at most "
+                        "one)", file=grdsets[1].file or file, line=grdsets[1].line, card="GRDSET")
+    defaults = _grdset(Fields(grdsets[0], file), Source(grdsets[0].file or file, grdsets[0].line)) if grdsets \
+        else (0, 0, "")
+    celas1s: list[tuple[Any, Source]] = []
+    pelas: dict[int, tuple[float, Source]] = {}
+    unions: dict[str, dict[int, SetUnion]] = {"SPCADD": {}, "MPCADD": {}}
     for raw in raw_cards:
-        if raw.name in NON_STRUCTURAL and raw.name not in _PARSERS:
+        if (raw.name in NON_STRUCTURAL and raw.name not in _PARSERS) or raw.name == "GRDSET":
             continue
         parser = _PARSERS[raw.name]
-        card = parser(Fields(raw, file), Source(raw.file or file, raw.line))
+        src = Source(raw.file or file, raw.line)
+        card = _grid(Fields(raw, file), src, defaults) if raw.name == "GRID" else parser(Fields(raw, file), src)
+        if raw.name == "PELAS":
+            for pid, k, where in card:
+                if pid in pelas:
+                    raise DeckError(f"PELAS {pid} defined twice: line {pelas[pid][1].line} and line {raw.line}",
+                                    file=src.file, line=raw.line, card=f"PELAS {pid}")
+                pelas[pid] = (k, where)
+            continue
+        if raw.name in unions:
+            if card.sid in unions[raw.name]:
+                raise DeckError(f"{raw.name} {card.sid} defined twice: line {unions[raw.name][card.sid].source.line} "
+                                f"and line {raw.line}", file=src.file, line=raw.line, card=f"{raw.name} {card.sid}")
+            unions[raw.name][card.sid] = card
+            continue
+        if raw.name == "CELAS1":
+            eid = card[0]
+            if eid in elements:
+                kind, other = elements[eid]
+                raise DeckError(f"element ID {eid} is used twice: {kind} at line {other.source.line} and CELAS1 at "
+                                f"line {raw.line} ({', '.join(_ELEMENTS)} share one ID namespace)", file=src.file,
+                                line=raw.line, card=f"CELAS1 {eid}")
+            celas1s.append((card, src))
+            elements[eid] = ("CELAS1", Celas2(id=eid, k=0.0, g1=card[2], c1=card[3], g2=card[4], c2=card[5],
+                                             source=src))
+            continue
         if raw.name == "SPC":  # one or two fixed DOFs: SPC1 entries of the same set
             for entry in card:
                 sets["spc1s"].setdefault(entry.sid, []).append(entry)
@@ -767,6 +877,15 @@ def _bulk_tables(raw_cards: list, file: str) -> tuple[dict[str, dict], tuple]:
         for card in card if raw.name == "PMASS" else (card,):  # PMASS: up to four properties on one card
             _store(raw, card, tables, elements, file)
     _resolve_thru(tables, sets, thru, file)
+    for (eid, pid, g1, c1, g2, c2), src in celas1s:  # CELAS1 + PELAS = CELAS2 (QRG)
+        if pid not in pelas:
+            raise DeckError(f"property {pid} is not defined (expected a PELAS ID)", file=src.file, line=src.line,
+                            card=f"CELAS1 {eid}", field="field 3 (PID)")
+        if eid in tables["celas2s"]:
+            raise DeckError(f"element ID {eid} is used twice: CELAS2 at line {tables['celas2s'][eid].source.line} and "
+                            f"CELAS1 at line {src.line}", file=src.file, line=src.line, card=f"CELAS1 {eid}")
+        tables["celas2s"][eid] = Celas2(id=eid, k=pelas[pid][0], g1=g1, c1=c1, g2=g2, c2=c2, source=src)
+    _union_sets(sets, unions)
     report = tuple((n, len(rs), f"{rs[0].file or file}:{rs[0].line}") for n, rs in sorted(skipped.items()))
     return {**tables, **{name: {sid: tuple(cards) for sid, cards in group.items()} for name, group in sets.items()}}, \
         report
@@ -788,6 +907,26 @@ def _store(raw: Any, card: Any, tables: dict, elements: dict, file: str) -> None
                             file=raw.file or file, line=raw.line, card=f"{raw.name} {key}")
         elements[key] = (raw.name, card)
     table[key] = card
+
+
+def _union_sets(sets: dict[str, dict[int, list]], unions: dict[str, dict]) -> None:
+    """SPCADD / MPCADD: the set is the union of the listed SPC1/SPC (MPC) sets, which must exist and may not
+    themselves be SPCADD (MPCADD) sets (QRG)."""
+    for name, table, what in (("SPCADD", "spc1s", "an SPC or SPC1 set ID"), ("MPCADD", "mpcs", "an MPC set ID")):
+        for sid, card in unions[name].items():
+            if sid in sets[table]:
+                raise DeckError(f"set {sid} is both an {name} and a set of {'SPC/SPC1' if name == 'SPCADD' else 'MPC'} "
+                                f"cards (expected a new set ID; first such card at line "
+                                f"{sets[table][sid][0].source.line})", file=card.source.file, line=card.source.line,
+                                card=f"{name} {sid}", field="field 2 (SID)")
+        for sid, card in unions[name].items():
+            merged: list = []
+            for k, s in enumerate(card.sets, start=1):
+                if s not in sets[table] or s in unions[name]:
+                    raise DeckError(f"set {s} is not defined (expected {what})", file=card.source.file,
+                                    line=card.source.line, card=f"{name} {sid}", field=f"S{k}")
+                merged += sets[table][s]
+            sets[table][sid] = merged
 
 
 def _resolve_thru(tables: dict, sets: dict, thru: list, file: str) -> None:
@@ -888,6 +1027,10 @@ def _check_new_elements(deck: Deck, grid: tuple[str, str]) -> None:
             _need(m.pid, deck.pmasses, m, label, "field 3 (PID)", "property", "a PMASS ID")
         _need(m.g1, deck.grids, m, label, "field 4 (G1)", *grid)
         _need(m.g2, deck.grids, m, label, "field 6 (G2)", *grid)
+    for m in deck.conm1s.values():
+        _need(m.grid, deck.grids, m, f"CONM1 {m.id}", "field 3 (G)", *grid)
+        _need(m.cid if m.cid > 0 else None, coordinate_frames(deck), m, f"CONM1 {m.id}", "field 4 (CID)",
+              "coordinate system", "0 or a CORD2R ID")
     for r in deck.rigids.values():
         _need(r.independent, deck.grids, r, f"{r.card} {r.id}", "independent grid", *grid)
         for k, (g, _) in enumerate(r.dependent, start=1):

@@ -1,4 +1,4 @@
-"""Stiffness and mass of CBEAM, CROD/CONROD and CMASS1/CMASS2, with NASTRAN's mass conventions.
+"""Stiffness and mass of CBEAM, CROD/CONROD, CONM1 and CMASS1/CMASS2, with NASTRAN's mass conventions.
 
 Each element adds its matrices in basic coordinates to the global K and M that
 :func:`mace_fmu.fe.assembly.assemble` builds for CBAR, CONM2 and CELAS2 (it calls
@@ -102,7 +102,7 @@ def _scalar_vector(dofs: DofMap, cd_frames: np.ndarray, grid: int, component: in
 
 def add_elements(deck: Deck, dofs: DofMap, positions: dict[int, np.ndarray], frames: dict, cd_frames: np.ndarray,
                  stiffness: np.ndarray, mass: np.ndarray, kind: MassKind) -> None:
-    """Add the CBEAM, CROD/CONROD and CMASS1/CMASS2 matrices of ``deck`` to ``stiffness`` and ``mass`` in place.
+    """Add the CBEAM, CROD/CONROD, CONM1 and CMASS1/CMASS2 matrices of ``deck`` to ``stiffness`` and ``mass`` in place.
 
     ``positions``: grid ID -> position in basic [m]; ``frames``: coordinate frames of the deck;
     ``cd_frames``: (n_grid, 3, 3) displacement-system axes; ``kind``: "lumped" or "consistent" mass.
@@ -134,6 +134,14 @@ def add_elements(deck: Deck, dofs: DofMap, positions: dict[int, np.ndarray], fra
         idx = np.concatenate([dofs.indices(rod.ga), dofs.indices(rod.gb)])
         stiffness[np.ix_(idx, idx)] += to_basic(k, frame)
         mass[np.ix_(idx, idx)] += to_basic(m, frame)
+
+    for cm in sorted(deck.conm1s.values(), key=lambda c: c.id):  # CONM1: the 6x6 matrix rotated from CID to basic
+        matrix = np.zeros((6, 6))
+        matrix[np.tril_indices(6)] = cm.matrix
+        matrix = matrix + np.tril(matrix, -1).T
+        rot = np.kron(np.eye(2), frames[cm.cid][1])
+        idx = dofs.indices(cm.grid)
+        mass[np.ix_(idx, idx)] += rot @ matrix @ rot.T
 
     for sm in sorted(deck.scalar_masses.values(), key=lambda s: s.id):
         value = sm.mass if sm.mass is not None else deck.pmasses[sm.pid].mass  # type: ignore[index]
