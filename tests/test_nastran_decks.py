@@ -231,3 +231,24 @@ def test_conrod_chain_gives_the_lumped_chain_closed_form(tmp_path):
     k_e, m = e * area / (length / n), rho * area * length / n
     exact = [2 * np.sqrt(k_e / m) * np.sin((2 * j - 1) * np.pi / (4 * n)) / (2 * np.pi) for j in range(1, 7)]
     np.testing.assert_allclose(ours, exact, rtol=1e-10)
+
+
+def test_offt_b_reads_the_orientation_vector_in_basic(tmp_path):
+    """The grids' displacement system 1 is basic turned 90 degrees about X (y1 = Z, z1 = -Y): the vector
+    (0, 1, 0) in basic (OFFT BGG) is (0, 0, -1) in system 1 (OFFT GGG, or blank). Plane 1 (I1, the smaller)
+    then holds basic Y, so the tip of the first mode moves along Y; with (0, 1, 0) in system 1 it moves along Z."""
+    def tip_of_first_mode(v: str, offt: str) -> np.ndarray:
+        cards = ["MAT1,1,7.e10,,0.33,2700.", "PBAR,1,1,7.e-4,4.e-8,9.e-8,1.e-8",
+                 "CORD2R,1,,0.,0.,0.,0.,-1.,0.\n,1.,0.,0.", "SPC1,7,123456,1", "EIGRL,1,,,6"]
+        cards += [f"GRID,{k + 1},,{0.25 * k:.3f},0.,0.,1" for k in range(9)]
+        cards += [f"CBAR,{k + 1},1,{k + 1},{k + 2},{v},{offt}" for k in range(8)]
+        path = tmp_path / "offt.bdf"
+        path.write_text("SOL 103\nCEND\nSPC = 7\nMETHOD = 1\nBEGIN BULK\n" + "\n".join(cards) + "\nENDDATA\n")
+        modes = compute_modes(read_deck(path), structure="0g").modes
+        return np.abs([modes.shape(9, c)[0] for c in (1, 2, 3)])
+
+    for v, offt in (("0.,1.,0.", "BGG"), ("0.,0.,-1.", "GGG"), ("0.,0.,-1.", "")):
+        tip = tip_of_first_mode(v, offt)
+        assert tip[1] > 1e3 * max(tip[0], tip[2]), (offt, tip)  # along basic Y
+    tip = tip_of_first_mode("0.,1.,0.", "GGG")
+    assert tip[2] > 1e3 * max(tip[0], tip[1])  # along basic Z

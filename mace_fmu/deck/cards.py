@@ -59,6 +59,7 @@ class CBar:
     v: Vec3 | None  #: orientation vector, None when ``g0`` is used
     g0: int | None  #: orientation grid, None when ``v`` is used
     source: Source
+    orientation_basic: bool = False  #: OFFT B..: ``v`` is in the basic system, not in GA's CD system
 
 
 @dataclass(frozen=True)
@@ -92,6 +93,7 @@ class CBeam:
     v: Vec3 | None
     g0: int | None
     source: Source
+    orientation_basic: bool = False  #: OFFT B..: ``v`` is in the basic system, not in GA's CD system
 
 
 @dataclass(frozen=True)

@@ -69,8 +69,11 @@ def grid_positions(deck: Deck, frames: dict[int, Frame] | None = None) -> dict[i
 
 def bar_orientation(deck: Deck, bar: CBar, positions: dict[int, np.ndarray],
                     frames: dict[int, Frame]) -> np.ndarray:
-    """Orientation vector of ``bar`` in basic: R_cd(GA) @ v, or pos[G0] - pos[GA]."""
+    """Orientation vector of ``bar`` (CBAR or CBEAM) in basic: R_cd(GA) @ v (v itself for OFFT B..), or
+    pos[G0] - pos[GA]."""
     if bar.g0 is not None:
         return positions[bar.g0] - positions[bar.ga]
     assert bar.v is not None
+    if getattr(bar, "orientation_basic", False):  # OFFT B..
+        return np.asarray(bar.v, dtype=float)
     return frames[deck.grids[bar.ga].cd][1] @ np.asarray(bar.v, dtype=float)

@@ -178,6 +178,23 @@ def _orientation(f: Fields, ga: int, gb: int) -> tuple[tuple[float, float, float
     return v, g0
 
 
+def _offt(f: Fields, v: Any, g0: int | None, name: str) -> bool:
+    """CBAR/CBEAM field 9 (QRG OFFT): True when the orientation vector is in the basic system.
+
+    OFFT is three letters: the system of the orientation vector (G: GA's displacement system, B: basic), then
+    those of the end-A and end-B offsets (G, B or O: element). mace-fmu refuses offsets, so only the first letter
+    matters. An integer 1 (vector) or 2 (G0) is the F flag of older NASTRAN decks, which MSC Nastran still
+    reads: MSC's own test deck pt145 (tests/data/nastran/pt145) ran with a 1 there.
+    """
+    text = f.text(8).upper()
+    if not text or (text == "1" and v is not None) or (text == "2" and g0 is not None):
+        return False
+    if not re.fullmatch(r"[GB][GBO][GBO]", text):
+        raise f.error(f"expected blank, a code such as GGG or BGG (orientation G or B, offsets G, B or O), or the "
+                      f"old flag 1 (vector) / 2 (G0), got {f.text(8)!r}", 8, name)
+    return text[0] == "B" and v is not None
+
+
 def _cbar(f: Fields, src: Source) -> CBar:
     eid = f.ident(1, "EID")
     pid = f.integer(2, "PID", eid, minimum=1)
@@ -185,11 +202,7 @@ def _cbar(f: Fields, src: Source) -> CBar:
     if ga == gb:
         raise f.error(f"GA and GB are both grid {ga} (expected two different grids)", 3, "GA, GB", 4)
     v, g0 = _orientation(f, ga, gb)
-    # An integer 1 in field 9 is the F flag of older NASTRAN decks (1: X1-X3 is a vector), which MSC Nastran
-    # still reads as GGG: MSC's own test deck pt145 (tests/data/nastran/pt145) ran with it.
-    offt = "GGG" if f.text(8) == "1" and v is not None else f.word(8, "OFFT", "GGG")
-    if offt != "GGG":
-        raise f.error(f"OFFT {offt!r} is not supported by mace-fmu (expected blank or GGG)", 8, "OFFT")
+    basic = _offt(f, v, g0, "OFFT")
     for d, name in ((9, "PA"), (10, "PB")):
         if f.text(d) not in ("", "0"):
             raise f.error(f"pin flags are not supported by mace-fmu (got {f.text(d)!r}, expected blank or 0)", d, name)
@@ -197,7 +210,7 @@ def _cbar(f: Fields, src: Source) -> CBar:
         if f.real(d, name, 0.0) != 0.0:
             raise f.error(f"offsets are not supported by mace-fmu (got {f.text(d)!r}, expected blank or 0.0)", d, name)
     f.end(16)
-    return CBar(id=eid, pid=pid, ga=ga, gb=gb, v=v, g0=g0, source=src)
+    return CBar(id=eid, pid=pid, ga=ga, gb=gb, v=v, g0=g0, source=src, orientation_basic=basic)
 
 
 def _pbar(f: Fields, src: Source) -> PBar:
@@ -534,8 +547,7 @@ def _cbeam(f: Fields, src: Source) -> CBeam:
     if ga == gb:
         raise f.error(f"GA and GB are both grid {ga} (expected two different grids)", 3, "GA, GB", 4)
     v, g0 = _orientation(f, ga, gb)
-    if f.text(8).upper() not in ("", "GGG"):
-        raise f.error(f"OFFT/BIT {f.text(8)!r} is not supported by mace-fmu (expected blank or GGG)", 8, "OFFT/BIT")
+    basic = _offt(f, v, g0, "OFFT/BIT")
     for d, name in ((9, "PA"), (10, "PB")):
         if f.text(d) not in ("", "0"):
             raise f.error(f"pin flags are not supported by mace-fmu (got {f.text(d)!r}, expected blank or 0)", d, name)
@@ -545,7 +557,7 @@ def _cbeam(f: Fields, src: Source) -> CBeam:
     for d, name in ((17, "SA"), (18, "SB")):
         f.blank(d, name)
     f.end(18)
-    return CBeam(id=eid, pid=pid, ga=ga, gb=gb, v=v, g0=g0, source=src)
+    return CBeam(id=eid, pid=pid, ga=ga, gb=gb, v=v, g0=g0, source=src, orientation_basic=basic)
 
 
 def _rod_ends(f: Fields, first: int) -> tuple[int, int]:
