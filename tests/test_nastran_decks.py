@@ -252,3 +252,21 @@ def test_offt_b_reads_the_orientation_vector_in_basic(tmp_path):
         assert tip[1] > 1e3 * max(tip[0], tip[2]), (offt, tip)  # along basic Y
     tip = tip_of_first_mode("0.,1.,0.", "GGG")
     assert tip[2] > 1e3 * max(tip[0], tip[1])  # along basic Z
+
+
+def test_cord1r_is_the_cord2r_through_its_grids(tmp_path):
+    """CORD1R on grids at A, B, C (one given in a CORD2R system) is the CORD2R through A, B, C: a beam whose
+    grids are in it, with displacement systems in it, has the same modes either way."""
+    def bulk(system: str) -> list[str]:
+        cards = ["MAT1,1,7.e10,,0.33,2700.", "PBAR,1,1,7.e-4,4.e-8,9.e-8,1.e-8", "SPC1,7,123456,1",
+                 "CORD2R,5,,0.,0.,0.,0.,0.,1.\n,1.,0.,0.",  # basic, written out
+                 "GRID,91,,1.,2.,3.", "GRID,92,5,1.,2.,4.", "GRID,93,,2.,2.,3.5", system]
+        cards += [f"GRID,{k + 1},9,0.,0.,{0.25 * k:.3f},9" for k in range(9)]
+        cards += [f"CBAR,{k + 1},1,{k + 1},{k + 2},1.,0.,0." for k in range(8)]
+        return cards + ["CELAS2,50,1.e3,9,1", "CONM2,51,9,,0.5"]
+
+    one = _modes(tmp_path, bulk("CORD1R,9,91,92,93"), "cord1r")
+    two = _modes(tmp_path, bulk("CORD2R,9,,1.,2.,3.,1.,2.,4.\n,2.,2.,3.5"), "cord2r")
+    np.testing.assert_allclose(one, two, rtol=1e-12)
+    with pytest.raises(DeckError, match=r"x.bdf:9: CORD1R 9, field 4 \(G2\): grid 77 is not defined"):
+        read_deck_text(BASE.format(card="CORD1R,9,1,77,2"), name="x.bdf")

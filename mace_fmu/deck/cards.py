@@ -49,6 +49,18 @@ class Cord2R:
 
 
 @dataclass(frozen=True)
+class Cord1R:
+    """CORD1R: rectangular system with origin at grid ``g1``, z-axis towards ``g2`` and ``g3`` in the x-z plane."""
+
+    id: int
+    g1: int
+    g2: int
+    g3: int
+    source: Source
+    field: int = 2  #: NASTRAN field number of CID on the card (2, or 6 for the second system of a card)
+
+
+@dataclass(frozen=True)
 class CBar:
     """CBAR: two-node beam; orientation by vector ``v`` (in GA's CD system) or by grid ``g0``."""
 
@@ -382,7 +394,7 @@ class Deck:
 
     path: str
     grids: Mapping[int, Grid]
-    coords: Mapping[int, Cord2R]
+    coords: Mapping[int, Cord2R | Cord1R]  #: CORD2R and CORD1R (one ID namespace)
     bars: Mapping[int, CBar]
     pbars: Mapping[int, PBar]
     mat1s: Mapping[int, Mat1]

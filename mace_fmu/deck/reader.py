@@ -14,8 +14,9 @@ from typing import Any, Callable
 
 import numpy as np
 
-from mace_fmu.deck.cards import (CBar, CBeam, Celas2, Conm1, Conm2, SetUnion, Cord2R, Deck, Eigr, Eigrl, Grav, Grid, Load, Mat1, Mpc,
-                                 MpcTerm, Nlparm, Param, PBar, PBeam, PMass, PRod, Rigid, Rod, ScalarMass, Source, Spc1)
+from mace_fmu.deck.cards import (CBar, CBeam, Celas2, Conm1, Conm2, Cord1R, Cord2R, Deck, Eigr, Eigrl, Grav, Grid, Load,
+                                 Mat1, Mpc, MpcTerm, Nlparm, Param, PBar, PBeam, PMass, PRod, Rigid, Rod, ScalarMass,
+                                 SetUnion, Source, Spc1)
 from mace_fmu.deck.fields import (Fields, Selections, case_control, check_text, parse_int, parse_real, split_cards,
                                   split_sections)
 from mace_fmu.deck.sections import SECTIONS, section_properties
@@ -722,6 +723,24 @@ def _eigr(f: Fields, src: Source) -> Eigr:
     return Eigr(sid=sid, method=method, f1=f1, f2=f2, ne=ne, nd=nd or None, norm=norm, source=src)
 
 
+def _cord1r(f: Fields, src: Source) -> tuple[Cord1R, ...]:
+    """CORD1R (QRG): up to two CIDi G1i G2i G3i groups."""
+    out = []
+    for k, d in enumerate((1, 5), start=1):
+        if not any(f.text(d + i) for i in range(4)):
+            if k == 1:
+                raise f.error("required field is blank (expected CID1 G1A G2A G3A)", 1, "CIDA")
+            continue
+        cid = f.integer(d, f"CID{'AB'[k - 1]}", minimum=1)
+        f.label = f"CORD1R {cid}"
+        grids = tuple(f.integer(d + i, f"G{i}{'AB'[k - 1]}", minimum=1) for i in (1, 2, 3))
+        if len(set(grids)) < 3:
+            raise f.error(f"grids {grids} are not three different grids", d + 1, "G1-G3", d + 3)
+        out.append(Cord1R(id=cid, g1=grids[0], g2=grids[1], g3=grids[2], source=src, field=d + 1))
+    f.end(8)
+    return tuple(out)
+
+
 def _grdset(f: Fields, src: Source) -> tuple[int, int, str]:
     """GRDSET (QRG): defaults of GRID's CP (field 3), CD (field 7) and PS (field 8)."""
     f.blank(1, "unused")
@@ -791,7 +810,8 @@ def _spcadd(f: Fields, src: Source) -> SetUnion:
     if not sets:
         raise f.error("no sets listed (expected S1 ...)", 2, "S1")
     if sid in sets:
-        raise f.error(f"set {sid} lists itself (expected other set IDs)", 2 + sets.index(sid), f"S{sets.index(sid) + 1}")
+        k = sets.index(sid)
+        raise f.error(f"set {sid} lists itself (expected other set IDs)", 2 + k, f"S{k + 1}")
     return SetUnion(sid=sid, card=f.raw.name, sets=sets, source=src)
 
 
@@ -801,13 +821,13 @@ _PARSERS: dict[str, Callable[[Fields, Source], Any]] = {
     "NLPARM": _nlparm, "PARAM": _param, "PBARL": _pbarl, "PBEAML": _pbeaml, "PBEAM": _pbeam, "CBEAM": _cbeam,
     "CROD": _crod, "CONROD": _conrod, "PROD": _prod, "CMASS1": _cmass1, "CMASS2": _cmass2, "PMASS": _pmass,
     "RBAR": _rbar, "RBE2": _rbe2, "EIGR": _eigr, "GRDSET": _grdset, "CELAS1": _celas1, "PELAS": _pelas,
-    "CONM1": _conm1, "SPCADD": _spcadd, "MPCADD": _spcadd}
+    "CONM1": _conm1, "SPCADD": _spcadd, "MPCADD": _spcadd, "CORD1R": _cord1r}
 _TABLES = {"GRID": "grids", "CORD2R": "coords", "CBAR": "bars", "PBAR": "pbars", "MAT1": "mat1s",
            "CONM2": "conm2s", "CELAS2": "celas2s", "GRAV": "gravs", "LOAD": "loads", "EIGRL": "eigrls",
            "NLPARM": "nlparms", "PARAM": "params", "PBARL": "pbars", "PBEAML": "pbeams", "PBEAM": "pbeams",
            "CBEAM": "beams", "CROD": "rods", "CONROD": "rods", "PROD": "prods", "CMASS1": "scalar_masses",
            "CMASS2": "scalar_masses", "PMASS": "pmasses", "RBAR": "rigids", "RBE2": "rigids", "EIGR": "eigrs",
-           "CONM1": "conm1s"}
+           "CONM1": "conm1s", "CORD1R": "coords"}
 #: one element ID namespace in NASTRAN. CONM2 has its own: MSC Nastran ran HA144D with CBAR 100 and CONM2 100
 #: (its sorted bulk echo is in the .f06 of tests/data/nastran/ha144ds), so a deck may reuse a CBAR's ID on a CONM2
 _ELEMENTS = ("CBAR", "CELAS1", "CELAS2", "CBEAM", "CROD", "CONROD", "CMASS1", "CMASS2", "RBAR", "RBE2")
@@ -886,7 +906,7 @@ def _bulk_tables(raw_cards: list, file: str) -> tuple[dict[str, dict], tuple]:
                 thru.append((len(group), card))
             group.append(card)
             continue
-        for card in card if raw.name == "PMASS" else (card,):  # PMASS: up to four properties on one card
+        for card in card if raw.name in ("PMASS", "CORD1R") else (card,):  # several on one card
             _store(raw, card, tables, elements, file)
     _resolve_thru(tables, sets, thru, file)
     for (eid, pid, g1, c1, g2, c2), src in celas1s:  # CELAS1 + PELAS = CELAS2 (QRG)

@@ -38,7 +38,8 @@ def main(argv: list[str]) -> None:
     lines = open(f06, encoding="latin-1").read().splitlines()
     title_line, rows = first_eigenvalue_table(lines)
     text = [
-        "# NASTRAN's natural frequencies of this deck, copied once from its .f06 by tests/data/nastran/f06_frequencies.py",
+        "# NASTRAN's natural frequencies of this deck, copied once from its .f06 by "
+        "tests/data/nastran/f06_frequencies.py",
         f'source = "{source}"',
         f'program = "{program}"',
         f"table_line = {title_line}  # line of the first REAL EIGENVALUES table in that .f06",
