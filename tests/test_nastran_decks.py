@@ -202,7 +202,7 @@ def test_celas1_pelas_cmass1_pmass_conm1_stand_for_celas2_cmass2_conm2(tmp_path)
     base = _cantilever()
     tip = 9  # the free end
     two = base + [f"CELAS2,900,3.0e4,{tip},2", f"CMASS2,901,0.7,{tip},1", f"CONM2,902,{tip},,1.5\n,0.01,,0.02,,,0.03"]
-    one = base + [f"CELAS1,900,50,{tip},2", "PELAS,50,3.0e4,,,51,1.0", f"CMASS1,901,60,{tip},1", "PMASS,60,0.7",
+    one = base + [f"CELAS1,900,50,{tip},2", "PELAS,50,3.0e4,,,51,1.0", f"CMASS1,901,60,{tip},1,0,0", "PMASS,60,0.7",
                   f"CONM1,902,{tip},,1.5,,1.5\n,1.5,,,,0.01\n,,0.02,,,,,,0.03"]
     np.testing.assert_allclose(_modes(tmp_path, one, "one"), _modes(tmp_path, two, "two"), rtol=1e-12)
     assert not np.allclose(_modes(tmp_path, base, "base"), _modes(tmp_path, two, "two"))  # they matter

@@ -607,7 +607,8 @@ def _prod(f: Fields, src: Source) -> PRod:
 
 def _scalar_ends(f: Fields, first: int) -> tuple[int, int, int | None, int | None]:
     g1, c1 = f.integer(first, "G1", minimum=1), f.component(first + 1, "C1")
-    grounded = not (f.text(first + 2) or f.text(first + 3))
+    # QRG (CELAS1, CMASS1, CMASS2): zero or blank G2 and C2 make a grounded terminal
+    grounded = f.text(first + 2) in ("", "0") and f.text(first + 3) in ("", "0")
     g2, c2 = (None, None) if grounded else (f.integer(first + 2, "G2", minimum=1), f.component(first + 3, "C2"))
     if (g1, c1) == (g2, c2):
         raise f.error(f"both ends are DOF {g1}-{c1} (expected two different DOFs, or G2 and C2 blank for a "
