@@ -43,6 +43,9 @@ DECKS = {
     # SOL 145, MSC Nastran 2012: the BAH wing of bah_plane as pyNastran's MATLAB example has it (its own copy of
     # the structure, free-field comments after '$'); EIGR LAN ND = 10
     "BAH_Plane": ("BAH_Plane.bdf", 10),
+    # SOL 146, MSC Nastran 2014: the same wing in a gust-response run (GUST, RLOAD1, RANDPS, TABRND1, MONPNT3 read
+    # past); EIGR LAN ND = 8
+    "BAH_Plane_gust": ("BAH_Plane_cont_gust_LINE5000000_10FREQs.bdf", 8),
 }
 
 

@@ -126,6 +126,8 @@ NON_STRUCTURAL = frozenset({
     # 0.0 Hz); with a statically determinate set, as NASTRAN requires, the elastic modes are those of the
     # unsupported structure, which is what mace-fmu solves (its rigid-body modes come out near 0 Hz).
     "SUPORT", "SUPORT1",
+    # gust, random-response and monitor-point data of the aeroelastic solutions
+    "GUST", "TABRND1", "MONPNT1", "MONPNT3",
 })
 
 
