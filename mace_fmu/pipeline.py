@@ -143,6 +143,16 @@ def check_parameters_deck(parameters: ParameterSet, deck: Deck) -> None:
                         f"not for {deck.path}; refit it for this deck or remove its deck_sha256")
 
 
+def _check_preload_elements(deck: Deck) -> None:
+    """The gravity preload's tangent stiffness holds CBAR (corotational) and CELAS2 terms only: a deck with
+    CBEAM or rod elements would lose their stiffness there, so it is refused rather than solved wrongly."""
+    others = [(name, table) for name, table in (("CBEAM", deck.beams), ("CROD/CONROD", deck.rods)) if table]
+    if others:
+        listed = ", ".join(f"{len(table)} {name} (first {next(iter(table.values())).source})" for name, table in others)
+        raise MaceError(f"{deck.path}: the 1-g gravity preload models CBAR and CELAS2 elements only, and this deck "
+                        f"has {listed}; compute the 0-g modes (structure='0g'), or model them as CBARs")
+
+
 @single_blas_thread
 def compute_modes(deck: Deck | str | os.PathLike | None = None, *, structure: StructureKind = "1g",
                   preload: PreloadKind = "large", mass: MassKind = "lumped", max_hz: float | None = None,
@@ -179,6 +189,7 @@ def compute_modes(deck: Deck | str | os.PathLike | None = None, *, structure: St
     auto = autospc_enabled(struct.deck)
     removed: tuple[tuple[int, int], ...] = ()
     if struct.preload is not None:
+        _check_preload_elements(struct.deck)
         static = build_constraints(struct.deck, model.dofs, model.cd_frames, spc_set=struct.preload.spc,
                                    mpc_set=struct.preload.mpc)
         if auto:  # statics: a DOF without stiffness is singular whatever its mass

@@ -273,3 +273,18 @@ def test_cord1r_is_the_cord2r_through_its_grids(tmp_path):
     np.testing.assert_allclose(one, two, rtol=1e-12)
     with pytest.raises(DeckError, match=r"x.bdf:9: CORD1R 9, field 4 \(G2\): grid 77 is not defined"):
         read_deck_text(BASE.format(card="CORD1R,9,1,77,2"), name="x.bdf")
+
+
+def test_a_gravity_preload_with_beams_or_rods_is_refused_not_solved_without_them(tmp_path):
+    """The 1-g preload's tangent stiffness is built from CBARs and springs only: a CBEAM would silently lose its
+    stiffness there, so a 1-g analysis of a deck with one is an error naming it."""
+    cards = _cantilever() + ["GRID,20,,2.25,0.,0.,,345", "CBEAM,300,30,9,20,0.,1.,0.", "PBEAML,30,1,,ROD\n,0.01",
+                             "GRAV,5,,9.81,0.,0.,-1."]
+    path = tmp_path / "g.bdf"
+    path.write_text("SOL 103\nCEND\nSUBCASE 1\n  SPC = 7\n  LOAD = 5\nSUBCASE 2\n  SPC = 7\n  METHOD = 1\n"
+                    "BEGIN BULK\nEIGRL,1,,,4\n" + "\n".join(cards) + "\nENDDATA\n")
+    deck = read_deck(path)
+    assert len(compute_modes(deck, structure="0g").modes) == 4
+    with pytest.raises(MaceError, match=r"1-g gravity preload models CBAR and CELAS2 elements only, and this deck "
+                                        r"has 1 CBEAM \(first .*g.bdf:\d+\)"):
+        compute_modes(deck, structure="1g")
