@@ -288,3 +288,17 @@ def test_a_gravity_preload_with_beams_or_rods_is_refused_not_solved_without_them
     with pytest.raises(MaceError, match=r"1-g gravity preload models CBAR and CELAS2 elements only, and this deck "
                                         r"has 1 CBEAM \(first .*g.bdf:\d+\)"):
         compute_modes(deck, structure="1g")
+
+
+@pytest.mark.parametrize("rigid", ["RBE2,40,9,123456,30", "RBAR,40,9,30,123456", "RBAR,40,30,9,,123456"])
+def test_a_mass_on_a_rigid_element_is_the_offset_mass(tmp_path, rigid):
+    """A CONM2 on grid 30, held rigidly to the beam's tip 9 by an RBE2 or an RBAR (either end independent; grid
+    30's displacement system turned), has the modes of the same CONM2 on grid 9 with grid 30's offset."""
+    base = [c for c in _cantilever(ps="") if not c.startswith("SPC1")] + ["SPC1,7,123456,1"]
+    mass = "1.5\n,0.01,0.002,0.02,0.001,0.003,0.03"
+    offset = base + [f"CONM2,50,9,,{mass.replace('1.5', '1.5,0.0,0.3,0.1', 1)}"]
+    rigid_model = base + ["CORD2R,3,,0.,0.,0.,0.3,0.2,1.\n,1.,0.5,0.2", "GRID,30,,2.,0.3,0.1,3", rigid,
+                          f"CONM2,50,30,,{mass}"]
+    ours = _modes(tmp_path, rigid_model, "rigid")
+    np.testing.assert_allclose(ours, _modes(tmp_path, offset, "offset"), rtol=1e-9)
+    assert not np.allclose(ours, _modes(tmp_path, base + [f"CONM2,50,9,,{mass}"], "no_offset"), rtol=1e-3)

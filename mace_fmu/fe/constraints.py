@@ -8,6 +8,7 @@ import numpy as np
 from scipy import sparse
 
 from mace_fmu.deck.cards import Deck
+from mace_fmu.deck.geometry import grid_positions
 from mace_fmu.errors import MaceError
 from mace_fmu.fe.dofs import DofMap
 
@@ -44,8 +45,6 @@ def rigid_equations(deck: Deck, dofs: DofMap, cd_frames: np.ndarray, fixed: np.n
     """
     if not deck.rigids:
         return
-    from mace_fmu.deck.geometry import grid_positions
-
     pos = grid_positions(deck)
     for r in sorted(deck.rigids.values(), key=lambda e: e.id):
         i_row = dofs.grid_index(r.independent)
