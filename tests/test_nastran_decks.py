@@ -75,6 +75,21 @@ def test_published_deck_gives_nastrans_frequencies(folder):
     check_against_nastran(result.modes.frequencies_hz, nastran)
 
 
+def test_the_decks_are_pynastrans_files_unedited():
+    """Every file of every deck folder is byte for byte the pyNastran file named in provenance.toml (its git blob
+    id there), so the decks are read as published."""
+    import hashlib
+
+    with open(DATA / "provenance.toml", "rb") as handle:
+        files = tomllib.load(handle)["files"]
+    for folder in DECKS:
+        deck_files = {f"{folder}/{p.name}" for p in (DATA / folder).iterdir() if p.name != "reference_frequencies.toml"}
+        assert deck_files <= set(files), deck_files - set(files)
+    for name, entry in files.items():
+        data = (DATA / name).read_bytes()
+        assert hashlib.sha1(b"blob %d\0" % len(data) + data).hexdigest() == entry["blob"], name
+
+
 def test_pt145_every_root_nastran_prints():
     """EIGR GIV finds every root: NASTRAN prints all 30 (vectors for the ND = 6 lowest); all 30 match."""
     result = compute_modes(read_deck(DATA / "pt145" / "pt145.bdf"), structure="0g", max_hz=1e6)
