@@ -175,6 +175,7 @@ ENDDATA
     ("PBARL,7,1,,BOX\n,0.1,0.2,0.11,0.01", r"deck.bdf:10: PBARL 7, continuation 1 fields 2-5 \(DIM1-DIM4\): BOX: "
                                          r"the walls fill the box"),
     ("CROD,8,9,1,1", r"deck.bdf:9: CROD 8, fields 4-5 \(G1, G2\): G1 and G2 are both grid 1"),
+    ("GRID,3,,1.,0.,0.\nCONROD,8,2,3,1,0.1", r"deck.bdf:10: CONROD 8, fields 3-4 \(G1, G2\): zero length"),
 ])
 def test_malformed_new_card_is_one_error_naming_file_line_card_and_field(tmp_path, card, message):
     path = tmp_path / "deck.bdf"

@@ -1107,6 +1107,12 @@ def _check_bars(deck: Deck, frames: dict) -> None:
         if np.linalg.norm(np.cross(axis, v)) <= 1e-6 * length * np.linalg.norm(v):
             raise _fail(b, f"{name} {b.id}", where, "orientation vector is parallel to the bar axis (expected a "
                         "vector that defines the element x-y plane)")
+    for r in deck.rods.values():
+        if np.linalg.norm(pos[r.gb] - pos[r.ga]) < 1e-9:
+            first = 4 if r.card == "CROD" else 3
+            raise _fail(r, f"{r.card} {r.id}", f"fields {first}-{first + 1} (G1, G2)", f"zero length: grids {r.ga} "
+                        f"and {r.gb} are both at {tuple(round(float(x), 9) for x in pos[r.ga])} (expected distinct "
+                        "positions)")
 
 
 _TARGETS = {"SPC": (("spc1s",), "an SPC1 set ID"), "MPC": (("mpcs",), "an MPC set ID"),
