@@ -12,7 +12,10 @@ Guide, PARAM COUPMASS and the CBEAM/CROD remarks):
   torsional mass moment rho (I1 + I2) L on each end's rotation about the beam axis. NASTRAN includes
   this torsional term in CBEAM's lumped mass (unlike CBAR's): the grid point weight generator of the
   beam_modes run (tests/data/nastran/beam_modes) has Ixx = 3.765757e-3 = the CONM2's 2.59e-3 plus
-  rho (I1 + I2) L = 7.4851e-4 * 1.5708 * 1.0 of its one CBEAM, and nothing from its nine CBARs.
+  rho (I1 + I2) L = 7.4851e-4 * 1.5708 * 1.0 of its one CBEAM, and nothing from its nine CBARs. That
+  section is a ROD, whose J equals I1 + I2; MSC's fmondsp run (pyNastran models/aero, BOX beams, not in
+  the tests because two of its beams are tapered) tells them apart: with rho J L its torsion modes come
+  out 1 % off NASTRAN's, with rho (I1 + I2) L within 0.1 % (the rest being the tapered beams).
 * CBEAM coupled: the consistent (Hermitian) bending mass, linear axial and torsional mass
   (mace_fmu.fe.beam.local_mass "consistent").
 * CROD lumped: half the rod's mass on the three translations of each end; coupled: m/6 [[2, 1], [1, 2]]
