@@ -9,7 +9,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from mace_fmu.deck.cards import Deck
+from mace_fmu.deck.cards import Deck, Eigr, Eigrl
 from mace_fmu.deck.geometry import coordinate_frames
 from mace_fmu.deck.reader import read_deck
 from mace_fmu.errors import MaceError
@@ -86,20 +86,40 @@ def gravity_load(deck: Deck, model: FEModel, load_id: int) -> np.ndarray:
 
 
 def _eigrl(deck: Deck, structure: Structure):
-    """The EIGRL card the modal subcase's METHOD selects (None without one)."""
+    """The EIGRL (or EIGR) card the modal subcase's METHOD selects (None without one)."""
     method = structure.modal.method
-    return deck.eigrls.get(method) if method is not None else None
+    if method is None:
+        return None
+    return deck.eigrls.get(method) or deck.eigrs.get(method)
+
+
+#: EIGR methods that reduce to a tridiagonal matrix and find every root: NASTRAN prints them all, and ND, when
+#: given, is the number of lowest roots whose vectors it computes whatever F1 and F2 say (QRG, EIGR remarks;
+#: MSC's pt145 run, tests/data/nastran/pt145: F2 = 0.1 Hz and ND = 6 gave the six lowest modes, up to 1153 Hz)
+_TRIDIAGONAL = ("GIV", "MGIV", "HOU", "MHOU", "AHOU")
+
+
+def _eigen_request(card: Eigrl | Eigr | None) -> tuple[str, float | None, float | None, int | None]:
+    """(name, V1 [Hz], V2 [Hz], ND) of the deck's eigenvalue request card, in NASTRAN's meaning."""
+    if card is None:
+        return "", None, None, None
+    if isinstance(card, Eigr):  # EIGR: F1, F2, ND
+        name, v1, v2, nd = f"EIGR {card.sid} {card.method}", card.f1, card.f2, card.nd
+        if card.method in _TRIDIAGONAL and nd:
+            v1 = v2 = None
+        return name, v1, v2, nd
+    return f"EIGRL {card.sid}", card.v1, card.v2, card.nd
 
 
 def _modes_to_find(deck: Deck, structure: Structure, max_hz: float | None) -> tuple[float | None, int | None]:
     """(frequency [Hz], count) the eigen-solution must reach for :func:`_requested_modes` to pick from."""
-    eigrl = _eigrl(deck, structure)
     if max_hz is not None:
         return max_hz, None
-    if eigrl is not None and (eigrl.v2 is not None or eigrl.nd):
+    _, _, v2, nd = _eigen_request(_eigrl(deck, structure))
+    if v2 is not None or nd:
         # with V1 too, the sparse route finds the lowest ND and V1 then drops some: NASTRAN would shift
         # to V1 instead; a large model with V1 and ND but no V2 may get fewer than ND modes
-        return eigrl.v2, eigrl.nd or None
+        return v2, nd or None
     return DEFAULT_MAX_HZ, None
 
 
@@ -109,20 +129,20 @@ def _requested_modes(modes: Modes, deck: Deck, structure: Structure, max_hz: flo
 
     A MaceError when that leaves no mode, saying what was asked and where the modes are.
     """
-    eigrl = _eigrl(deck, structure)
+    card = _eigrl(deck, structure)
     f = modes.frequencies_hz
+    name, v1, v2, nd = _eigen_request(card)
     if max_hz is not None:
         keep, asked = f <= max_hz, f"up to {max_hz:g} Hz"
-    elif eigrl is not None and (eigrl.v1 is not None or eigrl.v2 is not None or eigrl.nd):
+    elif card is not None and (v1 is not None or v2 is not None or nd):
         keep = np.ones(len(f), dtype=bool)
-        if eigrl.v1 is not None:
-            keep &= f >= eigrl.v1
-        if eigrl.v2 is not None:
-            keep &= f <= eigrl.v2
-        if eigrl.nd:
-            keep &= np.cumsum(keep) <= eigrl.nd
-        asked = (f"EIGRL {eigrl.sid} (V1 = {eigrl.v1}, V2 = {eigrl.v2}, ND = {eigrl.nd}; "
-                 f"{eigrl.source.file}:{eigrl.source.line})")
+        if v1 is not None:
+            keep &= f >= v1
+        if v2 is not None:
+            keep &= f <= v2
+        if nd:
+            keep &= np.cumsum(keep) <= nd
+        asked = f"{name} (V1 = {v1}, V2 = {v2}, ND = {nd}; {card.source.file}:{card.source.line})"
     else:
         keep, asked = f <= DEFAULT_MAX_HZ, f"up to {DEFAULT_MAX_HZ:g} Hz (no EIGRL in the deck)"
     if not keep.any():
@@ -140,6 +160,16 @@ def check_parameters_deck(parameters: ParameterSet, deck: Deck) -> None:
     if deck_fingerprint(deck.path) != prov.deck_sha256:
         raise MaceError(f"the parameter set was made for deck {prov.deck!r} (sha256 {prov.deck_sha256[:12]}...), "
                         f"not for {deck.path}; refit it for this deck or remove its deck_sha256")
+
+
+def _check_preload_elements(deck: Deck) -> None:
+    """The gravity preload's tangent stiffness holds CBAR (corotational) and CELAS2 terms only: a deck with
+    CBEAM or rod elements would lose their stiffness there, so it is refused rather than solved wrongly."""
+    others = [(name, table) for name, table in (("CBEAM", deck.beams), ("CROD/CONROD", deck.rods)) if table]
+    if others:
+        listed = ", ".join(f"{len(table)} {name} (first {next(iter(table.values())).source})" for name, table in others)
+        raise MaceError(f"{deck.path}: the 1-g gravity preload models CBAR and CELAS2 elements only, and this deck "
+                        f"has {listed}; compute the 0-g modes (structure='0g'), or model them as CBARs")
 
 
 @single_blas_thread
@@ -178,6 +208,7 @@ def compute_modes(deck: Deck | str | os.PathLike | None = None, *, structure: St
     auto = autospc_enabled(struct.deck)
     removed: tuple[tuple[int, int], ...] = ()
     if struct.preload is not None:
+        _check_preload_elements(struct.deck)
         static = build_constraints(struct.deck, model.dofs, model.cd_frames, spc_set=struct.preload.spc,
                                    mpc_set=struct.preload.mpc)
         if auto:  # statics: a DOF without stiffness is singular whatever its mass

@@ -42,7 +42,7 @@ def _print_modes(result: StructureModes) -> None:
     print(f"{result.structure.kind} modes of {result.structure.deck.path}{pre}")
     file = result.structure.file
     print(f"structure file: {file.path}" if file is not None else
-          "structure file: none (the deck's own SPC, MPC and EIGRL; nothing removed; labels by motion)")
+          "structure file: none (the deck's own SPC, MPC and EIGRL or EIGR; nothing removed; labels by motion)")
     if result.structure.deck.skipped:
         print("read past (no mass or stiffness): " + ", ".join(f"{n} ({k}x, first at {where})"
                                                              for n, k, where in result.structure.deck.skipped))

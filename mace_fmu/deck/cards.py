@@ -49,6 +49,18 @@ class Cord2R:
 
 
 @dataclass(frozen=True)
+class Cord1R:
+    """CORD1R: rectangular system with origin at grid ``g1``, z-axis towards ``g2`` and ``g3`` in the x-z plane."""
+
+    id: int
+    g1: int
+    g2: int
+    g3: int
+    source: Source
+    field: int = 2  #: NASTRAN field number of CID on the card (2, or 6 for the second system of a card)
+
+
+@dataclass(frozen=True)
 class CBar:
     """CBAR: two-node beam; orientation by vector ``v`` (in GA's CD system) or by grid ``g0``."""
 
@@ -59,6 +71,7 @@ class CBar:
     v: Vec3 | None  #: orientation vector, None when ``g0`` is used
     g0: int | None  #: orientation grid, None when ``v`` is used
     source: Source
+    orientation_basic: bool = False  #: OFFT B..: ``v`` is in the basic system, not in GA's CD system
 
 
 @dataclass(frozen=True)
@@ -76,6 +89,129 @@ class PBar:
     k1: float | None  #: shear area factor, plane 1; None = blank = no shear flexibility
     k2: float | None  #: shear area factor, plane 2
     i12: float  #: product of inertia [m^4]
+    source: Source
+    #: PBARL section type (e.g. "ROD") when the card was a PBARL, which NASTRAN replaces by this PBAR
+    section: str | None = None
+
+
+@dataclass(frozen=True)
+class CBeam:
+    """CBEAM: two-node beam of constant section, oriented like CBAR (vector ``v`` or grid ``g0``)."""
+
+    id: int
+    pid: int  #: PBEAM or PBEAML property ID
+    ga: int
+    gb: int
+    v: Vec3 | None
+    g0: int | None
+    source: Source
+    orientation_basic: bool = False  #: OFFT B..: ``v`` is in the basic system, not in GA's CD system
+
+
+@dataclass(frozen=True)
+class PBeam:
+    """PBEAM of constant section (or a PBEAML, which NASTRAN replaces by one): the end-A values.
+
+    Unlike PBAR, NASTRAN's PBEAM shear factors default to 1.0; 0.0 means rigid in shear.
+    """
+
+    id: int
+    mid: int
+    area: float  #: A [m^2]
+    i1: float  #: bending inertia in plane 1 (element x-y plane) [m^4]
+    i2: float  #: bending inertia in plane 2 (element x-z plane) [m^4]
+    i12: float  #: product of inertia [m^4]
+    j: float  #: torsion constant [m^4]
+    nsm: float  #: non-structural mass per length [kg/m]
+    k1: float  #: shear stiffness factor, plane 1 (0.0: rigid in shear)
+    k2: float  #: shear stiffness factor, plane 2
+    source: Source
+    section: str | None = None  #: PBEAML section type (e.g. "ROD") when the card was a PBEAML
+
+
+@dataclass(frozen=True)
+class Rod:
+    """CROD (properties on PROD ``pid``) or CONROD (properties on the card: ``pid`` is None)."""
+
+    id: int
+    ga: int
+    gb: int
+    pid: int | None  #: PROD ID, None for a CONROD
+    mid: int | None  #: CONROD's MAT1 ID (None for a CROD)
+    area: float  #: CONROD's A [m^2] (0.0 for a CROD)
+    j: float  #: CONROD's torsion constant [m^4]
+    nsm: float  #: CONROD's non-structural mass [kg/m]
+    source: Source
+    card: str = "CROD"  #: "CROD" or "CONROD"
+
+
+@dataclass(frozen=True)
+class PRod:
+    """PROD: rod section."""
+
+    id: int
+    mid: int
+    area: float  #: A [m^2]
+    j: float  #: torsion constant [m^4]
+    nsm: float  #: non-structural mass per length [kg/m]
+    source: Source
+
+
+@dataclass(frozen=True)
+class ScalarMass:
+    """CMASS1 (mass on PMASS ``pid``) or CMASS2 (mass on the card): a scalar mass between two DOFs
+    (or to ground when ``g2`` is None), in each grid's displacement system."""
+
+    id: int
+    mass: float | None  #: [kg], None for a CMASS1 (see ``pid``)
+    pid: int | None  #: PMASS ID of a CMASS1
+    g1: int
+    c1: int
+    g2: int | None
+    c2: int | None
+    source: Source
+    card: str = "CMASS2"
+
+
+@dataclass(frozen=True)
+class PMass:
+    """PMASS: the value of a scalar mass (CMASS1)."""
+
+    id: int
+    mass: float  #: [kg]
+    source: Source
+
+
+@dataclass(frozen=True)
+class Conm1:
+    """CONM1: a symmetric 6x6 mass matrix at grid ``grid``, in system ``cid``."""
+
+    id: int
+    grid: int
+    cid: int
+    matrix: tuple[float, ...]  #: M11 M21 M22 M31 ... M66, the lower triangle row by row [kg, kg m, kg m^2]
+    source: Source
+
+
+@dataclass(frozen=True)
+class SetUnion:
+    """SPCADD or MPCADD: set ``sid`` is the union of ``sets`` (expanded by the reader)."""
+
+    sid: int
+    card: str
+    sets: tuple[int, ...]
+    source: Source
+
+
+@dataclass(frozen=True)
+class Rigid:
+    """RBAR or RBE2 as NASTRAN reads it: components ``components`` of each dependent grid follow the
+    rigid-body motion of independent grid ``independent`` (all six of its DOFs)."""
+
+    id: int
+    card: str  #: "RBAR" or "RBE2"
+    independent: int
+    dependent: tuple[tuple[int, str], ...]  #: (grid, components "1".."123456")
     source: Source
 
 
@@ -199,6 +335,21 @@ class Eigrl:
 
 
 @dataclass(frozen=True)
+class Eigr:
+    """EIGR: real eigenvalue request by a method other than Lanczos (GIV, MGIV, HOU, MHOU, AHOU, INV, SINV,
+    LAN); frequencies in [f1, f2] Hz, at most ``nd`` of them."""
+
+    sid: int
+    method: str
+    f1: float | None  #: [Hz]
+    f2: float | None  #: [Hz]
+    ne: int | None  #: estimate of the number of roots in the range (INV/SINV only)
+    nd: int | None  #: number of roots wanted
+    norm: str  #: eigenvector normalisation: MASS, MAX or POINT
+    source: Source
+
+
+@dataclass(frozen=True)
 class Nlparm:
     """NLPARM: nonlinear static controls (only the fields mace-fmu uses are typed)."""
 
@@ -243,7 +394,7 @@ class Deck:
 
     path: str
     grids: Mapping[int, Grid]
-    coords: Mapping[int, Cord2R]
+    coords: Mapping[int, Cord2R | Cord1R]  #: CORD2R and CORD1R (one ID namespace)
     bars: Mapping[int, CBar]
     pbars: Mapping[int, PBar]
     mat1s: Mapping[int, Mat1]
@@ -260,3 +411,12 @@ class Deck:
     global_case: Subcase | None = field(default=None)  #: selections above the first SUBCASE
     #: cards read but not modelled because they change neither mass nor stiffness: (name, count, file:line of the first)
     skipped: tuple[tuple[str, int, str], ...] = field(default=())
+    beams: Mapping[int, CBeam] = field(default_factory=dict)  #: CBEAM
+    pbeams: Mapping[int, PBeam] = field(default_factory=dict)  #: PBEAM and PBEAML (as the PBEAM NASTRAN makes)
+    rods: Mapping[int, Rod] = field(default_factory=dict)  #: CROD and CONROD
+    prods: Mapping[int, PRod] = field(default_factory=dict)
+    scalar_masses: Mapping[int, ScalarMass] = field(default_factory=dict)  #: CMASS1 and CMASS2
+    pmasses: Mapping[int, PMass] = field(default_factory=dict)
+    rigids: Mapping[int, Rigid] = field(default_factory=dict)  #: RBAR and RBE2 (always in force, like NASTRAN's)
+    eigrs: Mapping[int, Eigr] = field(default_factory=dict)
+    conm1s: Mapping[int, Conm1] = field(default_factory=dict)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from mace_fmu.deck.cards import CBar, Cord2R, Deck
+from mace_fmu.deck.cards import CBar, Cord1R, Cord2R, Deck
 from mace_fmu.errors import DeckError
 
 Frame = tuple[np.ndarray, np.ndarray]  #: (origin (3,), R (3, 3) with the unit axes as columns)
@@ -36,28 +36,82 @@ def _frame(card: Cord2R, parent: Frame) -> Frame:
                         field="field 4 to continuation 1 field 4 (A, B, C)") from None
 
 
+def _cord1r_frame(card: Cord1R, frames: dict[int, Frame], deck: Deck) -> Frame | None:
+    """CORD1R axes from its three grids (origin G1, z towards G2, G3 in the x-z plane), or None while a grid's
+    CP system is not known yet."""
+    points = []
+    for k, (name, gid) in enumerate((("G1", card.g1), ("G2", card.g2), ("G3", card.g3)), start=1):
+        grid = deck.grids.get(gid)
+        if grid is None:
+            raise DeckError(f"grid {gid} is not defined (expected a GRID ID)", file=card.source.file,
+                            line=card.source.line, card=f"CORD1R {card.id}",
+                            field=f"field {card.field + k} ({name})")
+        if grid.cp not in frames:
+            if grid.cp not in deck.coords:
+                raise DeckError(f"coordinate system {grid.cp} is not defined (expected 0 or a CORD2R ID)",
+                                file=grid.source.file, line=grid.source.line, card=f"GRID {grid.id}",
+                                field="field 3 (CP)")
+            return None
+        origin, rot = frames[grid.cp]
+        points.append(origin + rot @ np.asarray(grid.xyz, dtype=float))
+    try:
+        return points[0], axes_from_points(*points)
+    except ValueError as exc:
+        raise DeckError(str(exc).replace("points A and B", "grids G1 and G2").replace("point C", "grid G3")
+                        .replace("line AB", "line G1-G2"), file=card.source.file, line=card.source.line,
+                        card=f"CORD1R {card.id}",
+                        field=f"fields {card.field + 1}-{card.field + 3} (G1, G2, G3)") from None
+
+
 def coordinate_frames(deck: Deck) -> dict[int, Frame]:
-    """Origin and axes in basic of system 0 and every CORD2R (DeckError for a bad RID chain)."""
+    """Origin and axes in basic of system 0 and every CORD2R and CORD1R (DeckError for a bad RID chain or
+    a CORD1R whose grids are given in a system that depends on it)."""
     frames: dict[int, Frame] = {0: (np.zeros(3), np.eye(3))}
-    for start in deck.coords:
+    pending = sorted(deck.coords)
+    while pending:  # a CORD1R needs the CP systems of its grids, a CORD2R its RID: resolve in rounds
+        waiting = []
+        for cid in pending:
+            card = deck.coords[cid]
+            if isinstance(card, Cord1R):
+                frame = _cord1r_frame(card, frames, deck)
+                if frame is None:
+                    waiting.append(cid)
+                else:
+                    frames[cid] = frame
+            elif card.rid in frames:
+                frames[cid] = _frame(card, frames[card.rid])
+            else:
+                waiting.append(cid)
+        if len(waiting) == len(pending):
+            _unresolved(deck, waiting)
+        pending = waiting
+    return frames
+
+
+def _unresolved(deck: Deck, waiting: list[int]) -> None:
+    """The DeckError for systems that can never be resolved: a missing RID, an RID cycle, or a CORD1R cycle."""
+    for start in waiting:
+        card = deck.coords[start]
+        if isinstance(card, Cord1R):
+            continue
         chain: list[int] = []
         cid = start
-        while cid not in frames:
+        while cid in deck.coords and not isinstance(deck.coords[cid], Cord1R):
             if cid in chain:
                 loop = " -> ".join(str(i) for i in chain[chain.index(cid):] + [cid])
                 src = deck.coords[cid].source
                 raise DeckError(f"RID chain {loop} is a cycle (expected a chain that ends at the basic system 0)",
                                 file=src.file, line=src.line, card=f"CORD2R {cid}", field="field 3 (RID)")
-            if cid not in deck.coords:
-                src = deck.coords[chain[-1]].source
-                raise DeckError(f"coordinate system {cid} is not defined (expected 0 or a CORD2R ID)",
-                                file=src.file, line=src.line, card=f"CORD2R {chain[-1]}", field="field 3 (RID)")
             chain.append(cid)
-            cid = deck.coords[cid].rid
-        # Parents are resolved before children, so each frame needs only its RID's frame.
-        for cid in reversed(chain):
-            frames[cid] = _frame(deck.coords[cid], frames[deck.coords[cid].rid])
-    return frames
+            cid = deck.coords[cid].rid  # type: ignore[union-attr]
+        if cid not in deck.coords and cid != 0:
+            src = deck.coords[chain[-1]].source
+            raise DeckError(f"coordinate system {cid} is not defined (expected 0 or a CORD2R ID)",
+                            file=src.file, line=src.line, card=f"CORD2R {chain[-1]}", field="field 3 (RID)")
+    card = next(deck.coords[c] for c in waiting if isinstance(deck.coords[c], Cord1R))
+    raise DeckError("the grids G1, G2, G3 are given in coordinate systems that depend on this one (expected grids "
+                    "whose CP systems do not need it)", file=card.source.file, line=card.source.line,
+                    card=f"CORD1R {card.id}", field=f"fields {card.field + 1}-{card.field + 3} (G1, G2, G3)")
 
 
 def grid_positions(deck: Deck, frames: dict[int, Frame] | None = None) -> dict[int, np.ndarray]:
@@ -69,8 +123,11 @@ def grid_positions(deck: Deck, frames: dict[int, Frame] | None = None) -> dict[i
 
 def bar_orientation(deck: Deck, bar: CBar, positions: dict[int, np.ndarray],
                     frames: dict[int, Frame]) -> np.ndarray:
-    """Orientation vector of ``bar`` in basic: R_cd(GA) @ v, or pos[G0] - pos[GA]."""
+    """Orientation vector of ``bar`` (CBAR or CBEAM) in basic: R_cd(GA) @ v (v itself for OFFT B..), or
+    pos[G0] - pos[GA]."""
     if bar.g0 is not None:
         return positions[bar.g0] - positions[bar.ga]
     assert bar.v is not None
+    if getattr(bar, "orientation_basic", False):  # OFFT B..
+        return np.asarray(bar.v, dtype=float)
     return frames[deck.grids[bar.ga].cd][1] @ np.asarray(bar.v, dtype=float)

@@ -10,8 +10,10 @@ from scipy import sparse
 from mace_fmu.deck.cards import Deck
 from mace_fmu.deck.geometry import bar_orientation, coordinate_frames, grid_positions
 from mace_fmu.errors import MaceError
-from mace_fmu.fe.beam import BeamSection, MassKind, local_frame, local_mass, local_stiffness, natural_stiffness, to_basic
-from mace_fmu.fe.dofs import DofMap
+from mace_fmu.fe.beam import BeamSection, MassKind, local_frame, local_stiffness, natural_stiffness, to_basic
+from mace_fmu.fe.dofs import DofMap, cd_component_entries
+from mace_fmu.fe.elements import add_elements, bar_mass, coupled_mass
+from mace_fmu.fe.triplets import MatrixTriplets
 
 
 @dataclass(frozen=True)
@@ -61,44 +63,6 @@ def _conm2_matrix(mass: float, offset: np.ndarray, inertia_cg: np.ndarray) -> np
     return m
 
 
-def cd_component_entries(dofs: DofMap, cd_frames: np.ndarray, grid: int, component: int
-                         ) -> tuple[np.ndarray, np.ndarray]:
-    """(DOF indices, coefficients) of the row vector that picks component 1-6 of ``grid``, measured in
-    its CD system, from basic DOFs."""
-    row = dofs.grid_index(grid)
-    block = 6 * row + (0 if component <= 3 else 3)
-    return np.arange(block, block + 3), cd_frames[row][:, (component - 1) % 3]
-
-
-def cd_component_vector(dofs: DofMap, cd_frames: np.ndarray, grid: int, component: int) -> np.ndarray:
-    """Dense row vector that picks component 1-6 of ``grid``, measured in its CD system, from basic DOFs."""
-    vec = np.zeros(dofs.size)
-    idx, coefficients = cd_component_entries(dofs, cd_frames, grid, component)
-    vec[idx] = coefficients
-    return vec
-
-
-class _Triplets:
-    """Element matrices gathered as (row, column, value) triplets; duplicates add up in the sparse matrix."""
-
-    def __init__(self) -> None:
-        self.rows: list[np.ndarray] = []
-        self.cols: list[np.ndarray] = []
-        self.values: list[np.ndarray] = []
-
-    def add(self, idx: np.ndarray, block: np.ndarray) -> None:
-        """Add the square ``block`` at DOFs ``idx`` (rows and columns)."""
-        self.rows.append(np.repeat(idx, len(idx)))
-        self.cols.append(np.tile(idx, len(idx)))
-        self.values.append(np.asarray(block, dtype=float).ravel())
-
-    def matrix(self, n: int) -> sparse.csr_array:
-        if not self.values:
-            return sparse.csr_array((n, n))
-        return sparse.coo_array((np.concatenate(self.values), (np.concatenate(self.rows), np.concatenate(self.cols))),
-                                shape=(n, n)).tocsr()
-
-
 def mass_factor(deck: Deck) -> float:
     """PARAM,WTMASS: NASTRAN multiplies every mass term by it (element and CONM2 masses alike), e.g. 1/386.1
     for a deck in weight units (lbf, in); 1 without the parameter."""
@@ -107,15 +71,19 @@ def mass_factor(deck: Deck) -> float:
 
 
 def assemble(deck: Deck, *, mass: MassKind = "lumped") -> FEModel:
-    """Assemble K and M of every CBAR, CONM2 and CELAS2 of ``deck`` (no constraints applied), as sparse
-    matrices."""
+    """Assemble K and M of every element of ``deck`` (no constraints applied), as sparse matrices.
+
+    ``mass``: "lumped" (NASTRAN's default) or "consistent"; a deck's PARAM,COUPMASS > 0 asks for the coupled
+    (consistent) mass, as in NASTRAN.
+    """
+    mass = coupled_mass(deck, mass)
     frames = coordinate_frames(deck)
     pos = grid_positions(deck)
     dofs = DofMap(tuple(sorted(deck.grids)))
     n = dofs.size
     positions = np.array([pos[g] for g in dofs.grid_ids])
     cd_frames = np.array([frames[deck.grids[g].cd][1] for g in dofs.grid_ids])
-    k_glob, m_glob = _Triplets(), _Triplets()
+    k_glob, m_glob = MatrixTriplets(n), MatrixTriplets(n)
 
     ids, na, nb, fr, ln, kn = [], [], [], [], [], []
     for bar in sorted(deck.bars.values(), key=lambda b: b.id):
@@ -125,7 +93,7 @@ def assemble(deck: Deck, *, mass: MassKind = "lumped") -> FEModel:
         sec = bar_section(deck, bar.pid)
         idx = np.concatenate([dofs.indices(bar.ga), dofs.indices(bar.gb)])
         k_glob.add(idx, to_basic(local_stiffness(sec, length), frame))
-        m_glob.add(idx, to_basic(local_mass(sec, length, mass), frame))
+        m_glob.add(idx, to_basic(bar_mass(sec, length, mass, deck), frame))
         ids.append(bar.id)
         na.append(dofs.grid_index(bar.ga))
         nb.append(dofs.grid_index(bar.gb))
@@ -156,8 +124,9 @@ def assemble(deck: Deck, *, mass: MassKind = "lumped") -> FEModel:
     constants = np.array([sp.k for sp in springs], dtype=float)
     k_spring = sparse.csr_array(vectors.T @ sparse.diags_array(constants) @ vectors) if springs else \
         sparse.csr_array((n, n))
-    stiffness = sparse.csr_array(k_glob.matrix(n) + k_spring)
-    mass_matrix = sparse.csr_array(m_glob.matrix(n) * mass_factor(deck))
+    add_elements(deck, dofs, pos, frames, cd_frames, k_glob, m_glob, mass)  # CBEAM, CROD, CMASS (fe/elements.py)
+    stiffness = sparse.csr_array(k_glob.matrix() + k_spring)
+    mass_matrix = sparse.csr_array(m_glob.matrix() * mass_factor(deck))
 
     bars = Bars(ids=np.array(ids), node_a=np.array(na), node_b=np.array(nb), frames0=np.array(fr),
                 lengths0=np.array(ln), k_natural=np.array(kn))

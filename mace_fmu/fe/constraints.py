@@ -8,6 +8,7 @@ import numpy as np
 from scipy import sparse
 
 from mace_fmu.deck.cards import Deck
+from mace_fmu.deck.geometry import grid_positions
 from mace_fmu.errors import MaceError
 from mace_fmu.fe.dofs import DofMap
 
@@ -39,9 +40,45 @@ def cd_rotation(cd_frames: np.ndarray) -> np.ndarray:
     return sparse.block_diag([blk for r in cd_frames for blk in (r, r)], format="csr")
 
 
+def rigid_equations(deck: Deck, dofs: DofMap, cd_frames: np.ndarray, fixed: np.ndarray,
+                    equations: dict[int, list[tuple[int, float]]], sources: dict, labels: dict) -> None:
+    """Add the equations of every RBAR and RBE2 (always in force, like NASTRAN's rigid elements) to
+    ``equations`` (dependent index -> [(index, coefficient)], CD components).
+
+    A dependent grid moves rigidly with the independent grid: in basic, u_d = u_i + theta_i x (x_d - x_i) and
+    theta_d = theta_i; each dependent CD component is that row of Lambda_d^T G Lambda_i.
+    """
+    if not deck.rigids:
+        return
+    pos = grid_positions(deck)
+    for r in sorted(deck.rigids.values(), key=lambda e: e.id):
+        i_row = dofs.grid_index(r.independent)
+        lam_i = np.kron(np.eye(2), cd_frames[i_row])
+        i_idx = dofs.indices(r.independent)
+        for grid, comps in r.dependent:
+            d_row = dofs.grid_index(grid)
+            x, y, z = pos[grid] - pos[r.independent]
+            g = np.eye(6)
+            g[:3, 3:] = -np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])  # -skew(r): theta x r
+            coupling = np.kron(np.eye(2), cd_frames[d_row]).T @ g @ lam_i
+            for c in comps:
+                d = dofs.index(grid, int(c))
+                label = f"{r.card} {r.id}"
+                if fixed[d]:
+                    raise MaceError(f"{r.source}: {label}: dependent DOF {grid}-{c} is also fixed by an SPC or a "
+                                    "GRID PS field; a DOF can be eliminated only once")
+                if d in equations:
+                    raise MaceError(f"{r.source}: {label}: dependent DOF {grid}-{c} is already dependent in "
+                                    f"{labels[d]} ({sources[d]}); a DOF can be dependent only once")
+                row = coupling[int(c) - 1]
+                equations[d] = [(int(i_idx[k]), float(row[k])) for k in range(6) if abs(row[k]) > 1e-15]
+                sources[d], labels[d] = r.source, label
+
+
 def build_constraints(deck: Deck, dofs: DofMap, cd_frames: np.ndarray, *, spc_set: int | None,
                       mpc_set: int | None) -> Constraints:
-    """Eliminate SPC1 set ``spc_set``, GRID PS fields and MPC set ``mpc_set`` (first term dependent)."""
+    """Eliminate SPC1 set ``spc_set``, GRID PS fields, MPC set ``mpc_set`` (first term dependent) and the
+    dependent DOFs of every RBAR and RBE2."""
     n = dofs.size
     fixed = np.zeros(n, dtype=bool)
     for grid in deck.grids.values():
@@ -65,20 +102,41 @@ def build_constraints(deck: Deck, dofs: DofMap, cd_frames: np.ndarray, *, spc_se
                             f"has a zero coefficient")
         equations[d] = [(dofs.index(t.grid, t.component), -t.coefficient / dep.coefficient) for t in mpc.terms[1:]]
         sources[d] = mpc.source
+    labels = {d: f"MPC {mpc_set}" for d in equations}
+    rigid_equations(deck, dofs, cd_frames, fixed, equations, sources, labels)
 
     independent = [i for i in range(n) if not fixed[i] and i not in equations]
     column = {i: k for k, i in enumerate(independent)}
-    # T in the CD systems, built as triplets: a unit entry per independent DOF, the MPC coefficients
-    # of each dependent one (its terms are independent DOFs, so their rows are unit rows)
-    rows, cols, values = list(column), list(column.values()), [1.0] * len(column)
-    for d, terms in equations.items():
-        for i, a in terms:
+    # T in the CD systems as sparse rows {column: coefficient}: a unit row per independent DOF, none for a
+    # fixed one, and for a dependent one the sum of its terms' rows. A term may itself be dependent (RBAR
+    # chains, RBE2 on an RBAR's grid): substitute it, as NASTRAN solves its m-set equations together; a
+    # cycle has no solution.
+    rows: dict[int, dict[int, float]] = {i: {k: 1.0} for i, k in column.items()}
+
+    def row(i: int) -> dict[int, float]:
+        return rows.get(i, {})
+
+    def resolve(d: int, path: tuple[int, ...]) -> None:
+        if d in rows:
+            return
+        if d in path:
+            loop = " -> ".join(f"{labels[x]} ({sources[x]})" for x in path[path.index(d):])
+            raise MaceError(f"{sources[d]}: {labels[d]}: dependent DOF {dofs.label(d)} depends on itself through "
+                            f"{loop}")
+        out: dict[int, float] = {}
+        for i, a in equations[d]:
             if i in equations:
-                raise MaceError(f"{sources[d]}: MPC {mpc_set}: DOF {dofs.label(i)} is dependent in another "
-                                f"equation and cannot be used as an independent term")
-            if i in column:  # a fixed DOF contributes nothing
-                rows.append(d), cols.append(column[i]), values.append(a)
-    t_cd = sparse.coo_array((values, (rows, cols)), shape=(n, len(independent))).tocsr()  # sums repeated terms
+                resolve(i, path + (d,))
+            for k, v in row(i).items():
+                out[k] = out.get(k, 0.0) + a * v
+        rows[d] = out
+
+    for d in equations:
+        resolve(d, ())
+    r_idx = [i for i, entries in rows.items() for _ in entries]
+    c_idx = [k for entries in rows.values() for k in entries]
+    values = [v for entries in rows.values() for v in entries.values()]
+    t_cd = sparse.coo_array((values, (r_idx, c_idx)), shape=(n, len(independent))).tocsr()
     transform = sparse.csr_array(cd_rotation(cd_frames) @ t_cd)
     return Constraints(transform=transform, independent=tuple(dofs.label(i) for i in independent),
                        spc_set=spc_set, mpc_set=mpc_set)

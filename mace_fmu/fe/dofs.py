@@ -44,3 +44,20 @@ class DofMap:
     def label(self, index: int) -> tuple[int, int]:
         """(grid, component) of a global index."""
         return self.grid_ids[index // 6], index % 6 + 1
+
+
+def cd_component_entries(dofs: DofMap, cd_frames: np.ndarray, grid: int, component: int
+                         ) -> tuple[np.ndarray, np.ndarray]:
+    """(DOF indices, coefficients) of the row vector that picks component 1-6 of ``grid``, measured in
+    its CD system (``cd_frames``: (n_grid, 3, 3), columns = axes in basic), from basic DOFs."""
+    row = dofs.grid_index(grid)
+    block = 6 * row + (0 if component <= 3 else 3)
+    return np.arange(block, block + 3), cd_frames[row][:, (component - 1) % 3]
+
+
+def cd_component_vector(dofs: DofMap, cd_frames: np.ndarray, grid: int, component: int) -> np.ndarray:
+    """Dense row vector that picks component 1-6 of ``grid``, measured in its CD system, from basic DOFs."""
+    vec = np.zeros(dofs.size)
+    idx, coefficients = cd_component_entries(dofs, cd_frames, grid, component)
+    vec[idx] = coefficients
+    return vec

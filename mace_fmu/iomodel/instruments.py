@@ -15,7 +15,7 @@ import numpy as np
 
 from mace_fmu.structure import StructureFile, bundled_structure_path, load_structure_file
 from mace_fmu.errors import MaceError
-from mace_fmu.fe.assembly import cd_component_vector
+from mace_fmu.fe.dofs import cd_component_vector
 from mace_fmu.fe.dofs import DofMap
 
 SensorKind = Literal["displacement", "rate"]

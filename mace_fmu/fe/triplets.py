@@ -1,0 +1,44 @@
+"""Element matrices gathered as (row, column, value) triplets into one sparse global matrix.
+
+Assembly adds thousands of small dense blocks; collecting them as triplets and letting scipy sum
+the duplicates once costs memory and time in proportion to the number of element entries, where
+adding into a dense n x n matrix costs n^2 memory before the first element.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import sparse
+
+
+class MatrixTriplets:
+    """A global matrix under assembly: ``add`` blocks, then ``matrix`` sums them into CSR."""
+
+    def __init__(self, size: int) -> None:
+        self.size = size  #: number of rows and columns (DOFs)
+        self._rows: list[np.ndarray] = []
+        self._cols: list[np.ndarray] = []
+        self._values: list[np.ndarray] = []
+
+    def add(self, idx: np.ndarray, block: np.ndarray) -> None:
+        """Add the square ``block`` at the DOFs ``idx`` (rows and columns alike)."""
+        idx = np.asarray(idx, dtype=np.int64)
+        self._rows.append(np.repeat(idx, len(idx)))
+        self._cols.append(np.tile(idx, len(idx)))
+        self._values.append(np.asarray(block, dtype=float).ravel())
+
+    def add_many(self, idx: np.ndarray, blocks: np.ndarray) -> None:
+        """Add blocks (n, k, k) at DOFs idx (n, k): one call for a batch of like elements."""
+        idx = np.asarray(idx, dtype=np.int64)
+        k = idx.shape[1]
+        self._rows.append(np.repeat(idx, k, axis=1).ravel())
+        self._cols.append(np.tile(idx, (1, k)).ravel())
+        self._values.append(np.asarray(blocks, dtype=float).ravel())
+
+    def matrix(self) -> sparse.csr_array:
+        """The sum of every block added, as CSR."""
+        if not self._values:
+            return sparse.csr_array((self.size, self.size))
+        return sparse.coo_array((np.concatenate(self._values), (np.concatenate(self._rows),
+                                                                np.concatenate(self._cols))),
+                                shape=(self.size, self.size)).tocsr()
