@@ -16,7 +16,8 @@ def cmd_build(args: argparse.Namespace) -> int:
     from mace_fmu.fmu.export import export_fmu
     from mace_fmu.fmu.native.export import export_native_fmu
     from mace_fmu.iomodel.parametric_data import parametric_arrays
-    from mace_fmu.iomodel.volts import DEFAULT_MAX_HZ, volts_model
+    from mace_fmu.iomodel import DEFAULT_MAX_HZ
+    from mace_fmu.iomodel.volts import volts_model
 
     deck = read_deck(args.deck)
     params = parameters(args)

@@ -64,8 +64,8 @@ def deck_option(p: argparse.ArgumentParser) -> None:
 
 def model_options(p: argparse.ArgumentParser, *, motion: bool = True) -> None:
     """Options of the volts-volts model (shared by model, export and view response)."""
-    p.add_argument("--max-hz", type=positive_hz, default=DEFAULT_MAX_HZ,
-                   help=f"highest retained mode [Hz] (default {DEFAULT_MAX_HZ:g})")
+    p.add_argument("--max-hz", type=positive_hz, default=None,
+                   help=f"highest retained mode [Hz] (default: the deck's EIGRL, else {DEFAULT_MAX_HZ:g})")
     p.add_argument("--bessel", choices=["full", "delay", "none"], default="full",
                    help="Bessel filters as 8-pole filters, as their 2.44 ms Pade delay, or left out")
     p.add_argument("--no-servos", action="store_true", help="leave the wheel speed loops and gimbal servos open")

@@ -10,7 +10,8 @@ from scipy import sparse
 from mace_fmu.deck.cards import Deck
 from mace_fmu.deck.geometry import bar_orientation, coordinate_frames, grid_positions
 from mace_fmu.errors import MaceError
-from mace_fmu.fe.beam import BeamSection, MassKind, local_frame, local_stiffness, natural_stiffness, to_basic
+from mace_fmu.fe.beam import (BeamSection, MassKind, local_frames, local_stiffness, natural_stiffness,
+                              to_basic_many)
 from mace_fmu.fe.dofs import DofMap, cd_component_entries
 from mace_fmu.fe.elements import add_elements, bar_mass, coupled_mass
 from mace_fmu.fe.triplets import MatrixTriplets
@@ -85,21 +86,29 @@ def assemble(deck: Deck, *, mass: MassKind = "lumped") -> FEModel:
     cd_frames = np.array([frames[deck.grids[g].cd][1] for g in dofs.grid_ids])
     k_glob, m_glob = MatrixTriplets(n), MatrixTriplets(n)
 
-    ids, na, nb, fr, ln, kn = [], [], [], [], [], []
-    for bar in sorted(deck.bars.values(), key=lambda b: b.id):
-        axis = pos[bar.gb] - pos[bar.ga]
-        length = float(np.linalg.norm(axis))
-        frame = local_frame(axis, bar_orientation(deck, bar, pos, frames))
-        sec = bar_section(deck, bar.pid)
-        idx = np.concatenate([dofs.indices(bar.ga), dofs.indices(bar.gb)])
-        k_glob.add(idx, to_basic(local_stiffness(sec, length), frame))
-        m_glob.add(idx, to_basic(bar_mass(sec, length, mass, deck), frame))
-        ids.append(bar.id)
-        na.append(dofs.grid_index(bar.ga))
-        nb.append(dofs.grid_index(bar.gb))
-        fr.append(frame)
-        ln.append(length)
-        kn.append(natural_stiffness(sec, length))
+    bar_cards = sorted(deck.bars.values(), key=lambda b: b.id)
+    ga = np.array([dofs.grid_index(b.ga) for b in bar_cards], dtype=np.int64)
+    gb = np.array([dofs.grid_index(b.gb) for b in bar_cards], dtype=np.int64)
+    axes = positions[gb] - positions[ga]
+    lengths = np.linalg.norm(axes, axis=1)
+    fr = local_frames(axes, np.array([bar_orientation(deck, b, pos, frames) for b in bar_cards]).reshape(-1, 3))
+    # The element matrices in element axes depend on the section and the length only: computed once per
+    # distinct pair (a lattice has a handful), then rotated to basic all at once.
+    cache: dict[tuple[int, float], tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+    k_loc, m_loc, kn = [], [], []
+    for bar, length in zip(bar_cards, lengths.tolist()):
+        key = (bar.pid, length)
+        if key not in cache:
+            sec = bar_section(deck, bar.pid)
+            cache[key] = (local_stiffness(sec, length), bar_mass(sec, length, mass, deck),
+                          natural_stiffness(sec, length))
+        k_e, m_e, kn_e = cache[key]
+        k_loc.append(k_e), m_loc.append(m_e), kn.append(kn_e)
+    if bar_cards:
+        idx = np.concatenate([6 * ga[:, None] + np.arange(6), 6 * gb[:, None] + np.arange(6)], axis=1)
+        k_glob.add_many(idx, to_basic_many(np.array(k_loc), fr))
+        m_glob.add_many(idx, to_basic_many(np.array(m_loc), fr))
+    ids, na, nb, ln = [b.id for b in bar_cards], ga, gb, lengths
 
     for cm in deck.conm2s.values():
         if cm.cid == -1:
@@ -128,8 +137,8 @@ def assemble(deck: Deck, *, mass: MassKind = "lumped") -> FEModel:
     stiffness = sparse.csr_array(k_glob.matrix() + k_spring)
     mass_matrix = sparse.csr_array(m_glob.matrix() * mass_factor(deck))
 
-    bars = Bars(ids=np.array(ids), node_a=np.array(na), node_b=np.array(nb), frames0=np.array(fr),
-                lengths0=np.array(ln), k_natural=np.array(kn))
+    bars = Bars(ids=np.array(ids, dtype=np.int64), node_a=na, node_b=nb, frames0=fr.reshape(-1, 3, 3),
+                lengths0=ln, k_natural=np.array(kn).reshape(-1, 7, 7))
     return FEModel(dofs=dofs, positions=positions, cd_frames=cd_frames, stiffness=stiffness, mass=mass_matrix,
                    bars=bars, spring_stiffness=k_spring, spring_ids=tuple(sp.id for sp in springs),
                    spring_vectors=vectors, spring_constants=constants)

@@ -45,6 +45,14 @@ def local_frame(axis: np.ndarray, orientation: np.ndarray) -> np.ndarray:
     return np.array([x, y, np.cross(x, y)])
 
 
+def local_frames(axes: np.ndarray, orientations: np.ndarray) -> np.ndarray:
+    """(n, 3, 3) frames of :func:`local_frame` for n bars at once (axes and orientation vectors (n, 3))."""
+    x = axes / np.linalg.norm(axes, axis=1, keepdims=True)
+    y = orientations - np.einsum("ni,ni->n", orientations, x)[:, None] * x
+    y = y / np.linalg.norm(y, axis=1, keepdims=True)
+    return np.stack([x, y, np.cross(x, y)], axis=1)
+
+
 def _shear_parameter(e_i: float, g: float, k: float | None, area: float, length: float) -> float:
     """Phi = 12 E I / (k G A L^2); zero when the section is rigid in shear."""
     if k is None or k == 0.0 or g == 0.0 or area == 0.0:
@@ -114,3 +122,11 @@ def to_basic(matrix_local: np.ndarray, frame: np.ndarray) -> np.ndarray:
     """Rotate a 12x12 element matrix from element axes (rows of ``frame``) to basic axes."""
     t = np.kron(np.eye(4), frame)
     return t.T @ matrix_local @ t
+
+
+def to_basic_many(matrices_local: np.ndarray, frames: np.ndarray) -> np.ndarray:
+    """:func:`to_basic` for n element matrices (n, 12, 12) with their frames (n, 3, 3) at once."""
+    n = len(matrices_local)
+    k = matrices_local.reshape(n, 4, 3, 4, 3)
+    # T = blockdiag(frame x 4): (T^T K T)[a i, b j] = frame[p, i] K[a p, b q] frame[q, j]
+    return np.einsum("npi,napbq,nqj->naibj", frames, k, frames, optimize=True).reshape(n, 12, 12)

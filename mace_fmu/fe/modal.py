@@ -16,16 +16,18 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.linalg as sla
 from scipy import sparse
-from scipy.sparse.linalg import LinearOperator, eigsh, splu
+from scipy.sparse.linalg import LinearOperator, eigsh
 
 from mace_fmu.errors import MaceError
 from mace_fmu.fe.constraints import Constraints
 from mace_fmu.fe.dofs import DofMap
+from mace_fmu.fe.factor import factorize
 
 MASSLESS_RELATIVE_TOLERANCE = 1e-12
-#: Largest number of independent DOFs solved densely (every mode at once); above it the sparse route
-#: (benchmarks/bench_fe_scale.py measured where the two cross).
-DENSE_MAX_DOF = 2000
+#: Largest number of independent DOFs solved densely (every mode at once); above it the sparse route.
+#: Measured (benchmarks/RESULTS.md, "FE core at scale"): the MACE deck (474 DOFs, 35 modes) takes the same
+#: time either way; a 1,026-DOF tower's 50 modes 0.17 s dense, 0.09 s sparse; 2,976 DOFs 1.87 s / 0.31 s.
+DENSE_MAX_DOF = 1000
 #: Modes the sparse route looks for first when only a frequency range is given.
 SPARSE_FIRST_BATCH = 40
 
@@ -75,11 +77,13 @@ def solve_modes(stiffness: np.ndarray | sparse.sparray, mass: np.ndarray | spars
     m = constraints.reduce_sparse(mass)
     k = sparse.csr_array(0.5 * (k + k.T))
     m = sparse.csr_array(0.5 * (m + m.T))
-    if k.shape[0] <= DENSE_MAX_DOF:
-        freq, phi = _dense_modes(k.toarray(), m.toarray(), constraints)
-    else:
-        freq, phi = _sparse_modes(k, m, constraints, up_to_hz=wanted_hz if wanted_hz is not None else max_hz,
-                                  count=wanted_count)
+    massive = int(np.count_nonzero(~_massless(m.diagonal())))
+    # Lanczos pays off for a few of many modes; asked for a good part of them, the dense route is faster
+    found = None
+    if k.shape[0] > DENSE_MAX_DOF and (wanted_count or 0) < massive // 4:
+        found = _sparse_modes(k, m, constraints, up_to_hz=wanted_hz if wanted_hz is not None else max_hz,
+                              count=wanted_count)
+    freq, phi = found if found is not None else _dense_modes(k.toarray(), m.toarray(), constraints)
     keep = np.ones_like(freq, dtype=bool) if max_hz is None else freq <= max_hz
     return Modes(frequencies_hz=freq[keep], shapes=constraints.transform @ phi[:, keep], dofs=dofs,
                  cd_frames=cd_frames)
@@ -116,33 +120,41 @@ def _dense_modes(k: np.ndarray, m: np.ndarray, constraints: Constraints) -> tupl
 
 
 def _sparse_modes(k: sparse.csr_array, m: sparse.csr_array, constraints: Constraints, *, up_to_hz: float | None,
-                  count: int | None) -> tuple[np.ndarray, np.ndarray]:
+                  count: int | None) -> tuple[np.ndarray, np.ndarray] | None:
     """The lowest modes by shift-invert Lanczos about a small negative shift: (K - sigma M)^-1 M maps
     every eigenvalue above the shift, rigid-body modes included, to a large one in order, and the
     massless DOFs' infinite eigenvalues to zero, so they need no condensation. With ``count`` that
-    many are found at least; the number found doubles until one lies above ``up_to_hz`` too."""
+    many are found at least; the number found doubles until one lies above ``up_to_hz`` too. None when
+    that would take more than half the modes there are (the dense route is then the faster)."""
     n = k.shape[0]
     if count is None and up_to_hz is None:
         raise MaceError(f"a model of {n} independent DOFs is solved for its lowest modes only: give a frequency "
                         "range (max_hz, --max-hz, or the deck's EIGRL V2) or a number of modes (EIGRL ND)")
     massive = int(np.count_nonzero(~_massless(m.diagonal())))
-    # the shift sits below every eigenvalue: minus (2 pi 0.01 Hz)^2 times a unit of the model's scale
+    if massive < 4:
+        return None
+    # the shift: a millionth of a typical K_ii / M_ii [(rad/s)^2] below zero, under every eigenvalue of a
+    # stable structure (its rigid-body zeros included) and well clear of the first flexible one
     scale = float(np.median(k.diagonal()[k.diagonal() > 0]) / np.median(m.diagonal()[m.diagonal() > 0]))
     sigma = -1e-6 * scale
     try:
-        factor = splu(sparse.csc_array(k - sigma * m))
+        solve = factorize(k - sigma * m)
     except RuntimeError:
         raise MaceError(_unrestrained_message_sparse(k, m, constraints)) from None
-    op = LinearOperator((n, n), matvec=lambda x: factor.solve(np.asarray(x, dtype=float).ravel()), dtype=float)
-    wanted = min(max(count or 0, SPARSE_FIRST_BATCH if up_to_hz is not None else 1), massive - 1)
+    op = LinearOperator((n, n), matvec=lambda x: solve(np.asarray(x, dtype=float).ravel()), dtype=float)
+    wanted = min(max(count or 0, SPARSE_FIRST_BATCH if up_to_hz is not None else 1), massive // 2)
     while True:
-        eigval, vec = eigsh(k, k=wanted, M=m, sigma=sigma, which="LM", OPinv=op, tol=0.0)
+        # the Krylov space lives in the range of M: no more vectors than DOFs with mass
+        ncv = min(massive, max(2 * wanted + 1, 20))
+        eigval, vec = eigsh(k, k=wanted, M=m, sigma=sigma, which="LM", OPinv=op, tol=0.0, ncv=ncv)
         order = np.argsort(eigval)
         eigval, vec = eigval[order], vec[:, order]
         freq = np.sign(eigval) * np.sqrt(np.abs(eigval)) / (2.0 * np.pi)
-        if (up_to_hz is None or freq[-1] > up_to_hz) or wanted >= massive - 1:
+        if up_to_hz is None or freq[-1] > up_to_hz:
             break
-        wanted = min(2 * wanted, massive - 1)
+        if wanted >= massive // 2:
+            return None
+        wanted = min(2 * wanted, massive // 2)
     vec = vec / np.sqrt(np.einsum("im,im->m", vec, m @ vec))  # mass-normalised, as the dense route
     return freq, vec
 

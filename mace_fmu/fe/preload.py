@@ -17,11 +17,11 @@ from typing import Callable, Literal
 import numpy as np
 import scipy.linalg as sla
 from scipy import sparse
-from scipy.sparse.linalg import splu
 
 from mace_fmu.errors import MaceError
 from mace_fmu.fe.assembly import FEModel
 from mace_fmu.fe.constraints import Constraints
+from mace_fmu.fe.factor import factorize
 from mace_fmu.fe.modal import DENSE_MAX_DOF
 from mace_fmu.fe.corotational import (BarState, bar_dof_indices, deformation_jacobian, internal_force,
                                       rotation_matrix, tangent)
@@ -83,7 +83,7 @@ def linear_preload(model: FEModel, constraints: Constraints, load: np.ndarray) -
 def _factor(k: np.ndarray | sparse.sparray) -> Callable[[np.ndarray], np.ndarray]:
     """Sparse LU of the reduced stiffness as a solve function, or a clear error for a mechanism."""
     try:
-        return splu(sparse.csc_array(k)).solve
+        return factorize(k)
     except RuntimeError:
         raise MaceError("the preload stiffness is singular: the static subcase leaves a mechanism or rigid-body "
                         "motion free (check its SPC and MPC sets)") from None

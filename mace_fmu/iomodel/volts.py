@@ -26,7 +26,6 @@ from mace_fmu.errors import MaceError
 from mace_fmu.fe.preload import PreloadKind
 from mace_fmu.iomodel.damping import modal_damping
 from mace_fmu.iomodel.frf import frequency_response
-from mace_fmu.iomodel import DEFAULT_MAX_HZ
 from mace_fmu.iomodel.instruments import Instruments, load_instruments
 from mace_fmu.iomodel.modal_core import ZERO_HZ
 from mace_fmu.iomodel.modal_ss import ModalPlant, modal_plant
@@ -209,12 +208,13 @@ def build_diagram(plant: ModalPlant, instruments: Instruments, *, servos: bool =
 
 @single_blas_thread
 def volts_model(structure: StructureKind = "1g", *, parameters: ParameterSet | None = None, servos: bool = True,
-                bessel: BesselKind = "full", delays: bool = True, pade_order: int = 3, max_hz: float = DEFAULT_MAX_HZ,
+                bessel: BesselKind = "full", delays: bool = True, pade_order: int = 3, max_hz: float | None = None,
                 preload: PreloadKind = "large", deck: Deck | str | None = None, instruments: Instruments | None = None,
                 modes: StructureModes | None = None, inputs: Sequence[str] | None = None,
                 outputs: Sequence[str] | None = None, motion_grids: Sequence[int] | Literal["all"] = (),
                 structure_file: StructureFile | str | os.PathLike | None = None) -> VoltsModel:
-    """Volts-volts model of the 1-g or 0-g structure, modes up to ``max_hz`` [Hz].
+    """Volts-volts model of the 1-g or 0-g structure, modes up to ``max_hz`` [Hz] (None: the modes the deck's
+    EIGRL asks for, else those up to 250 Hz, as :func:`~mace_fmu.pipeline.compute_modes`).
 
     Inputs: gimbal commands (relative angle, 1 V = 1 deg, with servos; motor volts without),
     wheel speed commands and active strut volts. Outputs: the 20 sensors in volts.
@@ -230,7 +230,8 @@ def volts_model(structure: StructureKind = "1g", *, parameters: ParameterSet | N
     """
     _check(structure in ("1g", "0g"), f"structure must be '1g' or '0g', got {structure!r}")
     if modes is None:
-        modes = compute_modes(deck, structure=structure, preload=preload, max_hz=max(max_hz, 1.0),
+        modes = compute_modes(deck, structure=structure, preload=preload,
+                              max_hz=max(max_hz, 1.0) if max_hz is not None else None,
                               parameters=parameters, structure_file=structure_file)
     file = modes.structure.file
     if instruments is None:
@@ -247,6 +248,8 @@ def volts_model(structure: StructureKind = "1g", *, parameters: ParameterSet | N
     except MaceError as exc:
         raise ValueError(str(exc)) from None
     flexible = modes.modes.frequencies_hz[np.abs(modes.modes.frequencies_hz) >= ZERO_HZ]
+    if max_hz is None:
+        max_hz = float(np.max(modes.modes.frequencies_hz))
     _check(len(flexible) > 0 and max_hz >= flexible.min(),
            f"max_hz = {max_hz} Hz is below the first flexible mode ({flexible.min():.3f} Hz); allowed: >= that")
     zeta = modal_damping(modes.modes.labels, modes.modes.frequencies_hz, instruments.damping)

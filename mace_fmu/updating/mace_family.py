@@ -23,7 +23,8 @@ from mace_fmu.fe.pairing import carry_labels
 from mace_fmu.fe.preload import PreloadKind
 from mace_fmu.iomodel.parametric import ParametricSystem
 from mace_fmu.iomodel.parametric_data import parametric_arrays, physical_sensitivities, with_physical
-from mace_fmu.iomodel.volts import DEFAULT_MAX_HZ, VoltsModel, volts_model
+from mace_fmu.iomodel import DEFAULT_MAX_HZ
+from mace_fmu.iomodel.volts import VoltsModel, volts_model
 from mace_fmu.parameter_kinds import DAMPING, kind_of_set_name, mode_label
 from mace_fmu.parameters import ParameterSet, deck_values, parameter_kind
 from mace_fmu.pipeline import StructureModes, compute_modes
