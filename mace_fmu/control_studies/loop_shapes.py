@@ -112,7 +112,7 @@ def _stop_reason(study) -> str:
     """Why the BFGS update stopped, in the study's terms rather than scipy's."""
     if "precision loss" in study.message:
         # the cost is accurate to ~1e-8 and its forward-difference gradient no better: BFGS stops where a
-        # line search can no longer tell a descent; the cost has settled (1e-4 over the last 20
+        # line search can no longer tell a descent; the cost has settled (2e-4 over the last 20
         # iterations), the parameters have not (a flat valley: README, A.2)
         return "stopped: the forward-difference gradient lost precision; the cost has settled, not the poles"
     if "Maximum number of iterations" in study.message:
