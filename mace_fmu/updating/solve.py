@@ -186,8 +186,9 @@ def update(family: ModelFamily, cost: Cost, *, start: Mapping[str, float], stage
         before = dict(values)
         for stage in stages:
             t_stage = time.perf_counter()
-            values, model, outcome = _run_stage(family, stage.cost or cost, stage, rnd, values, model, start, bounds,
-                                                settings, history, runner, progress)
+            problem = _StageProblem.of(family=family, cost=stage.cost or cost, stage=stage, round=rnd, start=start,
+                                       bounds=bounds, settings=settings, runner=runner, progress=progress)
+            values, model, outcome = _run_stage(problem, values, model, history)
             outcomes.append(outcome)
             stage_seconds[stage.name] = stage_seconds.get(stage.name, 0.0) + time.perf_counter() - t_stage
         if max(abs(values[n] / before[n] - 1.0) for n in names_all) < settings.tolerance:
@@ -199,32 +200,68 @@ def update(family: ModelFamily, cost: Cost, *, start: Mapping[str, float], stage
                         seconds=time.perf_counter() - t_start, stage_seconds=stage_seconds, outcomes=tuple(outcomes))
 
 
-def _run_stage(family, cost, stage, rnd, values, model, start, bounds, settings, history, runner, progress):
+@dataclass(frozen=True)
+class _StageProblem:
+    """What stays fixed while one stage runs: the family, cost and settings, the stage's parameters and
+    their box in relative changes x = value / start - 1."""
+
+    family: ModelFamily
+    cost: Cost
+    stage: Stage
+    round: int
+    settings: UpdateSettings
+    runner: Callable
+    progress: ProgressCallback | None
+    names: tuple[str, ...]
+    start_values: np.ndarray  #: relative changes are measured from the update's start values
+    lower: np.ndarray  #: bounds in relative change
+    upper: np.ndarray
+    gamma: np.ndarray  #: eq. 4.18's plausible relative change of each parameter
+
+    @classmethod
+    def of(cls, *, family: ModelFamily, cost: Cost, stage: Stage, round: int, start: Mapping[str, float],
+           bounds: Mapping[str, Bounds], settings: UpdateSettings, runner: Callable,
+           progress: ProgressCallback | None) -> _StageProblem:
+        names = tuple(stage.parameters)
+        s = np.array([start[n] for n in names])
+        lo = np.array([bounds[n].lower for n in names]) / s - 1.0
+        hi = np.array([bounds[n].upper for n in names]) / s - 1.0
+        return cls(family=family, cost=cost, stage=stage, round=round, settings=settings, runner=runner,
+                   progress=progress, names=names, start_values=s,
+                   lower=np.minimum(lo, hi), upper=np.maximum(lo, hi),  # a negative start value flips the interval
+                   gamma=np.array([bounds[n].gamma_percent for n in names]) / 100.0)
+
+    def relative(self, values: Mapping[str, float]) -> np.ndarray:
+        """x of ``values``: the stage's parameters as relative changes from the start."""
+        return np.array([values[n] for n in self.names]) / self.start_values - 1.0
+
+    def point(self, values: Mapping[str, float], x: np.ndarray) -> dict[str, float]:
+        """``values`` with the stage's parameters set to relative changes ``x``."""
+        return {**values, **{n: float(v) for n, v in zip(self.names, self.start_values * (1.0 + x))}}
+
+
+def _run_stage(problem: _StageProblem, values: dict[str, float], model, history: list[Iteration]
+               ) -> tuple[dict[str, float], object, StageOutcome]:
     """The outer loop of one stage from ``values`` (``model``: the full model there); returns the new
     values, the full model at them and how the loop ended."""
-    names = list(stage.parameters)
-    s = np.array([start[n] for n in names])  # relative changes are measured from the update's start
-    lo = np.array([bounds[n].lower for n in names]) / s - 1.0
-    hi = np.array([bounds[n].upper for n in names]) / s - 1.0
-    lo, hi = np.minimum(lo, hi), np.maximum(lo, hi)  # a negative start value flips the interval
+    family, cost, stage, settings = problem.family, problem.cost, problem.stage, problem.settings
+    names, lo, hi, rnd = list(problem.names), problem.lower, problem.upper, problem.round
     j_base = cost.residual(model)
-    gamma = np.array([bounds[n].gamma_percent for n in names]) / 100.0
-    w = np.sqrt(0.01 * scalar_cost(j_base)) / gamma if settings.penalty else np.zeros(len(names))
-    best = (_total(j_base, w, np.array([values[n] for n in names]) / s - 1.0, settings), values, model)
+    w = np.sqrt(0.01 * scalar_cost(j_base)) / problem.gamma if settings.penalty else np.zeros(len(names))
+    best = (_total(j_base, w, problem.relative(values), settings), values, model)
 
     def point(x: np.ndarray) -> dict[str, float]:
-        return {**values, **{n: float(v) for n, v in zip(names, s * (1.0 + x))}}
+        return problem.point(values, x)
 
     radius = np.inf  # trust region: largest step in x from the base point
     linearisation = None  # (x_base, fun builder) kept while the base point does not move
     reason, converged, outer = f"iteration cap reached (max_outer = {settings.max_outer})", False, -1
     for outer in range(settings.max_outer):
         t0 = time.perf_counter()
-        x_base = np.array([values[n] for n in names]) / s - 1.0
+        x_base = problem.relative(values)
         lo_t, hi_t = np.maximum(lo, x_base - radius), np.minimum(hi, x_base + radius)
         if linearisation is None:
-            linearisation = _linearise(family, cost, stage, settings, values, model, names, x_base, w, point,
-                                       runner, progress)
+            linearisation = _linearise(problem, values, model, x_base, w, point)
             optimality = _first_order_optimality(linearisation[2], x_base, lo, hi, best[0])
             if optimality is not None and optimality < settings.gradient_tolerance:
                 reason, converged = (f"first-order optimality: |d cost / d relative change| = {optimality:.1e} x cost "
@@ -262,7 +299,7 @@ def _run_stage(family, cost, stage, rnd, values, model, start, bounds, settings,
                 reason, converged = (f"no lower cost within a step of {radius:.1e} of the point (tolerance "
                                      f"{settings.tolerance:g})"), True
                 break
-    x_end = np.array([best[1][n] for n in names]) / s - 1.0
+    x_end = problem.relative(best[1])
     at_bound = [f"{n} at its {'lower' if abs(x - a) <= abs(x - b) else 'upper'} bound"
                 for n, x, a, b in zip(names, x_end, lo, hi) if min(abs(x - a), abs(x - b)) <= 1e-9 * max(1.0, abs(x))]
     if at_bound:
@@ -282,8 +319,12 @@ def _first_order_optimality(gradient, x_base: np.ndarray, lo: np.ndarray, hi: np
     return float(np.max(np.abs(g))) / cost
 
 
-def _linearise(family, cost, stage, settings, values, model, names, x_base, w, point, runner, progress):
-    """(sensitivities or None, solve(lo, hi) -> (least-squares solution, predicted j^T j)) about ``values``."""
+def _linearise(problem: _StageProblem, values: dict[str, float], model, x_base: np.ndarray, w: np.ndarray,
+               point: Callable[[np.ndarray], dict[str, float]]):
+    """(sensitivities or None, solve(lo, hi) -> (least-squares solution, predicted j^T j), gradient or None)
+    about ``values``."""
+    family, cost, stage, settings = problem.family, problem.cost, problem.stage, problem.settings
+    names, runner, progress = list(problem.names), problem.runner, problem.progress
     if settings.method == "cost-sensitivity":
         perturbed = family.full if settings.perturbation == "full" else family.basis(values).model
         sens = cost_sensitivities(cost, base_model=model, perturbed=perturbed, base=values, names=names,
