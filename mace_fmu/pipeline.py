@@ -192,9 +192,9 @@ def compute_modes(deck: Deck | str | os.PathLike | None = None, *, structure: St
     also logged at DEBUG level).
     """
     if preload not in ("large", "linear"):
-        raise ValueError(f"preload must be 'large' or 'linear', got {preload!r}")
+        raise MaceError(f"preload must be 'large' or 'linear', got {preload!r}")
     if mass not in ("lumped", "consistent"):
-        raise ValueError(f"mass must be 'lumped' or 'consistent', got {mass!r}")
+        raise MaceError(f"mass must be 'lumped' or 'consistent', got {mass!r}")
     if not isinstance(deck, Deck):
         deck = read_deck(deck if deck is not None else bundled_deck_path())
     file = structure_file_for(deck, structure_file)

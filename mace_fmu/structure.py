@@ -375,7 +375,7 @@ def build_structure(deck: Deck, *, kind: StructureKind, spec: StructureSpec | No
     replaces the file's structure part.
     """
     if kind not in ("1g", "0g"):
-        raise ValueError(f"kind must be '1g' or '0g', got {kind!r}")
+        raise MaceError(f"kind must be '1g' or '0g', got {kind!r}")
     file = structure_file_for(deck, structure_file)
     spec = spec if spec is not None else (file.spec if file is not None else StructureSpec.empty())
     check_spec_against_deck(spec, deck)

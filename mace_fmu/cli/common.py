@@ -119,7 +119,4 @@ def volts(args: argparse.Namespace, **overrides):
                    pade_order=args.pade_order, max_hz=args.max_hz, preload=args.preload, deck=read_deck(args.deck),
                    motion_grids=motion_grids(getattr(args, "motion_grids", None)), parameters=parameters(args),
                    structure_file=getattr(args, "structure_file", None))
-    try:
-        return volts_model(args.structure, **{**options, **overrides})
-    except ValueError as exc:  # a bad option value: one message, not a traceback
-        raise MaceError(str(exc)) from None
+    return volts_model(args.structure, **{**options, **overrides})  # a bad option value: a MaceError

@@ -113,7 +113,7 @@ def _by_name(items, name: str, what: str):
     for item in items:
         if item.name == name:
             return item
-    raise ValueError(f"unknown {what} {name!r}; known: {', '.join(i.name for i in items)}")
+    raise MaceError(f"unknown {what} {name!r}; known: {', '.join(i.name for i in items)}")
 
 
 def influence_vector(dofs: tuple[Dof, ...], dof_map: DofMap, cd_frames: np.ndarray) -> np.ndarray:

@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 import control as ct
 import numpy as np
 
+from mace_fmu.errors import MaceError
 from mace_fmu.fe.modal import Modes
 from mace_fmu.iomodel.instruments import Instruments, influence_vector
 from mace_fmu.iomodel.modal_core import modal_matrices
@@ -88,7 +89,7 @@ def modal_data(modes: Modes, instruments: Instruments, *, max_hz: float,
     rate_out = {s.name: rows[s.name] for s in instruments.sensors if s.kind == "rate"}
     order = [s.name for s in instruments.sensors] + [f"{n}_angle" for n in integrated]
     if len(set(motion_grids)) != len(motion_grids):
-        raise ValueError(f"motion grids must be distinct, got {list(motion_grids)}")
+        raise MaceError(f"motion grids must be distinct, got {list(motion_grids)}")
     motion_out = {motion_output_name(grid, component): phi[index] for grid in motion_grids
                   for component, index in zip(MOTION_COMPONENTS, modes.dofs.indices(grid))}  # KeyError names a grid
     return ModalData(frequencies_hz=modes.frequencies_hz[keep], labels=tuple(l for l, k in zip(modes.labels, keep) if k),

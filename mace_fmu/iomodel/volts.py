@@ -98,8 +98,9 @@ class VoltsModel:
 
 
 def _check(condition: bool, message: str) -> None:
+    """A bad request is a MaceError (a ValueError too), with the message the CLI prints as is."""
     if not condition:
-        raise ValueError(message)
+        raise MaceError(message)
 
 
 def build_diagram(plant: ModalPlant, instruments: Instruments, *, servos: bool = True, bessel: BesselKind = "full",
@@ -240,13 +241,10 @@ def volts_model(structure: StructureKind = "1g", *, parameters: ParameterSet | N
                             "deck has no structure file declaring them (give one: structure_file=..., CLI --structure "
                             "FILE; the bundled mace_em.toml belongs to the bundled MACE deck only)")
         instruments = load_instruments(file)
-    try:
-        # the moduli and springs must name cards, whether or not modes were given
-        fe_overrides(parameters, parameter_names(modes.structure.deck, file))
-        instruments = apply_parameters(instruments, parameters, modes.modes.labels, structure=structure)
-        modes = scale_frequencies(modes, parameters, structure=structure)
-    except MaceError as exc:
-        raise ValueError(str(exc)) from None
+    # the moduli and springs must name cards, whether or not modes were given
+    fe_overrides(parameters, parameter_names(modes.structure.deck, file))
+    instruments = apply_parameters(instruments, parameters, modes.modes.labels, structure=structure)
+    modes = scale_frequencies(modes, parameters, structure=structure)
     flexible = modes.modes.frequencies_hz[np.abs(modes.modes.frequencies_hz) >= ZERO_HZ]
     if max_hz is None:
         max_hz = float(np.max(modes.modes.frequencies_hz))
