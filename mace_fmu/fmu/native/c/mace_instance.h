@@ -55,13 +55,18 @@ MiStatus mi_error(MiInstance *inst, const char *fmt, ...);
 void mi_debug(MiInstance *inst, const char *fmt, ...);
 /* 1 if `function` may be called now (mask of MI_IN(phase)), else logs why not and returns 0. */
 int mi_allowed(MiInstance *inst, const char *function, unsigned mask);
+/* The same for a function of one interface only (co-simulation or model exchange). */
+int mi_allowed_kind(MiInstance *inst, const char *function, MaceKind kind, unsigned mask);
 
 MiStatus mi_set_reals(MiInstance *inst, const unsigned int *vr, size_t n, const double *values, const char *fn);
 MiStatus mi_get_reals(MiInstance *inst, const unsigned int *vr, size_t n, double *values, const char *fn);
 /* For the variable types the model has none of. */
-MiStatus mi_no_variables(MiInstance *inst, size_t n, const char *type, const char *fn);
+MiStatus mi_no_variables(MiInstance *inst, size_t n, const char *type, const char *fn, int set);
 
-MiStatus mi_enter_initialization(MiInstance *inst, double start_time, const char *fn);
+/* The experiment (FMI 2 SetupExperiment, FMI 3 EnterInitializationMode's arguments), checked. */
+MiStatus mi_experiment(MiInstance *inst, int tolerance_defined, double tolerance, double start_time,
+                       int stop_defined, double stop_time, const char *fn);
+MiStatus mi_enter_initialization(MiInstance *inst, const char *fn);
 MiStatus mi_exit_initialization(MiInstance *inst, const char *fn);
 MiStatus mi_do_step(MiInstance *inst, double t, double h, const char *fn);
 MiStatus mi_terminate(MiInstance *inst, const char *fn);
