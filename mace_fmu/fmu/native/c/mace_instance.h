@@ -1,9 +1,12 @@
 /* An FMU instance: the model core, the FMI state machine and the host's logger, shared by the
  * FMI 2 and FMI 3 wrappers (fmi2_api.c, fmi3_api.c), which only translate types and names.
  *
- * Calls out of order (a step before initialisation, a fixed parameter set after it, an unknown
- * value reference) return an error with a logged reason and leave the instance as it was; a
- * failure of the model (invalid parameters, a non-finite input) logs the reason and puts the
+ * Calls out of order (outside the states the FMI 2.0.x / 3.0 state tables allow them in, or of the
+ * other interface) and invalid arguments (a value reference the FMU's own model description does
+ * not declare, a non-finite input, a step that does not start at the FMU's time or is not > 0, an
+ * FMU state of another FMU, interface or FMI version, or a damaged one) return an error with a
+ * logged reason and leave the instance as it was; a
+ * failure of the model (invalid parameters) logs the reason and puts the
  * instance into the error state, from which only getting values, restoring an FMU state,
  * reset and freeing are possible. Error messages are logged whether debug logging is on or not.
  */
