@@ -168,8 +168,8 @@ class Reference:
                 g = self.group(vr)
                 if g == "input" and math.isfinite(value):
                     continue
-                if g == "param" and p in (INST, INIT):
-                    continue
+                if g == "param" and p in (INST, INIT) and math.isfinite(value):
+                    continue  # a value outside the declared range is taken; the build refuses it
                 return ERROR
             for vr, value in zip(args["vr"], args["values"]):
                 if vr in m.params:

@@ -20,7 +20,7 @@ from mace_fmu.fmu.native.export import export_native_fmu
 from mace_fmu.iomodel.volts import volts_model
 
 WORKER = Path(__file__).with_name("fmi_fuzz.py")
-SEEDS, LENGTH = 20, 40  # 60 sequences, 2,400 calls: about 10 s on the 2-core machine
+SEEDS, LENGTH = 30, 40  # 90 sequences, 3,600 calls
 
 
 @pytest.fixture(scope="module")

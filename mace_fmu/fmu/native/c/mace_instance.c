@@ -153,15 +153,16 @@ MiStatus mi_set_reals(MiInstance *inst, const unsigned int *vr, size_t n, const 
         const MaceGroup g = mace_variable(inst->model, vr[i], &k);
         if (!declared(inst, g)) {
             return mi_error(inst, "%s%s: value reference %u is not a variable of this FMU", inst->api, fn, vr[i]);
-        } else if (g == MACE_VAR_INPUT) {
-            /* refused here, where it is set, so that no output ever becomes NaN or infinite */
-            if (!isfinite(values[i]))
-                return mi_error(inst, "%s%s: non-finite value %g for input %s (expected a finite number); not set",
-                                inst->api, fn, values[i], mace_name(inst->model, g, k));
-        } else if (g == MACE_VAR_PARAMETER) {
-            if (!(MI_IN(inst->phase) & SETTABLE_PARAMETER))
+        } else if (g == MACE_VAR_INPUT || g == MACE_VAR_PARAMETER) {
+            if (g == MACE_VAR_PARAMETER && !(MI_IN(inst->phase) & SETTABLE_PARAMETER))
                 return mi_error(inst, "%s%s: parameter %s is fixed: set it before %sExitInitializationMode",
                                 inst->api, fn, mace_name(inst->model, g, k), inst->api);
+            /* refused here, where it is set, so that no variable, output or parameter, ever reads NaN or
+               infinite (a parameter outside its declared range is refused by the build, which names it) */
+            if (!isfinite(values[i]))
+                return mi_error(inst, "%s%s: non-finite value %g for %s %s (expected a finite number); not set",
+                                inst->api, fn, values[i], g == MACE_VAR_INPUT ? "input" : "parameter",
+                                mace_name(inst->model, g, k));
         } else {
             return mi_error(inst, "%s%s: value reference %u is %s and cannot be set", inst->api, fn, vr[i],
                             group_name(g));
