@@ -9,6 +9,7 @@ every call's status must be the reference's. The long run is benchmarks/bench_fm
 from __future__ import annotations
 
 import json
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -20,6 +21,8 @@ from mace_fmu.fmu.native.export import export_native_fmu
 from mace_fmu.iomodel.volts import volts_model
 
 WORKER = Path(__file__).with_name("fmi_fuzz.py")
+C_HOST = Path(__file__).with_name("native_fuzz_host.c")
+RUNTIME_DIR = Path(__file__).parents[1] / "mace_fmu" / "fmu" / "native" / "c"
 SEEDS, LENGTH = 30, 40  # 90 sequences, 3,600 calls
 
 
@@ -55,3 +58,24 @@ def test_random_call_sequences_follow_the_standards_state_machines(folders):
     assert summary["sequences"] == 3 * SEEDS
     # both sides of the state machine are exercised
     assert summary["ok"] > 0.3 * summary["calls"] and summary["error"] > 0.1 * summary["calls"]
+
+
+def test_random_call_sequences_from_c_are_clean_under_valgrind(folders, tmp_path):
+    """The same kind of sequences from a C host (tests/native_fuzz_host.c: FMI 2 co-simulation and
+    model exchange, the other interface's states, flipped, garbage and truncated serialised states)
+    in memcheck: no invalid access, every heap block freed."""
+    if shutil.which("valgrind") is None:
+        pytest.fail("valgrind is a test dependency (.ci/run installs it)")
+    exe = tmp_path / "native_fuzz_host"
+    subprocess.run(["gcc", "-std=c99", "-O2", "-Wall", "-Werror", f"-I{RUNTIME_DIR}", "-o", str(exe), str(C_HOST),
+                    "-ldl", "-lm"], check=True)
+    md = fmpy.read_model_description(folders["fmi2"])
+    n_states = sum(1 for v in md.modelVariables if v.derivative is not None)
+    max_vr = max(v.valueReference for v in md.modelVariables)
+    done = subprocess.run(["valgrind", "--error-exitcode=9", "--leak-check=full", "--errors-for-leak-kinds=all",
+                           str(exe), folders["fmi2"], md.coSimulation.modelIdentifier, md.guid, str(n_states),
+                           str(max_vr), "20", "40", "23"], capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr[-3000:]
+    assert "ERROR SUMMARY: 0 errors" in done.stderr, done.stderr[-3000:]
+    assert "All heap blocks were freed" in done.stderr, done.stderr[-3000:]
+    assert done.stdout.startswith("sequences 20 calls 800 ")
