@@ -326,11 +326,11 @@ def test_a_non_finite_or_inconsistent_experiment_is_refused(fmus, kwargs):
 # ---- 5. variable communication steps are the exact zero-order hold -----------------------------------
 
 def test_random_variable_steps_equal_the_exact_zoh_to_1e_10(fmus):
-    """canHandleVariableCommunicationStepSize: 400 random steps from 10 us to 20 ms, random held inputs,
+    """canHandleVariableCommunicationStepSize: 120 random steps from 10 us to 20 ms, random held inputs,
     against the ZOH of (A, B, C, D) by scipy.linalg.expm of each step, to 1e-10 of each output's range."""
     sys_ = fmus.model.system
     rng = np.random.default_rng(23)
-    steps = np.exp(rng.uniform(np.log(1e-5), np.log(2e-2), 400))
+    steps = np.exp(rng.uniform(np.log(1e-5), np.log(2e-2), 120))
     u = rng.uniform(-1.0, 1.0, (sys_.ninputs, len(steps)))
     ins, outs = _io(fmus, fmus.dir2)
     fmu = _ready(fmus)
@@ -351,5 +351,5 @@ def test_random_variable_steps_equal_the_exact_zoh_to_1e_10(fmus):
     span = np.ptp(ref, axis=1)
     assert np.all(span > 0)
     error = np.max(np.abs(y - ref) / span[:, None])
-    print(f"largest difference over 400 random steps: {error:.2e} of the output's range")
+    print(f"largest difference over 120 random steps: {error:.2e} of the output's range")
     assert error <= 1e-10
