@@ -243,14 +243,19 @@ MiStatus mi_exit_initialization(MiInstance *inst, const char *fn) {
 MiStatus mi_do_step(MiInstance *inst, double t, double h, const char *fn) {
     const double now = mace_time(inst->model);
     if (!mi_allowed_kind(inst, fn, MACE_CO_SIMULATION, MI_IN(PH_STEP))) return MI_ERROR;
-    /* the step must be > 0: FMI 2.0.x section 4.2.2 (fmi2DoStep: "communicationStepSize ... hc_i > 0").
-       FMI 3.0 section 4.2.4 allows a zero step only in Event Mode for event handling, which this FMU
-       does not offer (hasEventMode false, eventModeUsed refused at instantiation): an error too */
+    /* the step must be > 0: FMI 2.0.x sections 4.2.1-4.2.2 define the communication step
+       hc_i = tc_{i+1} - tc_i between strictly increasing communication points (the standard's own
+       sample FMUs, fmuTemplate.c, refuse communicationStepSize <= 0 with fmi2Error). FMI 3.0
+       section 4.2 gives a zero step a meaning only with event mode (event handling at a
+       communication point), which this FMU does not offer (hasEventMode false, eventModeUsed
+       refused at instantiation): an error there too */
     if (!(isfinite(t) && isfinite(h) && h > 0.0))
         return mi_error(inst, "%s%s: the step from t = %.17g s over %g s needs a finite time and a step > 0", inst->api,
                         fn, t, h);
-    /* the step starts where the last one ended (FMI 2.0.x section 4.2.2 and FMI 3.0 section 4.2.4:
-       currentCommunicationPoint is the time reached by the previous fmiDoStep or the start time) */
+    /* the step starts where the last one ended: currentCommunicationPoint is tc_i, the end of the
+       previous step (or the start time); another point means the importer lost track of the FMU's
+       time (a rollback takes fmiSetFMUState). The standard names no status for this; the issue's
+       decision is fmiError, so that a step never silently starts from the wrong state */
     if (!(fabs(t - now) <= TIME_TOLERANCE * (fabs(now) > 1.0 ? fabs(now) : 1.0)))
         return mi_error(inst, "%s%s: currentCommunicationPoint %.17g s is not the FMU's time %.17g s", inst->api,
                         fn, t, now);
