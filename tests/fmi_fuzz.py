@@ -466,7 +466,8 @@ class Driver:
             args = {"n": rng.choice([0, 0, 1])}
             expected = self.ref.expect(call, args)
             if fmi3:
-                name = ("fmi3Get" if call == "getNoVariables" else "fmi3Set") + rng.choice(["Int32", "Boolean", "UInt8"])
+                prefix = "fmi3Get" if call == "getNoVariables" else "fmi3Set"
+                name = prefix + rng.choice(["Int32", "Boolean", "UInt8"])
                 ctype = {"Int32": ctypes.c_int32, "Boolean": ctypes.c_bool, "UInt8": ctypes.c_uint8}[name[7:]]
                 got = self.status(name, _vrs([0]), args["n"], (ctype * 1)(), 1)
             else:
@@ -648,8 +649,9 @@ def run(folders: dict[str, str], first_seed: int, n_seeds: int, length: int, int
                  "me2": Variables.read(folders["fmi2"], folders["fmi3"]),
                  "cs3": Variables.read(folders["fmi3"], folders["fmi2"])}
     peers = {i: _foreign_blob(i, folders) for i in interfaces}
-    summary = {"sequences": 0, "calls": 0, "ok": 0, "error": 0, "mismatches": [], "seeds": [first_seed,
-               first_seed + n_seeds - 1], "interfaces": interfaces, "length": length, "by_interface": {}, "by_state": {}}
+    summary = {"sequences": 0, "calls": 0, "ok": 0, "error": 0, "mismatches": [],
+               "seeds": [first_seed, first_seed + n_seeds - 1], "interfaces": interfaces, "length": length,
+               "by_interface": {}, "by_state": {}}
     start = clock.perf_counter()
     for seed in range(first_seed, first_seed + n_seeds):
         print(f"seed {seed}", file=sys.stderr, flush=True)
