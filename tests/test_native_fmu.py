@@ -420,17 +420,35 @@ def test_non_finite_input_is_an_error_with_a_logged_reason(fmus):
     fmu.enterInitializationMode()
     fmu.exitInitializationMode()
     name = model.system.input_labels[2]
-    fmu.setReal([_vr(fmus.dir2)[name]], [float("nan")])
+    # refused where it is set (issue 23): not stored, so the outputs never become NaN
     with pytest.raises(FMICallException) as error:
-        fmu.doStep(currentCommunicationPoint=0.0, communicationStepSize=1e-3)
+        fmu.setReal([_vr(fmus.dir2)[name]], [float("nan")])
     assert error.value.status == 3  # fmi2Error
-    assert any("non-finite input" in m and name in m for m in messages.errors()), messages.records
+    assert any("non-finite value" in m and name in m for m in messages.errors()), messages.records
+    fmu.doStep(currentCommunicationPoint=0.0, communicationStepSize=1e-3)
+    assert np.all(np.isfinite(fmu.getReal([_vr(fmus.dir2)[n] for n in model.system.output_labels])))
+    fmu.freeInstance()
+
+
+def test_non_finite_parameters_are_refused_where_they_are_set(fmus):
+    """Not stored (issue 23): the parameter keeps its value and initialisation goes on."""
+    messages = Messages()
+    fmu = _slave(fmus.dir2, messages=messages)
+    fmu.setupExperiment(startTime=0.0)
+    fmu.enterInitializationMode()
+    for name, value in (("damping_mode_20", float("nan")), ("K_a", float("inf"))):
+        before = fmu.getReal([_vr(fmus.dir2)[name]])
+        with pytest.raises(FMICallException) as error:
+            fmu.setReal([_vr(fmus.dir2)[name]], [value])
+        assert error.value.status == 3
+        assert name in messages.errors()[-1] and "non-finite value" in messages.errors()[-1]
+        assert fmu.getReal([_vr(fmus.dir2)[name]]) == before
+    fmu.exitInitializationMode()
+    fmu.doStep(currentCommunicationPoint=0.0, communicationStepSize=1e-3)
     fmu.freeInstance()
 
 
 @pytest.mark.parametrize("name, value, reason", [
-    ("damping_mode_20", float("nan"), "not a finite number"),
-    ("K_a", float("inf"), "not a finite number"),
     ("damping_mode_20", np.nextafter(1.0, 2.0), "outside its declared range"),
     ("damping_mode_20", -0.1, "outside its declared range"),
     ("delay_gimbal_primary_x", -1e-3, "outside its declared range"),

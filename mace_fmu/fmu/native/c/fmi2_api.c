@@ -92,19 +92,14 @@ void fmi2FreeInstance(fmi2Component c) {
 
 fmi2Status fmi2SetupExperiment(fmi2Component c, fmi2Boolean toleranceDefined, fmi2Real tolerance,
                                fmi2Real startTime, fmi2Boolean stopTimeDefined, fmi2Real stopTime) {
-    (void)toleranceDefined;
-    (void)tolerance;
-    (void)stopTimeDefined;
-    (void)stopTime;
     CHECK(c);
-    if (!mi_allowed(INST(c), "SetupExperiment", MI_IN(PH_INSTANTIATED))) return fmi2Error;
-    mace_set_time(INST(c)->model, startTime);
-    return fmi2OK;
+    return (fmi2Status)mi_experiment(INST(c), toleranceDefined != fmi2False, tolerance, startTime,
+                                     stopTimeDefined != fmi2False, stopTime, "SetupExperiment");
 }
 
 fmi2Status fmi2EnterInitializationMode(fmi2Component c) {
     CHECK(c);
-    return (fmi2Status)mi_enter_initialization(INST(c), mace_time(INST(c)->model), "EnterInitializationMode");
+    return (fmi2Status)mi_enter_initialization(INST(c), "EnterInitializationMode");
 }
 
 fmi2Status fmi2ExitInitializationMode(fmi2Component c) {
@@ -136,42 +131,42 @@ fmi2Status fmi2GetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t
     (void)vr;
     (void)value;
     CHECK(c);
-    return (fmi2Status)mi_no_variables(INST(c), nvr, "Integer", "GetInteger");
+    return (fmi2Status)mi_no_variables(INST(c), nvr, "Integer", "GetInteger", 0);
 }
 
 fmi2Status fmi2GetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2Boolean value[]) {
     (void)vr;
     (void)value;
     CHECK(c);
-    return (fmi2Status)mi_no_variables(INST(c), nvr, "Boolean", "GetBoolean");
+    return (fmi2Status)mi_no_variables(INST(c), nvr, "Boolean", "GetBoolean", 0);
 }
 
 fmi2Status fmi2GetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, fmi2String value[]) {
     (void)vr;
     (void)value;
     CHECK(c);
-    return (fmi2Status)mi_no_variables(INST(c), nvr, "String", "GetString");
+    return (fmi2Status)mi_no_variables(INST(c), nvr, "String", "GetString", 0);
 }
 
 fmi2Status fmi2SetInteger(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Integer value[]) {
     (void)vr;
     (void)value;
     CHECK(c);
-    return (fmi2Status)mi_no_variables(INST(c), nvr, "Integer", "SetInteger");
+    return (fmi2Status)mi_no_variables(INST(c), nvr, "Integer", "SetInteger", 1);
 }
 
 fmi2Status fmi2SetBoolean(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2Boolean value[]) {
     (void)vr;
     (void)value;
     CHECK(c);
-    return (fmi2Status)mi_no_variables(INST(c), nvr, "Boolean", "SetBoolean");
+    return (fmi2Status)mi_no_variables(INST(c), nvr, "Boolean", "SetBoolean", 1);
 }
 
 fmi2Status fmi2SetString(fmi2Component c, const fmi2ValueReference vr[], size_t nvr, const fmi2String value[]) {
     (void)vr;
     (void)value;
     CHECK(c);
-    return (fmi2Status)mi_no_variables(INST(c), nvr, "String", "SetString");
+    return (fmi2Status)mi_no_variables(INST(c), nvr, "String", "SetString", 1);
 }
 
 fmi2Status fmi2GetFMUstate(fmi2Component c, fmi2FMUstate *FMUstate) {
@@ -221,12 +216,21 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReferenc
 
 /* ---- co-simulation --------------------------------------------------------------------------- */
 
+/* The masks of the FMI 2.0.x section 4.2.4 state table. This FMU's steps never return fmi2Pending
+ * or fmi2Discard, so of the table's stepComplete, stepInProgress, stepFailed and stepCanceled
+ * states only stepComplete (PH_STEP) is ever reached. */
+#define CS_INPUT_DERIVATIVES (MI_IN(PH_INSTANTIATED) | MI_IN(PH_INITIALIZATION) | MI_IN(PH_STEP))
+#define CS_OUTPUT_DERIVATIVES (MI_IN(PH_STEP) | MI_IN(PH_TERMINATED) | MI_IN(PH_ERROR))
+#define CS_STATUS (MI_IN(PH_STEP) | MI_IN(PH_TERMINATED))
+
 fmi2Status fmi2SetRealInputDerivatives(fmi2Component c, const fmi2ValueReference vr[], size_t nvr,
                                        const fmi2Integer order[], const fmi2Real value[]) {
     (void)vr;
     (void)order;
     (void)value;
     CHECK(c);
+    if (!mi_allowed_kind(INST(c), "SetRealInputDerivatives", MACE_CO_SIMULATION, CS_INPUT_DERIVATIVES))
+        return fmi2Error;
     if (nvr == 0) return fmi2OK;
     return (fmi2Status)mi_error(INST(c), "fmi2SetRealInputDerivatives: inputs are held constant over a step "
                                 "(canInterpolateInputs is false)");
@@ -238,6 +242,8 @@ fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c, const fmi2ValueReferenc
     (void)order;
     (void)value;
     CHECK(c);
+    if (!mi_allowed_kind(INST(c), "GetRealOutputDerivatives", MACE_CO_SIMULATION, CS_OUTPUT_DERIVATIVES))
+        return fmi2Error;
     if (nvr == 0) return fmi2OK;
     return (fmi2Status)mi_error(INST(c), "fmi2GetRealOutputDerivatives: not provided (maxOutputDerivativeOrder 0)");
 }
@@ -251,19 +257,25 @@ fmi2Status fmi2DoStep(fmi2Component c, fmi2Real currentCommunicationPoint, fmi2R
 
 fmi2Status fmi2CancelStep(fmi2Component c) {
     CHECK(c);
-    return (fmi2Status)mi_error(INST(c), "fmi2CancelStep: steps are never asynchronous here");
+    /* only in stepInProgress, which a step that never returns fmi2Pending never leaves behind */
+    if (!mi_allowed_kind(INST(c), "CancelStep", MACE_CO_SIMULATION, 0)) return fmi2Error;
+    return fmi2Error;
 }
 
 fmi2Status fmi2GetStatus(fmi2Component c, const fmi2StatusKind s, fmi2Status *value) {
     (void)s;
     (void)value;
     CHECK(c);
+    if (!mi_allowed_kind(INST(c), "GetStatus", MACE_CO_SIMULATION, CS_STATUS)) return fmi2Error;
+    /* fmi2DoStepStatus and fmi2PendingStatus have a meaning only after fmi2DoStep returned fmi2Pending */
     return (fmi2Status)mi_error(INST(c), "fmi2GetStatus: no step is ever pending");
 }
 
 fmi2Status fmi2GetRealStatus(fmi2Component c, const fmi2StatusKind s, fmi2Real *value) {
     CHECK(c);
+    if (!mi_allowed_kind(INST(c), "GetRealStatus", MACE_CO_SIMULATION, CS_STATUS)) return fmi2Error;
     if (s != fmi2LastSuccessfulTime) return (fmi2Status)mi_error(INST(c), "fmi2GetRealStatus: unknown status kind");
+    if (!value) return (fmi2Status)mi_error(INST(c), "fmi2GetRealStatus: NULL value");
     *value = mace_time(INST(c)->model);
     return fmi2OK;
 }
@@ -272,12 +284,15 @@ fmi2Status fmi2GetIntegerStatus(fmi2Component c, const fmi2StatusKind s, fmi2Int
     (void)s;
     (void)value;
     CHECK(c);
+    if (!mi_allowed_kind(INST(c), "GetIntegerStatus", MACE_CO_SIMULATION, CS_STATUS)) return fmi2Error;
     return (fmi2Status)mi_error(INST(c), "fmi2GetIntegerStatus: no integer status");
 }
 
 fmi2Status fmi2GetBooleanStatus(fmi2Component c, const fmi2StatusKind s, fmi2Boolean *value) {
     CHECK(c);
+    if (!mi_allowed_kind(INST(c), "GetBooleanStatus", MACE_CO_SIMULATION, CS_STATUS)) return fmi2Error;
     if (s != fmi2Terminated) return (fmi2Status)mi_error(INST(c), "fmi2GetBooleanStatus: unknown status kind");
+    if (!value) return (fmi2Status)mi_error(INST(c), "fmi2GetBooleanStatus: NULL value");
     *value = fmi2False;
     return fmi2OK;
 }
@@ -286,6 +301,7 @@ fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2Stri
     (void)s;
     (void)value;
     CHECK(c);
+    if (!mi_allowed_kind(INST(c), "GetStringStatus", MACE_CO_SIMULATION, CS_STATUS)) return fmi2Error;
     return (fmi2Status)mi_error(INST(c), "fmi2GetStringStatus: no string status");
 }
 
@@ -293,14 +309,16 @@ fmi2Status fmi2GetStringStatus(fmi2Component c, const fmi2StatusKind s, fmi2Stri
 
 fmi2Status fmi2EnterEventMode(fmi2Component c) {
     CHECK(c);
-    if (!mi_allowed(INST(c), "EnterEventMode", MI_IN(PH_EVENT) | MI_IN(PH_CONTINUOUS))) return fmi2Error;
+    if (!mi_allowed_kind(INST(c), "EnterEventMode", MACE_MODEL_EXCHANGE, MI_IN(PH_EVENT) | MI_IN(PH_CONTINUOUS)))
+        return fmi2Error;
     INST(c)->phase = PH_EVENT;
     return fmi2OK;
 }
 
 fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *eventInfo) {
     CHECK(c);
-    if (!mi_allowed(INST(c), "NewDiscreteStates", MI_IN(PH_EVENT))) return fmi2Error;
+    if (!mi_allowed_kind(INST(c), "NewDiscreteStates", MACE_MODEL_EXCHANGE, MI_IN(PH_EVENT))) return fmi2Error;
+    if (!eventInfo) return (fmi2Status)mi_error(INST(c), "fmi2NewDiscreteStates: NULL eventInfo");
     eventInfo->newDiscreteStatesNeeded = fmi2False;
     eventInfo->terminateSimulation = fmi2False;
     eventInfo->nominalsOfContinuousStatesChanged = fmi2False;
@@ -312,7 +330,7 @@ fmi2Status fmi2NewDiscreteStates(fmi2Component c, fmi2EventInfo *eventInfo) {
 
 fmi2Status fmi2EnterContinuousTimeMode(fmi2Component c) {
     CHECK(c);
-    if (!mi_allowed(INST(c), "EnterContinuousTimeMode", MI_IN(PH_EVENT))) return fmi2Error;
+    if (!mi_allowed_kind(INST(c), "EnterContinuousTimeMode", MACE_MODEL_EXCHANGE, MI_IN(PH_EVENT))) return fmi2Error;
     INST(c)->phase = PH_CONTINUOUS;
     return fmi2OK;
 }
@@ -321,7 +339,10 @@ fmi2Status fmi2CompletedIntegratorStep(fmi2Component c, fmi2Boolean noSetFMUStat
                                        fmi2Boolean *enterEventMode, fmi2Boolean *terminateSimulation) {
     (void)noSetFMUStatePriorToCurrentPoint;
     CHECK(c);
-    if (!mi_allowed(INST(c), "CompletedIntegratorStep", MI_IN(PH_CONTINUOUS))) return fmi2Error;
+    if (!mi_allowed_kind(INST(c), "CompletedIntegratorStep", MACE_MODEL_EXCHANGE, MI_IN(PH_CONTINUOUS)))
+        return fmi2Error;
+    if (!enterEventMode || !terminateSimulation)
+        return (fmi2Status)mi_error(INST(c), "fmi2CompletedIntegratorStep: NULL enterEventMode or terminateSimulation");
     *enterEventMode = fmi2False;
     *terminateSimulation = fmi2False;
     return fmi2OK;
@@ -345,6 +366,10 @@ fmi2Status fmi2GetDerivatives(fmi2Component c, fmi2Real derivatives[], size_t nx
 fmi2Status fmi2GetEventIndicators(fmi2Component c, fmi2Real eventIndicators[], size_t ni) {
     (void)eventIndicators;
     CHECK(c);
+    if (!mi_allowed_kind(INST(c), "GetEventIndicators", MACE_MODEL_EXCHANGE,
+                         MI_IN(PH_INITIALIZATION) | MI_IN(PH_EVENT) | MI_IN(PH_CONTINUOUS) | MI_IN(PH_TERMINATED) |
+                             MI_IN(PH_ERROR)))
+        return fmi2Error;
     if (ni == 0) return fmi2OK;
     return (fmi2Status)mi_error(INST(c), "fmi2GetEventIndicators: this model has no event indicators");
 }

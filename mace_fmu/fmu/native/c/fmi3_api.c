@@ -116,12 +116,11 @@ void fmi3FreeInstance(fmi3Instance c) {
 
 fmi3Status fmi3EnterInitializationMode(fmi3Instance c, fmi3Boolean toleranceDefined, fmi3Float64 tolerance,
                                        fmi3Float64 startTime, fmi3Boolean stopTimeDefined, fmi3Float64 stopTime) {
-    (void)toleranceDefined;
-    (void)tolerance;
-    (void)stopTimeDefined;
-    (void)stopTime;
     CHECK(c);
-    return (fmi3Status)mi_enter_initialization(INST(c), startTime, "EnterInitializationMode");
+    if (mi_experiment(INST(c), toleranceDefined != fmi3False, tolerance, startTime, stopTimeDefined != fmi3False,
+                      stopTime, "EnterInitializationMode") != MI_OK)
+        return fmi3Error;
+    return (fmi3Status)mi_enter_initialization(INST(c), "EnterInitializationMode");
 }
 
 fmi3Status fmi3ExitInitializationMode(fmi3Instance c) {
@@ -167,7 +166,7 @@ fmi3Status fmi3SetFloat64(fmi3Instance c, const fmi3ValueReference vr[], size_t 
         (void)values;                                                                                              \
         (void)nValues;                                                                                             \
         CHECK(c);                                                                                                  \
-        return (fmi3Status)mi_no_variables(INST(c), nvr, #Type, "Get" #Type);                                      \
+        return (fmi3Status)mi_no_variables(INST(c), nvr, #Type, "Get" #Type, 0);                                      \
     }                                                                                                              \
     fmi3Status fmi3Set##Type(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr, const ctype values[],      \
                              size_t nValues) {                                                                     \
@@ -175,7 +174,7 @@ fmi3Status fmi3SetFloat64(fmi3Instance c, const fmi3ValueReference vr[], size_t 
         (void)values;                                                                                              \
         (void)nValues;                                                                                             \
         CHECK(c);                                                                                                  \
-        return (fmi3Status)mi_no_variables(INST(c), nvr, #Type, "Set" #Type);                                      \
+        return (fmi3Status)mi_no_variables(INST(c), nvr, #Type, "Set" #Type, 1);                                      \
     }
 
 NO_VARIABLES(Float32, fmi3Float32)
@@ -197,7 +196,7 @@ fmi3Status fmi3GetBinary(fmi3Instance c, const fmi3ValueReference vr[], size_t n
     (void)values;
     (void)nValues;
     CHECK(c);
-    return (fmi3Status)mi_no_variables(INST(c), nvr, "Binary", "GetBinary");
+    return (fmi3Status)mi_no_variables(INST(c), nvr, "Binary", "GetBinary", 0);
 }
 
 fmi3Status fmi3SetBinary(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr, const size_t valueSizes[],
@@ -207,21 +206,21 @@ fmi3Status fmi3SetBinary(fmi3Instance c, const fmi3ValueReference vr[], size_t n
     (void)values;
     (void)nValues;
     CHECK(c);
-    return (fmi3Status)mi_no_variables(INST(c), nvr, "Binary", "SetBinary");
+    return (fmi3Status)mi_no_variables(INST(c), nvr, "Binary", "SetBinary", 1);
 }
 
 fmi3Status fmi3GetClock(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr, fmi3Clock values[]) {
     (void)vr;
     (void)values;
     CHECK(c);
-    return (fmi3Status)mi_no_variables(INST(c), nvr, "Clock", "GetClock");
+    return (fmi3Status)mi_no_variables(INST(c), nvr, "Clock", "GetClock", 0);
 }
 
 fmi3Status fmi3SetClock(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr, const fmi3Clock values[]) {
     (void)vr;
     (void)values;
     CHECK(c);
-    return (fmi3Status)mi_no_variables(INST(c), nvr, "Clock", "SetClock");
+    return (fmi3Status)mi_no_variables(INST(c), nvr, "Clock", "SetClock", 1);
 }
 
 static fmi3Status not_provided(fmi3Instance c, const char *what) {
@@ -317,7 +316,7 @@ fmi3Status fmi3GetIntervalDecimal(fmi3Instance c, const fmi3ValueReference vr[],
     (void)intervals;
     (void)qualifiers;
     CHECK(c);
-    return (fmi3Status)mi_no_variables(INST(c), nvr, "Clock", "GetIntervalDecimal");
+    return (fmi3Status)mi_no_variables(INST(c), nvr, "Clock", "GetIntervalDecimal", 0);
 }
 
 fmi3Status fmi3GetIntervalFraction(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr, fmi3UInt64 counters[],
@@ -327,14 +326,14 @@ fmi3Status fmi3GetIntervalFraction(fmi3Instance c, const fmi3ValueReference vr[]
     (void)resolutions;
     (void)qualifiers;
     CHECK(c);
-    return (fmi3Status)mi_no_variables(INST(c), nvr, "Clock", "GetIntervalFraction");
+    return (fmi3Status)mi_no_variables(INST(c), nvr, "Clock", "GetIntervalFraction", 0);
 }
 
 fmi3Status fmi3GetShiftDecimal(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr, fmi3Float64 shifts[]) {
     (void)vr;
     (void)shifts;
     CHECK(c);
-    return (fmi3Status)mi_no_variables(INST(c), nvr, "Clock", "GetShiftDecimal");
+    return (fmi3Status)mi_no_variables(INST(c), nvr, "Clock", "GetShiftDecimal", 0);
 }
 
 fmi3Status fmi3GetShiftFraction(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr, fmi3UInt64 counters[],
@@ -343,7 +342,7 @@ fmi3Status fmi3GetShiftFraction(fmi3Instance c, const fmi3ValueReference vr[], s
     (void)counters;
     (void)resolutions;
     CHECK(c);
-    return (fmi3Status)mi_no_variables(INST(c), nvr, "Clock", "GetShiftFraction");
+    return (fmi3Status)mi_no_variables(INST(c), nvr, "Clock", "GetShiftFraction", 0);
 }
 
 fmi3Status fmi3SetIntervalDecimal(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr,
@@ -351,7 +350,7 @@ fmi3Status fmi3SetIntervalDecimal(fmi3Instance c, const fmi3ValueReference vr[],
     (void)vr;
     (void)intervals;
     CHECK(c);
-    return (fmi3Status)mi_no_variables(INST(c), nvr, "Clock", "SetIntervalDecimal");
+    return (fmi3Status)mi_no_variables(INST(c), nvr, "Clock", "SetIntervalDecimal", 1);
 }
 
 fmi3Status fmi3SetIntervalFraction(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr,
@@ -360,14 +359,14 @@ fmi3Status fmi3SetIntervalFraction(fmi3Instance c, const fmi3ValueReference vr[]
     (void)counters;
     (void)resolutions;
     CHECK(c);
-    return (fmi3Status)mi_no_variables(INST(c), nvr, "Clock", "SetIntervalFraction");
+    return (fmi3Status)mi_no_variables(INST(c), nvr, "Clock", "SetIntervalFraction", 1);
 }
 
 fmi3Status fmi3SetShiftDecimal(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr, const fmi3Float64 shifts[]) {
     (void)vr;
     (void)shifts;
     CHECK(c);
-    return (fmi3Status)mi_no_variables(INST(c), nvr, "Clock", "SetShiftDecimal");
+    return (fmi3Status)mi_no_variables(INST(c), nvr, "Clock", "SetShiftDecimal", 1);
 }
 
 fmi3Status fmi3SetShiftFraction(fmi3Instance c, const fmi3ValueReference vr[], size_t nvr, const fmi3UInt64 counters[],
@@ -376,7 +375,7 @@ fmi3Status fmi3SetShiftFraction(fmi3Instance c, const fmi3ValueReference vr[], s
     (void)counters;
     (void)resolutions;
     CHECK(c);
-    return (fmi3Status)mi_no_variables(INST(c), nvr, "Clock", "SetShiftFraction");
+    return (fmi3Status)mi_no_variables(INST(c), nvr, "Clock", "SetShiftFraction", 1);
 }
 
 fmi3Status fmi3EvaluateDiscreteStates(fmi3Instance c) { return not_provided(c, "EvaluateDiscreteStates"); }
@@ -460,6 +459,8 @@ fmi3Status fmi3GetOutputDerivatives(fmi3Instance c, const fmi3ValueReference vr[
     (void)values;
     (void)nValues;
     CHECK(c);
+    if (!mi_allowed(INST(c), "GetOutputDerivatives", MI_IN(PH_STEP) | MI_IN(PH_TERMINATED) | MI_IN(PH_ERROR)))
+        return fmi3Error;
     if (nvr == 0) return fmi3OK;
     return not_provided(c, "GetOutputDerivatives (maxOutputDerivativeOrder 0)");
 }

@@ -1,9 +1,12 @@
 /* An FMU instance: the model core, the FMI state machine and the host's logger, shared by the
  * FMI 2 and FMI 3 wrappers (fmi2_api.c, fmi3_api.c), which only translate types and names.
  *
- * Calls out of order (a step before initialisation, a fixed parameter set after it, an unknown
- * value reference) return an error with a logged reason and leave the instance as it was; a
- * failure of the model (invalid parameters, a non-finite input) logs the reason and puts the
+ * Calls out of order (outside the states the FMI 2.0.x / 3.0 state tables allow them in, or of the
+ * other interface) and invalid arguments (a value reference the FMU's own model description does
+ * not declare, a non-finite input, a step that does not start at the FMU's time or is not > 0, an
+ * FMU state of another FMU, interface or FMI version, or a damaged one) return an error with a
+ * logged reason and leave the instance as it was; a
+ * failure of the model (invalid parameters) logs the reason and puts the
  * instance into the error state, from which only getting values, restoring an FMU state,
  * reset and freeing are possible. Error messages are logged whether debug logging is on or not.
  */
@@ -55,13 +58,18 @@ MiStatus mi_error(MiInstance *inst, const char *fmt, ...);
 void mi_debug(MiInstance *inst, const char *fmt, ...);
 /* 1 if `function` may be called now (mask of MI_IN(phase)), else logs why not and returns 0. */
 int mi_allowed(MiInstance *inst, const char *function, unsigned mask);
+/* The same for a function of one interface only (co-simulation or model exchange). */
+int mi_allowed_kind(MiInstance *inst, const char *function, MaceKind kind, unsigned mask);
 
 MiStatus mi_set_reals(MiInstance *inst, const unsigned int *vr, size_t n, const double *values, const char *fn);
 MiStatus mi_get_reals(MiInstance *inst, const unsigned int *vr, size_t n, double *values, const char *fn);
 /* For the variable types the model has none of. */
-MiStatus mi_no_variables(MiInstance *inst, size_t n, const char *type, const char *fn);
+MiStatus mi_no_variables(MiInstance *inst, size_t n, const char *type, const char *fn, int set);
 
-MiStatus mi_enter_initialization(MiInstance *inst, double start_time, const char *fn);
+/* The experiment (FMI 2 SetupExperiment, FMI 3 EnterInitializationMode's arguments), checked. */
+MiStatus mi_experiment(MiInstance *inst, int tolerance_defined, double tolerance, double start_time,
+                       int stop_defined, double stop_time, const char *fn);
+MiStatus mi_enter_initialization(MiInstance *inst, const char *fn);
 MiStatus mi_exit_initialization(MiInstance *inst, const char *fn);
 MiStatus mi_do_step(MiInstance *inst, double t, double h, const char *fn);
 MiStatus mi_terminate(MiInstance *inst, const char *fn);

@@ -813,10 +813,20 @@ void mace_state_save(MaceModel *m, int phase, unsigned char *buffer) {
     put(buffer, &pos, m->built ? model_states(m) : m->s, 8 * m->n);
 }
 
-int mace_state_load(MaceModel *m, const unsigned char *buffer, size_t size, int *phase, char *err) {
+static int all_finite(const unsigned char *bytes, size_t n) {
+    size_t k;
+    for (k = 0; k < n; k++) {
+        double v;
+        memcpy(&v, bytes + 8 * k, 8);
+        if (!isfinite(v)) return 0;
+    }
+    return 1;
+}
+
+int mace_state_check(MaceModel *m, const unsigned char *buffer, size_t size, int *phase, int *usable, char *err) {
     uint64_t header[STATE_HEADER - 1];
-    size_t pos = 8 + sizeof(header);
-    const unsigned char *vec;
+    const size_t pos = 8 + sizeof(header);
+    double *saved;
     if (size != mace_state_size(m) || memcmp(buffer, STATE_MAGIC, 8) != 0) {
         snprintf(err, MACE_ERR_LEN, "not an FMU state of this model (%lu bytes)", (unsigned long)size);
         return -1;
@@ -826,6 +836,42 @@ int mace_state_load(MaceModel *m, const unsigned char *buffer, size_t size, int 
         snprintf(err, MACE_ERR_LEN, "not an FMU state of this model (other dimensions)");
         return -1;
     }
+    if (header[0] > 255 || header[1] > 1 || header[2] > 1) {
+        snprintf(err, MACE_ERR_LEN, "a damaged FMU state (header flags out of range)");
+        return -1;
+    }
+    /* time, inputs and states: the setters refuse non-finite values, so a state with one is damaged
+       (parameters may be anything before initialisation: the build refuses them) */
+    if (!all_finite(buffer + pos, 1) || !all_finite(buffer + pos + 8 * (1 + m->n_par), m->n_in + 2 * m->n)) {
+        snprintf(err, MACE_ERR_LEN, "a damaged FMU state (a non-finite time, input or state)");
+        return -1;
+    }
+    *phase = (int)header[0];
+    /* usable: built and with parameters the build accepts (checked on a copy, nothing applied) */
+    *usable = 0;
+    if (header[1]) {
+        saved = m->params;
+        m->params = (double *)m->al.calloc(m->n_par + 1, sizeof(double));
+        if (!m->params) {
+            m->params = saved;
+            snprintf(err, MACE_ERR_LEN, "out of memory");
+            return -1;
+        }
+        memcpy(m->params, buffer + pos + 8, 8 * m->n_par);
+        *usable = check_parameters(m, err) == 0;
+        m->al.free(m->params);
+        m->params = saved;
+    }
+    return 0;
+}
+
+int mace_state_load(MaceModel *m, const unsigned char *buffer, size_t size, int *phase, char *err) {
+    uint64_t header[STATE_HEADER - 1];
+    size_t pos = 8 + sizeof(header);
+    const unsigned char *vec;
+    int usable;
+    if (mace_state_check(m, buffer, size, phase, &usable, err) != 0) return -1;
+    memcpy(header, buffer + 8, sizeof(header));
     memcpy(&m->time, buffer + pos, 8);
     pos += 8;
     memcpy(m->params, buffer + pos, 8 * m->n_par);
@@ -835,7 +881,7 @@ int mace_state_load(MaceModel *m, const unsigned char *buffer, size_t size, int 
     pos += 8 * m->n_in;
     vec = buffer + pos;
     m->y_valid = m->x_valid = 0;
-    if (header[1]) {
+    if (usable) {
         if (mace_build(m, err) != 0) return -1;
         if ((int)header[2] == coordinates(m)) {
             memcpy(m->s, vec, 8 * m->n);
@@ -850,6 +896,5 @@ int mace_state_load(MaceModel *m, const unsigned char *buffer, size_t size, int 
     } else {
         memset(m->s, 0, 8 * m->n);
     }
-    *phase = (int)header[0];
     return 0;
 }

@@ -77,6 +77,11 @@ void mace_get_nominals(MaceModel *m, double *nominal);
  * inputs and the state vector (in stepping and in model coordinates). */
 size_t mace_state_size(const MaceModel *m);
 void mace_state_save(MaceModel *m, int phase, unsigned char *buffer);
+/* 0 if buffer is an FMU state of this model (size, magic, dimensions, finite time, inputs and
+ * states), with nothing applied; *phase: the caller's phase stored in it; *usable: 1 if it was saved
+ * from a built model and its parameters pass the build's checks (the states in it then apply). */
+int mace_state_check(MaceModel *m, const unsigned char *buffer, size_t size, int *phase, int *usable, char *err);
+/* Applies a state mace_state_check accepts; -1 (err) if it is refused or the build fails. */
 int mace_state_load(MaceModel *m, const unsigned char *buffer, size_t size, int *phase, char *err);
 
 #endif

@@ -259,23 +259,37 @@ void mace_state_save(MaceModel *m, int phase, unsigned char *buffer) {
     memcpy(buffer + 40 + 8 * m->n_in, m->x, 8 * m->n_x);
 }
 
-int mace_state_load(MaceModel *m, const unsigned char *buffer, size_t size, int *phase, char *err) {
+int mace_state_check(MaceModel *m, const unsigned char *buffer, size_t size, int *phase, int *usable, char *err) {
     uint64_t header[3];
-    double time;
+    double v;
+    size_t k;
     if (size != mace_state_size(m) || memcmp(buffer, STATE_MAGIC, 8) != 0) {
         snprintf(err, MACE_ERR_LEN, "not an FMU state of this controller (%lu bytes)", (unsigned long)size);
         return -1;
     }
     memcpy(header, buffer + 8, sizeof(header));
-    memcpy(&time, buffer + 32, 8);
-    if (header[1] != m->n_in || header[2] != m->n_x || header[0] >= 16 || !isfinite(time)) {
+    if (header[1] != m->n_in || header[2] != m->n_x || header[0] > 255) {
         snprintf(err, MACE_ERR_LEN, "not an FMU state of this controller (other dimensions or a damaged header)");
         return -1;
     }
-    m->time = time;
+    for (k = 0; k < 1 + m->n_in + m->n_x; k++) { /* time, inputs, states: the setters refuse non-finite values */
+        memcpy(&v, buffer + 32 + 8 * k, 8);
+        if (!isfinite(v)) {
+            snprintf(err, MACE_ERR_LEN, "a damaged FMU state (a non-finite time, input or state)");
+            return -1;
+        }
+    }
+    *phase = (int)header[0];
+    *usable = 1; /* nothing to build */
+    return 0;
+}
+
+int mace_state_load(MaceModel *m, const unsigned char *buffer, size_t size, int *phase, char *err) {
+    int usable;
+    if (mace_state_check(m, buffer, size, phase, &usable, err) != 0) return -1;
+    memcpy(&m->time, buffer + 32, 8);
     memcpy(m->u, buffer + 40, 8 * m->n_in);
     memcpy(m->x, buffer + 40 + 8 * m->n_in, 8 * m->n_x);
     m->y_valid = 0;
-    *phase = (int)header[0];
     return 0;
 }
