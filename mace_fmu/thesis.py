@@ -132,7 +132,8 @@ def _pair_poles(rows: list[tuple[str, str, float, float | None, bool]], poles) -
     from mace_fmu.updating.pairing import pair_poles
 
     out = []
-    for (label, _, hz, zeta, heavy), i in zip(rows, pair_poles([(r[1], r[2]) for r in rows], poles)):
+    for (label, _, hz, zeta, heavy), i in zip(rows, pair_poles([(r[1], r[2]) for r in rows], poles,
+                                                                 damping=[r[3] for r in rows])):
         if i is None:
             out.append(PoleRow(label, hz, zeta, heavy, None, None, "(none)"))
         else:
