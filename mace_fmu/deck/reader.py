@@ -198,22 +198,29 @@ def _offt(f: Fields, v: Any, g0: int | None, name: str) -> bool:
     return text[0] == "B" and v is not None
 
 
-def _cbar(f: Fields, src: Source) -> CBar:
+def _two_node_beam(f: Fields, offt_name: str) -> dict:
+    """The fields CBAR and CBEAM share (EID PID GA GB orientation OFFT; PA PB W1A ... W3B), without pin
+    flags or offsets (mace-fmu models neither), as keyword arguments of their records."""
     eid = f.ident(1, "EID")
     pid = f.integer(2, "PID", eid, minimum=1)
     ga, gb = f.integer(3, "GA", minimum=1), f.integer(4, "GB", minimum=1)
     if ga == gb:
         raise f.error(f"GA and GB are both grid {ga} (expected two different grids)", 3, "GA, GB", 4)
     v, g0 = _orientation(f, ga, gb)
-    basic = _offt(f, v, g0, "OFFT")
+    basic = _offt(f, v, g0, offt_name)
     for d, name in ((9, "PA"), (10, "PB")):
         if f.text(d) not in ("", "0"):
             raise f.error(f"pin flags are not supported by mace-fmu (got {f.text(d)!r}, expected blank or 0)", d, name)
     for d, name in enumerate(("W1A", "W2A", "W3A", "W1B", "W2B", "W3B"), start=11):
         if f.real(d, name, 0.0) != 0.0:
             raise f.error(f"offsets are not supported by mace-fmu (got {f.text(d)!r}, expected blank or 0.0)", d, name)
+    return dict(id=eid, pid=pid, ga=ga, gb=gb, v=v, g0=g0, orientation_basic=basic)
+
+
+def _cbar(f: Fields, src: Source) -> CBar:
+    fields = _two_node_beam(f, "OFFT")
     f.end(16)
-    return CBar(id=eid, pid=pid, ga=ga, gb=gb, v=v, g0=g0, source=src, orientation_basic=basic)
+    return CBar(**fields, source=src)
 
 
 def _pbar(f: Fields, src: Source) -> PBar:
@@ -537,30 +544,18 @@ def _pbeam(f: Fields, src: Source) -> PBeam:
             raise f.error(f"{name} is not supported by mace-fmu (expected blank or 0.0)", k, name)
     f.end(d + 15)
     if i12 != 0.0 and not i1 * i2 > i12 * i12:
-        raise f.error(f"I1 I2 <= I12^2 (expected I1 I2 > I12^2)", 6, "I12")
+        raise f.error("I1 I2 <= I12^2 (expected I1 I2 > I12^2)", 6, "I12")
     return PBeam(id=pid, mid=mid, area=area, i1=i1, i2=i2, i12=i12, j=j, nsm=nsm, k1=k1, k2=k2, source=src)
 
 
 def _cbeam(f: Fields, src: Source) -> CBeam:
     """CBEAM (QRG): EID PID GA GB X1 X2 X3 (or G0) OFFT/BIT; PA PB W1A ... W3B; SA SB. Without offsets, pin
     flags or scalar points (mace-fmu models none of them)."""
-    eid = f.ident(1, "EID")
-    pid = f.integer(2, "PID", eid, minimum=1)
-    ga, gb = f.integer(3, "GA", minimum=1), f.integer(4, "GB", minimum=1)
-    if ga == gb:
-        raise f.error(f"GA and GB are both grid {ga} (expected two different grids)", 3, "GA, GB", 4)
-    v, g0 = _orientation(f, ga, gb)
-    basic = _offt(f, v, g0, "OFFT/BIT")
-    for d, name in ((9, "PA"), (10, "PB")):
-        if f.text(d) not in ("", "0"):
-            raise f.error(f"pin flags are not supported by mace-fmu (got {f.text(d)!r}, expected blank or 0)", d, name)
-    for d, name in enumerate(("W1A", "W2A", "W3A", "W1B", "W2B", "W3B"), start=11):
-        if f.real(d, name, 0.0) != 0.0:
-            raise f.error(f"offsets are not supported by mace-fmu (got {f.text(d)!r}, expected blank or 0.0)", d, name)
+    fields = _two_node_beam(f, "OFFT/BIT")
     for d, name in ((17, "SA"), (18, "SB")):
         f.blank(d, name)
     f.end(18)
-    return CBeam(id=eid, pid=pid, ga=ga, gb=gb, v=v, g0=g0, source=src, orientation_basic=basic)
+    return CBeam(**fields, source=src)
 
 
 def _rod_ends(f: Fields, first: int) -> tuple[int, int]:
