@@ -48,11 +48,11 @@ from __future__ import annotations
 from .blocks import PD, PI, Block, Gain, Integrator, StateSpace, Sum
 from .connectors import Connector
 from .errors import ModelError
-from .filters import BesselFilter, PadeDelay
+from .filters import BesselFilter, LowPassFilter, PadeDelay
 from .modelica import modelica_identifier
 from .system import System
 
 __all__ = [
-    "BesselFilter", "Block", "Connector", "Gain", "Integrator", "ModelError", "PadeDelay", "PD",
+    "BesselFilter", "Block", "Connector", "Gain", "Integrator", "LowPassFilter", "ModelError", "PadeDelay", "PD",
     "PI", "StateSpace", "Sum", "System", "modelica_identifier",
 ]

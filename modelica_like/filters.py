@@ -70,15 +70,25 @@ def pade_realization(delay: float, order: int) -> Matrices:
     return A * (1.0 / scale)[:, None] * scale[None, :], B / scale[:, None], C1 * scale[None, :], D1
 
 
-def bessel_realization(order: int, cutoff_hz: float) -> Matrices:
-    """Cascade realisation of ``scipy.signal.bessel(..., norm="mag")``, unit DC gain per section.
+#: analog low-pass families: the scipy.signal design of each, |H| = -3.01 dB at the cutoff
+LOWPASS_KINDS = ("bessel", "butterworth")
+
+
+def lowpass_realization(kind: str, order: int, cutoff_hz: float) -> Matrices:
+    """Cascade realisation of an analog low-pass, ``scipy.signal.bessel(..., norm="mag")`` or
+    ``scipy.signal.butter``, unit DC gain per section.
 
     Each complex pole pair ``wn, zeta`` is a section with states (y, y'/wn); each real pole
     ``p`` a first-order lag ``-p/(s-p)``. Sections run from the most to the least damped.
     """
-    zeros, poles, k = scipy.signal.bessel(order, 2 * np.pi * cutoff_hz, btype="low",
-                                          analog=True, norm="mag", output="zpk")
-    assert len(zeros) == 0, "an analog Bessel low-pass has no finite zeros"
+    wc = 2 * np.pi * cutoff_hz
+    if kind == "bessel":
+        zeros, poles, k = scipy.signal.bessel(order, wc, btype="low", analog=True, norm="mag", output="zpk")
+    elif kind == "butterworth":
+        zeros, poles, k = scipy.signal.butter(order, wc, btype="low", analog=True, output="zpk")
+    else:
+        raise ValueError(f"low-pass kind must be one of {', '.join(LOWPASS_KINDS)}, got {kind!r}")
+    assert len(zeros) == 0, "an analog all-pole low-pass has no finite zeros"
     sections: list[Matrices] = []
     for p in sorted(poles[poles.imag >= 0], key=lambda p: -abs(p.real) / abs(p)):
         if abs(p.imag) <= 1e-12 * abs(p):
@@ -93,6 +103,11 @@ def bessel_realization(order: int, cutoff_hz: float) -> Matrices:
         A, B, C, D = _series((A, B, C, D), section)
     # The sections have unit DC gain; scipy's k is prod|p| up to rounding: keep its exact value.
     return A, B, C * (np.real(k) / np.prod(np.abs(poles))), D
+
+
+def bessel_realization(order: int, cutoff_hz: float) -> Matrices:
+    """:func:`lowpass_realization` of the Bessel design."""
+    return lowpass_realization("bessel", order, cutoff_hz)
 
 
 class PadeDelay(Block):
@@ -133,19 +148,24 @@ class PadeDelay(Block):
         return self._order
 
 
-class BesselFilter(Block):
-    """Analog Bessel low-pass of ``order`` poles with |H| = -3.01 dB at ``cutoff_hz``.
+class LowPassFilter(Block):
+    """Analog low-pass (``family`` "bessel" or "butterworth") of ``order`` poles with |H| = -3.01 dB at
+    ``cutoff_hz``.
 
     The design is ``scipy.signal.bessel(order, 2*pi*cutoff_hz, btype="low", analog=True,
-    norm="mag")``; ports ``u`` and ``y`` (``size`` independent copies, element names
-    ``signals``); ``order`` states per copy, strictly proper (D = 0).
+    norm="mag")`` or ``scipy.signal.butter(order, 2*pi*cutoff_hz, analog=True)``; ports ``u`` and
+    ``y`` (``size`` independent copies, element names ``signals``); ``order`` states per copy,
+    strictly proper (D = 0).
     """
 
-    kind = "BesselFilter"
+    kind = "LowPassFilter"
 
     def __init__(self, name: str, order: int, cutoff_hz: float, size: int = 1,
-                 signals: Sequence[str] | None = None) -> None:
-        owner = owner_label("BesselFilter", name)
+                 signals: Sequence[str] | None = None, *, family: str = "bessel") -> None:
+        owner = owner_label(self.kind, name)
+        if family not in LOWPASS_KINDS:
+            raise ModelError(f"{owner}: family must be one of {', '.join(LOWPASS_KINDS)}, got {family!r}")
+        self._family = family
         size, signals = channels(owner, size, signals)
         order = _check_order(owner, order)
         cutoff_hz = _number(owner, "cutoff_hz", cutoff_hz, "a finite frequency in Hz > 0",
@@ -153,8 +173,13 @@ class BesselFilter(Block):
         self._order, self._cutoff_hz = order, cutoff_hz
         u = Connector.make("u", "input", size, signals, owner=owner)
         y = Connector.make("y", "output", size, signals, owner=owner)
-        super().__init__(name, [u], [y], *_copies(bessel_realization(order, cutoff_hz), size),
+        super().__init__(name, [u], [y], *_copies(lowpass_realization(family, order, cutoff_hz), size),
                          channel_states(size, order))
+
+    @property
+    def family(self) -> str:
+        """"bessel" or "butterworth"."""
+        return self._family
 
     @property
     def order(self) -> int:
@@ -165,3 +190,13 @@ class BesselFilter(Block):
     def cutoff_hz(self) -> float:
         """The -3.01 dB frequency in Hz."""
         return self._cutoff_hz
+
+
+class BesselFilter(LowPassFilter):
+    """Analog Bessel low-pass: :class:`LowPassFilter` of the Bessel family."""
+
+    kind = "BesselFilter"
+
+    def __init__(self, name: str, order: int, cutoff_hz: float, size: int = 1,
+                 signals: Sequence[str] | None = None) -> None:
+        super().__init__(name, order, cutoff_hz, size, signals, family="bessel")

@@ -10,6 +10,7 @@ frequencies of a cantilever with a tip mass and against the same beam renumbered
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -315,3 +316,32 @@ def test_param_wtmass_scales_every_mass(tmp_path):
     # the decks print 11 significant digits: 1e-9 is their rounding, not the method's
     assert weighted.mass_properties.mass_kg == pytest.approx(plain.mass_properties.mass_kg, rel=1e-9)
     np.testing.assert_allclose(weighted.modes.frequencies_hz, plain.modes.frequencies_hz, rtol=1e-9)
+
+
+def test_a_butterworth_filter_from_the_structure_file_filters_exactly_its_sensors(tmp_path):
+    """[electronics] filter_kind = "butterworth": the gyro channels of the spacecraft equal the unfiltered
+    model's times scipy's own Butterworth response (1e-9), the encoder channel is untouched, and the
+    filter's four poles are in the model, labelled, at the cutoff."""
+    import scipy.signal
+
+    from mace_fmu.iomodel.poles import closed_loop_poles
+    from mace_fmu.iomodel.volts import volts_model
+
+    here = Path(__file__).resolve().parent.parent / "examples" / "own_structure"
+    deck, plain = here / "spacecraft.bdf", here / "spacecraft.toml"
+    filtered = tmp_path / "spacecraft_filtered.toml"
+    filtered.write_text(plain.read_text() + '\n[electronics]\nfilter_kind = "butterworth"\nfilter_order = 4\n'
+                        'filter_cutoff_hz = 30.0\nanalog_sensors = ["gyro_*"]\n')
+    f = np.geomspace(0.5, 80.0, 60)
+    g0 = volts_model("0g", deck=str(deck), structure_file=plain).frequency_response(f)
+    model = volts_model("0g", deck=str(deck), structure_file=filtered)
+    g1 = model.frequency_response(f)
+    b, a = scipy.signal.butter(4, 2 * np.pi * 30.0, analog=True)
+    h = scipy.signal.freqs(b, a, worN=2 * np.pi * f)[1]
+    outputs = list(model.system.output_labels)
+    for o, name in enumerate(outputs):
+        expected = g0[:, o, :] * (h[:, None] if name.startswith("gyro_") else 1.0)
+        np.testing.assert_allclose(g1[:, o, :], expected, rtol=1e-9, atol=1e-12 * np.abs(g0).max())
+    filter_poles = [p for p in closed_loop_poles(model) if p.label == "Butterworth filter"]
+    assert len(filter_poles) == 2 * 2  # two gyros, two complex pairs each (Im >= 0)
+    assert all(abs(abs(p.eigenvalue) / (2 * np.pi * 30.0) - 1.0) < 1e-9 for p in filter_poles)

@@ -15,8 +15,8 @@ import numpy as np
 
 from mace_fmu.structure import StructureFile, bundled_structure_path, load_structure_file
 from mace_fmu.errors import MaceError
-from mace_fmu.fe.dofs import cd_component_vector
-from mace_fmu.fe.dofs import DofMap
+from mace_fmu.fe.dofs import DofMap, cd_component_vector
+from modelica_like.filters import LOWPASS_KINDS, lowpass_realization
 
 SensorKind = Literal["displacement", "rate"]
 Dof = tuple[int, int, float]  #: (grid, component 1-6 in CD, weight)
@@ -48,12 +48,13 @@ class Sensor:
 class Electronics:
     """Filters and delays between the structure and the control computer (thesis 3.5, 4.5)."""
 
-    bessel_order: int
-    bessel_cutoff_hz: float
-    bessel_equivalent_delay_s: float  #: the Pade stand-in for a Bessel filter (Fig. 3.18)
-    analog_sensors: tuple[str, ...]  #: sensor names behind a Bessel filter
+    filter_order: int  #: poles of the analog anti-aliasing low-pass on each analog sensor (0: none)
+    filter_cutoff_hz: float  #: its -3.01 dB frequency [Hz]
+    filter_equivalent_delay_s: float  #: the Pade stand-in for the filter (Fig. 3.18 for MACE's Bessel) [s]
+    analog_sensors: tuple[str, ...]  #: sensor names behind the filter
     sensor_delays_s: Mapping[str, float]  #: extra delays (Table 4.6)
     actuator_delays_s: Mapping[str, float]  #: computational delays (Table 4.5)
+    filter_kind: str = "bessel"  #: the low-pass family: "bessel" (MACE's) or "butterworth"
 
 
 @dataclass(frozen=True)
@@ -155,6 +156,29 @@ def _sensor_unit(kind: str, dofs: tuple[Dof, ...]) -> str:
     return f"{base}/s" if kind == "rate" and base != "physical unit" else base
 
 
+def _electronics(table: Mapping[str, Any], path: object) -> Electronics:
+    """[electronics] of a structure file. The filter: ``filter_kind`` ("bessel", the default, or
+    "butterworth"), ``filter_order``, ``filter_cutoff_hz`` and ``filter_equivalent_delay_s`` (the
+    delay that stands in for the filter with ``bessel="delay"``; default: the filter's group delay
+    at 0 Hz, sum of -Re(p) / |p|^2 over its poles). ``bessel_order``, ``bessel_cutoff_hz`` and
+    ``bessel_equivalent_delay_s`` are the same keys for a Bessel filter (the older spelling)."""
+    kind = str(table.get("filter_kind", "bessel"))
+    if kind not in LOWPASS_KINDS:
+        raise MaceError(f"{path}: [electronics] filter_kind must be one of {', '.join(LOWPASS_KINDS)}, got {kind!r}")
+    order = int(table.get("filter_order", table.get("bessel_order", 0)))
+    cutoff_hz = float(table.get("filter_cutoff_hz", table.get("bessel_cutoff_hz", 0.0)))
+    delay = table.get("filter_equivalent_delay_s", table.get("bessel_equivalent_delay_s"))
+    if delay is None and order > 0 and cutoff_hz > 0:
+        a = lowpass_realization(kind, order, cutoff_hz)[0]
+        poles = np.linalg.eigvals(a)
+        delay = float(np.sum(-poles.real / np.abs(poles) ** 2))
+    return Electronics(filter_kind=kind, filter_order=order, filter_cutoff_hz=cutoff_hz,
+                       filter_equivalent_delay_s=float(delay or 0.0),
+                       analog_sensors=tuple(table.get("analog_sensors", ())),
+                       sensor_delays_s=dict(table.get("gyro_delays_s", {})),
+                       actuator_delays_s=dict(table.get("actuator_delays_s", {})))
+
+
 def load_instruments(structure_file: StructureFile | str | Path | None = None) -> Instruments:
     """Instruments, electronics, servos and damping of a structure file (read once; see
     :class:`~mace_fmu.structure.StructureFile`), or of the file at a path; default: the bundled mace_em.toml."""
@@ -171,12 +195,7 @@ def load_instruments(structure_file: StructureFile | str | Path | None = None) -
         # electronics, servos and damping are optional: a structure without them has no filters, no
         # delays, no local loops, and every mode DEFAULT_DAMPING (rigid-body and mechanism modes none)
         el, sv, dm = data.get("electronics", {}), data.get("servos", {}), data.get("damping", {})
-        electronics = Electronics(bessel_order=int(el.get("bessel_order", 0)),
-                                  bessel_cutoff_hz=float(el.get("bessel_cutoff_hz", 0.0)),
-                                  bessel_equivalent_delay_s=float(el.get("bessel_equivalent_delay_s", 0.0)),
-                                  analog_sensors=tuple(el.get("analog_sensors", ())),
-                                  sensor_delays_s=dict(el.get("gyro_delays_s", {})),
-                                  actuator_delays_s=dict(el.get("actuator_delays_s", {})))
+        electronics = _electronics(el, path)
         servos = Servos(wheel_forward_gain=float(sv.get("wheel_forward_gain", 0.0)),
                         wheel_backward_gain=float(sv.get("wheel_backward_gain", 0.0)), wheels=dict(sv.get("wheels", {})),
                         gimbal_angle_gain=float(sv.get("gimbal_angle_gain", 0.0)),
@@ -187,8 +206,8 @@ def load_instruments(structure_file: StructureFile | str | Path | None = None) -
                                violin_families=tuple(ViolinFamily(order=int(f["order"]), cables=frozenset(f["cables"]),
                                                                   zeta=tuple(f["zeta"]))
                                                      for f in dm.get("violin_families", ())))
-        if el.get("analog_sensors") and not (electronics.bessel_order > 0 and electronics.bessel_cutoff_hz > 0):
-            raise MaceError(f"{path}: [electronics] analog_sensors need bessel_order > 0 and bessel_cutoff_hz > 0")
+        if el.get("analog_sensors") and not (electronics.filter_order > 0 and electronics.filter_cutoff_hz > 0):
+            raise MaceError(f"{path}: [electronics] analog_sensors need filter_order > 0 and filter_cutoff_hz > 0")
     except KeyError as exc:
         raise MaceError(f"{path}: missing table or key {exc}") from None
     for s in sensors:

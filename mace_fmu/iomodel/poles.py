@@ -23,6 +23,7 @@ from scipy.sparse.csgraph import connected_components
 
 from mace_fmu.fe.labels import ordinal
 from mace_fmu.iomodel.volts import VoltsModel
+from modelica_like.filters import LOWPASS_KINDS
 
 _MODE_STATE = re.compile(r"^structure\.mode(\d+)_(?:disp|vel)$")
 _BENDING = re.compile(r"^\d+(?:st|nd|rd|th) ([YZ]) bending$")
@@ -49,8 +50,8 @@ def _group(state: str, mode_labels: Sequence[str]) -> str:
     block = state.split(".", 1)[0]
     if block.startswith("delay_"):
         return f"time delay ({block[len('delay_'):]})"
-    if block == "bessel":
-        return "Bessel filter"
+    if block in LOWPASS_KINDS:  # the anti-aliasing filter block is named after its family
+        return f"{block.capitalize()} filter"
     return block
 
 

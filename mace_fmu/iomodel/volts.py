@@ -35,7 +35,7 @@ from mace_fmu.parameters import ParameterSet, fe_overrides, parameter_names
 from mace_fmu.pipeline import StructureModes, compute_modes
 from mace_fmu.structure import StructureFile, StructureKind
 from mace_fmu.threads import single_blas_thread
-from modelica_like import BesselFilter, Gain, PadeDelay, PD, StateSpace, Sum, System
+from modelica_like import Gain, LowPassFilter, PadeDelay, PD, StateSpace, Sum, System
 
 BesselKind = Literal["full", "delay", "none"]
 DEG_PER_RAD = 180.0 / np.pi
@@ -84,14 +84,14 @@ class VoltsModel:
                              pade_order=self.pade_order).compile()
 
     def _output_filter(self, sensor: str, frequencies_hz: np.ndarray) -> np.ndarray:
-        """Bessel filter and delay of one analog output channel, evaluated exactly."""
+        """Anti-aliasing filter and delay of one analog output channel, evaluated exactly."""
         el = self.instruments.electronics
         extra = el.sensor_delays_s.get(sensor, 0.0) if self.delays else 0.0
         response = np.ones(len(frequencies_hz), dtype=complex)
         if self.bessel == "full":
-            response *= frequency_response(BesselFilter("f", el.bessel_order, el.bessel_cutoff_hz).lti(),
-                                           frequencies_hz)[:, 0, 0]
-        delay = extra + (el.bessel_equivalent_delay_s if self.bessel == "delay" else 0.0)
+            response *= frequency_response(LowPassFilter("f", el.filter_order, el.filter_cutoff_hz,
+                                                         family=el.filter_kind).lti(), frequencies_hz)[:, 0, 0]
+        delay = extra + (el.filter_equivalent_delay_s if self.bessel == "delay" else 0.0)
         if delay > 0.0:
             response *= frequency_response(PadeDelay("d", delay, self.pade_order).lti(), frequencies_hz)[:, 0, 0]
         return response
@@ -129,11 +129,13 @@ def build_diagram(plant: ModalPlant, instruments: Instruments, *, servos: bool =
     extra = {n: (el.sensor_delays_s.get(n, 0.0) if delays else 0.0) for n in analog}
     source = {n: f"sensor_gain.y[{n}]" for n in sen_names}
     if bessel == "full" and analog:  # a structure whose file names no analog sensors has no filter
-        s.add(BesselFilter("bessel", el.bessel_order, el.bessel_cutoff_hz, size=len(analog), signals=analog))
+        block = el.filter_kind  # "bessel" (MACE's) or "butterworth"
+        s.add(LowPassFilter(block, el.filter_order, el.filter_cutoff_hz, size=len(analog), signals=analog,
+                            family=el.filter_kind))
         for n in analog:
-            s.connect(source[n], f"bessel.u[{n}]")
-            source[n] = f"bessel.y[{n}]"
-    net = {n: extra[n] + (el.bessel_equivalent_delay_s if bessel == "delay" else 0.0) for n in analog}
+            s.connect(source[n], f"{block}.u[{n}]")
+            source[n] = f"{block}.y[{n}]"
+    net = {n: extra[n] + (el.filter_equivalent_delay_s if bessel == "delay" else 0.0) for n in analog}
     for n in analog:
         if net[n] > 0.0:
             s.add(PadeDelay(f"delay_{n}", net[n], pade_order))
