@@ -27,7 +27,6 @@ from fmpy.fmi2 import FMU2Slave
 from common import machine_line
 from mace_fmu.fmu.export import export_fmu
 from mace_fmu.fmu.native.compile import SOURCE_DIR
-from mace_fmu.fmu.native.export import export_native_fmu
 from mace_fmu.iomodel.volts import volts_model
 
 HOST = Path(__file__).resolve().parents[1] / "tests" / "native_host.c"
@@ -39,10 +38,8 @@ def main() -> None:
     args = parser.parse_args()
     model = volts_model("1g")
     tmp = Path(tempfile.mkdtemp(prefix="bench_fmu_"))  # kept until exit (pythonfmu pitfall)
-    folders = {"native": fmpy.extract(str(export_native_fmu(model, out_dir=tmp, name="MACE_1g_native")),
-                                      unzipdir=str(tmp / "native")),
-               "pythonfmu": fmpy.extract(str(export_fmu(model, out_dir=tmp, name="MACE_1g_pythonfmu")),
-                                         unzipdir=str(tmp / "pythonfmu"))}
+    folders = {kind: fmpy.extract(str(export_fmu(model, kind=kind, out_dir=tmp, name=f"MACE_1g_{kind}")),
+                                  unzipdir=str(tmp / kind)) for kind in ("native", "pythonfmu")}
     step, stop = 2e-3, 10.0
     t = np.arange(0.0, stop + step / 2, step)
     n_steps = len(t) - 1

@@ -6,7 +6,7 @@ The names a user starts with, in the order of the data flow (imported on first u
     deck = mace_fmu.read_deck("my.bdf")                       # the deck as NASTRAN reads it
     modes = mace_fmu.compute_modes(deck, structure="0g")      # modes [Hz], labelled
     model = mace_fmu.volts_model("0g", structure_file="my.toml")  # volts in, volts out
-    mace_fmu.export_native_fmu(model, out_dir="fmus")         # an FMU (FMI 2 or 3)
+    mace_fmu.export_fmu(model, out_dir="fmus")                # an FMU (native: FMI 2 or 3; or kind="pythonfmu")
 """
 
 from __future__ import annotations
@@ -21,7 +21,6 @@ _PUBLIC = {
     "compute_modes": "mace_fmu.pipeline",
     "volts_model": "mace_fmu.iomodel.volts",
     "ParameterSet": "mace_fmu.parameters",
-    "export_native_fmu": "mace_fmu.fmu.native.export",
     "export_fmu": "mace_fmu.fmu.export",
     "export_controller_fmu": "mace_fmu.fmu.controller",
     "DiscreteController": "mace_fmu.fmu.controller",

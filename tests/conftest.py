@@ -41,5 +41,5 @@ def motion_fmu_0g(tmp_path_factory):
     from mace_fmu.iomodel.volts import volts_model
 
     model = volts_model("0g", motion_grids="all")
-    fmu = export_fmu(model, out_dir=tmp_path_factory.mktemp("motion_fmu"), name="MACE_0g_motion")
+    fmu = export_fmu(model, out_dir=tmp_path_factory.mktemp("motion_fmu"), name="MACE_0g_motion", kind="pythonfmu")
     return model, fmu, fmpy.extract(str(fmu), unzipdir=str(tmp_path_factory.mktemp("motion_unzipped")))

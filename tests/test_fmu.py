@@ -24,7 +24,7 @@ from mace_fmu.iomodel.volts import volts_model
 @pytest.fixture(scope="module", params=["1g", "0g"])
 def built(request, tmp_path_factory):
     model = volts_model(request.param)
-    fmu = export_fmu(model, out_dir=tmp_path_factory.mktemp("fmu"))
+    fmu = export_fmu(model, out_dir=tmp_path_factory.mktemp("fmu"), kind="pythonfmu")
     unzipped = fmpy.extract(str(fmu), unzipdir=str(tmp_path_factory.mktemp("unzipped")))
     return model, fmu, unzipped
 
@@ -126,7 +126,7 @@ def test_libcosim_gives_the_same_outputs_as_fmpy(built):
 
 @pytest.fixture(scope="module")
 def fmu_1g(tmp_path_factory):
-    return export_fmu(volts_model("1g"), out_dir=tmp_path_factory.mktemp("fmu_1g"))
+    return export_fmu(volts_model("1g"), out_dir=tmp_path_factory.mktemp("fmu_1g"), kind="pythonfmu")
 
 
 def test_cosimulation_example_closes_a_loop_around_the_1g_fmu(fmu_1g, tmp_path_factory):
@@ -367,5 +367,5 @@ def test_export_leaves_no_cached_implementation_behind(tmp_path):
     from mace_fmu.fmu.export import _CACHE_PREFIX
 
     before = {k for k in sys.modules if k.startswith(_CACHE_PREFIX)}
-    export_fmu(volts_model("0g", max_hz=20.0), out_dir=tmp_path, name="MACE_0g_small")
+    export_fmu(volts_model("0g", max_hz=20.0), out_dir=tmp_path, name="MACE_0g_small", kind="pythonfmu")
     assert {k for k in sys.modules if k.startswith(_CACHE_PREFIX)} == before

@@ -41,7 +41,7 @@ OK, DISCARD, ERROR = 0, 2, 3
 def fmu_0g(tmp_path_factory):
     """(model, FMU file, extracted folder) of the 0-g model; the folder outlives every worker."""
     model = volts_model("0g")
-    fmu = export_fmu(model, out_dir=tmp_path_factory.mktemp("misuse_fmu"))
+    fmu = export_fmu(model, out_dir=tmp_path_factory.mktemp("misuse_fmu"), kind="pythonfmu")
     return model, fmu, fmpy.extract(str(fmu), unzipdir=str(tmp_path_factory.mktemp("misuse_unzipped")))
 
 
@@ -172,7 +172,8 @@ def test_simulate_and_the_cli_raise_with_the_fmus_logged_reason(fmu_0g, tmp_path
                                         r"refused: non-finite input value\(s\): rwa_z"):
         simulate_input_response(fmu, input_name="rwa_z", amplitude_v=float("nan"), duration_s=0.01)
     # view response --fmu takes only an FMU with grid motion outputs (one grid is enough)
-    motion = export_fmu(volts_model("0g", modes=model.structure_modes, motion_grids=[16]), out_dir=tmp_path)
+    motion = export_fmu(volts_model("0g", modes=model.structure_modes, motion_grids=[16]), out_dir=tmp_path,
+                        kind="pythonfmu")
     code = main(["view", "response", "0g", "--input", "rwa_z", "--amplitude", "nan", "--duration", "0.01",
                  "--fmu", str(motion), "--html", str(tmp_path / "r.html")])
     last = capsys.readouterr().err.splitlines()[-1]  # the lines before are progress

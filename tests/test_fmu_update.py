@@ -319,7 +319,7 @@ def test_a_pythonfmu_fmu_is_updated_with_every_run_in_the_workers(capsys, data_c
     from mace_fmu.fmu.export import export_fmu
     from mace_fmu.iomodel.volts import volts_model
 
-    fmu = export_fmu(volts_model("1g"), out_dir=tmp_path, name="MACE_1g_pythonfmu")
+    fmu = export_fmu(volts_model("1g"), out_dir=tmp_path, name="MACE_1g_pythonfmu", kind="pythonfmu")
     start = tmp_path / "start.toml"
     start.write_text(f"[values]\nE_lexan_center = {pre_update_parameters()['E_lexan_center']!r}\n")
     code, out, err = _cli(capsys, ["update", "--fmu", str(fmu), "--data", str(data_csv), "--update", "E_lexan_center",

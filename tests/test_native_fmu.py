@@ -50,7 +50,7 @@ def fmus(request, tmp_path_factory):
     out = tmp_path_factory.mktemp(f"native_{kind}")
     fmi2 = export_native_fmu(model, out_dir=out, name=f"MACE_{kind}_native")
     fmi3 = export_native_fmu(model, out_dir=out, name=f"MACE_{kind}_native_fmi3", fmi_version=3)
-    python = export_fmu(model, out_dir=out, name=f"MACE_{kind}_pythonfmu")
+    python = export_fmu(model, out_dir=out, name=f"MACE_{kind}_pythonfmu", kind="pythonfmu")
     extract = lambda f: fmpy.extract(str(f), unzipdir=str(tmp_path_factory.mktemp(f.stem)))  # noqa: E731
     return SimpleNamespace(model=model, arrays=parametric_arrays(model), fmi2=fmi2, fmi3=fmi3, python=python,
                            dir2=extract(fmi2), dir3=extract(fmi3), dir_python=extract(python))

@@ -142,7 +142,7 @@ def fmus(run, nominal, tmp_path_factory):
     bounds = {int(k): v for k, v in data["frequency_bounds"].items()}
     native = Path(data["files"]["fmu"])
     python = export_fmu(nominal, out_dir=tmp_path_factory.mktemp("zero_g_python"), name="MACE_0g_nominal_py",
-                        arrays=parametric_arrays(nominal, physical=False), frequency_bounds=bounds)
+                        arrays=parametric_arrays(nominal, physical=False), frequency_bounds=bounds, kind="pythonfmu")
     return {kind: (path, fmpy.extract(str(path), unzipdir=str(tmp_path_factory.mktemp(f"unzipped_{kind}"))))
             for kind, path in (("native", native), ("pythonfmu", python))}
 

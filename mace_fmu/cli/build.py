@@ -14,7 +14,6 @@ from mace_fmu.text import hz_text
 def cmd_build(args: argparse.Namespace) -> int:
     # imported here, as in the other commands, so that `mace-fmu modes` starts without control/pythonfmu
     from mace_fmu.fmu.export import export_fmu
-    from mace_fmu.fmu.native.export import export_native_fmu
     from mace_fmu.iomodel.parametric_data import parametric_arrays
     from mace_fmu.iomodel import DEFAULT_MAX_HZ
     from mace_fmu.iomodel.volts import volts_model
@@ -24,7 +23,7 @@ def cmd_build(args: argparse.Namespace) -> int:
     if params is not None:
         progress(f"parameter set {args.parameters} ({len(params)} values)")
     progress("0-g modes (suspension removed, linear)")
-    # the modes the FMUs are built from: the same cut-off as `mace-fmu export`, whatever the deck's EIGRL says
+    # the modes the FMUs are built from: up to 250 Hz, the thesis's cut-off, whatever a deck's EIGRL says
     m0 = compute_modes(deck, structure="0g", max_hz=DEFAULT_MAX_HZ, parameters=params)
     results = {}
     for kind in ("large", "linear"):
@@ -40,10 +39,10 @@ def cmd_build(args: argparse.Namespace) -> int:
         arrays = parametric_arrays(model)  # what every kind of FMU carries: computed once
         for fmi_version in (2, 3):
             name = fmu_name(kind, kind="native", fmi_version=fmi_version)
-            path = export_native_fmu(model, out_dir=args.out, name=name,
-                                     fmi_version=fmi_version, arrays=arrays)
+            path = export_fmu(model, kind="native", fmi_version=fmi_version, out_dir=args.out, name=name, arrays=arrays)
             print(f"wrote {path}")
-        print(f"wrote {export_fmu(model, out_dir=args.out, name=fmu_name(kind, kind='pythonfmu'), arrays=arrays)}")
+        path = export_fmu(model, kind="pythonfmu", out_dir=args.out, name=fmu_name(kind, kind="pythonfmu"), arrays=arrays)
+        print(f"wrote {path}")
     print()
     print(low_modes(results))
     return 0

@@ -49,15 +49,10 @@ def cmd_export(args: argparse.Namespace) -> int:
                     motion_grids=model.plant.motion_grids, all_grids=model.structure_modes.modes.dofs.grid_ids,
                     variant=model_variant(args), prefix=model_prefix(model))
     progress(f"{args.kind} FMU {name}.fmu")
-    if args.kind == "native":
-        from mace_fmu.fmu.native.export import export_native_fmu
+    from mace_fmu.fmu.export import export_fmu
 
-        path = export_native_fmu(model, out_dir=args.out, name=name, fmi_version=args.fmi_version,
-                                 frequency_bounds=bounds)
-    else:
-        from mace_fmu.fmu.export import export_fmu
-
-        path = export_fmu(model, out_dir=args.out, name=name, frequency_bounds=bounds)
+    path = export_fmu(model, kind=args.kind, fmi_version=args.fmi_version, out_dir=args.out, name=name,
+                      frequency_bounds=bounds)
     print(f"wrote {path}")
     return 0
 

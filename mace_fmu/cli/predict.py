@@ -41,16 +41,10 @@ def cmd_predict(args: argparse.Namespace) -> int:
 
         name = fmu_name("0g", kind=args.kind) + "_nominal"
         say(f"{args.kind} FMU {name}.fmu with the frequency bounds")
-        if args.kind == "native":
-            from mace_fmu.fmu.native.export import export_native_fmu
+        from mace_fmu.fmu.export import export_fmu
 
-            paths["fmu"] = export_native_fmu(prediction.model, out_dir=out, name=name,
-                                             frequency_bounds=prediction.frequency_bounds)
-        else:
-            from mace_fmu.fmu.export import export_fmu
-
-            paths["fmu"] = export_fmu(prediction.model, out_dir=out, name=name,
-                                      frequency_bounds=prediction.frequency_bounds)
+        paths["fmu"] = export_fmu(prediction.model, kind=args.kind, out_dir=out, name=name,
+                                  frequency_bounds=prediction.frequency_bounds)
     if out is not None:
         paths.update(write_prediction(prediction, out))
     if args.json:

@@ -38,14 +38,9 @@ def export_ssp(args: argparse.Namespace) -> int:
                     prefix=model_prefix(model))
     with tempfile.TemporaryDirectory(prefix="mace_ssp_") as tmp:
         progress(f"{args.kind} FMU {name}.fmu")
-        if args.kind == "native":
-            from mace_fmu.fmu.native.export import export_native_fmu
+        from mace_fmu.fmu.export import export_fmu
 
-            fmu = export_native_fmu(model, out_dir=tmp, name=name, fmi_version=2, frequency_bounds=bounds)
-        else:
-            from mace_fmu.fmu.export import export_fmu
-
-            fmu = export_fmu(model, out_dir=tmp, name=name, frequency_bounds=bounds)
+        fmu = export_fmu(model, kind=args.kind, fmi_version=2, out_dir=tmp, name=name, frequency_bounds=bounds)
         import fmpy
 
         tunable = [v.name for v in fmpy.read_model_description(str(fmu)).modelVariables

@@ -131,7 +131,7 @@ def cmd_view_response(args: argparse.Namespace) -> int:
         progress(f"{args.structure} volts-volts model with the motion of every grid")
         model = volts(args, motion_grids="all")
         modes = model.structure_modes
-        fmu = export_fmu(model, out_dir=out_dir)  # the name `mace-fmu export --motion-grids all` gives it
+        fmu = export_fmu(model, out_dir=out_dir, kind="pythonfmu")  # the name `mace-fmu export --motion-grids all` gives it
         print(f"wrote {fmu} (reuse it with --fmu)")
     progress(f"simulating {args.duration} s of {args.signal} on {args.input} through fmpy")
     run = simulate_input_response(fmu, input_name=args.input, signal=args.signal, duration_s=args.duration,

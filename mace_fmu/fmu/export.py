@@ -19,12 +19,14 @@ import zipfile
 from collections.abc import Mapping
 from importlib import metadata
 from pathlib import Path
+from typing import Literal
 from xml.etree import ElementTree as ET
 
 import numpy as np
 from pythonfmu.builder import FmuBuilder
 
 from mace_fmu.atomic import atomic_path
+from mace_fmu.errors import MaceError
 from mace_fmu.fmu.naming import fmu_name
 from mace_fmu.fmu.variables import DEFAULT_EXPERIMENT, model_summary, variable_unit
 from mace_fmu.iomodel import modal_core, parametric, reanalysis
@@ -122,12 +124,54 @@ def _entry_script(name: str, description: str) -> str:
                                   prefix=_CACHE_PREFIX)
 
 
-def export_fmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str | None = None,
-               arrays: dict[str, np.ndarray] | None = None,
+FmuKind = Literal["native", "pythonfmu"]
+
+
+def export_fmu(model: VoltsModel, *, kind: FmuKind = "native", fmi_version: int = 2, out_dir: str | Path = ".",
+               name: str | None = None, arrays: dict[str, np.ndarray] | None = None,
                frequency_bounds: Mapping[int, float] | None = None) -> Path:
-    """Write ``out_dir/<name>.fmu`` (default name from ``fmu_name``: MACE_1g, MACE_1g_motion, ...) and return its path; ``arrays``:
-    the model's parametric arrays if already computed; ``frequency_bounds`` (1-based mode -> relative bound) the
-    min/max of the modes' ``frequency_scale_mode_<k>``, 1 -+ bound."""
+    """Write ``model`` as an FMU ``out_dir/<name>.fmu`` and return its path: the one export call.
+
+    Parameters
+    ----------
+    model : VoltsModel
+        The volts-volts model (inputs and outputs in V).
+    kind : {"native", "pythonfmu"}
+        "native": the C runtime, FMI 2.0 CS + ME or FMI 3.0 CS (:func:`mace_fmu.fmu.native.export.export_native_fmu`);
+        "pythonfmu": a Python slave (numpy and scipy), FMI 2.0 CS only (:func:`export_pythonfmu`).
+    fmi_version : {2, 3}
+        FMI version; 3 for the native kind only.
+    out_dir, name
+        Where, and the model identifier (default: each kind's own, e.g. ``MACE_1g``).
+    arrays
+        The model's parametric arrays if already computed.
+    frequency_bounds
+        1-based mode -> relative bound: the declared min/max of ``frequency_scale_mode_<k>``, 1 -+ bound.
+
+    Raises
+    ------
+    MaceError
+        An unknown kind, or FMI 3 asked of the pythonfmu kind.
+    """
+    if kind == "native":
+        from mace_fmu.fmu.native.export import export_native_fmu
+
+        return export_native_fmu(model, out_dir=out_dir, name=name, fmi_version=fmi_version, arrays=arrays,
+                                 frequency_bounds=frequency_bounds)
+    if kind != "pythonfmu":
+        raise MaceError(f"FMU kind must be 'native' or 'pythonfmu', got {kind!r}")
+    if fmi_version != 2:
+        raise MaceError(f"pythonfmu writes FMI 2.0 FMUs only, not FMI {fmi_version}: export the native kind")
+    return export_pythonfmu(model, out_dir=out_dir, name=name, arrays=arrays, frequency_bounds=frequency_bounds)
+
+
+def export_pythonfmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str | None = None,
+                     arrays: dict[str, np.ndarray] | None = None,
+                     frequency_bounds: Mapping[int, float] | None = None) -> Path:
+    """Write ``out_dir/<name>.fmu`` with pythonfmu (default name from ``fmu_name``: MACE_1g, MACE_1g_motion,
+    ...) and return its path; ``arrays``: the model's parametric arrays if already computed;
+    ``frequency_bounds`` (1-based mode -> relative bound) the min/max of the modes'
+    ``frequency_scale_mode_<k>``, 1 -+ bound."""
     kind = model.structure_modes.structure.kind
     name = name or fmu_name(kind, motion_grids=model.plant.motion_grids,
                             all_grids=model.structure_modes.model.dofs.grid_ids)

@@ -79,9 +79,9 @@ def robust_0g_study(model: VoltsModel, *, frequency_bounds: Mapping[int, float],
                     progress: ProgressCallback | None = None) -> RobustStudy:
     """Export ``model`` (the nominal 0-g volts model) as a native FMU whose ``frequency_scale_mode_<k>``
     span ``frequency_bounds`` (1-based mode -> relative bound), design the compensator on it, run the sweep."""
-    from mace_fmu.fmu.native.export import export_native_fmu
+    from mace_fmu.fmu.export import export_fmu
 
-    fmu = export_native_fmu(model, out_dir=out_dir, name=FMU_NAME, frequency_bounds=dict(frequency_bounds))
+    fmu = export_fmu(model, kind="native", out_dir=out_dir, name=FMU_NAME, frequency_bounds=dict(frequency_bounds))
     design = design_compensator(model.system, loop=loop, weights=weights, reduced_states=reduced_states)
     sweep = robust_sweep(fmu, compensator=design.compensator, loop=loop, samples=samples, seed=seed,
                          critical_count=critical_count, runner=runner, progress=progress)
