@@ -2,10 +2,10 @@
 
 A structure's stiffness is as banded as its numbering lets it be; decks number grids as their
 authors please. Reverse Cuthill-McKee renumbers the DOFs into a narrow band whatever the deck's
-numbering, and SuperLU then factors in that order, pivoting off the diagonal only where it must. On a 10k-DOF lattice
-tower this gives a third fewer nonzeros in the factors than SuperLU's default column ordering and
-half the factor and solve time, with the deck's numbering or a random one alike
-(benchmarks/bench_fe_scale.py).
+numbering, and SuperLU then factors in that order, pivoting off the diagonal only where it must.
+On a 10k-DOF lattice tower this gives a third fewer nonzeros in the factors than SuperLU's
+default column ordering and half its factor time, with the deck's numbering or a random one
+alike (benchmarks/RESULTS.md, "FE core at scale").
 """
 
 from __future__ import annotations

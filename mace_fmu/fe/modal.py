@@ -6,7 +6,8 @@ for massless DOFs (their inertia forces are zero, so their motion is the static 
 others); the remaining M is positive definite, so one dense generalised eigen-solution handles
 rigid-body and mechanism modes without a shift: they come out as the cluster of (near) zero
 eigenvalues. Large models take the sparse route (shift-invert Lanczos about a small negative
-shift), whose cost grows about linearly with the DOFs where the dense one grows with their cube.
+shift), whose cost follows the nonzeros of the factored K - sigma M (DOFs times the band the
+structure leaves after reordering) where the dense one grows with the cube of the DOFs.
 """
 
 from __future__ import annotations
