@@ -4,7 +4,7 @@ to a volts-volts model of them, and through the 1-g gravity preload.
 Each size runs in its own process, so its peak resident memory (ru_maxrss) is that size's alone.
 Run by hand: ``python benchmarks/bench_fe_scale.py [--sizes 1k 10k 30k 100k] [--preload-sizes 1k 3k]``
 and paste the table into benchmarks/RESULTS.md with the machine, date and load (``uptime``).
-The deck is tests/decks.py's ``frame_tower`` (aluminium tube lattice, clamped base, 5 kg masses on
+The deck is tests/support/decks.py's ``frame_tower`` (aluminium tube lattice, clamped base, 5 kg masses on
 the top level, EIGRL ND = 50).
 """
 
@@ -55,7 +55,7 @@ gain = 1.0
 
 def run_one(size: str, kind: str, volts: bool) -> dict:
     """In this process: the stages for one deck, with their wall times [s] and the peak memory [MB]."""
-    from decks import frame_tower
+    from support.decks import frame_tower
     from mace_fmu.deck.reader import read_deck
     from mace_fmu.fe.assembly import assemble
     from mace_fmu.pipeline import compute_modes

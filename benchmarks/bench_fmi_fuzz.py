@@ -1,6 +1,6 @@
 """The long state-machine fuzz of the native FMUs (issue 23, section 3): seeded random call sequences
 of FMI 2 co-simulation, FMI 2 model exchange and FMI 3 co-simulation against the reference model of
-the standard's state tables (tests/fmi_fuzz.py), in worker subprocesses so that a crash or a hang
+the standard's state tables (tests/support/fmi_fuzz.py), in worker subprocesses so that a crash or a hang
 is reported with its seeds instead of ending the run.
 
 Run: python benchmarks/bench_fmi_fuzz.py [--sequences 3000] [--length 40] [--chunk 100] [--model 0g]
@@ -25,7 +25,7 @@ from common import machine_line
 from mace_fmu.fmu.native.export import export_native_fmu
 from mace_fmu.iomodel.volts import volts_model
 
-WORKER = Path(__file__).resolve().parents[1] / "tests" / "fmi_fuzz.py"
+WORKER = Path(__file__).resolve().parents[1] / "tests" / "support" / "fmi_fuzz.py"
 
 
 def main() -> int:

@@ -1,7 +1,7 @@
 """FMUs against control.forced_response: 10 s at 2 ms, all 9 inputs driven, full 1-g model.
 
 Side by side in one run: the native FMU through fmpy.simulate_fmu, through a bare fmpy FMU2Slave
-loop and in a C host without Python (tests/native_host.c, compiled here); the pythonfmu FMU the
+loop and in a C host without Python (tests/support/native_host.c, compiled here); the pythonfmu FMU the
 same two ways through fmpy; control.forced_response (ZOH discretisation included). Then the native
 FMU's initialisation (instantiate to exitInitializationMode) with nominal and with physical
 parameters changed.
@@ -29,7 +29,7 @@ from mace_fmu.fmu.export import export_fmu
 from mace_fmu.fmu.native.compile import SOURCE_DIR
 from mace_fmu.iomodel.volts import volts_model
 
-HOST = Path(__file__).resolve().parents[1] / "tests" / "native_host.c"
+HOST = Path(__file__).resolve().parents[1] / "tests" / "support" / "native_host.c"
 
 
 def main() -> None:

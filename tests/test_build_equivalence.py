@@ -1,4 +1,4 @@
-"""The faster model build gives the same models as the implementation before it (issue 13, section 4).
+"""The faster model build gives the same models as the implementation before it.
 
 Before: ``System.compile`` was ``control.interconnect``, which linearises the interconnected system
 numerically. Now the wiring algebra (``modelica_like.algebra.interconnect``) gives the matrices

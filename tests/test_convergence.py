@@ -12,7 +12,7 @@ import math
 import numpy as np
 import pytest
 
-from two_mass_records import two_mass_record, true_damping
+from support.two_mass_records import two_mass_record, true_damping
 from mace_fmu.cli import main
 from mace_fmu.two_mass import TwoMassSystem
 from mace_fmu.updating.convergence import convergence_report, time_noise_floor

@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from decks import deck_text, r
+from support.decks import deck_text, r
 from mace_fmu.deck.reader import read_deck_text
 from mace_fmu.errors import MaceError
 from mace_fmu.fe.assembly import Bars, assemble, bar_section

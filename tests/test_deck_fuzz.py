@@ -1,6 +1,6 @@
 """Seeded fuzz test: the bundled deck broken in thousands of ways reads as a model or fails with a located DeckError.
 
-Every mutated deck (tests/deck_mutations.py: lines deleted, duplicated, swapped or truncated, fields
+Every mutated deck (tests/support/deck_mutations.py: lines deleted, duplicated, swapped or truncated, fields
 swapped or blanked, characters injected, numbers changed in value, sign or type) must either read
 and give both structures, or raise a DeckError that names the file and a line of it. Any other
 exception is a defect. A few of each kind also go through the command line (status 2, one line)
@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from deck_mutations import MUTATIONS, mutate
+from support.deck_mutations import MUTATIONS, mutate
 from mace_fmu.cli import main
 from mace_fmu.deck import DeckError, read_deck
 from mace_fmu.structure import build_structure, bundled_deck_path

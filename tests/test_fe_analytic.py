@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 import scipy.linalg as sla
 
-from decks import deck_text, line_of_bars, r
+from support.decks import deck_text, line_of_bars, r
 from mace_fmu.deck.reader import read_deck_text
 from mace_fmu.fe.assembly import assemble
 from mace_fmu.fe.constraints import build_constraints

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from scipy import sparse
 
-from decks import deck_text, frame_tower, line_of_bars
+from support.decks import deck_text, frame_tower, line_of_bars
 from mace_fmu.deck.reader import read_deck_text
 from mace_fmu.errors import MaceError
 from mace_fmu.fe import modal

@@ -1,4 +1,4 @@
-"""Native FMUs against the FMI 2.0.x / 3.0 state machines (issue 23, section 3).
+"""Native FMUs against the FMI 2.0.x / 3.0 state machines (their state tables: which call in which state).
 
 Each finding of the stress check as a short call sequence: FMU states checked against the instance
 before anything is applied (interface, FMI version, GUID, checksum, state-machine value), including

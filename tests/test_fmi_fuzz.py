@@ -1,5 +1,5 @@
-"""A seeded state-machine fuzz of the native FMUs (issue 23, section 3; the driver and the reference
-model of the standard's state tables are in fmi_fuzz.py).
+"""A seeded state-machine fuzz of the native FMUs (the driver and the reference
+model of the standard's state tables are in support/fmi_fuzz.py).
 
 Random call sequences for FMI 2 co-simulation, FMI 2 model exchange and FMI 3 co-simulation run in a
 subprocess with a time limit: a crash or a hang fails the test instead of taking pytest down, and
@@ -20,8 +20,8 @@ import pytest
 from mace_fmu.fmu.native.export import export_native_fmu
 from mace_fmu.iomodel.volts import volts_model
 
-WORKER = Path(__file__).with_name("fmi_fuzz.py")
-C_HOST = Path(__file__).with_name("native_fuzz_host.c")
+WORKER = Path(__file__).parent / "support" / "fmi_fuzz.py"
+C_HOST = Path(__file__).parent / "support" / "native_fuzz_host.c"
 RUNTIME_DIR = Path(__file__).parents[1] / "mace_fmu" / "fmu" / "native" / "c"
 SEEDS, LENGTH = 30, 40  # 90 sequences, 3,600 calls
 
@@ -61,7 +61,7 @@ def test_random_call_sequences_follow_the_standards_state_machines(folders):
 
 
 def test_random_call_sequences_from_c_are_clean_under_valgrind(folders, tmp_path):
-    """The same kind of sequences from a C host (tests/native_fuzz_host.c: FMI 2 co-simulation and
+    """The same kind of sequences from a C host (tests/support/native_fuzz_host.c: FMI 2 co-simulation and
     model exchange, the other interface's states, flipped, garbage and truncated serialised states)
     in memcheck: no invalid access, every heap block freed."""
     if shutil.which("valgrind") is None:

@@ -14,7 +14,7 @@ import pytest
 from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
 
-from fmu_checks import (DURATION, check_close, initialised_slave, make_inputs, nominal_slave, rss_bytes,
+from support.fmu_checks import (DURATION, check_close, initialised_slave, make_inputs, nominal_slave, rss_bytes,
                         run_in_libcosim, run_steps, value_references, zoh_reference)
 from mace_fmu.fmu.export import export_fmu
 from mace_fmu.iomodel.motion import MOTION_COMPONENTS

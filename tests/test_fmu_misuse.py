@@ -1,6 +1,6 @@
 """The pythonfmu FMU used wrongly, as a new user would: statuses per FMI 2.0, reasons in the log, exact otherwise.
 
-Each scenario runs in its own worker process (tests/fmu_misuse_worker.py) through fmpy's FMI 2.0
+Each scenario runs in its own worker process (tests/support/fmu_misuse_worker.py) through fmpy's FMI 2.0
 API with a logger, so the statuses and messages are those any host sees. What the FMU answers:
 - a step it cannot take (NaN or infinite input, not initialised, terminated, negative or
   non-finite step size) returns fmi2Discard with the state unchanged and the last successful time
@@ -33,7 +33,7 @@ from mace_fmu.fmu.export import export_fmu
 from mace_fmu.fmu.simulate import simulate_input_response
 from mace_fmu.iomodel.volts import volts_model
 
-WORKER = Path(__file__).with_name("fmu_misuse_worker.py")
+WORKER = Path(__file__).parent / "support" / "fmu_misuse_worker.py"
 OK, DISCARD, ERROR = 0, 2, 3
 
 

@@ -1,4 +1,4 @@
-"""Updating through FMU simulation (issue 11, parts 1 and 3 on a small case): the FMU as the model in the cost,
+"""Updating through FMU simulation (on a small case): the FMU as the model in the cost,
 its runs side by side on a Dask LocalCluster, bit for bit the serial answer."""
 
 from __future__ import annotations

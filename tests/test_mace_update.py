@@ -1,6 +1,6 @@
 """The MACE update of thesis 4.5 through the command line: from the pre-update moduli to updated FMUs.
 
-One run of ``mace-fmu update -o DIR`` (module fixture) is checked against the issue's goals and
+One run of ``mace-fmu update -o DIR`` (module fixture) is checked against the update's goals and
 the thesis: the start model against Table 4.1, the selection against the thesis's choice, the
 updated closed-loop modes against Table 4.7's measurement model (RMS no worse than the thesis's
 own, every lightly damped bending mode within 2 %), and the parameter set it writes, read back
@@ -100,7 +100,7 @@ def test_the_update_meets_the_goals(run):
             assert abs(m["after_hz"] / m["measured_hz"] - 1) <= 0.02, m["label"]
     assert summary["reduction"] > 0.25  # the thesis's automated update: 27.8 %
     physical = [h for h in summary["history"] if "physical" in h["step"]]
-    assert len(physical) >= 3  # the issue: at least two recomputations of the sensitivities
+    assert len(physical) >= 3  # at least two recomputations of the sensitivities
 
 
 def test_the_parameter_set_says_where_it_comes_from(run):

@@ -1,4 +1,4 @@
-"""Measured data files (issue 11 part 2): round trips, the H1 estimate against exact responses, bad data.
+"""Measured data files (CSV, npz, UFF58): round trips, the H1 estimate against exact responses, bad data.
 
 H1 references are independent: the exact discrete-time response C (zI - A)^-1 B + D of the
 zero-order-hold system at z = exp(j 2 pi f dt), with the records simulated by ``scipy.signal.lfilter``.

@@ -1,4 +1,4 @@
-"""Real NASTRAN decks as published, against NASTRAN's own frequencies (issue 24, sections 2 and 3).
+"""Real NASTRAN decks as published, against NASTRAN's own frequencies.
 
 Each folder of tests/data/nastran holds a deck copied unedited from the pyNastran repository (licence in
 tests/data/nastran/LICENSE-pyNastran.txt) and reference_frequencies.toml: the CYCLES column of the real
@@ -204,7 +204,7 @@ def _modes(tmp_path, bulk: list[str], name: str, case: str = "SPC = 7\n") -> np.
 
 
 def _cantilever(ps: str = "345", grdset: str | None = None) -> list[str]:
-    from decks import line_of_bars
+    from support.decks import line_of_bars
 
     cards = line_of_bars(n=8, length=2.0, e=7.0e10, nu=0.33, rho=2700.0, area=7e-4, i=4e-8, ps=ps)
     return cards + ([grdset] if grdset else []) + ["SPC1,7,123456,1"]

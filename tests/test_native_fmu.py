@@ -1,7 +1,7 @@
 """Native FMUs (C runtime, no Python in the host) against the models' exact responses and the pythonfmu FMU.
 
 FMI 2.0 co-simulation against the exact zero-order hold of the state-space model (1e-8 of each
-output's range, the bound of the FMU issue), FMI 2.0 model exchange (derivatives against A x + B u,
+output's range, the bound the FMUs are held to), FMI 2.0 model exchange (derivatives against A x + B u,
 fmpy's CVode and the free response against the exact solution), FMI 3.0 co-simulation; native
 against pythonfmu with the same parameters, physical ones included, to 1e-10; misuse; a C host
 without Python (also under valgrind); libcosim; the independent checker of fmu-manipulation-toolbox.
@@ -28,7 +28,7 @@ from fmpy.fmi2 import (FMU2Model, FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi
                        fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
 from fmpy.validation import validate_fmu
 
-from fmu_checks import (check_close, initialised_slave, make_inputs, nominal_slave, rss_bytes, run_in_libcosim,
+from support.fmu_checks import (check_close, initialised_slave, make_inputs, nominal_slave, rss_bytes, run_in_libcosim,
                         run_steps, value_references, zoh_reference)
 from mace_fmu.errors import MaceError
 from mace_fmu.fmu.export import export_fmu
@@ -39,7 +39,7 @@ from mace_fmu.iomodel.parametric_data import parametric_arrays
 from mace_fmu.iomodel.volts import volts_model
 
 RUNTIME_DIR = Path(runtime.__file__).with_name("c")
-HOST_SOURCE = Path(__file__).with_name("native_host.c")
+HOST_SOURCE = Path(__file__).parent / "support" / "native_host.c"
 
 
 @pytest.fixture(scope="module", params=["1g", "0g"])
@@ -410,7 +410,7 @@ def test_reset_returns_to_rest_and_reruns_identically(fmus):
     np.testing.assert_array_equal(first, again)
 
 
-# ---- misuse: an error status with a logged reason (issue 13) ----------------------------------------
+# ---- misuse: an error status with a logged reason ----------------------------------------
 
 def test_non_finite_input_is_an_error_with_a_logged_reason(fmus):
     model = fmus.model
@@ -420,7 +420,7 @@ def test_non_finite_input_is_an_error_with_a_logged_reason(fmus):
     fmu.enterInitializationMode()
     fmu.exitInitializationMode()
     name = model.system.input_labels[2]
-    # refused where it is set (issue 23): not stored, so the outputs never become NaN
+    # refused where it is set: not stored, so the outputs never become NaN
     with pytest.raises(FMICallException) as error:
         fmu.setReal([_vr(fmus.dir2)[name]], [float("nan")])
     assert error.value.status == 3  # fmi2Error
@@ -431,7 +431,7 @@ def test_non_finite_input_is_an_error_with_a_logged_reason(fmus):
 
 
 def test_non_finite_parameters_are_refused_where_they_are_set(fmus):
-    """Not stored (issue 23): the parameter keeps its value and initialisation goes on."""
+    """Not stored: the parameter keeps its value and initialisation goes on."""
     messages = Messages()
     fmu = _slave(fmus.dir2, messages=messages)
     fmu.setupExperiment(startTime=0.0)
@@ -566,7 +566,7 @@ def test_instantiation_refuses_another_fmus_guid_with_a_logged_reason(fmus):
 
 @pytest.fixture(scope="session")
 def host(tmp_path_factory) -> Path:
-    """The C host program (tests/native_host.c), compiled here with gcc."""
+    """The C host program (tests/support/native_host.c), compiled here with gcc."""
     exe = tmp_path_factory.mktemp("host") / "native_host"
     subprocess.run(["gcc", "-std=c99", "-O2", "-Wall", "-Werror", f"-I{RUNTIME_DIR}", "-o", str(exe), str(HOST_SOURCE),
                     "-ldl"], check=True)

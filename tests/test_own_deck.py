@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 import scipy.optimize
 
-from decks import line_of_bars, r
+from support.decks import line_of_bars, r
 from mace_fmu.cli import main
 from mace_fmu.deck.reader import read_deck
 from mace_fmu.errors import MaceError
@@ -190,7 +190,7 @@ def test_your_own_deck_with_a_structure_file_gives_a_volts_model_and_an_fmu(tmp_
     import control as ct
     import fmpy
 
-    from fmu_checks import check_close, make_inputs, zoh_reference
+    from support.fmu_checks import check_close, make_inputs, zoh_reference
     from mace_fmu.fmu.native.export import export_native_fmu
     from mace_fmu.iomodel.volts import volts_model
 

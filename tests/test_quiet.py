@@ -1,4 +1,4 @@
-"""A library does not print, and leaves no temporary folders behind (issue 14, part 4)."""
+"""A library does not print, and leaves no temporary folders behind."""
 
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
 """The sample problem of thesis 4.3: our Tables 4.2 and 4.3 against the thesis's conclusions.
 
-The tolerances are the issue's: every case recovers k1 and k2 within 1 % and the natural
+The tolerances: every case recovers k1 and k2 within 1 % and the natural
 frequencies within 0.5 %; the time-domain cases identify the damping ratios within 15 %; the
 measurement-model and frequency-domain cases identify more damping than the actual system has
 (the windowing and averaging bias the thesis explains).

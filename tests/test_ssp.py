@@ -105,7 +105,7 @@ def test_exported_package_is_schema_valid_and_binds_the_set(plant_ssp):
 
 def test_ecos_runs_the_package_as_our_state_space_model(plant_ssp):
     ecospy = _ecospy()
-    from fmu_checks import make_inputs, zoh_reference
+    from support.fmu_checks import make_inputs, zoh_reference
 
     from mace_fmu.iomodel.volts import volts_model
 

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from two_mass_records import two_mass_record, true_damping
+from support.two_mass_records import two_mass_record, true_damping
 from mace_fmu.two_mass import TwoMassSystem
 from mace_fmu.updating.costs import TimeResponseCost
 from mace_fmu.updating.sample_family import MODE_LABELS, TwoMassFamily

@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 from fmpy.validation import validate_fmu
 
-from fmu_checks import initialised_slave, make_inputs, run_steps, zoh_reference
+from support.fmu_checks import initialised_slave, make_inputs, run_steps, zoh_reference
 from mace_fmu.cli import main
 from mace_fmu.fmu.export import export_fmu
 from mace_fmu.iomodel.parametric import ParametricSystem

@@ -450,7 +450,7 @@ def _param(f: Fields, src: Source) -> Param:
 
 
 # ----------------------------------------------------------------------------------------------
-# Beams, rods, scalar masses, rigid elements, EIGR (issue 24). Field layouts and defaults are those of
+# Beams, rods, scalar masses, rigid elements, EIGR: what public NASTRAN decks use beyond the MACE deck. Field layouts and defaults are those of
 # the cards' entries in the MSC Nastran Quick Reference Guide (QRG).
 
 def _section_dims(f: Fields, first: int, kind: str) -> tuple[tuple[float, ...], float, int]:

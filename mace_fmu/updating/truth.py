@@ -1,4 +1,4 @@
-"""A test article whose truth is known (issue 11, part 3): the 1-g FMU of the bundled deck measured through files.
+"""A test article whose truth is known (the proof of an FMU update): the 1-g FMU of the bundled deck measured through files.
 
 The bundled deck holds the updated moduli of Table 4.4 and the FMU the updated delays of Tables
 4.5 and 4.6: that FMU, simulated once, is the "test article". Its measured data are its response

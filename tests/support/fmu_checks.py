@@ -114,7 +114,7 @@ def run_in_libcosim(fmu, *, model, u: np.ndarray, step_s: float, exchange) -> np
               "y = run(sys.argv[1], inputs={str(k): d['u'][i] for i, k in enumerate(d['names'])},\n"
               "        outputs=[str(k) for k in d['outputs']], step_s=float(sys.argv[4]))\n"
               "np.save(sys.argv[2] + '.y.npy', y)\n")
-    examples = Path(__file__).resolve().parents[1] / "examples"
+    examples = Path(__file__).resolve().parents[2] / "examples"
     subprocess.run([sys.executable, "-c", script, str(fmu), str(exchange), str(examples), repr(step_s)],
                    check=True, capture_output=True, timeout=300)
     return np.load(str(exchange) + ".y.npy")

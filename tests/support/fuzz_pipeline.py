@@ -1,6 +1,6 @@
 """By hand: mutated decks that read go through the whole modal analysis (0-g and 1-g, linear preload).
 
-``python tests/fuzz_pipeline.py FIRST_SEED COUNT`` prints the outcome classes (a model whose 0-g
+``python tests/support/fuzz_pipeline.py FIRST_SEED COUNT`` prints the outcome classes (a model whose 0-g
 frequencies equal the bundled deck's, another valid model, a MaceError, or an exception class,
 which would be a defect) and every non-model outcome. Seeds are those of tests/test_deck_fuzz.py.
 """

@@ -3,7 +3,7 @@
 Run as a program (tests/test_fmi_fuzz.py and benchmarks/bench_fmi_fuzz.py start it in a subprocess,
 so that a crash of the FMU fails the run instead of killing the caller):
 
-    python tests/fmi_fuzz.py FMI2_DIR FMI3_DIR FIRST_SEED N_SEEDS [--length L] [--interfaces cs2,me2,cs3]
+    python tests/support/fmi_fuzz.py FMI2_DIR FMI3_DIR FIRST_SEED N_SEEDS [--length L] [--interfaces cs2,me2,cs3]
 
 FMI2_DIR / FMI3_DIR are extracted native FMUs of one model. Every seed drives one random sequence
 of calls per interface (FMI 2 co-simulation, FMI 2 model exchange, FMI 3 co-simulation) on a fresh
