@@ -92,34 +92,27 @@ SERVO_GAINS = MappingProxyType({"K_a": "gimbal_angle_gain", "K_r": "gimbal_rate_
                                 "K_b": "wheel_backward_gain"})
 
 
-def _match(name: str, prefix_of) -> ParameterKind | None:
+def _match(name: str, *, in_fmu: bool) -> ParameterKind | None:
+    """The kind whose name (exact) or prefix ``name`` carries, in an FMU's spelling or a set's."""
     for kind in KINDS:
         if name in kind.exact_names:
             return kind
-        prefix = prefix_of(kind)
-        if prefix and name.startswith(prefix) and len(name) > len(prefix):
-            if kind.per_mode and prefix_of is _fmu_prefix and not name[len(prefix):].isdigit():
-                continue
+        prefix = kind.fmu_prefix if in_fmu else kind.set_prefix
+        rest = name[len(prefix):]
+        # an FMU's per-mode name ends in the mode number; a set's in a mode label
+        if prefix and name.startswith(prefix) and rest and (rest.isdigit() or not (in_fmu and kind.per_mode)):
             return kind
     return None
 
 
-def _set_prefix(kind: ParameterKind) -> str:
-    return kind.set_prefix
-
-
-def _fmu_prefix(kind: ParameterKind) -> str:
-    return kind.fmu_prefix
-
-
 def kind_of_set_name(name: str) -> ParameterKind | None:
     """The kind of a parameter-set name (``E_lexan_end``, ``damping:1st Z bending``), None if unknown."""
-    return _match(name, _set_prefix)
+    return _match(name, in_fmu=False)
 
 
 def kind_of_fmu_name(name: str) -> ParameterKind | None:
     """The kind of an FMU parameter name (``E_lexan_end``, ``damping_mode_14``), None if unknown."""
-    return _match(name, _fmu_prefix)
+    return _match(name, in_fmu=True)
 
 
 def mode_number(name: str) -> int:

@@ -721,14 +721,19 @@ def _eigr(f: Fields, src: Source) -> Eigr:
     return Eigr(sid=sid, method=method, f1=f1, f2=f2, ne=ne, nd=nd or None, norm=norm, source=src)
 
 
+def _two_groups(f: Fields, expected: str, first_name: str) -> list[tuple[int, int]]:
+    """(group number 1 or 2, first field) of each four-field group present on a card that carries up to
+    two (CORD1R, PELAS, ...); the first is required."""
+    present = [(k, d) for k, d in ((1, 1), (2, 5)) if any(f.text(d + i) for i in range(4))]
+    if not present or present[0][0] != 1:
+        raise f.error(f"required field is blank (expected {expected})", 1, first_name)
+    return present
+
+
 def _cord1r(f: Fields, src: Source) -> tuple[Cord1R, ...]:
     """CORD1R (QRG): up to two CIDi G1i G2i G3i groups."""
     out = []
-    for k, d in enumerate((1, 5), start=1):
-        if not any(f.text(d + i) for i in range(4)):
-            if k == 1:
-                raise f.error("required field is blank (expected CID1 G1A G2A G3A)", 1, "CIDA")
-            continue
+    for k, d in _two_groups(f, "CID1 G1A G2A G3A", "CIDA"):
         cid = f.integer(d, f"CID{'AB'[k - 1]}", minimum=1)
         f.label = f"CORD1R {cid}"
         grids = tuple(f.integer(d + i, f"G{i}{'AB'[k - 1]}", minimum=1) for i in (1, 2, 3))
@@ -763,11 +768,7 @@ def _celas1(f: Fields, src: Source) -> tuple[int, int, int, int, int | None, int
 def _pelas(f: Fields, src: Source) -> tuple[tuple[int, float, Source], ...]:
     """PELAS (QRG): up to two PIDi Ki GEi Si groups; (PID, K, source) each."""
     out = []
-    for k, d in enumerate((1, 5), start=1):
-        if not any(f.text(d + i) for i in range(4)):
-            if k == 1:
-                raise f.error("required field is blank (expected PID1 K1)", 1, "PID1")
-            continue
+    for k, d in _two_groups(f, "PID1 K1", "PID1"):
         pid = f.integer(d, f"PID{k}", minimum=1)
         f.label = f"PELAS {pid}"
         out.append((pid, f.real(d + 1, f"K{k}"), src))

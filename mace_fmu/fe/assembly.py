@@ -12,7 +12,7 @@ from mace_fmu.deck.geometry import bar_orientation, coordinate_frames, grid_posi
 from mace_fmu.errors import MaceError
 from mace_fmu.fe.beam import (BeamSection, MassKind, local_frames, local_stiffness, natural_stiffness,
                               to_basic_many)
-from mace_fmu.fe.dofs import DofMap, cd_component_entries
+from mace_fmu.fe.dofs import DofMap, scalar_element_entries
 from mace_fmu.fe.elements import add_elements, bar_mass, coupled_mass
 from mace_fmu.fe.triplets import MatrixTriplets
 
@@ -120,15 +120,11 @@ def assemble(deck: Deck, *, mass: MassKind = "lumped") -> FEModel:
         m_glob.add(idx, _conm2_matrix(cm.mass, rot @ np.array(cm.offset), rot @ inertia @ rot.T))
 
     springs = sorted(deck.celas2s.values(), key=lambda sp: sp.id)
-    rows, cols, values = [], [], []
+    rows, cols, values = [np.zeros(0, int)], [np.zeros(0, int)], [np.zeros(0)]
     for row, sp in enumerate(springs):
-        ends = [(sp.g1, sp.c1, 1.0)] + ([(sp.g2, sp.c2, -1.0)] if sp.g2 is not None else [])
-        for grid, component, sign in ends:
-            idx, coefficients = cd_component_entries(dofs, cd_frames, grid, component)
-            rows.append(np.full(3, row)), cols.append(idx), values.append(sign * coefficients)
-    vectors = sparse.coo_array((np.concatenate(values) if values else np.zeros(0),
-                                (np.concatenate(rows) if rows else np.zeros(0, int),
-                                 np.concatenate(cols) if cols else np.zeros(0, int))),
+        idx, coefficients = scalar_element_entries(dofs, cd_frames, sp.g1, sp.c1, sp.g2, sp.c2)
+        rows.append(np.full(len(idx), row)), cols.append(idx), values.append(coefficients)
+    vectors = sparse.coo_array((np.concatenate(values), (np.concatenate(rows), np.concatenate(cols))),
                                shape=(len(springs), n)).tocsr()
     constants = np.array([sp.k for sp in springs], dtype=float)
     k_spring = sparse.csr_array(vectors.T @ sparse.diags_array(constants) @ vectors) if springs else \

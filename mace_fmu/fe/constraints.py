@@ -24,10 +24,7 @@ class Constraints:
 
     def reduce(self, matrix: np.ndarray | sparse.sparray) -> np.ndarray:
         """T^T A T as a dense array, for a dense or a sparse A."""
-        t = self.transform
-        if sparse.issparse(matrix):
-            return (t.T @ matrix @ t).toarray()
-        return (t.T @ (t.T @ matrix).T).T
+        return self.reduce_sparse(matrix).toarray()
 
     def reduce_sparse(self, matrix: np.ndarray | sparse.sparray) -> sparse.csr_array:
         """T^T A T as a sparse (CSR) array, for a dense or a sparse A."""

@@ -61,3 +61,14 @@ def cd_component_vector(dofs: DofMap, cd_frames: np.ndarray, grid: int, componen
     idx, coefficients = cd_component_entries(dofs, cd_frames, grid, component)
     vec[idx] = coefficients
     return vec
+
+
+def scalar_element_entries(dofs: DofMap, cd_frames: np.ndarray, g1: int, c1: int, g2: int | None, c2: int | None
+                           ) -> tuple[np.ndarray, np.ndarray]:
+    """(DOF indices, coefficients) of u1 - u2 for a scalar element (CELAS, CMASS) between component ``c1``
+    of ``g1`` and ``c2`` of ``g2`` (each in its grid's CD system); ``g2`` None: grounded, u1 alone."""
+    idx, coefficients = cd_component_entries(dofs, cd_frames, g1, c1)
+    if g2 is None:
+        return idx, coefficients
+    idx2, coefficients2 = cd_component_entries(dofs, cd_frames, g2, c2)
+    return np.concatenate([idx, idx2]), np.concatenate([coefficients, -coefficients2])

@@ -33,7 +33,7 @@ from mace_fmu.deck.cards import Deck
 from mace_fmu.deck.geometry import bar_orientation
 from mace_fmu.errors import MaceError
 from mace_fmu.fe.beam import BeamSection, MassKind, local_frame, local_mass, local_stiffness, to_basic
-from mace_fmu.fe.dofs import DofMap, cd_component_vector
+from mace_fmu.fe.dofs import DofMap, scalar_element_entries
 from mace_fmu.fe.triplets import MatrixTriplets
 
 
@@ -141,8 +141,5 @@ def add_elements(deck: Deck, dofs: DofMap, positions: dict[int, np.ndarray], fra
 
     for sm in sorted(deck.scalar_masses.values(), key=lambda s: s.id):
         value = sm.mass if sm.mass is not None else deck.pmasses[sm.pid].mass  # type: ignore[index]
-        vec = cd_component_vector(dofs, cd_frames, sm.g1, sm.c1)
-        if sm.g2 is not None:
-            vec = vec - cd_component_vector(dofs, cd_frames, sm.g2, sm.c2)  # type: ignore[arg-type]
-        nz = np.flatnonzero(vec)
-        mass.add(nz, value * np.outer(vec[nz], vec[nz]))
+        idx, vec = scalar_element_entries(dofs, cd_frames, sm.g1, sm.c1, sm.g2, sm.c2)
+        mass.add(idx, value * np.outer(vec, vec))  # repeated DOFs (g1 = g2) add up in the sparse sum

@@ -82,8 +82,8 @@ def solve_modes(stiffness: np.ndarray | sparse.sparray, mass: np.ndarray | spars
     # Lanczos pays off for a few of many modes; asked for a good part of them, the dense route is faster
     found = None
     if k.shape[0] > DENSE_MAX_DOF and (wanted_count or 0) < massive // 4:
-        found = _sparse_modes(k, m, constraints, up_to_hz=wanted_hz if wanted_hz is not None else max_hz,
-                              count=wanted_count)
+        found = _sparse_modes(k, m, constraints, massive=massive,
+                              up_to_hz=wanted_hz if wanted_hz is not None else max_hz, count=wanted_count)
     freq, phi = found if found is not None else _dense_modes(k.toarray(), m.toarray(), constraints)
     keep = np.ones_like(freq, dtype=bool) if max_hz is None else freq <= max_hz
     return Modes(frequencies_hz=freq[keep], shapes=constraints.transform @ phi[:, keep], dofs=dofs,
@@ -120,18 +120,18 @@ def _dense_modes(k: np.ndarray, m: np.ndarray, constraints: Constraints) -> tupl
     return freq, phi
 
 
-def _sparse_modes(k: sparse.csr_array, m: sparse.csr_array, constraints: Constraints, *, up_to_hz: float | None,
-                  count: int | None) -> tuple[np.ndarray, np.ndarray] | None:
+def _sparse_modes(k: sparse.csr_array, m: sparse.csr_array, constraints: Constraints, *, massive: int,
+                  up_to_hz: float | None, count: int | None) -> tuple[np.ndarray, np.ndarray] | None:
     """The lowest modes by shift-invert Lanczos about a small negative shift: (K - sigma M)^-1 M maps
     every eigenvalue above the shift, rigid-body modes included, to a large one in order, and the
     massless DOFs' infinite eigenvalues to zero, so they need no condensation. With ``count`` that
     many are found at least; the number found doubles until one lies above ``up_to_hz`` too. None when
-    that would take more than half the modes there are (the dense route is then the faster)."""
+    that would take more than half the modes there are (the dense route is then the faster);
+    ``massive``: the number of DOFs with mass, which bounds the modes there are."""
     n = k.shape[0]
     if count is None and up_to_hz is None:
         raise MaceError(f"a model of {n} independent DOFs is solved for its lowest modes only: give a frequency "
                         "range (max_hz, --max-hz, or the deck's EIGRL V2) or a number of modes (EIGRL ND)")
-    massive = int(np.count_nonzero(~_massless(m.diagonal())))
     if massive < 4:
         return None
     # the shift: a millionth of a typical K_ii / M_ii [(rad/s)^2] below zero, under every eigenvalue of a

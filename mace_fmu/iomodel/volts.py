@@ -314,8 +314,9 @@ def apply_parameters(instruments: Instruments, parameters: ParameterSet | None, 
 
 
 def _check_range(name: str, value: float, kind: ParameterKind) -> None:
-    """A MaceError unless ``value`` lies in the range every parameter of ``kind`` has (the FMUs' own)."""
-    low, high = kind.range_for(value)
+    """A MaceError unless ``value`` lies in the range every parameter of ``kind`` has (the FMUs' own; for the
+    kinds whose range does not depend on a nominal value: delays, damping ratios, frequency scales)."""
+    low, high = kind.minimum, kind.maximum
     if not low <= value <= high:
         unit = "" if kind.unit == "1" else f" {kind.unit}"
         raise MaceError(f"parameter {name!r} = {value:g} is outside [{low:g}, {high:g}]{unit}, the range of every "
