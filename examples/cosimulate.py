@@ -12,6 +12,7 @@ runs, into a temporary folder that ``main`` removes when they are done.
 
 from __future__ import annotations
 
+import os
 import sys
 import tempfile
 
@@ -60,3 +61,10 @@ def main() -> None:
 
 if __name__ == "__main__":
     main()
+    # A pythonfmu FMU keeps its Python module alive after freeInstance (pythonfmu issue #229), and the
+    # interpreter's finalisation has then aborted ("corrupted double-linked list", SIGABRT) after the
+    # results were printed, in one run in several. Leave without finalisation, as the test suite does
+    # (tests/conftest.py): the results are flushed and the unpacked FMU is already removed.
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(0)
