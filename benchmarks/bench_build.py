@@ -16,11 +16,11 @@ from contextlib import contextmanager
 
 import numpy as np
 import scipy
-
 from common import machine_line
+
 from mace_fmu import pipeline
 from mace_fmu.iomodel import volts
-from mace_fmu.structure import bundled_deck_path
+from mace_fmu.structure.file import bundled_deck_path
 
 #: (module, function name, stage) wrapped to time the stages of one build
 STAGES = ((pipeline, "read_deck", "read deck"), (pipeline, "assemble", "assemble K, M"),

@@ -56,9 +56,10 @@ gain = 1.0
 def run_one(size: str, kind: str, volts: bool) -> dict:
     """In this process: the stages for one deck, with their wall times [s] and the peak memory [MB]."""
     from support.decks import frame_tower
+
     from mace_fmu.deck.reader import read_deck
     from mace_fmu.fe.assembly import assemble
-    from mace_fmu.pipeline import compute_modes
+    from mace_fmu.fe.modes import compute_modes
 
     nx, ny, levels = SIZES[size]
     folder = Path(tempfile.mkdtemp())
@@ -100,9 +101,9 @@ def main() -> None:
     if args.one:
         print(json.dumps(run_one(args.one[0], args.one[1], args.volts)))
         return
-    from common import machine_line
     import numpy
     import scipy
+    from common import machine_line
 
     print(machine_line(numpy=numpy.__version__, scipy=scipy.__version__))
     print(f"date: {time.strftime('%Y-%m-%d %H:%M')}, load: {os.getloadavg()[0]:.2f}")

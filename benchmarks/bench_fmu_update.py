@@ -30,7 +30,6 @@ import time
 from pathlib import Path
 
 import numpy as np
-
 from common import machine_line, timed
 
 
@@ -51,12 +50,12 @@ def main() -> None:
 
     from mace_fmu.fmu.native.export import export_native_fmu
     from mace_fmu.iomodel.volts import volts_model
-    from mace_fmu.runner import DaskRunner
-    from mace_fmu.threads import single_blas_thread
     from mace_fmu.updating.fmu_model import fmu_family
     from mace_fmu.updating.fmu_update import fmu_cost
     from mace_fmu.updating.mace_update import THESIS_KEPT, pre_update_parameters
     from mace_fmu.updating.truth import measure_test_article
+    from mace_fmu.util.runner import DaskRunner
+    from mace_fmu.util.threads import single_blas_thread
 
     out = Path(args.out or tempfile.mkdtemp(prefix="bench_fmu_update_"))
     fmu = export_native_fmu(volts_model("1g"), out_dir=out, name="MACE_1g_native")

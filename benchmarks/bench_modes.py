@@ -11,11 +11,11 @@ import time
 
 import numpy as np
 import scipy
-
 from common import machine_line, timed
+
 from mace_fmu.deck.reader import read_deck
-from mace_fmu.pipeline import compute_modes
-from mace_fmu.structure import bundled_deck_path
+from mace_fmu.fe.modes import compute_modes
+from mace_fmu.structure.file import bundled_deck_path
 
 CASES = {
     "deck -> 0-g modes": dict(structure="0g"),

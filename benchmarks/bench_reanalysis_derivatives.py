@@ -24,8 +24,8 @@ from mace_fmu.iomodel.frf import frequency_response
 from mace_fmu.iomodel.parametric import ParametricSystem
 from mace_fmu.iomodel.parametric_data import parametric_arrays
 from mace_fmu.iomodel.volts import volts_model
-from mace_fmu.parameter_kinds import MODULUS, kind_of_fmu_name
-from mace_fmu.parameters import ParameterSet
+from mace_fmu.parameters.kinds import MODULUS, kind_of_fmu_name
+from mace_fmu.parameters.sets import ParameterSet
 
 STEP = 1e-3
 FREQUENCIES_HZ = np.geomspace(0.5, 60.0, 300)

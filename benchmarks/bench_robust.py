@@ -11,12 +11,13 @@ import tempfile
 import time
 
 from common import machine_line
+
 from mace_fmu.fmu.native.export import export_native_fmu
-from mace_fmu.robust.design import design_compensator
-from mace_fmu.robust.study import prediction_bounds
-from mace_fmu.robust.sweep import robust_sweep
-from mace_fmu.runner import DaskRunner
-from mace_fmu.zero_g import predict_zero_g
+from mace_fmu.util.runner import DaskRunner
+from mace_fmu.zero_g.nominal import predict_zero_g
+from mace_fmu.zero_g.robust.design import design_compensator
+from mace_fmu.zero_g.robust.study import prediction_bounds
+from mace_fmu.zero_g.robust.sweep import robust_sweep
 
 
 def main(samples: int = 100) -> None:

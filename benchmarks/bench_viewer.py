@@ -10,7 +10,8 @@ import os
 import tempfile
 
 from common import machine_line, timed
-from mace_fmu.pipeline import compute_modes
+
+from mace_fmu.fe.modes import compute_modes
 from viewer import animate_modes, write_animation_html
 
 

@@ -10,11 +10,11 @@ import time
 
 import control as ct
 import numpy as np
-
 from common import machine_line, timed
+
 from mace_fmu.deck.reader import read_deck
 from mace_fmu.iomodel.volts import volts_model
-from mace_fmu.structure import bundled_deck_path
+from mace_fmu.structure.file import bundled_deck_path
 
 
 def main() -> None:

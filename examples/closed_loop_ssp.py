@@ -33,7 +33,7 @@ def state_space_loop(*, parameters: Path | None, steps: int, step_s: float, dist
     left out), from the state-space models alone."""
     from mace_fmu.cli.controller import lqg_controller
     from mace_fmu.iomodel.volts import volts_model
-    from mace_fmu.parameters import ParameterSet
+    from mace_fmu.parameters.sets import ParameterSet
 
     plant = volts_model("0g", parameters=ParameterSet.read(parameters) if parameters else None).system
     sampled = ct.sample_system(plant, step_s, "zoh")

@@ -18,9 +18,9 @@ from pathlib import Path
 from typing import Mapping
 
 from mace_fmu.iomodel.volts import VoltsModel
-from mace_fmu.robust.report import format_summary, sweep_figure
-from mace_fmu.robust.study import RobustStudy, format_cross_checks, prediction_bounds, robust_0g_study
-from mace_fmu.runner import DaskRunner
+from mace_fmu.util.runner import DaskRunner
+from mace_fmu.zero_g.robust.study import RobustStudy, format_cross_checks, prediction_bounds, robust_0g_study
+from mace_fmu.zero_g.robust.summary import format_summary, sweep_figure
 
 
 def study_on_dask(model: VoltsModel, *, frequency_bounds: Mapping[int, float], out_dir: str | Path,
@@ -32,7 +32,7 @@ def study_on_dask(model: VoltsModel, *, frequency_bounds: Mapping[int, float], o
 
 
 def main() -> None:
-    from mace_fmu.zero_g import predict_zero_g
+    from mace_fmu.zero_g.nominal import predict_zero_g
 
     out = Path(sys.argv[1] if len(sys.argv) > 1 else "robust_0g")
     prediction = predict_zero_g()

@@ -41,14 +41,13 @@ def main(argv: list[str] | None = None) -> dict:
 
     from mace_fmu.fmu.native.export import export_native_fmu
     from mace_fmu.iomodel.volts import volts_model
-    from mace_fmu.parameters import ParameterSet
-    from mace_fmu.runner import DaskRunner
+    from mace_fmu.parameters.sets import ParameterSet
     from mace_fmu.updating.fmu_model import fmu_family
     from mace_fmu.updating.fmu_problem import fmu_problem
     from mace_fmu.updating.fmu_update import fmu_parameters, update_fmu
     from mace_fmu.updating.mace_update import THESIS_KEPT, pre_update_parameters, table_4_4_moduli
-    from mace_fmu.updating.truth import (GYRO_DELAYS, SERVO_DELAYS, compare_frfs, default_estimator,
-                                         measure_test_article)
+    from mace_fmu.updating.truth import GYRO_DELAYS, SERVO_DELAYS, compare_frfs, default_estimator, measure_test_article
+    from mace_fmu.util.runner import DaskRunner
 
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -162,10 +161,10 @@ def overlay_plot(*, truth_fmu: Path, updated_fmu: Path, start: dict, history, es
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from mace_fmu.atomic import save_figure_atomic
     from mace_fmu.updating.data import TimeHistory
     from mace_fmu.updating.fmu_model import fmu_family
     from mace_fmu.updating.truth import CHECKED_FRFS
+    from mace_fmu.util.atomic import save_figure_atomic
 
     outs = sorted({o for _, o in CHECKED_FRFS})
     curves = {}

@@ -7,37 +7,31 @@ The names a user starts with, in the order of the data flow (imported on first u
     modes = mace_fmu.compute_modes(deck, structure="0g")      # modes [Hz], labelled
     model = mace_fmu.volts_model("0g", structure_file="my.toml")  # volts in, volts out
     mace_fmu.export_fmu(model, out_dir="fmus")                # an FMU (native: FMI 2 or 3; or kind="pythonfmu")
+
+The packages follow the same flow, each with its own ``__all__``: :mod:`mace_fmu.deck` (the deck),
+:mod:`mace_fmu.structure` (the structure file; 1-g and 0-g structures), :mod:`mace_fmu.parameters`
+(parameter kinds and sets), :mod:`mace_fmu.fe` (finite elements to labelled modes),
+:mod:`mace_fmu.iomodel` (volts-volts state-space models), :mod:`mace_fmu.fmu` and :mod:`mace_fmu.ssp`
+(FMUs and SSP packages), :mod:`mace_fmu.updating` (models updated from test data), :mod:`mace_fmu.zero_g`
+(the 0-g prediction and its robustness), :mod:`mace_fmu.control_studies` (thesis Appendix A),
+:mod:`mace_fmu.cli` (the ``mace-fmu`` command); :mod:`mace_fmu.util` holds what they share.
 """
 
 from __future__ import annotations
 
-import importlib
-from typing import Any
+from mace_fmu.util.lazy import lazy_exports
 
-#: public name -> the module that defines it
-_PUBLIC = {
+__all__, __getattr__, __dir__ = lazy_exports(__name__, {
     "read_deck": "mace_fmu.deck.reader",
-    "load_structure_file": "mace_fmu.structure",
-    "compute_modes": "mace_fmu.pipeline",
+    "load_structure_file": "mace_fmu.structure.file",
+    "compute_modes": "mace_fmu.fe.modes",
     "volts_model": "mace_fmu.iomodel.volts",
-    "ParameterSet": "mace_fmu.parameters",
+    "ParameterSet": "mace_fmu.parameters.sets",
     "export_fmu": "mace_fmu.fmu.export",
     "export_controller_fmu": "mace_fmu.fmu.controller",
     "DiscreteController": "mace_fmu.fmu.controller",
-    "write_ssp": "mace_fmu.ssp",
+    "write_ssp": "mace_fmu.ssp.package",
     "fmu_problem": "mace_fmu.updating.fmu_problem",
     "update_fmu": "mace_fmu.updating.fmu_update",
     "MaceError": "mace_fmu.errors",
-}
-
-__all__ = sorted(_PUBLIC)
-
-
-def __getattr__(name: str) -> Any:
-    if name not in _PUBLIC:
-        raise AttributeError(f"module 'mace_fmu' has no attribute {name!r}")
-    return getattr(importlib.import_module(_PUBLIC[name]), name)
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(__all__))
+})

@@ -10,9 +10,9 @@ from typing import Any
 
 import numpy as np
 
-from mace_fmu.textfile import read_toml
+from mace_fmu.fe.modes import StructureModes
 from mace_fmu.fe.pairing import pair_by_mac
-from mace_fmu.pipeline import StructureModes
+from mace_fmu.util.textfile import read_toml
 
 
 @functools.cache
@@ -129,7 +129,7 @@ class PoleRow:
 
 def _pair_poles(rows: list[tuple[str, str, float, float | None, bool]], poles) -> list[PoleRow]:
     """Each thesis row takes the nearest unused pole whose label matches its pattern ("a|b": either)."""
-    from mace_fmu.updating.pairing import pair_poles
+    from mace_fmu.iomodel.pole_pairing import pair_poles
 
     out = []
     for (label, _, hz, zeta, heavy), i in zip(rows, pair_poles([(r[1], r[2]) for r in rows], poles,

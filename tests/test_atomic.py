@@ -19,8 +19,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from mace_fmu.atomic import atomic_path, save_figure_atomic, write_text_atomic
 from mace_fmu.cli import main
+from mace_fmu.util.atomic import atomic_path, save_figure_atomic, write_text_atomic
 
 PREVIOUS = b"the previous good file\n"
 

@@ -174,7 +174,7 @@ def test_fmu_names_say_which_outputs_an_fmu_has():
 
 
 def test_hz_text_shows_the_zero_frequency_cluster_as_zero():
-    from mace_fmu.text import hz_text
+    from mace_fmu.util.frequency import hz_text
 
     assert [hz_text(f, decimals=3) for f in (-4e-4, -1e-7, 0.0, 0.0099)] == ["0.000"] * 4
     assert hz_text(-0.02, decimals=3) == "-0.020" and hz_text(2.0996, decimals=3) == "2.100"
@@ -211,7 +211,7 @@ def test_each_input_is_collocated_with_its_own_sensor():
     from mace_fmu.deck.reader import read_deck
     from mace_fmu.iomodel.collocation import collocated_sensor
     from mace_fmu.iomodel.instruments import load_instruments
-    from mace_fmu.structure import bundled_deck_path
+    from mace_fmu.structure.file import bundled_deck_path
 
     instruments = load_instruments()
     positions = grid_positions(read_deck(bundled_deck_path()))

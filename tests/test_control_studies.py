@@ -19,7 +19,7 @@ from mace_fmu.control_studies.reduced_order import (THESIS_COSTS, balanced_model
                                                     weights_for_full_cost)
 from mace_fmu.control_studies.stiffness_sensitivity import AUTHORITIES, study_authority
 from mace_fmu.errors import MaceError
-from mace_fmu.two_mass import TwoMassSystem
+from mace_fmu.updating.two_mass import TwoMassSystem
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 

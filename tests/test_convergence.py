@@ -11,14 +11,14 @@ import math
 
 import numpy as np
 import pytest
+from support.two_mass_records import true_damping, two_mass_record
 
-from support.two_mass_records import two_mass_record, true_damping
 from mace_fmu.cli import main
-from mace_fmu.two_mass import TwoMassSystem
 from mace_fmu.updating.convergence import convergence_report, time_noise_floor
 from mace_fmu.updating.costs import TimeResponseCost
 from mace_fmu.updating.sample_family import MODE_LABELS, TwoMassFamily
 from mace_fmu.updating.solve import Bounds, Stage, UpdateSettings, update
+from mace_fmu.updating.two_mass import TwoMassSystem
 
 NOISE = 0.05  # noise RMS / noise-free output RMS
 SAMPLES = 2048

@@ -317,7 +317,7 @@ def test_utf8_comments_and_byte_order_mark_are_text(tmp_path: Path) -> None:
 
 
 def test_structure_errors_name_the_case_control_line() -> None:
-    from mace_fmu.structure import build_structure
+    from mace_fmu.structure.build import build_structure
 
     deck = read_deck_text(case("SUBCASE 1\n  SPC = 1", sf("SPC1", 1, 123456, 1)), name="deck.bdf")
     with pytest.raises(DeckError) as info:

@@ -16,11 +16,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 from support.deck_mutations import MUTATIONS, mutate
+
 from mace_fmu.cli import main
 from mace_fmu.deck import DeckError, read_deck
-from mace_fmu.structure import build_structure, bundled_deck_path
+from mace_fmu.structure.build import build_structure
+from mace_fmu.structure.file import bundled_deck_path
 
 SEEDS = range(2000)
 
@@ -88,7 +89,7 @@ def test_deck_error_exit_status_of_the_installed_command(outcomes) -> None:
 def test_valid_mutants_give_modes(outcomes) -> None:
     """The first few mutants that read go through the whole 0-g analysis: finite frequencies or a MaceError."""
     from mace_fmu.errors import MaceError
-    from mace_fmu.pipeline import compute_modes
+    from mace_fmu.fe.modes import compute_modes
 
     valid = [path for _, outcome, path in outcomes.values() if outcome == "valid"][:6]
     assert len(valid) == 6

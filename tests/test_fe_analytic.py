@@ -7,15 +7,15 @@ import math
 import numpy as np
 import pytest
 import scipy.linalg as sla
-
 from support.decks import deck_text, line_of_bars, r
+
 from mace_fmu.deck.reader import read_deck_text
 from mace_fmu.fe.assembly import assemble
 from mace_fmu.fe.constraints import build_constraints
 from mace_fmu.fe.modal import solve_modes
+from mace_fmu.fe.modes import compute_modes, gravity_load
 from mace_fmu.fe.preload import geometric_stiffness
-from mace_fmu.pipeline import compute_modes, gravity_load
-from mace_fmu.structure import StructureSpec
+from mace_fmu.structure.file import StructureSpec
 
 # Steel-like solid round bar, 1 m
 E, NU, RHO, L = 2.0e11, 0.3, 7800.0, 1.0

@@ -12,15 +12,15 @@ import math
 import numpy as np
 import pytest
 from scipy import sparse
-
 from support.decks import deck_text, frame_tower, line_of_bars
+
 from mace_fmu.deck.reader import read_deck_text
 from mace_fmu.errors import MaceError
 from mace_fmu.fe import modal
 from mace_fmu.fe.assembly import assemble
 from mace_fmu.fe.constraints import build_constraints
 from mace_fmu.fe.modal import solve_modes
-from mace_fmu.pipeline import compute_modes
+from mace_fmu.fe.modes import compute_modes
 
 E, NU, RHO, L = 2.0e11, 0.3, 7800.0, 1.0
 D = 0.02

@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 from fmpy.fmi1 import FMICallException
 from fmpy.validation import validate_fmu
-
 from support.fmu_checks import (DURATION, check_close, initialised_slave, make_inputs, nominal_slave, rss_bytes,
-                        run_in_libcosim, run_steps, value_references, zoh_reference)
+                                run_in_libcosim, run_steps, value_references, zoh_reference)
+
 from mace_fmu.fmu.export import export_fmu
 from mace_fmu.iomodel.motion import MOTION_COMPONENTS
 from mace_fmu.iomodel.volts import volts_model
@@ -241,7 +241,7 @@ def test_physical_parameter_reanalysis_matches_the_fe_rebuild(built):
     """E of Lexan center +5 % set in the FMU (Ritz reanalysis on the retained modes, eq. 4.6-4.9)
     against the FE core rebuilt with that modulus: every flexible mode within 1e-3 (measured 2.8e-4
     in 0-g, 7.8e-4 in 1-g, where the stiffness change is taken about the sagged configuration)."""
-    from mace_fmu.pipeline import compute_modes
+    from mace_fmu.fe.modes import compute_modes
 
     model, _, unzipped = built
     kind = model.structure_modes.structure.kind
@@ -262,7 +262,7 @@ def test_reanalysed_modes_keep_their_index_through_a_frequency_crossing(motion_f
     """Doubling the piezo stack modulus lifts 2nd Y bending (8.638 Hz) above 2nd Z bending
     (8.667 Hz). frequency_mode_k (and damping_mode_k) must follow the physical mode: checked
     against the FE rebuild, whose modes are labelled from their energy distributions."""
-    from mace_fmu.pipeline import compute_modes
+    from mace_fmu.fe.modes import compute_modes
 
     model, _, unzipped = motion_fmu_0g
     md = fmpy.read_model_description(unzipped)
@@ -285,7 +285,7 @@ def test_reanalysed_modes_keep_their_index_through_a_frequency_crossing(motion_f
 def test_parameters_rebuild_the_same_model_as_volts_model(built, change):
     """A delay, a servo gain or a modal damping ratio set in the FMU gives the response of the
     model rebuilt by volts_model with that value (1e-8 of each output's range)."""
-    from mace_fmu.parameters import ParameterSet
+    from mace_fmu.parameters.sets import ParameterSet
 
     model, _, unzipped = built
     if change == "delay":

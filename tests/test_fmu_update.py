@@ -8,11 +8,11 @@ import pytest
 
 from mace_fmu.errors import MaceError
 from mace_fmu.updating.data import TimeHistory
+from mace_fmu.updating.files import h1_estimate
 from mace_fmu.updating.fmu_model import fmu_family
 from mace_fmu.updating.fmu_update import fmu_cost, update_fmu
 from mace_fmu.updating.mace_update import pre_update_parameters, table_4_4_moduli
 from mace_fmu.updating.sensitivity import cost_sensitivities
-from mace_fmu.updating.files import h1_estimate
 from mace_fmu.updating.simulated_frf import H1Estimator
 
 GIMBALS = ("gimbal_primary_x", "gimbal_primary_z", "gimbal_secondary_x", "gimbal_secondary_z")
@@ -125,7 +125,7 @@ def _fmu_runs() -> int:
 
 
 def test_sensitivities_on_a_two_worker_local_cluster_are_the_serial_ones_bit_for_bit(fmu):
-    from mace_fmu.runner import DaskRunner
+    from mace_fmu.util.runner import DaskRunner
 
     family = fmu_family(fmu)
     cost = fmu_cost("time", history=_measured(fmu, 2.0))

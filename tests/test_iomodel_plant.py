@@ -5,11 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from mace_fmu.fe.modes import compute_modes
 from mace_fmu.iomodel.damping import modal_damping
-from mace_fmu.iomodel.modal_core import ZERO_HZ
 from mace_fmu.iomodel.instruments import influence_vector, load_instruments
 from mace_fmu.iomodel.modal_ss import modal_plant
-from mace_fmu.pipeline import compute_modes
+from mace_fmu.util.frequency import ZERO_HZ
 
 
 @pytest.fixture(scope="module")

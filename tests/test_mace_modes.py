@@ -7,8 +7,8 @@ import pytest
 
 from mace_fmu.deck.geometry import grid_positions
 from mace_fmu.deck.reader import read_deck
-from mace_fmu.pipeline import compute_modes
-from mace_fmu.structure import bundled_deck_path
+from mace_fmu.fe.modes import compute_modes
+from mace_fmu.structure.file import bundled_deck_path
 from mace_fmu.thesis import table_3_15_comparison, table_5_1_0g, table_5_1_1g, thesis_data
 
 

@@ -17,10 +17,10 @@ import numpy as np
 import pytest
 
 from mace_fmu.cli import main
-from mace_fmu.parameters import ParameterSet
+from mace_fmu.parameters.sets import ParameterSet
 from mace_fmu.thesis import thesis_data
 from mace_fmu.updating.mace_family import MaceFamily
-from mace_fmu.updating.mace_update import (CANDIDATES, pre_update_parameters, table_4_1_rows, table_4_4_moduli)
+from mace_fmu.updating.mace_update import CANDIDATES, pre_update_parameters, table_4_1_rows, table_4_4_moduli
 
 FILES = ("parameters.toml", "report.txt", "summary.json", "orthogonality.png", "strength.png", "cost_history.png",
          "bode_gimbal_secondary_z_to_gyro_payload_z.png", "bode_gimbal_secondary_x_to_gyro_payload_x.png",

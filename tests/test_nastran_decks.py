@@ -19,7 +19,7 @@ import pytest
 
 from mace_fmu.deck.reader import read_deck, read_deck_text
 from mace_fmu.errors import DeckError, MaceError
-from mace_fmu.pipeline import compute_modes
+from mace_fmu.fe.modes import compute_modes
 
 DATA = Path(__file__).parent / "data" / "nastran"
 RELATIVE = 1e-4  #: elastic modes

@@ -15,12 +15,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 import scipy.optimize
-
 from support.decks import line_of_bars, r
+
 from mace_fmu.cli import main
 from mace_fmu.deck.reader import read_deck
 from mace_fmu.errors import MaceError
-from mace_fmu.pipeline import compute_modes
+from mace_fmu.fe.modes import compute_modes
 
 E, NU, RHO, L, N = 7.0e10, 0.33, 2700.0, 2.0, 20
 D = 0.03
@@ -130,7 +130,7 @@ def test_a_structure_file_with_an_unknown_table_names_file_and_line(beam, tmp_pa
 
 
 def test_the_bundled_structure_file_applies_to_a_copy_of_the_bundled_deck(tmp_path):
-    from mace_fmu.structure import bundled_deck_path
+    from mace_fmu.structure.file import bundled_deck_path
 
     copy = tmp_path / "copy.bdf"
     copy.write_bytes(bundled_deck_path().read_bytes())
@@ -189,8 +189,8 @@ def test_your_own_deck_with_a_structure_file_gives_a_volts_model_and_an_fmu(tmp_
     FMU (FMI 2 and 3) steps as the exact ZOH of its state space."""
     import control as ct
     import fmpy
-
     from support.fmu_checks import check_close, make_inputs, zoh_reference
+
     from mace_fmu.fmu.native.export import export_native_fmu
     from mace_fmu.iomodel.volts import volts_model
 

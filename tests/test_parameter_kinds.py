@@ -1,5 +1,5 @@
 """The one registry of parameter kinds: both spellings of every kind decode to it, and the ranges
-FMUs declare follow from it (mace_fmu.parameter_kinds)."""
+FMUs declare follow from it (mace_fmu.parameters.kinds)."""
 
 from __future__ import annotations
 
@@ -7,10 +7,10 @@ import math
 
 import pytest
 
-from mace_fmu.parameter_kinds import (DAMPING, DELAY, FREQUENCY_SCALE, GAIN, KINDS, MODULUS, SPRING, ZERO_HZ,
-                                      declared_range, kind_of_fmu_name, kind_of_set_name, mode_label, mode_number,
-                                      unit_of)
-from mace_fmu.parameters import parameter_kind, parameter_unit
+from mace_fmu.parameters.kinds import (DAMPING, DELAY, FREQUENCY_SCALE, GAIN, KINDS, MODULUS, SPRING, ZERO_HZ,
+                                       declared_range, kind_of_fmu_name, kind_of_set_name, mode_label, mode_number,
+                                       unit_of)
+from mace_fmu.parameters.sets import parameter_kind, parameter_unit
 
 
 @pytest.mark.parametrize("set_name, fmu_name, kind, unit", [

@@ -18,3 +18,54 @@ def test_importing_the_package_loads_no_heavy_dependency():
     code = "import sys, mace_fmu; print(sorted(m for m in ('control', 'fmpy', 'scipy') if m in sys.modules))"
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert done.stdout.strip() == "[]"
+
+
+#: the packages in the order of the data flow: each may import only from packages before it (the
+#: command line, last, from all). util and errors are shared by every stage.
+STAGES = ("errors", "util", "deck", "structure", "parameters", "fe", "iomodel", "thesis", "fmu", "ssp", "updating",
+          "control_studies", "zero_g", "cli")
+
+
+def _imports_between_stages() -> list[tuple[str, str, str]]:
+    """(importing module, imported module, the two stages) for every ``from mace_fmu.X import`` in the package."""
+    import ast
+    from pathlib import Path
+
+    import mace_fmu
+
+    root = Path(mace_fmu.__file__).parent
+    found = []
+    for path in sorted(root.rglob("*.py")):
+        module = ".".join(path.relative_to(root.parent).with_suffix("").parts)
+        for node in ast.walk(ast.parse(path.read_text(), filename=str(path))):
+            if isinstance(node, ast.ImportFrom) and node.module and node.module.startswith("mace_fmu."):
+                found.append((module, node.module))
+    return found
+
+
+def _stage(module: str) -> str:
+    return module.split(".")[1]
+
+
+def test_every_stage_imports_only_earlier_stages():
+    """The layout reads like the data flow: deck -> structure -> parameters -> fe -> iomodel -> fmu -> ...;
+    an import against that order (a later stage's name used by an earlier one) is a design error."""
+    edges = _imports_between_stages()
+    assert len(edges) > 300  # the walk saw the package
+    backwards = [(a, b) for a, b in edges if _stage(a) != "__init__" and STAGES.index(_stage(b)) > STAGES.index(_stage(a))]
+    assert backwards == []
+
+
+def test_every_package_lists_its_public_names_and_each_resolves():
+    import importlib
+    import pkgutil
+
+    import mace_fmu
+
+    packages = ["mace_fmu"] + [m.name for m in pkgutil.walk_packages(mace_fmu.__path__, "mace_fmu.") if m.ispkg]
+    assert {"mace_fmu.fe", "mace_fmu.updating", "mace_fmu.zero_g.robust", "mace_fmu.fmu.native"} <= set(packages)
+    for name in packages:
+        package = importlib.import_module(name)
+        assert package.__doc__ and package.__all__, name
+        for public in package.__all__:
+            assert getattr(package, public) is not None, f"{name}.{public}"

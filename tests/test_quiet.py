@@ -40,8 +40,8 @@ def test_compute_modes_reports_progress_only_to_its_callback_and_the_log(capfd, 
     """From Python nothing reaches stdout or stderr; the 20 preload increments go to the callback and the log."""
     import logging
 
-    from mace_fmu.pipeline import compute_modes
-    from mace_fmu.progress import Step
+    from mace_fmu.fe.modes import compute_modes
+    from mace_fmu.util.progress import Step
 
     steps: list[Step] = []
     with caplog.at_level(logging.DEBUG, logger="mace_fmu"):

@@ -45,8 +45,7 @@ def _normalise(text: str) -> str:
 @pytest.fixture(scope="module")
 def build_text():
     from mace_fmu.cli.build import low_modes, thesis_tables
-    from mace_fmu.iomodel import DEFAULT_MAX_HZ
-    from mace_fmu.pipeline import compute_modes
+    from mace_fmu.fe.modes import DEFAULT_MAX_HZ, compute_modes
 
     m0 = compute_modes(structure="0g", max_hz=DEFAULT_MAX_HZ)
     results = {kind: compute_modes(structure="1g", preload=kind, max_hz=DEFAULT_MAX_HZ) for kind in ("large", "linear")}

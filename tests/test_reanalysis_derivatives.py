@@ -11,7 +11,7 @@ from mace_fmu.iomodel.frf import frequency_response
 from mace_fmu.iomodel.parametric import ParametricSystem
 from mace_fmu.iomodel.parametric_data import parametric_arrays
 from mace_fmu.iomodel.volts import volts_model
-from mace_fmu.parameters import ParameterSet
+from mace_fmu.parameters.sets import ParameterSet
 
 FREQUENCIES_HZ = np.geomspace(0.5, 60.0, 200)
 OPTIONS = dict(servos=False, bessel="none", delays=False)

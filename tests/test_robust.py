@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from mace_fmu.errors import MaceError
-from mace_fmu.robust.box import corner_points, monte_carlo_points, read_box
-from mace_fmu.robust.loop import LoopSpec
+from mace_fmu.zero_g.robust.box import corner_points, monte_carlo_points, read_box
+from mace_fmu.zero_g.robust.loop import LoopSpec
 
 #: 1-based mode -> relative bound: 1st Y, 2nd Z, 3rd Y bending with Table 5.3's +-1.1, 2.5, 1.8 %
 BOUNDS = {15: 0.011, 17: 0.025, 22: 0.018}
@@ -41,7 +41,7 @@ def unzipped(bounded_fmu, tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def design(model_0g):
-    from mace_fmu.robust.design import design_compensator
+    from mace_fmu.zero_g.robust.design import design_compensator
 
     return design_compensator(model_0g.system)
 
@@ -75,7 +75,7 @@ def test_box_is_the_fmus_declared_frequency_bounds(bounded_fmu):
 
 
 def test_corners_and_the_seeded_sample():
-    from mace_fmu.robust.box import ParameterBox
+    from mace_fmu.zero_g.robust.box import ParameterBox
 
     box = ParameterBox(names=("a", "b", "c"), nominal=np.array([1.0, 2.0, 3.0]), low=np.array([0.5, 1.0, 2.0]),
                        high=np.array([1.5, 4.0, 3.5]))
@@ -121,8 +121,8 @@ def test_lqg_closed_loop_poles_are_regulator_and_estimator_poles(design):
 
 def test_fmu_co_simulation_equals_the_state_space_closed_loop(unzipped, design, reference):
     """At a corner of the box: FMU (C runtime, fmpy) and Python model + control.feedback give the same samples."""
-    from mace_fmu.robust.cosim import SampledCompensator, run_fmu_loop
-    from mace_fmu.robust.statespace import simulate_state_space, state_space_loop
+    from mace_fmu.zero_g.robust.cosim import SampledCompensator, run_fmu_loop
+    from mace_fmu.zero_g.robust.statespace import simulate_state_space, state_space_loop
 
     loop = LoopSpec()
     corner = {name: 1 + b * s for (name, b), s in zip(zip(SCALES, BOUNDS.values()), (1, -1, 1))}
@@ -141,7 +141,7 @@ def test_fmu_co_simulation_equals_the_state_space_closed_loop(unzipped, design, 
 
 def test_a_refused_run_is_reported_not_printed(unzipped, design, capfd):
     """The FMU's own error (a value outside the declared bound) comes back in the run, not on the console."""
-    from mace_fmu.robust.cosim import SampledCompensator, run_fmu_loop
+    from mace_fmu.zero_g.robust.cosim import SampledCompensator, run_fmu_loop
 
     run = run_fmu_loop(unzipped, loop=LoopSpec(), compensator=SampledCompensator.of(design.compensator),
                        parameters={"frequency_scale_mode_17": 0.5})
@@ -154,9 +154,9 @@ def test_growth_test_finds_the_unstable_loop_the_eigenvalues_find(unzipped, mode
     """A more aggressive design (rho = 0.001, theta = 0.01) destabilises the 0-g FMU: spectral radius > 1, and
     the growth test on the FMU run says unstable; the default design says stable both ways."""
     from mace_fmu.control_studies.lqg import LqgWeights
-    from mace_fmu.robust.cosim import SampledCompensator, run_fmu_loop
-    from mace_fmu.robust.design import design_compensator
-    from mace_fmu.robust.statespace import state_space_loop
+    from mace_fmu.zero_g.robust.cosim import SampledCompensator, run_fmu_loop
+    from mace_fmu.zero_g.robust.design import design_compensator
+    from mace_fmu.zero_g.robust.statespace import state_space_loop
 
     loop = LoopSpec()
     hot = design_compensator(model_0g.system, weights=LqgWeights(rho=1e-3, theta=1e-2))
@@ -175,7 +175,7 @@ def test_example_on_a_local_dask_cluster_equals_the_serial_sweep(model_0g, tmp_p
     import importlib.util
     from pathlib import Path
 
-    from mace_fmu.robust.sweep import robust_sweep
+    from mace_fmu.zero_g.robust.sweep import robust_sweep
 
     path = Path(__file__).resolve().parents[1] / "examples" / "robust_lqg_0g.py"
     spec = importlib.util.spec_from_file_location("robust_lqg_0g", path)

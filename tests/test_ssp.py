@@ -15,9 +15,10 @@ import pytest
 
 from mace_fmu.cli import main
 from mace_fmu.errors import MaceError
-from mace_fmu.parameters import ParameterSet, Provenance
+from mace_fmu.parameters.sets import ParameterSet, Provenance
 from mace_fmu.ssp import (FrequencyBound, SspComponent, SsvContent, parameter_set_from_ssv, parameter_set_to_ssv,
                           schema_problems, write_ssp)
+
 
 def _ecospy():
     """ecospy, or a skip that says what is missing (its library links against the libtbb12 system library,
@@ -56,7 +57,7 @@ def test_ssv_cli_round_trip_through_toml(tmp_path):
     assert main(["params", "from-ssv", str(tmp_path / "p.ssv"), "-o", str(tmp_path / "q.toml"),
                  "--frequency-bounds-out", str(tmp_path / "c.toml")]) == 0
     assert ParameterSet.read(tmp_path / "q.toml") == ParameterSet.read(tmp_path / "p.toml")
-    from mace_fmu.zero_g_report import read_frequency_bounds
+    from mace_fmu.zero_g.table import read_frequency_bounds
 
     labels = ["x"] * 6 + ["1st Z bending"]
     assert read_frequency_bounds(tmp_path / "c.toml", mode_labels=labels) == {7: 1.1 / 100.0}

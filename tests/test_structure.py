@@ -10,8 +10,9 @@ import pytest
 
 from mace_fmu.deck.reader import read_deck
 from mace_fmu.errors import MaceError
-from mace_fmu.pipeline import compute_modes
-from mace_fmu.structure import apply_overrides, build_structure, bundled_deck_path, load_spec
+from mace_fmu.fe.modes import compute_modes
+from mace_fmu.structure.build import apply_overrides, build_structure
+from mace_fmu.structure.file import bundled_deck_path, load_spec
 
 TOML_TEXT = (resources.files("mace_fmu") / "data" / "mace_em.toml").read_text()
 SUSPENSION_GRIDS = {32, 33, 34, *range(63, 93)}

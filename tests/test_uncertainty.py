@@ -11,12 +11,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from support.two_mass_records import true_damping, two_mass_record
 
-from support.two_mass_records import two_mass_record, true_damping
-from mace_fmu.two_mass import TwoMassSystem
 from mace_fmu.updating.costs import TimeResponseCost
 from mace_fmu.updating.sample_family import MODE_LABELS, TwoMassFamily
 from mace_fmu.updating.solve import Bounds, Stage, UpdateSettings, update
+from mace_fmu.updating.two_mass import TwoMassSystem
 from mace_fmu.updating.uncertainty import format_uncertainty, stage_uncertainty, uncertainty_toml
 
 TRUTH = {"k_1": 0.75, "k_2": 1.20}

@@ -13,10 +13,9 @@ import numpy as np
 import pytest
 
 from mace_fmu.errors import MaceError
-from mace_fmu.parameters import ParameterSet, Provenance, deck_fingerprint, fe_overrides
-from mace_fmu.pipeline import compute_modes
-from mace_fmu.structure import bundled_deck_path
-from mace_fmu.two_mass import TwoMassSystem
+from mace_fmu.fe.modes import compute_modes
+from mace_fmu.parameters.sets import ParameterSet, Provenance, deck_fingerprint, fe_overrides
+from mace_fmu.structure.file import bundled_deck_path
 from mace_fmu.updating.costs import FrequencyResponseCost, ModalCost, TimeResponseCost, UnpairedModeError
 from mace_fmu.updating.data import FrequencyResponseData, MeasuredMode, TimeHistory
 from mace_fmu.updating.inclusion import evaluator, modal_sensitivity, track_modes
@@ -24,6 +23,7 @@ from mace_fmu.updating.sample_family import TwoMassFamily
 from mace_fmu.updating.selection import SelectionRule, select_parameters
 from mace_fmu.updating.sensitivity import CostSensitivities, cost_sensitivities
 from mace_fmu.updating.solve import Bounds, Stage, UpdateSettings, update
+from mace_fmu.updating.two_mass import TwoMassSystem
 
 START = {"k_1": 1.0, "k_2": 1.0, "damping:mode 1": 0.01, "damping:mode 2": 0.01}
 TRUTH = {"k_1": 0.75, "k_2": 1.2, "damping:mode 1": 0.004, "damping:mode 2": 0.008}

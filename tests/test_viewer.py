@@ -14,7 +14,7 @@ import pytest
 import umsgpack
 
 from mace_fmu.errors import MaceError
-from mace_fmu.pipeline import compute_modes
+from mace_fmu.fe.modes import compute_modes
 from viewer import (animate_mode, animate_modes, animate_response, build_scene, scene_commands, standalone_html,
                     write_animation_html)
 from viewer.frames import body_motion

@@ -9,13 +9,13 @@ import numpy as np
 import pytest
 
 from mace_fmu.cli import main
+from mace_fmu.fe.modes import DEFAULT_MAX_HZ
 from mace_fmu.iomodel.frf import frequency_response
 from mace_fmu.iomodel.modal_ss import modal_data
 from mace_fmu.iomodel.poles import closed_loop_poles
-from mace_fmu.iomodel import DEFAULT_MAX_HZ
 from mace_fmu.iomodel.volts import volts_model
+from mace_fmu.parameters.sets import ParameterSet
 from mace_fmu.thesis import table_4_7_comparison, table_5_2_comparison
-from mace_fmu.parameters import ParameterSet
 
 
 @pytest.fixture(scope="module")

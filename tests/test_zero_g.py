@@ -18,18 +18,18 @@ import fmpy
 import numpy as np
 import pytest
 from fmpy.validation import validate_fmu
-
 from support.fmu_checks import initialised_slave, make_inputs, run_steps, zoh_reference
+
 from mace_fmu.cli import main
 from mace_fmu.fmu.export import export_fmu
 from mace_fmu.iomodel.parametric import ParametricSystem
 from mace_fmu.iomodel.parametric_data import parametric_arrays
+from mace_fmu.iomodel.pole_pairing import pair_poles
 from mace_fmu.iomodel.poles import closed_loop_poles
 from mace_fmu.iomodel.volts import volts_model
-from mace_fmu.parameters import ParameterSet, Provenance
-from mace_fmu.updating.pairing import pair_poles
-from mace_fmu.zero_g import BoundRule
-from mace_fmu.zero_g_report import beside_table_5_3, bound_text, table_5_3
+from mace_fmu.parameters.sets import ParameterSet, Provenance
+from mace_fmu.zero_g.nominal import BoundRule
+from mace_fmu.zero_g.table import beside_table_5_3, bound_text, table_5_3
 
 #: rows whose nominal damping ratio does not reproduce Table 5.3 (README, "Updated nominal 0-g model")
 DAMPING_NOT_REPRODUCED = {"1st Y bending", "4th Y bending"}
@@ -128,7 +128,7 @@ def test_files_hold_the_rows_and_the_parameter_set_rebuilds_the_nominal_poles(ru
 
 
 def _zero_g_patterns():
-    from mace_fmu.zero_g import table_4_7_zero_g_patterns
+    from mace_fmu.zero_g.nominal import table_4_7_zero_g_patterns
 
     return table_4_7_zero_g_patterns()
 
@@ -160,7 +160,7 @@ def test_fmus_declare_each_bound_as_the_min_max_of_a_frequency_scale(run, fmus):
             assert float(v.min) == 1.0 - bound and float(v.max) == 1.0 + bound, (kind, mode)
         free = [v for n, v in variables.items() if n.startswith("frequency_scale_mode_") and int(n.rsplit("_", 1)[1])
                 not in bounds]
-        # the others keep the range every frequency scale has (mace_fmu.parameter_kinds), raised for slow modes
+        # the others keep the range every frequency scale has (mace_fmu.parameters.kinds), raised for slow modes
         assert free and all(0.1 <= float(v.min) < 1.0 and float(v.max) == 10.0 for v in free), kind
 
 
@@ -322,16 +322,16 @@ def test_scales_outside_their_bounds_are_named_by_the_rebuild_the_pythonfmu_slav
     free = next(n for n in system.parameter_names if n.startswith("frequency_scale_mode_")
                 and int(n.rsplit("_", 1)[1]) not in bounds)
     params = system.nominal.copy()
-    params[system.index(free)] = 0.0  # below every scale's own minimum (0.1: mace_fmu.parameter_kinds)
+    params[system.index(free)] = 0.0  # below every scale's own minimum (0.1: mace_fmu.parameters.kinds)
     assert system.parameter_problems(params) == [f"{free} = 0 is outside its declared range [0.1, 10]"]
 
 
 def test_a_1g_parameter_set_from_an_update_is_carried_to_0g(run):
     """A set like `mace-fmu update` writes (1-g provenance, a modulus, damping of suspension modes the 0-g
     structure lacks): the modulus reaches the 0-g modes, the 1-g-only damping is dropped, the deck is kept."""
-    from mace_fmu.parameters import deck_fingerprint, parameter_kind
-    from mace_fmu.structure import bundled_deck_path
-    from mace_fmu.zero_g import predict_zero_g
+    from mace_fmu.parameters.sets import deck_fingerprint, parameter_kind
+    from mace_fmu.structure.file import bundled_deck_path
+    from mace_fmu.zero_g.nominal import predict_zero_g
 
     deck = bundled_deck_path()
     start = ParameterSet({"E_lexan_center": 2.3e9, "damping:Y suspension twist (Y rotation)": 0.09,

@@ -10,7 +10,7 @@ from pathlib import Path as FilePath
 import meshcat
 import umsgpack
 
-from mace_fmu.atomic import write_text_atomic
+from mace_fmu.util.atomic import write_text_atomic
 from viewer.frames import Clip
 
 _VIEWER_JS = FilePath(meshcat.__file__).parent / "viewer" / "dist" / "main.min.js"

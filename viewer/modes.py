@@ -8,8 +8,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from mace_fmu.errors import MaceError
-from mace_fmu.pipeline import StructureModes
-from mace_fmu.text import hz_text
+from mace_fmu.fe.modes import StructureModes
+from mace_fmu.util.frequency import hz_text
 from viewer.frames import Clip, Frames
 from viewer.scene import Scene, build_scene
 

@@ -16,10 +16,10 @@ from meshcat.commands import SetTransform
 from meshcat.path import Path
 
 from mace_fmu.errors import MaceError
+from mace_fmu.fe.modes import StructureModes
 from mace_fmu.fe.pairing import mac_matrix
-from mace_fmu.pipeline import StructureModes
-from mace_fmu.text import hz_text
 from mace_fmu.thesis import table_5_1_0g, table_5_1_1g
+from mace_fmu.util.frequency import hz_text
 from viewer.camera import camera_axes, framing_position
 from viewer.frames import Clip, Frames
 from viewer.meshcat_scene import (ROOT, Y_UP_TO_Z_UP, body_animations, body_commands, set_animation,

@@ -5,17 +5,16 @@ from __future__ import annotations
 import textwrap
 from dataclasses import dataclass
 from pathlib import Path
-
 from typing import TYPE_CHECKING
 
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from mace_fmu.atomic import save_figure_atomic
 from mace_fmu.errors import MaceError
+from mace_fmu.fe.modes import StructureModes
 from mace_fmu.iomodel.motion import MOTION_COMPONENTS, motion_output_name
-from mace_fmu.pipeline import StructureModes
+from mace_fmu.util.atomic import save_figure_atomic
 from viewer.frames import Clip, Frames
 from viewer.scene import Scene, build_scene
 

@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from mace_fmu.pipeline import StructureModes
+from mace_fmu.fe.modes import StructureModes
 
 #: RGB colours by component name prefix (``mace_em.toml`` [components]); anything else is "other".
 COMPONENT_COLOURS: dict[str, int] = {

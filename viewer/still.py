@@ -8,8 +8,8 @@ import subprocess
 import tempfile
 from pathlib import Path
 
-from mace_fmu.atomic import atomic_path
 from mace_fmu.errors import MaceError
+from mace_fmu.util.atomic import atomic_path
 
 #: Executable names of Chromium, in the order they are looked up on PATH (Debian: chromium).
 CHROMIUM_NAMES = ("chromium", "chromium-browser", "google-chrome")

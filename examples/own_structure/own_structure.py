@@ -61,9 +61,9 @@ def exact_zoh_error(model, fmu: Path, *, seconds: float = 2.0, step_s: float = 2
 
 def main(out: Path) -> dict:
     from mace_fmu.deck.reader import read_deck
+    from mace_fmu.fe.modes import compute_modes
     from mace_fmu.fmu.native.export import export_native_fmu
     from mace_fmu.iomodel.volts import volts_model
-    from mace_fmu.pipeline import compute_modes
     from viewer import animate_modes, write_animation_html
 
     out.mkdir(parents=True, exist_ok=True)

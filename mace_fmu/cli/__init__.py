@@ -11,6 +11,8 @@ from typing import Sequence
 from mace_fmu.cli import build, controller, data, export, model, modes, params, predict, report, study, update, view
 from mace_fmu.errors import MaceError
 
+__all__ = ["build_parser", "main"]
+
 #: command modules in the order ``mace-fmu --help`` lists them; each has register(subparsers)
 COMMANDS = (modes, model, export, controller, report, view, build, update, predict, study, data, params)
 

@@ -6,16 +6,16 @@ import argparse
 
 from mace_fmu.cli.common import deck_option, parameters, parameters_option, progress, progress_bar
 from mace_fmu.deck.reader import read_deck
+from mace_fmu.fe.modes import compute_modes
 from mace_fmu.fmu.naming import fmu_name
-from mace_fmu.pipeline import compute_modes
-from mace_fmu.text import hz_text
+from mace_fmu.util.frequency import hz_text
 
 
 def cmd_build(args: argparse.Namespace) -> int:
     # imported here, as in the other commands, so that `mace-fmu modes` starts without control/pythonfmu
+    from mace_fmu.fe.modes import DEFAULT_MAX_HZ
     from mace_fmu.fmu.export import export_fmu
     from mace_fmu.iomodel.parametric_data import parametric_arrays
-    from mace_fmu.iomodel import DEFAULT_MAX_HZ
     from mace_fmu.iomodel.volts import volts_model
 
     deck = read_deck(args.deck)

@@ -10,9 +10,9 @@ from typing import Iterator
 
 from mace_fmu.deck.reader import read_deck
 from mace_fmu.errors import MaceError
-from mace_fmu.iomodel import DEFAULT_MAX_HZ
-from mace_fmu.progress import ProgressCallback, Step
-from mace_fmu.structure import bundled_deck_path
+from mace_fmu.fe.modes import DEFAULT_MAX_HZ
+from mace_fmu.structure.file import bundled_deck_path
+from mace_fmu.util.progress import ProgressCallback, Step
 
 
 def progress(message: str) -> None:
@@ -95,7 +95,7 @@ def parameters_option(p: argparse.ArgumentParser) -> None:
 
 def parameters(args: argparse.Namespace):
     """The --parameters file as a ParameterSet (None without the option)."""
-    from mace_fmu.parameters import ParameterSet
+    from mace_fmu.parameters.sets import ParameterSet
 
     path = getattr(args, "parameters", None)
     if not path:

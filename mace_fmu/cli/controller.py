@@ -19,8 +19,8 @@ def lqg_controller(*, step_s: float):
 
     from mace_fmu.fmu.controller import DiscreteController
     from mace_fmu.iomodel.volts import volts_model
-    from mace_fmu.robust.design import design_compensator
-    from mace_fmu.robust.loop import LoopSpec
+    from mace_fmu.zero_g.robust.design import design_compensator
+    from mace_fmu.zero_g.robust.loop import LoopSpec
 
     loop = LoopSpec(step_s=step_s)
     design = design_compensator(volts_model("0g").system, loop=loop)

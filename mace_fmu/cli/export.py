@@ -12,7 +12,7 @@ from mace_fmu.fmu.naming import fmu_name
 
 def model_prefix(model) -> str:
     """"MACE" for the bundled deck's models, else the deck's file stem (an FMU of another structure is not MACE's)."""
-    from mace_fmu.structure import is_bundled_deck
+    from mace_fmu.structure.file import is_bundled_deck
 
     deck = model.structure_modes.structure.deck
     return "MACE" if is_bundled_deck(deck) else Path(deck.path).stem
@@ -42,7 +42,7 @@ def cmd_export(args: argparse.Namespace) -> int:
     model = volts(args)
     bounds = None
     if args.frequency_bounds:
-        from mace_fmu.zero_g_report import read_frequency_bounds
+        from mace_fmu.zero_g.table import read_frequency_bounds
 
         bounds = read_frequency_bounds(args.frequency_bounds, mode_labels=model.plant.labels)
     name = fmu_name(args.structure, kind=args.kind, fmi_version=args.fmi_version,

@@ -8,8 +8,8 @@ import sys
 
 import numpy as np
 
-from mace_fmu.atomic import atomic_path, write_text_atomic
 from mace_fmu.cli.common import deck_option, model_options, volts
+from mace_fmu.util.atomic import atomic_path, write_text_atomic
 
 
 def cmd_model(args: argparse.Namespace) -> int:

@@ -10,9 +10,8 @@ import numpy as np
 
 from mace_fmu.cli.common import deck_option, positive_hz, progress_bar
 from mace_fmu.deck.reader import read_deck
-from mace_fmu.iomodel.modal_core import ZERO_HZ
-from mace_fmu.pipeline import StructureModes, compute_modes
-from mace_fmu.text import hz_text
+from mace_fmu.fe.modes import StructureModes, compute_modes
+from mace_fmu.util.frequency import ZERO_HZ, hz_text
 
 
 def _modes_json(result: StructureModes) -> dict:

@@ -11,7 +11,7 @@ from mace_fmu.errors import MaceError
 def _read_bounds_table(path: str):
     """The (mode, mode label, relative bound) rows of a table_5_3.toml of ``mace-fmu predict-0g``."""
     from mace_fmu.ssp import FrequencyBound
-    from mace_fmu.textfile import read_toml
+    from mace_fmu.util.textfile import read_toml
 
     rows = read_toml(path, what="frequency-bounds").get("mode")
     if not isinstance(rows, list) or not rows:
@@ -31,7 +31,7 @@ def _read_bounds_table(path: str):
 
 def _bounds_toml(bounds) -> str:
     """The bounds as [[mode]] rows that ``--frequency-bounds`` of export and to-ssv read back."""
-    from mace_fmu.parameters import toml_value
+    from mace_fmu.parameters.sets import toml_value
 
     lines = ["# frequency bounds of the open-loop modes (from an SSV file; mace-fmu params from-ssv)", ""]
     for b in bounds:
@@ -41,7 +41,7 @@ def _bounds_toml(bounds) -> str:
 
 
 def cmd_to_ssv(args: argparse.Namespace) -> int:
-    from mace_fmu.parameters import ParameterSet
+    from mace_fmu.parameters.sets import ParameterSet
     from mace_fmu.ssp import SsvContent, write_parameter_ssv
 
     parameters = ParameterSet.read(args.parameters)
@@ -53,8 +53,8 @@ def cmd_to_ssv(args: argparse.Namespace) -> int:
 
 
 def cmd_from_ssv(args: argparse.Namespace) -> int:
-    from mace_fmu.atomic import write_text_atomic
     from mace_fmu.ssp import read_parameter_ssv
+    from mace_fmu.util.atomic import write_text_atomic
 
     content = read_parameter_ssv(args.ssv)
     out = Path(args.out) if args.out else Path(args.ssv).with_suffix(".toml")

@@ -13,8 +13,8 @@ from mace_fmu.errors import MaceError
 
 
 def cmd_predict(args: argparse.Namespace) -> int:
-    from mace_fmu.zero_g import BoundRule, predict_zero_g, read_zero_g_measured
-    from mace_fmu.zero_g_report import format_table, rows_as_data, write_prediction
+    from mace_fmu.zero_g.nominal import BoundRule, predict_zero_g, read_zero_g_measured
+    from mace_fmu.zero_g.table import format_table, rows_as_data, write_prediction
 
     # everything is checked before anything is computed or written
     if args.fmu and args.out is None:

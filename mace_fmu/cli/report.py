@@ -9,7 +9,7 @@ from mace_fmu.deck.reader import read_deck
 
 
 def cmd_report(args: argparse.Namespace) -> int:
-    from mace_fmu.report import bode_report
+    from mace_fmu.iomodel.bode import bode_report
 
     for path in bode_report(read_deck(args.deck), out_dir=args.out, progress=progress):
         print(f"wrote {path}")

@@ -14,8 +14,8 @@ def export_ssp(args: argparse.Namespace) -> int:
     """Build the plant FMU (FE part of --parameters built in) and write it with the rest of the set as an SSV."""
     from mace_fmu.fmu.naming import fmu_name
     from mace_fmu.ssp import SspComponent, write_ssp
-    from mace_fmu.ssp.package import wiring_by_name
     from mace_fmu.ssp.binding import fmu_start_values, split_parameters
+    from mace_fmu.ssp.package import wiring_by_name
 
     if args.fmi_version != 2:
         raise MaceError("--ssp: SSP 1.0 importers (fmpy, ecos) take FMI 2.0 FMUs: leave out --fmi-version 3")
@@ -28,7 +28,7 @@ def export_ssp(args: argparse.Namespace) -> int:
     model = volts(args, parameters=split.built_in)
     bounds = None
     if args.frequency_bounds:
-        from mace_fmu.zero_g_report import read_frequency_bounds
+        from mace_fmu.zero_g.table import read_frequency_bounds
 
         bounds = read_frequency_bounds(args.frequency_bounds, mode_labels=model.plant.labels)
     from mace_fmu.cli.export import model_prefix, model_variant

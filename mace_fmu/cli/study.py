@@ -25,11 +25,11 @@ def _grid(text: str, what: str) -> np.ndarray:
 
 
 def cmd_lqg_sensitivity(args: argparse.Namespace) -> int:
-    from mace_fmu.atomic import write_text_atomic
     from mace_fmu.control_studies.figures import sensitivity_contour
     from mace_fmu.control_studies.lqg import LqgWeights
     from mace_fmu.control_studies.stiffness_sensitivity import AUTHORITIES, format_studies, study_authority
-    from mace_fmu.two_mass import TwoMassSystem
+    from mace_fmu.updating.two_mass import TwoMassSystem
+    from mace_fmu.util.atomic import write_text_atomic
 
     k1, k2 = _grid(args.k1, "--k1"), _grid(args.k2, "--k2")
     out = Path(args.out)
@@ -52,12 +52,12 @@ def cmd_lqg_sensitivity(args: argparse.Namespace) -> int:
 
 
 def cmd_reduced_order(args: argparse.Namespace) -> int:
-    from mace_fmu.atomic import write_text_atomic
     from mace_fmu.control_studies.cantilever import cantilever_model
     from mace_fmu.control_studies.figures import bode_overlay
-    from mace_fmu.control_studies.lqg import LqgWeights
     from mace_fmu.control_studies.loop_shapes import dereverberated_crossover_hz, format_table, loop_shapes
+    from mace_fmu.control_studies.lqg import LqgWeights
     from mace_fmu.control_studies.reduced_order import THESIS_COSTS, reduced_order_study, weights_for_full_cost
+    from mace_fmu.util.atomic import write_text_atomic
 
     if args.max_iterations < 0:
         raise MaceError(f"--max-iterations must be 0 or more, got {args.max_iterations}")
@@ -112,7 +112,7 @@ def _bounds(args: argparse.Namespace) -> tuple[object, dict[int, float], str]:
         progress("0-g volts model" + (f" with {args.parameters}" if params is not None else " (nominal, not updated)"))
         model = volts_model("0g", parameters=params)
     if args.frequency_bounds:
-        from mace_fmu.zero_g_report import read_frequency_bounds
+        from mace_fmu.zero_g.table import read_frequency_bounds
 
         return model, read_frequency_bounds(args.frequency_bounds, mode_labels=model.plant.labels), args.frequency_bounds
     if args.bound:
@@ -126,8 +126,8 @@ def _bounds(args: argparse.Namespace) -> tuple[object, dict[int, float], str]:
         return model, bounds, "--bound"
     if args.parameters:
         raise MaceError("--parameters needs its bounds: --frequency-bounds table_5_3.toml or --bound MODE=PERCENT")
-    from mace_fmu.robust.study import prediction_bounds
-    from mace_fmu.zero_g import predict_zero_g
+    from mace_fmu.zero_g.nominal import predict_zero_g
+    from mace_fmu.zero_g.robust.study import prediction_bounds
 
     progress("updated nominal 0-g model and Table 5.3 bounds (about a minute; mace-fmu predict-0g -o DIR writes "
              "them once for --parameters and --frequency-bounds)")
@@ -136,12 +136,12 @@ def _bounds(args: argparse.Namespace) -> tuple[object, dict[int, float], str]:
 
 
 def cmd_robust_0g(args: argparse.Namespace) -> int:
-    from mace_fmu.atomic import write_text_atomic
     from mace_fmu.cli.common import progress_bar
     from mace_fmu.control_studies.lqg import LqgWeights
-    from mace_fmu.robust.loop import LoopSpec
-    from mace_fmu.robust.report import format_summary, sweep_figure
-    from mace_fmu.robust.study import format_cross_checks, robust_0g_study, write_runs_csv
+    from mace_fmu.util.atomic import write_text_atomic
+    from mace_fmu.zero_g.robust.loop import LoopSpec
+    from mace_fmu.zero_g.robust.study import format_cross_checks, robust_0g_study, write_runs_csv
+    from mace_fmu.zero_g.robust.summary import format_summary, sweep_figure
 
     if args.samples < 0 or args.critical < 0:
         raise MaceError(f"--samples and --critical must be 0 or more, got {args.samples} and {args.critical}")
@@ -151,7 +151,7 @@ def cmd_robust_0g(args: argparse.Namespace) -> int:
     out = Path(args.out)
     runner = map
     if not args.serial:
-        from mace_fmu.runner import DaskRunner
+        from mace_fmu.util.runner import DaskRunner
 
         runner = DaskRunner(scheduler=args.scheduler, workers=args.workers, task="closed-loop runs")
         progress(f"Dask: {runner.workers} workers" + (f" at {args.scheduler}" if args.scheduler else " (local)"))

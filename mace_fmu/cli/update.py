@@ -7,11 +7,11 @@ import json
 import sys
 from pathlib import Path
 
-from mace_fmu.atomic import write_text_atomic
 from mace_fmu.cli.common import deck_option, progress_bar
 from mace_fmu.deck.reader import read_deck
 from mace_fmu.errors import MaceError
-from mace_fmu.textfile import read_toml
+from mace_fmu.util.atomic import write_text_atomic
+from mace_fmu.util.textfile import read_toml
 
 #: exit status of an update that wrote its results but did not converge (see ``mace-fmu update --help``)
 NOT_CONVERGED = 3
@@ -47,9 +47,9 @@ def _read_start(path: str) -> dict[str, float]:
 
 def cmd_fmu_update(args: argparse.Namespace) -> int:
     """``--fmu``: update FMU parameters against measured-data files, every argument checked before any run."""
-    from mace_fmu.runner import DaskRunner
     from mace_fmu.updating.fmu_problem import fmu_problem
     from mace_fmu.updating.fmu_update import fmu_parameters, update_fmu
+    from mace_fmu.util.runner import DaskRunner
 
     if args.sample_problem or args.measured:
         raise MaceError("--fmu updates an FMU against --data files; it does not combine with --sample-problem or "
@@ -133,9 +133,9 @@ def cmd_update(args: argparse.Namespace) -> int:
     if args.out is None:
         raise MaceError("say where to write the updated parameter set and the report: -o DIR "
                         "(or run --sample-problem)")
-    from mace_fmu.parameters import ParameterSet
+    from mace_fmu.parameters.sets import ParameterSet
     from mace_fmu.updating.data import read_measured_modes
-    from mace_fmu.updating.mace_update import run_mace_update, format_mode_rows, mode_rows, scores
+    from mace_fmu.updating.mace_update import format_mode_rows, mode_rows, run_mace_update, scores
     from mace_fmu.updating.report import write_report
     from mace_fmu.updating.solve import UpdateSettings
 
@@ -163,7 +163,6 @@ def cmd_update(args: argparse.Namespace) -> int:
           f"{res.seconds:.1f} s; RMS frequency error (zeta < 10 %) {s.rms_light_before:.2f} -> {s.rms_light_after:.2f} % "
           f"(thesis {s.rms_light_thesis:.2f} %)")
     from mace_fmu.updating.convergence import convergence_report
-
     from mace_fmu.updating.uncertainty import format_uncertainty, stage_uncertainty, uncertainty_toml
 
     report = convergence_report(res)

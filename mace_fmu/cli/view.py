@@ -8,7 +8,7 @@ from pathlib import Path
 from mace_fmu.cli.common import deck_option, model_options, progress, progress_bar, volts
 from mace_fmu.deck.reader import read_deck
 from mace_fmu.errors import MaceError
-from mace_fmu.pipeline import compute_modes
+from mace_fmu.fe.modes import compute_modes
 
 #: viewer.camera.CAMERA_VIEWS, spelled out so that `mace-fmu --help` does not import meshcat
 CAMERA_CHOICES = ("iso", "x", "y", "z")
@@ -67,7 +67,8 @@ def _check_signals(args: argparse.Namespace, deck) -> str:
     from mace_fmu.iomodel.collocation import collocated_sensor
     from mace_fmu.iomodel.instruments import load_instruments
     from mace_fmu.iomodel.motion import MOTION_COMPONENTS, parse_motion_output
-    from mace_fmu.structure import build_structure, structure_file_for
+    from mace_fmu.structure.build import build_structure
+    from mace_fmu.structure.file import structure_file_for
 
     input_signal(args.signal, communication_times(duration_s=args.duration, step_s=args.step),
                  amplitude_v=args.amplitude, chirp_hz=tuple(args.chirp_hz))
@@ -95,9 +96,8 @@ def _checked_fmu(path: str, structure: str) -> Path:
     """--fmu: an existing MACE FMU of this structure with grid motion outputs."""
     import fmpy
 
-    from mace_fmu.iomodel.motion import parse_motion_output
-
     from mace_fmu.fmu.archive import check_fmu
+    from mace_fmu.iomodel.motion import parse_motion_output
 
     fmu = Path(path)
     if not fmu.is_file():

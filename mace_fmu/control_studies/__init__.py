@@ -6,3 +6,18 @@
 - ``reduced_order``: A.2, balanced reduction to 4 modes and its update under the closed-loop cost;
 - ``figures``: the contour and transfer-function PNGs.
 """
+
+from __future__ import annotations
+
+from mace_fmu.util.lazy import lazy_exports
+
+__all__, __getattr__, __dir__ = lazy_exports(__name__, {
+    "design_lqg": "lqg",
+    "LqgWeights": "lqg",
+    "LqgDesign": "lqg",
+    "sensitivity_map": "stiffness_sensitivity",
+    "cantilever_model": "cantilever",
+    "reduced_order_study": "reduced_order",
+    "balanced_truncation": "balanced_truncation",
+    "loop_shapes": "loop_shapes",
+})

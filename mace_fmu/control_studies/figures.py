@@ -11,8 +11,8 @@ matplotlib.use("Agg")  # files only: no display on CI or servers
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from mace_fmu.atomic import atomic_path  # noqa: E402
 from mace_fmu.control_studies.stiffness_sensitivity import CostMinimum, SensitivityMap  # noqa: E402
+from mace_fmu.util.atomic import atomic_path  # noqa: E402
 
 #: contour levels of the normalised cost (1.1 is the thesis's "tolerable" boundary)
 COST_LEVELS = (1.01, 1.02, 1.05, 1.1, 1.2, 1.5, 2.0, 3.0, 5.0, 10.0)

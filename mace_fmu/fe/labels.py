@@ -37,8 +37,8 @@ import numpy as np
 from mace_fmu.fe.assembly import FEModel
 from mace_fmu.fe.corotational import BarState, bar_dof_indices, bar_energies, deformation_jacobian
 from mace_fmu.fe.modal import Modes
-from mace_fmu.iomodel.modal_core import ZERO_HZ
-from mace_fmu.structure import StructureSpec
+from mace_fmu.structure.file import StructureSpec
+from mace_fmu.util.frequency import ZERO_HZ
 
 _AXES = "XYZ"
 _RIGID_NAMES = ("X translation", "Y translation", "Z translation", "X rotation", "Y rotation", "Z rotation")

@@ -21,11 +21,11 @@ from scipy import sparse
 from mace_fmu.errors import MaceError
 from mace_fmu.fe.assembly import FEModel
 from mace_fmu.fe.constraints import Constraints
+from mace_fmu.fe.corotational import (BarState, bar_dof_indices, deformation_jacobian, internal_force, rotation_matrix,
+                                      tangent)
 from mace_fmu.fe.factor import factorize
 from mace_fmu.fe.modal import DENSE_MAX_DOF
-from mace_fmu.fe.corotational import (BarState, bar_dof_indices, deformation_jacobian, internal_force,
-                                      rotation_matrix, tangent)
-from mace_fmu.progress import ProgressCallback, Step
+from mace_fmu.util.progress import ProgressCallback, Step
 
 PreloadKind = Literal["large", "linear"]
 _log = logging.getLogger(__name__)

@@ -23,11 +23,11 @@ from typing import Literal
 import control as ct
 import numpy as np
 
-from mace_fmu.atomic import atomic_path
 from mace_fmu.errors import MaceError
 from mace_fmu.fmu.native import compile as runtime
 from mace_fmu.fmu.native.export import runtime_token, write_native_fmu
 from mace_fmu.fmu.native.model_description import FmuVariable, fmi2_model_description, fmi3_model_description
+from mace_fmu.util.atomic import atomic_path
 
 FORMAT_VERSION = 1
 

@@ -25,13 +25,14 @@ from xml.etree import ElementTree as ET
 import numpy as np
 from pythonfmu.builder import FmuBuilder
 
-from mace_fmu.atomic import atomic_path
 from mace_fmu.errors import MaceError
 from mace_fmu.fmu.naming import fmu_name
 from mace_fmu.fmu.variables import DEFAULT_EXPERIMENT, model_summary, variable_unit
 from mace_fmu.iomodel import modal_core, parametric, reanalysis
 from mace_fmu.iomodel.parametric_data import parametric_arrays, with_frequency_bounds
 from mace_fmu.iomodel.volts import VoltsModel
+from mace_fmu.util import frequency
+from mace_fmu.util.atomic import atomic_path
 from modelica_like import algebra
 
 SLAVE_SOURCE = Path(__file__).with_name("slave.py")
@@ -112,7 +113,7 @@ sys.modules[_KEY].wrapper_references.append(globals())  # the reference the wrap
 def _entry_script(name: str, description: str) -> str:
     """The entry script: the numpy cores and the slave as one cached implementation, and a thin class."""
     parts = []
-    for path in (Path(algebra.__file__), Path(modal_core.__file__), Path(reanalysis.__file__),
+    for path in (Path(algebra.__file__), Path(frequency.__file__), Path(modal_core.__file__), Path(reanalysis.__file__),
                  Path(parametric.__file__), SLAVE_SOURCE):
         lines = [ln for ln in path.read_text().splitlines()
                  if ln.strip() != "from __future__ import annotations" and not ln.rstrip().endswith("# fmu: inlined")]

@@ -6,7 +6,7 @@ from pathlib import Path
 
 from mace_fmu.iomodel.motion import motion_unit, parse_motion_output
 from mace_fmu.iomodel.volts import VoltsModel
-from mace_fmu.parameter_kinds import kind_of_fmu_name, unit_of
+from mace_fmu.parameters.kinds import kind_of_fmu_name, unit_of
 
 DEFAULT_EXPERIMENT = {"startTime": "0.0", "stopTime": "10.0", "stepSize": "0.002"}
 
@@ -30,7 +30,7 @@ def model_summary(model: VoltsModel) -> str:
     kind = structure.kind
     # "MACE <kind>" names the bundled structure only (hosts and `view response` read it); another deck is
     # named by its file
-    from mace_fmu.structure import is_bundled_deck
+    from mace_fmu.structure.file import is_bundled_deck
 
     who = "MACE" if is_bundled_deck(structure.deck) else Path(structure.deck.path).stem
     return (f"{who} {kind} volts-volts model: {sys_.nstates} states; servos {'closed' if model.servos else 'open'}, "

@@ -1,5 +1,25 @@
-"""Input-output models: instruments, the modal plant, the volts-volts block diagram, their parameters."""
+"""Input-output models: instruments, the modal plant, the volts-volts block diagram (servos, filters,
+delays), its parameters, poles and frequency responses."""
 
-#: Highest retained mode [Hz] of the models (thesis 3.4: modes to 250 Hz); also the modes a deck without
-#: an EIGRL range gets.
-DEFAULT_MAX_HZ = 250.0
+from __future__ import annotations
+
+from mace_fmu.util.lazy import lazy_exports
+
+__all__, __getattr__, __dir__ = lazy_exports(__name__, {
+    "VoltsModel": "volts",
+    "volts_model": "volts",
+    "apply_parameters": "volts",
+    "scale_frequencies": "volts",
+    "select_signals": "volts",
+    "Instruments": "instruments",
+    "load_instruments": "instruments",
+    "Actuator": "instruments",
+    "Sensor": "instruments",
+    "ModalPlant": "modal_ss",
+    "modal_plant": "modal_ss",
+    "ParametricSystem": "parametric",
+    "frequency_response": "frf",
+    "ClosedLoopPole": "poles",
+    "closed_loop_poles": "poles",
+    "bode_report": "bode",
+})

@@ -13,9 +13,9 @@ from typing import Any, Literal, Mapping
 
 import numpy as np
 
-from mace_fmu.structure import StructureFile, bundled_structure_path, load_structure_file
 from mace_fmu.errors import MaceError
 from mace_fmu.fe.dofs import DofMap, cd_component_vector
+from mace_fmu.structure.file import StructureFile, bundled_structure_path, load_structure_file
 from modelica_like.filters import LOWPASS_KINDS, lowpass_realization
 
 SensorKind = Literal["displacement", "rate"]
@@ -181,7 +181,7 @@ def _electronics(table: Mapping[str, Any], path: object) -> Electronics:
 
 def load_instruments(structure_file: StructureFile | str | Path | None = None) -> Instruments:
     """Instruments, electronics, servos and damping of a structure file (read once; see
-    :class:`~mace_fmu.structure.StructureFile`), or of the file at a path; default: the bundled mace_em.toml."""
+    :class:`~mace_fmu.structure.file.StructureFile`), or of the file at a path; default: the bundled mace_em.toml."""
     if not isinstance(structure_file, StructureFile):
         structure_file = load_structure_file(structure_file if structure_file is not None else bundled_structure_path())
     path, data = structure_file.path, structure_file.tables

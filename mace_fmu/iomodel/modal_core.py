@@ -17,7 +17,8 @@ from __future__ import annotations
 
 import numpy as np
 
-ZERO_HZ = 0.01
+from mace_fmu.util.frequency import ZERO_HZ  # fmu: inlined
+
 # Relative to the largest modal input/output coefficient. The computed zero cluster is exact to
 # ~1e-8 (mechanisms) and to round-off (rigid bodies, built geometrically).
 NEGLIGIBLE = 1e-6

@@ -52,7 +52,7 @@ class ParametricSystem:
 
     def parameter_problems(self, params: np.ndarray) -> list[str]:
         """Why parameter values cannot be used, one sentence each (empty when all can): not finite, or
-        outside the declared [min, max] (the ranges carry every limit: mace_fmu.parameter_kinds)."""
+        outside the declared [min, max] (the ranges carry every limit: mace_fmu.parameters.kinds)."""
         problems = []
         for name, value, low, high in zip(self.parameter_names, np.asarray(params, dtype=np.float64),
                                           self.minimum, self.maximum):

@@ -19,12 +19,12 @@ from mace_fmu.fe.assembly import FEModel, bar_section
 from mace_fmu.fe.beam import natural_stiffness
 from mace_fmu.fe.corotational import BarState, tangent
 from mace_fmu.fe.preload import Preload
-from mace_fmu.iomodel.modal_core import ZERO_HZ
 from mace_fmu.iomodel.modal_ss import modal_data
 from mace_fmu.iomodel.motion import motion_unit, parse_motion_output
 from mace_fmu.iomodel.volts import VoltsModel
-from mace_fmu.parameter_kinds import DAMPING, DELAY, FREQUENCY_SCALE, declared_range, kind_of_fmu_name, mode_number
-from mace_fmu.parameters import parameter_names
+from mace_fmu.parameters.kinds import DAMPING, DELAY, FREQUENCY_SCALE, declared_range, kind_of_fmu_name, mode_number
+from mace_fmu.parameters.sets import parameter_names
+from mace_fmu.util.frequency import ZERO_HZ
 from modelica_like import PD, Gain, PadeDelay
 
 _RELATIVE_STEP = 1e-3  # the material stiffness is linear in E and k: the difference quotient is exact
@@ -233,7 +233,7 @@ def with_frequency_bounds(arrays: Mapping[str, np.ndarray], bounds: Mapping[int,
 def _with_parameters(arrays: dict[str, np.ndarray], parameters: Sequence[tuple[str, float, str]], *,
                      frequencies_hz: Mapping[str, float] | None = None) -> dict:
     """``arrays`` with (name, value, description) parameters appended, and the range each declares
-    (:func:`mace_fmu.parameter_kinds.declared_range`; ``frequencies_hz`` gives a frequency scale's mode
+    (:func:`mace_fmu.parameters.kinds.declared_range`; ``frequencies_hz`` gives a frequency scale's mode
     frequency [Hz])."""
     out = dict(arrays)
     old = list(out.get("param_names", []))

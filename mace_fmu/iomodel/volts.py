@@ -23,19 +23,19 @@ import numpy as np
 
 from mace_fmu.deck.cards import Deck
 from mace_fmu.errors import MaceError
+from mace_fmu.fe.modes import StructureModes, compute_modes
 from mace_fmu.fe.preload import PreloadKind
 from mace_fmu.iomodel.damping import modal_damping
 from mace_fmu.iomodel.frf import frequency_response
 from mace_fmu.iomodel.instruments import Instruments, load_instruments
-from mace_fmu.iomodel.modal_core import ZERO_HZ
 from mace_fmu.iomodel.modal_ss import ModalPlant, modal_plant
 from mace_fmu.iomodel.motion import parse_motion_output
-from mace_fmu.parameter_kinds import DAMPING, DELAY, FREQUENCY_SCALE, SERVO_GAINS, ParameterKind, mode_label
-from mace_fmu.parameters import ParameterSet, fe_overrides, parameter_names
-from mace_fmu.pipeline import StructureModes, compute_modes
-from mace_fmu.structure import StructureFile, StructureKind
-from mace_fmu.threads import single_blas_thread
-from modelica_like import Gain, LowPassFilter, PadeDelay, PD, StateSpace, Sum, System
+from mace_fmu.parameters.kinds import DAMPING, DELAY, FREQUENCY_SCALE, SERVO_GAINS, ParameterKind, mode_label
+from mace_fmu.parameters.sets import ParameterSet, fe_overrides, parameter_names
+from mace_fmu.structure.file import StructureFile, StructureKind
+from mace_fmu.util.frequency import ZERO_HZ
+from mace_fmu.util.threads import single_blas_thread
+from modelica_like import PD, Gain, LowPassFilter, PadeDelay, StateSpace, Sum, System
 
 BesselKind = Literal["full", "delay", "none"]
 DEG_PER_RAD = 180.0 / np.pi
@@ -217,11 +217,11 @@ def volts_model(structure: StructureKind = "1g", *, parameters: ParameterSet | N
                 outputs: Sequence[str] | None = None, motion_grids: Sequence[int] | Literal["all"] = (),
                 structure_file: StructureFile | str | os.PathLike | None = None) -> VoltsModel:
     """Volts-volts model of the 1-g or 0-g structure, modes up to ``max_hz`` [Hz] (None: the modes the deck's
-    EIGRL asks for, else those up to 250 Hz, as :func:`~mace_fmu.pipeline.compute_modes`).
+    EIGRL asks for, else those up to 250 Hz, as :func:`~mace_fmu.fe.modes.compute_modes`).
 
     Inputs: gimbal commands (relative angle, 1 V = 1 deg, with servos; motor volts without),
     wheel speed commands and active strut volts. Outputs: the 20 sensors in volts.
-    ``parameters`` (a :class:`~mace_fmu.parameters.ParameterSet`) replaces moduli and spring
+    ``parameters`` (a :class:`~mace_fmu.parameters.sets.ParameterSet`) replaces moduli and spring
     stiffnesses (in the FE model, unless ``modes`` are given, which must then have been computed
     with them), delays (defaults: Tables 4.5 and 4.6 from the instrument file), servo gains and
     open-loop damping ratios and frequency scales by mode label (as in
@@ -229,7 +229,7 @@ def volts_model(structure: StructureKind = "1g", *, parameters: ParameterSet | N
     frequencies, given ``modes`` or not). ``motion_grids`` (grid IDs, or "all") adds each grid's
     translations [m] and rotations [rad] in basic axes as outputs ``grid_<id>_<tx|ty|tz|rx|ry|rz>``
     after the sensors, for animation. ``structure_file`` declares the actuators and sensors (default:
-    the bundled one for the bundled deck; see :mod:`mace_fmu.structure`); ``instruments`` replaces them.
+    the bundled one for the bundled deck; see :mod:`mace_fmu.structure.file`); ``instruments`` replaces them.
     """
     _check(structure in ("1g", "0g"), f"structure must be '1g' or '0g', got {structure!r}")
     if modes is None:

@@ -16,8 +16,8 @@ from dataclasses import dataclass
 from typing import Sequence
 
 from mace_fmu.errors import MaceError
-from mace_fmu.parameter_kinds import kind_of_set_name, mode_label
-from mace_fmu.parameters import ParameterSet
+from mace_fmu.parameters.kinds import kind_of_set_name, mode_label
+from mace_fmu.parameters.sets import ParameterSet
 
 _BUILT_IN = ("modulus", "spring", "frequency_scale")
 

@@ -21,9 +21,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Mapping, Sequence
 
-from mace_fmu.atomic import atomic_path
 from mace_fmu.errors import MaceError
 from mace_fmu.ssp.ssv import SSC, SSV, units_element, values_ssv
+from mace_fmu.util.atomic import atomic_path
 
 SSD = "http://ssp-standard.org/SSP1/SystemStructureDescription"
 ET.register_namespace("ssd", SSD)

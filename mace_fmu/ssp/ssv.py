@@ -2,7 +2,7 @@
 
 An SSV file is how the co-simulation world hands parameter values to a model (SSP 1.0, Modelica
 Association; read by ecos, OMSimulator and fmpy). :func:`parameter_set_to_ssv` writes a
-:class:`~mace_fmu.parameters.ParameterSet` as one: every value as an ``ssv:Real`` with its SI
+:class:`~mace_fmu.parameters.sets.ParameterSet` as one: every value as an ``ssv:Real`` with its SI
 unit (declared in the file's ``ssv:Units`` as SSP requires), the provenance and any frequency
 bounds as a ``ssc:Annotation`` of type :data:`ANNOTATION_TYPE`, so that
 :func:`parameter_set_from_ssv` gives back the same set, value for value and bit for bit
@@ -21,10 +21,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Mapping
 
-from mace_fmu.atomic import write_text_atomic
 from mace_fmu.errors import MaceError
-from mace_fmu.parameters import ParameterSet, Provenance, parameter_unit
-from mace_fmu.textfile import read_text
+from mace_fmu.parameters.sets import ParameterSet, Provenance, parameter_unit
+from mace_fmu.util.atomic import write_text_atomic
+from mace_fmu.util.textfile import read_text
 
 SSV = "http://ssp-standard.org/SSP1/SystemStructureParameterValues"
 SSC = "http://ssp-standard.org/SSP1/SystemStructureCommon"

@@ -14,9 +14,9 @@ from typing import Protocol
 import numpy as np
 
 from mace_fmu.errors import MaceError
+from mace_fmu.iomodel.pole_pairing import pair_poles
 from mace_fmu.updating.data import FrequencyResponseData, MeasuredMode, TimeHistory
 from mace_fmu.updating.model import LinearModel
-from mace_fmu.updating.pairing import pair_poles
 
 
 class Cost(Protocol):
@@ -43,7 +43,7 @@ class ModalCost:
 
     j = [w_i (f_meas,i - f_model,i) / f_meas,i ; w_i c_zeta ln(max(zeta_meas,i, z0) / max(zeta_model,i, z0))]
     with poles paired to measured modes by label pattern and then the nearest frequency
-    (:func:`~mace_fmu.updating.pairing.pair_poles`), never by sort order. The damping term is a log
+    (:func:`~mace_fmu.iomodel.pole_pairing.pair_poles`), never by sort order. The damping term is a log
     ratio: for small errors the relative error, but bounded for the servo-dominated modes whose
     damping is off by factors (Table 4.7: 2nd Z bending 0.445 against 0.105). ``damping_weight``
     (c_zeta) makes a 10 % damping error count like a 1 % frequency error at its default 0.1.

@@ -10,7 +10,7 @@ from typing import Mapping
 import numpy as np
 
 from mace_fmu.errors import MaceError
-from mace_fmu.textfile import read_text
+from mace_fmu.util.textfile import read_text
 
 
 @dataclass(frozen=True)

@@ -31,7 +31,6 @@ from mace_fmu.fmu.archive import check_cosimulation_fmu
 from mace_fmu.fmu.host import collecting_callbacks, status_name
 
 
-
 @dataclass(frozen=True)
 class FmuInterface:
     """What a host needs to know of an FMU to drive it: signals, parameters and their start values."""
@@ -235,7 +234,7 @@ def _run_packed(args: tuple) -> np.ndarray:
 class FmuModel:
     """The FMU with parameter ``values`` [FMU units] set through FMI before initialisation.
 
-    ``runner`` (a map-like callable, e.g. a :class:`~mace_fmu.runner.DaskRunner`): where the runs of an
+    ``runner`` (a map-like callable, e.g. a :class:`~mace_fmu.util.runner.DaskRunner`): where the runs of an
     FMU that must not be loaded here go (pythonfmu FMUs run in worker processes only); it is not sent
     along when the model itself travels to a worker.
     """

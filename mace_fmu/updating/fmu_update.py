@@ -3,7 +3,7 @@
 The cost is the time-domain output error (eq. 4.3) or the log-FRF error (eq. 4.5/4.17) of the
 FMU's simulated response; the update is the engine's cost-sensitivity method (N + 1 FMU
 simulations per linearisation, handed to the ``runner``: ``map`` serially, a
-:class:`~mace_fmu.runner.DaskRunner` on local processes or a cluster). The perturbed models are
+:class:`~mace_fmu.util.runner.DaskRunner` on local processes or a cluster). The perturbed models are
 the FMU itself with one parameter changed ("full" perturbations): the FMU re-analyses its own
 physical parameters at initialisation.
 """
@@ -16,17 +16,16 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, Literal, Mapping, Sequence
 
-from mace_fmu.atomic import write_text_atomic
 from mace_fmu.errors import MaceError
-from mace_fmu.parameters import Provenance, toml_key, toml_value, now_utc, tool_version
-from mace_fmu.progress import ProgressCallback
+from mace_fmu.parameters.sets import Provenance, now_utc, toml_key, toml_value, tool_version
 from mace_fmu.updating.costs import Cost, TimeResponseCost
 from mace_fmu.updating.data import FrequencyResponseData, TimeHistory
 from mace_fmu.updating.fmu_model import FmuFamily
 from mace_fmu.updating.mace_update import default_bounds
-from mace_fmu.updating.simulated_frf import (H1Estimator, SimulatedFrequencyResponseCost, log_h1_weights,
-                                             principal_pairs)
+from mace_fmu.updating.simulated_frf import H1Estimator, SimulatedFrequencyResponseCost, log_h1_weights, principal_pairs
 from mace_fmu.updating.solve import Stage, UpdateResult, UpdateSettings, update
+from mace_fmu.util.atomic import write_text_atomic
+from mace_fmu.util.progress import ProgressCallback
 
 CostKind = Literal["time", "log-frf"]
 COST_KINDS: tuple[str, ...] = ("time", "log-frf")
@@ -106,7 +105,7 @@ class FmuParameters:
     provenance: Provenance
 
     def to_toml(self) -> str:
-        """[provenance] and [values] tables as in :class:`~mace_fmu.parameters.ParameterSet` files."""
+        """[provenance] and [values] tables as in :class:`~mace_fmu.parameters.sets.ParameterSet` files."""
         lines = ["# mace-fmu: FMU parameters after an update (names and units as the FMU declares them)", "",
                  "[provenance]"]
         for key in ("created", "tool", "structure", "fitted_to", "data", "cost", "method", "initial_cost",

@@ -1,6 +1,6 @@
 """The MACE volts-volts model as a parametrised family: full re-solves, reanalysis, modal coordinates.
 
-Parameter names are those of :mod:`mace_fmu.parameters`. The FE solve depends only on the
+Parameter names are those of :mod:`mace_fmu.parameters.sets`. The FE solve depends only on the
 moduli and springs, so it is cached by their values; damping ratios, delays and servo gains
 then enter exactly through the blocks of a :class:`~mace_fmu.iomodel.parametric.ParametricSystem`
 (the FMUs' own rebuild), so a change of damping costs a block rebuild, not an FE solve. Every
@@ -19,16 +19,15 @@ import numpy as np
 from mace_fmu.deck.cards import Deck
 from mace_fmu.deck.reader import read_deck
 from mace_fmu.errors import MaceError
+from mace_fmu.fe.modes import DEFAULT_MAX_HZ, StructureModes, compute_modes
 from mace_fmu.fe.pairing import carry_labels
 from mace_fmu.fe.preload import PreloadKind
 from mace_fmu.iomodel.parametric import ParametricSystem
 from mace_fmu.iomodel.parametric_data import parametric_arrays, physical_sensitivities, with_physical
-from mace_fmu.iomodel import DEFAULT_MAX_HZ
 from mace_fmu.iomodel.volts import VoltsModel, volts_model
-from mace_fmu.parameter_kinds import DAMPING, kind_of_set_name, mode_label
-from mace_fmu.parameters import ParameterSet, deck_values, parameter_kind
-from mace_fmu.pipeline import StructureModes, compute_modes
-from mace_fmu.structure import StructureKind, bundled_deck_path
+from mace_fmu.parameters.kinds import DAMPING, kind_of_set_name, mode_label
+from mace_fmu.parameters.sets import ParameterSet, deck_values, parameter_kind
+from mace_fmu.structure.file import StructureKind, bundled_deck_path
 from mace_fmu.updating.model import LinearModel
 
 Values = Mapping[str, float]

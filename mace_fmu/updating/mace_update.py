@@ -18,17 +18,17 @@ from typing import Callable, Mapping, Sequence
 import numpy as np
 
 from mace_fmu.fe.preload import PreloadKind
-from mace_fmu.parameter_kinds import DAMPING, DELAY, MODULUS, SPRING, kind_of_set_name
-from mace_fmu.parameters import ParameterSet, Provenance, deck_fingerprint, now_utc, tool_version
+from mace_fmu.parameters.kinds import DAMPING, DELAY, MODULUS, SPRING, kind_of_set_name
+from mace_fmu.parameters.sets import ParameterSet, Provenance, deck_fingerprint, now_utc, tool_version
 from mace_fmu.thesis import thesis_data
-from mace_fmu.threads import single_blas_thread
 from mace_fmu.updating.costs import ModalCost
 from mace_fmu.updating.data import MeasuredMode
 from mace_fmu.updating.mace_family import MaceFamily
 from mace_fmu.updating.selection import Selection, SelectionRule, select_parameters
-from mace_fmu.progress import ProgressCallback
 from mace_fmu.updating.sensitivity import CostSensitivities, cost_sensitivities
 from mace_fmu.updating.solve import Bounds, Stage, UpdateResult, UpdateSettings, update
+from mace_fmu.util.progress import ProgressCallback
+from mace_fmu.util.threads import single_blas_thread
 
 #: the 13 candidates of section 4.5, numbered as in Figures 4.11 and 4.12
 CANDIDATES = ("E_lexan_end", "E_lexan_center", "E_stainless_steel", "E_aluminium", "E_cable_1", "E_cable_2",
@@ -244,7 +244,7 @@ class PreUpdateRow:
 
 def table_4_1_rows(family: MaceFamily, values: Mapping[str, float]) -> list[PreUpdateRow]:
     """Our closed-loop model at ``values`` paired with Table 4.1's rows (label pattern, then frequency)."""
-    from mace_fmu.updating.pairing import pair_poles
+    from mace_fmu.iomodel.pole_pairing import pair_poles
 
     rows = thesis_data()["table_4_1"]
     poles = family.full(values).poles()

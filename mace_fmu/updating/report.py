@@ -7,12 +7,12 @@ from pathlib import Path
 
 import numpy as np
 
-from mace_fmu.atomic import save_figure_atomic, write_text_atomic
+from mace_fmu.iomodel.bode import plot_bode
 from mace_fmu.iomodel.volts import volts_model
-from mace_fmu.report import plot_bode
-from mace_fmu.updating.mace_update import (MaceUpdate, cost_history, format_moduli, format_mode_rows,
-                                           format_table_4_1, mode_rows, scores, table_4_1_rows, table_4_4_moduli)
+from mace_fmu.updating.mace_update import (MaceUpdate, cost_history, format_mode_rows, format_moduli, format_table_4_1,
+                                           mode_rows, scores, table_4_1_rows, table_4_4_moduli)
 from mace_fmu.updating.selection import plot_selection
+from mace_fmu.util.atomic import save_figure_atomic, write_text_atomic
 
 #: channels of the update (gimbals to rate gyros, thesis 4.5) drawn before and after
 BODE_CHANNELS = (

@@ -20,14 +20,14 @@ from typing import Mapping
 import numpy as np
 
 from mace_fmu.thesis import thesis_data
-from mace_fmu.threads import single_blas_thread
-from mace_fmu.two_mass import TwoMassSystem
 from mace_fmu.updating.costs import Cost, FrequencyResponseCost, ModalCost, TimeResponseCost
 from mace_fmu.updating.data import FrequencyResponseData, MeasuredMode, TimeHistory
 from mace_fmu.updating.files import h1_estimate
 from mace_fmu.updating.model import simulate_discrete, zoh_transition
 from mace_fmu.updating.sample_family import MODE_LABELS, TwoMassFamily
 from mace_fmu.updating.solve import Bounds, Stage, UpdateResult, UpdateSettings, update
+from mace_fmu.updating.two_mass import TwoMassSystem
+from mace_fmu.util.threads import single_blas_thread
 
 CASES = ("1", "2a", "2b", "3a", "3b")
 SEPARATE_CASES = ("3a", "3b")  #: Table 4.3

@@ -2,7 +2,7 @@
 
 Parameters: ``k_1``, ``k_2`` [N/m] and the modal damping ratios ``damping:mode 1``, ``damping:mode 2``.
 The model is the modal state-space of eq. 3.6 (modal damping), as an FE-based model would be; the
-"actual" system it is fitted to has physical dampers (:class:`mace_fmu.two_mass.TwoMassSystem`).
+"actual" system it is fitted to has physical dampers (:class:`mace_fmu.updating.two_mass.TwoMassSystem`).
 """
 
 from __future__ import annotations
@@ -12,8 +12,8 @@ from typing import Mapping
 import numpy as np
 
 from mace_fmu.iomodel.reanalysis import ritz_reanalysis
-from mace_fmu.two_mass import TwoMassSystem
 from mace_fmu.updating.model import LinearModel
+from mace_fmu.updating.two_mass import TwoMassSystem
 
 Values = Mapping[str, float]
 MODE_LABELS = ("mode 1", "mode 2")

@@ -104,7 +104,7 @@ def plot_selection(selection: Selection, *, orthogonality_png: str | Path, stren
     """Figures like thesis Figs. 4.11 (orthogonality, as a 3-D bar chart) and 4.12 (strength bars)."""
     from matplotlib.figure import Figure
 
-    from mace_fmu.atomic import save_figure_atomic
+    from mace_fmu.util.atomic import save_figure_atomic
 
     n = len(selection.names)
     ticks = np.arange(1, n + 1)

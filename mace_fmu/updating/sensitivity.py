@@ -7,11 +7,10 @@ from typing import Callable, Mapping, Sequence
 
 import numpy as np
 
-from mace_fmu.progress import ProgressCallback, Step
 from mace_fmu.updating.costs import Cost
 from mace_fmu.updating.inclusion import Evaluator
 from mace_fmu.updating.model import LinearModel
-
+from mace_fmu.util.progress import ProgressCallback, Step
 
 
 @dataclass(frozen=True)

@@ -38,11 +38,11 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from mace_fmu.errors import MaceError
-from mace_fmu.progress import ProgressCallback, Step
-from mace_fmu.threads import single_blas_thread
 from mace_fmu.updating.costs import Cost, scalar_cost
 from mace_fmu.updating.inclusion import ModelFamily, evaluator
 from mace_fmu.updating.sensitivity import CostSensitivities, cost_sensitivities
+from mace_fmu.util.progress import ProgressCallback, Step
+from mace_fmu.util.threads import single_blas_thread
 
 Method = Literal["cost-sensitivity", "full", "reanalysis", "modal-sensitivity"]
 

@@ -14,12 +14,12 @@ import traceback
 from pathlib import Path
 
 import numpy as np
-
 from deck_mutations import mutate
+
 from mace_fmu.deck import read_deck
 from mace_fmu.errors import MaceError
-from mace_fmu.pipeline import compute_modes
-from mace_fmu.structure import bundled_deck_path
+from mace_fmu.fe.modes import compute_modes
+from mace_fmu.structure.file import bundled_deck_path
 
 
 def main(first: int, count: int) -> None:

@@ -14,14 +14,13 @@ import hashlib
 import re
 import uuid
 import zipfile
-from importlib import metadata
 from collections.abc import Mapping
+from importlib import metadata
 from pathlib import Path
 from typing import Literal
 
 import numpy as np
 
-from mace_fmu.atomic import atomic_path
 from mace_fmu.errors import MaceError
 from mace_fmu.fmu.native import compile as runtime
 from mace_fmu.fmu.native.model_description import (fmi2_model_description, fmi3_build_description,
@@ -31,6 +30,7 @@ from mace_fmu.fmu.variables import model_summary
 from mace_fmu.iomodel.parametric import ParametricSystem
 from mace_fmu.iomodel.parametric_data import parametric_arrays, with_frequency_bounds
 from mace_fmu.iomodel.volts import VoltsModel
+from mace_fmu.util.atomic import atomic_path
 
 FmiVersion = Literal[2, 3]
 RESOURCE_NAME = "mace_model.bin"

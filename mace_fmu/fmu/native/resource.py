@@ -20,8 +20,9 @@ from collections.abc import Mapping
 import numpy as np
 
 from mace_fmu.errors import MaceError
-from mace_fmu.iomodel.modal_core import ZERO_HZ, reduce_zero_cluster
-from mace_fmu.parameter_kinds import kind_of_fmu_name, mode_number
+from mace_fmu.iomodel.modal_core import reduce_zero_cluster
+from mace_fmu.parameters.kinds import kind_of_fmu_name, mode_number
+from mace_fmu.util.frequency import ZERO_HZ
 
 MAGIC = b"MACEFMU1"
 FORMAT_VERSION = 1

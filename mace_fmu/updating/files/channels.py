@@ -9,7 +9,7 @@ from pathlib import Path
 from typing import Literal
 
 from mace_fmu.errors import MaceError
-from mace_fmu.textfile import read_text
+from mace_fmu.util.textfile import read_text
 
 Role = Literal["input", "output", "ignore"]
 ROLES: tuple[str, ...] = ("input", "output", "ignore")

@@ -7,11 +7,11 @@ from pathlib import Path
 
 import numpy as np
 
-from mace_fmu.atomic import atomic_path
 from mace_fmu.errors import MaceError
-from mace_fmu.textfile import read_text
 from mace_fmu.updating.data import DataError, TimeHistory
 from mace_fmu.updating.files.channels import ChannelMap, check_present, format_label, parse_label, resolve
+from mace_fmu.util.atomic import atomic_path
+from mace_fmu.util.textfile import read_text
 
 TIME_SUFFIXES = (".csv", ".npz")
 #: relative tolerance on the time step: the same as TimeHistory's uniform-spacing check

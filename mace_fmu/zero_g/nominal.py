@@ -27,18 +27,18 @@ from scipy.optimize import least_squares
 
 from mace_fmu.deck.cards import Deck
 from mace_fmu.errors import MaceError
-from mace_fmu.iomodel.modal_core import ZERO_HZ
 from mace_fmu.iomodel.parametric import ParametricSystem
 from mace_fmu.iomodel.parametric_data import parametric_arrays
+from mace_fmu.iomodel.pole_pairing import REAL_POLE_DAMPING, pair_poles
 from mace_fmu.iomodel.poles import ClosedLoopPole, closed_loop_poles, label_poles
 from mace_fmu.iomodel.volts import VoltsModel, volts_model
-from mace_fmu.parameter_kinds import DAMPING, FREQUENCY_SCALE, kind_of_set_name, mode_label
-from mace_fmu.parameters import ParameterSet, Provenance, deck_fingerprint, now_utc, tool_version
+from mace_fmu.parameters.kinds import DAMPING, FREQUENCY_SCALE, kind_of_set_name, mode_label
+from mace_fmu.parameters.sets import ParameterSet, Provenance, deck_fingerprint, now_utc, tool_version
 from mace_fmu.thesis import thesis_data
-from mace_fmu.threads import single_blas_thread
 from mace_fmu.updating.data import MeasuredMode, read_measured_modes
 from mace_fmu.updating.mace_update import measured_modes
-from mace_fmu.updating.pairing import REAL_POLE_DAMPING, pair_poles
+from mace_fmu.util.frequency import ZERO_HZ
+from mace_fmu.util.threads import single_blas_thread
 
 _TOLERANCE = 1e-7  #: largest relative miss of an adjusted closed-loop frequency or damping ratio
 _FREQUENCY_WEIGHT = 1e5  #: of the frequency residuals against the damping ones
@@ -282,7 +282,7 @@ def _deck_provenance(parameters: ParameterSet | None, deck: Deck | None, *, sour
     base = parameters.provenance if parameters is not None else None
     method = "thesis 5.3: 0-g open-loop frequencies and damping ratios adjusted by the residual 1-g errors"
     if base is None:
-        from mace_fmu.structure import bundled_deck_path
+        from mace_fmu.structure.file import bundled_deck_path
 
         path = Path(deck.path) if deck is not None else bundled_deck_path()
         return Provenance(created=now_utc(), tool=tool_version(), deck=path.name, deck_sha256=deck_fingerprint(path),

@@ -13,7 +13,7 @@ A parameter set maps names to values in SI units. The names are the FMUs' own:
   ``damping:1st Z bending``;
 - ``frequency_scale:<mode label>`` [-] factor on the open-loop natural frequency of the modes with
   that label, after the FE analysis (the updated nominal 0-g model of thesis 5.3 is made of these
-  and damping ratios, see mace_fmu.zero_g).
+  and damping ratios, see mace_fmu.zero_g.nominal).
 
 Names not given keep the deck's and the data file's values.
 """
@@ -30,16 +30,17 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Any, Mapping
 
-from mace_fmu.atomic import write_text_atomic
 from mace_fmu.errors import MaceError
-from mace_fmu.parameter_kinds import DAMPING, FREQUENCY_SCALE, MODULUS, SERVO_GAINS, KindName, kind_of_set_name, unit_of
-from mace_fmu.textfile import read_text
+from mace_fmu.parameters.kinds import (DAMPING, FREQUENCY_SCALE, MODULUS, SERVO_GAINS, KindName, kind_of_set_name,
+                                       unit_of)
+from mace_fmu.util.atomic import write_text_atomic
+from mace_fmu.util.textfile import read_text
 
 ParameterKind = KindName
 
 
 def parameter_kind(name: str) -> ParameterKind:
-    """What a parameter-set name refers to (:mod:`mace_fmu.parameter_kinds`); a MaceError for a name of no
+    """What a parameter-set name refers to (:mod:`mace_fmu.parameters.kinds`); a MaceError for a name of no
     known kind."""
     kind = kind_of_set_name(name)
     if kind is None:
@@ -130,7 +131,7 @@ class ParameterSet:
     # --- TOML ---------------------------------------------------------------------------------
     def to_toml(self) -> str:
         """The set as TOML: a [provenance] table and a [values] table (units in comments)."""
-        lines = ["# mace-fmu parameter set: values in SI units (see mace_fmu/parameters.py for the names)", ""]
+        lines = ["# mace-fmu parameter set: values in SI units (see mace_fmu/parameters/sets.py for the names)", ""]
         if self.provenance is not None:
             lines.append("[provenance]")
             for f in dataclasses.fields(Provenance):
@@ -203,7 +204,7 @@ class ParameterNames:
 
 def load_parameter_names(path: str | Path | None = None) -> ParameterNames:
     """The ``[parameters]`` table of a structure file (default: the bundled mace_em.toml)."""
-    from mace_fmu.structure import bundled_structure_path, load_structure_file
+    from mace_fmu.structure.file import bundled_structure_path, load_structure_file
 
     return names_of_table(load_structure_file(path if path is not None else bundled_structure_path()).tables)
 

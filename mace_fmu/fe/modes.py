@@ -20,12 +20,15 @@ from mace_fmu.fe.constraints import build_constraints
 from mace_fmu.fe.labels import label_modes, rigid_body_vectors
 from mace_fmu.fe.modal import Modes, solve_modes
 from mace_fmu.fe.preload import Preload, PreloadKind, large_displacement_preload, linear_preload
-from mace_fmu.iomodel import DEFAULT_MAX_HZ
-from mace_fmu.parameters import ParameterSet, deck_fingerprint, fe_overrides, parameter_names
-from mace_fmu.progress import ProgressCallback
-from mace_fmu.structure import (Structure, StructureFile, StructureKind, StructureSpec, build_structure,
-                                bundled_deck_path, structure_file_for)
-from mace_fmu.threads import single_blas_thread
+from mace_fmu.parameters.sets import ParameterSet, deck_fingerprint, fe_overrides, parameter_names
+from mace_fmu.structure.build import Structure, build_structure
+from mace_fmu.structure.file import StructureFile, StructureKind, StructureSpec, bundled_deck_path, structure_file_for
+from mace_fmu.util.progress import ProgressCallback
+from mace_fmu.util.threads import single_blas_thread
+
+#: highest mode [Hz] found when the deck has no EIGRL/EIGR range (thesis 3.4: the MACE models keep modes to
+#: 250 Hz)
+DEFAULT_MAX_HZ = 250.0
 
 
 @dataclass(frozen=True)
@@ -181,12 +184,12 @@ def compute_modes(deck: Deck | str | os.PathLike | None = None, *, structure: St
                   structure_file: StructureFile | str | os.PathLike | None = None) -> StructureModes:
     """Modes [Hz] of the 1-g or 0-g structure of a deck (default: the bundled MACE deck).
 
-    ``structure_file``: what the deck does not say (see :mod:`mace_fmu.structure`); default the
+    ``structure_file``: what the deck does not say (see :mod:`mace_fmu.structure.file`); default the
     bundled one for the bundled deck and none for any other deck, which then keeps NASTRAN's
     meaning (nothing removed; modes labelled by their motion, not by MACE's names).
     ``max_hz`` [Hz]: the modes up to it; by default the deck's EIGRL decides (V1, V2, ND), else 250 Hz.
     ``overrides`` replaces card fields
-    (see :func:`mace_fmu.structure.apply_overrides`); ``parameters`` replaces moduli and spring
+    (see :func:`mace_fmu.structure.build.apply_overrides`); ``parameters`` replaces moduli and spring
     stiffnesses by name (``E_<material>``, ``k_<spring>``; its other entries act later).
     ``progress`` is called after each preload increment; nothing is printed (the increments are
     also logged at DEBUG level).

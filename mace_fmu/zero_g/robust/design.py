@@ -21,7 +21,7 @@ import numpy as np
 from mace_fmu.control_studies.balanced_truncation import balanced_truncation
 from mace_fmu.control_studies.lqg import LqgDesign, LqgWeights, design_lqg
 from mace_fmu.errors import MaceError
-from mace_fmu.robust.loop import LoopSpec
+from mace_fmu.zero_g.robust.loop import LoopSpec
 
 #: Default weights, chosen here (the thesis designs no 0-g compensator): theta = 10 rho, and rho ten
 #: times the value (1e-3) at which the loop on the 0-g FMU before the update is unstable (spectral

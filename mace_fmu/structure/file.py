@@ -1,4 +1,4 @@
-"""The 1-g (suspended) and 0-g (suspension removed) structures of one deck, and the structure file.
+"""The structure file: what a deck does not say about its structure, read and checked against the deck.
 
 A deck says what NASTRAN needs; a structure file (TOML) says what it does not: which cards form a
 suspension removed for the 0-g structure, which grids form named components (mode labels,
@@ -11,7 +11,6 @@ NASTRAN's meaning: its modes as its own SPC, MPC and EIGRL define them, nothing 
 
 from __future__ import annotations
 
-import dataclasses
 import functools
 import hashlib
 import os
@@ -22,12 +21,9 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Any, Literal, Mapping
 
-import numpy as np
-
-from mace_fmu.deck.cards import Deck, Subcase
-from mace_fmu.deck.reader import check_deck
-from mace_fmu.errors import DeckError, MaceError
-from mace_fmu.textfile import read_text
+from mace_fmu.deck.cards import Deck
+from mace_fmu.errors import MaceError
+from mace_fmu.util.textfile import read_text
 
 StructureKind = Literal["1g", "0g"]
 
@@ -234,6 +230,17 @@ def structure_file_for(deck: Deck, structure_file: StructureFile | str | os.Path
     return load_structure_file(bundled_structure_path()) if is_bundled_deck(deck) else None
 
 
+def _ids_text(ids: list[int]) -> str:
+    """'1-31, 35, 93-112': IDs as compact ranges for error messages."""
+    ids, parts, start = sorted(ids), [], None
+    for i, k in enumerate(ids):
+        start = k if start is None else start
+        if i + 1 == len(ids) or ids[i + 1] != k + 1:
+            parts.append(str(k) if k == start else f"{start}-{k}")
+            start = None
+    return ", ".join(parts)
+
+
 def check_spec_against_deck(spec: StructureSpec, deck: Deck) -> None:
     """A MaceError naming the structure file and the IDs when it names grids or elements the deck lacks."""
     elements = set(deck.bars) | set(deck.conm2s) | set(deck.celas2s)
@@ -254,138 +261,3 @@ def check_spec_against_deck(spec: StructureSpec, deck: Deck) -> None:
     if problems:
         raise MaceError(f"{spec.source}: names IDs that {deck.path} lacks: " + "; ".join(problems)
                         + " (is it the structure file of another deck?)")
-
-
-@dataclass(frozen=True)
-class Structure:
-    """One analysable structure: its deck, its preload subcase (1-g only) and its modal subcase."""
-
-    kind: StructureKind
-    deck: Deck
-    preload: Subcase | None  #: SPC/MPC/LOAD/NLPARM of the static preload; None for 0-g
-    modal: Subcase  #: SPC/MPC of the eigen-solution
-    spec: StructureSpec  #: empty when the deck has no structure file
-    file: StructureFile | None = None  #: the structure file, None for a deck on its own
-
-
-def _ids_text(ids: list[int]) -> str:
-    """'1-31, 35, 93-112': IDs as compact ranges for error messages."""
-    ids, parts, start = sorted(ids), [], None
-    for i, k in enumerate(ids):
-        start = k if start is None else start
-        if i + 1 == len(ids) or ids[i + 1] != k + 1:
-            parts.append(str(k) if k == start else f"{start}-{k}")
-            start = None
-    return ", ".join(parts)
-
-
-def _checked_value(card: str, cid: int, name: str, old: Any, new: Any) -> Any:
-    """``new`` converted to the type of the field it replaces, or a MaceError saying what was expected."""
-    def is_number(x: Any) -> bool:
-        return isinstance(x, (int, float, np.integer, np.floating)) and not isinstance(x, bool)
-
-    if isinstance(old, tuple):
-        if not isinstance(new, (tuple, list)) or len(new) != len(old) or not all(is_number(x) for x in new):
-            raise MaceError(f"override of {card} {cid}: field {name!r} takes {len(old)} numbers, got {new!r}")
-        return tuple(float(x) if isinstance(o, float) else x for x, o in zip(new, old))
-    if isinstance(old, bool) or isinstance(old, str):
-        if type(new) is not type(old):
-            raise MaceError(f"override of {card} {cid}: field {name!r} takes a {type(old).__name__}, got {new!r}")
-        return new
-    if isinstance(old, int):
-        if not isinstance(new, (int, np.integer)) or isinstance(new, bool):
-            raise MaceError(f"override of {card} {cid}: field {name!r} takes an integer ID, got {new!r}")
-        return int(new)
-    if new is None or is_number(new):  # real fields, possibly blank (None)
-        return None if new is None else float(new)
-    raise MaceError(f"override of {card} {cid}: field {name!r} takes a real number, got {new!r}")
-
-
-def apply_overrides(deck: Deck, overrides: Mapping[tuple[str, int], Mapping[str, Any]]) -> Deck:
-    """Deck with card fields replaced, e.g. {("MAT1", 2): {"e": 2.4e9}, ("PBAR", 1): {"k1": 0.55}}.
-
-    Values are type-checked against the fields they replace, and the changed deck gets the
-    reader's cross-reference and geometry checks; any problem is a MaceError (a ValueError)
-    naming the override.
-    """
-    if not overrides:
-        return deck
-    tables = {name: dict(getattr(deck, attr)) for name, attr in _CARD_TABLES.items()}
-    for (card, cid), fields in overrides.items():
-        if card not in tables:
-            raise MaceError(f"override of unknown card type {card!r}; allowed: {sorted(tables)}")
-        if cid not in tables[card]:
-            raise MaceError(f"override of {card} {cid}: no such card in {deck.path}; {card} IDs there: "
-                             f"{_ids_text(list(tables[card]))}")
-        old = tables[card][cid]
-        allowed = {f.name for f in dataclasses.fields(old)} - {"id", "source"}
-        unknown = set(fields) - allowed
-        if unknown:
-            raise MaceError(f"override of {card} {cid}: unknown field(s) {sorted(unknown)}; allowed: {sorted(allowed)}")
-        values = {k: _checked_value(card, cid, k, getattr(old, k), v) for k, v in fields.items()}
-        tables[card][cid] = dataclasses.replace(old, **values)
-    changed = dataclasses.replace(deck, **{attr: tables[name] for name, attr in _CARD_TABLES.items()})
-    try:
-        check_deck(changed)
-    except DeckError as exc:
-        raise MaceError(f"overrides {dict(overrides)} make the deck invalid: {exc}") from None
-    return changed
-
-
-def remove_suspension(deck: Deck, spec: StructureSpec) -> Deck:
-    """The deck without the suspension: its grids, elements, MPC equations and SPC entries."""
-    gone_g, gone_e = spec.suspension_grids, spec.suspension_elements
-    bars = {i: b for i, b in deck.bars.items() if i not in gone_e}
-    conm2s = {i: m for i, m in deck.conm2s.items() if i not in gone_e}
-    celas2s = {i: s for i, s in deck.celas2s.items() if i not in gone_e}
-    for what, cards, grids_of in (("CBAR", bars, lambda c: (c.ga, c.gb)), ("CONM2", conm2s, lambda c: (c.grid,)),
-                                  ("CELAS2", celas2s, lambda c: (c.g1, c.g2))):
-        for card in cards.values():
-            dangling = [g for g in grids_of(card) if g in gone_g]
-            if dangling:
-                raise DeckError(f"connects suspension grid(s) {dangling} but is not listed as a suspension element in "
-                                f"{spec.source} (expected every element on a suspension grid listed there)",
-                                file=card.source.file, line=card.source.line, card=f"{what} {card.id}")
-    mpcs = {sid: tuple(e for e in eqs if not any(t.grid in gone_g for t in e.terms)) for sid, eqs in deck.mpcs.items()}
-    spc1s = {sid: tuple(dataclasses.replace(c, grids=tuple(g for g in c.grids if g not in gone_g)) for c in cards)
-             for sid, cards in deck.spc1s.items()}
-    return dataclasses.replace(
-        deck, grids={i: g for i, g in deck.grids.items() if i not in gone_g}, bars=bars, conm2s=conm2s,
-        celas2s=celas2s, mpcs=mpcs, spc1s={sid: tuple(c for c in cards if c.grids) for sid, cards in spc1s.items()})
-
-
-def _subcases(deck: Deck) -> tuple[Subcase | None, Subcase]:
-    """(preload subcase = first with a LOAD, modal subcase = last) from the deck's case control."""
-    cases = [deck.subcases[k] for k in sorted(deck.subcases)] or ([deck.global_case] if deck.global_case else [])
-    if not cases:
-        raise DeckError("no case control: cannot tell which SPC/MPC sets to use (expected CEND, SUBCASEs selecting "
-                        "SPC, MPC and LOAD, then BEGIN BULK)", file=deck.path, line=1)
-    preload = next((c for c in cases if c.load is not None), None)
-    return preload, cases[-1]
-
-
-def build_structure(deck: Deck, *, kind: StructureKind, spec: StructureSpec | None = None,
-                    overrides: Mapping[tuple[str, int], Mapping[str, Any]] | None = None,
-                    structure_file: StructureFile | str | os.PathLike | None = None) -> Structure:
-    """The 1-g structure (deck as is, preload subcase + modal subcase) or the 0-g structure.
-
-    The structure file is ``structure_file`` when given, else the bundled one for the bundled deck,
-    else none: then 0-g is the deck's own modal subcase with nothing removed (NASTRAN's SOL 103)
-    and 1-g adds the gravity preload of its LOAD subcase. ``spec`` (e.g. ``StructureSpec.empty()``)
-    replaces the file's structure part.
-    """
-    if kind not in ("1g", "0g"):
-        raise MaceError(f"kind must be '1g' or '0g', got {kind!r}")
-    file = structure_file_for(deck, structure_file)
-    spec = spec if spec is not None else (file.spec if file is not None else StructureSpec.empty())
-    check_spec_against_deck(spec, deck)
-    deck = apply_overrides(deck, overrides or {})
-    preload, modal = _subcases(deck)
-    if kind == "1g":
-        if preload is None:
-            raise DeckError("the 1-g structure needs a subcase with a LOAD (gravity preload); none of the subcases "
-                            "selects one (expected LOAD = set ID in the preload subcase; for the deck's plain modes "
-                            "ask for the 0-g structure)", file=deck.path,
-                            line=modal.source.line, card=f"SUBCASE {modal.id}" if modal.id else "global case control")
-        return Structure(kind=kind, deck=deck, preload=preload, modal=modal, spec=spec, file=file)
-    return Structure(kind=kind, deck=remove_suspension(deck, spec), preload=None, modal=modal, spec=spec, file=file)

@@ -15,7 +15,7 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from mace_fmu.fmu.host import collecting_callbacks
-from mace_fmu.robust.loop import LoopSpec, LoopVerdict, judge
+from mace_fmu.zero_g.robust.loop import LoopSpec, LoopVerdict, judge
 
 
 @dataclass(frozen=True)

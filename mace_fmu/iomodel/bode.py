@@ -8,9 +8,9 @@ from typing import Callable, Mapping
 import numpy as np
 from matplotlib.figure import Figure  # no pyplot: the caller's backend and figures stay untouched
 
-from mace_fmu.atomic import save_figure_atomic
 from mace_fmu.deck.cards import Deck
 from mace_fmu.iomodel.volts import VoltsModel, volts_model
+from mace_fmu.util.atomic import save_figure_atomic
 
 # Disturbance (secondary gimbal) to performance (payload gyro): thesis Figs. 4.15/5.1 and 4.16/5.2
 CHANNELS = (

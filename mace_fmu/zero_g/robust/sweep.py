@@ -4,7 +4,7 @@ bound, at the corners of the most critical parameters, and at a seeded Monte Car
 Corners: all 2^n when the box has at most ``critical_count`` parameters; otherwise the
 ``critical_count`` parameters whose bounds alone move the cost most (the one-at-a-time screening
 runs) span the corners and the rest stay nominal: 2^n corners of 15 Table 5.3 bounds would be
-32768 runs. Every run goes through ``runner`` (``map``, or a :class:`~mace_fmu.runner.DaskRunner`);
+32768 runs. Every run goes through ``runner`` (``map``, or a :class:`~mace_fmu.util.runner.DaskRunner`);
 the runs are independent and their results come back in order, so any runner gives the same
 numbers bit for bit.
 """
@@ -21,11 +21,11 @@ import numpy as np
 import scipy.stats
 
 from mace_fmu.errors import MaceError
-from mace_fmu.progress import ProgressCallback, Step
-from mace_fmu.robust.box import (DEFAULT_PATTERN, ParameterBox, SweepPoint, corner_points, monte_carlo_points,
-                                 nominal_point, read_box, screening_points)
-from mace_fmu.robust.cosim import SampledCompensator, run_fmu_loop
-from mace_fmu.robust.loop import LoopSpec
+from mace_fmu.util.progress import ProgressCallback, Step
+from mace_fmu.zero_g.robust.box import (DEFAULT_PATTERN, ParameterBox, SweepPoint, corner_points, monte_carlo_points,
+                                        nominal_point, read_box, screening_points)
+from mace_fmu.zero_g.robust.cosim import SampledCompensator, run_fmu_loop
+from mace_fmu.zero_g.robust.loop import LoopSpec
 
 OPEN_LOOP = SampledCompensator(a=np.zeros((0, 0)), b=np.zeros(0), c=np.zeros(0), d=0.0)
 

@@ -18,7 +18,7 @@ import numpy as np
 import scipy.signal
 
 from mace_fmu.iomodel.parametric import ParametricSystem
-from mace_fmu.robust.loop import LoopSpec, LoopVerdict, judge
+from mace_fmu.zero_g.robust.loop import LoopSpec, LoopVerdict, judge
 
 
 @dataclass(frozen=True)

@@ -13,7 +13,7 @@ import os
 from typing import Any, Callable, Iterable
 
 from mace_fmu.errors import MaceError
-from mace_fmu.progress import ProgressCallback, Step
+from mace_fmu.util.progress import ProgressCallback, Step
 
 
 class DaskRunner:

@@ -1,8 +1,10 @@
-"""Numbers as people read them, shared by the command line and the viewer."""
+"""Frequencies as every stage reads them: the edge of the zero-frequency cluster, and frequency text."""
 
 from __future__ import annotations
 
-from mace_fmu.iomodel.modal_core import ZERO_HZ
+#: modes below this frequency [Hz] form the zero cluster: rigid bodies and mechanisms, whose computed
+#: frequencies are round-off (a few 1e-4 Hz)
+ZERO_HZ = 0.01
 
 
 def hz_text(frequency_hz: float, *, decimals: int) -> str:

@@ -1,6 +1,6 @@
 """One record per kind of model parameter: its names, its SI unit and the range every FMU declares.
 
-A parameter has two spellings. In a :class:`~mace_fmu.parameters.ParameterSet` a modal
+A parameter has two spellings. In a :class:`~mace_fmu.parameters.sets.ParameterSet` a modal
 parameter is named by its mode's label (``damping:1st Z bending``), so that a set fits any model
 that has such a mode; in an FMU it is named by the mode's number (``damping_mode_14``), because an
 FMU's variables are fixed. Physical parameters, delays and gains are spelled the same in both.
@@ -30,7 +30,7 @@ from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Literal, Mapping
 
-from mace_fmu.iomodel.modal_core import ZERO_HZ  # the zero-frequency cluster's edge [Hz]
+from mace_fmu.util.frequency import ZERO_HZ  # the zero-frequency cluster's edge [Hz]
 
 KindName = Literal["modulus", "spring", "delay", "gain", "damping", "frequency_scale"]
 

@@ -8,10 +8,10 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from mace_fmu.atomic import save_figure_atomic
-from mace_fmu.robust.box import short_name
-from mace_fmu.robust.design import RobustDesign
-from mace_fmu.robust.sweep import SweepResult
+from mace_fmu.util.atomic import save_figure_atomic
+from mace_fmu.zero_g.robust.box import short_name
+from mace_fmu.zero_g.robust.design import RobustDesign
+from mace_fmu.zero_g.robust.sweep import SweepResult
 
 
 def _db(ratio: float) -> str:

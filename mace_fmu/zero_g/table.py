@@ -9,10 +9,10 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from mace_fmu.atomic import write_text_atomic
 from mace_fmu.thesis import thesis_data
-from mace_fmu.textfile import read_toml
-from mace_fmu.zero_g import ZeroGPrediction, ZeroGRow
+from mace_fmu.util.atomic import write_text_atomic
+from mace_fmu.util.textfile import read_toml
+from mace_fmu.zero_g.nominal import ZeroGPrediction, ZeroGRow
 
 CSV_COLUMNS = ("label", "nominal_hz", "damping", "bound_percent", "heavy", "adjusted", "damping_reached", "mode",
                "mode_label", "frequency_scale", "open_loop_damping", "unaltered_hz", "unaltered_damping",

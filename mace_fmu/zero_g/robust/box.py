@@ -3,7 +3,7 @@
 The box is read from the FMU's model description (fmpy): every real parameter whose name matches
 ``pattern`` (default the 0-g FMU's ``frequency_scale_mode_<k>``) and whose declared minimum and
 maximum are narrower, on both sides, than the range of every parameter of its kind (the validity
-limits of mace_fmu.parameter_kinds): a bound given at export. ``ranges`` names the range of other parameters explicitly (an
+limits of mace_fmu.parameters.kinds): a bound given at export. ``ranges`` names the range of other parameters explicitly (an
 FMU without declared bounds, e.g. ``damping_mode_<k>`` over a chosen interval).
 """
 
@@ -18,7 +18,7 @@ from typing import Literal, Mapping
 import numpy as np
 
 from mace_fmu.errors import MaceError
-from mace_fmu.parameter_kinds import FREQUENCY_SCALE, kind_of_fmu_name, mode_number
+from mace_fmu.parameters.kinds import FREQUENCY_SCALE, kind_of_fmu_name, mode_number
 
 PointKind = Literal["nominal", "screen", "corner", "sample"]
 #: The 0-g FMU's modal frequency scales; their min/max are Table 5.3's bounds.
@@ -58,7 +58,7 @@ def short_name(name: str) -> str:
 
 def _is_uncertainty_bound(name: str, start: float, low: float, high: float) -> bool:
     """True when a declared range is narrower, on both sides, than the range every parameter of its kind
-    has (mace_fmu.parameter_kinds): then it was given as a bound (Table 5.3's), not as a validity limit."""
+    has (mace_fmu.parameters.kinds): then it was given as a bound (Table 5.3's), not as a validity limit."""
     kind = kind_of_fmu_name(name)
     own_low, own_high = kind.range_for(start) if kind is not None else (-np.inf, np.inf)
     return bool(np.isfinite(low) and np.isfinite(high) and own_low < low < high < own_high)

@@ -14,13 +14,13 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, Mapping
 
-from mace_fmu.atomic import write_text_atomic
 from mace_fmu.control_studies.lqg import LqgWeights
 from mace_fmu.iomodel.volts import VoltsModel
-from mace_fmu.progress import ProgressCallback
-from mace_fmu.robust.design import DEFAULT_REDUCED_STATES, DEFAULT_WEIGHTS, RobustDesign, design_compensator
-from mace_fmu.robust.loop import LoopSpec
-from mace_fmu.robust.sweep import SweepResult, robust_sweep
+from mace_fmu.util.atomic import write_text_atomic
+from mace_fmu.util.progress import ProgressCallback
+from mace_fmu.zero_g.robust.design import DEFAULT_REDUCED_STATES, DEFAULT_WEIGHTS, RobustDesign, design_compensator
+from mace_fmu.zero_g.robust.loop import LoopSpec
+from mace_fmu.zero_g.robust.sweep import SweepResult, robust_sweep
 
 FMU_NAME = "MACE_0g_native"
 
@@ -61,7 +61,7 @@ def cross_check(model: VoltsModel, sweep: SweepResult, design: RobustDesign, *, 
     """Sweep point ``point`` again through the Python model in a sampled state-space loop."""
     from mace_fmu.iomodel.parametric import ParametricSystem
     from mace_fmu.iomodel.parametric_data import parametric_arrays
-    from mace_fmu.robust.statespace import simulate_state_space, state_space_loop
+    from mace_fmu.zero_g.robust.statespace import simulate_state_space, state_space_loop
 
     reference = ParametricSystem(parametric_arrays(model, physical=False))
     values = dict(zip(sweep.box.names, sweep.points[point].values))

@@ -1,0 +1,19 @@
+"""Model parameters: one record per kind (unit, valid range, name in a set and in an FMU) and the
+frozen, provenance-carrying parameter set every stage takes (SI units, TOML in and out)."""
+
+from __future__ import annotations
+
+from mace_fmu.util.lazy import lazy_exports
+
+__all__, __getattr__, __dir__ = lazy_exports(__name__, {
+    "ParameterSet": "sets",
+    "Provenance": "sets",
+    "ParameterNames": "sets",
+    "parameter_names": "sets",
+    "load_parameter_names": "sets",
+    "ParameterKind": "kinds",
+    "KINDS": "kinds",
+    "declared_range": "kinds",
+    "kind_of_set_name": "kinds",
+    "kind_of_fmu_name": "kinds",
+})
