@@ -9,12 +9,13 @@ import numpy as np
 import pytest
 
 from mace_fmu.cli import main
+from mace_fmu.errors import MaceError
 from mace_fmu.fe.modes import DEFAULT_MAX_HZ
 from mace_fmu.iomodel.frf import frequency_response
 from mace_fmu.iomodel.modal_ss import modal_data
 from mace_fmu.iomodel.poles import closed_loop_poles
 from mace_fmu.iomodel.volts import volts_model
-from mace_fmu.parameters.sets import ParameterSet
+from mace_fmu.parameters.sets import ParameterSet, deck_values, parameter_names
 from mace_fmu.thesis import table_4_7_comparison, table_5_2_comparison
 
 
@@ -140,6 +141,11 @@ def test_bessel_delay_variant_and_open_loop_variant():
     (dict(motion_grids=[1, 999999]), "999999] are not in the 0g model; it has grids 1..112"),
     (dict(motion_grids="some"), "motion_grids must be grid IDs or 'all'"),
     (dict(motion_grids=1), "motion_grids must be a list of grid IDs or 'all', got 1"),
+    # where the modes come from is said once
+    (dict(deck="any.bdf"), "modes= already fix the deck, preload and structure file they were computed with; drop deck="),
+    (dict(preload="linear", structure_file="x.toml"), "drop preload=, structure_file="),
+    (dict(parameters=ParameterSet({"E_lexan_end": 1.0e9})), "parameters set MAT1 .* e = 1e\\+09 but modes= were "
+                                                             "computed with"),
 ])
 def test_bad_requests_are_value_errors_that_say_what_is_allowed(v0, kwargs, message):
     with pytest.raises(ValueError, match=message.replace("(", r"\(").replace(")", r"\)")):
@@ -223,3 +229,16 @@ def test_damping_override_moves_only_that_pole(v0):
     assert base["5th Y bending"].damping == pytest.approx(0.017, abs=0.002)
     assert new["5th Y bending"].damping == pytest.approx(0.05, abs=0.003)
     assert new["4th Z bending"].damping == pytest.approx(base["4th Z bending"].damping, rel=1e-6)
+
+
+def test_modes_of_one_structure_do_not_make_the_other(v0):
+    with pytest.raises(MaceError, match="modes= are of the 0g structure, the model asked for is 1g"):
+        volts_model("1g", modes=v0.structure_modes)
+
+
+def test_modes_agree_with_parameters_that_repeat_their_moduli(v0):
+    """A set whose moduli are those the modes were computed with is no contradiction: same model."""
+    deck = v0.structure_modes.structure.deck
+    same = ParameterSet(deck_values(deck, parameter_names(deck, v0.structure_modes.structure.file)))
+    again = volts_model("0g", modes=v0.structure_modes, parameters=same)
+    assert np.array_equal(again.system.A, v0.system.A)

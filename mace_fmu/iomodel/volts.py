@@ -16,7 +16,7 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass, replace
 from functools import cached_property
-from typing import Literal, Sequence
+from typing import Any, Literal, Mapping, Sequence
 
 import control as ct
 import numpy as np
@@ -212,7 +212,7 @@ def build_diagram(plant: ModalPlant, instruments: Instruments, *, servos: bool =
 @single_blas_thread
 def volts_model(structure: StructureKind = "1g", *, parameters: ParameterSet | None = None, servos: bool = True,
                 bessel: BesselKind = "full", delays: bool = True, pade_order: int = 3, max_hz: float | None = None,
-                preload: PreloadKind = "large", deck: Deck | str | None = None, instruments: Instruments | None = None,
+                preload: PreloadKind | None = None, deck: Deck | str | None = None, instruments: Instruments | None = None,
                 modes: StructureModes | None = None, inputs: Sequence[str] | None = None,
                 outputs: Sequence[str] | None = None, motion_grids: Sequence[int] | Literal["all"] = (),
                 structure_file: StructureFile | str | os.PathLike | None = None) -> VoltsModel:
@@ -230,10 +230,18 @@ def volts_model(structure: StructureKind = "1g", *, parameters: ParameterSet | N
     translations [m] and rotations [rad] in basic axes as outputs ``grid_<id>_<tx|ty|tz|rx|ry|rz>``
     after the sensors, for animation. ``structure_file`` declares the actuators and sensors (default:
     the bundled one for the bundled deck; see :mod:`mace_fmu.structure.file`); ``instruments`` replaces them.
+
+    Where the modes come from is said once: either ``modes`` (computed before, which fix the deck, the
+    structure file, the preload and the moduli) or ``deck``, ``preload`` (default "large") and
+    ``structure_file``; given both, or ``modes`` of the other structure, or moduli in ``parameters`` that
+    the modes were not computed with, it raises :class:`~mace_fmu.errors.MaceError`.
     """
     _check(structure in ("1g", "0g"), f"structure must be '1g' or '0g', got {structure!r}")
-    if modes is None:
-        modes = compute_modes(deck, structure=structure, preload=preload,
+    if modes is not None:
+        _check_modes_agree(modes, structure=structure, parameters=parameters,
+                           given={"deck": deck, "preload": preload, "structure_file": structure_file})
+    else:
+        modes = compute_modes(deck, structure=structure, preload=preload or "large",
                               max_hz=max(max_hz, 1.0) if max_hz is not None else None,
                               parameters=parameters, structure_file=structure_file)
     file = modes.structure.file
@@ -271,6 +279,25 @@ def volts_model(structure: StructureKind = "1g", *, parameters: ParameterSet | N
     return VoltsModel(system=select_signals(system, inputs=inputs, outputs=outputs), diagram=diagram, plant=plant,
                       structure_modes=modes, instruments=instruments, servos=servos, bessel=bessel, delays=delays,
                       pade_order=pade_order)
+
+
+def _check_modes_agree(modes: StructureModes, *, structure: str, parameters: ParameterSet | None,
+                       given: Mapping[str, Any]) -> None:
+    """Refuse a model whose given ``modes`` contradict the other arguments (they would be ignored)."""
+    doubled = [name for name, value in given.items() if value is not None]
+    _check(not doubled, f"modes= already fix the deck, preload and structure file they were computed with; drop "
+                        f"{', '.join(f'{name}=' for name in doubled)} (or drop modes= to compute them)")
+    _check(modes.structure.kind == structure, f"modes= are of the {modes.structure.kind} structure, the model asked "
+                                              f"for is {structure}")
+    deck = modes.structure.deck
+    for (card, cid), fields in fe_overrides(parameters, parameter_names(deck, modes.structure.file)).items():
+        entry = (deck.mat1s if card == "MAT1" else deck.celas2s)[cid]
+        for key, value in fields.items():
+            computed = float(getattr(entry, key))
+            _check(abs(computed - value) <= 1e-12 * abs(value),
+                   f"parameters set {card} {cid} {key} = {value:.6g} but modes= were computed with {computed:.6g}; "
+                   "compute the modes with the same parameters (compute_modes(..., parameters=...)) or leave "
+                   "modes= out")
 
 
 def apply_parameters(instruments: Instruments, parameters: ParameterSet | None, mode_labels: Sequence[str], *,

@@ -353,7 +353,7 @@ def predict_zero_g(*, parameters: ParameterSet | None = None, measured: Sequence
     nominal_set = ParameterSet({**base, **updates}, _deck_provenance(parameters, deck, source=source))
 
     say("updated nominal 0-g model")
-    nominal = volts_model("0g", parameters=nominal_set, modes=v0.structure_modes, deck=deck)
+    nominal = volts_model("0g", parameters=nominal_set, modes=v0.structure_modes)
     pn = closed_loop_poles(nominal)
     near = [p0[i].frequency_hz for i in i0]
     for j, hz in zip(adjusted, target_hz):
