@@ -32,8 +32,9 @@ def zoh_reference(model, t: np.ndarray, u: np.ndarray) -> np.ndarray:
         return ct.forced_response(ct.sample_system(model.system, steps[0], "zoh"), T=t, U=u).outputs
     x = np.zeros(model.system.nstates)
     y = [model.system.C @ x + model.system.D @ u[:, 0]]
-    for k, h in enumerate(steps):  # an independent discretization for every step size
-        d = ct.sample_system(model.system, h, "zoh")
+    discrete = {}  # an independent discretization for every distinct step size [s]
+    for k, h in enumerate(steps):
+        d = discrete.get(h) or discrete.setdefault(h, ct.sample_system(model.system, h, "zoh"))
         x = d.A @ x + d.B @ u[:, k]
         y.append(model.system.C @ x + model.system.D @ u[:, k])
     return np.array(y).T
