@@ -7,19 +7,35 @@ grid's displacement (CD) system, so nothing indexes a mode-shape vector by posit
 from __future__ import annotations
 
 import fnmatch
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, Literal, Mapping
 
 import numpy as np
 
+from mace_fmu.deck.cards import Deck
 from mace_fmu.errors import MaceError
+from mace_fmu.fe.assembly import FEModel
+from mace_fmu.fe.bar_strain import bar_strain_weights
 from mace_fmu.fe.dofs import DofMap, cd_component_vector
 from mace_fmu.structure.file import StructureFile, bundled_structure_path, load_structure_file
 from modelica_like.filters import LOWPASS_KINDS, lowpass_realization
 
 SensorKind = Literal["displacement", "rate"]
+#: the sensor kinds a structure file may name: a bar strain gauge is a displacement sensor whose weights
+#: the deck's bar gives (fe/bar_strain.py)
+SENSOR_KINDS = ("displacement", "rate", "bar_strain")
 Dof = tuple[int, int, float]  #: (grid, component 1-6 in CD, weight)
+
+
+@dataclass(frozen=True)
+class BarGauge:
+    """Where a strain gauge sits: a CBAR, a position along it and a fibre of its section."""
+
+    bar: int  #: CBAR ID
+    position: float  #: along the bar from end A, as a fraction of its length (0: end A, 1: end B)
+    fiber_y_m: float  #: fibre offset from the centroid along the element y axis [m]
+    fiber_z_m: float  #: fibre offset along the element z axis [m]
 
 
 @dataclass(frozen=True)
@@ -42,6 +58,8 @@ class Sensor:
     dofs: tuple[Dof, ...]
     gain: float  #: [V per strain, per rad/s, ...] (Table 3.12, notch DC gains of Table 3.13)
     unit: str = ""  #: the physical quantity's unit: rad, m, rad/s, m/s, or "strain" (given in the structure file)
+    #: a bar strain gauge: its ``dofs`` come from the deck's bar (:func:`resolve_bar_gauges`); None otherwise
+    gauge: BarGauge | None = None
 
 
 @dataclass(frozen=True)
@@ -125,6 +143,63 @@ def influence_vector(dofs: tuple[Dof, ...], dof_map: DofMap, cd_frames: np.ndarr
     return vec
 
 
+def _number(entry: Mapping[str, Any], key: str, where: str, default: float | None = None) -> float:
+    value = entry.get(key, default)
+    if not isinstance(value, (int, float)) or isinstance(value, bool):
+        raise MaceError(f"{where}: {key} must be a number, got {value!r}")
+    return float(value)
+
+
+def _bar_gauge(entry: Mapping[str, Any], where: str) -> BarGauge:
+    """``bar = ID``, ``position = 0..1`` (default 0.5), ``fiber = [y, z]`` [m] of a bar_strain sensor."""
+    if "dofs" in entry or "wheels" in entry:
+        raise MaceError(f"{where}: a bar_strain sensor takes bar, position and fiber, not dofs (its bar gives them)")
+    bar, fiber = entry.get("bar"), entry.get("fiber")
+    if not isinstance(bar, int) or isinstance(bar, bool):
+        raise MaceError(f"{where}: bar must be a CBAR ID (an integer), got {bar!r}")
+    if not (isinstance(fiber, list) and len(fiber) == 2
+            and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in fiber)):
+        raise MaceError(f"{where}: fiber must be [y, z], the gauge's offset [m] from the section centroid in "
+                        f"element axes, got {fiber!r}")
+    position = _number(entry, "position", where, default=0.5)
+    if not 0.0 <= position <= 1.0:
+        raise MaceError(f"{where}: position must be in [0, 1] (a fraction of the bar's length from end A), got "
+                        f"{position}")
+    return BarGauge(bar=bar, position=position, fiber_y_m=float(fiber[0]), fiber_z_m=float(fiber[1]))
+
+
+def _sensor(entry: Mapping[str, Any], path: Path) -> Sensor:
+    where = f"{path} sensor {entry['name']}"
+    kind = entry["kind"]
+    if kind not in SENSOR_KINDS:
+        raise MaceError(f"{path}: sensor {entry['name']}: kind must be one of {', '.join(map(repr, SENSOR_KINDS))}, "
+                        f"got {kind!r}")
+    if kind == "bar_strain":
+        return Sensor(name=entry["name"], description=entry["description"], kind="displacement", dofs=(),
+                      gain=float(entry["gain"]), unit=str(entry.get("unit") or "strain"),
+                      gauge=_bar_gauge(entry, where))
+    dofs = _dofs(entry, where)
+    return Sensor(name=entry["name"], description=entry["description"], kind=kind, dofs=dofs,
+                  gain=float(entry["gain"]), unit=str(entry.get("unit") or _sensor_unit(kind, dofs)))
+
+
+def resolve_bar_gauges(instruments: Instruments, model: FEModel, deck: Deck) -> Instruments:
+    """``instruments`` with every bar strain gauge's DOF weights computed from its bar in ``deck``."""
+    if not any(s.gauge is not None and not s.dofs for s in instruments.sensors):
+        return instruments
+    sensors = []
+    for s in instruments.sensors:
+        if s.gauge is not None and not s.dofs:
+            try:
+                dofs = bar_strain_weights(model, deck, bar_id=s.gauge.bar, position=s.gauge.position,
+                                          fiber_y_m=s.gauge.fiber_y_m, fiber_z_m=s.gauge.fiber_z_m)
+            except MaceError as exc:
+                raise MaceError(f"{instruments.source} sensor {s.name}: {exc}") from None
+            s = replace(s, dofs=dofs)
+        sensors.append(s)
+    return replace(instruments, sensors=tuple(sensors))
+
+
 def _dofs(entry: Mapping[str, Any], where: str) -> tuple[Dof, ...]:
     """DOF list from ``dofs = [[grid, comp, w], ...]`` or ``wheels = [[wheel, base, w], ...]``."""
     if "dofs" in entry:
@@ -188,10 +263,7 @@ def load_instruments(structure_file: StructureFile | str | Path | None = None) -
     try:
         actuators = tuple(Actuator(name=a["name"], description=a["description"], dofs=_dofs(a, f"{path} actuator "
                                    f"{a['name']}"), gain=float(a["gain"])) for a in data["actuators"])
-        sensors = tuple(Sensor(name=s["name"], description=s["description"], kind=s["kind"],
-                               dofs=_dofs(s, f"{path} sensor {s['name']}"), gain=float(s["gain"]),
-                               unit=str(s.get("unit") or _sensor_unit(s["kind"], _dofs(s, f"{path} sensor {s['name']}"))))
-                        for s in data["sensors"])
+        sensors = tuple(_sensor(s, path) for s in data["sensors"])
         # electronics, servos and damping are optional: a structure without them has no filters, no
         # delays, no local loops, and every mode DEFAULT_DAMPING (rigid-body and mechanism modes none)
         el, sv, dm = data.get("electronics", {}), data.get("servos", {}), data.get("damping", {})
@@ -210,9 +282,6 @@ def load_instruments(structure_file: StructureFile | str | Path | None = None) -
             raise MaceError(f"{path}: [electronics] analog_sensors need filter_order > 0 and filter_cutoff_hz > 0")
     except KeyError as exc:
         raise MaceError(f"{path}: missing table or key {exc}") from None
-    for s in sensors:
-        if s.kind not in ("displacement", "rate"):
-            raise MaceError(f"{path}: sensor {s.name}: kind must be 'displacement' or 'rate', got {s.kind!r}")
     inst = Instruments(actuators=actuators, sensors=sensors, electronics=electronics, servos=servos, damping=damping,
                        source=str(path))
     names = [a.name for a in actuators] + [s.name for s in sensors]

@@ -27,7 +27,7 @@ from mace_fmu.fe.modes import StructureModes, compute_modes
 from mace_fmu.fe.preload import PreloadKind
 from mace_fmu.iomodel.damping import modal_damping
 from mace_fmu.iomodel.frf import frequency_response
-from mace_fmu.iomodel.instruments import Instruments, load_instruments
+from mace_fmu.iomodel.instruments import Instruments, load_instruments, resolve_bar_gauges
 from mace_fmu.iomodel.modal_ss import ModalPlant, modal_plant
 from mace_fmu.iomodel.motion import parse_motion_output
 from mace_fmu.parameters.kinds import DAMPING, DELAY, FREQUENCY_SCALE, SERVO_GAINS, ParameterKind, mode_label
@@ -251,6 +251,7 @@ def volts_model(structure: StructureKind = "1g", *, parameters: ParameterSet | N
                             "deck has no structure file declaring them (give one: structure_file=..., CLI --structure "
                             "FILE; the bundled mace_em.toml belongs to the bundled MACE deck only)")
         instruments = load_instruments(file)
+    instruments = resolve_bar_gauges(instruments, modes.model, modes.structure.deck)
     # the moduli and springs must name cards, whether or not modes were given
     fe_overrides(parameters, parameter_names(modes.structure.deck, file))
     instruments = apply_parameters(instruments, parameters, modes.modes.labels, structure=structure)
