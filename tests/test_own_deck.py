@@ -345,3 +345,43 @@ def test_a_butterworth_filter_from_the_structure_file_filters_exactly_its_sensor
     filter_poles = [p for p in closed_loop_poles(model) if p.label == "Butterworth filter"]
     assert len(filter_poles) == 2 * 2  # two gyros, two complex pairs each (Im >= 0)
     assert all(abs(abs(p.eigenvalue) / (2 * np.pi * 30.0) - 1.0) < 1e-9 for p in filter_poles)
+
+
+#: every command that takes --structure, with the arguments it needs besides it
+STRUCTURE_COMMANDS = {
+    "modes": ["modes", "0g"], "model": ["model", "0g"], "export": ["export", "0g", "--out", "{tmp}"],
+    "report": ["report", "--out", "{tmp}"], "build": ["build", "--out", "{tmp}"],
+    "update": ["update", "-o", "{tmp}"], "predict-0g": ["predict-0g"],
+    "view modes": ["view", "modes", "0g", "--html", "{tmp}/v.html"],
+    "view pairs": ["view", "pairs", "--html", "{tmp}/v.html"],
+    "view response": ["view", "response", "0g", "--input", "gimbal_secondary_z", "--html", "{tmp}/v.html"],
+}
+
+
+def _commands_with_option(parser, option: str, prefix: str = "") -> list[str]:
+    import argparse
+
+    found = []
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for name, sub in action.choices.items():
+                found += _commands_with_option(sub, option, f"{prefix} {name}".strip())
+        elif option in action.option_strings:
+            found.append(prefix)
+    return found
+
+
+@pytest.mark.parametrize("command", sorted(STRUCTURE_COMMANDS))
+def test_no_command_ignores_the_structure_file_it_is_given(command, tmp_path, capsys):
+    """The bundled deck with another structure's file (its suspension IDs are not MACE's): every command
+    that takes --structure reads it and stops on the mismatch, or says why it does not take one."""
+    from mace_fmu.cli import build_parser
+
+    assert sorted(_commands_with_option(build_parser(), "--structure")) == sorted(STRUCTURE_COMMANDS)
+    spacecraft = Path(__file__).parents[1] / "examples" / "own_structure" / "spacecraft.toml"
+    argv = [a.replace("{tmp}", str(tmp_path)) for a in STRUCTURE_COMMANDS[command]]
+    assert main([*argv, "--structure", str(spacecraft)]) == 2
+    err = capsys.readouterr().err
+    assert "spacecraft.toml" in err, err
+    assert ("names IDs that" in err and "mace_em.bdf lacks: [suspension] elements 201-206" in err
+            or command in ("update", "view response")), err

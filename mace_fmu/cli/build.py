@@ -24,13 +24,14 @@ def cmd_build(args: argparse.Namespace) -> int:
         progress(f"parameter set {args.parameters} ({len(params)} values)")
     progress("0-g modes (suspension removed, linear)")
     # the modes the FMUs are built from: up to 250 Hz, the thesis's cut-off, whatever a deck's EIGRL says
-    m0 = compute_modes(deck, structure="0g", max_hz=DEFAULT_MAX_HZ, parameters=params)
+    m0 = compute_modes(deck, structure="0g", max_hz=DEFAULT_MAX_HZ, parameters=params,
+                       structure_file=args.structure_file)
     results = {}
     for kind in ("large", "linear"):
         progress(f"1-g modes ({kind} gravity preload)")
         with progress_bar() as bar:
             results[kind] = compute_modes(deck, structure="1g", preload=kind, max_hz=DEFAULT_MAX_HZ, progress=bar,
-                                          parameters=params)
+                                          parameters=params, structure_file=args.structure_file)
     print(thesis_tables(m0, results))
     print()
     for kind, modes in (("1g", results["large"]), ("0g", m0)):

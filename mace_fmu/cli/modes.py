@@ -10,7 +10,7 @@ import numpy as np
 
 from mace_fmu.cli.common import deck_option, positive_hz, progress_bar
 from mace_fmu.deck.reader import read_deck
-from mace_fmu.fe.modes import StructureModes, compute_modes
+from mace_fmu.fe.modes import DEFAULT_MAX_HZ, StructureModes, compute_modes
 from mace_fmu.util.frequency import ZERO_HZ, hz_text
 
 
@@ -77,7 +77,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("structure", choices=["1g", "0g"])
     deck_option(p)
     p.add_argument("--max-hz", type=positive_hz, default=None,
-                   help="upper frequency [Hz] (default: the deck's EIGRL, else 250)")
+                   help=f"upper frequency [Hz] (default: the deck's EIGRL, else {DEFAULT_MAX_HZ:g})")
     p.add_argument("--preload", choices=["large", "linear"], default="large",
                    help="1-g gravity preload: large displacement (SOL 106, default) or linear")
     p.add_argument("--mass", choices=["lumped", "consistent"], default="lumped", help="bar mass matrix")

@@ -34,7 +34,7 @@ def cmd_predict(args: argparse.Namespace) -> int:
         source = f"measurement model {args.measured}"
     say = (lambda _: None) if args.json else progress
     prediction = predict_zero_g(parameters=params, measured=measured, zero_g_patterns=patterns, rule=rule, deck=deck,
-                                source=source, message=say)
+                                structure_file=args.structure_file, source=source, message=say)
     paths = {}
     if args.fmu:  # first: an export that fails leaves no tables behind
         from mace_fmu.fmu.naming import fmu_name

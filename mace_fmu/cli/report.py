@@ -11,7 +11,8 @@ from mace_fmu.deck.reader import read_deck
 def cmd_report(args: argparse.Namespace) -> int:
     from mace_fmu.iomodel.bode import bode_report
 
-    for path in bode_report(read_deck(args.deck), out_dir=args.out, progress=progress):
+    for path in bode_report(read_deck(args.deck), structure_file=args.structure_file, out_dir=args.out,
+                            progress=progress):
         print(f"wrote {path}")
     return 0
 

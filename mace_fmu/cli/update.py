@@ -130,6 +130,11 @@ def cmd_update(args: argparse.Namespace) -> int:
         raise MaceError("--data and --update belong to an FMU update: add --fmu FILE")
     if args.sample_problem:
         return cmd_sample(args)
+    if args.structure_file is not None:
+        raise MaceError(f"--structure {args.structure_file}: the modal update is the thesis's MACE update (its "
+                        "candidate moduli, Table 4.4 "
+                        "start and Table 4.7 data) and reads MACE's structure file; to update your own structure, "
+                        "export its FMU and update that against test data: mace-fmu update --fmu FILE --data ...")
     if args.out is None:
         raise MaceError("say where to write the updated parameter set and the report: -o DIR "
                         "(or run --sample-problem)")

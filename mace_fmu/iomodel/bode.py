@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 from typing import Callable, Mapping
 
@@ -10,6 +11,7 @@ from matplotlib.figure import Figure  # no pyplot: the caller's backend and figu
 
 from mace_fmu.deck.cards import Deck
 from mace_fmu.iomodel.volts import VoltsModel, volts_model
+from mace_fmu.structure.file import StructureFile
 from mace_fmu.util.atomic import save_figure_atomic
 
 # Disturbance (secondary gimbal) to performance (payload gyro): thesis Figs. 4.15/5.1 and 4.16/5.2
@@ -26,7 +28,8 @@ def channel_response(model: VoltsModel, response: np.ndarray, u: str, y: str) ->
     return response[:, o, i]
 
 
-def bode_report(deck: Deck | None = None, *, out_dir: str | Path = "report",
+def bode_report(deck: Deck | None = None, *, structure_file: StructureFile | str | os.PathLike | None = None,
+                out_dir: str | Path = "report",
                 frequencies_hz: np.ndarray | None = None, progress: Callable[[str], None] | None = None) -> list[Path]:
     """Write one PNG per channel of CHANNELS with the 1-g and 0-g models overlaid; return the paths."""
     out = Path(out_dir)
@@ -36,7 +39,7 @@ def bode_report(deck: Deck | None = None, *, out_dir: str | Path = "report",
     for kind in ("1g", "0g"):
         if progress:
             progress(f"{kind} volts-volts model")
-        models[kind] = volts_model(kind, deck=deck)
+        models[kind] = volts_model(kind, deck=deck, structure_file=structure_file)
         responses[kind] = models[kind].frequency_response(f)  # all channels at once, then indexed
     paths = []
     for u, y, title in CHANNELS:

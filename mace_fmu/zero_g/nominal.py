@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import csv
 import math
+import os
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -34,6 +35,7 @@ from mace_fmu.iomodel.poles import ClosedLoopPole, closed_loop_poles, label_pole
 from mace_fmu.iomodel.volts import VoltsModel, volts_model
 from mace_fmu.parameters.kinds import DAMPING, FREQUENCY_SCALE, kind_of_set_name, mode_label
 from mace_fmu.parameters.sets import ParameterSet, Provenance, deck_fingerprint, now_utc, tool_version
+from mace_fmu.structure.file import StructureFile, is_bundled_deck
 from mace_fmu.thesis import thesis_data
 from mace_fmu.updating.data import MeasuredMode, read_measured_modes
 from mace_fmu.updating.mace_update import measured_modes
@@ -295,12 +297,15 @@ def _deck_provenance(parameters: ParameterSet | None, deck: Deck | None, *, sour
 @single_blas_thread
 def predict_zero_g(*, parameters: ParameterSet | None = None, measured: Sequence[MeasuredMode] | None = None,
                    zero_g_patterns: Sequence[str | None] | None = None, rule: BoundRule = BoundRule(),
-                   deck: Deck | None = None, source: str = "Table 4.7 measurement model",
+                   deck: Deck | None = None, structure_file: StructureFile | str | os.PathLike | None = None,
+                   source: str = "Table 4.7 measurement model",
                    message: Callable[[str], None] | None = None) -> ZeroGPrediction:
     """The updated nominal 0-g model and its bounds (thesis 5.3) from ``parameters`` and a 1-g measurement model.
 
     ``measured`` defaults to Table 4.7's measured column and ``zero_g_patterns`` (one per measured mode,
-    None: no 0-g counterpart) to Table 5.2's rows; ``message`` receives one line per stage.
+    None: no 0-g counterpart) to Table 5.2's rows (the bundled MACE deck only: any other deck needs its
+    own); ``structure_file`` as :func:`~mace_fmu.iomodel.volts.volts_model`'s; ``message`` receives one
+    line per stage.
     """
     say = message or (lambda _: None)
     if parameters is not None and parameters.of_kind("frequency_scale"):
@@ -309,6 +314,9 @@ def predict_zero_g(*, parameters: ParameterSet | None = None, measured: Sequence
                         " predict-0g starts from physical parameters (e.g. from mace-fmu update), not from an "
                         "updated nominal 0-g set")
     if measured is None:
+        if deck is not None and not is_bundled_deck(deck):
+            raise MaceError(f"{deck.path} is not the bundled MACE deck: its 1-g measurement model is not Table 4.7's; "
+                            "give it (CLI --measured FILE: label, pattern, frequency_hz, damping, pattern_0g)")
         measured, zero_g_patterns = measured_modes(band_hz=None), table_4_7_zero_g_patterns()
     if zero_g_patterns is None or len(zero_g_patterns) != len(measured):
         raise MaceError(f"the measurement model has {len(measured)} modes but "
@@ -316,11 +324,11 @@ def predict_zero_g(*, parameters: ParameterSet | None = None, measured: Sequence
     if not any(zero_g_patterns):
         raise MaceError("no measured mode has a 0-g counterpart (every pattern_0g is empty)")
     say("1-g closed-loop model and the residual errors")
-    v1 = _volts("1g", parameters, deck)
+    v1 = volts_model("1g", parameters=parameters, deck=deck, structure_file=structure_file)
     p1 = closed_loop_poles(v1)
     i1 = _pair([(m.label, m.pattern, m.frequency_hz) for m in measured], p1, what="the 1-g model")
     say("0-g closed-loop model")
-    v0 = _volts("0g", parameters, deck)
+    v0 = volts_model("0g", parameters=parameters, deck=deck, structure_file=structure_file)
     p0 = closed_loop_poles(v0)
     kept = [k for k, pattern in enumerate(zero_g_patterns) if pattern]
     i0 = _pair([(measured[k].label, zero_g_patterns[k], p1[i1[k]].frequency_hz) for k in kept], p0,
@@ -381,9 +389,3 @@ def predict_zero_g(*, parameters: ParameterSet | None = None, measured: Sequence
     return ZeroGPrediction(rows=tuple(rows), parameters=nominal_set, model=nominal, rule=rule, source=source,
                            dropped=tuple(measured[k].label for k, p in enumerate(zero_g_patterns) if not p))
 
-
-def _volts(structure: str, parameters: ParameterSet | None, deck: Deck | None) -> VoltsModel:
-    try:
-        return volts_model(structure, parameters=parameters, deck=deck)
-    except ValueError as exc:  # a parameter that names no card or mode
-        raise MaceError(str(exc)) from None
