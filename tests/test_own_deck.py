@@ -385,3 +385,40 @@ def test_no_command_ignores_the_structure_file_it_is_given(command, tmp_path, ca
     assert "spacecraft.toml" in err, err
     assert ("names IDs that" in err and "mace_em.bdf lacks: [suspension] elements 201-206" in err
             or command in ("update", "view response")), err
+
+
+def test_predict_0g_takes_your_own_structure_with_its_measurement_model(tmp_path, capsys):
+    """The spacecraft example through predict-0g: each 0-g mode moves by its 1-g mode's measured/model ratio
+    (the nominal 0-g frequency = 0-g pole x measured 1-g / model 1-g), and its FMU is named after the deck."""
+    import fmpy
+
+    from mace_fmu.iomodel.poles import closed_loop_poles
+    from mace_fmu.iomodel.volts import volts_model
+
+    here = Path(__file__).parents[1] / "examples" / "own_structure"
+    deck, spec = here / "spacecraft.bdf", here / "spacecraft.toml"
+    measured = _write(tmp_path / "measured.csv", "label,pattern,frequency_hz,damping,pattern_0g\n"
+                      "suspension bounce,1st spring mode,1.10,0.02,\n"
+                      "boom bending Y,1st bending about Y,3.50,0.006,1st bending about Y\n"
+                      "boom bending Z,1st bending about Z,29.0,0.004,1st bending about Z\n")
+    assert main(["predict-0g", "--deck", str(deck), "--structure", str(spec), "--measured", str(measured),
+                 "-o", str(tmp_path / "out"), "--fmu", "--json"]) == 0
+    import json
+
+    result = json.loads(capsys.readouterr().out)
+    rows = {row["label"]: row for row in result["rows"]}
+    assert set(rows) == {"boom bending Y", "boom bending Z"}
+    poles = {kind: {p.label: p.frequency_hz for p in closed_loop_poles(volts_model(kind, deck=read_deck(deck),
+                                                                                     structure_file=spec))}
+             for kind in ("1g", "0g")}
+    for label, pattern, hz in (("boom bending Y", "1st bending about Y", 3.50),
+                               ("boom bending Z", "1st bending about Z", 29.0)):
+        expected = poles["0g"][pattern] * hz / poles["1g"][pattern]
+        np.testing.assert_allclose(rows[label]["nominal_hz"], expected, rtol=1e-6)
+    fmu = Path(result["files"]["fmu"])
+    assert fmu.name == "spacecraft_0g_native_nominal.fmu"
+    md = fmpy.read_model_description(str(fmu))
+    scales = {v.name: (float(v.min), float(v.max)) for v in md.modelVariables
+              if v.name.startswith("frequency_scale_mode_") and v.name[len("frequency_scale_mode_"):].isdigit()
+              and int(v.name[len("frequency_scale_mode_"):]) in {r["mode"] for r in rows.values()}}
+    assert sorted(scales.values()) == [(0.99, 1.01)] * 2  # the 1 % bounds of lightly damped modes

@@ -7,15 +7,7 @@ from pathlib import Path
 
 from mace_fmu.cli.common import deck_option, model_options, progress, volts
 from mace_fmu.errors import MaceError
-from mace_fmu.fmu.naming import fmu_name
-
-
-def model_prefix(model) -> str:
-    """"MACE" for the bundled deck's models, else the deck's file stem (an FMU of another structure is not MACE's)."""
-    from mace_fmu.structure.file import is_bundled_deck
-
-    deck = model.structure_modes.structure.deck
-    return "MACE" if is_bundled_deck(deck) else Path(deck.path).stem
+from mace_fmu.fmu.naming import fmu_name, model_prefix
 
 
 def model_variant(args: argparse.Namespace) -> str:

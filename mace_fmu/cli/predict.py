@@ -37,9 +37,9 @@ def cmd_predict(args: argparse.Namespace) -> int:
                                 structure_file=args.structure_file, source=source, message=say)
     paths = {}
     if args.fmu:  # first: an export that fails leaves no tables behind
-        from mace_fmu.fmu.naming import fmu_name
+        from mace_fmu.fmu.naming import fmu_name, model_prefix
 
-        name = fmu_name("0g", kind=args.kind) + "_nominal"
+        name = fmu_name("0g", kind=args.kind, prefix=model_prefix(prediction.model)) + "_nominal"
         say(f"{args.kind} FMU {name}.fmu with the frequency bounds")
         from mace_fmu.fmu.export import export_fmu
 
@@ -73,7 +73,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="write table_5_3.csv/.toml/.txt and zero_g_nominal.toml (the parameter set of the nominal "
                         "model, for export/build --parameters) into DIR")
     p.add_argument("--fmu", action="store_true", help="also export the nominal 0-g FMU with the bounds as the "
-                   "min/max of its frequency_scale_mode_<k> (MACE_0g_<kind>_nominal.fmu in DIR)")
+                   "min/max of its frequency_scale_mode_<k> (MACE_0g_<kind>_nominal.fmu in DIR; another deck's FMU is "
+                   "named after its file)")
     p.add_argument("--kind", choices=["native", "pythonfmu"], default="native", help="FMU kind (default native)")
     p.add_argument("--json", action="store_true", help="print the rows as JSON (label, nominal_hz, damping, "
                    "bound_percent, ...) instead of the table")

@@ -31,7 +31,8 @@ def export_ssp(args: argparse.Namespace) -> int:
         from mace_fmu.zero_g.table import read_frequency_bounds
 
         bounds = read_frequency_bounds(args.frequency_bounds, mode_labels=model.plant.labels)
-    from mace_fmu.cli.export import model_prefix, model_variant
+    from mace_fmu.cli.export import model_variant
+    from mace_fmu.fmu.naming import model_prefix
 
     name = fmu_name(args.structure, kind=args.kind, fmi_version=2, motion_grids=model.plant.motion_grids,
                     all_grids=model.structure_modes.modes.dofs.grid_ids, variant=model_variant(args),

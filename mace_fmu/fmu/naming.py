@@ -32,6 +32,16 @@ def fmu_name(structure: str, *, kind: str | None = None, fmi_version: int = 2, m
     return f"{base}_motion_{len(grids)}_grids"
 
 
+def model_prefix(model) -> str:
+    """"MACE" for the bundled deck's models, else the deck's file stem (an FMU of another structure is not MACE's)."""
+    from pathlib import Path
+
+    from mace_fmu.structure.file import is_bundled_deck
+
+    deck = model.structure_modes.structure.deck
+    return "MACE" if is_bundled_deck(deck) else Path(deck.path).stem
+
+
 def variant_identifier(text: str) -> str:
     """``text`` as a C-identifier fragment: letters, digits and underscores ("zero-g nominal" -> "zero_g_nominal")."""
     out = "".join(c if c.isalnum() and c.isascii() else "_" for c in text).strip("_")

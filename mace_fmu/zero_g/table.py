@@ -72,7 +72,8 @@ def rows_as_data(prediction: ZeroGPrediction) -> list[dict]:
 
 def format_table(prediction: ZeroGPrediction) -> str:
     """Plain-text table: ours (nominal Hz, zeta, bound %) beside Table 5.3, with the 1-g residual errors."""
-    head = (f"{'mode':15s} {'Hz':>8s} {'zeta':>7s} {'bound %':>7s} | {'T5.3 Hz':>7s} {'zeta':>6s} {'bound %':>7s} | "
+    width = max([15] + [len(row.label) for row in prediction.rows])  # MACE's labels fit 15
+    head = (f"{'mode':{width}s} {'Hz':>8s} {'zeta':>7s} {'bound %':>7s} | {'T5.3 Hz':>7s} {'zeta':>6s} {'bound %':>7s} | "
             f"{'err Hz %':>8s} {'1-g err %':>9s} {'FMU k':>5s} {'shift % -b/+b':>13s}  open-loop mode adjusted")
     lines = [f"Updated nominal 0-g model and frequency bounds (thesis Table 5.3); residual 1-g errors from the "
              f"{prediction.source}", head, "-" * len(head)]
@@ -85,7 +86,7 @@ def format_table(prediction: ZeroGPrediction) -> str:
         note = "" if row.damping_reached else " (damping target out of reach)"
         fmu = (f"{row.mode:5d} {100 * row.closed_loop_shift[0]:6.2f}/{100 * row.closed_loop_shift[1]:+.2f}"
                if row.closed_loop_shift is not None else f"{'-':>5s} {'-':>13s}")
-        lines.append(f"{row.label:15s} {row.nominal_hz:8.3f} {row.nominal_damping:7.4f} {bound_text(row.bound):>7s} | "
+        lines.append(f"{row.label:{width}s} {row.nominal_hz:8.3f} {row.nominal_damping:7.4f} {bound_text(row.bound):>7s} | "
                      f"{thesis} | {diff} {100 * row.frequency_error:9.2f} {fmu}  {how}{note}")
     rule = prediction.rule
     lines.append(f"bounds: zeta < {rule.heavy_damping:g}: max({100 * rule.minimum_bound:g} %, {rule.error_fraction:g} "
