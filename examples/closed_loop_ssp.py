@@ -1,4 +1,5 @@
 """From the updated model to an SSP package a colleague opens in another tool, and the proof it runs there.
+========================================================================================================
 
     python examples/closed_loop_ssp.py [OUT_DIR] [--quick]
 

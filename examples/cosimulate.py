@@ -1,4 +1,5 @@
 """The 1-g MACE FMU in closed loop with a controller written in Python, stepped by fmpy.
+=====================================================================================
 
     python examples/cosimulate.py fmus/MACE_1g_native.fmu
 

@@ -1,4 +1,5 @@
 """Run a MACE FMU in libcosim (the Open Simulation Platform's co-simulation library).
+==================================================================================
 
     python examples/libcosim_import.py fmus/MACE_1g_native.fmu [--verbose]
 

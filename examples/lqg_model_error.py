@@ -1,4 +1,5 @@
 """How much LQG performance a wrong model costs (thesis Appendix A.1), through the library.
+========================================================================================
 
     python examples/lqg_model_error.py
 

@@ -1,4 +1,5 @@
 """Measured data files: a lab's time-history CSV through a channel map, an H1 estimate, a UFF 58 file.
+===================================================================================================
 
 The 'test article' is one lightly damped mode (12 Hz, 2 %) from the secondary Z gimbal command
 to the payload Z gyro, sampled at 200 Hz; the logger names its channels ai0, ai3, ai7 and adds a

@@ -1,5 +1,8 @@
-"""What a control designer does next: an LQG compensator designed on the nominal 0-g model, closed
-around the 0-g FMU over Table 5.3's frequency bounds, on a local Dask cluster.
+"""What a control designer does next: a compensator checked over the 0-g model's bounds
+=======================================================================================
+
+An LQG compensator designed on the nominal 0-g model, closed around the 0-g FMU over Table 5.3's
+frequency bounds, on a local Dask cluster.
 
     python examples/robust_lqg_0g.py [OUT_DIR]
 

@@ -1,4 +1,5 @@
 """Updating an FMU from test data files: the whole story, on a test article whose truth is known.
+==============================================================================================
 
 1. Export the 1-g FMU of the bundled deck (native, FMI 2.0 co-simulation). The deck holds the
    updated moduli of Table 4.4 and the FMU the updated delays of Tables 4.5 and 4.6: it is the

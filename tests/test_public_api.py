@@ -69,3 +69,18 @@ def test_every_package_lists_its_public_names_and_each_resolves():
         assert package.__doc__ and package.__all__, name
         for public in package.__all__:
             assert getattr(package, public) is not None, f"{name}.{public}"
+
+
+def test_no_public_name_is_shadowed_by_a_module_of_its_package():
+    """``package.name`` must be the public object: once a submodule of that name is imported, Python binds
+    the module to the package's attribute and the lazy re-export is never asked."""
+    import importlib
+    import pkgutil
+
+    import mace_fmu
+
+    packages = ["mace_fmu"] + [m.name for m in pkgutil.walk_packages(mace_fmu.__path__, "mace_fmu.") if m.ispkg]
+    for name in packages:
+        package = importlib.import_module(name)
+        modules = {m.name for m in pkgutil.iter_modules(package.__path__)}
+        assert not modules & set(package.__all__), name

@@ -1,4 +1,5 @@
 """Your own structure, from its NASTRAN deck and a structure file to modes, volts-volts models and FMUs.
+=====================================================================================================
 
     python examples/own_structure/own_structure.py [OUT_DIR]
 

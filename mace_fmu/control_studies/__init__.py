@@ -18,6 +18,4 @@ __all__, __getattr__, __dir__ = lazy_exports(__name__, {
     "sensitivity_map": "stiffness_sensitivity",
     "cantilever_model": "cantilever",
     "reduced_order_study": "reduced_order",
-    "balanced_truncation": "balanced_truncation",
-    "loop_shapes": "loop_shapes",
 })

@@ -41,7 +41,7 @@ class Preload:
     bar_forces: np.ndarray  #: (n_bar, 7) natural forces: axial [N], end moments [N m] (local)
     increments: int
     iterations: int  #: total Newton iterations
-    residual_ratio: float  #: final |r| / |F| on the independent DOFs
+    residual_ratio: float  #: final ``|r| / |F|`` on the independent DOFs
     state: BarState  #: configuration the tangent is about (undeformed for the linear preload)
 
 

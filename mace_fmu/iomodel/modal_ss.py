@@ -27,7 +27,7 @@ from mace_fmu.iomodel.motion import MOTION_COMPONENTS, motion_output_name
 class ModalPlant:
     """The physical modal model with the bookkeeping a reader needs."""
 
-    system: ct.StateSpace  #: named inputs (actuators, N m), outputs (sensors; *_angle [rad])
+    system: ct.StateSpace  #: named inputs (actuators, N m), outputs (sensors; ``*_angle`` [rad])
     frequencies_hz: np.ndarray  #: of the retained modes
     damping: np.ndarray
     labels: tuple[str, ...]

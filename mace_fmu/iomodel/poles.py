@@ -33,8 +33,8 @@ _BENDING = re.compile(r"^\d+(?:st|nd|rd|th) ([YZ]) bending$")
 class ClosedLoopPole:
     """One pole (of a complex pair, the one with positive imaginary part)."""
 
-    frequency_hz: float  #: |lambda| / (2 pi)
-    damping: float  #: -Re(lambda) / |lambda|
+    frequency_hz: float  #: ``|lambda| / (2 pi)``
+    damping: float  #: ``-Re(lambda) / |lambda|``
     label: str
     share: float  #: participation of the naming group (0-1)
     eigenvalue: complex

@@ -196,7 +196,7 @@ def toml_value(value: Any) -> str:
 # --- the structure's parameter names ----------------------------------------------------------
 @dataclass(frozen=True)
 class ParameterNames:
-    """Which MAT1 and CELAS2 cards the E_ and k_ names of a structure refer to."""
+    """Which MAT1 and CELAS2 cards the ``E_`` and ``k_`` names of a structure refer to."""
 
     materials: Mapping[str, int]  #: material name -> MAT1 ID
     springs: Mapping[str, int]  #: spring name -> CELAS2 ID
@@ -217,7 +217,7 @@ def names_of_table(tables: Mapping[str, Any]) -> ParameterNames:
 
 
 def parameter_names(deck, structure_file=None) -> ParameterNames:
-    """The E_ and k_ names of a deck: its structure file's ``[parameters]`` names, and for every MAT1 and
+    """The ``E_`` and ``k_`` names of a deck: its structure file's ``[parameters]`` names, and for every MAT1 and
     CELAS2 card that table does not name (or every card, without a structure file) ``mat<ID>`` and
     ``celas<ID>`` (``E_mat2``, ``k_celas138``): a name never reaches a card of another deck."""
     named = names_of_table(structure_file.tables) if structure_file is not None else ParameterNames({}, {})
@@ -228,7 +228,7 @@ def parameter_names(deck, structure_file=None) -> ParameterNames:
 
 
 def deck_values(deck, names: ParameterNames | None = None) -> dict[str, float]:
-    """The E_ and k_ values [Pa, N/m] a deck has for every named material and spring it contains."""
+    """The ``E_`` and ``k_`` values [Pa, N/m] a deck has for every named material and spring it contains."""
     names = names if names is not None else load_parameter_names()
     out = {f"E_{n}": deck.mat1s[mid].youngs_modulus for n, mid in names.materials.items() if mid in deck.mat1s}
     out.update({f"k_{n}": deck.celas2s[sid].k for n, sid in names.springs.items() if sid in deck.celas2s})
@@ -237,7 +237,7 @@ def deck_values(deck, names: ParameterNames | None = None) -> dict[str, float]:
 
 def fe_overrides(parameters: ParameterSet | None, names: ParameterNames | None = None
                  ) -> dict[tuple[str, int], dict[str, float]]:
-    """The E_ and k_ entries as deck overrides ({("MAT1", 2): {"e": 2.3e9}, ("CELAS2", 138): {"k": ...}})."""
+    """The ``E_`` and ``k_`` entries as deck overrides ({("MAT1", 2): {"e": 2.3e9}, ("CELAS2", 138): {"k": ...}})."""
     if parameters is None:
         return {}
     names = names if names is not None else load_parameter_names()

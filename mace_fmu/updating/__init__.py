@@ -15,7 +15,6 @@ __all__, __getattr__, __dir__ = lazy_exports(__name__, {
     "ModelFamily": "inclusion",
     "update_fmu": "fmu_update",
     "fmu_parameters": "fmu_update",
-    "fmu_problem": "fmu_problem",
     "FmuProblem": "fmu_problem",
     "run_mace_update": "mace_update",
     "MaceUpdate": "mace_update",

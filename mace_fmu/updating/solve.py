@@ -80,7 +80,7 @@ class UpdateSettings:
     penalty: bool = True  #: augment the cost with eq. 4.18's penalty
     tolerance: float = 1e-3  #: largest relative parameter change that ends the outer loop
     cost_tolerance: float = 1e-6  #: relative fall of the (augmented) cost that ends it
-    gradient_tolerance: float = 1e-6  #: |d cost / d relative change| / cost that ends it (first-order optimality)
+    gradient_tolerance: float = 1e-6  #: ``|d cost / d relative change| / cost`` that ends it (first-order optimality)
     max_outer: int = 6  #: safety net only: a stage that reaches it has not converged
     rounds: int = 1  #: repeats of the stage sequence (fewer when a round moves nothing)
     loss: str = "linear"  #: least_squares loss ("soft_l1", "huber", "cauchy", "arctan": outliers count less)

@@ -39,6 +39,7 @@ def lazy_exports(package: str, public: Mapping[str, str]
         return getattr(importlib.import_module(module_of(name)), name)
 
     names = sorted(public)
+    __getattr__.modules = {name: module_of(name) for name in names}  # where each is defined (the API reference)
 
     def __dir__() -> list[str]:
         return sorted(set(names) | set(vars(sys.modules[package])))

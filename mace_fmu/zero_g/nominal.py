@@ -52,7 +52,7 @@ class BoundRule:
 
     heavy_damping: float = 0.10  #: a mode with measured 1-g damping ratio >= this is heavily damped
     minimum_bound: float = 0.01  #: lightly damped modes: at least +-1 %
-    error_fraction: float = 0.5  #: lightly damped modes: or this fraction of |residual 1-g error|, if larger
+    error_fraction: float = 0.5  #: lightly damped modes: or this fraction of ``|residual 1-g error|``, if larger
     heavy_bound: float = 0.025  #: heavily damped modes: +-2.5 %
     correct_heavy: bool = False  #: also take the residual errors out of heavily damped modes (the thesis does not)
 

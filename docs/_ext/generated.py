@@ -1,0 +1,174 @@
+"""Pages generated from the code at build time, so that they cannot drift from it.
+
+- ``reference/api/*.rst``: one page per package, its public names read from the package's ``__all__``;
+- ``reference/cli.rst``: every ``mace-fmu`` command's ``--help``, from the argparse parser;
+- ``thesis/tables.md``: the thesis's tables beside ours, as the commands print them today.
+
+The files are written under ``docs/`` before Sphinx lists the sources (``config-inited``) and are
+not kept in git (``docs/.gitignore``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import importlib
+import inspect
+import io
+import os
+from pathlib import Path
+
+DOCS = Path(__file__).resolve().parents[1]
+
+#: the packages of the API reference, in the order of the data flow (tests/test_public_api.py's STAGES)
+PACKAGES = ("mace_fmu", "mace_fmu.deck", "mace_fmu.structure", "mace_fmu.parameters", "mace_fmu.fe",
+            "mace_fmu.iomodel", "mace_fmu.fmu", "mace_fmu.fmu.native", "mace_fmu.ssp", "mace_fmu.updating",
+            "mace_fmu.updating.files", "mace_fmu.control_studies", "mace_fmu.zero_g", "mace_fmu.zero_g.robust",
+            "mace_fmu.util", "mace_fmu.cli")
+
+#: the commands whose printed tables stand beside the thesis: (title, argv, what it shows)
+THESIS_COMMANDS = (
+    ("Tables 5.1 and 3.15: modes and mass properties", ["build", "--tables-only"],
+     "The 0-g and 1-g (both preloads) flexible modes beside Table 5.1 and the free-free mass properties beside "
+     "Table 3.15, as `mace-fmu build` prints them."),
+    ("Table 4.7: the 1-g volts-volts model's closed-loop poles", ["model", "1g", "--poles"],
+     "Closed-loop poles of the 1-g model beside Table 4.7's FE columns."),
+    ("Table 5.2: the 0-g volts-volts model's closed-loop poles", ["model", "0g", "--poles"],
+     "Closed-loop poles of the 0-g model beside Table 5.2."),
+    ("Tables 4.2 and 4.3: the updating sample problem", ["update", "--sample-problem"],
+     "The two-mass sample problem of thesis section 4.3, every case beside Table 4.2 and 4.3."),
+    ("Table 5.3: the updated nominal 0-g model and its frequency bounds", ["predict-0g"],
+     "The updated nominal 0-g model and its bounds beside Table 5.3."),
+)
+
+
+def _write(path: Path, text: str) -> None:
+    """Write only when the text changed, so that Sphinx does not rebuild pages that did not."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    if not path.exists() or path.read_text() != text:
+        path.write_text(text)
+
+
+def _title(text: str, underline: str = "=") -> str:
+    return f"{text}\n{underline * len(text)}\n"
+
+
+def _is_data(obj) -> bool:
+    return not (inspect.isclass(obj) or inspect.isfunction(obj) or inspect.ismodule(obj) or callable(obj))
+
+
+def api_pages() -> None:
+    """One page per package: its functions and classes (autosummary stubs), its constants with the
+    comment that documents them where they are defined. The top-level names link to their package."""
+    index = [_title("API reference"), "",
+             "Every package lists its public names in ``__all__``; these pages are generated from those lists. "
+             "The packages follow the data flow: deck, structure, parameters, finite elements, input-output "
+             "models, FMUs and SSP packages, updating, Appendix A studies, the 0-g prediction; ``util`` holds what "
+             "they share.", "", ".. toctree::", "   :maxdepth: 1", ""]
+    home = {}  # public name -> the package whose page documents it
+    for name in PACKAGES[1:]:
+        for public in importlib.import_module(name).__all__:
+            home.setdefault(public, name)
+    for name in PACKAGES:
+        package = importlib.import_module(name)
+        lines = [_title(f"``{name}``"), f".. automodule:: {name}", "", f".. currentmodule:: {name}", ""]
+        defined_in = getattr(getattr(package, "__getattr__", None), "modules", {})  # deck and ssp import eagerly
+        objects = {public: getattr(package, public) for public in package.__all__}
+        if name == "mace_fmu":  # the names a user starts with: documented on their package's page
+            lines += [f"- :py:obj:`{public} <{home[public]}.{public}>`" for public in package.__all__ if public in home]
+            lines.append("")
+            objects = {public: obj for public, obj in objects.items() if public not in home}
+        if objects:
+            lines += [".. autosummary::", "   :toctree: generated", "   :nosignatures:", ""]
+            lines += [f"   {public}" for public, obj in objects.items() if not _is_data(obj)]  # current module's
+            lines.append("")
+            for public, obj in objects.items():
+                if _is_data(obj):
+                    lines += [f".. autodata:: {defined_in.get(public, name)}.{public}", "   :no-index:", ""]
+        _write(DOCS / "reference" / "api" / f"{name}.rst", "\n".join(lines) + "\n")
+        index.append(f"   {name}")
+    _write(DOCS / "reference" / "api" / "index.rst", "\n".join(index) + "\n")
+
+
+def _commands(parser: argparse.ArgumentParser, prefix: str = "mace-fmu"):
+    yield prefix, parser
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for name, sub in action.choices.items():
+                yield from _commands(sub, f"{prefix} {name}")
+
+
+def cli_page() -> None:
+    from mace_fmu.cli import build_parser
+
+    os.environ["COLUMNS"] = "100"  # argparse wraps to the terminal: a fixed width for the page
+    lines = [_title("Command line"), "",
+             "Every command's ``--help``, generated from the parser at build time. Errors in the input end with "
+             "one line naming the file, line or option and exit status 2; an update that did not converge exits "
+             "with status 3 (its results still written).", ""]
+    for name, parser in _commands(build_parser()):
+        lines += [_title(f"``{name}``", "-"), "", ".. code-block:: text", ""]
+        lines += ["   " + line if line else "" for line in parser.format_help().splitlines()]
+        lines.append("")
+    _write(DOCS / "reference" / "cli.rst", "\n".join(lines) + "\n")
+
+
+def _run(argv: list[str]) -> str:
+    from mace_fmu.cli import main
+
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        status = main(argv)
+    if status != 0:
+        raise RuntimeError(f"mace-fmu {' '.join(argv)} exited {status}: {err.getvalue()[-2000:]}")
+    return out.getvalue()
+
+
+def thesis_page() -> None:
+    lines = ["# The thesis reproduced", "",
+             "Each table below is printed by the command above it, run when this page was built: the thesis value, "
+             "ours and the difference come from the code of this version, never typed by hand. How each "
+             "difference arises is explained on the pages of the user guide and in "
+             "[What the main job reproduces](main_job.md).", ""]
+    for title, argv, what in THESIS_COMMANDS:
+        shown = [a for a in argv if a != "--tables-only"]
+        text = _tables_only() if "--tables-only" in argv else _run(argv)
+        lines += [f"## {title}", "", what, "", "```console", f"$ mace-fmu {' '.join(shown)}", "```", "", "```text",
+                  text.rstrip(), "```", ""]
+    _write(DOCS / "thesis" / "tables.md", "\n".join(lines))
+
+
+def _tables_only() -> str:
+    """What ``mace-fmu build`` prints before it writes FMUs: the same functions, without the export."""
+    from mace_fmu.cli.build import low_modes, thesis_tables
+    from mace_fmu.fe.modes import DEFAULT_MAX_HZ, compute_modes
+
+    m0 = compute_modes(structure="0g", max_hz=DEFAULT_MAX_HZ)
+    results = {kind: compute_modes(structure="1g", preload=kind, max_hz=DEFAULT_MAX_HZ) for kind in ("large", "linear")}
+    return thesis_tables(m0, results) + "\n\n" + low_modes(results)
+
+
+def data_flow_page() -> None:
+    """The packages in the order the data flows through them, each with the first line of its docstring."""
+    lines = ["# The data flow", "",
+             "A deck becomes modes, the modes a volts-volts model, the model an FMU; test data update the "
+             "model's parameters. The packages follow that flow, and each imports only from those before it "
+             "(a test checks every import). This page is generated from the package layout.", "", "```text"]
+    for i, name in enumerate(PACKAGES[1:]):
+        doc = (importlib.import_module(name).__doc__ or "").strip().split("\n\n")[0].replace("\n", " ")
+        lines += [("    |\n    v\n" if i else "") + f"{name}", f"    {doc}"]
+    lines += ["```", ""]
+    _write(DOCS / "explanation" / "data_flow.md", "\n".join(lines))
+
+
+def generate(app, config) -> None:
+    data_flow_page()
+    api_pages()
+    cli_page()
+    thesis_page()
+
+
+def setup(app):
+    # config-inited: before Sphinx lists the source files, so that autosummary sees the generated pages
+    app.connect("config-inited", generate)
+    return {"parallel_read_safe": True, "parallel_write_safe": True}

@@ -1,0 +1,63 @@
+"""Every ``mace-fmu`` command the README and the documentation pages show is one the parser accepts.
+
+The commands are taken from the fenced ``bash`` and ``console`` blocks (and from inline code in the
+README's table of commands); each is parsed by ``mace_fmu.cli.build_parser()`` exactly as the shell
+would pass it, so a renamed option or subcommand fails here. Running them is left to the tests of each
+command (most need minutes or files a user brings); this checks that the text is still true.
+"""
+
+from __future__ import annotations
+
+import re
+import shlex
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").rglob("*.md"))]
+
+
+def _commands(path: Path) -> list[tuple[str, str]]:
+    """(where, command) for each ``mace-fmu`` command of a page's shell blocks and README table cells."""
+    found, block = [], None
+    lines = path.read_text().replace("\\\n", " ").splitlines()  # shell line continuations
+    for number, line in enumerate(lines, start=1):
+        if line.startswith("```"):
+            block = line[3:].strip() if block is None else None
+            continue
+        text = line
+        if block in ("bash", "console", "sh", "shell"):
+            text = re.sub(r"^\$ ", "", line)
+        elif block is None and path.name == "README.md" and line.startswith("|"):
+            text = " ".join(re.findall(r"`(mace-fmu [^`]*)`", line))
+        else:
+            continue
+        for part in re.split(r"&&|\|\||;", text.split(" #")[0]):
+            part = part.strip()
+            if part.startswith("mace-fmu "):
+                found.append((f"{path.relative_to(ROOT)}:{number}", part))
+    return found
+
+
+COMMANDS = [c for page in PAGES for c in _commands(page)]
+
+
+def test_the_pages_show_commands():
+    assert len(COMMANDS) >= 40
+    assert {where.split(":")[0] for where, _ in COMMANDS} >= {"README.md", "docs/guide/fmus.md",
+                                                               "docs/howto/animate_a_response.md"}
+
+
+@pytest.mark.parametrize("where, command", COMMANDS, ids=[w for w, _ in COMMANDS])
+def test_every_shown_command_parses(where, command):
+    from mace_fmu.cli import build_parser
+
+    # usage-style optional parts ("[--json]") are checked as given
+    argv = [a.strip("[]") for a in shlex.split(command)[1:] if a not in (">", "2>")]
+    argv = [a for a in argv if not re.match(r"^[0-9]?>", a)]  # redirections
+    try:
+        build_parser().parse_args(argv)
+    except SystemExit as exc:
+        if exc.code != 0:  # --help exits 0
+            pytest.fail(f"{where}: `{command}` is not a valid command line")
