@@ -601,3 +601,19 @@ def test_cli_view_response_takes_a_native_motion_fmu(motion_fmu_0g, tmp_path, ca
     assert scale > 0
     for k in motion:
         np.testing.assert_allclose(runs[0].outputs[k], runs[1].outputs[k], rtol=0, atol=1e-9 * scale)
+
+
+def test_a_notebook_shows_an_animation_inline_as_its_standalone_page(modes_0g):
+    """``_repr_html_``: the same page write_animation_html writes, in an iframe's srcdoc (no server)."""
+    import html
+
+    from viewer import animation_commands, standalone_html
+
+    anim = animate_modes(modes_0g, [14], frames_per_cycle=12)
+    shown = anim._repr_html_()
+    assert shown.startswith('<iframe srcdoc="') and shown.endswith("</iframe>")
+    page = html.unescape(shown[len('<iframe srcdoc="'):shown.index('" style=')])
+    again = standalone_html(animation_commands(anim), title="ModeAnimation", clips=anim.frames.clips)
+    # the same page up to meshcat's fresh object UUIDs: same length, same viewer, same legend, same commands
+    assert len(page) == len(again) and page.count('\n"') == again.count('\n"') > 100
+    assert "new MeshCat.Viewer" in page and "mode 14: 2.100 Hz 1st Z bending" in page

@@ -73,6 +73,18 @@ for (const b of blobs) {{
 """
 
 
+class ShownInline:
+    """Mixin of the viewer's animations: a Jupyter notebook shows one inline (``_repr_html_``), as the
+    standalone page in an iframe, so nothing needs a server or a meshcat process."""
+
+    def _repr_html_(self) -> str:
+        from viewer import animation_commands  # the package knows every animation kind
+
+        page = standalone_html(animation_commands(self), title=type(self).__name__, clips=self.frames.clips)
+        return (f'<iframe srcdoc="{html_text.escape(page, quote=True)}" '
+                'style="width: 100%; height: 480px; border: 0;"></iframe>')
+
+
 def write_html(path: str | os.PathLike, commands: list, *, title: str, clips: tuple[Clip, ...] = ()) -> int:
     """Write the standalone page to ``path``; returns its size in bytes."""
     text = standalone_html(commands, title=title, clips=clips)

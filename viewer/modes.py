@@ -11,11 +11,12 @@ from mace_fmu.errors import MaceError
 from mace_fmu.fe.modes import StructureModes
 from mace_fmu.util.frequency import hz_text
 from viewer.frames import Clip, Frames
+from viewer.html import ShownInline
 from viewer.scene import Scene, build_scene
 
 
 @dataclass(frozen=True)
-class ModeAnimation:
+class ModeAnimation(ShownInline):
     """A scene and its key frames, plus which mode each clip shows and the scale used."""
 
     scene: Scene

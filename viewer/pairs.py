@@ -22,6 +22,7 @@ from mace_fmu.thesis import table_5_1_0g, table_5_1_1g
 from mace_fmu.util.frequency import hz_text
 from viewer.camera import camera_axes, framing_position
 from viewer.frames import Clip, Frames
+from viewer.html import ShownInline
 from viewer.meshcat_scene import (ROOT, Y_UP_TO_Z_UP, body_animations, body_commands, set_animation,
                                   surroundings_commands)
 from viewer.modes import ModeAnimation, animate_modes
@@ -58,7 +59,7 @@ class ModePair:
 
 
 @dataclass(frozen=True)
-class PairAnimation:
+class PairAnimation(ShownInline):
     """Two mode animations on one timeline, and where each copy is drawn."""
 
     one_g: ModeAnimation  #: 1-g copy (its clips are those of ``frames``)

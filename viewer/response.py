@@ -16,6 +16,7 @@ from mace_fmu.fe.modes import StructureModes
 from mace_fmu.iomodel.motion import MOTION_COMPONENTS, motion_output_name
 from mace_fmu.util.atomic import save_figure_atomic
 from viewer.frames import Clip, Frames
+from viewer.html import ShownInline
 from viewer.scene import Scene, build_scene
 
 if TYPE_CHECKING:  # fmpy is imported only where an FMU runs
@@ -23,7 +24,7 @@ if TYPE_CHECKING:  # fmpy is imported only where an FMU runs
 
 
 @dataclass(frozen=True)
-class ResponseAnimation:
+class ResponseAnimation(ShownInline):
     """A scene, its key frames, and which FMU samples they show at which magnification."""
 
     scene: Scene
