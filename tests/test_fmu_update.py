@@ -157,7 +157,7 @@ def test_unknown_parameter_and_channel_are_refused_naming_them(fmu):
         family.interface.check_signals(inputs=GIMBALS, outputs=["gyro_nowhere"], where="data.csv")
 
 
-# --- the CLI: mace-fmu update --fmu ... (files from mace_fmu.updating.files) -----------------------------------
+# --- the CLI: mace-fmu update fmu ... (files from mace_fmu.updating.files) -----------------------------------
 
 def _cli(capsys, argv: list[str]) -> tuple[int, str, str]:
     from mace_fmu.cli import main
@@ -194,7 +194,7 @@ def test_cli_refuses_data_channels_the_fmu_lacks(capsys, fmu, tmp_path):
     t = np.arange(200) * STEP
     bad = write_time_history(TimeHistory(t, {"gimbal_primary_x": np.sin(t)}, {"gyro_elsewhere": np.cos(t)}),
                              tmp_path / "bad.csv")
-    code, _, err = _cli(capsys, ["update", "--fmu", str(fmu), "--data", str(bad), "--update", "E_lexan_center",
+    code, _, err = _cli(capsys, ["update", "fmu", str(fmu), "--data", str(bad), "--update", "E_lexan_center",
                                  "-o", str(tmp_path / "out")])
     assert code == 2 and "output 'gyro_elsewhere'" in err
 
@@ -217,7 +217,7 @@ def test_cli_updates_an_fmu_parameter_and_writes_it_by_the_fmus_name(capsys, fmu
                                                                   for role, name in signals))
     start = tmp_path / "start.toml"
     start.write_text(f"[values]\nE_lexan_center = {pre_update_parameters()['E_lexan_center']!r}\n")
-    code, out, err = _cli(capsys, ["update", "--fmu", str(fmu), "--data", str(logged), "--map", str(channel_map),
+    code, out, err = _cli(capsys, ["update", "fmu", str(fmu), "--data", str(logged), "--map", str(channel_map),
                                    "--update", "E_lexan_center", "--cost", "time", "--start", str(start),
                                    "--workers", "1", "-o", str(tmp_path / "o"), "--hold-input", UNRECORDED])
     assert code in (0, 3), err  # 3: written, but the verdict is not converged (see convergence.toml)
@@ -230,12 +230,12 @@ def test_cli_updates_an_fmu_parameter_and_writes_it_by_the_fmus_name(capsys, fmu
 
 def test_an_input_the_data_lack_is_refused_unless_held_explicitly(capsys, fmu, data_csv, tmp_path):
     """The data drive the four gimbals only: the wheels and the active strut must be named as held at 0."""
-    code, _, err = _cli(capsys, ["update", "--fmu", str(fmu), "--data", str(data_csv), "--update", "E_lexan_center",
+    code, _, err = _cli(capsys, ["update", "fmu", str(fmu), "--data", str(data_csv), "--update", "E_lexan_center",
                                  "-o", str(tmp_path / "out")])
     assert code == 2 and "no channel for the FMU input(s) rwa_x, rwa_y, rwa_z, active_strut_y, active_strut_z" in err
     assert "--hold-input NAME=0" in err and not (tmp_path / "out").exists()
     for bad, message in (("rwa_x=1", "expected NAME=0"), ("wheel_9=0", "wheel_9 is not an input of")):
-        code, _, err = _cli(capsys, ["update", "--fmu", str(fmu), "--data", str(data_csv), "--update",
+        code, _, err = _cli(capsys, ["update", "fmu", str(fmu), "--data", str(data_csv), "--update",
                                      "E_lexan_center", "--hold-input", bad, "-o", str(tmp_path / "out")])
         assert code == 2 and message in err
 
@@ -322,7 +322,7 @@ def test_a_pythonfmu_fmu_is_updated_with_every_run_in_the_workers(capsys, data_c
     fmu = export_fmu(volts_model("1g"), out_dir=tmp_path, name="MACE_1g_pythonfmu", kind="pythonfmu")
     start = tmp_path / "start.toml"
     start.write_text(f"[values]\nE_lexan_center = {pre_update_parameters()['E_lexan_center']!r}\n")
-    code, out, err = _cli(capsys, ["update", "--fmu", str(fmu), "--data", str(data_csv), "--update", "E_lexan_center",
+    code, out, err = _cli(capsys, ["update", "fmu", str(fmu), "--data", str(data_csv), "--update", "E_lexan_center",
                                    "--start", str(start), "--workers", "2", "--hold-input", UNRECORDED,
                                    "-o", str(tmp_path / "o")])
     assert code in (0, 3), err
@@ -331,7 +331,7 @@ def test_a_pythonfmu_fmu_is_updated_with_every_run_in_the_workers(capsys, data_c
 
 
 def test_a_set_fitted_to_one_structures_fmu_is_refused_for_the_other(capsys, tmp_path):
-    """What `update --fmu` writes says which FMU it was fitted to; `model 1g` refuses a fit to the 0-g FMU."""
+    """What `update fmu` writes says which FMU it was fitted to; `model 1g` refuses a fit to the 0-g FMU."""
     path = tmp_path / "fitted.toml"
     path.write_text('[provenance]\ncreated = "2026-11-24T00:00:00+00:00"\ntool = "mace-fmu"\nstructure = "0g"\n'
                     'fitted_to = "MACE_0g_native.fmu"\n\n[values]\nE_lexan_center = 2.4e9\n')

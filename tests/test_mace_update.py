@@ -1,6 +1,6 @@
 """The MACE update of thesis 4.5 through the command line: from the pre-update moduli to updated FMUs.
 
-One run of ``mace-fmu update -o DIR`` (module fixture) is checked against the update's goals and
+One run of ``mace-fmu update mace -o DIR`` (module fixture) is checked against the update's goals and
 the thesis: the start model against Table 4.1, the selection against the thesis's choice, the
 updated closed-loop modes against Table 4.7's measurement model (RMS no worse than the thesis's
 own, every lightly damped bending mode within 2 %), and the parameter set it writes, read back
@@ -31,7 +31,7 @@ FILES = ("parameters.toml", "report.txt", "summary.json", "orthogonality.png", "
 def run(tmp_path_factory):
     out = tmp_path_factory.mktemp("update")
     # 3: written, but not converged in the strict sense: a damping ratio ends at its bound (see below)
-    assert main(["update", "-o", str(out)]) in (0, 3)
+    assert main(["update", "mace", "-o", str(out)]) in (0, 3)
     return out, json.loads((out / "summary.json").read_text())
 
 
@@ -141,10 +141,10 @@ def test_bad_start_files_stop_before_any_work(tmp_path, capsys):
     bad = tmp_path / "bad.toml"
     bad.write_text("[values]\nE_unobtainium = 1e9\n")
     out = tmp_path / "out"
-    assert main(["update", "-o", str(out), "--start", str(bad)]) == 2
+    assert main(["update", "mace", "-o", str(out), "--start", str(bad)]) == 2
     assert "E_unobtainium" in capsys.readouterr().err
     assert not out.exists()  # nothing written half-way
-    assert main(["update", "-o", str(out), "--rounds", "0"]) == 2
+    assert main(["update", "mace", "-o", str(out), "--rounds", "0"]) == 2
     assert not out.exists()
 
 
@@ -154,15 +154,15 @@ def test_measured_tables_that_cannot_be_used_stop_before_any_work(tmp_path, caps
     table = tmp_path / "modes.csv"
     table.write_text("label,pattern,frequency_hz,damping\n1st Z bending,* Z bending,1.96,0.022\n"
                      "2nd W bending,* W bending,9.0,0.01\n")
-    assert main(["update", "-o", str(out), "--measured", str(table)]) == 2
+    assert main(["update", "mace", "-o", str(out), "--measured", str(table)]) == 2
     err = capsys.readouterr().err
     assert "measured mode '2nd W bending' at 9.0 Hz: no model pole matches its pattern '* W bending'" in err
     assert not out.exists()
     table.write_text("label,pattern,frequency_hz,damping\n1st Z bending,* Z bending,nan,0.022\n")
-    assert main(["update", "-o", str(out), "--measured", str(table)]) == 2
+    assert main(["update", "mace", "-o", str(out), "--measured", str(table)]) == 2
     assert "modes.csv:2: measured mode '1st Z bending': frequency must be a positive number" in capsys.readouterr().err
     table.write_text("label,frequency_hz\nx,1.0\n")
-    assert main(["update", "-o", str(out), "--measured", str(table)]) == 2
+    assert main(["update", "mace", "-o", str(out), "--measured", str(table)]) == 2
     assert "missing column(s) pattern, damping" in capsys.readouterr().err
     assert not out.exists()
 

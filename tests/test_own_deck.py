@@ -351,7 +351,8 @@ def test_a_butterworth_filter_from_the_structure_file_filters_exactly_its_sensor
 STRUCTURE_COMMANDS = {
     "modes": ["modes", "0g"], "model": ["model", "0g"], "export": ["export", "0g", "--out", "{tmp}"],
     "report": ["report", "--out", "{tmp}"], "build": ["build", "--out", "{tmp}"],
-    "update": ["update", "-o", "{tmp}"], "predict-0g": ["predict-0g"],
+    "update": ["update", "-o", "{tmp}"], "update mace": ["update", "mace", "-o", "{tmp}"],
+    "predict-0g": ["predict-0g"],
     "view modes": ["view", "modes", "0g", "--html", "{tmp}/v.html"],
     "view pairs": ["view", "pairs", "--html", "{tmp}/v.html"],
     "view response": ["view", "response", "0g", "--input", "gimbal_secondary_z", "--html", "{tmp}/v.html"],
@@ -384,7 +385,7 @@ def test_no_command_ignores_the_structure_file_it_is_given(command, tmp_path, ca
     err = capsys.readouterr().err
     assert "spacecraft.toml" in err, err
     assert ("names IDs that" in err and "mace_em.bdf lacks: [suspension] elements 201-206" in err
-            or command in ("update", "view response")), err
+            or command in ("update", "update mace", "view response")), err
 
 
 def test_predict_0g_takes_your_own_structure_with_its_measurement_model(tmp_path, capsys):

@@ -88,10 +88,20 @@ def test_cli_prints_the_tables_beside_the_thesis(capsys, problem, monkeypatch):
     import mace_fmu.updating.sample as sample
 
     monkeypatch.setattr(sample, "run_sample_problem", lambda: problem)  # the run is the fixture's
-    assert main(["update", "--sample-problem"]) == 0
+    assert main(["update", "sample-problem"]) == 0
     out = capsys.readouterr().out
     assert "Table 4.2: converged parameters, ours (thesis)" in out and "Table 4.3" in out
     assert "k1 (N/m)     0.7500 (0.7500)" in out
-    assert main(["update", "--sample-problem", "--json"]) == 0
+    assert main(["update", "sample-problem", "--json"]) == 0
     data = json.loads(capsys.readouterr().out)
     assert np.isclose(data["cases"]["2a"]["k1"], problem.cases["2a"].values["k1"])
+
+
+def test_the_old_spelling_still_runs_and_names_the_new_one(capsys, problem, monkeypatch):
+    import mace_fmu.updating.sample as sample
+
+    monkeypatch.setattr(sample, "run_sample_problem", lambda: problem)
+    assert main(["update", "--sample-problem", "--json"]) == 0
+    captured = capsys.readouterr()
+    assert "this spelling of update is deprecated; use: mace-fmu update sample-problem" in captured.err
+    assert np.isclose(json.loads(captured.out)["cases"]["2a"]["k1"], problem.cases["2a"].values["k1"])

@@ -61,7 +61,7 @@ def _update(lab, tmp_path, data_files, capsys):
     tmp_path.mkdir(parents=True, exist_ok=True)
     start = tmp_path / "start.toml"
     start.write_text("[values]\n" + "".join(f"{n} = {v * f!r}\n" for (n, v), f in zip(truth.items(), (1.03, 0.97, 1.03))))
-    args = ["update", "--fmu", str(fmu), "--update", ",".join(STRUT), "--cost", "time", "--start", str(start),
+    args = ["update", "fmu", str(fmu), "--update", ",".join(STRUT), "--cost", "time", "--start", str(start),
             "--hold-input", "rwa_x=0,rwa_y=0,rwa_z=0", "--workers", "1", "-o", str(tmp_path / "out")]
     for path in data_files:
         args += ["--data", str(path)]
@@ -108,7 +108,7 @@ def test_tests_with_different_sample_times_are_refused(lab, tmp_path, capsys):
     coarse = read_time_history(lab[3])
     other = write_time_history(TimeHistory(coarse.times_s[::2], {k: v[::2] for k, v in coarse.inputs.items()},
                                            {k: v[::2] for k, v in coarse.outputs.items()}), tmp_path / "coarse.csv")
-    code = main(["update", "--fmu", str(lab[0]), "--update", STRUT[0], "--data", str(lab[2]), "--data", str(other),
+    code = main(["update", "fmu", str(lab[0]), "--update", STRUT[0], "--data", str(lab[2]), "--data", str(other),
                  "-o", str(tmp_path / "out")])
     assert code == 2 and "sample time 0.004 s, but" in capsys.readouterr().err
     assert not (tmp_path / "out").exists()

@@ -35,7 +35,7 @@ THESIS_COMMANDS = (
      "Closed-loop poles of the 1-g model beside Table 4.7's FE columns."),
     ("Table 5.2: the 0-g volts-volts model's closed-loop poles", ["model", "0g", "--poles"],
      "Closed-loop poles of the 0-g model beside Table 5.2."),
-    ("Tables 4.2 and 4.3: the updating sample problem", ["update", "--sample-problem"],
+    ("Tables 4.2 and 4.3: the updating sample problem", ["update", "sample-problem"],
      "The two-mass sample problem of thesis section 4.3, every case beside Table 4.2 and 4.3."),
     ("Table 5.3: the updated nominal 0-g model and its frequency bounds", ["predict-0g"],
      "The updated nominal 0-g model and its bounds beside Table 5.3."),

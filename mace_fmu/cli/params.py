@@ -73,7 +73,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("params", help="parameter sets as SSP 1.0 parameter value files (SSV) and back")
     psub = p.add_subparsers(dest="params_command", required=True)
     to = psub.add_parser("to-ssv", help="a parameter set (TOML) as an SSV file, losslessly")
-    to.add_argument("parameters", help="parameter set TOML (mace-fmu update, update --fmu or predict-0g)")
+    to.add_argument("parameters", help="parameter set TOML (mace-fmu update mace, update fmu or predict-0g)")
     to.add_argument("--frequency-bounds", metavar="FILE",
                     help="table_5_3.toml of mace-fmu predict-0g: its bounds travel in the SSV too")
     to.add_argument("-o", "--out", help="SSV file to write (default: the TOML's name with .ssv)")

@@ -46,16 +46,17 @@ def _read_start(path: str) -> dict[str, float]:
 
 
 def cmd_fmu_update(args: argparse.Namespace) -> int:
-    """``--fmu``: update FMU parameters against measured-data files, every argument checked before any run."""
+    """``update fmu FILE``: update FMU parameters against measured-data files, every argument checked before any
+    run."""
     from mace_fmu.updating.fmu_problem import fmu_problem
     from mace_fmu.updating.fmu_update import fmu_parameters, update_fmu
     from mace_fmu.util.runner import DaskRunner
 
     if args.sample_problem or args.measured:
-        raise MaceError("--fmu updates an FMU against --data files; it does not combine with --sample-problem or "
-                        "--measured")
+        raise MaceError("an FMU update (update fmu FILE) fits --data files; it does not combine with --sample-problem "
+                        "or --measured")
     if not args.data or not args.update:
-        raise MaceError("--fmu needs --data FILE (measured time history [, frequency response]) and --update "
+        raise MaceError("an FMU update needs --data FILE (measured time history [, frequency response]) and --update "
                         "NAME[,NAME...]")
     if args.out is None:
         raise MaceError("say where to write parameters.toml: -o DIR")
@@ -123,21 +124,38 @@ def cmd_fmu_update(args: argparse.Namespace) -> int:
     return 0 if report.converged else NOT_CONVERGED
 
 
+#: the old spelling (flags on ``update`` itself) -> the subcommand that replaces it
+_OLD_SPELLING = {"fmu": "update fmu FILE ...", "sample-problem": "update sample-problem", "mace": "update mace -o DIR ..."}
+
+
 def cmd_update(args: argparse.Namespace) -> int:
-    if args.fmu is not None:
+    """``update`` without a subcommand: the old spelling, still served, with one line saying the new one."""
+    mode = "fmu" if args.fmu is not None else "sample-problem" if args.sample_problem else "mace"
+    print(f"mace-fmu: this spelling of update is deprecated; use: mace-fmu {_OLD_SPELLING[mode]}", file=sys.stderr)
+    if mode == "fmu":
         return cmd_fmu_update(args)
     if args.data or args.update:
-        raise MaceError("--data and --update belong to an FMU update: add --fmu FILE")
-    if args.sample_problem:
+        raise MaceError("--data and --update belong to an FMU update: mace-fmu update fmu FILE --data ...")
+    if mode == "sample-problem":
         return cmd_sample(args)
+    return cmd_mace_update(args)
+
+
+def cmd_fmu_subcommand(args: argparse.Namespace) -> int:
+    args.sample_problem, args.measured = False, None
+    return cmd_fmu_update(args)
+
+
+def cmd_mace_update(args: argparse.Namespace) -> int:
+    """``update mace``: the thesis's modal update of the bundled MACE deck's moduli."""
     if args.structure_file is not None:
         raise MaceError(f"--structure {args.structure_file}: the modal update is the thesis's MACE update (its "
                         "candidate moduli, Table 4.4 "
                         "start and Table 4.7 data) and reads MACE's structure file; to update your own structure, "
-                        "export its FMU and update that against test data: mace-fmu update --fmu FILE --data ...")
+                        "export its FMU and update that against test data: mace-fmu update fmu FILE --data ...")
     if args.out is None:
         raise MaceError("say where to write the updated parameter set and the report: -o DIR "
-                        "(or run --sample-problem)")
+                        "(or run: mace-fmu update sample-problem)")
     from mace_fmu.parameters.sets import ParameterSet
     from mace_fmu.updating.data import read_measured_modes
     from mace_fmu.updating.mace_update import format_mode_rows, mode_rows, run_mace_update, scores
@@ -181,51 +199,107 @@ def cmd_update(args: argparse.Namespace) -> int:
     return 0 if report.converged else NOT_CONVERGED
 
 
-def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("update", help="model updating (thesis ch. 4): the MACE 1-g update or the sample problem",
-                       formatter_class=argparse.RawDescriptionHelpFormatter,
-                       epilog=f"exit status: 0 converged; 2 bad input (nothing written); {NOT_CONVERGED} the update "
-                              "stopped without converging (at its iteration cap, at a parameter bound, or with the "
-                              "time cost more than 3 standard deviations above the noise floor): the results are "
-                              "written all the same, with converged = false and the reasons in convergence.toml")
-    deck_option(p)
-    p.add_argument("-o", "--out", help="directory for parameters.toml, convergence.toml, uncertainty.toml, report.txt, "
-                   "summary.json and figures")
-    p.add_argument("--sample-problem", action="store_true",
-                   help="run the two-mass sample problem (thesis 4.3) and print Tables 4.2 and 4.3 beside the thesis")
-    p.add_argument("--json", action="store_true", help="with --sample-problem: the tables as JSON")
-    p.add_argument("--start", metavar="FILE", help="parameter set to start from (default: the pre-update moduli, "
-                   "Table 4.4 back-computed; with --fmu: the FMU's own start values)")
-    p.add_argument("--measured", metavar="FILE", help="measured modes (CSV: label, pattern, frequency_hz, damping "
+_EXIT_STATUS = (f"exit status: 0 converged; 2 bad input (nothing written); {NOT_CONVERGED} the update stopped "
+                "without converging (at its iteration cap, at a parameter bound, or with the time cost more than "
+                "3 standard deviations above the noise floor): the results are written all the same, with "
+                "converged = false and the reasons in convergence.toml")
+
+
+def _out_option(p: argparse.ArgumentParser, *, help_text: str | None = None) -> None:
+    p.add_argument("-o", "--out", help=help_text or "directory for parameters.toml, convergence.toml, "
+                   "uncertainty.toml, report.txt, summary.json and figures")
+
+
+def _sample_options(p: argparse.ArgumentParser, *, hidden: bool = False) -> None:
+    p.add_argument("--json", action="store_true",
+                   help=argparse.SUPPRESS if hidden else "print the tables as JSON")
+
+
+def _mace_options(p: argparse.ArgumentParser, *, hidden: bool = False) -> None:
+    def show(text: str) -> str:
+        return argparse.SUPPRESS if hidden else text
+
+    p.add_argument("--start", metavar="FILE", help=show("parameter set to start from (default: the pre-update moduli, "
+                   "Table 4.4 back-computed; for an FMU update: the FMU's own start values)"))
+    p.add_argument("--measured", metavar="FILE", help=show("measured modes (CSV: label, pattern, frequency_hz, damping "
                    "[, weight]; pattern: which model pole labels a row can be, e.g. '* Y bending'); default: Table "
-                   "4.7's measurement model")
+                   "4.7's measurement model"))
     p.add_argument("--method", choices=["cost-sensitivity", "full", "reanalysis", "modal-sensitivity"],
-                   default="cost-sensitivity", help="how the parameters enter the cost (default: cost-sensitivity)")
+                   default="cost-sensitivity", help=show("how the parameters enter the cost (default: "
+                                                         "cost-sensitivity)"))
     p.add_argument("--perturbation", choices=["reanalysis", "full"], default="reanalysis",
-                   help="how the cost-sensitivity method makes its perturbed models (default: reanalysis)")
-    p.add_argument("--rounds", type=int, default=2, help="repeats of physical, delays, damping (default 2)")
-    p.add_argument("--preload", choices=["large", "linear"], default="large", help="1-g gravity preload")
-    fmu = p.add_argument_group("updating through FMU simulation (any FMI 2.0 co-simulation FMU)")
-    fmu.add_argument("--fmu", metavar="FILE", help="the FMU whose parameters are updated (set through FMI)")
-    fmu.add_argument("--data", metavar="FILE", action="append", default=[],
-                     help="measured data: a time history (CSV/npz; its inputs drive the FMU), one per test (repeat "
-                          "the option: several tests are summed, each in units of its own noise) and, with one test "
-                          "and --cost log-frf, optionally a frequency response (UFF 58/CSV)")
-    fmu.add_argument("--update", metavar="NAME[,NAME...]", action="append", default=[],
-                     help="FMU parameters to update (repeatable)")
-    fmu.add_argument("--cost", choices=["time", "log-frf"], default="time",
-                     help="time: output errors (eq. 4.3); log-frf: log ratio of H1 estimates (eq. 4.5/4.17)")
-    fmu.add_argument("--scheduler", metavar="ADDRESS", help="run the FMU simulations on this Dask cluster "
-                     "(default: local worker processes)")
-    fmu.add_argument("--workers", type=int, default=None, help="local worker processes (default: one per core)")
-    fmu.add_argument("--map", metavar="FILE", help="channel map: data channel names and units to the FMU's signals")
-    fmu.add_argument("--segment-s", type=float, default=2.0, help="H1 segment length [s] of the log-frf cost (default 2)")
-    fmu.add_argument("--hold-input", metavar="NAME=0[,NAME=0...]", action="append", default=[],
-                     help="FMU inputs the data have no channel for, held at 0 V (repeatable); any other missing "
-                          "input is an error")
-    fmu.add_argument("--noise-rms-percent", type=float, default=None, metavar="P",
-                     help="time cost: the measurement noise RMS as P %% of each output's RMS, for the noise-floor test "
-                          "(default: estimated from the outputs' spectra above the inputs' band)")
-    fmu.add_argument("--weighting", choices=["noise", "none"], default="noise",
-                     help="log-frf: each bin's log error over its noise standard deviation (default), or unweighted")
+                   help=show("how the cost-sensitivity method makes its perturbed models (default: reanalysis)"))
+    p.add_argument("--rounds", type=int, default=2, help=show("repeats of physical, delays, damping (default 2)"))
+    p.add_argument("--preload", choices=["large", "linear"], default="large", help=show("1-g gravity preload"))
+
+
+def _fmu_options(p, *, hidden: bool = False) -> None:
+    def show(text: str) -> str:
+        return argparse.SUPPRESS if hidden else text
+
+    p.add_argument("--data", metavar="FILE", action="append", default=[],
+                   help=show("measured data: a time history (CSV/npz; its inputs drive the FMU), one per test (repeat "
+                             "the option: several tests are summed, each in units of its own noise) and, with one "
+                             "test and --cost log-frf, optionally a frequency response (UFF 58/CSV)"))
+    p.add_argument("--update", metavar="NAME[,NAME...]", action="append", default=[],
+                   help=show("FMU parameters to update (repeatable)"))
+    p.add_argument("--cost", choices=["time", "log-frf"], default="time",
+                   help=show("time: output errors (eq. 4.3); log-frf: log ratio of H1 estimates (eq. 4.5/4.17)"))
+    p.add_argument("--scheduler", metavar="ADDRESS", help=show("run the FMU simulations on this Dask cluster "
+                   "(default: local worker processes)"))
+    p.add_argument("--workers", type=int, default=None, help=show("local worker processes (default: one per core)"))
+    p.add_argument("--map", metavar="FILE", help=show("channel map: data channel names and units to the FMU's signals"))
+    p.add_argument("--segment-s", type=float, default=2.0,
+                   help=show("H1 segment length [s] of the log-frf cost (default 2)"))
+    p.add_argument("--hold-input", metavar="NAME=0[,NAME=0...]", action="append", default=[],
+                   help=show("FMU inputs the data have no channel for, held at 0 V (repeatable); any other missing "
+                             "input is an error"))
+    p.add_argument("--noise-rms-percent", type=float, default=None, metavar="P",
+                   help=show("time cost: the measurement noise RMS as P %% of each output's RMS, for the noise-floor "
+                             "test (default: estimated from the outputs' spectra above the inputs' band)"))
+    p.add_argument("--weighting", choices=["noise", "none"], default="noise",
+                   help=show("log-frf: each bin's log error over its noise standard deviation (default), or "
+                             "unweighted"))
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("update", help="model updating (thesis ch. 4): the MACE update, an FMU against test data, or "
+                       "the sample problem", formatter_class=argparse.RawDescriptionHelpFormatter,
+                       description="Three updates, one subcommand each: 'mace' (the thesis's modal update of the "
+                                   "bundled deck's moduli), 'fmu' (any FMI 2.0 FMU's parameters against measured "
+                                   "data files), 'sample-problem' (the two-mass problem of thesis 4.3). The old "
+                                   "spelling (update --fmu FILE, update --sample-problem, update -o DIR) still works "
+                                   "and says the new one.",
+                       epilog=_EXIT_STATUS)
+    # the old spelling: every option on update itself, hidden from --help
+    deck_option(p)
+    _out_option(p, help_text=argparse.SUPPRESS)
+    p.add_argument("--sample-problem", action="store_true", help=argparse.SUPPRESS)
+    p.add_argument("--fmu", metavar="FILE", help=argparse.SUPPRESS)
+    _sample_options(p, hidden=True)
+    _mace_options(p, hidden=True)
+    _fmu_options(p, hidden=True)
     p.set_defaults(func=cmd_update)
+    modes = p.add_subparsers(dest="update_mode", metavar="{mace,fmu,sample-problem}")
+
+    m = modes.add_parser("mace", help="the thesis's modal update of the bundled MACE deck's moduli (chapter 4)",
+                         formatter_class=argparse.RawDescriptionHelpFormatter, epilog=_EXIT_STATUS)
+    deck_option(m)
+    _out_option(m)
+    _mace_options(m)
+    m.set_defaults(func=cmd_mace_update, data=[], update=[])
+
+    f = modes.add_parser("fmu", help="update an FMU's parameters against measured data files (any FMI 2.0 "
+                         "co-simulation FMU)", formatter_class=argparse.RawDescriptionHelpFormatter,
+                         epilog=_EXIT_STATUS)
+    f.add_argument("fmu", metavar="FILE", help="the FMU whose parameters are updated (set through FMI)")
+    _out_option(f)
+    f.add_argument("--start", metavar="FILE", help="parameter values to start from (TOML [values]; default: the "
+                   "FMU's own start values)")
+    _fmu_options(f)
+    f.set_defaults(func=cmd_fmu_subcommand)
+
+    s = modes.add_parser("sample-problem", help="the two-mass sample problem (thesis 4.3): Tables 4.2 and 4.3 "
+                         "beside the thesis")
+    _sample_options(s)
+    s.set_defaults(func=cmd_sample)

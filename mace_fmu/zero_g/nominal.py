@@ -137,7 +137,7 @@ def table_4_7_zero_g_patterns() -> tuple[str | None, ...]:
 
 
 def read_zero_g_measured(path: str | Path) -> tuple[tuple[MeasuredMode, ...], tuple[str | None, ...]]:
-    """A measurement model (the CSV of ``mace-fmu update --measured``) with a ``pattern_0g`` column: the label
+    """A measurement model (the CSV of ``mace-fmu update mace --measured``) with a ``pattern_0g`` column: the label
     pattern of each mode's 0-g pole, empty where the mode has no 0-g counterpart."""
     modes = read_measured_modes(path)
     rows = list(csv.DictReader(Path(path).read_text(encoding="utf-8").splitlines()))
