@@ -25,7 +25,25 @@ from mace_fmu.errors import DeckError
 
 
 def read_deck(path: str | os.PathLike[str]) -> Deck:
-    """Read and validate the deck in file ``path``."""
+    """Read and validate the NASTRAN bulk-data deck in file ``path`` (INCLUDE files relative to it).
+
+    Parameters
+    ----------
+    path : str or path-like
+        The deck (``.bdf``, ``.dat``, ``.nas``): free, small or large field.
+
+    Returns
+    -------
+    Deck
+        Every card we model as a frozen record, with the file and line it came from; cards that do not
+        change mass or stiffness are read past and listed in ``Deck.skipped``.
+
+    Raises
+    ------
+    DeckError
+        With the file, line, card and field, and what was expected; every card we cannot model is
+        listed at once.
+    """
     name = os.fspath(path)
     try:
         data = Path(path).read_bytes()

@@ -182,17 +182,53 @@ def compute_modes(deck: Deck | str | os.PathLike | None = None, *, structure: St
                   spec: StructureSpec | None = None, progress: ProgressCallback | None = None,
                   parameters: ParameterSet | None = None,
                   structure_file: StructureFile | str | os.PathLike | None = None) -> StructureModes:
-    """Modes [Hz] of the 1-g or 0-g structure of a deck (default: the bundled MACE deck).
+    """Modes of the 1-g or 0-g structure of a deck, labelled, with the structure's mass properties.
 
-    ``structure_file``: what the deck does not say (see :mod:`mace_fmu.structure.file`); default the
-    bundled one for the bundled deck and none for any other deck, which then keeps NASTRAN's
-    meaning (nothing removed; modes labelled by their motion, not by MACE's names).
-    ``max_hz`` [Hz]: the modes up to it; by default the deck's EIGRL decides (V1, V2, ND), else 250 Hz.
-    ``overrides`` replaces card fields
-    (see :func:`mace_fmu.structure.build.apply_overrides`); ``parameters`` replaces moduli and spring
-    stiffnesses by name (``E_<material>``, ``k_<spring>``; its other entries act later).
-    ``progress`` is called after each preload increment; nothing is printed (the increments are
-    also logged at DEBUG level).
+    Parameters
+    ----------
+    deck : Deck, path or None
+        The NASTRAN deck (default: the bundled MACE deck).
+    structure : {"1g", "0g"}
+        1-g: the deck's gravity subcase preloads the structure and the modes are those about the
+        preloaded state; 0-g: the suspension the structure file names is removed, no preload.
+    preload : {"large", "linear"}
+        The 1-g preload: incremental Newton on the updated geometry, or linear prestress.
+    mass : {"lumped", "coupled"}
+        Bar mass matrices (NASTRAN's default is lumped; PARAM COUPMASS in the deck also selects coupled).
+    max_hz : float or None
+        Highest mode [Hz]; by default the deck's EIGRL/EIGR decides (V1, V2, ND), else 250 Hz.
+    overrides : mapping, optional
+        Card fields replaced, ``{("MAT1", 2): {"e": 2.3e9}}`` (see :func:`mace_fmu.structure.build.apply_overrides`).
+    spec : StructureSpec, optional
+        The structure file's content, when already read.
+    progress : callable, optional
+        Called with a :class:`~mace_fmu.util.progress.Step` after each preload increment; nothing is
+        printed (the increments are also logged at DEBUG level).
+    parameters : ParameterSet, optional
+        Moduli [Pa] and spring stiffnesses [N/m] by name (``E_<material>``, ``k_<spring>``); its other
+        entries act in the later stages.
+    structure_file : StructureFile, path or None
+        What the deck does not say (see :mod:`mace_fmu.structure.file`): by default the bundled one for
+        the bundled deck and none for any other deck, which then keeps NASTRAN's meaning (nothing
+        removed; modes labelled by their motion, not by MACE's names).
+
+    Returns
+    -------
+    StructureModes
+        The structure, its FE model, the modes (frequencies [Hz], mass-normalised shapes, labels), the
+        mass properties [kg, m, kg m^2] and the preload (1-g).
+
+    Raises
+    ------
+    MaceError
+        For a deck or structure file that cannot give modes, with the file, line and card or key.
+
+    Examples
+    --------
+    >>> from mace_fmu import compute_modes
+    >>> modes = compute_modes(structure="0g", max_hz=5.0)
+    >>> [f"{hz:.2f} Hz {label}" for hz, label in zip(modes.modes.frequencies_hz, modes.modes.labels) if hz > 1]
+    ['2.10 Hz 1st Z bending', '3.07 Hz 1st Y bending']
     """
     if preload not in ("large", "linear"):
         raise MaceError(f"preload must be 'large' or 'linear', got {preload!r}")

@@ -216,25 +216,73 @@ def volts_model(structure: StructureKind = "1g", *, parameters: ParameterSet | N
                 modes: StructureModes | None = None, inputs: Sequence[str] | None = None,
                 outputs: Sequence[str] | None = None, motion_grids: Sequence[int] | Literal["all"] = (),
                 structure_file: StructureFile | str | os.PathLike | None = None) -> VoltsModel:
-    """Volts-volts model of the 1-g or 0-g structure, modes up to ``max_hz`` [Hz] (None: the modes the deck's
-    EIGRL asks for, else those up to 250 Hz, as :func:`~mace_fmu.fe.modes.compute_modes`).
+    """Volts-volts model of the 1-g or 0-g structure: actuator volts in, sensor volts out.
 
-    Inputs: gimbal commands (relative angle, 1 V = 1 deg, with servos; motor volts without),
-    wheel speed commands and active strut volts. Outputs: the 20 sensors in volts.
-    ``parameters`` (a :class:`~mace_fmu.parameters.sets.ParameterSet`) replaces moduli and spring
-    stiffnesses (in the FE model, unless ``modes`` are given, which must then have been computed
-    with them), delays (defaults: Tables 4.5 and 4.6 from the instrument file), servo gains and
-    open-loop damping ratios and frequency scales by mode label (as in
-    ``compute_modes(...).modes.labels``, e.g. "1st Z bending"; the scales multiply the FE
-    frequencies, given ``modes`` or not). ``motion_grids`` (grid IDs, or "all") adds each grid's
-    translations [m] and rotations [rad] in basic axes as outputs ``grid_<id>_<tx|ty|tz|rx|ry|rz>``
-    after the sensors, for animation. ``structure_file`` declares the actuators and sensors (default:
-    the bundled one for the bundled deck; see :mod:`mace_fmu.structure.file`); ``instruments`` replaces them.
+    Inputs: gimbal commands (relative angle, 1 V = 1 deg, with servos; motor volts without), wheel speed
+    commands and active strut volts. Outputs: the sensors in volts (MACE: 20), then any grid motion.
 
-    Where the modes come from is said once: either ``modes`` (computed before, which fix the deck, the
-    structure file, the preload and the moduli) or ``deck``, ``preload`` (default "large") and
-    ``structure_file``; given both, or ``modes`` of the other structure, or moduli in ``parameters`` that
-    the modes were not computed with, it raises :class:`~mace_fmu.errors.MaceError`.
+    Parameters
+    ----------
+    structure : {"1g", "0g"}
+        The suspended, gravity-preloaded structure or the free one.
+
+    Where the modes come from (either ``modes`` or the rest of this group):
+
+    modes : StructureModes, optional
+        Modes computed before (:func:`~mace_fmu.fe.modes.compute_modes`); they fix the deck, the
+        structure file, the preload and the moduli, so giving any of those too is an error.
+    deck : Deck or path, optional
+        The NASTRAN deck (default: the bundled MACE deck).
+    preload : {"large", "linear"}, optional
+        The 1-g gravity preload (default "large").
+    structure_file : StructureFile or path, optional
+        Declares the actuators and sensors (default: the bundled one for the bundled deck; see
+        :mod:`mace_fmu.structure.file`).
+    max_hz : float, optional
+        Highest retained mode [Hz] (default: the modes the deck's EIGRL asks for, else those up to 250 Hz).
+    parameters : ParameterSet, optional
+        Moduli [Pa] and spring stiffnesses [N/m] (in the FE model; with ``modes``, the ones they were
+        computed with), delays [s] (defaults: Tables 4.5 and 4.6 from the structure file), servo gains,
+        and open-loop damping ratios and frequency scales by mode label (as in
+        ``compute_modes(...).modes.labels``, e.g. "1st Z bending").
+    instruments : Instruments, optional
+        Replaces the structure file's actuators, sensors, electronics, servos and damping.
+
+    The electronics:
+
+    servos : bool
+        Close the wheel speed loops and gimbal servos.
+    bessel : {"full", "delay", "none"}
+        The anti-aliasing filters as filters, as their equivalent delay, or left out.
+    delays : bool
+        The actuator and sensor time delays, as Pade approximations of order ``pade_order``.
+    pade_order : int
+
+    Which signals come out:
+
+    inputs, outputs : sequence of str, optional
+        Keep only these inputs and outputs (default: all), in this order.
+    motion_grids : sequence of int or "all"
+        Adds each grid's translations [m] and rotations [rad] in basic axes as outputs
+        ``grid_<id>_<tx|ty|tz|rx|ry|rz>`` after the sensors, for animation.
+
+    Returns
+    -------
+    VoltsModel
+        ``system`` (a ``control.StateSpace`` with named signals and states), the block diagram, the
+        modal plant, the modes and the instruments it was built from.
+
+    Raises
+    ------
+    MaceError
+        For a request that contradicts itself or names what the model lacks, saying what is allowed.
+
+    Examples
+    --------
+    >>> from mace_fmu import volts_model
+    >>> model = volts_model("0g", max_hz=5.0, outputs=["gyro_payload_z"], inputs=["gimbal_secondary_z"])
+    >>> model.system.ninputs, model.system.noutputs
+    (1, 1)
     """
     _check(structure in ("1g", "0g"), f"structure must be '1g' or '0g', got {structure!r}")
     if modes is not None:

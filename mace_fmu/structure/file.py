@@ -183,7 +183,23 @@ def _load_structure_file(path: str, mtime_ns: int, size: int) -> StructureFile:
 
 
 def load_structure_file(path: str | os.PathLike) -> StructureFile:
-    """Read and check a structure file (errors name the file, the line and the table or key)."""
+    """Read and check a structure file: what a deck does not say (suspension, components, instruments).
+
+    Parameters
+    ----------
+    path : str or path-like
+        The structure file (TOML; schema in ``mace_fmu/data/README.md``).
+
+    Returns
+    -------
+    StructureFile
+        Its tables, read once (later calls with an unchanged file return the same object).
+
+    Raises
+    ------
+    MaceError
+        Naming the file, the line and the table or key that is wrong, and what was expected.
+    """
     file = Path(path)
     try:
         st = file.stat()

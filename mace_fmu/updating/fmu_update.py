@@ -72,8 +72,36 @@ def fmu_cost(kind: CostKind, *, history: TimeHistory, frequency_data: FrequencyR
 def update_fmu(*, family: FmuFamily, cost: Cost, start: Mapping[str, float], stages: Sequence[Sequence[str]],
                settings: UpdateSettings = FMU_SETTINGS, runner: Callable = map,
                progress: ProgressCallback | None = None) -> UpdateResult:
-    """Update the FMU parameters of ``stages`` (one tuple of names per stage, in order) from ``start``
-    [FMU units] to lower ``cost``; bounds by kind of name (moduli x0.5-1.5, delays x0.2-3, others x0.2-5)."""
+    """Update the FMU parameters of ``stages`` from ``start`` to lower ``cost``, stage after stage.
+
+    Parameters
+    ----------
+    family : FmuFamily
+        The FMU as a model family: which parameters it has and how to simulate it.
+    cost : Cost
+        The residual vector to lower (time or log-FRF, one or several tests).
+    start : mapping of str to float
+        Start values [FMU units: Pa, s, 1] of every parameter named in ``stages``.
+    stages : sequence of sequences of str
+        One tuple of parameter names per stage, in order.
+    settings : UpdateSettings
+        Stopping tests, difference steps and rounds.
+    runner : callable
+        A ``map``-like function that runs the simulations (``map``, or a
+        :class:`~mace_fmu.util.runner.DaskRunner`).
+    progress : callable, optional
+        Called with a progress step after each outer iteration.
+
+    Returns
+    -------
+    UpdateResult
+        Values, cost history, why each stage stopped (and whether it converged) and the final Jacobian
+        the uncertainty report is computed from.
+
+    Notes
+    -----
+    Bounds by kind of name: moduli x0.5-1.5, delays x0.2-3, others x0.2-5.
+    """
     names = [n for s in stages for n in s]
     if not names:
         raise MaceError("name at least one FMU parameter to update")
