@@ -2,7 +2,8 @@
 
 - ``reference/api/*.rst``: one page per package, its public names read from the package's ``__all__``;
 - ``reference/cli.rst``: every ``mace-fmu`` command's ``--help``, from the argparse parser;
-- ``thesis/tables.md``: the thesis's tables beside ours, as the commands print them today.
+- ``thesis/tables.md``: the thesis's tables beside ours, as the commands print them today;
+- ``_static/viewer/*.html``: the viewer's pages of the first flexible modes, embedded in the viewer guide.
 
 The files are written under ``docs/`` before Sphinx lists the sources (``config-inited``) and are
 not kept in git (``docs/.gitignore``).
@@ -161,7 +162,21 @@ def data_flow_page() -> None:
     _write(DOCS / "explanation" / "data_flow.md", "\n".join(lines))
 
 
+def viewer_pages() -> None:
+    """The viewer's standalone pages of the first 0-g and 1-g modes, embedded by the viewer guide."""
+    from viewer import animate_modes, write_animation_html
+
+    from mace_fmu.fe.modes import compute_modes
+
+    for structure, max_hz in (("0g", 12.0), ("1g", 12.0)):
+        modes = compute_modes(structure=structure, max_hz=max_hz)
+        flexible = [k + 1 for k, hz in enumerate(modes.modes.frequencies_hz) if hz > 1.5][:4]
+        write_animation_html(animate_modes(modes, flexible), DOCS / "_static" / "viewer" / f"modes_{structure}.html",
+                             title=f"MACE {structure} modes")
+
+
 def generate(app, config) -> None:
+    viewer_pages()
     data_flow_page()
     api_pages()
     cli_page()
