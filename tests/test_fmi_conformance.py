@@ -282,6 +282,45 @@ def test_a_step_starts_at_the_fmus_time_and_is_positive(fmus, t, h, ok):
     fmu3.freeInstance()
 
 
+def test_no_step_or_time_goes_past_a_defined_stop_time(fmus):
+    """FMI 2.0.x 2.1.6 / FMI 3.0 2.3.2: with stopTimeDefined, computing past stopTime is fmiError. A
+    co-simulation step that ends on the stop time up to round-off is allowed; the refused one moves nothing."""
+    messages = Messages()
+    fmu = _slave(fmus.dir2, messages=messages)
+    fmu.setupExperiment(startTime=0.0, stopTime=0.03)
+    fmu.enterInitializationMode()
+    fmu.exitInitializationMode()
+    _, outs = _io(fmus, fmus.dir2)
+    t = 0.0
+    for _ in range(3):  # 0.01 + 0.01 + 0.01 ends on 0.03 up to round-off
+        fmu.doStep(currentCommunicationPoint=t, communicationStepSize=0.01)
+        t += 0.01
+    before = fmu.getReal(outs)
+    assert _status(fmu.doStep, currentCommunicationPoint=t, communicationStepSize=1e-3) == ERROR
+    assert "passes the stop time 0.029999999999999999 s" in messages.errors()[-1]
+    assert fmu.getReal(outs) == before
+    fmu.reset()  # forgets the stop time with the rest of the experiment
+    fmu.setupExperiment(startTime=0.0)
+    fmu.enterInitializationMode()
+    fmu.exitInitializationMode()
+    fmu.doStep(currentCommunicationPoint=0.0, communicationStepSize=0.05)
+    fmu.freeInstance()
+    fmu3 = _slave3(fmus)
+    fmu3.enterInitializationMode(startTime=0.0, stopTime=0.02)
+    fmu3.exitInitializationMode()
+    fmu3.doStep(0.0, 0.02)
+    assert _status(fmu3.doStep, 0.02, 0.01) == ERROR
+    fmu3.freeInstance()
+    # model exchange: an integrator evaluates the derivatives past its output time (fmpy's CVode sets times
+    # past stopTime on a run that ends at it, tests/test_native_fmu.py), so fmi2SetTime is not refused
+    me = _model(fmus)
+    me.setupExperiment(startTime=0.0, stopTime=0.05)
+    me.enterInitializationMode()
+    me.exitInitializationMode()
+    me.setTime(0.06)
+    me.freeInstance()
+
+
 # ---- 4. non-finite values are refused where they are set ---------------------------------------------
 
 def test_non_finite_inputs_are_refused_by_set_real_and_not_stored(fmus):

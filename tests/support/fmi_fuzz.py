@@ -91,6 +91,7 @@ class Reference:
         self.cs = interface != "me2"
         self.fmi = 3 if interface == "cs3" else 2
         self.m = Model(params={vr: p[0] for vr, p in variables.params.items()})
+        self.stop: float | None = None  # setupExperiment's stop time: no step or time past it (an instance's, not a state's)
 
     def params_valid(self, params: dict[int, float] | None = None) -> bool:
         for vr, value in (params or self.m.params).items():
@@ -117,6 +118,10 @@ class Reference:
 
     def reset(self) -> None:
         self.m = Model(params={vr: p[0] for vr, p in self.v.params.items()})
+        self.stop = None
+
+    def past_stop(self, t: float) -> bool:
+        return self.stop is not None and t > self.stop + TIME_TOLERANCE * max(1.0, abs(self.stop))
 
     # each returns the expected status and applies the call's effect when it is OK
     def expect(self, call: str, args: dict) -> int:
@@ -130,7 +135,7 @@ class Reference:
         if call == "setupExperiment" or (call == "enterInitializationMode" and self.fmi == 3):
             if p != INST or not _experiment_valid(args):
                 return ERROR
-            m.time = args["start"]
+            m.time, self.stop = args["start"], args["stop"]
             if call == "enterInitializationMode":
                 m.phase = INIT
             return OK
@@ -184,7 +189,7 @@ class Reference:
                 return ERROR
             if not (math.isfinite(t) and math.isfinite(h) and h > 0):
                 return ERROR
-            if abs(t - m.time) > TIME_TOLERANCE * max(1.0, abs(m.time)):
+            if abs(t - m.time) > TIME_TOLERANCE * max(1.0, abs(m.time)) or self.past_stop(t + h):
                 return ERROR
             m.time = t + h
             return OK
@@ -214,7 +219,7 @@ class Reference:
         if call == "completedIntegratorStep":
             return OK if me and p == CONT else ERROR
         if call == "setTime":
-            if me and p in (EVENT, CONT) and math.isfinite(args["t"]):
+            if me and p in (EVENT, CONT) and math.isfinite(args["t"]):  # integrators evaluate past the stop time
                 m.time = args["t"]
                 return OK
             return ERROR
@@ -352,7 +357,7 @@ class Driver:
         r = self.rng.random()
         a = {"start": self.rng.choice([0.0, 0.0, 1.5, -2.0]), "stop": None, "tol": None}
         if self.rng.random() < 0.4:
-            a["stop"] = a["start"] + self.rng.choice([10.0, 100.0])
+            a["stop"] = a["start"] + self.rng.choice([0.01, 10.0, 100.0])  # 0.01: a few steps reach it
         if self.rng.random() < 0.3:
             a["tol"] = 1e-6
         if r < 0.08:

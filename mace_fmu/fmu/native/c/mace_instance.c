@@ -198,6 +198,12 @@ MiStatus mi_no_variables(MiInstance *inst, size_t n, const char *type, const cha
 
 /* ---- life cycle ------------------------------------------------------------------------------ */
 
+/* Tolerance of the communication point against the FMU's time, relative to max(1, |t|): hosts
+ * compute communication points as t0 + k h or as running sums of step sizes, which differ from
+ * the FMU's own sum by a few ulps per step (1e-16 relative each); 1e-9 covers the rounding of
+ * millions of steps and is still far below any step a host would make (1 ns at t < 1 s). */
+#define TIME_TOLERANCE 1e-9
+
 MiStatus mi_experiment(MiInstance *inst, int tolerance_defined, double tolerance, double start_time,
                        int stop_defined, double stop_time, const char *fn) {
     if (!mi_allowed(inst, fn, MI_IN(PH_INSTANTIATED))) return MI_ERROR;
@@ -211,7 +217,18 @@ MiStatus mi_experiment(MiInstance *inst, int tolerance_defined, double tolerance
     if (tolerance_defined && !(isfinite(tolerance) && tolerance > 0.0))
         return mi_error(inst, "%s%s: tolerance %g is not a finite number > 0", inst->api, fn, tolerance);
     mace_set_time(inst->model, start_time);
+    inst->stop_defined = stop_defined;
+    inst->stop_time = stop_time;
     return MI_OK;
+}
+
+/* FMI 2.0.x section 2.1.6 (fmi2SetupExperiment): "if the environment tries to compute past stopTime
+   the FMU has to return fmi2Error"; FMI 3.0 section 2.3.2 says the same of a defined stopTime. The
+   tolerance is the communication point's: a step that ends at the stop time up to round-off is allowed.
+   Checked on co-simulation steps only (see mi_set_time) */
+static int past_stop(const MiInstance *inst, double t) {
+    return inst->stop_defined && t > inst->stop_time + TIME_TOLERANCE * (fabs(inst->stop_time) > 1.0 ?
+                                                                         fabs(inst->stop_time) : 1.0);
 }
 
 MiStatus mi_enter_initialization(MiInstance *inst, const char *fn) {
@@ -234,12 +251,6 @@ MiStatus mi_exit_initialization(MiInstance *inst, const char *fn) {
     return MI_OK;
 }
 
-/* Tolerance of the communication point against the FMU's time, relative to max(1, |t|): hosts
- * compute communication points as t0 + k h or as running sums of step sizes, which differ from
- * the FMU's own sum by a few ulps per step (1e-16 relative each); 1e-9 covers the rounding of
- * millions of steps and is still far below any step a host would make (1 ns at t < 1 s). */
-#define TIME_TOLERANCE 1e-9
-
 MiStatus mi_do_step(MiInstance *inst, double t, double h, const char *fn) {
     const double now = mace_time(inst->model);
     if (!mi_allowed_kind(inst, fn, MACE_CO_SIMULATION, MI_IN(PH_STEP))) return MI_ERROR;
@@ -259,6 +270,9 @@ MiStatus mi_do_step(MiInstance *inst, double t, double h, const char *fn) {
     if (!(fabs(t - now) <= TIME_TOLERANCE * (fabs(now) > 1.0 ? fabs(now) : 1.0)))
         return mi_error(inst, "%s%s: currentCommunicationPoint %.17g s is not the FMU's time %.17g s", inst->api,
                         fn, t, now);
+    if (past_stop(inst, t + h))
+        return mi_error(inst, "%s%s: the step to t = %.17g s passes the stop time %.17g s given at the set-up of the "
+                        "experiment", inst->api, fn, t + h, inst->stop_time);
     if (mace_do_step(inst->model, t, h, inst->err) != 0) {
         inst->phase = PH_ERROR;
         return mi_error(inst, "%s%s: %s", inst->api, fn, inst->err);
@@ -276,6 +290,7 @@ MiStatus mi_reset(MiInstance *inst, const char *fn) {
     (void)fn;
     mace_reset(inst->model);
     inst->phase = PH_INSTANTIATED;
+    inst->stop_defined = 0;  /* as after instantiation: the next setupExperiment says it again */
     return MI_OK;
 }
 
@@ -476,6 +491,9 @@ static int all_finite(const double *x, size_t n) {
 MiStatus mi_set_time(MiInstance *inst, double t, const char *fn) {
     if (!mi_allowed_kind(inst, fn, MACE_MODEL_EXCHANGE, MI_IN(PH_EVENT) | MI_IN(PH_CONTINUOUS))) return MI_ERROR;
     if (!isfinite(t)) return mi_error(inst, "%s%s: time %g is not finite", inst->api, fn, t);
+    /* no stop-time check here: an importer's integrator evaluates the derivatives beyond its output
+       time and interpolates back (fmpy's CVode sets times past stopTime on a run that ends at it), so
+       refusing them would break the integrators the standard's rule does not aim at */
     mace_set_time(inst->model, t);
     return MI_OK;
 }

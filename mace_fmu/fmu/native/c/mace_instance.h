@@ -46,6 +46,8 @@ typedef struct MiInstance {
     void *host;
     char err[MACE_ERR_LEN];
     char *message; /* the last message, formatted */
+    int stop_defined; /* setupExperiment's stopTimeDefined: no step or time past stop_time [s] */
+    double stop_time;
 } MiInstance;
 
 /* NULL on failure, after logging the reason through log(host, ...). */
