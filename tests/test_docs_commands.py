@@ -1,7 +1,7 @@
 """Every ``mace-fmu`` command the README and the documentation pages show is one the parser accepts.
 
 The commands are taken from the fenced ``bash`` and ``console`` blocks (and from inline code in the
-README's table of commands); each is parsed by ``mace_fmu.cli.build_parser()`` exactly as the shell
+README's table of commands) and from the tutorials, the gallery's examples (their docstrings' command lines); each is parsed by ``mace_fmu.cli.build_parser()`` exactly as the shell
 would pass it, so a renamed option or subcommand fails here. Running them is left to the tests of each
 command (most need minutes or files a user brings); this checks that the text is still true.
 """
@@ -40,13 +40,34 @@ def _commands(path: Path) -> list[tuple[str, str]]:
     return found
 
 
-COMMANDS = [c for page in PAGES for c in _commands(page)]
+#: the tutorials: the gallery's examples (their docstrings are the tutorial pages' text) and its header
+EXAMPLES = sorted((ROOT / "examples").rglob("*.py")) + [ROOT / "examples" / "GALLERY_HEADER.rst"]
+
+
+def _example_commands(path: Path) -> list[tuple[str, str]]:
+    """(where, command) for each whole ``mace-fmu`` command of an example: an indented command line of its
+    docstring or comments, or an inline literal (````mace-fmu ...````); fragments with ``...`` are left out."""
+    found = []
+    for number, line in enumerate(path.read_text().splitlines(), start=1):
+        shown = re.findall(r"``(mace-fmu [^`]*)``", line)
+        bare = line.strip().lstrip("# ")
+        if not shown and bare.startswith("mace-fmu ") and line.startswith(" "):
+            shown = [bare]
+        for command in shown:
+            command = command.split(" #")[0].strip()
+            if "..." not in command:
+                found.append((f"{path.relative_to(ROOT)}:{number}", command))
+    return found
+
+
+COMMANDS = [c for page in PAGES for c in _commands(page)] + [c for path in EXAMPLES for c in _example_commands(path)]
 
 
 def test_the_pages_show_commands():
     assert len(COMMANDS) >= 40
     assert {where.split(":")[0] for where, _ in COMMANDS} >= {"README.md", "docs/guide/fmus.md",
-                                                               "docs/howto/animate_a_response.md"}
+                                                               "docs/howto/animate_a_response.md",
+                                                               "examples/own_structure/own_structure.py"}
 
 
 @pytest.mark.parametrize("where, command", COMMANDS, ids=[w for w, _ in COMMANDS])
