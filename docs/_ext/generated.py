@@ -245,6 +245,13 @@ def fmu_variables_page() -> None:
     _write(DOCS / "reference" / "fmu_variables.md", "\n".join(lines))
 
 
+def example_argv(gallery_conf, script_vars) -> list[str]:
+    """The command-line arguments of an example run by sphinx-gallery (its ``reset_argv``): the examples that
+    write files by default into the folder they run in write them under ``docs/_build/examples`` instead."""
+    name = Path(script_vars["src_file"]).stem
+    return [str(DOCS / "_build" / "examples" / name)] if name in ("own_structure",) else []
+
+
 def generate(app, config) -> None:
     fmu_variables_page()
     viewer_pages()
