@@ -82,3 +82,19 @@ def test_every_shown_command_parses(where, command):
     except SystemExit as exc:
         if exc.code != 0:  # --help exits 0
             pytest.fail(f"{where}: `{command}` is not a valid command line")
+
+
+def test_the_api_reference_covers_every_package():
+    """docs/_ext/generated.py writes one API page per name of its PACKAGES (the data-flow order): a new
+    package must be added there, or the reference would silently leave it out."""
+    import importlib.util
+    import pkgutil
+
+    import mace_fmu
+
+    spec = importlib.util.spec_from_file_location("docs_generated", ROOT / "docs" / "_ext" / "generated.py")
+    generated = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(generated)
+    found = {"mace_fmu"} | {m.name for m in pkgutil.walk_packages(mace_fmu.__path__, "mace_fmu.") if m.ispkg}
+    assert sorted(generated.PACKAGES) == sorted(found)
+    assert len(set(generated.PACKAGES)) == len(generated.PACKAGES)
