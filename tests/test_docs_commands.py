@@ -98,3 +98,18 @@ def test_the_api_reference_covers_every_package():
     found = {"mace_fmu"} | {m.name for m in pkgutil.walk_packages(mace_fmu.__path__, "mace_fmu.") if m.ispkg}
     assert sorted(generated.PACKAGES) == sorted(found)
     assert len(set(generated.PACKAGES)) == len(generated.PACKAGES)
+
+
+def test_readme_headline_numbers_are_on_the_pages_it_links():
+    """Each headline number of the README appears on the page its bullet links to (where it is measured)."""
+    readme = (ROOT / "README.md").read_text()
+    section = readme[readme.index("## Headline numbers"):readme.index("\n## ", readme.index("## Headline numbers") + 1)]
+    checked = 0
+    for bullet in re.split(r"\n- ", section)[1:]:
+        numbers = [a or b for a, b in re.findall(r"(\d+(?:\.\d+)?) ?%|(\d(?:\.\d+)?e-\d+)", bullet)]
+        pages = re.findall(r"\]\(((?:docs|benchmarks)/[^)#]+)\)", bullet)
+        text = "".join((ROOT / page).read_text() for page in pages)
+        for number in numbers:
+            assert number in text, f"README headline {number!r} is not on {pages}"
+            checked += 1
+    assert checked >= 12
