@@ -41,12 +41,9 @@ def _normalise(text: str) -> str:
 
 @pytest.fixture(scope="module")
 def build_text():
-    from mace_fmu.cli.build import low_modes, thesis_tables
-    from mace_fmu.fe.modes import DEFAULT_MAX_HZ, compute_modes
+    from mace_fmu.cli.build import main_job_text
 
-    m0 = compute_modes(structure="0g", max_hz=DEFAULT_MAX_HZ)
-    results = {kind: compute_modes(structure="1g", preload=kind, max_hz=DEFAULT_MAX_HZ) for kind in ("large", "linear")}
-    return _normalise(thesis_tables(m0, results) + "\n\n" + low_modes(results))
+    return _normalise(main_job_text())
 
 
 def test_every_output_block_of_the_main_job_section_is_what_build_prints(build_text):

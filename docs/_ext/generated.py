@@ -129,6 +129,8 @@ def _run(argv: list[str]) -> str:
 
 
 def thesis_page() -> None:
+    from mace_fmu.cli.build import main_job_text
+
     lines = ["# The thesis reproduced", "",
              "Each table below is printed by the command above it, run when this page was built: the thesis value, "
              "ours and the difference come from the code of this version, never typed by hand. How each "
@@ -136,20 +138,10 @@ def thesis_page() -> None:
              "[What the main job reproduces](main_job.md).", ""]
     for title, argv, what in THESIS_COMMANDS:
         shown = [a for a in argv if a != "--tables-only"]
-        text = _tables_only() if "--tables-only" in argv else _run(argv)
+        text = main_job_text() if "--tables-only" in argv else _run(argv)
         lines += [f"## {title}", "", what, "", "```console", f"$ mace-fmu {' '.join(shown)}", "```", "", "```text",
                   text.rstrip(), "```", ""]
     _write(DOCS / "thesis" / "tables.md", "\n".join(lines))
-
-
-def _tables_only() -> str:
-    """What ``mace-fmu build`` prints before it writes FMUs: the same functions, without the export."""
-    from mace_fmu.cli.build import low_modes, thesis_tables
-    from mace_fmu.fe.modes import DEFAULT_MAX_HZ, compute_modes
-
-    m0 = compute_modes(structure="0g", max_hz=DEFAULT_MAX_HZ)
-    results = {kind: compute_modes(structure="1g", preload=kind, max_hz=DEFAULT_MAX_HZ) for kind in ("large", "linear")}
-    return thesis_tables(m0, results) + "\n\n" + low_modes(results)
 
 
 def data_flow_page() -> None:

@@ -49,6 +49,16 @@ def cmd_build(args: argparse.Namespace) -> int:
     return 0
 
 
+def main_job_text() -> str:
+    """The tables ``mace-fmu build`` prints for the bundled deck (the same functions; no FMUs written):
+    what the documentation shows and its test compares."""
+    from mace_fmu.fe.modes import DEFAULT_MAX_HZ
+
+    m0 = compute_modes(structure="0g", max_hz=DEFAULT_MAX_HZ)
+    results = {kind: compute_modes(structure="1g", preload=kind, max_hz=DEFAULT_MAX_HZ) for kind in ("large", "linear")}
+    return thesis_tables(m0, results) + "\n\n" + low_modes(results)
+
+
 def thesis_tables(m0, results) -> str:
     """Tables 5.1 (0-g, and 1-g for each preload) and 3.15 beside the thesis, as ``build`` prints them.
 
