@@ -281,6 +281,15 @@ def _set_states(fmu: FMU2Model, x: np.ndarray) -> None:
     fmu.setContinuousStates((ctypes.c_double * len(x))(*x), len(x))
 
 
+def _state_order(unzipped) -> np.ndarray:
+    """Which model state (ParametricSystem's order) each position of the model-exchange state vector holds:
+    the order of ModelStructure/Derivatives (FMI 2.0.x 2.2.8), the states' value references being in the
+    model's order."""
+    md = fmpy.read_model_description(unzipped)
+    state_vrs = [u.variable.derivative.valueReference for u in md.derivatives]
+    return np.array(state_vrs) - min(state_vrs)
+
+
 def _model_exchange(fmus, change: dict[str, float]) -> FMU2Model:
     md = fmpy.read_model_description(fmus.dir2)
     vr = _vr(fmus.dir2)
@@ -299,8 +308,8 @@ def _model_exchange(fmus, change: dict[str, float]) -> FMU2Model:
 
 @pytest.mark.parametrize("changed", [False, True])
 def test_model_exchange_derivatives_and_outputs_are_a_x_plus_b_u(fmus, changed):
-    """Derivatives at random states and inputs against the reference A x + B u (same state order and
-    realisation); damping, delays and servo gains changed in the second case."""
+    """Derivatives at random states and inputs against the reference A x + B u (same realisation, the
+    states in the FMU's model-exchange order); damping, delays and servo gains changed in the second case."""
     model = fmus.model
     system = ParametricSystem(fmus.arrays)
     change = {"damping_mode_20": 0.05, "delay_gimbal_primary_x": 6.0e-3, "K_a": -1.5} if changed else {}
@@ -308,6 +317,11 @@ def test_model_exchange_derivatives_and_outputs_are_a_x_plus_b_u(fmus, changed):
     for name, value in change.items():
         params[system.index(name)] = value
     a, b, c, d = system.build(params)
+    order = _state_order(fmus.dir2)
+    assert sorted(order) == list(range(len(a)))
+    names = [system.state_names[k] for k in order]  # delays first, the structure's rates last (dense LU)
+    assert names[0].startswith("delay_") and names[-1].startswith("structure.") and names[-1].endswith("_vel")
+    a, b, c = a[np.ix_(order, order)], b[order], c[:, order]
     fmu = _model_exchange(fmus, change)
     ins, outs = value_references(fmus.dir2)
     rng = np.random.default_rng(11)
@@ -338,6 +352,8 @@ def test_model_exchange_directional_derivatives_are_the_jacobian(fmus, changed):
     for name, value in change.items():
         params[system.index(name)] = value
     a, b, c, d = system.build(params)
+    order = _state_order(fmus.dir2)
+    a, b, c = a[np.ix_(order, order)], b[order], c[:, order]  # the FMU's state order
     md = fmpy.read_model_description(fmus.dir2)
     assert md.modelExchange.providesDirectionalDerivative and not md.coSimulation.providesDirectionalDerivative
     states = [u.variable.derivative.valueReference for u in md.derivatives]
@@ -410,6 +426,8 @@ def test_model_exchange_free_response_equals_the_exact_solution(fmus):
 
     system = ParametricSystem(fmus.arrays)
     a, b, c, d = system.build(system.nominal)
+    order = _state_order(fmus.dir2)
+    a, b, c = a[np.ix_(order, order)], b[order], c[:, order]  # the FMU's state order
     u = 0.1 + 0.02 * np.arange(b.shape[1])
     x0 = scipy.linalg.expm(np.block([[a, b], [np.zeros((b.shape[1], len(a) + b.shape[1]))]]) * 0.05)[:len(a), len(a):] @ u
     fmu = _model_exchange(fmus, {})

@@ -118,7 +118,8 @@ def export_native_fmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str
     if fmi_version == 2:
         description = fmi2_model_description(variables, model_identifier=name, guid=token,
                                              description=model_summary(model), version=version, source_files=c_files,
-                                             jacobian=jacobian_pattern(reference))
+                                             jacobian=jacobian_pattern(reference),
+                                             state_order=[int(k) for k in data["me_order"]])
     else:
         description = fmi3_model_description(variables, model_identifier=name, token=token,
                                              description=model_summary(model), version=version)

@@ -128,11 +128,14 @@ def _dependencies(element: ET.Element, states: Sequence[int], inputs: Sequence[i
 
 def fmi2_model_description(variables: Sequence[FmuVariable], *, model_identifier: str, guid: str, description: str,
                            version: str, source_files: Sequence[str], model_exchange: bool = True,
-                           step_size_s: float | None = None, jacobian: JacobianPattern | None = None) -> bytes:
+                           step_size_s: float | None = None, jacobian: JacobianPattern | None = None,
+                           state_order: Sequence[int] | None = None) -> bytes:
     """modelDescription.xml of an FMI 2.0 FMU with co-simulation and (``model_exchange``) model exchange;
     ``step_size_s``: the default experiment's step [s] (default: the plants' 2 ms); ``jacobian``: the
     sparsity of the linear model, declared as the dependencies of the derivatives and outputs, with
-    directional derivatives provided in model exchange (the runtime computes them exactly)."""
+    directional derivatives provided in model exchange (the runtime computes them exactly);
+    ``state_order``: the model-exchange state vector (position i: state ``state_order[i]`` of the
+    variables' order), which the order of ``ModelStructure/Derivatives`` defines (FMI 2.0.x 2.2.8)."""
     variables = [v for v in variables if v.causality != "independent"]  # FMI 2: time is implicit
     root = _root("2.0", model_name=model_identifier, token_attribute="guid", token=guid, description=description,
                  version=version)
@@ -168,8 +171,9 @@ def fmi2_model_description(variables: Sequence[FmuVariable], *, model_identifier
             _dependencies(unknown, states, inputs, jacobian.c[k], jacobian.d[k])
     if states:  # the schema refuses an empty <Derivatives>
         derivatives = ET.SubElement(structure, "Derivatives")
-        for k, v in enumerate(v for v in variables if v.derivative_of is not None):
-            unknown = ET.SubElement(derivatives, "Unknown", index=str(index[v.value_reference]))
+        der = [v for v in variables if v.derivative_of is not None]
+        for k in (range(len(der)) if state_order is None else state_order):
+            unknown = ET.SubElement(derivatives, "Unknown", index=str(index[der[k].value_reference]))
             if jacobian is not None:
                 _dependencies(unknown, states, inputs, jacobian.a[k], jacobian.b[k])
     initial = ET.SubElement(structure, "InitialUnknowns")

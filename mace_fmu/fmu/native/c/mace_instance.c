@@ -575,13 +575,17 @@ MiStatus mi_directional(MiInstance *inst, const unsigned int *unknown, size_t n_
     memset(vu, 0, mace_n_inputs(m) * sizeof(double));
     for (i = 0; i < n_known; i++) {
         const MaceGroup g = mace_variable(m, known[i], &k);
-        (g == MACE_VAR_STATE ? vx : vu)[k] += seed[i];
+        if (g == MACE_VAR_STATE) {
+            vx[mace_state_position(m, k)] += seed[i];
+        } else {
+            vu[k] += seed[i];
+        }
     }
     if (mace_directional(m, vx, vu, want_dx ? dx : NULL, want_dy ? dy : NULL, inst->err) != 0)
         return mi_error(inst, "%s%s: %s", inst->api, fn, inst->err);
     for (i = 0; i < n_unknown; i++) {
         const MaceGroup g = mace_variable(m, unknown[i], &k);
-        out[i] = (g == MACE_VAR_DERIVATIVE ? dx : dy)[k];
+        out[i] = g == MACE_VAR_DERIVATIVE ? dx[mace_state_position(m, k)] : dy[k];
     }
     return MI_OK;
 }

@@ -42,7 +42,10 @@ struct MaceModel {
     MaceFile file;
     size_t n_in, n_out, n_par, n_modes, n_flex, n_blocks, pade, n, n_so, m_s, n_phys, n_ub, n_yb;
     const double *par_nominal, *par_min, *par_max, *freq0, *dk, *wiring, *entry, *exit_, *modal_b, *rows;
-    const int64_t *par_kind, *par_index, *block_info, *flex, *keep_disp, *keep_rate, *row_is_rate;
+    const int64_t *par_kind, *par_index, *block_info, *flex, *keep_disp, *keep_rate, *row_is_rate, *me_order;
+    /* the state vector's order: model exchange s[i] = x[perm[i]] (me_order of the data: dense-LU friendly),
+       pos its inverse; co-simulation: the identity (its stepping coordinates are the zero-order hold's) */
+    size_t *perm, *pos;
     const double **blk;   /* 4 per block: A, B, C, D of a constant block */
     const char **names;   /* inputs, outputs, parameters */
     const char *guid;     /* of the FMU the data belong to */
@@ -74,8 +77,10 @@ static void csr_free(const MaceAlloc *al, MaceCsr *s) {
     memset(s, 0, sizeof(*s));
 }
 
-/* s <- the nonzero entries of a (rows x cols, row-major); -1 if memory runs out. */
-static int csr_from_dense(const MaceAlloc *al, const double *a, size_t rows, size_t cols, MaceCsr *s) {
+/* s <- the nonzero entries of a (rows x cols, row-major), row i of s being row rp[i] of a and column j
+ * column cp[j] (rp, cp: NULL for none); -1 if memory runs out. */
+static int csr_from_dense(const MaceAlloc *al, const double *a, size_t rows, size_t cols, const size_t *rp,
+                          const size_t *cp, MaceCsr *s) {
     size_t i, j, nnz = 0;
     csr_free(al, s);
     for (i = 0; i < rows * cols; i++) nnz += a[i] != 0.0;
@@ -89,10 +94,12 @@ static int csr_from_dense(const MaceAlloc *al, const double *a, size_t rows, siz
     s->rows = rows;
     nnz = 0;
     for (i = 0; i < rows; i++) {
+        const double *row = a + (rp ? rp[i] : i) * cols;
         for (j = 0; j < cols; j++) {
-            if (a[i * cols + j] != 0.0) {
+            const double v = row[cp ? cp[j] : j];
+            if (v != 0.0) {
                 s->col[nnz] = j;
-                s->val[nnz++] = a[i * cols + j];
+                s->val[nnz++] = v;
             }
         }
         s->ptr[i + 1] = nnz;
@@ -176,8 +183,25 @@ static int load(MaceModel *m, const char *resource_dir, char *err) {
         !(m->row_is_rate = (const int64_t *)entry_1d(m, "struct_row_is_rate", MACE_I64, m->n_so, err)) ||
         !(m->keep_disp = (const int64_t *)entry_1d(m, "keep_disp", MACE_I64, m->n_modes, err)) ||
         !(m->keep_rate = (const int64_t *)entry_1d(m, "keep_rate", MACE_I64, m->n_modes, err)) ||
-        !(m->flex = (const int64_t *)entry_1d(m, "flexible", MACE_I64, m->n_flex, err)))
+        !(m->flex = (const int64_t *)entry_1d(m, "flexible", MACE_I64, m->n_flex, err)) ||
+        !(m->me_order = (const int64_t *)entry_1d(m, "me_order", MACE_I64, m->n, err)))
         return -1;
+    m->perm = (size_t *)m->al.calloc(m->n + 1, sizeof(size_t));
+    m->pos = (size_t *)m->al.calloc(m->n + 1, sizeof(size_t));
+    if (!m->perm || !m->pos) {
+        snprintf(err, MACE_ERR_LEN, "out of memory");
+        return -1;
+    }
+    for (k = 0; k < m->n; k++) m->pos[k] = m->n; /* unset */
+    for (k = 0; k < m->n; k++) {
+        const int64_t q = m->kind == MACE_MODEL_EXCHANGE ? m->me_order[k] : (int64_t)k;
+        if (q < 0 || (size_t)q >= m->n || m->pos[q] != m->n) {
+            snprintf(err, MACE_ERR_LEN, "model data: the model-exchange state order is not a permutation");
+            return -1;
+        }
+        m->perm[k] = (size_t)q;
+        m->pos[q] = k;
+    }
     m->names = (const char **)m->al.calloc(m->n_in + m->n_out + m->n_par + 1, sizeof(char *));
     m->blk = (const double **)m->al.calloc(4 * m->n_blocks + 1, sizeof(double *));
     m->damping_of = (size_t *)m->al.calloc(m->n_modes + 1, sizeof(size_t));
@@ -314,6 +338,8 @@ void mace_destroy(MaceModel *m) {
     zoh_destroy(m->zoh);
     mace_file_free(&m->file, &m->al);
     m->al.free(m->names);
+    m->al.free(m->perm);
+    m->al.free(m->pos);
     m->al.free(m->blk);
     m->al.free(m->damping_of);
     m->al.free(m->scale_of);
@@ -683,8 +709,10 @@ static int assemble(MaceModel *m, const double *phi_r, int changed, char *err) {
         memcpy(wq + i * (NY + ni) + NY, m->entry + i * ni, ni * sizeof(double));
     }
     ml_lu_solve(w, NU, piv, wq, NY + ni); /* wq = W [wiring | entry] */
-    if (csr_from_dense(&m->al, ab, N, N, &m->ab) != 0 || csr_from_dense(&m->al, bb, N, NU, &m->bb) != 0 ||
-        csr_from_dense(&m->al, cb, NY, N, &m->cb) != 0 || csr_from_dense(&m->al, wq, NU, NY + ni, &m->wq) != 0) {
+    if (csr_from_dense(&m->al, ab, N, N, m->perm, m->perm, &m->ab) != 0 ||
+        csr_from_dense(&m->al, bb, N, NU, m->perm, NULL, &m->bb) != 0 ||
+        csr_from_dense(&m->al, cb, NY, N, NULL, m->perm, &m->cb) != 0 ||
+        csr_from_dense(&m->al, wq, NU, NY + ni, NULL, NULL, &m->wq) != 0) {
         snprintf(err, MACE_ERR_LEN, "out of memory building the system");
         goto done;
     }
@@ -742,8 +770,11 @@ int mace_build(MaceModel *m, char *err) {
     if (reanalyse(m, phi_r, &changed, err) == 0 && assemble(m, phi_r, changed, err) == 0 &&
         zoh_prepare(m->zoh, m->a, m->b, m->c, m->d, err) == 0) {
         size_t i;
-        if (m->kind == MACE_MODEL_EXCHANGE && zoh_state_scales(m->zoh, m->nominal) != 0)
-            for (i = 0; i < m->n; i++) m->nominal[i] = 1.0;
+        if (m->kind == MACE_MODEL_EXCHANGE) {
+            if (zoh_state_scales(m->zoh, m->dir_dx) != 0)
+                for (i = 0; i < m->n; i++) m->dir_dx[i] = 1.0;
+            for (i = 0; i < m->n; i++) m->nominal[i] = m->dir_dx[m->perm[i]];
+        }
         memcpy(m->built_params, m->params, m->n_par * sizeof(double));
         memset(m->s, 0, m->n * sizeof(double));
         m->built = 1;
@@ -773,7 +804,7 @@ static const double *outputs(MaceModel *m) {
     } else {
         for (i = 0; i < m->n_out; i++) {
             double acc = 0.0;
-            for (k = 0; k < m->n; k++) acc += m->c[i * m->n + k] * m->s[k];
+            for (k = 0; k < m->n; k++) acc += m->c[i * m->n + m->perm[k]] * m->s[k];
             for (k = 0; k < m->n_in; k++) acc += m->d[i * m->n_in + k] * m->u[k];
             m->y[i] = acc;
         }
@@ -809,10 +840,10 @@ int mace_get(MaceModel *m, MaceGroup group, size_t k, double *value, char *err) 
     switch (group) {
         case MACE_VAR_OUTPUT: *value = outputs(m)[k]; break;
         case MACE_VAR_FREQUENCY: *value = m->freq[k]; break;
-        case MACE_VAR_STATE: *value = model_states(m)[k]; break;
+        case MACE_VAR_STATE: *value = model_states(m)[m->pos[k]]; break;
         case MACE_VAR_DERIVATIVE:
             rhs(m, model_states(m), m->u, m->dir_dx);
-            *value = m->dir_dx[k];
+            *value = m->dir_dx[m->pos[k]];
             break;
         default: snprintf(err, MACE_ERR_LEN, "unknown variable"); return -1;
     }
@@ -876,13 +907,15 @@ int mace_directional(MaceModel *m, const double *vx, const double *vu, double *d
     if (dy) {
         for (i = 0; i < m->n_out; i++) {
             double acc = 0.0;
-            for (k = 0; k < m->n; k++) acc += m->c[i * m->n + k] * vx[k];
+            for (k = 0; k < m->n; k++) acc += m->c[i * m->n + m->perm[k]] * vx[k];
             for (k = 0; k < m->n_in; k++) acc += m->d[i * m->n_in + k] * vu[k];
             dy[i] = acc;
         }
     }
     return 0;
 }
+
+size_t mace_state_position(const MaceModel *m, size_t k) { return m->pos[k]; }
 
 double *mace_directional_buffer(MaceModel *m, MaceGroup group) {
     switch (group) {

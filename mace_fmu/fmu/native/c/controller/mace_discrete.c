@@ -254,6 +254,10 @@ int mace_directional(MaceModel *m, const double *vx, const double *vu, double *d
     snprintf(err, MACE_ERR_LEN, "no directional derivatives in a sampled-data controller");
     return -1;
 }
+size_t mace_state_position(const MaceModel *m, size_t k) {
+    (void)m;
+    return k;
+}
 double *mace_directional_buffer(MaceModel *m, MaceGroup group) {
     (void)m;
     (void)group;
