@@ -30,7 +30,7 @@ extensions = [
 ]
 
 source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
-exclude_patterns = ["_build", "**.ipynb_checkpoints", "auto_examples/**/*.ipynb", "auto_examples/**/*.py",
+exclude_patterns = ["_build", "guide/_viewer_still.md", "**.ipynb_checkpoints", "auto_examples/**/*.ipynb", "auto_examples/**/*.py",
                     "auto_examples/**/*.zip", "auto_examples/**/*.json", "auto_examples/**/*.md5"]
 myst_enable_extensions = ["colon_fence", "dollarmath"]
 myst_heading_anchors = 3
@@ -57,7 +57,8 @@ html_theme_options = {
 sphinx_gallery_conf = {
     "examples_dirs": [str(HERE.parent / "examples")],
     "gallery_dirs": ["auto_examples"],
-    "filename_pattern": os.environ.get("MACE_DOCS_RUN", r"(measured_data|lqg_model_error)\.py$"),
+    "filename_pattern": os.environ.get("MACE_DOCS_RUN", r"(measured_data|lqg_model_error|own_structure)\.py$"),
+    "reset_argv": "generated.example_argv",  # own_structure.py writes its files under docs/_build/examples
     "ignore_pattern": r"__init__\.py",
     "download_all_examples": False,
     "remove_config_comments": True,

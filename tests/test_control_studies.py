@@ -130,7 +130,7 @@ def test_second_minimum_for_k1_between_2_and_3(studies, authority):
     """Thesis: a second local minimum for k1 in 2-3 at a cost about 60 % above the global one
     (high authority), in the same place for the other authorities. Ours: J/J_opt 1.41 (high) and
     1.47 (moderate), within 15 % of 1.6, at k1 = 2.15 N/m, within 0.3 N/m of the same-frequency
-    point (2.4, 0.375). At low authority ours lies at (1.34, 0.47) N/m instead (README)."""
+    point (2.4, 0.375). At low authority ours lies at (1.34, 0.47) N/m instead (docs/guide/appendix_a.md)."""
     second = studies[authority].minima[1]
     assert 2.0 <= second.k1 <= 3.0
     assert second.normalised_cost == pytest.approx(1.6, rel=0.15)

@@ -1,7 +1,7 @@
 """Every ``mace-fmu`` command the README and the documentation pages show is one the parser accepts.
 
 The commands are taken from the fenced ``bash`` and ``console`` blocks (and from inline code in the
-README's table of commands); each is parsed by ``mace_fmu.cli.build_parser()`` exactly as the shell
+README's table of commands) and from the tutorials, the gallery's examples (their docstrings' command lines); each is parsed by ``mace_fmu.cli.build_parser()`` exactly as the shell
 would pass it, so a renamed option or subcommand fails here. Running them is left to the tests of each
 command (most need minutes or files a user brings); this checks that the text is still true.
 """
@@ -40,13 +40,34 @@ def _commands(path: Path) -> list[tuple[str, str]]:
     return found
 
 
-COMMANDS = [c for page in PAGES for c in _commands(page)]
+#: the tutorials: the gallery's examples (their docstrings are the tutorial pages' text) and its header
+EXAMPLES = sorted((ROOT / "examples").rglob("*.py")) + [ROOT / "examples" / "GALLERY_HEADER.rst"]
+
+
+def _example_commands(path: Path) -> list[tuple[str, str]]:
+    """(where, command) for each whole ``mace-fmu`` command of an example: an indented command line of its
+    docstring or comments, or an inline literal (````mace-fmu ...````); fragments with ``...`` are left out."""
+    found = []
+    for number, line in enumerate(path.read_text().splitlines(), start=1):
+        shown = re.findall(r"``(mace-fmu [^`]*)``", line)
+        bare = line.strip().lstrip("# ")
+        if not shown and bare.startswith("mace-fmu ") and line.startswith(" "):
+            shown = [bare]
+        for command in shown:
+            command = command.split(" #")[0].strip()
+            if "..." not in command:
+                found.append((f"{path.relative_to(ROOT)}:{number}", command))
+    return found
+
+
+COMMANDS = [c for page in PAGES for c in _commands(page)] + [c for path in EXAMPLES for c in _example_commands(path)]
 
 
 def test_the_pages_show_commands():
     assert len(COMMANDS) >= 40
     assert {where.split(":")[0] for where, _ in COMMANDS} >= {"README.md", "docs/guide/fmus.md",
-                                                               "docs/howto/animate_a_response.md"}
+                                                               "docs/howto/animate_a_response.md",
+                                                               "examples/own_structure/own_structure.py"}
 
 
 @pytest.mark.parametrize("where, command", COMMANDS, ids=[w for w, _ in COMMANDS])
@@ -61,3 +82,34 @@ def test_every_shown_command_parses(where, command):
     except SystemExit as exc:
         if exc.code != 0:  # --help exits 0
             pytest.fail(f"{where}: `{command}` is not a valid command line")
+
+
+def test_the_api_reference_covers_every_package():
+    """docs/_ext/generated.py writes one API page per name of its PACKAGES (the data-flow order): a new
+    package must be added there, or the reference would silently leave it out."""
+    import importlib.util
+    import pkgutil
+
+    import mace_fmu
+
+    spec = importlib.util.spec_from_file_location("docs_generated", ROOT / "docs" / "_ext" / "generated.py")
+    generated = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(generated)
+    found = {"mace_fmu"} | {m.name for m in pkgutil.walk_packages(mace_fmu.__path__, "mace_fmu.") if m.ispkg}
+    assert sorted(generated.PACKAGES) == sorted(found)
+    assert len(set(generated.PACKAGES)) == len(generated.PACKAGES)
+
+
+def test_readme_headline_numbers_are_on_the_pages_it_links():
+    """Each headline number of the README appears on the page its bullet links to (where it is measured)."""
+    readme = (ROOT / "README.md").read_text()
+    section = readme[readme.index("## Headline numbers"):readme.index("\n## ", readme.index("## Headline numbers") + 1)]
+    checked = 0
+    for bullet in re.split(r"\n- ", section)[1:]:
+        numbers = [a or b for a, b in re.findall(r"(\d+(?:\.\d+)?) ?%|(\d(?:\.\d+)?e-\d+)", bullet)]
+        pages = re.findall(r"\]\(((?:docs|benchmarks)/[^)#]+)\)", bullet)
+        text = "".join((ROOT / page).read_text() for page in pages)
+        for number in numbers:
+            assert number in text, f"README headline {number!r} is not on {pages}"
+            checked += 1
+    assert checked >= 12

@@ -136,7 +136,7 @@ def test_cosimulation_example_closes_a_loop_around_the_1g_fmu(fmu_1g, tmp_path_f
 
     import fmpy
 
-    # unpacked into a folder that outlives the test process's FMU instances (README, "Teardown")
+    # unpacked into a folder that outlives the test process's FMU instances (docs/guide/fmus.md, "Teardown")
     unzipped = fmpy.extract(str(fmu_1g), unzipdir=str(tmp_path_factory.mktemp("cosim_unzipped")))
     sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "examples"))
     from cosimulate import simulate

@@ -488,7 +488,7 @@ def test_bad_coherence_names_line_and_channel(tmp_path):
 
 
 def test_example_measured_data(tmp_path):
-    """examples/measured_data.py: a logger CSV through a channel map, H1, UFF 58, as the README shows."""
+    """examples/measured_data.py: a logger CSV through a channel map, H1, UFF 58, as docs/reference/data_files.md shows."""
     import sys
     from pathlib import Path
     examples = str(Path(__file__).parent.parent / "examples")

@@ -318,3 +318,15 @@ def test_a_mass_on_a_rigid_element_is_the_offset_mass(tmp_path, rigid):
     ours = _modes(tmp_path, rigid_model, "rigid")
     np.testing.assert_allclose(ours, _modes(tmp_path, offset, "offset"), rtol=1e-9)
     assert not np.allclose(ours, _modes(tmp_path, base + [f"CONM2,50,9,,{mass}"], "no_offset"), rtol=1e-3)
+
+
+if __name__ == "__main__":  # python tests/test_nastran_decks.py: the worst relative error of each deck
+    worst = {}
+    for folder, (name, asked) in sorted(DECKS.items()):
+        ours = compute_modes(read_deck(DATA / folder / name), structure="0g").modes.frequencies_hz
+        worst[folder] = check_against_nastran(ours, reference(folder)[:asked])
+    every_root = compute_modes(read_deck(DATA / "pt145" / "pt145.bdf"), structure="0g", max_hz=1e6)
+    worst["pt145, all 30 roots"] = check_against_nastran(every_root.modes.frequencies_hz, reference("pt145"))
+    for folder, error in worst.items():
+        print(f"{folder:20s} worst relative error of the elastic modes {error:.2g}")
+    print(f"{'all':20s} {max(worst.values()):.2g}")

@@ -1,6 +1,6 @@
 """The FMUs' reanalysis against a full FE re-solve: the derivative of the 1-g frequency responses with
 respect to a strut modulus (benchmarks/bench_reanalysis_derivatives.py measures every modulus; the
-README's FMU limits give the table)."""
+FMU guide's limits, docs/guide/fmus.md, give the table)."""
 
 from __future__ import annotations
 

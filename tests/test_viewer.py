@@ -452,7 +452,7 @@ def test_pairs_change_from_1g_to_0g_as_table_5_1(pairs_anim):
     """Each pair's 1-g -> 0-g frequency change against the thesis's own columns of Table 5.1.
 
     Tolerance 1.0 percentage point: our 1-g column (large preload) is within 0.92 % and the 0-g
-    one within 0.12 % of the thesis (README), so the change can differ by their sum at most.
+    one within 0.12 % of the thesis (docs/thesis/main_job.md), so the change can differ by their sum at most.
     The suspension's signature, 1st Y bending 14.7 % lower in 0-g, must show.
     """
     from mace_fmu.thesis import thesis_data
@@ -463,7 +463,7 @@ def test_pairs_change_from_1g_to_0g_as_table_5_1(pairs_anim):
         thesis_change = 100.0 * (row["g0"] - row["g1"]) / row["g1"]
         assert pair.change_percent == pytest.approx(thesis_change, abs=1.0), pair.label
         assert pair.hz_1g == pytest.approx(row["g1"], rel=0.015) and pair.hz_0g == pytest.approx(row["g0"], rel=0.005)
-        assert pair.mac >= 0.83  # README: the pairing MACs are 0.84 and up (2nd Y bending: 0.8398)
+        assert pair.mac >= 0.83  # docs/thesis/main_job.md: the pairing MACs are 0.84 and up (2nd Y bending: 0.8398)
     first_y = pairs_anim.pairs[1]
     assert first_y.label == "1st Y bending" and first_y.change_percent == pytest.approx(-14.72, abs=0.5)
     # the legend carries both frequencies and the change, as printed

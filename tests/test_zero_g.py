@@ -31,7 +31,7 @@ from mace_fmu.parameters.sets import ParameterSet, Provenance
 from mace_fmu.zero_g.nominal import BoundRule
 from mace_fmu.zero_g.table import beside_table_5_3, bound_text, table_5_3
 
-#: rows whose nominal damping ratio does not reproduce Table 5.3 (README, "Updated nominal 0-g model")
+#: rows whose nominal damping ratio does not reproduce Table 5.3 (docs/guide/zero_g.md, "Updated nominal 0-g model")
 DAMPING_NOT_REPRODUCED = {"1st Y bending", "4th Y bending"}
 
 

@@ -3,7 +3,10 @@
 - ``reference/api/*.rst``: one page per package, its public names read from the package's ``__all__``;
 - ``reference/cli.rst``: every ``mace-fmu`` command's ``--help``, from the argparse parser;
 - ``thesis/tables.md``: the thesis's tables beside ours, as the commands print them today;
-- ``_static/viewer/*.html``: the viewer's pages of the first flexible modes, embedded in the viewer guide.
+- ``reference/fmu_variables.md``: the variables of the MACE FMUs, from the function that writes their
+  model descriptions;
+- ``_static/viewer/*.html``: the viewer's pages of the first flexible modes, embedded in the viewer guide,
+  with a PNG still (``_static/viewer/modes_0g.png``, ``guide/_viewer_still.md``) where Chromium is installed.
 
 The files are written under ``docs/`` before Sphinx lists the sources (``config-inited``) and are
 not kept in git (``docs/.gitignore``).
@@ -173,9 +176,84 @@ def viewer_pages() -> None:
         flexible = [k + 1 for k, hz in enumerate(modes.modes.frequencies_hz) if hz > 1.5][:4]
         write_animation_html(animate_modes(modes, flexible), DOCS / "_static" / "viewer" / f"modes_{structure}.html",
                              title=f"MACE {structure} modes")
+    viewer_still()
+
+
+def viewer_still() -> None:
+    """A PNG still of the 0-g page beside it where Chromium is installed; a sentence saying why not elsewhere.
+
+    The viewer guide includes ``guide/_viewer_still.md``; the still is taken again only when the page is
+    newer than it.
+    """
+    from viewer.still import chromium_executable, write_still
+
+    from mace_fmu.errors import MaceError
+
+    page, png = DOCS / "_static" / "viewer" / "modes_0g.html", DOCS / "_static" / "viewer" / "modes_0g.png"
+    reason = None
+    if chromium_executable() is None:
+        reason = "no Chromium was installed where this site was built"
+    elif not png.exists() or png.stat().st_mtime < page.stat().st_mtime:
+        try:
+            write_still(page, png)
+        except MaceError as error:  # a still is a picture of the page, not a reason to stop the build
+            reason = f"Chromium could not render the page ({str(error)[:200]})"
+    if reason is None:
+        text = ("```{image} ../_static/viewer/modes_0g.png\n:alt: A still of the viewer page of the 0-g modes\n"
+                ":width: 100%\n```\n\n*A still of the page above, taken by headless Chromium when this site was "
+                "built (`mace-fmu view modes 0g --png FILE` takes one).*\n")
+    else:
+        png.unlink(missing_ok=True)
+        text = f"*No still of the page above: {reason}.*\n"
+    _write(DOCS / "guide" / "_viewer_still.md", text)
+
+
+def _cell(value) -> str:
+    return "" if value is None else str(value).replace("|", "\\|")
+
+
+def fmu_variables_page() -> None:
+    """The variables of the MACE FMUs (both kinds carry the same), from ``fmu_variables`` itself."""
+    from mace_fmu.fmu.native.model_description import fmu_variables
+    from mace_fmu.iomodel.parametric import ParametricSystem
+    from mace_fmu.iomodel.parametric_data import parametric_arrays
+    from mace_fmu.iomodel.volts import volts_model
+
+    lines = ["# FMU variables", "",
+             "The variables of the bundled MACE FMUs (`mace-fmu export`, `mace-fmu build`), listed when this page was "
+             "built by the same function that writes the FMUs' `modelDescription.xml` "
+             "(`mace_fmu.fmu.native.model_description.fmu_variables`); the pythonfmu and native FMUs carry the "
+             "same names, units, descriptions and start values. How the parameters act is in the "
+             "[FMU guide](../guide/fmus.md).", ""]
+    for kind in ("1g", "0g"):
+        arrays = parametric_arrays(volts_model(kind))
+        variables = fmu_variables(arrays, ParametricSystem(arrays).state_names)
+        count = {c: sum(v.causality == c for v in variables) for c in
+                 ("input", "output", "parameter", "calculatedParameter", "local")}
+        lines += [f"## The {kind} FMU", "",
+                  f"{count['input']} inputs, {count['output']} outputs, {count['parameter']} parameters, "
+                  f"{count['calculatedParameter']} calculated parameters (`frequency_mode_k`, Hz: each mode's "
+                  f"natural frequency after reanalysis)"
+                  + (f", {count['local']} locals (the model-exchange states and their derivatives)" if count["local"]
+                     else "") + ", then `time`.", ""]
+        for causality, title in (("input", "Inputs"), ("output", "Outputs"), ("parameter", "Parameters")):
+            lines += [f"### {title} ({kind})", "", "| name | unit | start | min | max | description |",
+                      "|---|---|---|---|---|---|"]
+            lines += [f"| `{v.name}` | {_cell(v.unit)} | {_cell(v.start)} | {_cell(v.minimum)} | {_cell(v.maximum)} "
+                      f"| {_cell(v.description)} |" for v in variables if v.causality == causality]
+            lines.append("")
+    _write(DOCS / "reference" / "fmu_variables.md", "\n".join(lines))
+
+
+def example_argv(gallery_conf, script_vars) -> list[str]:
+    """The command-line arguments of an example run by sphinx-gallery (its ``reset_argv``): the examples that
+    write files by default into the folder they run in write them under ``docs/_build/examples`` instead."""
+    name = Path(script_vars["src_file"]).stem
+    return [str(DOCS / "_build" / "examples" / name)] if name in ("own_structure",) else []
 
 
 def generate(app, config) -> None:
+    fmu_variables_page()
     viewer_pages()
     data_flow_page()
     api_pages()

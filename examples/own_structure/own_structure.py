@@ -34,7 +34,8 @@ from pathlib import Path
 
 import numpy as np
 
-HERE = Path(__file__).resolve().parent
+# the folder of this script (sphinx-gallery runs it there, without __file__, when the site is built)
+HERE = Path(__file__).resolve().parent if "__file__" in globals() else Path.cwd()
 DECK, STRUCTURE = HERE / "spacecraft.bdf", HERE / "spacecraft.toml"
 
 
