@@ -753,6 +753,27 @@ def test_c_host_run_is_clean_under_valgrind(fmus, host, tmp_path):
     assert "All heap blocks were freed" in done.stderr, done.stderr[-3000:]
 
 
+def test_model_exchange_directional_derivatives_from_c_are_clean_under_valgrind(fmus, tmp_path):
+    """tests/support/native_me_host.c in memcheck: directional derivatives in initialisation,
+    continuous-time mode and after terminate, and the calls to refuse (a parameter as a known, a state as
+    an unknown, an undeclared value reference, NULL arrays, a NaN seed) answered as the standard says."""
+    if shutil.which("valgrind") is None:
+        pytest.fail("valgrind is a test dependency (.ci/run installs it)")
+    exe = tmp_path / "native_me_host"
+    subprocess.run(["gcc", "-std=c99", "-O2", "-Wall", "-Werror", f"-I{RUNTIME_DIR}", "-o", str(exe),
+                    str(Path(__file__).parent / "support" / "native_me_host.c"), "-ldl"], check=True)
+    md = fmpy.read_model_description(fmus.dir2)
+    states = [u.variable.derivative.valueReference for u in md.derivatives]
+    assert sorted(states) == list(range(min(states), min(states) + len(states)))
+    done = subprocess.run(["valgrind", "--error-exitcode=9", "--leak-check=full", "--errors-for-leak-kinds=all",
+                           str(exe), fmus.dir2, md.modelExchange.modelIdentifier, md.guid,
+                           str(fmus.model.system.ninputs), str(fmus.model.system.noutputs), str(min(states)),
+                           str(len(states)), str(_vr(fmus.dir2)["K_a"])], capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr[-3000:]
+    assert "unexpected statuses 0" in done.stdout, done.stdout
+    assert "ERROR SUMMARY: 0 errors" in done.stderr and "All heap blocks were freed" in done.stderr, done.stderr[-3000:]
+
+
 def test_instantiate_simulate_free_cycles_do_not_grow_memory(fmus):
     if fmus.model.structure_modes.structure.kind != "0g":
         pytest.skip("one model suffices; the 0-g model initialises faster")
