@@ -281,6 +281,15 @@ def _set_states(fmu: FMU2Model, x: np.ndarray) -> None:
     fmu.setContinuousStates((ctypes.c_double * len(x))(*x), len(x))
 
 
+def _state_order(unzipped) -> np.ndarray:
+    """Which model state (ParametricSystem's order) each position of the model-exchange state vector holds:
+    the order of ModelStructure/Derivatives (FMI 2.0.x 2.2.8), the states' value references being in the
+    model's order."""
+    md = fmpy.read_model_description(unzipped)
+    state_vrs = [u.variable.derivative.valueReference for u in md.derivatives]
+    return np.array(state_vrs) - min(state_vrs)
+
+
 def _model_exchange(fmus, change: dict[str, float]) -> FMU2Model:
     md = fmpy.read_model_description(fmus.dir2)
     vr = _vr(fmus.dir2)
@@ -299,8 +308,8 @@ def _model_exchange(fmus, change: dict[str, float]) -> FMU2Model:
 
 @pytest.mark.parametrize("changed", [False, True])
 def test_model_exchange_derivatives_and_outputs_are_a_x_plus_b_u(fmus, changed):
-    """Derivatives at random states and inputs against the reference A x + B u (same state order and
-    realisation); damping, delays and servo gains changed in the second case."""
+    """Derivatives at random states and inputs against the reference A x + B u (same realisation, the
+    states in the FMU's model-exchange order); damping, delays and servo gains changed in the second case."""
     model = fmus.model
     system = ParametricSystem(fmus.arrays)
     change = {"damping_mode_20": 0.05, "delay_gimbal_primary_x": 6.0e-3, "K_a": -1.5} if changed else {}
@@ -308,6 +317,11 @@ def test_model_exchange_derivatives_and_outputs_are_a_x_plus_b_u(fmus, changed):
     for name, value in change.items():
         params[system.index(name)] = value
     a, b, c, d = system.build(params)
+    order = _state_order(fmus.dir2)
+    assert sorted(order) == list(range(len(a)))
+    names = [system.state_names[k] for k in order]  # delays first, the structure's rates last (dense LU)
+    assert names[0].startswith("delay_") and names[-1].startswith("structure.") and names[-1].endswith("_vel")
+    a, b, c = a[np.ix_(order, order)], b[order], c[:, order]
     fmu = _model_exchange(fmus, change)
     ins, outs = value_references(fmus.dir2)
     rng = np.random.default_rng(11)
@@ -326,6 +340,85 @@ def test_model_exchange_derivatives_and_outputs_are_a_x_plus_b_u(fmus, changed):
     fmu.freeInstance()
 
 
+@pytest.mark.parametrize("changed", [False, True])
+def test_model_exchange_directional_derivatives_are_the_jacobian(fmus, changed):
+    """fmi2GetDirectionalDerivative of all derivatives and outputs, seeded on all states and inputs (and on
+    a shuffled subset), against A v + B w and C v + D w to 1e-12 (the derivatives' bound above), same
+    realisation (so no physical parameter: its reanalysis may flip the sign of a mode shape)."""
+    model = fmus.model
+    system = ParametricSystem(fmus.arrays)
+    change = {"damping_mode_20": 0.05, "delay_gimbal_primary_x": 6.0e-3, "K_a": -1.5} if changed else {}
+    params = system.nominal.copy()
+    for name, value in change.items():
+        params[system.index(name)] = value
+    a, b, c, d = system.build(params)
+    order = _state_order(fmus.dir2)
+    a, b, c = a[np.ix_(order, order)], b[order], c[:, order]  # the FMU's state order
+    md = fmpy.read_model_description(fmus.dir2)
+    assert md.modelExchange.providesDirectionalDerivative and not md.coSimulation.providesDirectionalDerivative
+    states = [u.variable.derivative.valueReference for u in md.derivatives]
+    ders = [u.variable.valueReference for u in md.derivatives]
+    ins, outs = value_references(fmus.dir2)
+    in_vr = [ins[n] for n in model.system.input_labels]
+    out_vr = [outs[n] for n in model.system.output_labels]
+    fmu = _model_exchange(fmus, change)
+    rng = np.random.default_rng(5)
+    for _ in range(3):
+        v, w = rng.standard_normal(len(a)), rng.standard_normal(b.shape[1])
+        got = np.array(fmu.getDirectionalDerivative(ders + out_vr, states + in_vr, list(v) + list(w)))
+        ref = np.concatenate([a @ v + b @ w, c @ v + d @ w])
+        scale = np.concatenate([np.abs(a) @ np.abs(v) + np.abs(b) @ np.abs(w),
+                                np.abs(c) @ np.abs(v) + np.abs(d) @ np.abs(w)])
+        assert np.all(np.abs(got - ref) <= 1e-12 * scale + 1e-300)
+    # a subset, knowns in any order: one input and two states
+    seed = 2.0 * np.eye(len(a))[5] - np.eye(len(a))[0]
+    got = fmu.getDirectionalDerivative([ders[3], out_vr[1]], [in_vr[2], states[5], states[0]], [0.5, 2.0, -1.0])
+    assert got[0] == pytest.approx(a[3] @ seed + 0.5 * b[3, 2], rel=1e-12, abs=1e-300)
+    assert got[1] == pytest.approx(c[1] @ seed + 0.5 * d[1, 2], rel=1e-12, abs=1e-300)
+    # a parameter is not a known, a state is not an unknown: refused
+    par_vr = _vr(fmus.dir2)["K_a"]
+    for unknown, known in (([ders[0]], [par_vr]), ([states[0]], [in_vr[0]])):
+        with pytest.raises(FMICallException):
+            fmu.getDirectionalDerivative(unknown, known, [1.0])
+    fmu.terminate()
+    fmu.freeInstance()
+
+
+def test_declared_dependencies_cover_the_jacobian_for_changed_parameters(fmus):
+    """The Derivatives and Outputs dependencies of the model description (kind "fixed") hold every nonzero
+    of the FMU's Jacobian, column by column from its directional derivatives, with physical parameters,
+    gains, delays and dampings changed (the reanalysis mixes the flexible modes); and they are sparse."""
+    md = fmpy.read_model_description(fmus.dir2)
+    states = [u.variable.derivative.valueReference for u in md.derivatives]
+    ders = [u.variable.valueReference for u in md.derivatives]
+    ins, outs = value_references(fmus.dir2)
+    in_vr, out_vr = list(ins.values()), list(outs.values())
+    knowns = states + in_vr
+    column = {vr: k for k, vr in enumerate(knowns)}
+    declared = np.zeros((len(ders) + len(out_vr), len(knowns)), dtype=bool)
+    unknowns = {u.variable.valueReference: u for u in list(md.derivatives) + list(md.outputs)}
+    for row, vr in enumerate(ders + out_vr):
+        assert set(unknowns[vr].dependenciesKind) == {"fixed"}
+        declared[row, [column[v.valueReference] for v in unknowns[vr].dependencies]] = True
+    fmu = _model_exchange(fmus, {"E_lexan_center": 2.0e9, "E_aluminium": 7.2e10, "K_r": -0.2,
+                                 "delay_rwa_x": 5e-3, "damping_mode_7": 0.03})
+    jacobian = np.array([fmu.getDirectionalDerivative(ders + out_vr, [vr], [1.0]) for vr in knowns]).T
+    fmu.terminate()
+    fmu.freeInstance()
+    assert np.count_nonzero(jacobian) > 0.5 * declared.sum()  # the check sees most of what is declared
+    assert not np.any((jacobian != 0) & ~declared)
+    assert declared[:len(ders)].mean() < 0.3  # sparse: modal 2 x 2 blocks, filters, delays, low-rank loops
+
+
+def test_directional_derivatives_are_refused_by_a_co_simulation_instance(fmus):
+    fmu = nominal_slave(fmus.model, fmus.dir2)
+    ins, outs = value_references(fmus.dir2)
+    with pytest.raises(FMICallException):
+        fmu.getDirectionalDerivative([next(iter(outs.values()))], [next(iter(ins.values()))], [1.0])
+    fmu.terminate()
+    fmu.freeInstance()
+
+
 def test_model_exchange_free_response_equals_the_exact_solution(fmus):
     """From a state reached under inputs, the inputs off: a tight ODE solution of the FMU's derivatives
     (scipy DOP853, rtol 1e-12) against expm(A t) x0."""
@@ -333,6 +426,8 @@ def test_model_exchange_free_response_equals_the_exact_solution(fmus):
 
     system = ParametricSystem(fmus.arrays)
     a, b, c, d = system.build(system.nominal)
+    order = _state_order(fmus.dir2)
+    a, b, c = a[np.ix_(order, order)], b[order], c[:, order]  # the FMU's state order
     u = 0.1 + 0.02 * np.arange(b.shape[1])
     x0 = scipy.linalg.expm(np.block([[a, b], [np.zeros((b.shape[1], len(a) + b.shape[1]))]]) * 0.05)[:len(a), len(a):] @ u
     fmu = _model_exchange(fmus, {})
@@ -361,6 +456,29 @@ def test_fmpy_cvode_simulation_of_model_exchange_equals_the_exact_step_response(
                             relative_tolerance=1e-12, input=_table(model, t[[0, -1]], u[:, [0, -1]]),
                             output=list(model.system.output_labels))
     check_close(model, np.array([res[n] for n in model.system.output_labels]), zoh_reference(model, t, u))
+
+
+def test_fmpy_cvode_model_exchange_with_input_steps_is_within_1e_6_of_the_exact_response(fmus):
+    """Issue 23 section 4's accuracy on a short run: fmpy's model exchange (CVode, rtol 1e-9) with the inputs
+    stepping at three instants (input events: fmpy stops and restarts CVode there) against the exact
+    zero-order-hold response, to 1e-6 of each output's range (benchmarks/bench_model_exchange.py has the
+    10 s runs and the tolerances)."""
+    model, step = fmus.model, 2e-3
+    t = np.arange(0.0, 0.2 + step / 2, step)
+    rng = np.random.default_rng(3)
+    switch = [0, 10, 35, 60, len(t)]  # the inputs change at t = 20, 70 and 120 ms
+    levels = 0.1 * rng.standard_normal((model.system.ninputs, len(switch) - 1))
+    u = np.concatenate([np.repeat(levels[:, [k]], switch[k + 1] - switch[k], axis=1) for k in range(len(switch) - 1)],
+                       axis=1)
+    at = np.concatenate([[0], np.repeat(switch[1:-1], 2), [len(t) - 1]])  # duplicate times: steps
+    after = np.concatenate([[0], np.ravel([(k - 1, k) for k in switch[1:-1]]), [len(t) - 1]])
+    res = fmpy.simulate_fmu(fmus.dir2, fmi_type="ModelExchange", stop_time=t[-1], output_interval=step,
+                            relative_tolerance=1e-9, input=_table(model, t[at], u[:, after]),
+                            output=list(model.system.output_labels))
+    rows = np.searchsorted(res["time"], t + 1e-12, side="right") - 1  # after the event at a step's instant
+    assert np.allclose(res["time"][rows], t, atol=1e-12)
+    y = np.array([res[n][rows] for n in model.system.output_labels])
+    assert _relative(y, zoh_reference(model, t, u)) <= 1e-6
 
 
 # ---- state, instances, reset ------------------------------------------------------------------------
@@ -633,6 +751,27 @@ def test_c_host_run_is_clean_under_valgrind(fmus, host, tmp_path):
                         wrapper=["valgrind", "--error-exitcode=9", "--leak-check=full", "--errors-for-leak-kinds=all"])
     assert "ERROR SUMMARY: 0 errors" in done.stderr, done.stderr[-3000:]
     assert "All heap blocks were freed" in done.stderr, done.stderr[-3000:]
+
+
+def test_model_exchange_directional_derivatives_from_c_are_clean_under_valgrind(fmus, tmp_path):
+    """tests/support/native_me_host.c in memcheck: directional derivatives in initialisation,
+    continuous-time mode and after terminate, and the calls to refuse (a parameter as a known, a state as
+    an unknown, an undeclared value reference, NULL arrays, a NaN seed) answered as the standard says."""
+    if shutil.which("valgrind") is None:
+        pytest.fail("valgrind is a test dependency (.ci/run installs it)")
+    exe = tmp_path / "native_me_host"
+    subprocess.run(["gcc", "-std=c99", "-O2", "-Wall", "-Werror", f"-I{RUNTIME_DIR}", "-o", str(exe),
+                    str(Path(__file__).parent / "support" / "native_me_host.c"), "-ldl"], check=True)
+    md = fmpy.read_model_description(fmus.dir2)
+    states = [u.variable.derivative.valueReference for u in md.derivatives]
+    assert sorted(states) == list(range(min(states), min(states) + len(states)))
+    done = subprocess.run(["valgrind", "--error-exitcode=9", "--leak-check=full", "--errors-for-leak-kinds=all",
+                           str(exe), fmus.dir2, md.modelExchange.modelIdentifier, md.guid,
+                           str(fmus.model.system.ninputs), str(fmus.model.system.noutputs), str(min(states)),
+                           str(len(states)), str(_vr(fmus.dir2)["K_a"])], capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr[-3000:]
+    assert "unexpected statuses 0" in done.stdout, done.stdout
+    assert "ERROR SUMMARY: 0 errors" in done.stderr and "All heap blocks were freed" in done.stderr, done.stderr[-3000:]
 
 
 def test_instantiate_simulate_free_cycles_do_not_grow_memory(fmus):

@@ -195,6 +195,10 @@ class Reference:
             return OK
         if call in ("getRealStatus", "getBooleanStatus"):
             return OK if cs and self.fmi == 2 and p in (STEP, TERM) and args["known"] else ERROR
+        if call == "getDirectionalDerivative" and self.fmi == 2 and not cs:
+            # model exchange declares providesDirectionalDerivative (of outputs and derivatives with respect
+            # to inputs and states): allowed where the FMI 2.0.x state table allows it, if the model builds
+            return OK if p in (INIT, EVENT, CONT, TERM, ERR) and self.params_valid() else ERROR
         if call in ("getStatus", "getIntegerStatus", "getStringStatus", "cancelStep", "getDirectionalDerivative",
                     "enterEventMode3", "updateDiscreteStates3", "enterConfigurationMode3"):
             return ERROR

@@ -23,7 +23,7 @@ import numpy as np
 
 from mace_fmu.errors import MaceError
 from mace_fmu.fmu.native import compile as runtime
-from mace_fmu.fmu.native.model_description import (fmi2_model_description, fmi3_build_description,
+from mace_fmu.fmu.native.model_description import (JacobianPattern, fmi2_model_description, fmi3_build_description,
                                                    fmi3_model_description, fmu_variables)
 from mace_fmu.fmu.native.resource import resource_bytes, runtime_arrays
 from mace_fmu.fmu.variables import model_summary
@@ -64,6 +64,28 @@ def write_native_fmu(final: Path, *, name: str, fmi_version: int, description: b
     return final
 
 
+def jacobian_pattern(system: ParametricSystem, *, samples: int = 2, seed: int = 0) -> JacobianPattern:
+    """Where (A, B, C, D) of ``system`` can be nonzero for any parameter values: the union of the
+    nonzero entries at the nominal parameters and at ``samples`` random sets (each parameter within 10 %
+    of its nominal value, or 1 % of its range from a zero nominal, inside its declared range). Entries
+    that no parameter reaches (the block structure's zeros) stay zero in every build; the random sets
+    reach those a parameter at its nominal value happens to zero (a damping or gain of 0), and the
+    physical parameters' reanalysis mixes the flexible modes as any change of them does."""
+    rng = np.random.default_rng(seed)
+    nominal, low, high = system.nominal, system.minimum, system.maximum
+    span = np.where(np.isfinite(high - low), high - low, 1.0)
+    sets = [nominal]
+    for _ in range(samples):
+        step = np.where(nominal != 0.0, 0.1 * nominal, 0.01 * span) * rng.uniform(0.5, 1.0, len(nominal))
+        sets.append(np.clip(nominal + step * rng.choice([-1.0, 1.0], len(nominal)), low, high))
+    patterns = None
+    for params in sets:
+        nonzero = [np.asarray(m) != 0.0 for m in system.build(params)]
+        patterns = nonzero if patterns is None else [p | q for p, q in zip(patterns, nonzero)]
+    system.build(nominal)  # leave the system as built at its nominal parameters
+    return JacobianPattern(*patterns)
+
+
 def export_native_fmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str | None = None,
                       fmi_version: FmiVersion = 2, arrays: dict[str, np.ndarray] | None = None,
                       frequency_bounds: Mapping[int, float] | None = None) -> Path:
@@ -95,7 +117,9 @@ def export_native_fmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str
     binaries = runtime.compile_runtimes(platforms)
     if fmi_version == 2:
         description = fmi2_model_description(variables, model_identifier=name, guid=token,
-                                             description=model_summary(model), version=version, source_files=c_files)
+                                             description=model_summary(model), version=version, source_files=c_files,
+                                             jacobian=jacobian_pattern(reference),
+                                             state_order=[int(k) for k in data["me_order"]])
     else:
         description = fmi3_model_description(variables, model_identifier=name, token=token,
                                              description=model_summary(model), version=version)

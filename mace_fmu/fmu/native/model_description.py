@@ -107,11 +107,35 @@ def _attributes(v: FmuVariable) -> tuple[dict[str, str], dict[str, str]]:
     return attrs, typed
 
 
+@dataclass(frozen=True)
+class JacobianPattern:
+    """Where the Jacobian blocks of x' = A x + B u, y = C x + D u can be nonzero (boolean arrays)."""
+
+    a: np.ndarray
+    b: np.ndarray
+    c: np.ndarray
+    d: np.ndarray
+
+
+def _dependencies(element: ET.Element, states: Sequence[int], inputs: Sequence[int], on_states: np.ndarray,
+                  on_inputs: np.ndarray) -> None:
+    """The dependencies of one unknown (FMI 2.0.x section 2.2.8): the states and inputs it depends on,
+    each with the factor's kind "fixed" (a linear model: a constant set at initialisation)."""
+    known = sorted([states[j] for j in np.flatnonzero(on_states)] + [inputs[j] for j in np.flatnonzero(on_inputs)])
+    element.set("dependencies", " ".join(map(str, known)))
+    element.set("dependenciesKind", " ".join(["fixed"] * len(known)))
+
+
 def fmi2_model_description(variables: Sequence[FmuVariable], *, model_identifier: str, guid: str, description: str,
                            version: str, source_files: Sequence[str], model_exchange: bool = True,
-                           step_size_s: float | None = None) -> bytes:
+                           step_size_s: float | None = None, jacobian: JacobianPattern | None = None,
+                           state_order: Sequence[int] | None = None) -> bytes:
     """modelDescription.xml of an FMI 2.0 FMU with co-simulation and (``model_exchange``) model exchange;
-    ``step_size_s``: the default experiment's step [s] (default: the plants' 2 ms)."""
+    ``step_size_s``: the default experiment's step [s] (default: the plants' 2 ms); ``jacobian``: the
+    sparsity of the linear model, declared as the dependencies of the derivatives and outputs, with
+    directional derivatives provided in model exchange (the runtime computes them exactly);
+    ``state_order``: the model-exchange state vector (position i: state ``state_order[i]`` of the
+    variables' order), which the order of ``ModelStructure/Derivatives`` defines (FMI 2.0.x 2.2.8)."""
     variables = [v for v in variables if v.causality != "independent"]  # FMI 2: time is implicit
     root = _root("2.0", model_name=model_identifier, token_attribute="guid", token=guid, description=description,
                  version=version)
@@ -124,6 +148,8 @@ def fmi2_model_description(variables: Sequence[FmuVariable], *, model_identifier
     for tag, extra in interfaces:
         if tag == "ModelExchange" and not model_exchange:
             continue
+        if tag == "ModelExchange" and jacobian is not None:
+            extra = {**extra, "providesDirectionalDerivative": "true"}
         element = ET.SubElement(root, tag, {**capabilities, **extra})
         sources = ET.SubElement(element, "SourceFiles")
         for name in source_files:
@@ -136,15 +162,20 @@ def fmi2_model_description(variables: Sequence[FmuVariable], *, model_identifier
         ET.SubElement(scalar, "Real", typed)
     structure = ET.SubElement(root, "ModelStructure")
     index = {v.value_reference: k + 1 for k, v in enumerate(variables)}
+    states = [v.derivative_of for v in variables if v.derivative_of is not None]  # 1-based, in state order
+    inputs = [index[v.value_reference] for v in variables if v.causality == "input"]
     outputs = ET.SubElement(structure, "Outputs")
-    for v in variables:
-        if v.causality == "output":
-            ET.SubElement(outputs, "Unknown", index=str(index[v.value_reference]))
-    if any(v.derivative_of is not None for v in variables):  # the schema refuses an empty <Derivatives>
+    for k, v in enumerate(v for v in variables if v.causality == "output"):
+        unknown = ET.SubElement(outputs, "Unknown", index=str(index[v.value_reference]))
+        if jacobian is not None:
+            _dependencies(unknown, states, inputs, jacobian.c[k], jacobian.d[k])
+    if states:  # the schema refuses an empty <Derivatives>
         derivatives = ET.SubElement(structure, "Derivatives")
-        for v in variables:
-            if v.derivative_of is not None:
-                ET.SubElement(derivatives, "Unknown", index=str(index[v.value_reference]))
+        der = [v for v in variables if v.derivative_of is not None]
+        for k in (range(len(der)) if state_order is None else state_order):
+            unknown = ET.SubElement(derivatives, "Unknown", index=str(index[der[k].value_reference]))
+            if jacobian is not None:
+                _dependencies(unknown, states, inputs, jacobian.a[k], jacobian.b[k])
     initial = ET.SubElement(structure, "InitialUnknowns")
     for v in variables:
         if v.causality in ("output", "calculatedParameter", "local"):

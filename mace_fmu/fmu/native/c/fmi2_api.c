@@ -204,14 +204,9 @@ fmi2Status fmi2DeSerializeFMUstate(fmi2Component c, const fmi2Byte serializedSta
 fmi2Status fmi2GetDirectionalDerivative(fmi2Component c, const fmi2ValueReference vUnknown_ref[], size_t nUnknown,
                                         const fmi2ValueReference vKnown_ref[], size_t nKnown,
                                         const fmi2Real dvKnown[], fmi2Real dvUnknown[]) {
-    (void)vUnknown_ref;
-    (void)nUnknown;
-    (void)vKnown_ref;
-    (void)nKnown;
-    (void)dvKnown;
-    (void)dvUnknown;
     CHECK(c);
-    return (fmi2Status)mi_error(INST(c), "fmi2GetDirectionalDerivative: not provided by this FMU");
+    return (fmi2Status)mi_directional(INST(c), vUnknown_ref, nUnknown, vKnown_ref, nKnown, dvKnown, dvUnknown,
+                                      "GetDirectionalDerivative");
 }
 
 /* ---- co-simulation --------------------------------------------------------------------------- */

@@ -527,6 +527,69 @@ MiStatus mi_get_derivatives(MiInstance *inst, double *dx, size_t n, const char *
     return MI_OK;
 }
 
+/* Directional derivatives (FMI 2.0.x section 2.1.9), model exchange: the unknowns are state derivatives
+ * and outputs, the knowns states and inputs (the model is linear: the result is its Jacobian times the
+ * seed). Allowed where fmi2GetReal is (the FMI 2.0.x state tables), except Instantiated. */
+#define ME_DIRECTIONAL (MI_IN(PH_INITIALIZATION) | MI_IN(PH_EVENT) | MI_IN(PH_CONTINUOUS) | MI_IN(PH_TERMINATED) | \
+                        MI_IN(PH_ERROR))
+
+MiStatus mi_directional(MiInstance *inst, const unsigned int *unknown, size_t n_unknown, const unsigned int *known,
+                        size_t n_known, const double *seed, double *out, const char *fn) {
+    MaceModel *m = inst->model;
+    double *vx = mace_directional_buffer(m, MACE_VAR_STATE), *vu = mace_directional_buffer(m, MACE_VAR_INPUT);
+    double *dx = mace_directional_buffer(m, MACE_VAR_DERIVATIVE), *dy = mace_directional_buffer(m, MACE_VAR_OUTPUT);
+    int want_dx = 0, want_dy = 0;
+    size_t i, k;
+    if (inst->kind != MACE_MODEL_EXCHANGE)
+        return mi_error(inst, "%s%s: provided for model exchange only (providesDirectionalDerivative of the "
+                        "ModelExchange element); this is a co-simulation instance", inst->api, fn);
+    if (!mi_allowed(inst, fn, ME_DIRECTIONAL)) return MI_ERROR;
+    if ((n_unknown > 0 && (!unknown || !out)) || (n_known > 0 && (!known || !seed)))
+        return mi_error(inst, "%s%s: NULL value references or values", inst->api, fn);
+    /* everything is checked before anything is computed */
+    for (i = 0; i < n_known; i++) {
+        const MaceGroup g = mace_variable(m, known[i], &k);
+        if (!declared(inst, g)) return mi_error(inst, "%s%s: value reference %u is not a variable of this FMU",
+                                               inst->api, fn, known[i]);
+        if (g != MACE_VAR_STATE && g != MACE_VAR_INPUT)
+            return mi_error(inst, "%s%s: known value reference %u is neither a continuous state nor an input "
+                            "(the directional derivatives are those of the derivatives and outputs with respect to "
+                            "the states and inputs)", inst->api, fn, known[i]);
+        if (!isfinite(seed[i]))
+            return mi_error(inst, "%s%s: the seed of value reference %u is not finite", inst->api, fn, known[i]);
+    }
+    for (i = 0; i < n_unknown; i++) {
+        const MaceGroup g = mace_variable(m, unknown[i], &k);
+        if (!declared(inst, g)) return mi_error(inst, "%s%s: value reference %u is not a variable of this FMU",
+                                               inst->api, fn, unknown[i]);
+        if (g == MACE_VAR_DERIVATIVE) {
+            want_dx = 1;
+        } else if (g == MACE_VAR_OUTPUT) {
+            want_dy = 1;
+        } else {
+            return mi_error(inst, "%s%s: unknown value reference %u is neither a state derivative nor an output",
+                            inst->api, fn, unknown[i]);
+        }
+    }
+    memset(vx, 0, mace_n_states(m) * sizeof(double));
+    memset(vu, 0, mace_n_inputs(m) * sizeof(double));
+    for (i = 0; i < n_known; i++) {
+        const MaceGroup g = mace_variable(m, known[i], &k);
+        if (g == MACE_VAR_STATE) {
+            vx[mace_state_position(m, k)] += seed[i];
+        } else {
+            vu[k] += seed[i];
+        }
+    }
+    if (mace_directional(m, vx, vu, want_dx ? dx : NULL, want_dy ? dy : NULL, inst->err) != 0)
+        return mi_error(inst, "%s%s: %s", inst->api, fn, inst->err);
+    for (i = 0; i < n_unknown; i++) {
+        const MaceGroup g = mace_variable(m, unknown[i], &k);
+        out[i] = g == MACE_VAR_DERIVATIVE ? dx[mace_state_position(m, k)] : dy[k];
+    }
+    return MI_OK;
+}
+
 MiStatus mi_get_nominals(MiInstance *inst, double *nominal, size_t n, const char *fn) {
     if (!mi_allowed_kind(inst, fn, MACE_MODEL_EXCHANGE, ME_GET_NOMINALS) || !states_count_ok(inst, n, fn))
         return MI_ERROR;

@@ -91,6 +91,10 @@ MiStatus mi_set_states(MiInstance *inst, const double *x, size_t n, const char *
 MiStatus mi_get_states(MiInstance *inst, double *x, size_t n, const char *fn);
 MiStatus mi_get_derivatives(MiInstance *inst, double *dx, size_t n, const char *fn);
 MiStatus mi_get_nominals(MiInstance *inst, double *nominal, size_t n, const char *fn);
+/* Directional derivatives (model exchange): out[i] = sum_j d unknown[i] / d known[j] seed[j], the unknowns
+ * state derivatives or outputs, the knowns states or inputs. */
+MiStatus mi_directional(MiInstance *inst, const unsigned int *unknown, size_t n_unknown, const unsigned int *known,
+                        size_t n_known, const double *seed, double *out, const char *fn);
 
 /* A path from an FMI 2 resource URI (file:///dir, file:/dir, file://host/dir on Windows,
  * %-escapes decoded); NULL if it is not a file URI. Free with al->free. */

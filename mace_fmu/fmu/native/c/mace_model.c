@@ -26,6 +26,13 @@ enum {
 };
 enum { INFO_KIND = 0, INFO_NX, INFO_NU, INFO_NY, INFO_P0, INFO_P1, N_INFO };
 
+/* A sparse matrix in compressed rows (CSR): row i holds val[ptr[i] .. ptr[i + 1]) at columns col[...]. */
+typedef struct MaceCsr {
+    size_t rows;
+    size_t *ptr, *col;
+    double *val;
+} MaceCsr;
+
 static const char STATE_MAGIC[8] = {'M', 'A', 'C', 'E', 'S', 'T', 'A', '1'};
 #define STATE_HEADER 7 /* magic, phase, built, coordinates, n_par, n_in, n */
 
@@ -35,7 +42,10 @@ struct MaceModel {
     MaceFile file;
     size_t n_in, n_out, n_par, n_modes, n_flex, n_blocks, pade, n, n_so, m_s, n_phys, n_ub, n_yb;
     const double *par_nominal, *par_min, *par_max, *freq0, *dk, *wiring, *entry, *exit_, *modal_b, *rows;
-    const int64_t *par_kind, *par_index, *block_info, *flex, *keep_disp, *keep_rate, *row_is_rate;
+    const int64_t *par_kind, *par_index, *block_info, *flex, *keep_disp, *keep_rate, *row_is_rate, *me_order;
+    /* the state vector's order: model exchange s[i] = x[perm[i]] (me_order of the data: dense-LU friendly),
+       pos its inverse; co-simulation: the identity (its stepping coordinates are the zero-order hold's) */
+    size_t *perm, *pos;
     const double **blk;   /* 4 per block: A, B, C, D of a constant block */
     const char **names;   /* inputs, outputs, parameters */
     const char *guid;     /* of the FMU the data belong to */
@@ -50,7 +60,62 @@ struct MaceModel {
     double *nominal;       /* of the states, for model exchange solvers */
     double *s;             /* co-simulation: stepping coordinates; model exchange: x */
     double *x, *y;
+    /* the block diagram of the last build, sparse, for the derivatives and their directional
+       derivatives: dx = A_b x + B_b u_b with u_b = W [wiring | entry] [C_b x; u], W = (I - wiring D_b)^-1 */
+    MaceCsr ab, bb, cb, wq;
+    double *zb;                             /* n_yb + n_in: C_b x, then the inputs */
+    double *ub;                             /* n_ub: the blocks' inputs */
+    double *dir_x, *dir_u, *dir_dx, *dir_dy; /* directional derivatives: seeds and results */
 };
+
+/* ---- sparse matrices ------------------------------------------------------------------------ */
+
+static void csr_free(const MaceAlloc *al, MaceCsr *s) {
+    al->free(s->ptr);
+    al->free(s->col);
+    al->free(s->val);
+    memset(s, 0, sizeof(*s));
+}
+
+/* s <- the nonzero entries of a (rows x cols, row-major), row i of s being row rp[i] of a and column j
+ * column cp[j] (rp, cp: NULL for none); -1 if memory runs out. */
+static int csr_from_dense(const MaceAlloc *al, const double *a, size_t rows, size_t cols, const size_t *rp,
+                          const size_t *cp, MaceCsr *s) {
+    size_t i, j, nnz = 0;
+    csr_free(al, s);
+    for (i = 0; i < rows * cols; i++) nnz += a[i] != 0.0;
+    s->ptr = (size_t *)al->calloc(rows + 1, sizeof(size_t));
+    s->col = (size_t *)al->calloc(nnz + 1, sizeof(size_t));
+    s->val = (double *)al->calloc(nnz + 1, sizeof(double));
+    if (!s->ptr || !s->col || !s->val) {
+        csr_free(al, s);
+        return -1;
+    }
+    s->rows = rows;
+    nnz = 0;
+    for (i = 0; i < rows; i++) {
+        const double *row = a + (rp ? rp[i] : i) * cols;
+        for (j = 0; j < cols; j++) {
+            const double v = row[cp ? cp[j] : j];
+            if (v != 0.0) {
+                s->col[nnz] = j;
+                s->val[nnz++] = v;
+            }
+        }
+        s->ptr[i + 1] = nnz;
+    }
+    return 0;
+}
+
+/* y = s x (accumulate = 0) or y += s x (accumulate = 1). */
+static void csr_apply(const MaceCsr *s, const double *x, double *y, int accumulate) {
+    size_t i, k;
+    for (i = 0; i < s->rows; i++) {
+        double acc = accumulate ? y[i] : 0.0;
+        for (k = s->ptr[i]; k < s->ptr[i + 1]; k++) acc += s->val[k] * x[s->col[k]];
+        y[i] = acc;
+    }
+}
 
 /* ---- creation -------------------------------------------------------------------------------- */
 
@@ -118,8 +183,25 @@ static int load(MaceModel *m, const char *resource_dir, char *err) {
         !(m->row_is_rate = (const int64_t *)entry_1d(m, "struct_row_is_rate", MACE_I64, m->n_so, err)) ||
         !(m->keep_disp = (const int64_t *)entry_1d(m, "keep_disp", MACE_I64, m->n_modes, err)) ||
         !(m->keep_rate = (const int64_t *)entry_1d(m, "keep_rate", MACE_I64, m->n_modes, err)) ||
-        !(m->flex = (const int64_t *)entry_1d(m, "flexible", MACE_I64, m->n_flex, err)))
+        !(m->flex = (const int64_t *)entry_1d(m, "flexible", MACE_I64, m->n_flex, err)) ||
+        !(m->me_order = (const int64_t *)entry_1d(m, "me_order", MACE_I64, m->n, err)))
         return -1;
+    m->perm = (size_t *)m->al.calloc(m->n + 1, sizeof(size_t));
+    m->pos = (size_t *)m->al.calloc(m->n + 1, sizeof(size_t));
+    if (!m->perm || !m->pos) {
+        snprintf(err, MACE_ERR_LEN, "out of memory");
+        return -1;
+    }
+    for (k = 0; k < m->n; k++) m->pos[k] = m->n; /* unset */
+    for (k = 0; k < m->n; k++) {
+        const int64_t q = m->kind == MACE_MODEL_EXCHANGE ? m->me_order[k] : (int64_t)k;
+        if (q < 0 || (size_t)q >= m->n || m->pos[q] != m->n) {
+            snprintf(err, MACE_ERR_LEN, "model data: the model-exchange state order is not a permutation");
+            return -1;
+        }
+        m->perm[k] = (size_t)q;
+        m->pos[q] = k;
+    }
     m->names = (const char **)m->al.calloc(m->n_in + m->n_out + m->n_par + 1, sizeof(char *));
     m->blk = (const double **)m->al.calloc(4 * m->n_blocks + 1, sizeof(double *));
     m->damping_of = (size_t *)m->al.calloc(m->n_modes + 1, sizeof(size_t));
@@ -234,9 +316,15 @@ MaceModel *mace_create(const char *resource_dir, MaceKind kind, const MaceAlloc 
     m->x = ml_zeros(al, m->n);
     m->y = ml_zeros(al, m->n_out);
     m->nominal = ml_zeros(al, m->n);
+    m->zb = ml_zeros(al, m->n_yb + m->n_in);
+    m->ub = ml_zeros(al, m->n_ub);
+    m->dir_x = ml_zeros(al, m->n);
+    m->dir_u = ml_zeros(al, m->n_in);
+    m->dir_dx = ml_zeros(al, m->n);
+    m->dir_dy = ml_zeros(al, m->n_out);
     m->zoh = zoh_create(al, m->n, m->n_in, m->n_out);
     if (!m->params || !m->built_params || !m->freq || !m->u || !m->a || !m->b || !m->c || !m->d || !m->s || !m->x ||
-        !m->y || !m->nominal || !m->zoh) {
+        !m->y || !m->nominal || !m->zb || !m->ub || !m->dir_x || !m->dir_u || !m->dir_dx || !m->dir_dy || !m->zoh) {
         snprintf(err, MACE_ERR_LEN, "out of memory");
         mace_destroy(m);
         return NULL;
@@ -250,6 +338,8 @@ void mace_destroy(MaceModel *m) {
     zoh_destroy(m->zoh);
     mace_file_free(&m->file, &m->al);
     m->al.free(m->names);
+    m->al.free(m->perm);
+    m->al.free(m->pos);
     m->al.free(m->blk);
     m->al.free(m->damping_of);
     m->al.free(m->scale_of);
@@ -265,6 +355,16 @@ void mace_destroy(MaceModel *m) {
     m->al.free(m->x);
     m->al.free(m->y);
     m->al.free(m->nominal);
+    m->al.free(m->zb);
+    m->al.free(m->ub);
+    m->al.free(m->dir_x);
+    m->al.free(m->dir_u);
+    m->al.free(m->dir_dx);
+    m->al.free(m->dir_dy);
+    csr_free(&m->al, &m->ab);
+    csr_free(&m->al, &m->bb);
+    csr_free(&m->al, &m->cb);
+    csr_free(&m->al, &m->wq);
     m->al.free(m);
 }
 
@@ -535,11 +635,11 @@ static int assemble(MaceModel *m, const double *phi_r, int changed, char *err) {
     const size_t N = m->n, NU = m->n_ub, NY = m->n_yb, ni = m->n_in, no = m->n_out;
     double *ab = ml_zeros(&m->al, N * N), *bb = ml_zeros(&m->al, N * NU), *cb = ml_zeros(&m->al, NY * N);
     double *db = ml_zeros(&m->al, NY * NU), *w = ml_zeros(&m->al, NU * NU), *rhs = ml_zeros(&m->al, NU * (N + ni));
-    double *t = ml_zeros(&m->al, (NY > NU ? NY : NU) * (N + ni));
+    double *t = ml_zeros(&m->al, (NY > NU ? NY : NU) * (N + ni)), *wq = ml_zeros(&m->al, NU * (NY + ni));
     size_t *piv = (size_t *)m->al.calloc(NU + 1, sizeof(size_t));
     size_t k, i, j, ox = 0, ou = 0, oy = 0;
     int status = -1;
-    if (!ab || !bb || !cb || !db || !w || !rhs || !t || !piv) {
+    if (!ab || !bb || !cb || !db || !w || !rhs || !t || !wq || !piv) {
         snprintf(err, MACE_ERR_LEN, "out of memory building the system");
         goto done;
     }
@@ -604,6 +704,18 @@ static int assemble(MaceModel *m, const double *phi_r, int changed, char *err) {
         goto done;
     }
     ml_lu_solve(w, NU, piv, rhs, N + ni); /* rhs = W [wiring C_b | entry] */
+    for (i = 0; i < NU; i++) {
+        memcpy(wq + i * (NY + ni), m->wiring + i * NY, NY * sizeof(double));
+        memcpy(wq + i * (NY + ni) + NY, m->entry + i * ni, ni * sizeof(double));
+    }
+    ml_lu_solve(w, NU, piv, wq, NY + ni); /* wq = W [wiring | entry] */
+    if (csr_from_dense(&m->al, ab, N, N, m->perm, m->perm, &m->ab) != 0 ||
+        csr_from_dense(&m->al, bb, N, NU, m->perm, NULL, &m->bb) != 0 ||
+        csr_from_dense(&m->al, cb, NY, N, NULL, m->perm, &m->cb) != 0 ||
+        csr_from_dense(&m->al, wq, NU, NY + ni, NULL, NULL, &m->wq) != 0) {
+        snprintf(err, MACE_ERR_LEN, "out of memory building the system");
+        goto done;
+    }
     memcpy(m->a, ab, N * N * sizeof(double));
     memset(m->b, 0, N * ni * sizeof(double));
     for (i = 0; i < N; i++) {
@@ -637,6 +749,7 @@ done:
     m->al.free(w);
     m->al.free(rhs);
     m->al.free(t);
+    m->al.free(wq);
     m->al.free(piv);
     return status;
 }
@@ -657,8 +770,11 @@ int mace_build(MaceModel *m, char *err) {
     if (reanalyse(m, phi_r, &changed, err) == 0 && assemble(m, phi_r, changed, err) == 0 &&
         zoh_prepare(m->zoh, m->a, m->b, m->c, m->d, err) == 0) {
         size_t i;
-        if (m->kind == MACE_MODEL_EXCHANGE && zoh_state_scales(m->zoh, m->nominal) != 0)
-            for (i = 0; i < m->n; i++) m->nominal[i] = 1.0;
+        if (m->kind == MACE_MODEL_EXCHANGE) {
+            if (zoh_state_scales(m->zoh, m->dir_dx) != 0)
+                for (i = 0; i < m->n; i++) m->dir_dx[i] = 1.0;
+            for (i = 0; i < m->n; i++) m->nominal[i] = m->dir_dx[m->perm[i]];
+        }
         memcpy(m->built_params, m->params, m->n_par * sizeof(double));
         memset(m->s, 0, m->n * sizeof(double));
         m->built = 1;
@@ -688,7 +804,7 @@ static const double *outputs(MaceModel *m) {
     } else {
         for (i = 0; i < m->n_out; i++) {
             double acc = 0.0;
-            for (k = 0; k < m->n; k++) acc += m->c[i * m->n + k] * m->s[k];
+            for (k = 0; k < m->n; k++) acc += m->c[i * m->n + m->perm[k]] * m->s[k];
             for (k = 0; k < m->n_in; k++) acc += m->d[i * m->n_in + k] * m->u[k];
             m->y[i] = acc;
         }
@@ -697,12 +813,14 @@ static const double *outputs(MaceModel *m) {
     return m->y;
 }
 
-static double derivative(MaceModel *m, const double *x, size_t i) {
-    double acc = 0.0;
-    size_t k;
-    for (k = 0; k < m->n; k++) acc += m->a[i * m->n + k] * x[k];
-    for (k = 0; k < m->n_in; k++) acc += m->b[i * m->n_in + k] * m->u[k];
-    return acc;
+/* dx = A x + B u through the sparse block diagram of the last build: about 4,000 multiplications for
+ * the 1-g model's 297 states against 91,000 for the dense A and B (which stay for the zero-order hold). */
+static void rhs(MaceModel *m, const double *x, const double *u, double *dx) {
+    csr_apply(&m->cb, x, m->zb, 0);
+    memcpy(m->zb + m->n_yb, u, m->n_in * sizeof(double));
+    csr_apply(&m->wq, m->zb, m->ub, 0);
+    csr_apply(&m->ab, x, dx, 0);
+    csr_apply(&m->bb, m->ub, dx, 1);
 }
 
 int mace_get(MaceModel *m, MaceGroup group, size_t k, double *value, char *err) {
@@ -722,8 +840,11 @@ int mace_get(MaceModel *m, MaceGroup group, size_t k, double *value, char *err) 
     switch (group) {
         case MACE_VAR_OUTPUT: *value = outputs(m)[k]; break;
         case MACE_VAR_FREQUENCY: *value = m->freq[k]; break;
-        case MACE_VAR_STATE: *value = model_states(m)[k]; break;
-        case MACE_VAR_DERIVATIVE: *value = derivative(m, model_states(m), k); break;
+        case MACE_VAR_STATE: *value = model_states(m)[m->pos[k]]; break;
+        case MACE_VAR_DERIVATIVE:
+            rhs(m, model_states(m), m->u, m->dir_dx);
+            *value = m->dir_dx[m->pos[k]];
+            break;
         default: snprintf(err, MACE_ERR_LEN, "unknown variable"); return -1;
     }
     return 0;
@@ -773,11 +894,37 @@ void mace_get_nominals(MaceModel *m, double *nominal) {
 }
 
 int mace_get_derivatives(MaceModel *m, double *dx, char *err) {
-    size_t i;
     if (mace_build(m, err) != 0) return -1;
     if (inputs_finite(m, m->time, err) != 0) return -1;
-    for (i = 0; i < m->n; i++) dx[i] = derivative(m, m->s, i);
+    rhs(m, m->s, m->u, dx);
     return 0;
+}
+
+int mace_directional(MaceModel *m, const double *vx, const double *vu, double *dx, double *dy, char *err) {
+    size_t i, k;
+    if (mace_build(m, err) != 0) return -1;
+    if (dx) rhs(m, vx, vu, dx);
+    if (dy) {
+        for (i = 0; i < m->n_out; i++) {
+            double acc = 0.0;
+            for (k = 0; k < m->n; k++) acc += m->c[i * m->n + m->perm[k]] * vx[k];
+            for (k = 0; k < m->n_in; k++) acc += m->d[i * m->n_in + k] * vu[k];
+            dy[i] = acc;
+        }
+    }
+    return 0;
+}
+
+size_t mace_state_position(const MaceModel *m, size_t k) { return m->pos[k]; }
+
+double *mace_directional_buffer(MaceModel *m, MaceGroup group) {
+    switch (group) {
+        case MACE_VAR_STATE: return m->dir_x;
+        case MACE_VAR_INPUT: return m->dir_u;
+        case MACE_VAR_DERIVATIVE: return m->dir_dx;
+        case MACE_VAR_OUTPUT: return m->dir_dy;
+        default: return NULL;
+    }
 }
 
 /* ---- FMU state ------------------------------------------------------------------------------ */

@@ -70,6 +70,16 @@ void mace_set_time(MaceModel *m, double t);
 void mace_set_states(MaceModel *m, const double *x);
 void mace_get_states(MaceModel *m, double *x);
 int mace_get_derivatives(MaceModel *m, double *dx, char *err);
+/* Position of model state k (value-reference order) in the state vector: model exchange orders its states
+ * for dense-LU integrators (the data's me_order: delays, filters, displacements, rates), co-simulation keeps k. */
+size_t mace_state_position(const MaceModel *m, size_t k);
+/* Directional derivatives of the linear model (its Jacobian times a seed): dx = A vx + B vu and
+ * dy = C vx + D vu for the current parameters (either result may be NULL), vx and dx in the state
+ * vector's order (mace_state_position). */
+int mace_directional(MaceModel *m, const double *vx, const double *vu, double *dx, double *dy, char *err);
+/* The model's scratch vectors for mace_directional: seeds (MACE_VAR_STATE: n, MACE_VAR_INPUT: n_in)
+ * and results (MACE_VAR_DERIVATIVE: n, MACE_VAR_OUTPUT: n_out); NULL for other groups. */
+double *mace_directional_buffer(MaceModel *m, MaceGroup group);
 /* Nominal values of the states (their typical size; 1 before the first build). */
 void mace_get_nominals(MaceModel *m, double *nominal);
 

@@ -244,6 +244,25 @@ void mace_set_states(MaceModel *m, const double *x) { (void)m; (void)x; }
 void mace_get_states(MaceModel *m, double *x) { (void)m; (void)x; }
 void mace_get_nominals(MaceModel *m, double *nominal) { (void)m; (void)nominal; }
 int mace_get_derivatives(MaceModel *m, double *dx, char *err) { (void)m; (void)dx; (void)err; return 0; }
+/* co-simulation only: the instance layer refuses directional derivatives before it gets here */
+int mace_directional(MaceModel *m, const double *vx, const double *vu, double *dx, double *dy, char *err) {
+    (void)m;
+    (void)vx;
+    (void)vu;
+    (void)dx;
+    (void)dy;
+    snprintf(err, MACE_ERR_LEN, "no directional derivatives in a sampled-data controller");
+    return -1;
+}
+size_t mace_state_position(const MaceModel *m, size_t k) {
+    (void)m;
+    return k;
+}
+double *mace_directional_buffer(MaceModel *m, MaceGroup group) {
+    (void)m;
+    (void)group;
+    return NULL;
+}
 
 size_t mace_state_size(const MaceModel *m) { return 8 * (STATE_HEADER + m->n_in + m->n_x); }
 
