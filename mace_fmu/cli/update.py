@@ -45,6 +45,24 @@ def _read_start(path: str) -> dict[str, float]:
     return {k: float(v) for k, v in values.items()}
 
 
+def _gain_uncertainty(items: list[str]) -> dict[str, float]:
+    """``--gain-uncertainty OUTPUT=P%`` (repeatable, comma-separated) -> output: standard deviation [fraction]."""
+    out: dict[str, float] = {}
+    for item in (x.strip() for part in items for x in part.split(",") if x.strip()):
+        name, _, value = item.partition("=")
+        name = name.strip()
+        try:
+            percent = float(value.strip().rstrip("%"))
+        except ValueError:
+            percent = float("nan")
+        if not name or not (percent > 0 and percent < float("inf")):
+            raise MaceError(f"--gain-uncertainty {item!r}: expected OUTPUT=P% with P > 0 (e.g. strain_strut2_y=1%)")
+        if name in out:
+            raise MaceError(f"--gain-uncertainty: {name!r} given twice")
+        out[name] = percent / 100.0
+    return out
+
+
 def cmd_fmu_update(args: argparse.Namespace) -> int:
     """``update fmu FILE``: update FMU parameters against measured-data files, every argument checked before any
     run."""
@@ -86,11 +104,12 @@ def cmd_fmu_update(args: argparse.Namespace) -> int:
     problem = fmu_problem(fmu=args.fmu, data=args.data, names=names, cost=args.cost,
                           start=_read_start(args.start) if args.start else None, channel_map=args.map,
                           segment_s=args.segment_s, weighting=args.weighting, held_inputs=held,
-                          noise_rms_fraction=noise_fraction)
+                          noise_rms_fraction=noise_fraction, gain_uncertainty=_gain_uncertainty(args.gain_uncertainty))
     where = f"the Dask cluster at {args.scheduler}" if args.scheduler else \
         f"{args.workers or 'one per core'} local worker processes"
-    _say(f"updating {len(problem.names)} parameter(s) of {Path(args.fmu).name} on the {args.cost} cost; FMU runs on "
-         f"{where}")
+    gains = len(problem.family.gain_outputs)
+    _say(f"updating {len(problem.names) - gains} parameter(s)" + (f" and {gains} sensor gain(s)" if gains else "")
+         + f" of {Path(args.fmu).name} on the {args.cost} cost; FMU runs on {where}")
     with progress_bar() as bar:
         with DaskRunner(scheduler=args.scheduler, workers=args.workers, progress=bar, task="FMU runs") as runner:
             result = update_fmu(family=problem.family, cost=problem.cost, start=problem.start, stages=[problem.names],
@@ -257,6 +276,10 @@ def _fmu_options(p, *, hidden: bool = False) -> None:
     p.add_argument("--noise-rms-percent", type=float, default=None, metavar="P",
                    help=show("time cost: the measurement noise RMS as P %% of each output's RMS, for the noise-floor "
                              "test (default: estimated from the outputs' spectra above the inputs' band)"))
+    p.add_argument("--gain-uncertainty", metavar="OUTPUT=P%[,...]", action="append", default=[],
+                   help=show("an output sensor whose gain is known only to P %% (standard deviation; repeatable, or "
+                             "the channel map's gain_uncertainty_percent column): its gain is estimated with the "
+                             "parameters, with that prior, and the parameters' uncertainty includes it"))
     p.add_argument("--weighting", choices=["noise", "none"], default="noise",
                    help=show("log-frf: each bin's log error over its noise standard deviation (default), or "
                              "unweighted"))

@@ -151,10 +151,11 @@ class ParameterSet:
             data = tomllib.loads(text)
         except tomllib.TOMLDecodeError as exc:
             raise MaceError(f"{source}: not a valid TOML parameter set: {exc}") from None
-        unknown = set(data) - {"provenance", "values"}
+        # [sensor_gains]: an FMU update's estimated sensor gains, calibration of the data, not of the model
+        unknown = set(data) - {"provenance", "values", "sensor_gains"}
         if unknown:
             raise MaceError(f"{source}: unknown table(s) {sorted(unknown)}; a parameter set has [provenance] and "
-                            "[values]")
+                            "[values] (and, from an FMU update, [sensor_gains])")
         if not isinstance(data.get("values"), dict):
             raise MaceError(f"{source}: no [values] table")
         prov = None

@@ -88,9 +88,20 @@ def time_noise_floor(cost: TimeResponseCost, *, noise_rms_fraction: float | None
 
 def noise_floor(cost, *, noise_rms_fraction: float | None = None) -> NoiseFloor | None:
     """The noise floor of a time cost, or of several tests' time costs summed with their weights
-    (:class:`~mace_fmu.updating.costs.SeveralTests`); None for other costs or when the noise is unknown."""
-    from mace_fmu.updating.costs import SeveralTests
+    (:class:`~mace_fmu.updating.costs.SeveralTests`), priors included (each adds one residual of the
+    noise's variance, :class:`~mace_fmu.updating.costs.WithPriors`); None for other costs or when the
+    noise is unknown."""
+    from mace_fmu.updating.costs import SeveralTests, WithPriors
 
+    if isinstance(cost, WithPriors):
+        inner = noise_floor(cost.cost, noise_rms_fraction=noise_rms_fraction)
+        if inner is None:
+            return None
+        k, s2 = len(cost.priors), cost.noise_sd**2
+        return NoiseFloor(expected_cost=inner.expected_cost + k * s2,
+                          standard_deviation=math.sqrt(inner.standard_deviation**2 + 2 * k * s2**2),
+                          noise_rms_percent=inner.noise_rms_percent,
+                          source=f"{inner.source}; {k} prior(s)")
     if isinstance(cost, TimeResponseCost):
         return time_noise_floor(cost, noise_rms_fraction=noise_rms_fraction)
     if not isinstance(cost, SeveralTests) or not all(isinstance(c, TimeResponseCost) for c in cost.tests):

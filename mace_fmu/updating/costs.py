@@ -172,6 +172,43 @@ class SeveralTests:
         return [f"{label}: {e}" for c, label in zip(self.tests, self.labels) for e in c.entry_labels()]
 
 
+@dataclass(frozen=True)
+class WithPriors:
+    """A cost with Gaussian prior knowledge of some parameters (a sensor gain calibrated to 1 %).
+
+    j = [j_data; s (p_k - mean_k) / sd_k]: ``s``, the noise standard deviation per residual of
+    j_data, puts each prior in the data's units, so that the least-squares answer is the posterior
+    mode and sigma^2 (J^T J)^-1 its covariance, the priors' information included. The model must say
+    its parameter values (``model.parameter_values``, as an FMU model does).
+    """
+
+    cost: object  #: the data's cost
+    priors: dict  #: parameter -> (mean, standard deviation) [the parameter's units]
+    noise_sd: float  #: s: noise standard deviation per residual of ``cost``
+    name: str = ""
+
+    def __post_init__(self) -> None:
+        bad = [n for n, (_, sd) in self.priors.items() if not (np.isfinite(sd) and sd > 0)]
+        if bad:
+            raise MaceError(f"prior standard deviation must be positive: {', '.join(bad)}")
+        if not (np.isfinite(self.noise_sd) and self.noise_sd > 0):
+            raise MaceError(f"noise standard deviation per residual must be positive, got {self.noise_sd!r}")
+        object.__setattr__(self, "name", self.name or f"{self.cost.name} with priors")
+
+    def residual(self, model) -> np.ndarray:
+        values = getattr(model, "parameter_values", None)
+        if values is None:
+            raise MaceError(f"priors on {', '.join(self.priors)} need a model that says its parameter values")
+        missing = [n for n in self.priors if n not in values]
+        if missing:
+            raise MaceError(f"prior on {', '.join(missing)}, which the model has no parameter of")
+        prior = [self.noise_sd * (values[n] - mean) / sd for n, (mean, sd) in self.priors.items()]
+        return np.concatenate([self.cost.residual(model), np.array(prior, dtype=float)])
+
+    def entry_labels(self) -> list[str]:
+        return self.cost.entry_labels() + [f"prior {n}" for n in self.priors]
+
+
 def scalar_cost(residual: np.ndarray) -> float:
     """j^T j."""
     return float(residual @ residual)

@@ -30,6 +30,14 @@ from mace_fmu.errors import MaceError
 from mace_fmu.fmu.archive import check_cosimulation_fmu
 from mace_fmu.fmu.host import collecting_callbacks, status_name
 
+#: an output's gain as an update parameter, "gain:strain_strut2_y": the data are gain x the FMU's output
+GAIN_PREFIX = "gain:"
+
+
+def gain_parameter(output: str) -> str:
+    """The update parameter of ``output``'s sensor gain (measured = gain x simulated), e.g. "gain:gyro_bus_x"."""
+    return GAIN_PREFIX + output
+
 
 @dataclass(frozen=True)
 class FmuInterface:
@@ -234,7 +242,8 @@ def _run_packed(args: tuple) -> np.ndarray:
 class FmuModel:
     """The FMU with parameter ``values`` [FMU units] set through FMI before initialisation.
 
-    ``runner`` (a map-like callable, e.g. a :class:`~mace_fmu.util.runner.DaskRunner`): where the runs of an
+    ``gains``: output -> factor the simulated output is multiplied by (a sensor's gain error, estimated as
+    a nuisance parameter; outputs not named have gain 1). ``runner`` (a map-like callable, e.g. a :class:`~mace_fmu.util.runner.DaskRunner`): where the runs of an
     FMU that must not be loaded here go (pythonfmu FMUs run in worker processes only); it is not sent
     along when the model itself travels to a worker.
     """
@@ -243,9 +252,15 @@ class FmuModel:
     values: Mapping[str, float]
     _memo: dict = field(default_factory=dict, repr=False, compare=False)
     runner: Callable | None = field(default=None, repr=False, compare=False)
+    gains: Mapping[str, float] = field(default_factory=dict)
 
     def __reduce__(self):
-        return FmuModel, (self.interface, self.values)
+        return FmuModel, (self.interface, self.values, {}, None, self.gains)
+
+    @property
+    def parameter_values(self) -> dict[str, float]:
+        """Every parameter of this model by its update name: the FMU's values and the gains ("gain:<output>")."""
+        return {**self.values, **{gain_parameter(o): g for o, g in self.gains.items()}}
 
     @property
     def inputs(self) -> tuple[str, ...]:
@@ -282,7 +297,8 @@ class FmuModel:
                 y = _run_in_worker(*args)
             self._memo.clear()  # one answer kept: the engine repeats only its last question
             self._memo[key] = y
-        return self._memo[key].copy()
+        scale = np.array([self.gains.get(o, 1.0) for o in outs])
+        return self._memo[key] * scale
 
 
 @dataclass(frozen=True)
@@ -303,21 +319,40 @@ class _NoBasis:
 class FmuFamily:
     """Parameter values -> the FMU with them set (the engine's ModelFamily); ``fixed`` values are set on every run.
 
-    ``runner``: where the runs of a pythonfmu FMU go from this process (see :class:`FmuModel`).
+    ``gain_outputs``: outputs whose sensor gain is a parameter too, named "gain:<output>" (default 1:
+    the data are gain x the FMU's output). ``runner``: where the runs of a pythonfmu FMU go from this
+    process (see :class:`FmuModel`).
     """
 
     interface: FmuInterface
     fixed: Mapping[str, float] = field(default_factory=dict)
     runner: Callable | None = field(default=None, repr=False, compare=False)
+    gain_outputs: tuple[str, ...] = ()
+
+    def __post_init__(self) -> None:
+        unknown = [o for o in self.gain_outputs if o not in self.interface.outputs]
+        if unknown:
+            raise MaceError(f"{self.interface.path}: sensor gain(s) of {', '.join(unknown)}, which is not an output "
+                            f"(outputs: {', '.join(self.interface.outputs)})")
 
     def __reduce__(self):
-        return FmuFamily, (self.interface, self.fixed)
+        return FmuFamily, (self.interface, self.fixed, None, self.gain_outputs)
+
+    @property
+    def gain_parameters(self) -> tuple[str, ...]:
+        """The gains' parameter names, "gain:<output>"."""
+        return tuple(gain_parameter(o) for o in self.gain_outputs)
+
+    def check_parameters(self, names: Sequence[str]) -> None:
+        """MaceError naming every one of ``names`` that is neither an FMU parameter nor one of the gains."""
+        self.interface.check_parameters([n for n in names if n not in self.gain_parameters])
 
     def full(self, values: Mapping[str, float]) -> FmuModel:
-        """The FMU at ``values`` (names the FMU has no parameter of are refused)."""
+        """The FMU at ``values`` (names the FMU has no parameter of are refused; gains default to 1)."""
         merged = {**self.fixed, **values}
+        gains = {o: float(merged.pop(gain_parameter(o), 1.0)) for o in self.gain_outputs}
         self.interface.check_parameters(list(merged))
-        return FmuModel(interface=self.interface, values=merged, runner=self.runner)
+        return FmuModel(interface=self.interface, values=merged, runner=self.runner, gains=gains)
 
     def basis(self, values: Mapping[str, float]) -> _NoBasis:
         return _NoBasis(self)

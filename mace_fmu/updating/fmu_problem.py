@@ -7,15 +7,16 @@ simulation, and reported as one :class:`~mace_fmu.errors.MaceError`.
 
 from __future__ import annotations
 
+import math
 import os
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Mapping, Sequence
 
 from mace_fmu.errors import MaceError
-from mace_fmu.updating.costs import Cost
+from mace_fmu.updating.costs import Cost, WithPriors
 from mace_fmu.updating.data import FrequencyResponseData, TimeHistory
-from mace_fmu.updating.fmu_model import FmuFamily, read_fmu_interface
+from mace_fmu.updating.fmu_model import FmuFamily, gain_parameter, read_fmu_interface
 from mace_fmu.updating.fmu_update import COST_KINDS, CostKind, Weighting, fmu_cost
 from mace_fmu.updating.simulated_frf import H1Estimator
 
@@ -37,7 +38,8 @@ class FmuProblem:
 def fmu_problem(*, fmu: str | os.PathLike, data: Sequence[str | os.PathLike], names: Sequence[str],
                 cost: CostKind, start: Mapping[str, float] | None = None, channel_map: str | os.PathLike | None = None,
                 segment_s: float = 2.0, weighting: Weighting = "noise",
-                held_inputs: Sequence[str] = (), noise_rms_fraction: float | None = None) -> FmuProblem:
+                held_inputs: Sequence[str] = (), noise_rms_fraction: float | None = None,
+                gain_uncertainty: Mapping[str, float] | None = None) -> FmuProblem:
     """Read and check everything an FMU update needs; no simulation runs.
 
     ``data``: one or more time histories (CSV/npz: the measured inputs and outputs of one test each;
@@ -46,14 +48,22 @@ def fmu_problem(*, fmu: str | os.PathLike, data: Sequence[str | os.PathLike], na
     history; ``noise_rms_fraction``: the tests' noise RMS over their outputs' RMS, when it cannot be
     estimated from the data; ``start``: values [FMU units] set on every run (default: the FMU's own start values);
     ``segment_s``: H1 segment length [s]; ``held_inputs``: FMU inputs the data lack that are to be held at
-    0 (any other input the data lack is an error: a silently grounded input biases every parameter).
+    0 (any other input the data lack is an error: a silently grounded input biases every parameter);
+    ``gain_uncertainty``: output -> standard deviation of its sensor's gain as a fraction (0.01: known to
+    1 %), for outputs whose gain is known only that well (with the channel map's
+    ``gain_uncertainty_percent`` column): each such gain is estimated with the update as a nuisance
+    parameter "gain:<output>" with a Gaussian prior (mean 1), so the moduli's stated uncertainty
+    includes the gains'.
     """
     from mace_fmu.updating.files import read_channel_map, read_measured_data
 
     if cost not in COST_KINDS:
         raise MaceError(f"cost must be one of {', '.join(COST_KINDS)}, got {cost!r}")
     interface = read_fmu_interface(fmu)
-    names = tuple(dict.fromkeys(names))
+    twice = sorted({n for n in names if list(names).count(n) > 1})
+    if twice:
+        raise MaceError(f"parameter {twice[0]!r} named twice in --update (name each once)")
+    names = tuple(names)
     if not names:
         raise MaceError("name at least one FMU parameter to update")
     interface.check_parameters(names)
@@ -97,12 +107,65 @@ def fmu_problem(*, fmu: str | os.PathLike, data: Sequence[str | os.PathLike], na
         if absent:
             raise MaceError(f"{test.source}: no channel for the FMU input(s) {', '.join(absent)}; record them, or "
                             "hold each at 0 explicitly (--hold-input NAME=0)")
+    gains = _gain_priors(gain_uncertainty or {}, mapping, histories)
     costs = [_test_cost(cost, test, frd, segment_s=segment_s, weighting=weighting) for test in histories]
     the_cost = costs[0] if len(costs) == 1 else _several_tests(costs, histories, noise_rms_fraction)
+    family = FmuFamily(interface=interface, fixed=start, gain_outputs=tuple(gains))
     values = {n: start.get(n, interface.parameters[n]) for n in names}
-    return FmuProblem(family=FmuFamily(interface=interface, fixed=start), names=names, start=values, history=history,
+    if gains:
+        the_cost = WithPriors(the_cost, priors={gain_parameter(o): (1.0, sd) for o, sd in gains.items()},
+                              noise_sd=_noise_per_residual(the_cost, histories[0], noise_rms_fraction))
+        names += family.gain_parameters
+        values.update({g: 1.0 for g in family.gain_parameters})
+    return FmuProblem(family=family, names=names, start=values, history=history,
                       frequency_data=frd, cost=the_cost, data_files=tuple(os.fspath(p) for p in data),
                       histories=tuple(histories))
+
+
+def _gain_priors(given: Mapping[str, float], mapping, histories: Sequence[TimeHistory]) -> dict[str, float]:
+    """output -> gain standard deviation [fraction] from ``given`` (--gain-uncertainty) and the channel map's
+    column; each must be an output some test records, positive, and stated once."""
+    gains: dict[str, float] = {}
+    recorded = {o for h in histories for o in h.outputs}
+    from_map = {ch.signal: ch.gain_uncertainty_percent / 100.0 for ch in (mapping.channels if mapping else ())
+                if ch.gain_uncertainty_percent is not None and ch.signal in recorded}
+    for where, table in (("--gain-uncertainty", given), (mapping.source if mapping else "", from_map)):
+        for output, sd in table.items():
+            if output in gains:
+                raise MaceError(f"{where}: the gain uncertainty of {output!r} is given twice (on the command line "
+                                "and in the channel map): state it once")
+            if not (math.isfinite(sd) and sd > 0):
+                raise MaceError(f"{where}: gain uncertainty of {output!r} must be a positive percentage, got "
+                                f"{100 * sd:g} %")
+            gains[output] = float(sd)
+    absent = [o for o in gains if o not in recorded]
+    if absent:
+        raise MaceError(f"--gain-uncertainty: no test records the output(s) {', '.join(absent)} (recorded: "
+                        f"{', '.join(sorted(recorded))})")
+    return gains
+
+
+def _noise_per_residual(cost: Cost, history: TimeHistory, noise_rms_fraction: float | None) -> float:
+    """The noise standard deviation per residual of ``cost``: 1 for costs already in units of their noise
+    (several tests, the noise-weighted log-FRF cost), from the noise floor for one test's time cost."""
+    from mace_fmu.updating.convergence import time_noise_floor
+    from mace_fmu.updating.costs import SeveralTests, TimeResponseCost
+    from mace_fmu.updating.simulated_frf import SimulatedFrequencyResponseCost
+
+    def weighted_frf(c) -> bool:
+        return isinstance(c, SimulatedFrequencyResponseCost) and c.weights is not None
+
+    if weighted_frf(cost) or (isinstance(cost, SeveralTests) and all(isinstance(c, TimeResponseCost) or weighted_frf(c)
+                                                                      for c in cost.tests)):
+        return 1.0
+    if isinstance(cost, TimeResponseCost):
+        floor = time_noise_floor(cost, noise_rms_fraction=noise_rms_fraction)
+        if floor is None:
+            raise MaceError(f"{history.source}: a gain prior weighs against the measurement noise, which cannot be "
+                            "estimated from this test (its inputs fill the band): give --noise-rms-percent")
+        return math.sqrt(floor.expected_cost / sum(len(v) for v in history.outputs.values()))
+    raise MaceError("a gain prior weighs against the measurement noise: use the time cost or the noise-weighted "
+                    "log-frf cost (--weighting noise)")
 
 
 def _test_cost(cost: CostKind, history: TimeHistory, frd: FrequencyResponseData | None, *, segment_s: float,

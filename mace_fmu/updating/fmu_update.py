@@ -105,7 +105,7 @@ def update_fmu(*, family: FmuFamily, cost: Cost, start: Mapping[str, float], sta
     names = [n for s in stages for n in s]
     if not names:
         raise MaceError("name at least one FMU parameter to update")
-    family.interface.check_parameters(names)
+    family.check_parameters(names)
     missing = [n for n in names if n not in start]
     if missing:
         raise MaceError(f"no start value for {', '.join(missing)}")
@@ -131,6 +131,7 @@ class FmuParameters:
     values: Mapping[str, float]
     units: Mapping[str, str]
     provenance: Provenance
+    sensor_gains: Mapping[str, float] = dataclasses.field(default_factory=dict)  #: output -> estimated gain
 
     def to_toml(self) -> str:
         """[provenance] and [values] tables as in :class:`~mace_fmu.parameters.sets.ParameterSet` files."""
@@ -144,6 +145,10 @@ class FmuParameters:
         lines += ["", "[values]"]
         lines += [f"{toml_key(n)} = {toml_value(v)}" + (f"  # [{self.units[n]}]" if self.units.get(n) else "")
                   for n, v in self.values.items()]
+        if self.sensor_gains:
+            lines += ["", "# sensor gains estimated with the parameters (the data are gain x the model's output);",
+                      "# not FMU parameters: a channel calibrated by them is its measured value divided by its gain", "[sensor_gains]"]
+            lines += [f"{toml_key(o)} = {toml_value(g)}" for o, g in self.sensor_gains.items()]
         return "\n".join(lines) + "\n"
 
     def write(self, path: str | os.PathLike) -> Path:
@@ -164,5 +169,7 @@ def fmu_parameters(result: UpdateResult, *, family: FmuFamily, data: str, cost: 
                              f"{'on' if s.penalty else 'off'}, {len(result.history)} outer iterations",
                       initial_cost=result.initial_cost, final_cost=result.final_cost, notes=notes,
                       structure=family.interface.structure, fitted_to=Path(family.interface.path).name)
-    return FmuParameters(values=dict(result.values), units={n: family.interface.units.get(n, "") for n in result.values},
-                         provenance=prov)
+    gains = {o: result.values[g] for o, g in zip(family.gain_outputs, family.gain_parameters) if g in result.values}
+    values = {n: v for n, v in result.values.items() if n not in family.gain_parameters}
+    return FmuParameters(values=values, units={n: family.interface.units.get(n, "") for n in values},
+                         provenance=prov, sensor_gains=gains)

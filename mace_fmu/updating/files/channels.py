@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import math
 import re
 from dataclasses import dataclass
 from pathlib import Path
@@ -14,6 +15,8 @@ from mace_fmu.util.textfile import read_text
 Role = Literal["input", "output", "ignore"]
 ROLES: tuple[str, ...] = ("input", "output", "ignore")
 MAP_COLUMNS = ("channel", "signal", "role", "unit")
+#: optional column: how well an output channel's gain is known [%] (blank: exactly)
+GAIN_COLUMN = "gain_uncertainty_percent"
 #: role prefixes of column labels when no channel map says the role, e.g. "in:gimbal_primary_x [V]"
 PREFIXES = {"in": "input", "out": "output"}
 _LABEL = re.compile(r"^\s*(?:(in|out):)?\s*([^\[\]]*?)\s*\[([^\[\]]*)\]\s*$")
@@ -28,6 +31,7 @@ class Channel:
     role: Role  #: "input" (actuator command), "output" (sensor) or "ignore" (a channel to skip)
     unit: str  #: unit the file must state for this channel, e.g. "V"
     line: int = 0  #: line of the map file (0: not from a file)
+    gain_uncertainty_percent: float | None = None  #: standard deviation of the sensor's gain [%]; None: exact
 
 
 @dataclass(frozen=True)
@@ -76,7 +80,8 @@ class ChannelMap:
 
 
 def read_channel_map(path: str | Path) -> ChannelMap:
-    """A channel map from CSV with columns channel, signal, role (input|output|ignore), unit."""
+    """A channel map from CSV with columns channel, signal, role (input|output|ignore), unit and, optionally,
+    gain_uncertainty_percent (an output sensor's gain known to that standard deviation [%]; blank: exactly)."""
     path = Path(path)
     text = read_text(path, what="channel-map")
     lines = [(k, line) for k, line in enumerate(text.splitlines(), start=1)
@@ -100,11 +105,30 @@ def read_channel_map(path: str | Path) -> ChannelMap:
         empty = [c for c in MAP_COLUMNS if not row[c] and not (c == "signal" and row["role"] == "ignore")]
         if empty:
             raise MaceError(f"{path}:{number}: empty {', '.join(empty)} (every channel needs {', '.join(MAP_COLUMNS)})")
-        channels.append(Channel(channel=row["channel"], signal=row["signal"],
-                                role=row["role"], unit=row["unit"], line=number))  # type: ignore[arg-type]
+        channels.append(Channel(channel=row["channel"], signal=row["signal"], role=row["role"],  # type: ignore[arg-type]
+                                unit=row["unit"], line=number,
+                                gain_uncertainty_percent=_gain_percent(row, where=f"{path}:{number}")))
     if not channels:
         raise MaceError(f"{path}: no channels (expected {expected})")
     return ChannelMap(tuple(channels), source=str(path))
+
+
+def _gain_percent(row: dict[str, str], *, where: str) -> float | None:
+    """The row's gain uncertainty [%], None when the column is absent or blank; only outputs have one."""
+    text = row.get(GAIN_COLUMN, "")
+    if not text:
+        return None
+    try:
+        value = float(text.rstrip("%").strip())
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value > 0):
+        raise MaceError(f"{where}: {GAIN_COLUMN} {text!r} of channel {row['channel']!r}: expected a positive "
+                        "percentage (or blank: the gain is exact)")
+    if row["role"] != "output":
+        raise MaceError(f"{where}: {GAIN_COLUMN} on channel {row['channel']!r} (role {row['role']}): only output "
+                        "(sensor) gains are estimated")
+    return value
 
 
 @dataclass(frozen=True)
