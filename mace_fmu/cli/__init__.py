@@ -8,13 +8,14 @@ import sys
 import threading
 from typing import Sequence
 
-from mace_fmu.cli import build, controller, data, export, model, modes, params, predict, report, study, update, view
+from mace_fmu.cli import (build, controller, data, export, model, modes, params, plan, predict, report, study, update,
+                          view)
 from mace_fmu.errors import MaceError
 
 __all__ = ["build_parser", "main"]
 
 #: command modules in the order ``mace-fmu --help`` lists them; each has register(subparsers)
-COMMANDS = (modes, model, export, controller, report, view, build, update, predict, study, data, params)
+COMMANDS = (modes, model, export, controller, report, view, build, update, plan, predict, study, data, params)
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -82,30 +82,39 @@ def stage_uncertainty(result: UpdateResult, *, tolerance_percent: float = DEFAUL
     for stage, (names, jac) in _stage_jacobians(result).items():
         m, n = jac.shape
         sigma2 = noise_variance if noise_variance is not None else result.final_cost / max(m - n, 1)
-        u, s, vt = np.linalg.svd(jac, full_matrices=False)
-        tiny = s <= s[0] * 1e-12 if len(s) else np.zeros(0, dtype=bool)
-        inv = np.where(tiny, np.inf, 1.0 / np.where(tiny, 1.0, s))
-        cov = (vt.T * (sigma2 * inv**2)) @ vt if not tiny.any() else np.full((n, n), np.inf)
-        sd = np.sqrt(np.abs(np.diag(cov)))
-        with np.errstate(invalid="ignore", divide="ignore"):
-            corr = cov / np.outer(sd, sd)
-        values = {k: float(result.values[k]) for k in names}
-        sd_percent = {k: float(100 * d) for k, d in zip(names, sd)}
-        interval = {k: (values[k] * (1 - Z95 * sd_percent[k] / 100), values[k] * (1 + Z95 * sd_percent[k] / 100))
-                    for k in names}
-        weak = []
-        for k in range(len(s)):
-            sd_dir = 100 * math.sqrt(sigma2) * inv[k]
-            if sd_dir > tolerance_percent:
-                v = vt[k] * np.sign(vt[k][np.argmax(np.abs(vt[k]))])
-                weak.append(WeakDirection(standard_deviation_percent=float(sd_dir),
-                                          coefficients={nm: float(c) for nm, c in zip(names, v)}))
-        weak.sort(key=lambda w: -w.standard_deviation_percent)
-        out.append(StageUncertainty(stage=stage, names=tuple(names), values=values, residuals=m, noise_variance=sigma2,
-                                    standard_deviation_percent=sd_percent, correlation=corr, interval_95=interval,
-                                    singular_values=s, weak_directions=tuple(weak),
-                                    tolerance_percent=tolerance_percent))
+        out.append(linearised_uncertainty(stage=stage, names=names, values={k: float(result.values[k]) for k in names},
+                                          jacobian=jac, noise_variance=sigma2, tolerance_percent=tolerance_percent))
     return tuple(out)
+
+
+def linearised_uncertainty(*, stage: str, names, values: dict, jacobian: np.ndarray, noise_variance: float,
+                           tolerance_percent: float = DEFAULT_TOLERANCE_PERCENT) -> StageUncertainty:
+    """The uncertainty of parameters ``names`` at ``values`` [SI] from J = d j / d delta (per unit relative
+    change, one column per name, m rows) and the noise variance per residual: sigma^2 (J^T J)^-1."""
+    jac = np.asarray(jacobian, dtype=float)
+    m, n = jac.shape
+    sigma2 = float(noise_variance)
+    u, s, vt = np.linalg.svd(jac, full_matrices=False)
+    tiny = s <= s[0] * 1e-12 if len(s) else np.zeros(0, dtype=bool)
+    inv = np.where(tiny, np.inf, 1.0 / np.where(tiny, 1.0, s))
+    cov = (vt.T * (sigma2 * inv**2)) @ vt if not tiny.any() else np.full((n, n), np.inf)
+    sd = np.sqrt(np.abs(np.diag(cov)))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        corr = cov / np.outer(sd, sd)
+    sd_percent = {k: float(100 * d) for k, d in zip(names, sd)}
+    interval = {k: (values[k] * (1 - Z95 * sd_percent[k] / 100), values[k] * (1 + Z95 * sd_percent[k] / 100))
+                for k in names}
+    weak = []
+    for k in range(len(s)):
+        sd_dir = 100 * math.sqrt(sigma2) * inv[k]
+        if sd_dir > tolerance_percent:
+            v = vt[k] * np.sign(vt[k][np.argmax(np.abs(vt[k]))])
+            weak.append(WeakDirection(standard_deviation_percent=float(sd_dir),
+                                      coefficients={nm: float(c) for nm, c in zip(names, v)}))
+    weak.sort(key=lambda w: -w.standard_deviation_percent)
+    return StageUncertainty(stage=stage, names=tuple(names), values=dict(values), residuals=m, noise_variance=sigma2,
+                            standard_deviation_percent=sd_percent, correlation=corr, interval_95=interval,
+                            singular_values=s, weak_directions=tuple(weak), tolerance_percent=tolerance_percent)
 
 
 def format_uncertainty(stages: tuple[StageUncertainty, ...]) -> str:

@@ -1,0 +1,146 @@
+"""plan-test: the uncertainty an update would report, predicted from the model before any test is run.
+
+Checked against what updates on synthetic data of the same experiments do (1-g native FMU of the
+bundled deck, 2 % output noise, band-limited 0.5-60 Hz excitation):
+- the predicted standard deviations equal the spread of 16 updates (16 noise and excitation
+  realisations, none the plan's own) within a factor 1.5;
+- for the active-strut moduli the plan ranks the strut test with exact gauge gains above the same
+  test with gains known to 1 %, as the updates' reported uncertainties turn out, each parameter the
+  data fix within 1.5x (measured 1.07-1.20x), the weak series combination flagged by both.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from mace_fmu.cli import main
+from mace_fmu.updating.data import TimeHistory
+from mace_fmu.updating.planning import Candidate, TestDesign, plan_tests, predict_uncertainty, read_test_plan
+from mace_fmu.updating.truth import band_limited_noise
+
+GIMBAL = TestDesign(name="gimbal", seconds=4.0,
+                    inputs=("gimbal_primary_x", "gimbal_primary_z", "gimbal_secondary_x", "gimbal_secondary_z"),
+                    outputs=("gyro_payload_x", "gyro_payload_z", "gyro_bus_x", "gyro_bus_y", "gyro_bus_z"))
+STRUT = ("E_active_strut_end", "E_active_strut_piezo", "E_active_strut_center")
+PLAN = """
+[[test]]
+name = "strut"
+inputs = ["active_strut_y", "active_strut_z"]
+outputs = ["strain_strut2_y", "strain_strut2_z", "gyro_payload_x"]
+
+[[test]]
+name = "strut, gauges to 1 %"
+inputs = ["active_strut_y", "active_strut_z"]
+outputs = ["strain_strut2_y", "strain_strut2_z", "gyro_payload_x"]
+gain_uncertainty_percent = { strain_strut2_y = 1, strain_strut2_z = 1 }
+"""
+
+
+@pytest.fixture(scope="module")
+def family(tmp_path_factory):
+    from mace_fmu.fmu.native.export import export_native_fmu
+    from mace_fmu.iomodel.volts import volts_model
+    from mace_fmu.updating.fmu_model import fmu_family
+
+    return fmu_family(export_native_fmu(volts_model("1g"), out_dir=tmp_path_factory.mktemp("plan"),
+                                        name="MACE_1g_native"))
+
+
+def _measure(family, test: TestDesign, *, seed: int) -> TimeHistory:
+    """A synthetic record of ``test``: its own excitation and noise realisation (seeds unlike the plan's)."""
+    n = int(round(test.seconds / test.sample_time_s)) + 1
+    t = np.arange(n) * test.sample_time_s
+    u = {k: np.zeros(n) for k in family.interface.inputs}
+    for j, name in enumerate(test.inputs):
+        u[name] = band_limited_noise(samples=n, step_s=test.sample_time_s, band_hz=test.band_hz, seed=100 + 10 * seed + j)
+    y = family.full({}).time_response(t, u, outputs=list(test.outputs))
+    rng = np.random.default_rng(500 + seed)
+    y = y + test.noise_rms_percent / 100 * np.sqrt(np.mean(y**2, axis=0)) * rng.standard_normal(y.shape)
+    return TimeHistory(t, u, {o: y[:, j] for j, o in enumerate(test.outputs)}, source=f"{test.name} {seed}")
+
+
+def test_predicted_standard_deviations_are_the_spread_of_updates_within_a_factor_1_5(family):
+    from mace_fmu.updating.costs import TimeResponseCost
+    from mace_fmu.updating.fmu_update import update_fmu
+
+    names = ["E_lexan_end", "E_cable_1"]
+    predicted = predict_uncertainty(family=family, parameters=names, candidate=Candidate("gimbal", (GIMBAL,)))
+    truth = {n: family.interface.parameters[n] for n in names}
+    errors = []
+    for seed in range(16):
+        result = update_fmu(family=family, cost=TimeResponseCost(_measure(family, GIMBAL, seed=seed)),
+                            start={"E_lexan_end": 1.02 * truth["E_lexan_end"], "E_cable_1": 0.98 * truth["E_cable_1"]},
+                            stages=[names])
+        assert result.converged, result.reasons
+        errors.append([100 * (result.values[n] / truth[n] - 1) for n in names])
+    spread = np.std(errors, axis=0, ddof=1)
+    ratio = spread / np.array([predicted.standard_deviation_percent[n] for n in names])
+    assert np.all((ratio > 1 / 1.5) & (ratio < 1.5)), (spread, predicted.standard_deviation_percent)
+
+
+def test_the_plan_ranks_the_strut_tests_as_their_updates_turn_out(family, tmp_path, capsys):
+    import tomllib
+
+    from mace_fmu.updating.files import write_time_history
+
+    (tmp_path / "plan.toml").write_text(PLAN)
+    candidates = read_test_plan(tmp_path / "plan.toml")
+    planned = plan_tests(fmu=family.interface.path, parameters=STRUT, candidates=candidates)
+    assert [p.candidate.name for p in planned] == ["strut", "strut, gauges to 1 %"]
+    data = write_time_history(_measure(family, candidates[0].tests[0], seed=3), tmp_path / "strut.csv")
+    held = ",".join(f"{i}=0" for i in family.interface.inputs if i not in candidates[0].tests[0].inputs)
+    reported = []
+    for k, extra in enumerate(([], ["--gain-uncertainty", "strain_strut2_y=1%,strain_strut2_z=1%"])):
+        out = tmp_path / f"out{k}"
+        code = main(["update", "fmu", family.interface.path, "--update", ",".join(STRUT), "--data", str(data),
+                     "--hold-input", held, "--workers", "1", "-o", str(out), *extra])
+        assert code in (0, 3), capsys.readouterr().err
+        stage = tomllib.loads((out / "uncertainty.toml").read_text())["stage"][0]
+        reported.append(dict(zip(stage["parameters"], stage["standard_deviation_percent"])))
+    for p, sd in zip(planned, reported):
+        predicted = p.uncertainty.standard_deviation_percent
+        # where the data fix a parameter the linearisation holds; the weak series combination (sd 20-40 %) is
+        # flagged by both, its size depends on where along it the update ends (measured: 1.1-1.5x)
+        for n in ("E_active_strut_end", "E_active_strut_piezo"):
+            assert 1 / 1.5 < sd[n] / predicted[n] < 1.5, (p.candidate.name, n, sd[n], predicted[n])
+        assert p.uncertainty.weak_directions and sd["E_active_strut_center"] > 5.0
+    assert max(reported[0][n] for n in STRUT) < max(reported[1][n] for n in STRUT)
+
+
+def test_cli_prints_the_ranking_and_writes_the_predictions(family, tmp_path, capsys):
+    import tomllib
+
+    (tmp_path / "plan.toml").write_text(PLAN)
+    code = main(["plan-test", family.interface.path, "--tests", str(tmp_path / "plan.toml"), "--update",
+                 "E_active_strut_end,E_active_strut_piezo", "--workers", "1", "-o", str(tmp_path / "p.toml")])
+    out = capsys.readouterr().out
+    assert code == 0
+    assert out.index("1    strut ") < out.index("2    strut, gauges to 1 %")
+    written = tomllib.loads((tmp_path / "p.toml").read_text())["stage"]
+    assert [s["name"] for s in written] == ["strut", "strut, gauges to 1 %"]
+    assert written[1]["parameters"][-2:] == ["gain:strain_strut2_y", "gain:strain_strut2_z"]
+
+
+@pytest.mark.parametrize("text, expected", [
+    ("[[test]]\nname = 'a'\ninputs = []\noutputs = ['x']\n", "inputs must be a list of signal names"),
+    ("[[test]]\nname = 'a'\ninputs = ['x']\noutputs = ['y']\nnoise_rms_percent = 0\n",
+     "noise_rms_percent must be a positive number"),
+    ("[[test]]\nname = 'a'\ninputs = ['x']\noutputs = ['y']\nband_hz = [0.5, 300]\n", "at or above the Nyquist"),
+    ("[[test]]\nname = 'a'\ninputs = ['x']\noutputs = ['y']\nduration = 3\n", "unknown key(s) ['duration']"),
+    ("[[test]]\nname = 'a'\ninputs = ['x']\noutputs = ['y']\n[[candidate]]\nname = 'c'\ntests = ['b']\n",
+     "no [[test]] named 'b'"),
+    ("[[candidate]]\nname = 'c'\ntests = ['b']\n", "no [[test]] tables"),
+])
+def test_a_bad_test_plan_is_one_line_naming_the_file_and_entry(tmp_path, capsys, family, text, expected):
+    (tmp_path / "plan.toml").write_text(text)
+    code = main(["plan-test", family.interface.path, "--tests", str(tmp_path / "plan.toml"), "--update", STRUT[0]])
+    err = capsys.readouterr().err
+    assert code == 2 and expected in err and "plan.toml" in err, err
+
+
+def test_signals_the_fmu_lacks_are_refused_before_any_simulation(tmp_path, capsys, family):
+    (tmp_path / "plan.toml").write_text("[[test]]\nname = 'a'\ninputs = ['active_strut_y']\noutputs = ['strain_x']\n")
+    code = main(["plan-test", family.interface.path, "--tests", str(tmp_path / "plan.toml"), "--update", STRUT[0]])
+    err = capsys.readouterr().err
+    assert code == 2 and "test 'a'" in err and "output 'strain_x'" in err, err
