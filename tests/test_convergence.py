@@ -101,3 +101,17 @@ def test_help_documents_the_exit_status(capsys):
         main(["update", "--help"])
     text = " ".join(capsys.readouterr().out.split())
     assert "exit status: 0 converged; 2 bad input (nothing written); 3 the update stopped without converging" in text
+
+
+def test_the_trust_radius_grows_while_the_linearisation_holds_and_shrinks_when_it_does_not():
+    from mace_fmu.updating.solve import _next_radius
+
+    # a step that reached the radius and fell as predicted (fall 90 of a predicted 100): doubled
+    assert _next_radius(0.1, step=0.1, before=200.0, predicted=100.0, after=110.0) == 0.2
+    # the same fall from a step inside the radius: the radius was not what limited it, kept
+    assert _next_radius(0.1, step=0.05, before=200.0, predicted=100.0, after=110.0) == 0.1
+    # a fall of 10 of a predicted 100: half the step
+    assert _next_radius(0.1, step=0.08, before=200.0, predicted=100.0, after=190.0) == pytest.approx(0.04)
+    # unbounded stays unbounded (the engine's default: the thesis's MACE update is unchanged)
+    assert _next_radius(math.inf, step=0.3, before=200.0, predicted=100.0, after=190.0) == math.inf
+

@@ -280,6 +280,25 @@ def test_pythonfmu_fmus_are_not_loaded_in_the_main_process(fmu, monkeypatch):
     fmu_model._loaded.cache_clear()
 
 
+def test_a_native_fmu_runs_a_whole_record_in_one_call_equal_to_the_fmi_route_to_the_last_bit(fmu):
+    """maceRunRecord makes the FMI calls in C: every output of every sample equal to the call-by-call route's,
+    with a changed modulus and delay, and a non-finite input refused at its sample by both routes alike."""
+    from mace_fmu.updating.fmu_model import _LoadedFmu, read_fmu_interface
+
+    interface = read_fmu_interface(fmu)
+    one_call, by_fmi = _LoadedFmu(interface), _LoadedFmu(interface, whole_record=False)
+    assert one_call._record is not None and by_fmi._record is None
+    t = np.arange(1501) * STEP
+    u = np.random.default_rng(4).standard_normal((t.size, len(interface.inputs)))
+    values = {"E_cable_2": 1.05 * interface.parameters["E_cable_2"], "delay_gyro_bus_x": 0.006}
+    y = one_call.run(values, t, u, interface.inputs, interface.outputs)
+    assert np.array_equal(y, by_fmi.run(values, t, u, interface.inputs, interface.outputs)) and np.all(np.isfinite(y))
+    u[700, 2] = np.nan
+    for loaded in (one_call, by_fmi):
+        with pytest.raises(MaceError, match=r"t = 1\.4 s.*non-finite value nan for input gimbal_secondary_x"):
+            loaded.run(values, t, u, interface.inputs, interface.outputs)
+
+
 def test_an_fmu_that_refuses_a_value_raises_with_its_log_and_runs_again_after(fmu):
     family = fmu_family(fmu)
     t, u = _noise_inputs(0.1)

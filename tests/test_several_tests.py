@@ -112,3 +112,49 @@ def test_tests_with_different_sample_times_are_refused(lab, tmp_path, capsys):
                  "-o", str(tmp_path / "out")])
     assert code == 2 and "sample time 0.004 s, but" in capsys.readouterr().err
     assert not (tmp_path / "out").exists()
+
+
+def test_from_the_pre_update_moduli_bounded_first_steps_reach_the_floor_where_an_unbounded_one_did_not(lab, tmp_path):
+    """Regression of the first step: the 8 kept moduli a few percent off the bundled ones (the truth), two 8 s
+    tests (the gimbals to the gyros and gauges; the strut test), start at the pre-update moduli (up to 12 %
+    off). Unbounded, the first linearised step threw cable 3 to its bound (+44 %) and the fit into another
+    minimum, 190 standard deviations above the noise floor (reported as not converged); bounded to 10 % and
+    growing, the update ends on the floor with lexan and cables within 0.5 %."""
+    import dataclasses
+    import math
+
+    from mace_fmu.updating.convergence import convergence_report, noise_floor
+    from mace_fmu.updating.fmu_model import fmu_family
+    from mace_fmu.updating.fmu_problem import fmu_problem
+    from mace_fmu.updating.fmu_update import FMU_SETTINGS, update_fmu
+    from mace_fmu.updating.mace_update import THESIS_KEPT, pre_update_parameters
+    from mace_fmu.updating.truth import band_limited_noise
+
+    fmu = lab[0]
+    family = fmu_family(fmu)
+    offsets = (0.02, -0.03, 0.04, -0.02, 0.03, -0.02, 0.03, 0.02)
+    truth = {n: family.interface.parameters[n] * (1 + d) for n, d in zip(THESIS_KEPT, offsets)}
+    t = np.arange(int(round(SECONDS / STEP)) + 1) * STEP
+    files = []
+    for k, (inputs, outputs) in enumerate(((GIMBAL_TEST[0], GIMBAL_TEST[1] + STRUT_TEST[1][:2]), STRUT_TEST)):
+        u = {i: band_limited_noise(samples=t.size, step_s=STEP, band_hz=(0.5, 60.0), seed=10 * k + j)
+             for j, i in enumerate(inputs)}
+        y = family.full(truth).time_response(t, u, outputs=list(outputs))
+        y = y + 0.02 * np.sqrt(np.mean(y**2, axis=0)) * np.random.default_rng(10 * k + 50).standard_normal(y.shape)
+        files.append(write_time_history(TimeHistory(t, u, {o: y[:, j] for j, o in enumerate(outputs)}),
+                                        tmp_path / f"test_{k}.csv"))
+    pre = pre_update_parameters()
+    problem = fmu_problem(fmu=fmu, data=files, names=THESIS_KEPT, cost="time", start={n: pre[n] for n in THESIS_KEPT},
+                          held_inputs=family.interface.inputs)
+    verdicts = {}
+    for radius in (math.inf, FMU_SETTINGS.initial_radius):
+        result = update_fmu(family=problem.family, cost=problem.cost, start=problem.start, stages=[problem.names],
+                            settings=dataclasses.replace(FMU_SETTINGS, initial_radius=radius))
+        report = convergence_report(result, noise_floor=noise_floor(problem.cost))
+        verdicts[radius] = (report, {n: result.values[n] / truth[n] - 1 for n in THESIS_KEPT})
+    unbounded, errors_unbounded = verdicts[math.inf]
+    assert not unbounded.converged and unbounded.noise_floor.sigmas_above(unbounded.final_cost) > 3.0
+    bounded, errors = verdicts[FMU_SETTINGS.initial_radius]
+    assert FMU_SETTINGS.initial_radius == 0.1
+    assert bounded.converged and abs(bounded.noise_floor.sigmas_above(bounded.final_cost)) < 3.0, bounded.reasons
+    assert all(abs(errors[n]) < 0.005 for n in THESIS_KEPT if "lexan" in n or "cable" in n), errors

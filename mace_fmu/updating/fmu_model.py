@@ -125,9 +125,14 @@ def _extraction_folder() -> str:
 
 
 class _LoadedFmu:
-    """One extracted and instantiated FMU of this process, run again and again with ``fmi2Reset`` between runs."""
+    """One extracted and instantiated FMU of this process, run again and again with ``fmi2Reset`` between runs.
 
-    def __init__(self, interface: FmuInterface):
+    A native FMU of this package runs a whole record in one call of its runtime (``maceRunRecord``: the same
+    FMI calls in C, outputs equal to the last bit), unless ``whole_record`` is False; any other FMU runs
+    through FMI call by call.
+    """
+
+    def __init__(self, interface: FmuInterface, *, whole_record: bool = True):
         from fmpy import extract
         from fmpy.fmi2 import FMU2Slave
 
@@ -143,6 +148,21 @@ class _LoadedFmu:
         self._callbacks = callbacks  # kept alive as long as the instance
         self.slave.instantiate(callbacks=callbacks)
         self._fresh = True
+        self._record = self._whole_record_function() if whole_record else None
+
+    def _whole_record_function(self):
+        """The runtime's ``maceRunRecord`` when this is a native FMU of this package, else None (the FMI route)."""
+        if not (self.interface.generation_tool.startswith("mace-fmu") and "native" in self.interface.generation_tool):
+            return None
+        try:
+            function = self.slave.dll.maceRunRecord
+        except AttributeError:  # written by an older mace-fmu
+            return None
+        double_p, vr_p = ctypes.POINTER(ctypes.c_double), ctypes.POINTER(ctypes.c_uint)
+        function.argtypes = [ctypes.c_void_p, vr_p, ctypes.c_size_t, vr_p, ctypes.c_size_t, ctypes.c_size_t,
+                             ctypes.c_double, ctypes.c_double, double_p, double_p, ctypes.POINTER(ctypes.c_size_t)]
+        function.restype = ctypes.c_int
+        return function
 
     def _check(self, status: int, call: str) -> None:
         if status > 1:
@@ -157,14 +177,20 @@ class _LoadedFmu:
         parameters ``values`` set before initialisation; a failing FMI call raises MaceError with the FMU's log."""
         from fmpy.fmi1 import FMICallException
 
+        self._now = None  # the sample whose calls are being made, for the message of a failing one
         try:
             return self._run(values, times_s, u, inputs, outputs)
         except FMICallException as exc:  # fmpy checks every call's status itself
-            text = " | ".join(self.messages[-5:])
-            self.messages.clear()
-            values_text = ", ".join(f"{n} = {v:g}" for n, v in values.items())
-            raise MaceError(f"{self.interface.path}: {exc} with {values_text or 'its start values'}"
-                            + (f" (FMU log: {text})" if text else "")) from None
+            raise self._failure(str(exc).rstrip("."), values) from None
+
+    def _failure(self, what: str, values: Mapping[str, float]) -> MaceError:
+        """The error of a failed run: the call, the sample's time, the parameter values and the FMU's log."""
+        text = " | ".join(self.messages[-5:])
+        self.messages.clear()
+        values_text = ", ".join(f"{n} = {v:g}" for n, v in values.items())
+        at = f" at t = {self._now:g} s" if self._now is not None else ""
+        return MaceError(f"{self.interface.path}: {what}{at} with {values_text or 'its start values'}"
+                         + (f" (FMU log: {text})" if text else ""))
 
     def _run(self, values, times_s, u, inputs, outputs) -> np.ndarray:
         from fmpy.fmi2 import fmi2Real, fmi2ValueReference
@@ -188,12 +214,15 @@ class _LoadedFmu:
         vr_out = (fmi2ValueReference * n_out)(*[ref[n] for n in outputs])
         u = np.ascontiguousarray(u, dtype=np.float64)
         y = np.empty((len(times_s), n_out), dtype=np.float64)
+        if self._record is not None:
+            return self._run_record(t0, dt, times_s, u, y, vr_in, vr_out, values)
         in_ptr, out_ptr = u.ctypes.data, y.ctypes.data
         row_in, row_out = 8 * n_in, 8 * n_out
         real_p = ctypes.POINTER(fmi2Real)
         set_real, get_real, do_step, c = s.fmi2SetReal, s.fmi2GetReal, s.fmi2DoStep, s.component
         last = len(times_s) - 1
         for k in range(len(times_s)):  # the time points are t0 + k dt exactly, as the data's are
+            self._now = float(times_s[k])
             if n_in:
                 status = set_real(c, vr_in, n_in, ctypes.cast(in_ptr + k * row_in, real_p))
                 if status > 1:
@@ -205,6 +234,18 @@ class _LoadedFmu:
                 status = do_step(c, t0 + k * dt, dt, 1)
                 if status > 1:
                     self._check(status, f"fmi2DoStep at t = {times_s[k]:g} s")
+        return y
+
+
+    def _run_record(self, t0, dt, times_s, u, y, vr_in, vr_out, values) -> np.ndarray:
+        """The record in one call of the runtime; a failing call is reported as the FMI route reports it."""
+        double_p = ctypes.POINTER(ctypes.c_double)
+        done = ctypes.c_size_t(0)
+        status = self._record(self.slave.component, vr_in, len(vr_in), vr_out, len(vr_out), len(times_s), t0, dt,
+                              u.ctypes.data_as(double_p), y.ctypes.data_as(double_p), ctypes.byref(done))
+        if status > 1:  # the FMU's log names the FMI call that failed
+            self._now = float(times_s[min(done.value, len(times_s) - 1)])
+            raise self._failure(f"maceRunRecord (the FMI calls of a sample) returned {status_name(status)}", values)
         return y
 
 

@@ -34,8 +34,11 @@ WEIGHTINGS: tuple[str, ...] = ("noise", "none")
 #: the FMU is the model: perturbed models are FMU runs, and the truth needs no penalty to hold it near the start.
 #: Central differences with a 1e-3 step: forward differences at 1e-2 misjudged the weak strut directions by
 #: an order of magnitude and let a run stop at its cap far above the noise. The cap is a safety net only.
-FMU_SETTINGS = UpdateSettings(method="cost-sensitivity", perturbation="full", penalty=False, max_outer=20,
-                              relative_step=1e-3, difference="central")
+#: The first step is bounded to 10 % per parameter (a trust region that doubles while the linearisation holds):
+#: a time cost over a long record is far from quadratic, and an unbounded first step from the pre-update moduli
+#: threw a cable modulus to its bound and the fit into another minimum.
+FMU_SETTINGS = UpdateSettings(method="cost-sensitivity", perturbation="full", penalty=False, max_outer=30,
+                              relative_step=1e-3, difference="central", initial_radius=0.1)
 
 
 def fmu_cost(kind: CostKind, *, history: TimeHistory, frequency_data: FrequencyResponseData | None = None,

@@ -15,7 +15,8 @@ The other inclusions give least squares the model itself (finite-difference Jaco
 ``relative_step``), about a base point that is moved the same way until converged. The outer
 loop is a trust region: it moves to the new point when the full model there costs less
 (augmented cost), else it stays and halves the largest step it allows, reusing the
-linearisation; a label flip or a mispairing far from the base cannot drag the update away.
+linearisation (with a finite ``initial_radius`` the first steps are bounded too, the bound doubling
+while the linearisation predicts the fall well); a label flip or a mispairing far from the base cannot drag the update away.
 Stages run in order and the whole sequence ``rounds`` times (thesis 4.5: physical parameters,
 then delays, then damping, repeated).
 
@@ -43,6 +44,9 @@ from mace_fmu.updating.inclusion import ModelFamily, evaluator
 from mace_fmu.updating.sensitivity import CostSensitivities, cost_sensitivities
 from mace_fmu.util.progress import ProgressCallback, Step
 from mace_fmu.util.threads import single_blas_thread
+
+#: a parameter this close to a bound (in relative change) ends there: the stage has not converged
+AT_BOUND = 1e-6
 
 Method = Literal["cost-sensitivity", "full", "reanalysis", "modal-sensitivity"]
 
@@ -85,6 +89,9 @@ class UpdateSettings:
     rounds: int = 1  #: repeats of the stage sequence (fewer when a round moves nothing)
     loss: str = "linear"  #: least_squares loss ("soft_l1", "huber", "cauchy", "arctan": outliers count less)
     loss_scale: float = 1.0  #: residual size beyond which the loss treats an entry as an outlier (f_scale)
+    #: trust region: the largest relative step of a stage's first outer iteration (inf: none until a step fails);
+    #: a finite radius doubles after a step the linearisation predicted well and halves after one it did not
+    initial_radius: float = math.inf
 
 
 @dataclass(frozen=True)
@@ -253,7 +260,7 @@ def _run_stage(problem: _StageProblem, values: dict[str, float], model, history:
     def point(x: np.ndarray) -> dict[str, float]:
         return problem.point(values, x)
 
-    radius = np.inf  # trust region: largest step in x from the base point
+    radius = settings.initial_radius  # trust region: largest step in x from the base point
     linearisation = None  # (x_base, fun builder) kept while the base point does not move
     reason, converged, outer = f"iteration cap reached (max_outer = {settings.max_outer})", False, -1
     for outer in range(settings.max_outer):
@@ -287,6 +294,8 @@ def _run_stage(problem: _StageProblem, values: dict[str, float], model, history:
                                  settings.tolerance else "one least-squares solve on the full model"), True
             break
         if improved:
+            radius = _next_radius(radius, step=float(np.max(np.abs(sol.x - x_base))), before=scalar_cost(j_base),
+                                  predicted=predicted, after=scalar_cost(j_new))
             best = (total, new, new_model)
             values, model, j_base = new, new_model, j_new
             linearisation = None
@@ -300,12 +309,26 @@ def _run_stage(problem: _StageProblem, values: dict[str, float], model, history:
                                      f"{settings.tolerance:g})"), True
                 break
     x_end = problem.relative(best[1])
+    # least_squares keeps its answer strictly inside the box: within 1e-6 (relative change) is at the bound
     at_bound = [f"{n} at its {'lower' if abs(x - a) <= abs(x - b) else 'upper'} bound"
-                for n, x, a, b in zip(names, x_end, lo, hi) if min(abs(x - a), abs(x - b)) <= 1e-9 * max(1.0, abs(x))]
+                for n, x, a, b in zip(names, x_end, lo, hi) if min(abs(x - a), abs(x - b)) <= AT_BOUND]
     if at_bound:
         reason, converged = f"{reason}; but {', '.join(at_bound)}", False
     return best[1], best[2], StageOutcome(stage=stage.name, round=rnd, outer_iterations=outer + 1,
                                           converged=converged, reason=reason)
+
+
+def _next_radius(radius: float, *, step: float, before: float, predicted: float, after: float) -> float:
+    """The trust radius after an accepted step (unbounded stays unbounded): doubled when the step reached the
+    radius and the model fell by more than 3/4 of the predicted fall, halved below the step when by less than 1/4."""
+    if not math.isfinite(radius) or before <= predicted:
+        return radius
+    agreement = (before - after) / (before - predicted)
+    if agreement > 0.75 and step >= 0.99 * radius:
+        return 2.0 * radius
+    if agreement < 0.25:
+        return 0.5 * step
+    return radius
 
 
 def _first_order_optimality(gradient, x_base: np.ndarray, lo: np.ndarray, hi: np.ndarray, cost: float) -> float | None:
