@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import control as ct
 import numpy as np
+import pytest
 
 from mace_fmu.iomodel.frf import frequency_response
 from mace_fmu.iomodel.parametric import ParametricSystem
@@ -17,10 +18,12 @@ FREQUENCIES_HZ = np.geomspace(0.5, 60.0, 200)
 OPTIONS = dict(servos=False, bessel="none", delays=False)
 
 
-def test_a_strut_modulus_moves_the_responses_as_a_full_resolve_does():
-    """d G / d ln E_active_strut_piezo over 9 inputs x 20 outputs x 200 frequencies: reanalysis within 5 %
-    of the full re-solve (measured 2.3 %); central differences of +-0.1 %."""
-    name, step = "E_active_strut_piezo", 1e-3
+@pytest.mark.parametrize("name, step", [("E_active_strut_piezo", 1e-3), ("E_cable_3", 1e-2)])
+def test_a_modulus_moves_the_responses_as_a_full_resolve_does(name, step):
+    """d G / d ln E over 9 inputs x 20 outputs x 200 frequencies: reanalysis within 5 % of the full re-solve
+    (measured: the piezo 2.3 %; cable 3 2.1 %, 51 % while the preload's forces were held: a stiffer cable takes
+    more of the weight, which the sensitivities now include to first order). Central differences; +-1 % for the
+    cable, whose full re-solves at +-0.1 % leave the suspension modes' derivatives in round-off."""
     nominal = volts_model("1g", **OPTIONS)
     system = ParametricSystem(parametric_arrays(nominal, physical=[name]))
     k = system.index(name)

@@ -18,7 +18,7 @@ from mace_fmu.errors import MaceError
 from mace_fmu.fe.assembly import FEModel, bar_section
 from mace_fmu.fe.beam import natural_stiffness
 from mace_fmu.fe.corotational import BarState, tangent
-from mace_fmu.fe.preload import Preload
+from mace_fmu.fe.preload import Preload, tangent_sensitivity
 from mace_fmu.iomodel.modal_ss import modal_data
 from mace_fmu.iomodel.motion import motion_unit, parse_motion_output
 from mace_fmu.iomodel.volts import VoltsModel
@@ -98,9 +98,11 @@ def _blocks(model: VoltsModel) -> tuple[dict, list[tuple[str, float, str]]]:
 def material_sensitivity(fe: FEModel, deck, preload: Preload | None, mid: int) -> np.ndarray:
     """dK/d(ln E) [N/m, N m/rad] of MAT1 ``mid``: the material stiffness of its bars per unit relative change.
 
-    About the configuration the modes are computed in: 1-g, the preloaded (sagged) geometry with
-    the preload's bar forces held, so a change of E changes only the material part, as at the new
-    equilibrium, where gravity sets the forces. Taking the undeformed geometry instead puts
+    About the configuration the modes are computed in. 1-g with the large-displacement preload: the
+    tangent's total derivative with the preload re-solved to first order
+    (:func:`~mace_fmu.fe.preload.tangent_sensitivity`: a stiffer cable takes more of the weight, and the
+    forces and geometry move with it). Otherwise (the linear preload; 0-g) the preloaded geometry with
+    the preload's bar forces held, so a change of E changes only the material part. Taking the undeformed geometry instead puts
     spurious strain into the near-rigid suspension modes: Z tilt, X twist and 1st Y bending then
     came out 1.9e-3 to 2.9e-3 off after E of the Lexan center +5 %, against 7.8e-4 at most this
     way. The bar stiffness is linear in E (and in G, which NASTRAN derives from E when blank), so
@@ -118,6 +120,9 @@ def material_sensitivity(fe: FEModel, deck, preload: Preload | None, mid: int) -
 
     dkn = np.array([section_delta(deck.bars[int(i)].pid, length)
                     for i, length in zip(ids[mine], fe.bars.lengths0[mine])]).reshape(-1, 7, 7)
+    if preload is not None and preload.kind == "large" and preload.constraints is not None:
+        # the gravity load redistributes (suspension cables, springs): the preload re-solved to first order
+        return tangent_sensitivity(fe, preload, bar_mask=mine, dk_natural=dkn)
     bars = dataclasses.replace(fe.bars, ids=ids[mine], node_a=fe.bars.node_a[mine], node_b=fe.bars.node_b[mine],
                                frames0=fe.bars.frames0[mine], lengths0=fe.bars.lengths0[mine], k_natural=dkn)
     if preload is not None:
@@ -151,8 +156,14 @@ def physical_sensitivities(model: VoltsModel, shapes: np.ndarray, *, only: Seque
         label = spring_name[sid]
         if only is not None and f"k_{label}" not in only:
             continue
-        v = (fe.spring_vectors[[row]] @ shapes)[0]
         parameters.append((f"k_{label}", float(k), f"stiffness of {label} (CELAS2 {sid}) [N/m]; reanalysis"))
+        if pre is not None and pre.kind == "large" and pre.constraints is not None:
+            e = np.asarray(fe.spring_vectors[[row]].toarray() if hasattr(fe.spring_vectors, "toarray")
+                           else fe.spring_vectors[[row]], dtype=float)[0]
+            dk = tangent_sensitivity(fe, pre, dk_springs=k * np.outer(e, e))
+            sensitivities.append(shapes.T @ dk @ shapes)
+            continue
+        v = (fe.spring_vectors[[row]] @ shapes)[0]
         sensitivities.append(k * np.outer(v, v))
     n = shapes.shape[1]
     dk = np.array(sensitivities).reshape(len(parameters), n, n)
