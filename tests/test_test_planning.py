@@ -6,7 +6,7 @@ bundled deck, 2 % output noise, band-limited 0.5-60 Hz excitation):
   realisations, none the plan's own) within a factor 1.5;
 - for the active-strut moduli the plan ranks the strut test with exact gauge gains above the same
   test with gains known to 1 %, as the updates' reported uncertainties turn out, each parameter the
-  data fix within 1.5x (measured 1.07-1.20x), the weak series combination flagged by both.
+  data fix within 1.5x (measured 1.06-1.20x), the weak series combination flagged by both.
 """
 
 from __future__ import annotations

@@ -45,9 +45,6 @@ from mace_fmu.updating.sensitivity import CostSensitivities, cost_sensitivities
 from mace_fmu.util.progress import ProgressCallback, Step
 from mace_fmu.util.threads import single_blas_thread
 
-#: a parameter this close to a bound (in relative change) ends there: the stage has not converged
-AT_BOUND = 1e-6
-
 Method = Literal["cost-sensitivity", "full", "reanalysis", "modal-sensitivity"]
 
 
@@ -309,9 +306,10 @@ def _run_stage(problem: _StageProblem, values: dict[str, float], model, history:
                                      f"{settings.tolerance:g})"), True
                 break
     x_end = problem.relative(best[1])
-    # least_squares keeps its answer strictly inside the box: within 1e-6 (relative change) is at the bound
+    # least_squares keeps its answer strictly inside the box, and may stop short of it: within the update's
+    # own precision (tolerance, as a relative change) is at the bound
     at_bound = [f"{n} at its {'lower' if abs(x - a) <= abs(x - b) else 'upper'} bound"
-                for n, x, a, b in zip(names, x_end, lo, hi) if min(abs(x - a), abs(x - b)) <= AT_BOUND]
+                for n, x, a, b in zip(names, x_end, lo, hi) if min(abs(x - a), abs(x - b)) <= settings.tolerance]
     if at_bound:
         reason, converged = f"{reason}; but {', '.join(at_bound)}", False
     return best[1], best[2], StageOutcome(stage=stage.name, round=rnd, outer_iterations=outer + 1,
