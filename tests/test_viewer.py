@@ -262,7 +262,7 @@ def test_legend_marks_the_clip_playing_now(modes_0g, motion_fmu_0g, step_run_0g,
         write_animation_html(anim, page, title=name)
         dom = subprocess.run([chromium_executable(), "--headless", "--no-sandbox", "--disable-gpu",
                               "--enable-unsafe-swiftshader", "--use-angle=swiftshader", "--no-first-run",
-                              f"--user-data-dir={tmp_path / 'profile'}", "--virtual-time-budget=4500", "--dump-dom",
+                              f"--user-data-dir={tmp_path / 'profile'}", "--virtual-time-budget=2000", "--dump-dom",
                               page.as_uri()], check=True, capture_output=True, text=True, timeout=240).stdout
         time_s = float(re.search(r'id="mace-legend" data-time="([0-9.e-]+)"', dom).group(1))
         assert time_s > 0.0
@@ -557,7 +557,7 @@ def test_pair_page_shows_two_articles_and_marks_the_pair(modes_1g_table, modes_0
     assert gaps.max() > 20 and min(upper, lower) > 300, f"wheel pixels {upper} above, {lower} below, gap {gaps.max()}"
     dom = subprocess.run([chromium_executable(), "--headless", "--no-sandbox", "--disable-gpu",
                           "--enable-unsafe-swiftshader", "--use-angle=swiftshader", "--no-first-run",
-                          f"--user-data-dir={tmp_path / 'profile'}", "--virtual-time-budget=4500", "--dump-dom",
+                          f"--user-data-dir={tmp_path / 'profile'}", "--virtual-time-budget=2000", "--dump-dom",
                           page.as_uri()], check=True, capture_output=True, text=True, timeout=240).stdout
     time_s = float(re.search(r'id="mace-legend" data-time="([0-9.e-]+)"', dom).group(1))
     playing = re.findall(r'<tr [^>]*class="playing"><td>[^<]*</td><td>([^<]*)</td>', dom)
