@@ -127,7 +127,8 @@ def main() -> None:
             ts.append(time.perf_counter() - t0)
         timing[label] = (float(np.median(ts)), y)
     same = np.array_equal(timing["FMI call by call"][1], timing["whole-record call"][1])
-    lines += ["| one 1-g simulation (12 inputs, 20 outputs, parameters set, initialised) | median [s] | per step [us] |",
+    lines += ["| one 1-g simulation (12 inputs, 20 outputs, parameters set, initialised) | median [s] | "
+              "per step [us] |",
               "|---|---|---|"]
     lines += [f"| {label} | {s:.4f} | {1e6 * s / t.size:.2f} |" for label, (s, _) in timing.items()]
     lines += ["", f"- outputs of the two routes equal to the last bit: {same}", ""]
@@ -157,7 +158,8 @@ def main() -> None:
         details.append(f"{label}: " + ", ".join(f"{n} {errors[n]:+.2f} % (sd {unc.standard_deviation_percent[n]:.2f})"
                                                for n in OFFSETS)
                        + "".join(f"; {g} {100 * (result.values[g] - 1):+.2f} % (sd "
-                                 f"{unc.standard_deviation_percent[g]:.2f})" for g in unc.names if g.startswith("gain:"))
+                                 f"{unc.standard_deviation_percent[g]:.2f})"
+                                 for g in unc.names if g.startswith("gain:"))
                        + ("; weak: " + "; ".join(w.text() for w in unc.weak_directions) if unc.weak_directions else ""))
         print(lines[-1], flush=True)
     lines += [""] + [f"- {d}" for d in details]

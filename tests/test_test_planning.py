@@ -53,7 +53,8 @@ def _measure(family, test: TestDesign, *, seed: int) -> TimeHistory:
     t = np.arange(n) * test.sample_time_s
     u = {k: np.zeros(n) for k in family.interface.inputs}
     for j, name in enumerate(test.inputs):
-        u[name] = band_limited_noise(samples=n, step_s=test.sample_time_s, band_hz=test.band_hz, seed=100 + 10 * seed + j)
+        u[name] = band_limited_noise(samples=n, step_s=test.sample_time_s, band_hz=test.band_hz,
+                                     seed=100 + 10 * seed + j)
     y = family.full({}).time_response(t, u, outputs=list(test.outputs))
     rng = np.random.default_rng(500 + seed)
     y = y + test.noise_rms_percent / 100 * np.sqrt(np.mean(y**2, axis=0)) * rng.standard_normal(y.shape)

@@ -102,7 +102,8 @@ def material_sensitivity(fe: FEModel, deck, preload: Preload | None, mid: int) -
     tangent's total derivative with the preload re-solved to first order
     (:func:`~mace_fmu.fe.preload.tangent_sensitivity`: a stiffer cable takes more of the weight, and the
     forces and geometry move with it). Otherwise (the linear preload; 0-g) the preloaded geometry with
-    the preload's bar forces held, so a change of E changes only the material part. Taking the undeformed geometry instead puts
+    the preload's bar forces held, so a change of E changes only the material part. Taking the
+    undeformed geometry instead puts
     spurious strain into the near-rigid suspension modes: Z tilt, X twist and 1st Y bending then
     came out 1.9e-3 to 2.9e-3 off after E of the Lexan center +5 %, against 7.8e-4 at most this
     way. The bar stiffness is linear in E (and in G, which NASTRAN derives from E when blank), so

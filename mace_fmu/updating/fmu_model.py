@@ -236,7 +236,6 @@ class _LoadedFmu:
                     self._check(status, f"fmi2DoStep at t = {times_s[k]:g} s")
         return y
 
-
     def _run_record(self, t0, dt, times_s, u, y, vr_in, vr_out, values) -> np.ndarray:
         """The record in one call of the runtime; a failing call is reported as the FMI route reports it."""
         double_p = ctypes.POINTER(ctypes.c_double)
@@ -284,9 +283,10 @@ class FmuModel:
     """The FMU with parameter ``values`` [FMU units] set through FMI before initialisation.
 
     ``gains``: output -> factor the simulated output is multiplied by (a sensor's gain error, estimated as
-    a nuisance parameter; outputs not named have gain 1). ``runner`` (a map-like callable, e.g. a :class:`~mace_fmu.util.runner.DaskRunner`): where the runs of an
-    FMU that must not be loaded here go (pythonfmu FMUs run in worker processes only); it is not sent
-    along when the model itself travels to a worker.
+    a nuisance parameter; outputs not named have gain 1). ``runner`` (a map-like callable, e.g. a
+    :class:`~mace_fmu.util.runner.DaskRunner`): where the runs of an FMU that must not be loaded here go
+    (pythonfmu FMUs run in worker processes only); it is not sent along when the model itself travels to
+    a worker.
     """
 
     interface: FmuInterface

@@ -150,7 +150,8 @@ class FmuParameters:
                   for n, v in self.values.items()]
         if self.sensor_gains:
             lines += ["", "# sensor gains estimated with the parameters (the data are gain x the model's output);",
-                      "# not FMU parameters: a channel calibrated by them is its measured value divided by its gain", "[sensor_gains]"]
+                      "# not FMU parameters: a channel calibrated by them is its measured value divided by its gain",
+                      "[sensor_gains]"]
             lines += [f"{toml_key(o)} = {toml_value(g)}" for o, g in self.sensor_gains.items()]
         return "\n".join(lines) + "\n"
 

@@ -162,7 +162,7 @@ def format_plan(planned: Sequence[PlannedCandidate]) -> str:
     """The ranking as a table: each candidate's standard deviation [%] of every parameter, and its weak combinations."""
     names = planned[0].parameters
     width = max([9, *(len(p.candidate.name) for p in planned)])
-    lines = [f"predicted standard deviation [%] of each parameter (linearised, before the test); best first",
+    lines = ["predicted standard deviation [%] of each parameter (linearised, before the test); best first",
              f"{'rank':<4} {'candidate':<{width}} " + " ".join(f"{n:>{max(9, len(n))}}" for n in names)
              + f" {'largest':>8}"]
     for k, p in enumerate(planned, start=1):
@@ -171,7 +171,8 @@ def format_plan(planned: Sequence[PlannedCandidate]) -> str:
                      + f" {p.worst_percent:>8.3g}")
     for p in planned:
         for w in p.uncertainty.weak_directions:
-            lines.append(f"  {p.candidate.name}: not identifiable (sd {w.standard_deviation_percent:.3g} %): {w.text()}")
+            lines.append(f"  {p.candidate.name}: not identifiable (sd {w.standard_deviation_percent:.3g} %): "
+                         f"{w.text()}")
     return "\n".join(lines)
 
 

@@ -265,8 +265,8 @@ MiStatus mi_do_step(MiInstance *inst, double t, double h, const char *fn) {
                         fn, t, h);
     /* the step starts where the last one ended: currentCommunicationPoint is tc_i, the end of the
        previous step (or the start time); another point means the importer lost track of the FMU's
-       time (a rollback takes fmiSetFMUState). The standard names no status for this; the issue's
-       decision is fmiError, so that a step never silently starts from the wrong state */
+       time (a rollback takes fmiSetFMUState). The standard names no status for this; this runtime's
+       answer is fmiError, so that a step never silently starts from the wrong state */
     if (!(fabs(t - now) <= TIME_TOLERANCE * (fabs(now) > 1.0 ? fabs(now) : 1.0)))
         return mi_error(inst, "%s%s: currentCommunicationPoint %.17g s is not the FMU's time %.17g s", inst->api,
                         fn, t, now);
