@@ -54,4 +54,4 @@ def test_a_failing_run_raises_its_own_error(runner):
 
 def test_an_unreachable_scheduler_is_a_clear_error():
     with pytest.raises(MaceError, match="cannot reach the Dask scheduler at tcp://127.0.0.1:9"):
-        DaskRunner(scheduler="tcp://127.0.0.1:9")
+        DaskRunner(scheduler="tcp://127.0.0.1:9", connect_timeout_s=1.0)

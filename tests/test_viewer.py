@@ -232,23 +232,25 @@ def framed_page(request, modes_0g, modes_1g, motion_fmu_0g, step_run_0g, tmp_pat
         anim = animate_response(motion_fmu_0g[0].structure_modes, step_run_0g)
     page = tmp_path / f"{request.param}.html"
     write_animation_html(anim, page, title=f"MACE {request.param}")
-    return page, BUILD / f"viewer_{request.param}_1200x800.png"
+    return page, BUILD / f"viewer_{request.param}_600x400.png"
 
 
 @needs_chromium
 def test_pages_open_framed_on_the_test_article(framed_page):
-    """At 1200 x 800 the structure is drawn in its colours, and the gimbals and wheels span >= 40 % of the width."""
+    """At 600 x 400 the structure is drawn in its colours, and the gimbals and wheels span >= 40 % of the width
+    (framing is relative to the picture: software WebGL draws a quarter of the pixels of the CLI's 1200 x 800
+    in about 40 % of the time, and the same fractions come out)."""
     from PIL import Image
 
     page, shot = framed_page
-    write_still(page, shot, width_px=1200, height_px=800)
+    write_still(page, shot, width_px=600, height_px=400)
     pixels = np.asarray(Image.open(shot).convert("RGB"), dtype=float)
-    assert pixels.shape == (800, 1200, 3)
+    assert pixels.shape == (400, 600, 3)
     assert pixels.std() > 20.0  # not blank
     bus = _component_mask(pixels, 213.0)  # 0x4A7FC1
-    assert bus.sum() > 2000, f"bus pixels: {bus.sum()}"
+    assert bus.sum() > 500, f"bus pixels: {bus.sum()}"
     span, counts = _article_span(pixels)
-    assert min(counts.values()) > 300, f"gimbal and wheel pixels: {counts}"
+    assert min(counts.values()) > 75, f"gimbal and wheel pixels: {counts}"
     assert span >= 0.40, f"gimbals and wheels span {100 * span:.1f} % of the width ({counts} pixels)"
 
 
@@ -307,10 +309,12 @@ def test_cli_png_writes_a_still_from_the_chosen_camera(tmp_path, capsys):
     spans = {}
     for camera in ("z", "x"):
         png = tmp_path / f"{camera}.png"
-        assert main(["view", "modes", "0g", "--mode", "14", "--png", str(png), "--camera", camera]) == 0
+        assert main(["view", "modes", "0g", "--mode", "14", "--png", str(png), "--camera", camera,
+                     "--png-size", "600", "400"]) == 0
         assert f"wrote {png} (still from headless Chromium, {camera} view)" in capsys.readouterr().out
         spans[camera] = _article_span(np.asarray(Image.open(png).convert("RGB"), dtype=float))[0]
     assert spans["z"] >= 0.4 and spans["x"] < 0.5 * spans["z"], spans
+    assert Image.open(tmp_path / "z.png").size == (600, 400)
     assert not list(tmp_path.glob("*.html"))
 
 
@@ -546,15 +550,15 @@ def test_pair_page_shows_two_articles_and_marks_the_pair(modes_1g_table, modes_0
     pairs_anim = animate_pairs(modes_1g_table, modes_0g, labels=["1st Z", "1st Y", "2nd Y"], frames_per_cycle=8)
     page = tmp_path / "pairs.html"
     write_animation_html(pairs_anim, page, title="pairs")
-    shot = BUILD / "viewer_pairs_1200x800.png"
-    write_still(page, shot, width_px=1200, height_px=800)
+    shot = BUILD / "viewer_pairs_600x400.png"
+    write_still(page, shot, width_px=600, height_px=400)
     pixels = np.asarray(Image.open(shot).convert("RGB"), dtype=float)
     wheels = _component_mask(pixels, _ARTICLE_HUES["reaction_wheels"])
     rows = np.nonzero(wheels)[0]
     gaps = np.diff(np.unique(rows))
     split = np.unique(rows)[np.argmax(gaps)]
     upper, lower = (rows <= split).sum(), (rows > split).sum()
-    assert gaps.max() > 20 and min(upper, lower) > 300, f"wheel pixels {upper} above, {lower} below, gap {gaps.max()}"
+    assert gaps.max() > 10 and min(upper, lower) > 75, f"wheel pixels {upper} above, {lower} below, gap {gaps.max()}"
     dom = subprocess.run([chromium_executable(), "--headless", "--no-sandbox", "--disable-gpu",
                           "--enable-unsafe-swiftshader", "--use-angle=swiftshader", "--no-first-run",
                           f"--user-data-dir={tmp_path / 'profile'}", "--virtual-time-budget=2000", "--dump-dom",

@@ -28,7 +28,7 @@ def _show(animation, args: argparse.Namespace, *, title: str) -> None:
             page = args.html or Path(tmp) / "page.html"
             if not args.html:
                 write_animation_html(animation, page, title=title, camera=args.camera)
-            write_still(page, args.png)
+            write_still(page, args.png, width_px=args.png_size[0], height_px=args.png_size[1])
         print(f"wrote {args.png} (still from headless Chromium, {args.camera} view)")
     if args.live:
         import time
@@ -51,6 +51,9 @@ def _need_target(args: argparse.Namespace) -> None:
 
     if not (args.html or args.png or args.live):
         raise MaceError("say where to show the animation: --html OUT.html, --png OUT.png, --live, or several")
+    if args.png and not all(16 <= px <= 8192 for px in args.png_size):
+        raise MaceError(f"--png-size {' '.join(map(str, args.png_size))}: expected WIDTH HEIGHT in pixels, each "
+                        "16-8192")
     if args.png and chromium_executable() is None:
         raise MaceError("--png needs headless Chromium, which is not installed (Debian: apt-get install chromium); "
                         "use --html and open the page in a browser")
@@ -194,7 +197,9 @@ def cmd_view_pairs(args: argparse.Namespace) -> int:
 def _output_options(p: argparse.ArgumentParser, *, html: str) -> None:
     """Where the animation goes and from where it is seen (both view commands)."""
     p.add_argument("--html", help=html)
-    p.add_argument("--png", help="write a still of the page (1200 x 800) through headless Chromium, if installed")
+    p.add_argument("--png", help="write a still of the page through headless Chromium, if installed")
+    p.add_argument("--png-size", type=int, nargs=2, default=[1200, 800], metavar=("WIDTH", "HEIGHT"),
+                   help="size of the still [px] (default 1200 800)")
     p.add_argument("--camera", choices=CAMERA_CHOICES, default="iso",
                    help="initial view: iso (3/4 view, default), or along the x, y (from above) or z axis")
     p.add_argument("--live", action="store_true", help="also serve it on a live meshcat server until Ctrl-C")

@@ -26,7 +26,7 @@ class DaskRunner:
     """
 
     def __init__(self, *, scheduler: str | None = None, client: Any = None, workers: int | None = None,
-                 progress: ProgressCallback | None = None, task: str = "model runs"):
+                 progress: ProgressCallback | None = None, task: str = "model runs", connect_timeout_s: float = 10.0):
         try:
             from dask.distributed import Client, LocalCluster
         except ImportError as exc:  # dask[distributed] is a dependency; say what is missing if it is not there
@@ -37,7 +37,7 @@ class DaskRunner:
             self.client = client
         elif scheduler is not None:
             try:
-                self.client = Client(scheduler, timeout="10s")
+                self.client = Client(scheduler, timeout=f"{connect_timeout_s}s")
             except (OSError, TimeoutError) as exc:
                 raise MaceError(f"cannot reach the Dask scheduler at {scheduler}: {exc}") from None
         else:
