@@ -40,7 +40,9 @@ struct MaceModel {
     MaceAlloc al;
     MaceKind kind;
     MaceFile file;
-    size_t n_in, n_out, n_par, n_modes, n_flex, n_blocks, pade, n, n_so, m_s, n_phys, n_ub, n_yb;
+    size_t n_in, n_out, n_par, n_modes, n_flex, n_blocks, pade, n, n_phys;
+    size_t n_structure_inputs, n_structure_outputs; /* the structure block's actuator and sensor rows */
+    size_t n_block_inputs, n_block_outputs;         /* all blocks' inputs and outputs, stacked */
     const double *par_nominal, *par_min, *par_max, *freq0, *dk, *wiring, *entry, *exit_, *modal_b, *rows;
     const int64_t *par_kind, *par_index, *block_info, *flex, *keep_disp, *keep_rate, *row_is_rate, *me_order;
     /* the state vector's order: model exchange s[i] = x[perm[i]] (me_order of the data: dense-LU friendly),
@@ -63,8 +65,8 @@ struct MaceModel {
     /* the block diagram of the last build, sparse, for the derivatives and their directional
        derivatives: dx = A_b x + B_b u_b with u_b = W [wiring | entry] [C_b x; u], W = (I - wiring D_b)^-1 */
     MaceCsr ab, bb, cb, wq;
-    double *zb;                             /* n_yb + n_in: C_b x, then the inputs */
-    double *ub;                             /* n_ub: the blocks' inputs */
+    double *zb;                             /* n_block_outputs + n_in: C_b x, then the inputs */
+    double *ub;                             /* n_block_inputs: the blocks' inputs */
     double *dir_x, *dir_u, *dir_dx, *dir_dy; /* directional derivatives: seeds and results */
 };
 
@@ -156,11 +158,11 @@ static int load(MaceModel *m, const char *resource_dir, char *err) {
     m->n_blocks = (size_t)counts[COUNT_BLOCKS];
     m->pade = (size_t)counts[COUNT_PADE];
     m->n = (size_t)counts[COUNT_STATES];
-    m->n_so = (size_t)counts[COUNT_SO];
-    m->m_s = (size_t)counts[COUNT_MS];
+    m->n_structure_outputs = (size_t)counts[COUNT_SO];
+    m->n_structure_inputs = (size_t)counts[COUNT_MS];
     m->n_phys = (size_t)counts[COUNT_PHYS];
-    m->n_ub = (size_t)counts[COUNT_UB];
-    m->n_yb = (size_t)counts[COUNT_YB];
+    m->n_block_inputs = (size_t)counts[COUNT_UB];
+    m->n_block_outputs = (size_t)counts[COUNT_YB];
     if (m->pade < 1 || m->pade > 10 || m->n_flex > m->n_modes) {
         snprintf(err, MACE_ERR_LEN, "%.900s: inconsistent counts", path);
         return -1;
@@ -175,12 +177,12 @@ static int load(MaceModel *m, const char *resource_dir, char *err) {
         !(m->freq0 = (const double *)entry_1d(m, "frequencies_hz", MACE_F64, m->n_modes, err)) ||
         !(m->dk = (const double *)mace_file_get(&m->file, "physical_dk", MACE_F64, 3, dims, err)) ||
         !(m->block_info = (const int64_t *)entry_2d(m, "block_info", MACE_I64, m->n_blocks, N_INFO, err)) ||
-        !(m->wiring = (const double *)entry_2d(m, "wiring", MACE_F64, m->n_ub, m->n_yb, err)) ||
-        !(m->entry = (const double *)entry_2d(m, "entry", MACE_F64, m->n_ub, m->n_in, err)) ||
-        !(m->exit_ = (const double *)entry_2d(m, "exit", MACE_F64, m->n_out, m->n_yb, err)) ||
-        !(m->modal_b = (const double *)entry_2d(m, "modal_b", MACE_F64, m->n_modes, m->m_s, err)) ||
-        !(m->rows = (const double *)entry_2d(m, "struct_rows", MACE_F64, m->n_so, m->n_modes, err)) ||
-        !(m->row_is_rate = (const int64_t *)entry_1d(m, "struct_row_is_rate", MACE_I64, m->n_so, err)) ||
+        !(m->wiring = (const double *)entry_2d(m, "wiring", MACE_F64, m->n_block_inputs, m->n_block_outputs, err)) ||
+        !(m->entry = (const double *)entry_2d(m, "entry", MACE_F64, m->n_block_inputs, m->n_in, err)) ||
+        !(m->exit_ = (const double *)entry_2d(m, "exit", MACE_F64, m->n_out, m->n_block_outputs, err)) ||
+        !(m->modal_b = (const double *)entry_2d(m, "modal_b", MACE_F64, m->n_modes, m->n_structure_inputs, err)) ||
+        !(m->rows = (const double *)entry_2d(m, "struct_rows", MACE_F64, m->n_structure_outputs, m->n_modes, err)) ||
+        !(m->row_is_rate = (const int64_t *)entry_1d(m, "struct_row_is_rate", MACE_I64, m->n_structure_outputs, err)) ||
         !(m->keep_disp = (const int64_t *)entry_1d(m, "keep_disp", MACE_I64, m->n_modes, err)) ||
         !(m->keep_rate = (const int64_t *)entry_1d(m, "keep_rate", MACE_I64, m->n_modes, err)) ||
         !(m->flex = (const int64_t *)entry_1d(m, "flexible", MACE_I64, m->n_flex, err)) ||
@@ -251,7 +253,7 @@ static int load(MaceModel *m, const char *resource_dir, char *err) {
         const size_t nx = (size_t)info[INFO_NX], nu = (size_t)info[INFO_NU], ny = (size_t)info[INFO_NY];
         int ok = info[INFO_NX] >= 0 && info[INFO_NU] >= 0 && info[INFO_NY] >= 0;
         switch (info[INFO_KIND]) {
-            case BLOCK_STRUCTURE: ok = ok && nu == m->m_s && ny == m->n_so; break;
+            case BLOCK_STRUCTURE: ok = ok && nu == m->n_structure_inputs && ny == m->n_structure_outputs; break;
             case BLOCK_DELAY: ok = ok && nx == m->pade && nu == 1 && ny == 1 && info[INFO_P0] >= 0; break;
             case BLOCK_GAIN: ok = ok && nx == 0 && nu == 1 && ny == 1 && info[INFO_P0] >= 0; break;
             case BLOCK_PD: ok = ok && nx == 0 && nu == 2 && ny == 1 && info[INFO_P0] >= 0 && info[INFO_P1] >= 0; break;
@@ -285,7 +287,7 @@ static int load(MaceModel *m, const char *resource_dir, char *err) {
                 (size_t)m->block_info[k * N_INFO + INFO_NX] != structure_states)
                 sum_x = m->n + 1;
     }
-    if (sum_x != m->n || sum_u != m->n_ub || sum_y != m->n_yb) {
+    if (sum_x != m->n || sum_u != m->n_block_inputs || sum_y != m->n_block_outputs) {
         snprintf(err, MACE_ERR_LEN, "model data: block sizes do not add up to the system's");
         return -1;
     }
@@ -316,8 +318,8 @@ MaceModel *mace_create(const char *resource_dir, MaceKind kind, const MaceAlloc 
     m->x = ml_zeros(al, m->n);
     m->y = ml_zeros(al, m->n_out);
     m->nominal = ml_zeros(al, m->n);
-    m->zb = ml_zeros(al, m->n_yb + m->n_in);
-    m->ub = ml_zeros(al, m->n_ub);
+    m->zb = ml_zeros(al, m->n_block_outputs + m->n_in);
+    m->ub = ml_zeros(al, m->n_block_inputs);
     m->dir_x = ml_zeros(al, m->n);
     m->dir_u = ml_zeros(al, m->n_in);
     m->dir_dx = ml_zeros(al, m->n);
@@ -536,19 +538,19 @@ static int structure_block(MaceModel *m, const double *phi_r, int changed, doubl
     const size_t nm = m->n_modes, nf = m->n_flex;
     size_t j, k, o, q, nd = 0, pos;
     size_t *dpos = (size_t *)m->al.calloc(nm + 1, sizeof(size_t)), *rpos = (size_t *)m->al.calloc(nm + 1, sizeof(size_t));
-    double *mb = ml_zeros(&m->al, nm * m->m_s), *rows = ml_zeros(&m->al, m->n_so * nm);
+    double *mb = ml_zeros(&m->al, nm * m->n_structure_inputs), *rows = ml_zeros(&m->al, m->n_structure_outputs * nm);
     int status = -1;
     if (!dpos || !rpos || !mb || !rows) goto done;
-    memcpy(mb, m->modal_b, nm * m->m_s * sizeof(double));
-    memcpy(rows, m->rows, m->n_so * nm * sizeof(double));
+    memcpy(mb, m->modal_b, nm * m->n_structure_inputs * sizeof(double));
+    memcpy(rows, m->rows, m->n_structure_outputs * nm * sizeof(double));
     if (changed) { /* Phi_R^T modal_b and rows Phi_R on the flexible modes */
         for (k = 0; k < nf; k++) {
-            for (q = 0; q < m->m_s; q++) {
+            for (q = 0; q < m->n_structure_inputs; q++) {
                 double acc = 0.0;
-                for (j = 0; j < nf; j++) acc += phi_r[j * nf + k] * m->modal_b[m->flex[j] * m->m_s + q];
-                mb[m->flex[k] * m->m_s + q] = acc;
+                for (j = 0; j < nf; j++) acc += phi_r[j * nf + k] * m->modal_b[m->flex[j] * m->n_structure_inputs + q];
+                mb[m->flex[k] * m->n_structure_inputs + q] = acc;
             }
-            for (o = 0; o < m->n_so; o++) {
+            for (o = 0; o < m->n_structure_outputs; o++) {
                 double acc = 0.0;
                 for (j = 0; j < nf; j++) acc += m->rows[o * nm + m->flex[j]] * phi_r[j * nf + k];
                 rows[o * nm + m->flex[k]] = acc;
@@ -569,10 +571,11 @@ static int structure_block(MaceModel *m, const double *phi_r, int changed, doubl
         }
         if (m->keep_rate[j]) {
             ab[(ox + rpos[j]) * N + ox + rpos[j]] = -2.0 * zeta * w;
-            for (q = 0; q < m->m_s; q++) bb[(ox + rpos[j]) * NU + ou + q] = mb[j * m->m_s + q];
+            for (q = 0; q < m->n_structure_inputs; q++)
+                bb[(ox + rpos[j]) * NU + ou + q] = mb[j * m->n_structure_inputs + q];
         }
     }
-    for (o = 0; o < m->n_so; o++) {
+    for (o = 0; o < m->n_structure_outputs; o++) {
         for (j = 0; j < nm; j++) {
             if (m->row_is_rate[o] ? m->keep_rate[j] : m->keep_disp[j])
                 cb[(oy + o) * N + ox + (m->row_is_rate[o] ? rpos[j] : dpos[j])] = rows[o * nm + j];
@@ -632,7 +635,7 @@ static int pade_block(size_t n, double delay, double *a, double *b, double *c, d
 /* ---- the system ----------------------------------------------------------------------------- */
 
 static int assemble(MaceModel *m, const double *phi_r, int changed, char *err) {
-    const size_t N = m->n, NU = m->n_ub, NY = m->n_yb, ni = m->n_in, no = m->n_out;
+    const size_t N = m->n, NU = m->n_block_inputs, NY = m->n_block_outputs, ni = m->n_in, no = m->n_out;
     double *ab = ml_zeros(&m->al, N * N), *bb = ml_zeros(&m->al, N * NU), *cb = ml_zeros(&m->al, NY * N);
     double *db = ml_zeros(&m->al, NY * NU), *w = ml_zeros(&m->al, NU * NU), *rhs = ml_zeros(&m->al, NU * (N + ni));
     double *t = ml_zeros(&m->al, (NY > NU ? NY : NU) * (N + ni)), *wq = ml_zeros(&m->al, NU * (NY + ni));
@@ -817,7 +820,7 @@ static const double *outputs(MaceModel *m) {
  * the 1-g model's 297 states against 91,000 for the dense A and B (which stay for the zero-order hold). */
 static void rhs(MaceModel *m, const double *x, const double *u, double *dx) {
     csr_apply(&m->cb, x, m->zb, 0);
-    memcpy(m->zb + m->n_yb, u, m->n_in * sizeof(double));
+    memcpy(m->zb + m->n_block_outputs, u, m->n_in * sizeof(double));
     csr_apply(&m->wq, m->zb, m->ub, 0);
     csr_apply(&m->ab, x, dx, 0);
     csr_apply(&m->bb, m->ub, dx, 1);
