@@ -306,11 +306,10 @@ def _model_exchange(fmus, change: dict[str, float]) -> FMU2Model:
     return fmu
 
 
-@pytest.mark.parametrize("changed", [False, True])
-def test_model_exchange_derivatives_and_outputs_are_a_x_plus_b_u(fmus, changed):
-    """Derivatives at random states and inputs against the reference A x + B u (same realisation, the
-    states in the FMU's model-exchange order); damping, delays and servo gains changed in the second case."""
-    model = fmus.model
+def _reference_in_the_fmus_state_order(fmus, changed: bool):
+    """(parameter change, (A, B, C, D) of the reference with the states in the FMU's model-exchange order, the
+    state names in that order); the change sets damping, a delay and a servo gain, no physical parameter (its
+    reanalysis may flip the sign of a mode shape)."""
     system = ParametricSystem(fmus.arrays)
     change = {"damping_mode_20": 0.05, "delay_gimbal_primary_x": 6.0e-3, "K_a": -1.5} if changed else {}
     params = system.nominal.copy()
@@ -320,8 +319,16 @@ def test_model_exchange_derivatives_and_outputs_are_a_x_plus_b_u(fmus, changed):
     order = _state_order(fmus.dir2)
     assert sorted(order) == list(range(len(a)))
     names = [system.state_names[k] for k in order]  # delays first, the structure's rates last (dense LU)
+    return change, (a[np.ix_(order, order)], b[order], c[:, order], d), names
+
+
+@pytest.mark.parametrize("changed", [False, True])
+def test_model_exchange_derivatives_and_outputs_are_a_x_plus_b_u(fmus, changed):
+    """Derivatives at random states and inputs against the reference A x + B u (same realisation, the
+    states in the FMU's model-exchange order); damping, delays and servo gains changed in the second case."""
+    model = fmus.model
+    change, (a, b, c, d), names = _reference_in_the_fmus_state_order(fmus, changed)
     assert names[0].startswith("delay_") and names[-1].startswith("structure.") and names[-1].endswith("_vel")
-    a, b, c = a[np.ix_(order, order)], b[order], c[:, order]
     fmu = _model_exchange(fmus, change)
     ins, outs = value_references(fmus.dir2)
     rng = np.random.default_rng(11)
@@ -346,14 +353,7 @@ def test_model_exchange_directional_derivatives_are_the_jacobian(fmus, changed):
     a shuffled subset), against A v + B w and C v + D w to 1e-12 (the derivatives' bound above), same
     realisation (so no physical parameter: its reanalysis may flip the sign of a mode shape)."""
     model = fmus.model
-    system = ParametricSystem(fmus.arrays)
-    change = {"damping_mode_20": 0.05, "delay_gimbal_primary_x": 6.0e-3, "K_a": -1.5} if changed else {}
-    params = system.nominal.copy()
-    for name, value in change.items():
-        params[system.index(name)] = value
-    a, b, c, d = system.build(params)
-    order = _state_order(fmus.dir2)
-    a, b, c = a[np.ix_(order, order)], b[order], c[:, order]  # the FMU's state order
+    change, (a, b, c, d), _ = _reference_in_the_fmus_state_order(fmus, changed)
     md = fmpy.read_model_description(fmus.dir2)
     assert md.modelExchange.providesDirectionalDerivative and not md.coSimulation.providesDirectionalDerivative
     states = [u.variable.derivative.valueReference for u in md.derivatives]

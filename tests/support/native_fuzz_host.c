@@ -15,7 +15,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "fmi2Functions.h"
+#include "silent_fmi2_host.h"
 
 static unsigned long long rng_state;
 static unsigned rnd(unsigned n) { /* n > 0 */
@@ -23,22 +23,6 @@ static unsigned rnd(unsigned n) { /* n > 0 */
     return (unsigned)((rng_state >> 33) % n);
 }
 static double pick(const double *values, unsigned n) { return values[rnd(n)]; }
-
-static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status, fmi2String category,
-                   fmi2String message, ...) {
-    (void)env;
-    (void)name;
-    (void)status;
-    (void)category;
-    (void)message;
-}
-
-#define LOAD(name)                                              \
-    name##TYPE *name = (name##TYPE *)dlsym(lib, #name);         \
-    if (!name) {                                                \
-        fprintf(stderr, "missing symbol %s\n", #name);          \
-        return 1;                                               \
-    }
 
 int main(int argc, char **argv) {
     char path[4096], uri[4096];

@@ -14,23 +14,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 
-#include "fmi2Functions.h"
-
-static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status, fmi2String category,
-                   fmi2String message, ...) {
-    (void)env;
-    (void)name;
-    (void)status;
-    (void)category;
-    (void)message;
-}
-
-#define LOAD(f)                                      \
-    f##TYPE *f = (f##TYPE *)dlsym(lib, #f);          \
-    if (!f) {                                        \
-        fprintf(stderr, "%s not exported\n", #f);    \
-        return 1;                                    \
-    }
+#include "silent_fmi2_host.h"
 
 int main(int argc, char **argv) {
     char path[4096], uri[4096];
