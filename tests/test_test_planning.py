@@ -145,3 +145,39 @@ def test_signals_the_fmu_lacks_are_refused_before_any_simulation(tmp_path, capsy
     code = main(["plan-test", family.interface.path, "--tests", str(tmp_path / "plan.toml"), "--update", STRUT[0]])
     err = capsys.readouterr().err
     assert code == 2 and "test 'a'" in err and "output 'strain_x'" in err, err
+
+
+def test_at_predicts_about_given_values_as_the_api_does(family, tmp_path, capsys):
+    """--at FILE linearises about those values: the printed standard deviation is predict_uncertainty's there,
+    not at the FMU's start values (the cable moduli's move with the point)."""
+    (tmp_path / "plan.toml").write_text(PLAN)
+    at = {"E_cable_1": 0.97 * family.interface.parameters["E_cable_1"]}
+    (tmp_path / "at.toml").write_text(f"[values]\nE_cable_1 = {at['E_cable_1']!r}\n")
+    code = main(["plan-test", family.interface.path, "--tests", str(tmp_path / "plan.toml"), "--update", "E_cable_1",
+                 "--at", str(tmp_path / "at.toml"), "--workers", "1", "-o", str(tmp_path / "p.toml")])
+    assert code == 0, capsys.readouterr().err
+    import tomllib
+
+    written = {s["name"]: s["standard_deviation_percent"][0]
+               for s in tomllib.loads((tmp_path / "p.toml").read_text())["stage"]}
+    strut = read_test_plan(tmp_path / "plan.toml")[0]
+    there = predict_uncertainty(family=family, parameters=["E_cable_1"], candidate=strut, values=at)
+    nominal = predict_uncertainty(family=family, parameters=["E_cable_1"], candidate=strut)
+    assert written["strut"] == pytest.approx(there.standard_deviation_percent["E_cable_1"], rel=1e-12)
+    assert there.standard_deviation_percent["E_cable_1"] != nominal.standard_deviation_percent["E_cable_1"]
+
+
+def test_example_plan_then_update_quick(tmp_path):
+    """examples/plan_then_update.py with 2 s tests: the plan picks a candidate, the update on its data converges
+    with the gauges' gains estimated, and every modulus's truth lies inside its reported 95 % interval."""
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "examples" / "plan_then_update.py"
+    spec = importlib.util.spec_from_file_location("plan_then_update", path)
+    example = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(example)
+    summary = example.main(["--seconds", "2", "--workers", "1", "--out", str(tmp_path)])
+    assert summary["best"] == "gimbal + strut" and summary["converged"]
+    for name, (error, sd, _) in summary["rows"].items():
+        assert abs(error) <= 1.96 * sd, (name, error, sd)
