@@ -151,7 +151,23 @@ class ConvergenceReport:
 
 def convergence_report(result: UpdateResult, *, noise_floor: NoiseFloor | None = None,
                        sigma_limit: float = SIGMA_LIMIT) -> ConvergenceReport:
-    """The verdict on ``result``: its stages' tests, and (with a noise floor) the final cost against it."""
+    """The verdict on ``result``: its stages' tests, and (with a noise floor) the final cost against it.
+
+    Parameters
+    ----------
+    result : UpdateResult
+        The update to judge.
+    noise_floor : NoiseFloor, optional
+        The time cost expected at the truth (:func:`noise_floor`); without one only the stopping
+        tests and bounds decide.
+    sigma_limit : float
+        A final cost more than this many standard deviations above the floor has not converged.
+
+    Returns
+    -------
+    ConvergenceReport
+        ``converged`` and the reasons, for the terminal line and ``convergence.toml``.
+    """
     reasons = list(result.reasons)
     converged = result.converged
     if noise_floor is not None:

@@ -42,18 +42,50 @@ def fmu_problem(*, fmu: str | os.PathLike, data: Sequence[str | os.PathLike], na
                 gain_uncertainty: Mapping[str, float] | None = None) -> FmuProblem:
     """Read and check everything an FMU update needs; no simulation runs.
 
-    ``data``: one or more time histories (CSV/npz: the measured inputs and outputs of one test each;
-    several tests are summed, each in units of its own noise) and, with a single one and the log-FRF
-    cost, optionally one frequency response (UFF 58/CSV) to compare with instead of the H1 of the time
-    history; ``noise_rms_fraction``: the tests' noise RMS over their outputs' RMS, when it cannot be
-    estimated from the data; ``start``: values [FMU units] set on every run (default: the FMU's own start values);
-    ``segment_s``: H1 segment length [s]; ``held_inputs``: FMU inputs the data lack that are to be held at
-    0 (any other input the data lack is an error: a silently grounded input biases every parameter);
-    ``gain_uncertainty``: output -> standard deviation of its sensor's gain as a fraction (0.01: known to
-    1 %), for outputs whose gain is known only that well (with the channel map's
-    ``gain_uncertainty_percent`` column): each such gain is estimated with the update as a nuisance
-    parameter "gain:<output>" with a Gaussian prior (mean 1), so the moduli's stated uncertainty
-    includes the gains'.
+    Parameters
+    ----------
+    fmu : path
+        An FMI 2.0 co-simulation FMU (any tool's; a native FMU of this package runs fastest).
+    data : sequence of paths
+        One or more time histories (CSV/npz: the measured inputs and outputs of one test each; several
+        tests are summed, each in units of its own noise) and, with a single one and the log-FRF cost,
+        optionally one frequency response (UFF 58/CSV) to compare with instead of the H1 of the time
+        history.
+    names : sequence of str
+        The FMU parameters to update, each named once.
+    cost : {"time", "log-frf"}
+        Output errors over their RMS (eq. 4.3), or log ratios of H1 estimates (eq. 4.5/4.17).
+    start : mapping of str to float, optional
+        Values [FMU units] set on every run (default: the FMU's own start values).
+    channel_map : path, optional
+        CSV mapping the data's channels to the FMU's signals (with units and, optionally, a
+        ``gain_uncertainty_percent`` column).
+    segment_s : float
+        H1 segment length [s] of the log-FRF cost.
+    weighting : {"noise", "none"}
+        Log-FRF: each bin over its noise standard deviation, or eq. 4.17 as printed.
+    held_inputs : sequence of str
+        FMU inputs the data lack that are to be held at 0 V (any other input the data lack is an
+        error: a silently grounded input biases every parameter).
+    noise_rms_fraction : float, optional
+        The tests' noise RMS over their outputs' RMS, when it cannot be estimated from the data.
+    gain_uncertainty : mapping of str to float, optional
+        Output -> standard deviation of its sensor's gain as a fraction (0.01: known to 1 %). Each such
+        gain is estimated with the update as a nuisance parameter "gain:<output>" with a Gaussian prior
+        of mean 1, so the stated uncertainty of the parameters includes the gains'.
+
+    Returns
+    -------
+    FmuProblem
+        The FMU as a model family, the parameters (gains appended) and their start values, the data
+        and the cost, ready for :func:`~mace_fmu.updating.fmu_update.update_fmu`.
+
+    Raises
+    ------
+    MaceError
+        A missing or malformed file, an unknown parameter or channel, a parameter named twice, tests
+        with different sample times, an FMU input the data lack and that is not held, a gain prior on
+        an output no test records or not positive: the message names the file, channel or parameter.
     """
     from mace_fmu.updating.files import read_channel_map, read_measured_data
 

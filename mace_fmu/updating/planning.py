@@ -186,9 +186,28 @@ _TEST_KEYS = {"name", "inputs", "outputs", "seconds", "sample_time_s", "band_hz"
 
 
 def read_test_plan(path: str | os.PathLike) -> tuple[Candidate, ...]:
-    """Candidates from a TOML file: ``[[test]]`` tables (name, inputs, outputs and optionally seconds,
-    sample_time_s, band_hz = [low, high], noise_rms_percent, gain_uncertainty_percent = {output = P}) and
-    ``[[candidate]]`` tables (name, tests = [test names]); without candidates, each test is one."""
+    """Candidates from a TOML file.
+
+    Parameters
+    ----------
+    path : path
+        A test plan: ``[[test]]`` tables (name, inputs, outputs and optionally seconds [s],
+        sample_time_s [s], band_hz = [low, high] [Hz], noise_rms_percent [%],
+        gain_uncertainty_percent = {output = P} [%]) and ``[[candidate]]`` tables (name, tests = [test
+        names]); without candidates, each test is one.
+
+    Returns
+    -------
+    tuple of Candidate
+        In the file's order.
+
+    Raises
+    ------
+    MaceError
+        An unknown table or key, a value of the wrong kind or out of range, a band at or above the
+        Nyquist frequency, a candidate naming a test the file lacks: the message names the file and
+        the entry.
+    """
     from mace_fmu.util.textfile import read_toml
 
     path = Path(path)

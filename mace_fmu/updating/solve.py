@@ -173,7 +173,40 @@ def _check(names: Sequence[str], start: Mapping[str, float], bounds: Mapping[str
 def update(family: ModelFamily, cost: Cost, *, start: Mapping[str, float], stages: Sequence[Stage],
            bounds: Mapping[str, Bounds], settings: UpdateSettings = UpdateSettings(), runner: Callable = map,
            progress: ProgressCallback | None = None) -> UpdateResult:
-    """Update ``start`` (every parameter value the family needs) stage by stage to lower ``cost``."""
+    """Update ``start`` (every parameter value the family needs) stage by stage to lower ``cost``.
+
+    Parameters
+    ----------
+    family : ModelFamily
+        Parameter values -> model (the FE model, the sample problem, an FMU).
+    cost : Cost
+        The residual vector j whose j^T j is lowered (modal, frequency response, time response, ...).
+    start : mapping of str to float
+        Every parameter value the family needs [SI]; the stages' parameters move from these, in
+        relative terms.
+    stages : sequence of Stage
+        Which parameters move together, in order (and, optionally, against which cost).
+    bounds : mapping of str to Bounds
+        Allowed range [SI] and plausible change of every stage parameter.
+    settings : UpdateSettings
+        Method, differences, stopping tests, trust region, rounds.
+    runner : callable
+        ``map``-like function the perturbed models' evaluations go to (``map`` or a Dask runner).
+    progress : callable, optional
+        Called with a :class:`~mace_fmu.util.progress.Step` as the work advances.
+
+    Returns
+    -------
+    UpdateResult
+        The final values, the cost before and after, every outer iteration with its sensitivities,
+        and how each stage ended (:attr:`UpdateResult.converged`, :attr:`UpdateResult.reasons`).
+
+    Raises
+    ------
+    MaceError
+        A stage parameter without a start value or bounds, a start outside its bounds or zero, an
+        unknown method.
+    """
     t_start = time.perf_counter()
     names_all = sorted({n for s in stages for n in s.parameters})
     _check(names_all, start, bounds)

@@ -75,8 +75,22 @@ def stage_uncertainty(result: UpdateResult, *, tolerance_percent: float = DEFAUL
                       noise_variance: float | None = None) -> tuple[StageUncertainty, ...]:
     """The uncertainty of every stage that has cost sensitivities (the cost-sensitivity method).
 
-    ``noise_variance``: sigma^2 per residual when known (e.g. the noise floor's expected cost / m);
-    default: the final cost / (m - n).
+    Parameters
+    ----------
+    result : UpdateResult
+        An update whose stages kept their final linearisation (no extra model runs are made).
+    tolerance_percent : float
+        A parameter or combination whose standard deviation exceeds this [%] is reported as not
+        fixed by the data.
+    noise_variance : float, optional
+        sigma^2 per residual when known (e.g. the noise floor's expected cost / m); default: the
+        final cost / (m - n).
+
+    Returns
+    -------
+    tuple of StageUncertainty
+        Per stage: standard deviations [% of the value], correlations, 95 % intervals [SI], singular
+        values and the weak directions in parameter names.
     """
     out = []
     for stage, (names, jac) in _stage_jacobians(result).items():
