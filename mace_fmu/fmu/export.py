@@ -169,15 +169,37 @@ def export_fmu(model: VoltsModel, *, kind: FmuKind = "native", fmi_version: int 
 def export_pythonfmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str | None = None,
                      arrays: dict[str, np.ndarray] | None = None,
                      frequency_bounds: Mapping[int, float] | None = None) -> Path:
-    """Write ``out_dir/<name>.fmu`` with pythonfmu (default name from ``fmu_name``: MACE_1g, MACE_1g_motion,
-    ...) and return its path; ``arrays``: the model's parametric arrays if already computed;
-    ``frequency_bounds`` (1-based mode -> relative bound) the min/max of the modes'
-    ``frequency_scale_mode_<k>``, 1 -+ bound."""
+    """Write an FMI 2.0 co-simulation FMU of ``model`` with pythonfmu and return its path.
+
+    Parameters
+    ----------
+    model : VoltsModel
+        The volts-volts model; the FMU re-analyses its physical parameters at initialisation in Python.
+    out_dir : path
+        Folder the FMU is written to.
+    name : str, optional
+        The model class's name, a Python/C identifier (default from :func:`fmu_name`: MACE_1g,
+        MACE_1g_motion, ...).
+    arrays : dict, optional
+        The model's parametric arrays if already computed.
+    frequency_bounds : mapping of int to float, optional
+        1-based mode -> relative bound: the declared min/max of that mode's ``frequency_scale_mode_<k>``.
+
+    Returns
+    -------
+    Path
+        ``out_dir/<name>.fmu``.
+
+    Raises
+    ------
+    MaceError
+        A name that is not an identifier.
+    """
     kind = model.structure_modes.structure.kind
     name = name or fmu_name(kind, motion_grids=model.plant.motion_grids,
                             all_grids=model.structure_modes.model.dofs.grid_ids)
     if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", name):
-        raise ValueError(f"FMU name must be a Python/C identifier (it names the model class), got {name!r}")
+        raise MaceError(f"FMU name must be a Python/C identifier (it names the model class), got {name!r}")
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     description = model_summary(model)

@@ -124,10 +124,31 @@ def build_structure(deck: Deck, *, kind: StructureKind, spec: StructureSpec | No
                     structure_file: StructureFile | str | os.PathLike | None = None) -> Structure:
     """The 1-g structure (deck as is, preload subcase + modal subcase) or the 0-g structure.
 
-    The structure file is ``structure_file`` when given, else the bundled one for the bundled deck,
-    else none: then 0-g is the deck's own modal subcase with nothing removed (NASTRAN's SOL 103)
-    and 1-g adds the gravity preload of its LOAD subcase. ``spec`` (e.g. ``StructureSpec.empty()``)
-    replaces the file's structure part.
+    Parameters
+    ----------
+    deck : Deck
+        The NASTRAN deck.
+    kind : {"1g", "0g"}
+        The suspended, gravity-preloaded structure or the free one.
+    spec : StructureSpec, optional
+        Replaces the structure file's structure part (e.g. ``StructureSpec.empty()``).
+    overrides : mapping, optional
+        (card, ID) -> {field: value} changes applied to a copy of the deck (e.g. a modulus).
+    structure_file : StructureFile or path, optional
+        The structure file; default: the bundled one for the bundled deck, else none: then 0-g is the
+        deck's own modal subcase with nothing removed (NASTRAN's SOL 103) and 1-g adds the gravity
+        preload of its LOAD subcase.
+
+    Returns
+    -------
+    Structure
+        The deck to analyse, its subcases (preload and modal) and the structure file it came from.
+
+    Raises
+    ------
+    MaceError
+        An unknown kind, a structure file naming IDs the deck lacks, a 1-g structure without a gravity
+        subcase.
     """
     if kind not in ("1g", "0g"):
         raise MaceError(f"kind must be '1g' or '0g', got {kind!r}")

@@ -42,8 +42,23 @@ MEASURED_COLUMNS = ("label", "pattern", "frequency_hz", "damping")
 def read_measured_modes(path: str | Path) -> tuple[MeasuredMode, ...]:
     """A measurement model's modes from CSV: columns label, pattern, frequency_hz, damping [, weight].
 
-    ``pattern`` says which model poles a row can be paired with (fnmatch of pole labels, "a|b"
-    for either), e.g. "* Y bending"; errors name the file, the row and the column.
+    Parameters
+    ----------
+    path : path
+        The CSV file. ``pattern`` says which model poles a row can be paired with (fnmatch of pole
+        labels, "a|b" for either), e.g. "* Y bending"; ``frequency_hz`` [Hz], ``damping`` (ratio),
+        ``weight`` (default 1).
+
+    Returns
+    -------
+    tuple of MeasuredMode
+        One per row, in the file's order.
+
+    Raises
+    ------
+    MaceError
+        A missing column, an empty file, a value that is not a number or out of range: the message
+        names the file, the row and the column.
     """
     import csv
 

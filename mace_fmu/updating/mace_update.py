@@ -131,8 +131,35 @@ def run_mace_update(*, start: ParameterSet | None = None, measured: Sequence[Mea
                     rule: SelectionRule | None = None, candidates: Sequence[str] = CANDIDATES, deck=None,
                     runner: Callable = map, progress: ProgressCallback | None = None,
                     message: Callable[[str], None] | None = None) -> MaceUpdate:
-    """Selection on the candidates about ``start`` (default: the pre-update moduli), then the update
-    against ``measured`` (default: Table 4.7's measurement model; the update band applies)."""
+    """The thesis's MACE update: selection of the candidates about ``start``, then the staged update.
+
+    Parameters
+    ----------
+    start : ParameterSet, optional
+        Where the update starts (default: the pre-update moduli, Table 4.4 back-computed).
+    measured : sequence of MeasuredMode, optional
+        The 1-g measured modes (default: Table 4.7's measurement model; the update band applies).
+    preload : {"large", "linear"}
+        The 1-g gravity preload.
+    settings : UpdateSettings
+        Method and stopping tests (default: the cost-sensitivity method, two rounds).
+    rule : SelectionRule, optional
+        Which candidates are kept (default: the thesis's).
+    candidates : sequence of str
+        The candidate parameters (default: the thesis's 13).
+    deck : Deck, optional
+        The deck (default: the bundled MACE deck).
+    runner : callable
+        ``map``-like function the perturbed models go to.
+    progress, message : callable, optional
+        Progress steps, and one line per stage.
+
+    Returns
+    -------
+    MaceUpdate
+        The selection, the update's result, the updated parameter set (with provenance) and the time per
+        stage [s].
+    """
     seconds: dict[str, float] = {}
     say = message or (lambda text: None)
     start = start if start is not None else pre_update_parameters()

@@ -302,10 +302,36 @@ def predict_zero_g(*, parameters: ParameterSet | None = None, measured: Sequence
                    message: Callable[[str], None] | None = None) -> ZeroGPrediction:
     """The updated nominal 0-g model and its bounds (thesis 5.3) from ``parameters`` and a 1-g measurement model.
 
-    ``measured`` defaults to Table 4.7's measured column and ``zero_g_patterns`` (one per measured mode,
-    None: no 0-g counterpart) to Table 5.2's rows (the bundled MACE deck only: any other deck needs its
-    own); ``structure_file`` as :func:`~mace_fmu.iomodel.volts.volts_model`'s; ``message`` receives one
-    line per stage.
+    Parameters
+    ----------
+    parameters : ParameterSet, optional
+        The updated 1-g parameter set (default: the bundled deck's values).
+    measured : sequence of MeasuredMode, optional
+        The 1-g measured modes (default: Table 4.7's measured column).
+    zero_g_patterns : sequence of str or None, optional
+        One per measured mode: which 0-g mode continues it (None: no 0-g counterpart); default:
+        Table 5.2's rows, for the bundled MACE deck only (any other deck needs its own).
+    rule : BoundRule
+        How each 0-g mode's frequency bound follows from its 1-g residual error.
+    deck : Deck, optional
+        The deck (default: the bundled MACE deck).
+    structure_file : StructureFile or path, optional
+        As :func:`~mace_fmu.iomodel.volts.volts_model`'s.
+    source : str
+        Which measurement model the residual errors come from (written into the files).
+    message : callable, optional
+        Receives one line per stage.
+
+    Returns
+    -------
+    ZeroGPrediction
+        The rows (1-g error, 0-g nominal frequency [Hz] and bound), the parameter set that builds the
+        nominal 0-g model (frequency scales included) and the model itself.
+
+    Raises
+    ------
+    MaceError
+        A parameter set with frequency scales, or measured modes and patterns of different lengths.
     """
     say = message or (lambda _: None)
     if parameters is not None and parameters.of_kind("frequency_scale"):

@@ -89,9 +89,37 @@ def jacobian_pattern(system: ParametricSystem, *, samples: int = 2, seed: int = 
 def export_native_fmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str | None = None,
                       fmi_version: FmiVersion = 2, arrays: dict[str, np.ndarray] | None = None,
                       frequency_bounds: Mapping[int, float] | None = None) -> Path:
-    """Write ``out_dir/<name>.fmu`` (default MACE_1g / MACE_0g), a native FMU, and return its path;
-    ``arrays``: the model's parametric arrays if already computed; ``frequency_bounds`` (1-based mode ->
-    relative bound): the min/max of the modes' ``frequency_scale_mode_<k>``, 1 -+ bound."""
+    """Write a native FMU (the C runtime, compiled here) of ``model`` and return its path.
+
+    Parameters
+    ----------
+    model : VoltsModel
+        The volts-volts model (:func:`~mace_fmu.iomodel.volts.volts_model`): its inputs and outputs [V]
+        become the FMU's, its physical parameters, damping ratios, frequency scales, delays [s] and servo
+        gains its tunable parameters.
+    out_dir : path
+        Folder the FMU is written to (created if needed).
+    name : str, optional
+        The FMU's model identifier, a C identifier (default: MACE_1g / MACE_0g).
+    fmi_version : {2, 3}
+        FMI 2.0 (co-simulation and model exchange) or FMI 3.0 (co-simulation).
+    arrays : dict, optional
+        The model's parametric arrays (:func:`~mace_fmu.iomodel.parametric_data.parametric_arrays`) if
+        already computed.
+    frequency_bounds : mapping of int to float, optional
+        1-based mode -> relative bound: the declared min/max of that mode's ``frequency_scale_mode_<k>``,
+        1 -+ bound.
+
+    Returns
+    -------
+    Path
+        ``out_dir/<name>.fmu``, written atomically.
+
+    Raises
+    ------
+    MaceError
+        A name that is not a C identifier, an FMI version other than 2 or 3, a compiler failure.
+    """
     kind = model.structure_modes.structure.kind
     name = name or f"MACE_{kind}"
     if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", name):
