@@ -1,4 +1,5 @@
 """Plan a test, run it, update: which experiment fixes which moduli, and does the update agree?
+===============================================================================================
 
 1. ``plan-test``: before any test, the uncertainty each candidate experiment would leave on the
    lexan, cable and active-strut moduli of the 1-g FMU (from the model alone).

@@ -28,3 +28,34 @@ def test_every_docstring_example_runs():
             if result.failed:
                 failures.append(dotted)
     assert failures == []
+
+
+def _public_functions():
+    """(dotted name, function) of every function a package's ``__all__`` names, once each."""
+    import inspect
+
+    seen = set()
+    for name in PACKAGES:
+        package = importlib.import_module(name)
+        for public in package.__all__:
+            obj = getattr(package, public)
+            if inspect.isfunction(obj) and id(obj) not in seen:
+                seen.add(id(obj))
+                yield f"{name}.{public}", obj
+
+
+def test_every_public_function_has_numpydoc_parameters_and_returns():
+    """The API reference is generated from these docstrings: every public function that takes arguments says
+    what each is (numpydoc Parameters, units where physical), and every one that returns something what."""
+    import inspect
+
+    offenders = []
+    for dotted, function in _public_functions():
+        doc = inspect.getdoc(function) or ""
+        signature = inspect.signature(function)
+        if signature.parameters and "Parameters\n----------" not in doc:
+            offenders.append(f"{dotted}: no Parameters section")
+        returns_nothing = signature.return_annotation in (None, "None")
+        if not returns_nothing and "Returns\n-------" not in doc:
+            offenders.append(f"{dotted}: no Returns section")
+    assert offenders == [], "\n".join(offenders)

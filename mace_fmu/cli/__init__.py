@@ -19,6 +19,13 @@ COMMANDS = (modes, model, export, controller, report, view, build, update, plan,
 
 
 def build_parser() -> argparse.ArgumentParser:
+    """The ``mace-fmu`` argument parser, one subcommand per command module.
+
+    Returns
+    -------
+    argparse.ArgumentParser
+        Every ``mace-fmu`` command (the CLI reference is generated from it).
+    """
     parser = argparse.ArgumentParser(prog="mace-fmu", description="Finite-element deck of the MACE structure to "
                                      "validated input-output models and FMUs.")
     sub = parser.add_subparsers(dest="command", required=True)
@@ -32,7 +39,19 @@ def _terminated(signum: int, frame: object) -> None:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the console script; errors in the input end with one message and status 2."""
+    """Entry point of the console script; errors in the input end with one message and status 2.
+
+    Parameters
+    ----------
+    argv : sequence of str, optional
+        The arguments after ``mace-fmu`` (default: the process's command line).
+
+    Returns
+    -------
+    int
+        The exit status: 0 done, 2 bad input (one line on stderr, nothing written), 3 an update that did
+        not converge (its results written), 130 interrupted.
+    """
     args = build_parser().parse_args(argv)
     in_main_thread = threading.current_thread() is threading.main_thread()  # signal handlers live there only
     previous = signal.signal(signal.SIGTERM, _terminated) if in_main_thread else None

@@ -105,7 +105,19 @@ def length_for_fundamental(spec: CantileverSpec) -> float:
 
 
 def cantilever_model(spec: CantileverSpec = CantileverSpec()) -> CantileverModel:
-    """The modal model of the first ``spec.modes`` modes, tip force [N] in, tip displacement [m] out."""
+    """The modal model of the first ``spec.modes`` modes, tip force [N] in, tip displacement [m] out.
+
+    Parameters
+    ----------
+    spec : CantileverSpec
+        Beam section [m], material [Pa, kg/m^3], the fundamental frequency it is tuned to [Hz], elements,
+        retained modes and their damping ratio (default: Appendix A's beam).
+
+    Returns
+    -------
+    CantileverModel
+        The beam's length [m], the kept modes' frequencies [Hz] and tip shapes, and their state space.
+    """
     length = length_for_fundamental(spec)
     modes = cantilever_modes(spec=spec, length=length)
     if len(modes) < spec.modes:

@@ -52,6 +52,21 @@ def design_lqg(model: ct.StateSpace, weights: LqgWeights, *, noise_input: np.nda
     ``noise_input`` (n_states x 1): where the unit-intensity process noise enters the Kalman
     filter's model; default the control input's column B (thesis eq. A.1). A disturbance that
     enters elsewhere (another actuator) is better modelled through its own column.
+
+    Parameters
+    ----------
+    model : control.StateSpace
+        The design model, one input [N] and one output [m].
+    weights : LqgWeights
+        The control weighting rho and the sensor noise intensity theta [m^2 s] (thesis eq. A.1).
+    noise_input : numpy.ndarray, optional
+        (n_states x 1) column where the process noise enters (default: the control input's).
+
+    Returns
+    -------
+    LqgDesign
+        The regulator gain K, the Kalman gain L and the compensator (a ``control.StateSpace`` from the
+        model's outputs to its inputs).
     """
     _check_siso_plant(model, "LQG design model")
     a, b, c = model.A, model.B, model.C

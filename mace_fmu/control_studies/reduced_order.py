@@ -185,7 +185,27 @@ def update_reduced_model(*, full: ct.StateSpace, reduced: ct.StateSpace, weights
 def reduced_order_study(*, full: ct.StateSpace, weights: LqgWeights, reduced_states: int = 8,
                         max_iterations: int = 200,
                         progress: Callable[[int, float], None] | None = None) -> ReducedOrderStudy:
-    """Table A.1: LQG on the full, the balanced and the updated reduced model, each closed around ``full``."""
+    """Table A.1: LQG on the full, the balanced and the updated reduced model, each closed around ``full``.
+
+    Parameters
+    ----------
+    full : control.StateSpace
+        The full model the compensators are closed around.
+    weights : LqgWeights
+        The LQG weighting (rho, theta) of every design.
+    reduced_states : int
+        States of the reduced models.
+    max_iterations : int
+        Of the reduced model's update (the optimiser's cap).
+    progress : callable, optional
+        ``progress(iteration, cost)`` during the update.
+
+    Returns
+    -------
+    ReducedOrderStudy
+        The full, balanced and updated reduced models, each one's LQG design, and each design's
+        closed-loop cost on the full model (Table A.1's rows).
+    """
     balanced, hsv = balanced_model(full, states=reduced_states)
     updated, result = update_reduced_model(full=full, reduced=balanced, weights=weights,
                                            max_iterations=max_iterations, progress=progress)

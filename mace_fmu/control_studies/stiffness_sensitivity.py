@@ -75,7 +75,25 @@ def normalised_cost(*, actual: TwoMassSystem, model_k1: float, model_k2: float, 
 
 def sensitivity_map(*, actual: TwoMassSystem, weights: LqgWeights, k1_values: np.ndarray, k2_values: np.ndarray,
                     progress: Callable[[int, int], None] | None = None) -> SensitivityMap:
-    """Normalised cost on the grid k1_values x k2_values [N/m]; ``progress(done, total)`` per row."""
+    """Normalised cost on the grid k1_values x k2_values [N/m]; ``progress(done, total)`` per row.
+
+    Parameters
+    ----------
+    actual : TwoMassSystem
+        The plant the compensators are closed around.
+    weights : LqgWeights
+        The LQG weighting (rho, theta) of every design.
+    k1_values, k2_values : numpy.ndarray
+        The design models' spring stiffnesses [N/m].
+    progress : callable, optional
+        ``progress(done, total)`` after each row.
+
+    Returns
+    -------
+    SensitivityMap
+        The closed-loop cost of each design model's compensator on the actual system, over the
+        optimal one's (inf where the loop is unstable).
+    """
     k1 = np.asarray(k1_values, dtype=float)
     k2 = np.asarray(k2_values, dtype=float)
     if k1.ndim != 1 or k2.ndim != 1 or not len(k1) or not len(k2) or min(k1.min(), k2.min()) <= 0.0:

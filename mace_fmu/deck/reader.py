@@ -61,7 +61,25 @@ def read_deck(path: str | os.PathLike[str]) -> Deck:
 
 
 def read_deck_text(text: str, *, name: str = "<string>") -> Deck:
-    """Read and validate a deck given as text; ``name`` stands for the file in error messages."""
+    """Read and validate a deck given as text; ``name`` stands for the file in error messages.
+
+    Parameters
+    ----------
+    text : str
+        The bulk data (and case control) as a NASTRAN deck file would hold it.
+    name : str
+        What error messages call the text.
+
+    Returns
+    -------
+    Deck
+        The validated cards.
+
+    Raises
+    ------
+    DeckError
+        A malformed or inconsistent card: the message names ``name``, the line, the card and the field.
+    """
     # Split on newlines only, so that line numbers match what an editor shows.
     physical = text.removeprefix("\ufeff").split("\n")  # a byte-order mark, which some editors write
     if physical and physical[-1] == "":

@@ -76,6 +76,19 @@ def assemble(deck: Deck, *, mass: MassKind = "lumped") -> FEModel:
 
     ``mass``: "lumped" (NASTRAN's default) or "consistent"; a deck's PARAM,COUPMASS > 0 asks for the coupled
     (consistent) mass, as in NASTRAN.
+
+    Parameters
+    ----------
+    deck : Deck
+        The deck (structure already chosen: :func:`~mace_fmu.structure.build.build_structure`).
+    mass : {"lumped", "consistent"}
+        The mass formulation.
+
+    Returns
+    -------
+    FEModel
+        Sparse stiffness [N/m, N m/rad] and mass [kg, kg m^2] on the basic DOFs, the DOF map, the bars and
+        the springs.
     """
     mass = coupled_mass(deck, mass)
     frames = coordinate_frames(deck)

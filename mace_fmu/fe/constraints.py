@@ -75,7 +75,24 @@ def rigid_equations(deck: Deck, dofs: DofMap, cd_frames: np.ndarray, fixed: np.n
 def build_constraints(deck: Deck, dofs: DofMap, cd_frames: np.ndarray, *, spc_set: int | None,
                       mpc_set: int | None) -> Constraints:
     """Eliminate SPC1 set ``spc_set``, GRID PS fields, MPC set ``mpc_set`` (first term dependent) and the
-    dependent DOFs of every RBAR and RBE2."""
+    dependent DOFs of every RBAR and RBE2.
+
+    Parameters
+    ----------
+    deck : Deck
+        The deck whose SPC1, GRID PS, MPC, RBAR and RBE2 cards apply.
+    dofs : DofMap
+        The model's DOFs (grid, component).
+    cd_frames : numpy.ndarray
+        (n_grids, 3, 3) displacement frames of the grids.
+    spc_set, mpc_set : int or None
+        The case control's SPC and MPC sets (None: none).
+
+    Returns
+    -------
+    Constraints
+        The transformation T from the independent DOFs to all DOFs.
+    """
     n = dofs.size
     fixed = np.zeros(n, dtype=bool)
     for grid in deck.grids.values():

@@ -273,6 +273,28 @@ def label_modes(model: FEModel, modes: Modes, spec: StructureSpec, *, reference:
     centre node); ``state`` is the configuration the modes are about (preloaded state for the
     large-displacement 1-g model, undeformed when None): bus strain is measured about it.
     ``bar_forces`` are the preload's natural bar forces (none: unstressed).
+
+    Parameters
+    ----------
+    model : FEModel
+        The model the modes belong to.
+    modes : Modes
+        The modes to label.
+    spec : StructureSpec
+        Component names (MACE's, or none: generic labels).
+    reference : numpy.ndarray
+        (3,) point [m] for rigid rotations and the torsion split.
+    state : BarState, optional
+        The configuration the modes are about (preloaded; None: undeformed).
+    bar_forces : numpy.ndarray, optional
+        (n_bars, 7) natural bar forces of the preload [N, N m].
+    zero_hz : float
+        Modes below this [Hz] form the zero-frequency cluster.
+
+    Returns
+    -------
+    Modes
+        The same modes with labels, the zero cluster rotated into named motions.
     """
     zero = np.abs(modes.frequencies_hz) < zero_hz
     shapes = modes.shapes.copy()

@@ -73,6 +73,28 @@ def solve_modes(stiffness: np.ndarray | sparse.sparray, mass: np.ndarray | spars
     massless DOFs condensed out). Above it, sparse shift-invert Lanczos (ARPACK) finds the lowest
     modes only: at least those up to ``wanted_hz`` [Hz] (or ``max_hz``) and at least the lowest
     ``wanted_count``; the caller picks among them (an EIGRL's V1, V2, ND).
+
+    Parameters
+    ----------
+    stiffness, mass : numpy.ndarray or scipy.sparse array
+        K [N/m, N m/rad] and M [kg, kg m^2] on the basic DOFs.
+    constraints : Constraints
+        The modal subcase's constraints.
+    dofs : DofMap
+        The model's DOFs.
+    cd_frames : numpy.ndarray
+        Displacement frames of the grids.
+    max_hz : float, optional
+        Keep the modes up to this frequency [Hz].
+    wanted_hz : float, optional
+        The sparse route finds at least the modes up to this [Hz].
+    wanted_count : int, optional
+        The sparse route finds at least this many modes.
+
+    Returns
+    -------
+    Modes
+        Frequencies [Hz] and mass-normalised shapes on the basic DOFs.
     """
     k = constraints.reduce_sparse(stiffness)
     m = constraints.reduce_sparse(mass)

@@ -9,7 +9,22 @@ from mace_fmu.fe.modal import Modes
 
 
 def mac_matrix(reference: Modes, reference_model: FEModel, other: Modes) -> np.ndarray:
-    """(n_ref, n_other) MAC on the grids both structures share, weighted by the reference mass."""
+    """(n_ref, n_other) MAC on the grids both structures share, weighted by the reference mass.
+
+    Parameters
+    ----------
+    reference : Modes
+        Modes whose mass weights the MAC.
+    reference_model : FEModel
+        Their model (its mass matrix).
+    other : Modes
+        The other structure's modes.
+
+    Returns
+    -------
+    numpy.ndarray
+        (n_ref, n_other) MAC values in [0, 1].
+    """
     common = [g for g in reference.dofs.grid_ids if g in set(other.dofs.grid_ids)]
     rows_ref = np.concatenate([reference.dofs.indices(g) for g in common])
     rows_other = np.concatenate([other.dofs.indices(g) for g in common])
@@ -28,6 +43,22 @@ def pair_by_mac(reference: Modes, reference_model: FEModel, other: Modes, indice
 
     Returns (reference index, other index, MAC); an other mode is used at most once, taken by
     the reference mode that matches it best.
+
+    Parameters
+    ----------
+    reference : Modes
+        The modes to pair.
+    reference_model : FEModel
+        Their model (its mass matrix).
+    other : Modes
+        The other structure's modes.
+    indices : list of int
+        The reference modes to pair (0-based).
+
+    Returns
+    -------
+    list of tuple
+        (reference index, other index, MAC) for each of ``indices``.
     """
     mac = mac_matrix(reference, reference_model, other)
     pairs: dict[int, tuple[int, float]] = {}

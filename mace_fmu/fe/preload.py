@@ -66,7 +66,22 @@ def _state(model: FEModel, u: np.ndarray) -> BarState:
 
 
 def linear_preload(model: FEModel, constraints: Constraints, load: np.ndarray) -> Preload:
-    """Linear static solution, then K + K_sigma from its bar forces on the undeformed geometry."""
+    """Linear static solution, then K + K_sigma from its bar forces on the undeformed geometry.
+
+    Parameters
+    ----------
+    model : FEModel
+        The structure.
+    constraints : Constraints
+        The static subcase's constraints.
+    load : numpy.ndarray
+        (n_dof,) load [N, N m].
+
+    Returns
+    -------
+    Preload
+        The linear displacements and the prestressed stiffness K + K_sigma.
+    """
     t = constraints.transform
     u = t @ _solve(constraints.reduce_sparse(model.stiffness), t.T @ load)
     n = model.dofs.size
@@ -101,6 +116,35 @@ def large_displacement_preload(model: FEModel, constraints: Constraints, load: n
     when it stops contracting) to NLPARM's work tolerance ``path_tolerance`` (EPSW). The last increment, whose tangent is the product,
     uses full Newton to ``final_tolerance``. The work criterion is NASTRAN's (CONV=W): the force
     residual itself stalls at round-off because the short aluminium links are ~1e10 N/m stiff.
+
+    Parameters
+    ----------
+    model : FEModel
+        The structure.
+    constraints : Constraints
+        The static subcase's constraints.
+    load : numpy.ndarray
+        (n_dof,) dead load [N, N m] (gravity).
+    increments : int
+        Load increments (NLPARM NINC).
+    max_iterations : int
+        Newton iterations per increment (NLPARM MAXITER).
+    path_tolerance : float
+        Work tolerance of the intermediate increments (NLPARM EPSW).
+    final_tolerance : float
+        Work tolerance of the last increment.
+    progress : callable, optional
+        Called with a :class:`~mace_fmu.util.progress.Step` per increment.
+
+    Returns
+    -------
+    Preload
+        The deformed state, the tangent stiffness about it, the bar forces and the convergence record.
+
+    Raises
+    ------
+    MaceError
+        A singular stiffness (a mechanism) or an increment that does not converge.
     """
     t = constraints.transform
     n = model.dofs.size

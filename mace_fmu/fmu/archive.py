@@ -88,7 +88,23 @@ def _safe_archive(path: Path, *, required: Callable[[set[str]], str | None]) -> 
 
 
 def check_fmu(path: str | os.PathLike) -> Path:
-    """``path`` if it is a MACE FMU (a file, or the folder of an unpacked one); MaceError saying why not."""
+    """``path`` if it is a MACE FMU (a file, or the folder of an unpacked one); MaceError saying why not.
+
+    Parameters
+    ----------
+    path : path
+        An .fmu file or the folder of an unpacked one.
+
+    Returns
+    -------
+    Path
+        ``path``, checked.
+
+    Raises
+    ------
+    MaceError
+        No such file, not a zip archive, no model description, or an FMU this package did not write.
+    """
     path = Path(path)
     where = os.fspath(path)
     if path.is_dir():

@@ -144,6 +144,11 @@ def export_controller_fmu(controller: DiscreteController, *, out_dir: str | Path
         Model identifier (a C identifier; names the binary too).
     fmi_version
         2 or 3 (co-simulation either way).
+
+    Returns
+    -------
+    Path
+        ``out_dir/<name>.fmu``.
     """
     if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", name):
         raise MaceError(f"FMU name must be a C identifier (it names the model and its binary), got {name!r}")

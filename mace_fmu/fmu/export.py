@@ -153,6 +153,11 @@ def export_fmu(model: VoltsModel, *, kind: FmuKind = "native", fmi_version: int 
     ------
     MaceError
         An unknown kind, or FMI 3 asked of the pythonfmu kind.
+
+    Returns
+    -------
+    Path
+        ``out_dir/<name>.fmu``.
     """
     if kind == "native":
         from mace_fmu.fmu.native.export import export_native_fmu

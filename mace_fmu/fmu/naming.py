@@ -18,6 +18,28 @@ def fmu_name(structure: str, *, kind: str | None = None, fmi_version: int = 2, m
     ``LISTED_GRIDS``: ``_motion_<count>_grids``. ``variant`` (e.g. the stem of the parameter set the model
     was built from) follows the kind, so that an FMU of a changed model never takes the plain model's name.
     ``prefix``: "MACE" for the bundled structure, another deck's file stem for its FMUs.
+
+    Parameters
+    ----------
+    structure : str
+        "1g" or "0g".
+    kind : str, optional
+        "native" or "pythonfmu" (None: neither in the name).
+    fmi_version : int
+        2 or 3 (3 adds ``_fmi3``).
+    motion_grids : sequence of int
+        The grids whose motion the FMU outputs.
+    all_grids : sequence of int
+        Every grid of the structure (to say "all of them" as ``_motion``).
+    variant : str
+        Names a changed model, e.g. the parameter set's file stem.
+    prefix : str
+        "MACE", or another deck's file stem.
+
+    Returns
+    -------
+    str
+        A C identifier, the FMU's model name and file stem.
     """
     base = f"{variant_identifier(prefix)}_{structure}" + (f"_{kind}" if kind else "") + ("_fmi3" if fmi_version == 3 else "")
     if variant:

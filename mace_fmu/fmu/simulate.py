@@ -86,6 +86,37 @@ def simulate_input_response(fmu: str | os.PathLike, *, input_name: str, signal: 
     All other inputs stay at 0 V. ``outputs`` None records every output. The FMU is stepped at
     ``step_s`` [s] for ``duration_s`` [s] and sampled at every step; ``in_subprocess`` runs fmpy
     in a fresh worker process (see the module docstring).
+
+    Parameters
+    ----------
+    fmu : path
+        An .fmu file or an extracted folder.
+    input_name : str
+        The driven input.
+    signal : {"step", "impulse", "chirp"}
+        The input's shape.
+    duration_s : float
+        Simulated time [s].
+    step_s : float
+        Communication step [s].
+    amplitude_v : float
+        The input's amplitude [V].
+    chirp_hz : tuple of float
+        Start and end frequency [Hz] of a chirp.
+    outputs : sequence of str, optional
+        The outputs to record (None: every one).
+    in_subprocess : bool
+        Run fmpy in a fresh worker process.
+
+    Returns
+    -------
+    FmuRun
+        Times [s], the driven input [V] and the recorded outputs with their units.
+
+    Raises
+    ------
+    MaceError
+        An unknown input or output, a non-positive duration or step, an FMU that fails.
     """
     t = communication_times(duration_s=duration_s, step_s=step_s)
     check_fmu(fmu)

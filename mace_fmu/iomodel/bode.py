@@ -31,7 +31,26 @@ def channel_response(model: VoltsModel, response: np.ndarray, u: str, y: str) ->
 def bode_report(deck: Deck | None = None, *, structure_file: StructureFile | str | os.PathLike | None = None,
                 out_dir: str | Path = "report",
                 frequencies_hz: np.ndarray | None = None, progress: Callable[[str], None] | None = None) -> list[Path]:
-    """Write one PNG per channel of CHANNELS with the 1-g and 0-g models overlaid; return the paths."""
+    """Write one PNG per channel of CHANNELS with the 1-g and 0-g models overlaid; return the paths.
+
+    Parameters
+    ----------
+    deck : Deck, optional
+        The deck (default: the bundled MACE deck).
+    structure_file : StructureFile or path, optional
+        The structure file (default: the bundled one for the bundled deck).
+    out_dir : path
+        Folder for the PNGs.
+    frequencies_hz : numpy.ndarray, optional
+        Frequencies [Hz] (default: 2000 from 0.1 to 250 Hz, log-spaced).
+    progress : callable, optional
+        Receives one line per stage.
+
+    Returns
+    -------
+    list of Path
+        The PNG files written.
+    """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     f = np.logspace(np.log10(0.1), np.log10(250.0), 2000) if frequencies_hz is None else frequencies_hz

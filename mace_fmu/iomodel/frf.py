@@ -17,7 +17,20 @@ _MAX_CONDITION = 1e6  # error ~ cond(V) * eps stays below ~1e-9 relative
 
 
 def frequency_response(system: ct.StateSpace, frequencies_hz: np.ndarray) -> np.ndarray:
-    """Complex response H[k, output, input] at ``frequencies_hz`` [Hz], same convention as control."""
+    """Complex response H[k, output, input] at ``frequencies_hz`` [Hz], same convention as control.
+
+    Parameters
+    ----------
+    system : control.StateSpace
+        A continuous-time model.
+    frequencies_hz : numpy.ndarray
+        Frequencies [Hz].
+
+    Returns
+    -------
+    numpy.ndarray
+        Complex H[k, output, input] in the model's units (V/V for a volts-volts model).
+    """
     a, b, c, d = system.A, system.B, system.C, system.D
     s = 2j * np.pi * np.asarray(frequencies_hz, dtype=float)
     if len(a):

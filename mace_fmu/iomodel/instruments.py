@@ -256,7 +256,23 @@ def _electronics(table: Mapping[str, Any], path: object) -> Electronics:
 
 def load_instruments(structure_file: StructureFile | str | Path | None = None) -> Instruments:
     """Instruments, electronics, servos and damping of a structure file (read once; see
-    :class:`~mace_fmu.structure.file.StructureFile`), or of the file at a path; default: the bundled mace_em.toml."""
+    :class:`~mace_fmu.structure.file.StructureFile`), or of the file at a path; default: the bundled mace_em.toml.
+
+    Parameters
+    ----------
+    structure_file : StructureFile or path, optional
+        A structure file, read or to read (default: the bundled mace_em.toml).
+
+    Returns
+    -------
+    Instruments
+        Actuators and sensors (DOFs, gains, kinds), electronics, servos and modal damping.
+
+    Raises
+    ------
+    MaceError
+        A malformed structure file, naming the file, the line and the key.
+    """
     if not isinstance(structure_file, StructureFile):
         structure_file = load_structure_file(structure_file if structure_file is not None else bundled_structure_path())
     path, data = structure_file.path, structure_file.tables

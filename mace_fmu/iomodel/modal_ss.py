@@ -44,6 +44,24 @@ def modal_plant(modes: Modes, instruments: Instruments, damping: np.ndarray, *, 
     ``motion_grids`` adds the six motion components of each named grid as outputs. Directions of
     the zero-frequency cluster that only they read (wheel angles) keep their displacement states;
     the sensor outputs stay those of the model without them.
+
+    Parameters
+    ----------
+    modes : Modes
+        The structure's modes.
+    instruments : Instruments
+        Where the actuators push and the sensors read.
+    damping : numpy.ndarray
+        Modal damping ratio of each mode.
+    max_hz : float
+        Keep the modes up to this frequency [Hz].
+    motion_grids : sequence of int
+        Grids whose six motions are outputs too.
+
+    Returns
+    -------
+    ModalPlant
+        The state space (inputs [N m], outputs in physical units) and its modes.
     """
     data = modal_data(modes, instruments, max_hz=max_hz, motion_grids=motion_grids)
     keep = modes.frequencies_hz <= max_hz

@@ -56,7 +56,20 @@ def _group(state: str, mode_labels: Sequence[str]) -> str:
 
 
 def closed_loop_poles(model: VoltsModel, *, max_hz: float | None = None) -> list[ClosedLoopPole]:
-    """Poles with Im >= 0 sorted by frequency [Hz], labelled; up to ``max_hz`` when given."""
+    """Poles with Im >= 0 sorted by frequency [Hz], labelled; up to ``max_hz`` when given.
+
+    Parameters
+    ----------
+    model : VoltsModel
+        The volts-volts model (servos closed).
+    max_hz : float, optional
+        Keep the poles up to this frequency [Hz].
+
+    Returns
+    -------
+    list of ClosedLoopPole
+        Frequency [Hz], damping ratio, label and the participating open-loop mode of each pole.
+    """
     return label_poles(model.system.A, state_names=model.system.state_labels, mode_labels=model.plant.labels,
                        max_hz=max_hz)
 

@@ -357,6 +357,27 @@ def apply_parameters(instruments: Instruments, parameters: ParameterSet | None, 
     entry and what is allowed. A damping ratio whose mode the structure lacks is skipped only when
     the set was made for the other structure (its provenance says so): a 1-g set carries the
     damping of suspension and violin modes, which the 0-g structure does not have.
+
+    Parameters
+    ----------
+    instruments : Instruments
+        The structure's instruments and electronics.
+    parameters : ParameterSet or None
+        The set whose delays [s], servo gains and damping ratios apply (None: no change).
+    mode_labels : sequence of str
+        The structure's mode labels, which damping names refer to.
+    structure : str
+        "1g" or "0g": the structure the instruments are for.
+
+    Returns
+    -------
+    Instruments
+        A copy with the set's values.
+
+    Raises
+    ------
+    MaceError
+        A name the instruments or the modes do not have.
     """
     if parameters is None:
         return instruments
@@ -406,6 +427,25 @@ def scale_frequencies(modes: StructureModes, parameters: ParameterSet | None, *,
     change. A set made for the other structure (its provenance says so) scales nothing: an updated
     nominal 0-g set leaves the 1-g model's frequencies alone, as the thesis never changes them.
     Labels are checked as for damping ratios (:func:`apply_parameters`); a scale must be > 0.
+
+    Parameters
+    ----------
+    modes : StructureModes
+        The structure's modes.
+    parameters : ParameterSet or None
+        The set whose ``frequency_scale:<label>`` entries apply (None: no change).
+    structure : str
+        "1g" or "0g": the structure the modes are of.
+
+    Returns
+    -------
+    StructureModes
+        A copy with the scaled frequencies [Hz].
+
+    Raises
+    ------
+    MaceError
+        A label the modes do not have, or a scale that is not > 0.
     """
     scales = parameters.of_kind("frequency_scale") if parameters is not None else {}
     prov = parameters.provenance if parameters is not None else None
@@ -425,7 +465,25 @@ def scale_frequencies(modes: StructureModes, parameters: ParameterSet | None, *,
 
 def select_signals(system: ct.StateSpace, *, inputs: Sequence[str] | None = None,
                    outputs: Sequence[str] | None = None) -> ct.StateSpace:
-    """The channels ``inputs`` -> ``outputs`` (by name) of a model; None keeps them all."""
+    """The channels ``inputs`` -> ``outputs`` (by name) of a model; None keeps them all.
+
+    Parameters
+    ----------
+    system : control.StateSpace
+        A model with named signals.
+    inputs, outputs : sequence of str, optional
+        The channels to keep, by name (None: all).
+
+    Returns
+    -------
+    control.StateSpace
+        The sub-model, signals named as before.
+
+    Raises
+    ------
+    MaceError
+        A name the model does not have.
+    """
     ins, outs = list(system.input_labels), list(system.output_labels)
     for name in inputs or ():
         _check(name in ins, f"unknown input signal {name!r}; allowed: {', '.join(ins)}")

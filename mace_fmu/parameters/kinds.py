@@ -106,12 +106,34 @@ def _match(name: str, *, in_fmu: bool) -> ParameterKind | None:
 
 
 def kind_of_set_name(name: str) -> ParameterKind | None:
-    """The kind of a parameter-set name (``E_lexan_end``, ``damping:1st Z bending``), None if unknown."""
+    """The kind of a parameter-set name (``E_lexan_end``, ``damping:1st Z bending``), None if unknown.
+
+    Parameters
+    ----------
+    name : str
+        A parameter-set name.
+
+    Returns
+    -------
+    ParameterKind or None
+        Its kind: prefix, unit and valid range.
+    """
     return _match(name, in_fmu=False)
 
 
 def kind_of_fmu_name(name: str) -> ParameterKind | None:
-    """The kind of an FMU parameter name (``E_lexan_end``, ``damping_mode_14``), None if unknown."""
+    """The kind of an FMU parameter name (``E_lexan_end``, ``damping_mode_14``), None if unknown.
+
+    Parameters
+    ----------
+    name : str
+        An FMU parameter name.
+
+    Returns
+    -------
+    ParameterKind or None
+        Its kind: prefix, unit and valid range.
+    """
     return _match(name, in_fmu=True)
 
 
@@ -141,6 +163,20 @@ def declared_range(name: str, nominal: float, *, frequency_hz: float | None = No
 
     ``frequency_hz`` (a frequency scale's mode, nominal) raises the scale's minimum so that the mode
     stays above :data:`ZERO_HZ`. Names of no kind are unbounded.
+
+    Parameters
+    ----------
+    name : str
+        An FMU parameter name.
+    nominal : float
+        Its nominal value [SI].
+    frequency_hz : float, optional
+        For a frequency scale: its mode's nominal frequency [Hz].
+
+    Returns
+    -------
+    tuple of float
+        (minimum, maximum) [SI]; (-inf, inf) for names of no kind.
     """
     kind = kind_of_fmu_name(name)
     if kind is None:

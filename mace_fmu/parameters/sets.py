@@ -204,7 +204,18 @@ class ParameterNames:
 
 
 def load_parameter_names(path: str | Path | None = None) -> ParameterNames:
-    """The ``[parameters]`` table of a structure file (default: the bundled mace_em.toml)."""
+    """The ``[parameters]`` table of a structure file (default: the bundled mace_em.toml).
+
+    Parameters
+    ----------
+    path : path, optional
+        A structure file (default: the bundled mace_em.toml).
+
+    Returns
+    -------
+    ParameterNames
+        Material name -> MAT1 ID and spring name -> CELAS2 ID.
+    """
     from mace_fmu.structure.file import bundled_structure_path, load_structure_file
 
     return names_of_table(load_structure_file(path if path is not None else bundled_structure_path()).tables)
@@ -220,7 +231,20 @@ def names_of_table(tables: Mapping[str, Any]) -> ParameterNames:
 def parameter_names(deck, structure_file=None) -> ParameterNames:
     """The ``E_`` and ``k_`` names of a deck: its structure file's ``[parameters]`` names, and for every MAT1 and
     CELAS2 card that table does not name (or every card, without a structure file) ``mat<ID>`` and
-    ``celas<ID>`` (``E_mat2``, ``k_celas138``): a name never reaches a card of another deck."""
+    ``celas<ID>`` (``E_mat2``, ``k_celas138``): a name never reaches a card of another deck.
+
+    Parameters
+    ----------
+    deck : Deck
+        The deck.
+    structure_file : StructureFile or path, optional
+        Its structure file (default: the bundled one for the bundled deck).
+
+    Returns
+    -------
+    ParameterNames
+        Material name -> MAT1 ID and spring name -> CELAS2 ID.
+    """
     named = names_of_table(structure_file.tables) if structure_file is not None else ParameterNames({}, {})
     materials = {**{f"mat{mid}": mid for mid in deck.mat1s if mid not in named.materials.values()},
                  **named.materials}

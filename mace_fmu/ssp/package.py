@@ -120,6 +120,27 @@ def system_structure(components: Sequence[SspComponent], connections: Sequence[S
     connectors with their units (an unconnected input is left out, so that a host keeps the start
     value it was given: fmpy sets every declared input connector at each step); a component with
     start values binds ``resources/<name>.ssv``.
+
+    Parameters
+    ----------
+    components : sequence of SspComponent
+        The FMUs, their instance names and start values.
+    connections : sequence of SspConnection
+        Output -> input, by component and signal names.
+    system_name : str
+        The system's name.
+    stop_time_s, step_size_s : float, optional
+        The default experiment [s].
+
+    Returns
+    -------
+    str
+        The SSD XML text.
+
+    Raises
+    ------
+    MaceError
+        A connection naming a component or signal that does not exist.
     """
     variables = _checked(components, connections)
     root = ET.Element(f"{{{SSD}}}SystemStructureDescription", version="1.0", name=system_name,
@@ -213,6 +234,18 @@ def schema_problems(text: str | bytes, *, kind: str) -> list[str]:
 
     The XSDs are the Modelica Association's, as fmpy ships them (BSD 2-clause, the licence text is in
     each file). An empty list means the file is valid.
+
+    Parameters
+    ----------
+    text : str or bytes
+        The XML document.
+    kind : {"ssd", "ssv"}
+        Which schema applies.
+
+    Returns
+    -------
+    list of str
+        One line per problem; empty when the document is valid.
     """
     from lxml import etree
 

@@ -183,6 +183,24 @@ def parameter_set_from_ssv(text: str, *, source: str = "<string>") -> SsvContent
 
     Any SSV 1.0 file of Real parameters with our parameter names is read; a unit that is not the
     parameter's SI unit is refused (no silent conversion), naming the file and the element.
+
+    Parameters
+    ----------
+    text : str
+        The SSV (System Structure Parameter Values, SSP 1.0) document.
+    source : str
+        What error messages call it.
+
+    Returns
+    -------
+    SsvContent
+        The parameter set (with provenance) and, for the 0-g nominal model, its frequency bounds.
+
+    Raises
+    ------
+    MaceError
+        Not SSV 1.0, an unknown parameter, a non-Real value or a unit that is not the parameter's SI
+        unit: the message names ``source`` and the element.
     """
     values, units, root = read_ssv_values(text, source=source)
     for key, unit in units.items():
@@ -218,10 +236,36 @@ def parameter_set_from_ssv(text: str, *, source: str = "<string>") -> SsvContent
 
 
 def write_parameter_ssv(content: SsvContent | ParameterSet, path: str | Path, *, name: str | None = None) -> Path:
-    """Write :func:`parameter_set_to_ssv` atomically to ``path`` (its stem names the set by default)."""
+    """Write :func:`parameter_set_to_ssv` atomically to ``path`` (its stem names the set by default).
+
+    Parameters
+    ----------
+    content : SsvContent or ParameterSet
+        The set (and bounds) to write.
+    path : path
+        The .ssv file.
+    name : str, optional
+        The set's name in the file (default: the file's stem).
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
     return write_text_atomic(path, parameter_set_to_ssv(content, name=name or Path(path).stem))
 
 
 def read_parameter_ssv(path: str | Path) -> SsvContent:
-    """Read an SSV file written by :func:`write_parameter_ssv` (or by another tool with our names)."""
+    """Read an SSV file written by :func:`write_parameter_ssv` (or by another tool with our names).
+
+    Parameters
+    ----------
+    path : path
+        The .ssv file.
+
+    Returns
+    -------
+    SsvContent
+        As :func:`parameter_set_from_ssv`.
+    """
     return parameter_set_from_ssv(read_text(path, what="SSV parameter"), source=str(path))

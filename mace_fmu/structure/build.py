@@ -62,6 +62,23 @@ def apply_overrides(deck: Deck, overrides: Mapping[tuple[str, int], Mapping[str,
     Values are type-checked against the fields they replace, and the changed deck gets the
     reader's cross-reference and geometry checks; any problem is a MaceError (a ValueError)
     naming the override.
+
+    Parameters
+    ----------
+    deck : Deck
+        The deck.
+    overrides : mapping
+        (card, ID) -> {field: value}.
+
+    Returns
+    -------
+    Deck
+        A changed copy, cross-referenced and checked as the reader checks a deck.
+
+    Raises
+    ------
+    MaceError
+        A card or field the deck lacks, or a value of the wrong type.
     """
     if not overrides:
         return deck
@@ -88,7 +105,20 @@ def apply_overrides(deck: Deck, overrides: Mapping[tuple[str, int], Mapping[str,
 
 
 def remove_suspension(deck: Deck, spec: StructureSpec) -> Deck:
-    """The deck without the suspension: its grids, elements, MPC equations and SPC entries."""
+    """The deck without the suspension: its grids, elements, MPC equations and SPC entries.
+
+    Parameters
+    ----------
+    deck : Deck
+        The 1-g deck.
+    spec : StructureSpec
+        The structure file's suspension: grids, elements, MPC and SPC IDs.
+
+    Returns
+    -------
+    Deck
+        A copy without them.
+    """
     gone_g, gone_e = spec.suspension_grids, spec.suspension_elements
     bars = {i: b for i, b in deck.bars.items() if i not in gone_e}
     conm2s = {i: m for i, m in deck.conm2s.items() if i not in gone_e}

@@ -46,12 +46,24 @@ STRUCTURE_FILE_TABLES = {
 
 
 def bundled_deck_path() -> Path:
-    """Path of the bundled MACE deck (Appendix B of the thesis)."""
+    """Path of the bundled MACE deck (Appendix B of the thesis).
+
+    Returns
+    -------
+    Path
+        ``mace_fmu/data/mace_em.bdf`` of the installed package.
+    """
     return Path(str(resources.files("mace_fmu") / "data" / "mace_em.bdf"))
 
 
 def bundled_structure_path() -> Path:
-    """Path of the bundled MACE structure file, ``mace_em.toml`` (it belongs to the bundled deck only)."""
+    """Path of the bundled MACE structure file, ``mace_em.toml`` (it belongs to the bundled deck only).
+
+    Returns
+    -------
+    Path
+        ``mace_fmu/data/mace_em.toml`` of the installed package.
+    """
     return Path(str(resources.files("mace_fmu") / "data" / "mace_em.toml"))
 
 
@@ -238,7 +250,20 @@ def is_bundled_deck(deck: Deck) -> bool:
 def structure_file_for(deck: Deck, structure_file: StructureFile | str | os.PathLike | None = None
                        ) -> StructureFile | None:
     """The structure file that goes with ``deck``: the one given, else the bundled one for the bundled
-    deck, else None (the deck's own meaning, nothing added or removed)."""
+    deck, else None (the deck's own meaning, nothing added or removed).
+
+    Parameters
+    ----------
+    deck : Deck
+        The deck.
+    structure_file : StructureFile or path, optional
+        The structure file given by the user.
+
+    Returns
+    -------
+    StructureFile or None
+        The file that applies, read.
+    """
     if isinstance(structure_file, StructureFile):
         return structure_file
     if structure_file is not None:

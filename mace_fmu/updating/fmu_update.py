@@ -163,7 +163,26 @@ class FmuParameters:
 def fmu_parameters(result: UpdateResult, *, family: FmuFamily, data: str, cost: Cost,
                    convergence=None) -> FmuParameters:
     """The updated values of ``result`` with their provenance (FMU file, data files, cost, method) and, given a
-    :class:`~mace_fmu.updating.convergence.ConvergenceReport`, its verdict in the notes."""
+    :class:`~mace_fmu.updating.convergence.ConvergenceReport`, its verdict in the notes.
+
+    Parameters
+    ----------
+    result : UpdateResult
+        The FMU update.
+    family : FmuFamily
+        The FMU it updated (its file names the provenance; its sensor gains go to ``[sensor_gains]``).
+    data : str
+        The data files, for the provenance.
+    cost : Cost
+        The cost it lowered.
+    convergence : ConvergenceReport, optional
+        Its verdict, written into the notes.
+
+    Returns
+    -------
+    FmuParameters
+        Values by the FMU's names and units, estimated sensor gains, provenance; ``write`` makes the TOML.
+    """
     s = result.settings
     notes = convergence.summary() if convergence is not None else ""
     prov = Provenance(created=now_utc(), tool=tool_version(), data=data,

@@ -196,7 +196,19 @@ class SampleProblem:
 
 @single_blas_thread
 def run_sample_problem(settings: SampleSettings = SampleSettings()) -> SampleProblem:
-    """Generate the data, run the five cases and the two separate-updating variants."""
+    """Generate the data, run the five cases and the two separate-updating variants.
+
+    Parameters
+    ----------
+    settings : SampleSettings
+        Record length, sample time [s], noise, H1 segment, band [Hz] and seed of the synthetic data.
+
+    Returns
+    -------
+    SampleProblem
+        The data, the five updating cases of Table 4.2 and the two separate-updating variants, each with
+        its values and costs.
+    """
     data = generate_data(settings)
     actual_values = {"k_1": data.actual.k1, "k_2": data.actual.k2}
     omega, phi = data.actual.modes()

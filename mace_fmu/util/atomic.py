@@ -46,7 +46,21 @@ def save_figure_atomic(figure: Figure, path: str | os.PathLike, **savefig_option
 
 
 def write_text_atomic(path: str | os.PathLike, text: str) -> Path:
-    """Write ``text`` (UTF-8) to ``path`` atomically; returns the path."""
+    """Write ``text`` (UTF-8) to ``path`` atomically; returns the path.
+
+    Parameters
+    ----------
+    path : path
+        The file to write (its folder must exist).
+    text : str
+        The content.
+
+    Returns
+    -------
+    Path
+        ``path``. A reader never sees half a file: the text goes to a temporary file beside it, which
+        replaces ``path`` when complete.
+    """
     with atomic_path(path) as tmp:
         tmp.write_text(text, encoding="utf-8")
     return Path(path)

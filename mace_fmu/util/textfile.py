@@ -20,7 +20,25 @@ def read_text(path: str | Path, *, what: str | None = None) -> str:
 
 
 def read_toml(path: str | Path, *, what: str) -> dict[str, Any]:
-    """The parsed TOML of ``path``; errors as :func:`read_text`'s, or '<path>: not a valid <what> (TOML): ...'."""
+    """The parsed TOML of ``path``; errors as :func:`read_text`'s, or '<path>: not a valid <what> (TOML): ...'.
+
+    Parameters
+    ----------
+    path : path
+        The TOML file.
+    what : str
+        What kind of file it is, for error messages ("parameter-set", "test-plan", ...).
+
+    Returns
+    -------
+    dict
+        The parsed tables.
+
+    Raises
+    ------
+    MaceError
+        The file is missing, not UTF-8 or not TOML: one line naming it.
+    """
     text = read_text(path, what=what)
     try:
         return tomllib.loads(text)

@@ -31,7 +31,13 @@ class ThesisRow:
 
 
 def table_5_3() -> tuple[ThesisRow, ...]:
-    """Table 5.3 of the thesis as data."""
+    """Table 5.3 of the thesis as data.
+
+    Returns
+    -------
+    tuple of ThesisRow
+        Mode label, nominal frequency [Hz], damping ratio and frequency bound [%], as printed.
+    """
     return tuple(ThesisRow(r["label"], r["hz"], r["zeta"], r["bound_percent"]) for r in thesis_data()["table_5_3"])
 
 
@@ -71,7 +77,18 @@ def rows_as_data(prediction: ZeroGPrediction) -> list[dict]:
 
 
 def format_table(prediction: ZeroGPrediction) -> str:
-    """Plain-text table: ours (nominal Hz, zeta, bound %) beside Table 5.3, with the 1-g residual errors."""
+    """Plain-text table: ours (nominal Hz, zeta, bound %) beside Table 5.3, with the 1-g residual errors.
+
+    Parameters
+    ----------
+    prediction : ZeroGPrediction
+        The prediction.
+
+    Returns
+    -------
+    str
+        The table, one row per 0-g mode.
+    """
     width = max([15] + [len(row.label) for row in prediction.rows])  # MACE's labels fit 15
     head = (f"{'mode':{width}s} {'Hz':>8s} {'zeta':>7s} {'bound %':>7s} | {'T5.3 Hz':>7s} {'zeta':>6s} {'bound %':>7s} | "
             f"{'err Hz %':>8s} {'1-g err %':>9s} {'FMU k':>5s} {'shift % -b/+b':>13s}  open-loop mode adjusted")
@@ -131,7 +148,20 @@ def as_toml(prediction: ZeroGPrediction) -> str:
 
 def write_prediction(prediction: ZeroGPrediction, out_dir: str | Path) -> dict[str, Path]:
     """Write table_5_3.csv, table_5_3.toml, table_5_3.txt and zero_g_nominal.toml (the parameter set) into
-    ``out_dir``, each atomically; returns the paths by kind."""
+    ``out_dir``, each atomically; returns the paths by kind.
+
+    Parameters
+    ----------
+    prediction : ZeroGPrediction
+        The prediction.
+    out_dir : path
+        The folder (created if needed).
+
+    Returns
+    -------
+    dict of str to Path
+        The written files by kind ("csv", "toml", "text", "parameters").
+    """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     return {"csv": write_text_atomic(out / "table_5_3.csv", as_csv(prediction)),
@@ -143,7 +173,25 @@ def write_prediction(prediction: ZeroGPrediction, out_dir: str | Path) -> dict[s
 def read_frequency_bounds(path: str | Path, *, mode_labels: Sequence[str]) -> dict[int, float]:
     """The FMU frequency bounds (1-based open-loop mode -> relative bound) of a table_5_3.toml written by
     :func:`write_prediction`, checked against the open-loop ``mode_labels`` of the model they are for (the same
-    mode numbers must name the same modes); rows without an FMU mode (servo mechanisms) carry none."""
+    mode numbers must name the same modes); rows without an FMU mode (servo mechanisms) carry none.
+
+    Parameters
+    ----------
+    path : path
+        A table_5_3.toml.
+    mode_labels : sequence of str
+        The open-loop mode labels of the model the bounds are for.
+
+    Returns
+    -------
+    dict of int to float
+        1-based mode -> relative bound.
+
+    Raises
+    ------
+    MaceError
+        A malformed file, or a mode number that names another mode in this model.
+    """
     from mace_fmu.errors import MaceError
 
     data = read_toml(path, what="frequency-bounds")

@@ -80,7 +80,25 @@ def _compile_cached(platform: Platform, c_files: tuple[str, ...], digest: str) -
 
 
 def compile_runtime(platform: Platform = LINUX64, *, c_files: tuple[str, ...] = C_FILES) -> bytes:
-    """A runtime's shared library for ``platform`` (compiled once per process and source version)."""
+    """A runtime's shared library for ``platform`` (compiled once per process and source version).
+
+    Parameters
+    ----------
+    platform : Platform
+        Compiler, flags and binary folder names (default: linux64 with gcc; win64 with mingw-w64).
+    c_files : tuple of str
+        The runtime's C sources, in link order.
+
+    Returns
+    -------
+    bytes
+        The shared library (.so or .dll).
+
+    Raises
+    ------
+    MaceError
+        The compiler is missing or fails (its messages included).
+    """
     if not available(platform):
         raise MaceError(f"no C compiler for {platform.name}: {platform.compiler} is not installed")
     return _compile_cached(platform, c_files, _digest(c_files))

@@ -47,7 +47,30 @@ def runtime_token(data: dict, *, salt: str, sources: list[Path]) -> str:
 
 def write_native_fmu(final: Path, *, name: str, fmi_version: int, description: bytes, data: dict,
                      binaries: dict, sources: list[Path]) -> Path:
-    """Zip a native FMU atomically: its model description, runtime data, binaries and C sources."""
+    """Zip a native FMU atomically: its model description, runtime data, binaries and C sources.
+
+    Parameters
+    ----------
+    final : Path
+        The .fmu file to write.
+    name : str
+        The model identifier (names the binaries).
+    fmi_version : int
+        2 or 3 (the binary folder names differ).
+    description : bytes
+        modelDescription.xml.
+    data : dict
+        The runtime's arrays (resources/mace_model.bin).
+    binaries : dict
+        Platform -> shared library bytes.
+    sources : list of Path
+        The C sources shipped in ``sources/``.
+
+    Returns
+    -------
+    Path
+        ``final``, written atomically.
+    """
     c_files = [p.name for p in sources if p.suffix == ".c"]
     with atomic_path(final) as part:
         with zipfile.ZipFile(part, "w", zipfile.ZIP_DEFLATED) as z:

@@ -36,7 +36,21 @@ class FmuVariable:
 
 
 def fmu_variables(arrays: Mapping[str, np.ndarray], state_names: Sequence[str]) -> list[FmuVariable]:
-    """All variables in value-reference order, from a ParametricSystem's arrays and its state names."""
+    """All variables in value-reference order, from a ParametricSystem's arrays and its state names.
+
+    Parameters
+    ----------
+    arrays : mapping
+        A ParametricSystem's arrays (:func:`~mace_fmu.iomodel.parametric_data.parametric_arrays`).
+    state_names : sequence of str
+        The built system's state names ("block.state").
+
+    Returns
+    -------
+    list of FmuVariable
+        Inputs, outputs, parameters (with units and declared ranges), frequencies, states, derivatives and
+        time, in value-reference order.
+    """
     out: list[FmuVariable] = []
 
     def add(**kw) -> None:

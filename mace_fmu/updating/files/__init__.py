@@ -24,7 +24,22 @@ __all__ = ["Channel", "ChannelMap", "read_channel_map", "read_time_history", "wr
 
 def read_measured_data(path: str | Path, *, channel_map: ChannelMap | None = None,
                        sample_time_s: float | None = None) -> TimeHistory | FrequencyResponseData:
-    """A time history (``.npz``, CSV from ``time [s]``) or a frequency response (UFF, CSV from ``frequency [Hz]``)."""
+    """A time history (``.npz``, CSV from ``time [s]``) or a frequency response (UFF, CSV from ``frequency [Hz]``).
+
+    Parameters
+    ----------
+    path : path
+        ``.npz``, ``.uff``, ``.unv`` or ``.csv`` (its first column says which).
+    channel_map : ChannelMap, optional
+        Data channel -> model signal, role and unit.
+    sample_time_s : float, optional
+        For a time history: the sample time [s] it must have.
+
+    Returns
+    -------
+    TimeHistory or FrequencyResponseData
+        What the file holds.
+    """
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix in (".uff", ".unv"):

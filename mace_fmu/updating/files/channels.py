@@ -81,7 +81,24 @@ class ChannelMap:
 
 def read_channel_map(path: str | Path) -> ChannelMap:
     """A channel map from CSV with columns channel, signal, role (input|output|ignore), unit and, optionally,
-    gain_uncertainty_percent (an output sensor's gain known to that standard deviation [%]; blank: exactly)."""
+    gain_uncertainty_percent (an output sensor's gain known to that standard deviation [%]; blank: exactly).
+
+    Parameters
+    ----------
+    path : path
+        The CSV file.
+
+    Returns
+    -------
+    ChannelMap
+        One row per channel.
+
+    Raises
+    ------
+    MaceError
+        A missing column, an unknown role, an empty field, a channel or signal mapped twice, a gain
+        uncertainty that is not a positive percentage or on an input: the message names the file and line.
+    """
     path = Path(path)
     text = read_text(path, what="channel-map")
     lines = [(k, line) for k, line in enumerate(text.splitlines(), start=1)

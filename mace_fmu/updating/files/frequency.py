@@ -302,6 +302,23 @@ def read_frequency_response(path: str | Path, *, channel_map: ChannelMap | None 
     :func:`write_frequency_response` writes them), else from node and direction, e.g. ``101+Z``;
     units from the ordinate (numerator and denominator) unit labels. Without a channel map the
     names are the model's signals and units must be V; with one the map translates and checks.
+
+    Parameters
+    ----------
+    path : path
+        A ``.csv``, ``.uff`` or ``.unv`` file.
+    channel_map : ChannelMap, optional
+        Data channel -> model signal, role and unit.
+
+    Returns
+    -------
+    FrequencyResponseData
+        Frequencies [Hz] and H[k, output, input].
+
+    Raises
+    ------
+    MaceError
+        Naming the file, the channel and the dataset or line.
     """
     path = Path(path)
     suffix = path.suffix.lower()
@@ -318,6 +335,18 @@ def write_frequency_response(frd: FrequencyResponseData, path: str | Path) -> Pa
 
     UFF 58 keeps six significant digits of each frequency (E13.5) and twelve of each real and
     imaginary part (pyuff writes E20.11); the signal names travel in ID lines 4 and 5.
+
+    Parameters
+    ----------
+    frd : FrequencyResponseData
+        The frequency response.
+    path : path
+        A ``.csv``, ``.uff`` or ``.unv`` file.
+
+    Returns
+    -------
+    Path
+        ``path``.
     """
     path = Path(path)
     suffix = path.suffix.lower()

@@ -18,6 +18,24 @@ def h1_estimate(history: TimeHistory, *, segment_length: int, window: str = "han
     matrix S_uu is inverted at each frequency, so simultaneous inputs must not be fully
     correlated. ``band_hz`` keeps [low, high] (inclusive); without it every frequency above 0 Hz.
     The settings are stated in the result's ``source``.
+
+    Parameters
+    ----------
+    history : TimeHistory
+        The measured inputs and outputs.
+    segment_length : int
+        Samples per Welch segment.
+    window : str
+        The segments' window (scipy name).
+    overlap : float
+        Overlap of the segments, a fraction of one.
+    band_hz : tuple of float, optional
+        [low, high] [Hz] to keep (inclusive).
+
+    Returns
+    -------
+    FrequencyResponseData
+        H1 at the Welch frequencies [Hz], each output's multiple coherence, the settings in ``source``.
     """
     inputs, outputs = list(history.inputs), list(history.outputs)
     n = history.times_s.size

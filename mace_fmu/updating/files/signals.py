@@ -15,6 +15,18 @@ def check_model_signals(data: TimeHistory | FrequencyResponseData, *, model_inpu
 
     ``model_inputs``/``model_outputs`` are the model's signal names, e.g. a ``control.StateSpace``'s
     ``input_labels``/``output_labels`` or an FMU's input and output variables.
+
+    Parameters
+    ----------
+    data : TimeHistory or FrequencyResponseData
+        The measured data.
+    model_inputs, model_outputs : sequence of str
+        The model's signal names.
+
+    Raises
+    ------
+    MaceError
+        A measured signal the model lacks, with the closest names.
     """
     for role, measured, model in (("input", data.inputs, model_inputs), ("output", data.outputs, model_outputs)):
         names = list(model)

@@ -27,6 +27,25 @@ def read_time_history(path: str | Path, *, channel_map: ChannelMap | None = None
     ``out:<signal>``, and the unit must be V; with a map the name is the data channel and the map
     gives signal, role and unit. ``sample_time_s``, when given, must be the file's time step.
     Errors name the file, the channel and the row (CSV: the line; npz: the 0-based sample).
+
+    Parameters
+    ----------
+    path : path
+        A ``.csv`` or ``.npz`` file.
+    channel_map : ChannelMap, optional
+        Data channel -> model signal, role and unit.
+    sample_time_s : float, optional
+        The sample time [s] the file must have.
+
+    Returns
+    -------
+    TimeHistory
+        Times [s], inputs and outputs by model signal name.
+
+    Raises
+    ------
+    MaceError
+        Naming the file, the channel and the row.
     """
     path = Path(path)
     suffix = path.suffix.lower()
@@ -148,7 +167,20 @@ def _labelled_columns(history: TimeHistory) -> tuple[list[str], list[np.ndarray]
 
 
 def write_time_history(history: TimeHistory, path: str | Path) -> Path:
-    """Write ``history`` to ``.csv`` ('%.17g': reads back exactly) or ``.npz``, atomically; returns the path."""
+    """Write ``history`` to ``.csv`` ('%.17g': reads back exactly) or ``.npz``, atomically; returns the path.
+
+    Parameters
+    ----------
+    history : TimeHistory
+        The record.
+    path : path
+        A ``.csv`` or ``.npz`` file.
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix not in TIME_SUFFIXES:

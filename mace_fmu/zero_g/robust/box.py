@@ -66,7 +66,27 @@ def _is_uncertainty_bound(name: str, start: float, low: float, high: float) -> b
 
 def read_box(fmu: str | os.PathLike, *, pattern: str = DEFAULT_PATTERN,
              ranges: Mapping[str, tuple[float, float]] | None = None) -> ParameterBox:
-    """The box of ``fmu`` (an .fmu file or its extracted folder): see the module docstring."""
+    """The box of ``fmu`` (an .fmu file or its extracted folder): see the module docstring.
+
+    Parameters
+    ----------
+    fmu : path
+        An .fmu file or its extracted folder.
+    pattern : str
+        Which parameters span the box (fnmatch of their names).
+    ranges : mapping, optional
+        Name -> (low, high) replacing the declared min/max.
+
+    Returns
+    -------
+    ParameterBox
+        Names, nominal values and [low, high] of each parameter.
+
+    Raises
+    ------
+    MaceError
+        No parameter matches, or a range outside what the FMU declares.
+    """
     import fmpy
 
     md = fmpy.read_model_description(os.fspath(fmu))

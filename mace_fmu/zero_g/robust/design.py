@@ -60,7 +60,24 @@ def loop_channels(system: ct.StateSpace, loop: LoopSpec) -> ct.StateSpace:
 
 def design_compensator(system: ct.StateSpace, *, loop: LoopSpec = LoopSpec(), weights: LqgWeights = DEFAULT_WEIGHTS,
                        reduced_states: int = DEFAULT_REDUCED_STATES) -> RobustDesign:
-    """LQG compensator of the nominal volts model ``system`` for ``loop`` (see the module docstring)."""
+    """LQG compensator of the nominal volts model ``system`` for ``loop`` (see the module docstring).
+
+    Parameters
+    ----------
+    system : control.StateSpace
+        The nominal 0-g volts model.
+    loop : LoopSpec
+        Control input, measurement and disturbance [V], the disturbance's square wave and the run.
+    weights : LqgWeights
+        The LQG weighting (rho, theta).
+    reduced_states : int
+        States of the balanced design model.
+
+    Returns
+    -------
+    RobustDesign
+        The channels, the reduced design model and the compensator (discrete, at the loop's step).
+    """
     channels = loop_channels(system, loop)
     if np.any(channels.D != 0):
         raise MaceError("the loop's channels have a direct feedthrough; the co-simulation assumes none")

@@ -78,7 +78,38 @@ def robust_0g_study(model: VoltsModel, *, frequency_bounds: Mapping[int, float],
                     critical_count: int = 4, runner: Callable = map,
                     progress: ProgressCallback | None = None) -> RobustStudy:
     """Export ``model`` (the nominal 0-g volts model) as a native FMU whose ``frequency_scale_mode_<k>``
-    span ``frequency_bounds`` (1-based mode -> relative bound), design the compensator on it, run the sweep."""
+    span ``frequency_bounds`` (1-based mode -> relative bound), design the compensator on it, run the sweep.
+
+    Parameters
+    ----------
+    model : VoltsModel
+        The nominal 0-g volts model.
+    frequency_bounds : mapping of int to float
+        1-based mode -> relative bound of its frequency scale.
+    out_dir : path
+        Folder of the FMU and the sweep's files.
+    loop : LoopSpec
+        The loop and its disturbance.
+    weights : LqgWeights
+        The LQG weighting.
+    reduced_states : int
+        States of the design model.
+    samples : int
+        Random points of the box.
+    seed : int
+        Seed of the samples.
+    critical_count : int
+        How many of the most influential parameters get corner runs.
+    runner : callable
+        ``map``-like function the runs go to.
+    progress : callable, optional
+        Progress steps.
+
+    Returns
+    -------
+    RobustStudy
+        The FMU, the design, the sweep and its cross-checks against the state-space loop.
+    """
     from mace_fmu.fmu.export import export_fmu
 
     fmu = export_fmu(model, kind="native", out_dir=out_dir, name=FMU_NAME, frequency_bounds=dict(frequency_bounds))

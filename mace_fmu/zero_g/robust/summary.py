@@ -19,7 +19,22 @@ def _db(ratio: float) -> str:
 
 
 def format_summary(result: SweepResult, design: RobustDesign | None = None, *, drivers: int = 3) -> str:
-    """The one-screen summary: loop, design, box, runs, fraction stable, worst cost, the modes that drive it."""
+    """The one-screen summary: loop, design, box, runs, fraction stable, worst cost, the modes that drive it.
+
+    Parameters
+    ----------
+    result : SweepResult
+        The sweep.
+    design : RobustDesign, optional
+        The compensator's design, to state it.
+    drivers : int
+        How many of the modes that drive the worst cost to name.
+
+    Returns
+    -------
+    str
+        The summary, a few lines.
+    """
     loop, box = result.loop, result.box
     nominal, open_cost = result.nominal.cost_rms_v, result.open_loop.cost_rms_v
     lines = [f"loop: {loop.control_input} <- K <- {loop.measurement}; disturbance {loop.disturbance_amplitude_v:g} V "

@@ -120,6 +120,34 @@ def robust_sweep(fmu: str | os.PathLike, *, compensator, loop: LoopSpec = LoopSp
 
     The box is ``read_box(fmu, pattern=..., ranges=...)``. ``fmu`` must be readable at the same
     path by every worker of ``runner`` (a local cluster, or a shared file system).
+
+    Parameters
+    ----------
+    fmu : path
+        The 0-g FMU with frequency scales.
+    compensator : control.StateSpace
+        Discrete, measurement -> control.
+    loop : LoopSpec
+        The loop and its disturbance.
+    samples : int
+        Random points of the box.
+    seed : int
+        Seed of the samples.
+    critical_count : int
+        How many of the most influential parameters get corner runs.
+    pattern : str
+        Which parameters span the box.
+    ranges : dict, optional
+        Name -> (low, high) replacing the declared min/max.
+    runner : callable
+        ``map``-like function the runs go to.
+    progress : callable, optional
+        Progress steps.
+
+    Returns
+    -------
+    SweepResult
+        The box, every point and its run (stable or not, cost), and the open loop.
     """
     if critical_count < 0:
         raise MaceError(f"critical_count must be 0 or more, got {critical_count}")
