@@ -202,8 +202,9 @@ def _advance(state: BarState, delta: np.ndarray) -> BarState:
 
 def tangent_sensitivity(model: FEModel, preload: Preload, *, bar_mask: np.ndarray | None = None,
                         dk_natural: np.ndarray | None = None, dk_springs: sparse.sparray | None = None,
-                        relative_step: float = 1e-2) -> np.ndarray:
-    """d K_T / d(ln p) about a large-displacement preload, the preload re-solved to first order (dense, basic).
+                        relative_step: float = 1e-2, solve: Callable[[np.ndarray], np.ndarray] | None = None
+                        ) -> sparse.csr_array:
+    """d K_T / d(ln p) about a large-displacement preload, the preload re-solved to first order (sparse, basic).
 
     A stiffness parameter p enters the bars ``bar_mask`` through d K_n / d(ln p) = ``dk_natural``
     (n_masked, 7, 7) and/or the springs through ``dk_springs`` (n_dof x n_dof). Changing it puts the
@@ -213,6 +214,7 @@ def tangent_sensitivity(model: FEModel, preload: Preload, *, bar_mask: np.ndarra
     the tangent's total derivative (material part, new forces, new geometry). Holding the preload's
     forces instead (the material part alone) missed 22-92 % of the 1-g responses' derivatives with
     respect to the suspension cables' moduli, which redistribute the gravity load among the cables.
+    ``solve`` (:func:`preload_solver`) reuses one factorisation of the reduced tangent for many parameters.
     """
     if preload.kind != "large" or preload.constraints is None:
         raise MaceError("tangent_sensitivity: needs a large-displacement preload with its constraints")
@@ -227,7 +229,7 @@ def tangent_sensitivity(model: FEModel, preload: Preload, *, bar_mask: np.ndarra
     if dk_springs is not None:
         df += dk_springs @ preload.displacements
     t = preload.constraints.transform
-    du = -(t @ _factor(t.T @ preload.tangent_stiffness @ t)(t.T @ df))
+    du = -(t @ (solve or preload_solver(preload))(t.T @ df))
     out = []
     for sign in (1.0, -1.0):
         h = sign * relative_step
@@ -236,11 +238,15 @@ def tangent_sensitivity(model: FEModel, preload: Preload, *, bar_mask: np.ndarra
             k_nat = k_nat.copy()
             k_nat[np.asarray(bar_mask, dtype=bool)] += h * dk_natural
         _, k_bars, _ = tangent(dataclasses.replace(bars, k_natural=k_nat), _advance(preload.state, h * du), n)
-        k = k_bars.toarray()
-        if dk_springs is not None:
-            k = k + h * (dk_springs.toarray() if sparse.issparse(dk_springs) else dk_springs)
-        out.append(k)
-    return (out[0] - out[1]) / (2.0 * relative_step)
+        out.append(sparse.csr_array(k_bars))
+    dk = (out[0] - out[1]) / (2.0 * relative_step)
+    return dk if dk_springs is None else sparse.csr_array(dk + sparse.csr_array(dk_springs))
+
+
+def preload_solver(preload: Preload) -> Callable[[np.ndarray], np.ndarray]:
+    """Solve with the preload's reduced tangent T^T K_T T (factored once): for :func:`tangent_sensitivity`."""
+    t = preload.constraints.transform
+    return _factor(t.T @ preload.tangent_stiffness @ t)
 
 
 def geometric_stiffness(model: FEModel, constraints: Constraints, load: np.ndarray) -> sparse.csr_array:

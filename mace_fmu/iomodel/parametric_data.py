@@ -13,12 +13,13 @@ import dataclasses
 from typing import Mapping, Sequence
 
 import numpy as np
+from scipy import sparse
 
 from mace_fmu.errors import MaceError
 from mace_fmu.fe.assembly import FEModel, bar_section
 from mace_fmu.fe.beam import natural_stiffness
 from mace_fmu.fe.corotational import BarState, tangent
-from mace_fmu.fe.preload import Preload, tangent_sensitivity
+from mace_fmu.fe.preload import Preload, preload_solver, tangent_sensitivity
 from mace_fmu.iomodel.modal_ss import modal_data
 from mace_fmu.iomodel.motion import motion_unit, parse_motion_output
 from mace_fmu.iomodel.volts import VoltsModel
@@ -95,7 +96,8 @@ def _blocks(model: VoltsModel) -> tuple[dict, list[tuple[str, float, str]]]:
     return arrays, parameters
 
 
-def material_sensitivity(fe: FEModel, deck, preload: Preload | None, mid: int) -> np.ndarray:
+def material_sensitivity(fe: FEModel, deck, preload: Preload | None, mid: int, *,
+                         solve=None) -> sparse.csr_array:
     """dK/d(ln E) [N/m, N m/rad] of MAT1 ``mid``: the material stiffness of its bars per unit relative change.
 
     About the configuration the modes are computed in. 1-g with the large-displacement preload: the
@@ -123,7 +125,7 @@ def material_sensitivity(fe: FEModel, deck, preload: Preload | None, mid: int) -
                     for i, length in zip(ids[mine], fe.bars.lengths0[mine])]).reshape(-1, 7, 7)
     if preload is not None and preload.kind == "large" and preload.constraints is not None:
         # the gravity load redistributes (suspension cables, springs): the preload re-solved to first order
-        return tangent_sensitivity(fe, preload, bar_mask=mine, dk_natural=dkn)
+        return tangent_sensitivity(fe, preload, bar_mask=mine, dk_natural=dkn, solve=solve)
     bars = dataclasses.replace(fe.bars, ids=ids[mine], node_a=fe.bars.node_a[mine], node_b=fe.bars.node_b[mine],
                                frames0=fe.bars.frames0[mine], lengths0=fe.bars.lengths0[mine], k_natural=dkn)
     if preload is not None:
@@ -131,7 +133,7 @@ def material_sensitivity(fe: FEModel, deck, preload: Preload | None, mid: int) -
     else:  # 0-g: the undeformed geometry, where the corotational tangent is the linear stiffness
         state = BarState(fe.positions, np.broadcast_to(np.eye(3), (len(fe.positions), 3, 3)))
     # forces held (zero change): only the material part B^T dK_n B of the tangent remains
-    return tangent(bars, state, fe.dofs.size, natural_forces=np.zeros((int(mine.sum()), 7)))[1].toarray()
+    return sparse.csr_array(tangent(bars, state, fe.dofs.size, natural_forces=np.zeros((int(mine.sum()), 7)))[1])
 
 
 def physical_sensitivities(model: VoltsModel, shapes: np.ndarray, *, only: Sequence[str] | None = None
@@ -143,26 +145,26 @@ def physical_sensitivities(model: VoltsModel, shapes: np.ndarray, *, only: Seque
     spring_name = {sid: name for name, sid in names.springs.items()}
     used = sorted({deck.pbars[b.pid].mid for b in deck.bars.values()})
     pre = model.structure_modes.preload
+    solve = preload_solver(pre) if pre is not None and pre.kind == "large" and pre.constraints is not None else None
     parameters, sensitivities = [], []
     for mid in used:
         e = deck.mat1s[mid].youngs_modulus
         label = material_name[mid]
         if only is not None and f"E_{label}" not in only:
             continue
-        dk = material_sensitivity(fe, deck, pre, mid)
+        dk = material_sensitivity(fe, deck, pre, mid, solve=solve)
         parameters.append((f"E_{label}", e, f"Young's modulus of {label} (MAT1 {mid}) [Pa]; takes effect by "
                                             "reanalysis on the retained modes"))
-        sensitivities.append(shapes.T @ dk @ shapes)
+        sensitivities.append(shapes.T @ (dk @ shapes))
     for row, (sid, k) in enumerate(zip(fe.spring_ids, fe.spring_constants)):
         label = spring_name[sid]
         if only is not None and f"k_{label}" not in only:
             continue
         parameters.append((f"k_{label}", float(k), f"stiffness of {label} (CELAS2 {sid}) [N/m]; reanalysis"))
         if pre is not None and pre.kind == "large" and pre.constraints is not None:
-            e = np.asarray(fe.spring_vectors[[row]].toarray() if hasattr(fe.spring_vectors, "toarray")
-                           else fe.spring_vectors[[row]], dtype=float)[0]
-            dk = tangent_sensitivity(fe, pre, dk_springs=k * np.outer(e, e))
-            sensitivities.append(shapes.T @ dk @ shapes)
+            e = sparse.csr_array(fe.spring_vectors[[row]])  # (1, n_dof)
+            dk = tangent_sensitivity(fe, pre, dk_springs=k * (e.T @ e), solve=solve)
+            sensitivities.append(shapes.T @ (dk @ shapes))
             continue
         v = (fe.spring_vectors[[row]] @ shapes)[0]
         sensitivities.append(k * np.outer(v, v))
