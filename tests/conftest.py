@@ -7,6 +7,13 @@ import sys
 
 import pytest
 
+# One BLAS thread per xdist worker: the suite runs one worker per core, and a second BLAS thread
+# per worker then waits for a busy core (the matrices here are small; mace_fmu/util/threads.py
+# measures the same for the model build). Set before numpy or scipy load their OpenBLAS.
+if "PYTEST_XDIST_WORKER" in os.environ:
+    for _variable in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ.setdefault(_variable, "1")
+
 _exit_status: list[int] = []
 
 

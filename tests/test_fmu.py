@@ -8,6 +8,8 @@ that folder (fmpy then extracts and deletes nothing).
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import fmpy
 import numpy as np
 import pytest
@@ -149,19 +151,29 @@ def test_cosimulation_example_closes_a_loop_around_the_1g_fmu(fmu_1g, tmp_path_f
 
 def test_fmu_runs_in_a_fresh_venv_without_mace_fmu(fmu_1g, tmp_path):
     """Self-contained: a new virtual environment with only numpy, scipy and a host (fmpy) runs
-    the FMU (pythonfmu itself is embedded in it) and reproduces this process's outputs."""
+    the FMU (pythonfmu itself is embedded in it) and reproduces this process's outputs.
+
+    The three distributions and what they require are linked from this environment
+    (tests/support/curated_site.py) rather than downloaded: the same packages, without the index."""
     import json
     import subprocess
     import sys
 
+    from support.curated_site import curated_site
+
     venv = tmp_path / "venv"
-    subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True)
+    subprocess.run([sys.executable, "-m", "venv", "--without-pip", str(venv)], check=True)
     python = venv / "bin" / "python"
-    subprocess.run([str(python), "-m", "pip", "install", "--quiet", "numpy", "scipy", "fmpy"], check=True)
+    linked = curated_site(tmp_path / "site", ("numpy", "scipy", "fmpy"))
+    assert "pythonfmu" not in linked and "mace-fmu" not in linked
+    purelib = subprocess.run([str(python), "-c", "import sysconfig; print(sysconfig.get_paths()['purelib'])"],
+                             check=True, capture_output=True, text=True).stdout.strip()
+    Path(purelib, "curated.pth").write_text(f"{tmp_path / 'site'}\n")
     script = tmp_path / "host.py"
     script.write_text(
         "import importlib.util, json, sys, fmpy, numpy as np\n"
-        "assert importlib.util.find_spec('mace_fmu') is None\n"
+        "assert importlib.util.find_spec('mace_fmu') is None and importlib.util.find_spec('pythonfmu') is None\n"
+        "assert importlib.util.find_spec('control') is None\n"
         "t = np.arange(0, 0.2001, 0.002)\n"
         "sig = np.zeros(len(t), dtype=[('time', float), ('gimbal_secondary_z', float)])\n"
         "sig['time'] = t; sig['gimbal_secondary_z'] = 1.0\n"

@@ -6,7 +6,6 @@ import base64
 import html as html_text
 import os
 import re
-import subprocess
 from pathlib import Path
 
 import numpy as np
@@ -20,7 +19,7 @@ from viewer import (animate_mode, animate_modes, animate_response, build_scene, 
 from viewer.frames import body_motion
 from viewer.meshcat_scene import FLOAT32_EXT
 from viewer.scene import tube_outer_radius_m
-from viewer.still import chromium_executable, write_still
+from viewer.still import chromium_executable, render_page, write_still
 
 BUILD = Path(__file__).resolve().parents[1] / "build"
 
@@ -262,10 +261,7 @@ def test_legend_marks_the_clip_playing_now(modes_0g, motion_fmu_0g, step_run_0g,
                                                      playback_speed=0.5))):
         page = tmp_path / f"{name}.html"
         write_animation_html(anim, page, title=name)
-        dom = subprocess.run([chromium_executable(), "--headless", "--no-sandbox", "--disable-gpu",
-                              "--enable-unsafe-swiftshader", "--use-angle=swiftshader", "--no-first-run",
-                              f"--user-data-dir={tmp_path / 'profile'}", "--virtual-time-budget=2000", "--dump-dom",
-                              page.as_uri()], check=True, capture_output=True, text=True, timeout=240).stdout
+        dom = render_page(page, png=tmp_path / f"{name}.png", width_px=400, height_px=300)
         time_s = float(re.search(r'id="mace-legend" data-time="([0-9.e-]+)"', dom).group(1))
         assert time_s > 0.0
         rows = re.findall(r'<tr data-start="([^"]+)" data-end="([^"]+)"(?: data-rate="[^"]+")?(?: class="(\w*)")?'
@@ -551,7 +547,7 @@ def test_pair_page_shows_two_articles_and_marks_the_pair(modes_1g_table, modes_0
     page = tmp_path / "pairs.html"
     write_animation_html(pairs_anim, page, title="pairs")
     shot = BUILD / "viewer_pairs_600x400.png"
-    write_still(page, shot, width_px=600, height_px=400)
+    dom = render_page(page, png=shot, width_px=600, height_px=400)  # picture and DOM of the same moment
     pixels = np.asarray(Image.open(shot).convert("RGB"), dtype=float)
     wheels = _component_mask(pixels, _ARTICLE_HUES["reaction_wheels"])
     rows = np.nonzero(wheels)[0]
@@ -559,10 +555,6 @@ def test_pair_page_shows_two_articles_and_marks_the_pair(modes_1g_table, modes_0
     split = np.unique(rows)[np.argmax(gaps)]
     upper, lower = (rows <= split).sum(), (rows > split).sum()
     assert gaps.max() > 10 and min(upper, lower) > 75, f"wheel pixels {upper} above, {lower} below, gap {gaps.max()}"
-    dom = subprocess.run([chromium_executable(), "--headless", "--no-sandbox", "--disable-gpu",
-                          "--enable-unsafe-swiftshader", "--use-angle=swiftshader", "--no-first-run",
-                          f"--user-data-dir={tmp_path / 'profile'}", "--virtual-time-budget=2000", "--dump-dom",
-                          page.as_uri()], check=True, capture_output=True, text=True, timeout=240).stdout
     time_s = float(re.search(r'id="mace-legend" data-time="([0-9.e-]+)"', dom).group(1))
     playing = re.findall(r'<tr [^>]*class="playing"><td>[^<]*</td><td>([^<]*)</td>', dom)
     holding = [c.title for c in pairs_anim.frames.clips if c.start_s <= time_s < c.end_s]

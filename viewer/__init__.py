@@ -8,13 +8,14 @@ from viewer.modes import ModeAnimation, animate_mode, animate_modes, mode_index
 from viewer.pairs import ModePair, PairAnimation, animate_pairs, pair_commands, table_5_1_pairs
 from viewer.response import ResponseAnimation, animate_response, grid_motion, plot_response
 from viewer.scene import Scene, build_scene
-from viewer.still import chromium_executable, write_still
+from viewer.still import chromium_executable, render_page, write_still
 
 __all__ = ["CAMERA_VIEWS", "BodyMotion", "Clip", "Frames", "ModeAnimation", "ModePair", "PairAnimation",
            "ResponseAnimation", "Scene", "animate_mode", "animate_modes", "animate_pairs", "animate_response",
            "animation_commands", "body_motion", "build_scene", "camera_position", "chromium_executable",
-           "grid_motion", "mode_index", "pair_commands", "plot_response", "scene_commands", "send_to_visualizer",
-           "standalone_html", "table_5_1_pairs", "write_animation_html", "write_html", "write_still"]
+           "grid_motion", "mode_index", "pair_commands", "plot_response", "render_page", "scene_commands",
+           "send_to_visualizer", "standalone_html", "table_5_1_pairs", "write_animation_html", "write_html",
+           "write_still"]
 
 
 def animation_commands(animation: ModeAnimation | ResponseAnimation | PairAnimation, *, camera: str = "iso") -> list:

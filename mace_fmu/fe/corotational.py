@@ -171,9 +171,7 @@ def deformation_jacobian(bars: Bars, state: BarState) -> tuple[np.ndarray, np.nd
 def internal_force(bars: Bars, state: BarState, n_dof: int) -> np.ndarray:
     """Internal force vector [N, N m] of all bars at ``state`` (first derivatives only: cheap)."""
     d, bz, _ = _reduced_derivatives(bars, state, second=False)
-    g = np.einsum("nij,nj->ni", bars.k_natural, d)
-    f_e = _nodal_vector(np.einsum("nki,nk->ni", bz, g))
-    return np.bincount(bar_dof_indices(bars).ravel(), weights=f_e.ravel(), minlength=n_dof)
+    return _force(bars, bz, np.einsum("nij,nj->ni", bars.k_natural, d), n_dof)
 
 
 def bar_energies(bars: Bars, state: BarState, natural_forces: np.ndarray, vectors: np.ndarray) -> np.ndarray:
@@ -190,6 +188,52 @@ def bar_dof_indices(bars: Bars) -> np.ndarray:
     return np.concatenate([6 * bars.node_a[:, None] + six, 6 * bars.node_b[:, None] + six], 1)
 
 
+def _assemble(bars: Bars, k_z: np.ndarray, n_dof: int) -> sparse.csr_array:
+    """Sparse global matrix of per-bar (n_bar, 9, 9) matrices in reduced coordinates (symmetrised)."""
+    k_e = _nodal_matrix(k_z)
+    k_e = 0.5 * (k_e + np.swapaxes(k_e, 1, 2))
+    idx = bar_dof_indices(bars)
+    rows = np.broadcast_to(idx[:, :, None], k_e.shape).ravel()
+    cols = np.broadcast_to(idx[:, None, :], k_e.shape).ravel()
+    return sparse.coo_array((k_e.ravel(), (rows, cols)), shape=(n_dof, n_dof)).tocsr()  # sums duplicates
+
+
+def _force(bars: Bars, bz: np.ndarray, g: np.ndarray, n_dof: int) -> np.ndarray:
+    f_e = _nodal_vector(np.einsum("nki,nk->ni", bz, g))
+    return np.bincount(bar_dof_indices(bars).ravel(), weights=f_e.ravel(), minlength=n_dof)
+
+
+def material_tangent(bars: Bars, state: BarState, n_dof: int) -> tuple[np.ndarray, sparse.csr_array]:
+    """(internal force [n_dof], material stiffness B^T K_n B at ``state``): first derivatives only.
+
+    An eleventh of the work of :func:`tangent`; with a geometric stiffness scaled from an earlier
+    state it makes the iteration matrix of the preload's intermediate increments.
+    """
+    d, bz, _ = _reduced_derivatives(bars, state, second=False)
+    g = np.einsum("nij,nj->ni", bars.k_natural, d)
+    return _force(bars, bz, g, n_dof), _assemble(bars, np.swapaxes(bz, 1, 2) @ bars.k_natural @ bz, n_dof)
+
+
+@dataclass(frozen=True)
+class TangentParts:
+    """The tangent stiffness of all bars about a state, split into its two parts (basic DOFs)."""
+
+    internal_force: np.ndarray  #: (n_dof,) [N, N m]
+    material: sparse.csr_array  #: B^T K_n B [N/m, N, N m]
+    geometric: sparse.csr_array  #: sum_k g_k d^2 d_k / dq^2, the stress stiffness
+    natural_forces: np.ndarray  #: (n_bar, 7) g: axial force [N], end moments [N m] (local)
+
+
+def tangent_parts(bars: Bars, state: BarState, n_dof: int, *, natural_forces: np.ndarray | None = None
+                  ) -> TangentParts:
+    """Internal force, material and geometric stiffness of all bars about ``state`` (see :func:`tangent`)."""
+    d, bz, d2z = _reduced_derivatives(bars, state)
+    g = np.einsum("nij,nj->ni", bars.k_natural, d) if natural_forces is None else natural_forces
+    return TangentParts(internal_force=_force(bars, bz, g, n_dof),
+                        material=_assemble(bars, np.swapaxes(bz, 1, 2) @ bars.k_natural @ bz, n_dof),
+                        geometric=_assemble(bars, np.einsum("nk,nkij->nij", g, d2z), n_dof), natural_forces=g)
+
+
 def tangent(bars: Bars, state: BarState, n_dof: int, *, natural_forces: np.ndarray | None = None
             ) -> tuple[np.ndarray, sparse.csr_array, np.ndarray]:
     """(internal force [n_dof], sparse tangent stiffness, natural forces [n_bar, 7]) of all bars.
@@ -197,15 +241,5 @@ def tangent(bars: Bars, state: BarState, n_dof: int, *, natural_forces: np.ndarr
     The natural forces default to K_n d at ``state``; pass them to build a linear-prestress
     stiffness (stresses from a linear solution, geometry of ``state``).
     """
-    d, bz, d2z = _reduced_derivatives(bars, state)
-    g = np.einsum("nij,nj->ni", bars.k_natural, d) if natural_forces is None else natural_forces
-    f_e = _nodal_vector(np.einsum("nki,nk->ni", bz, g))
-    k_z = np.swapaxes(bz, 1, 2) @ bars.k_natural @ bz + np.einsum("nk,nkij->nij", g, d2z)
-    k_e = _nodal_matrix(k_z)
-    idx = bar_dof_indices(bars)
-    f = np.bincount(idx.ravel(), weights=f_e.ravel(), minlength=n_dof)
-    k_e = 0.5 * (k_e + np.swapaxes(k_e, 1, 2))
-    rows = np.broadcast_to(idx[:, :, None], k_e.shape).ravel()
-    cols = np.broadcast_to(idx[:, None, :], k_e.shape).ravel()
-    k = sparse.coo_array((k_e.ravel(), (rows, cols)), shape=(n_dof, n_dof)).tocsr()  # sums duplicates
-    return f, k, g
+    parts = tangent_parts(bars, state, n_dof, natural_forces=natural_forces)
+    return parts.internal_force, sparse.csr_array(parts.material + parts.geometric), parts.natural_forces

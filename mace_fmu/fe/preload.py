@@ -22,8 +22,8 @@ from scipy import sparse
 from mace_fmu.errors import MaceError
 from mace_fmu.fe.assembly import FEModel
 from mace_fmu.fe.constraints import Constraints
-from mace_fmu.fe.corotational import (BarState, bar_dof_indices, deformation_jacobian, internal_force, rotation_matrix,
-                                      tangent)
+from mace_fmu.fe.corotational import (BarState, bar_dof_indices, deformation_jacobian, internal_force, material_tangent,
+                                      rotation_matrix, tangent, tangent_parts)
 from mace_fmu.fe.factor import factorize
 from mace_fmu.fe.modal import DENSE_MAX_DOF
 from mace_fmu.util.progress import ProgressCallback, Step
@@ -112,9 +112,10 @@ def large_displacement_preload(model: FEModel, constraints: Constraints, load: n
     """Incremental Newton solution on the updated geometry (dead load), tangent of the final state.
 
     Intermediate increments only have to stay on the load path: a secant predictor, then
-    modified Newton (tangent factored once per increment, cheap force-only iterations, refreshed
-    when it stops contracting) to NLPARM's work tolerance ``path_tolerance`` (EPSW). The last increment, whose tangent is the product,
-    uses full Newton to ``final_tolerance``. The work criterion is NASTRAN's (CONV=W): the force
+    modified Newton (the material stiffness of the current state plus the geometric stiffness of
+    the last full tangent scaled with the load; a full tangent again when an iteration stops
+    contracting) to NLPARM's work tolerance ``path_tolerance`` (EPSW). The last increment, whose tangent is the product, uses full Newton to
+    ``final_tolerance``. The work criterion is NASTRAN's (CONV=W): the force
     residual itself stalls at round-off because the short aluminium links are ~1e10 N/m stiff.
 
     Parameters
@@ -155,21 +156,28 @@ def large_displacement_preload(model: FEModel, constraints: Constraints, load: n
     last_increment = np.zeros(n)
 
     advance = _advance
+    geometric, reference_step, tangents = None, 0, 0
     for step in range(1, increments + 1):
         final = step == increments
         target = load * step / increments
         state = advance(state, last_increment)  # secant predictor
         u_start = u.copy()
         u = u + last_increment
-        solve, previous, refresh = None, np.inf, True
+        previous, refresh = np.inf, geometric is None
         for it in range(1, max_iterations + 1):
-            # Full Newton from the unstressed state (the cables have no lateral stiffness yet), in
-            # the last increment, and whenever modified Newton stops contracting.
-            if final or step == 1 or solve is None or refresh:
-                f_int, k_bars, _ = tangent(model.bars, state, n)
-                solve = _factor(t.T @ (k_bars + k_springs) @ t)
+            # Full Newton from the unstressed state (the cables have no lateral stiffness yet) and when
+            # an iteration stops contracting. Elsewhere the iteration matrix
+            # is the material stiffness at the current state (first derivatives: cheap) plus the last
+            # full tangent's geometric stiffness scaled with the load, which gravity's stress
+            # stiffness (cables, pendulum stages) is proportional to; second derivatives cost 11x.
+            if step == 1 or refresh:
+                parts = tangent_parts(model.bars, state, n)
+                f_int, k_bars = parts.internal_force, parts.material + parts.geometric
+                geometric, reference_step, tangents = parts.geometric, step, tangents + 1
             else:
-                f_int = internal_force(model.bars, state, n)
+                f_int, k_material = material_tangent(model.bars, state, n)
+                k_bars = k_material + (step / reference_step) * geometric
+            solve = _factor(t.T @ (k_bars + k_springs) @ t)
             residual = t.T @ (target - f_int - model.spring_stiffness @ u)
             delta = t @ solve(residual)
             total_iterations += 1
@@ -178,12 +186,12 @@ def large_displacement_preload(model: FEModel, constraints: Constraints, load: n
             work_ratio = abs(delta @ (t @ residual)) / max(abs(u @ target), 1e-300)
             if work_ratio <= (final_tolerance if final else path_tolerance):
                 break
-            refresh, previous = work_ratio > 0.5 * previous, work_ratio
+            refresh, previous = work_ratio > 0.25 * previous, work_ratio
         else:
             raise MaceError(f"gravity preload did not converge: increment {step}/{increments}, work ratio "
                             f"{work_ratio:.2e} after {max_iterations} iterations")
         last_increment = u - u_start
-        detail = f"{it} iterations, work ratio {work_ratio:.1e}"
+        detail = f"{it} iterations, work ratio {work_ratio:.1e}, {tangents} tangents so far"
         _log.debug("gravity preload increment %d/%d: %s", step, increments, detail)
         if progress is not None:
             progress(Step(task="gravity preload", done=step, total=increments, detail=detail))

@@ -18,7 +18,7 @@ from scipy import sparse
 from mace_fmu.errors import MaceError
 from mace_fmu.fe.assembly import FEModel, bar_section
 from mace_fmu.fe.beam import natural_stiffness
-from mace_fmu.fe.corotational import BarState, tangent
+from mace_fmu.fe.corotational import BarState, material_tangent
 from mace_fmu.fe.preload import Preload, preload_solver, tangent_sensitivity
 from mace_fmu.iomodel.modal_ss import modal_data
 from mace_fmu.iomodel.motion import motion_unit, parse_motion_output
@@ -133,7 +133,7 @@ def material_sensitivity(fe: FEModel, deck, preload: Preload | None, mid: int, *
     else:  # 0-g: the undeformed geometry, where the corotational tangent is the linear stiffness
         state = BarState(fe.positions, np.broadcast_to(np.eye(3), (len(fe.positions), 3, 3)))
     # forces held (zero change): only the material part B^T dK_n B of the tangent remains
-    return sparse.csr_array(tangent(bars, state, fe.dofs.size, natural_forces=np.zeros((int(mine.sum()), 7)))[1])
+    return material_tangent(bars, state, fe.dofs.size)[1]
 
 
 def physical_sensitivities(model: VoltsModel, shapes: np.ndarray, *, only: Sequence[str] | None = None
