@@ -22,8 +22,9 @@ from mace_fmu.deck.reader import read_deck_text
 from mace_fmu.errors import MaceError
 from mace_fmu.fe.assembly import Bars, assemble, bar_section
 from mace_fmu.fe.beam import local_stiffness, to_basic
-from mace_fmu.fe.corotational import (BarState, bar_dof_indices, deformation_derivatives, natural_deformations,
-                                      rotation_matrix, rotation_vector_small, tangent)
+from mace_fmu.fe.corotational import (BarState, bar_dof_indices, deformation_derivatives, material_tangent,
+                                      natural_deformations, rotation_matrix, rotation_vector_small, tangent,
+                                      tangent_parts)
 
 E, NU, RHO = 2.0e11, 0.3, 7800.0
 SKEW = np.array([1.0, 2.0, -0.5]) / np.linalg.norm([1.0, 2.0, -0.5])
@@ -226,6 +227,33 @@ def test_second_derivatives_match_central_differences_at_deformed_state(model):
     np.testing.assert_allclose(d2[k], fd, rtol=0, atol=1e-5 * np.abs(d2[k]).max())
 
 
+def test_tangent_parts_are_the_material_and_the_force_weighted_second_derivatives(model):
+    """At a stressed state: material = sum_e B^T K_n B and geometric = sum_e sum_k g_k D2_k, each from the
+    per-bar derivatives assembled here (1e-12); their sum is ``tangent``; ``material_tangent`` (first
+    derivatives only, the preload's cheap iterations) gives the same material part and force."""
+    state = _deformed_state(model, seed=5)
+    n = model.dofs.size
+    d, b, d2 = deformation_derivatives(model.bars, state)
+    g = np.einsum("nij,nj->ni", model.bars.k_natural, d)
+    material, geometric, force = np.zeros((n, n)), np.zeros((n, n)), np.zeros(n)
+    for idx, b_e, d2_e, g_e, kn in zip(bar_dof_indices(model.bars), b, d2, g, model.bars.k_natural):
+        material[np.ix_(idx, idx)] += b_e.T @ kn @ b_e
+        k_g = np.einsum("k,kij->ij", g_e, d2_e)
+        geometric[np.ix_(idx, idx)] += 0.5 * (k_g + k_g.T)
+        force[idx] += b_e.T @ g_e
+    parts = tangent_parts(model.bars, state, n)
+    scale = np.abs(material).max()
+    np.testing.assert_allclose(parts.material.toarray(), material, rtol=0, atol=1e-12 * scale)
+    np.testing.assert_allclose(parts.geometric.toarray(), geometric, rtol=0, atol=1e-12 * scale)
+    assert np.abs(geometric).max() > 1e-6 * scale  # stressed: the geometric part is not empty
+    f_total, k_total, _ = tangent(model.bars, state, n)
+    np.testing.assert_allclose(k_total.toarray(), material + geometric, rtol=0, atol=1e-12 * scale)
+    f_cheap, k_cheap = material_tangent(model.bars, state, n)
+    np.testing.assert_allclose(k_cheap.toarray(), material, rtol=0, atol=1e-12 * scale)
+    np.testing.assert_allclose(f_cheap, force, rtol=0, atol=1e-12 * np.abs(force).max())
+    np.testing.assert_allclose(f_total, force, rtol=0, atol=1e-12 * np.abs(force).max())
+
+
 # ---------------------------------------------------------------------------------------------
 # Geometric stiffness of an axially loaded bar
 
@@ -298,3 +326,19 @@ def test_rotation_vector_small_rejects_large_rotation():
 def test_rotation_vector_small_rejects_rotation_near_pi(angle):
     with pytest.raises(MaceError):
         rotation_vector_small(rotation_matrix(np.array([0.0, 0.0, angle])))
+
+
+def test_large_models_are_differentiated_in_chunks_of_bars_with_the_same_result(model, monkeypatch):
+    """Bars are batched in chunks (bounded memory on 100k-DOF decks): chunks of 3 of the 4 bars give
+    the unchunked force and tangent bit for bit."""
+    import mace_fmu.fe.corotational as corotational
+
+    state = _deformed_state(model, seed=7)
+    n = model.dofs.size
+    whole = tangent_parts(model.bars, state, n)
+    monkeypatch.setattr(corotational, "_CHUNK_BARS", 3)
+    chunked = tangent_parts(model.bars, state, n)
+    assert len(model.bars.ids) == 4
+    np.testing.assert_array_equal(chunked.internal_force, whole.internal_force)
+    np.testing.assert_array_equal(chunked.material.toarray(), whole.material.toarray())
+    np.testing.assert_array_equal(chunked.geometric.toarray(), whole.geometric.toarray())

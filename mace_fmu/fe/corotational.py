@@ -29,6 +29,7 @@ from mace_fmu.fe.assembly import Bars
 _CS_STEP = 1e-30  # complex step: no cancellation, so any tiny step is exact to round-off
 _FD_RELATIVE_STEP = 1e-4  # central differences of exact first derivatives: error ~1e-9
 _MAX_LOCAL_ROTATION = 0.5  # rad; beyond this the bar is far outside small-strain beam theory
+_CHUNK_BARS = 4000  # bars per derivative batch: large enough to vectorise, its temporaries ~60 MB each
 
 
 def skew(v: np.ndarray) -> np.ndarray:
@@ -50,14 +51,16 @@ def rotation_matrix(theta: np.ndarray) -> np.ndarray:
     """Rodrigues' formula for rotation vectors (..., 3); complex-safe for small complex parts."""
     phi2 = np.sum(theta * theta, axis=-1)[..., None, None]
     k = skew(theta)
+    # skew(v)^2 = v v^T - |v|^2 I, without a batched 3 x 3 product (slow for many small matrices)
+    k2 = theta[..., :, None] * theta[..., None, :] - phi2 * np.eye(3)
     if np.max(np.abs(phi2), initial=0.0) < 1e-6:  # every rotation tiny (derivative batches): series only
-        return np.eye(3) + (1 - phi2 / 6 + phi2**2 / 120) * k + (0.5 - phi2 / 24 + phi2**2 / 720) * (k @ k)
+        return np.eye(3) + (1 - phi2 / 6 + phi2**2 / 120) * k + (0.5 - phi2 / 24 + phi2**2 / 720) * k2
     small = np.abs(phi2) < 1e-6
     phi = np.sqrt(np.where(small, 1.0, phi2))
     # Series below 1e-3 rad keep complex-step derivatives analytic and accurate.
     a = np.where(small, 1 - phi2 / 6 + phi2**2 / 120, np.sin(phi) / phi)
     b = np.where(small, 0.5 - phi2 / 24 + phi2**2 / 720, (1 - np.cos(phi)) / np.where(small, 1.0, phi2))
-    return np.eye(3) + a * k + b * (k @ k)
+    return np.eye(3) + a * k + b * k2
 
 
 def rotation_vector_small(r: np.ndarray) -> np.ndarray:
@@ -134,6 +137,11 @@ def _reduced_derivatives(bars: Bars, state: BarState, *, second: bool = True
                          ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
     """(d, dd/dz, d2d/dz2 or None): shapes (n, 7), (n, 7, 9), (n, 7, 9, 9)."""
     n = len(bars.ids)
+    if n > _CHUNK_BARS:  # the complex batches hold ~15 kB per bar and temporary: bounded memory
+        parts = [_reduced_derivatives(_bar_rows(bars, slice(k, k + _CHUNK_BARS)), state, second=second)
+                 for k in range(0, n, _CHUNK_BARS)]
+        return (np.concatenate([q[0] for q in parts]), np.concatenate([q[1] for q in parts]),
+                np.concatenate([q[2] for q in parts]) if second else None)
     if not second:
         d_all = _deformations(bars, state, np.broadcast_to(1j * _CS_STEP * np.eye(9), (n, 9, 9)))
         return d_all[:, 0].real, np.swapaxes(d_all.imag, 1, 2) / _CS_STEP, None
@@ -153,6 +161,11 @@ def _reduced_derivatives(bars: Bars, state: BarState, *, second: bool = True
     d2z[:, :, i, j] = np.swapaxes(diff, 1, 2)
     d2z[:, :, j, i] = np.swapaxes(diff, 1, 2)
     return d_all[:, 0].real, bz, d2z
+
+
+def _bar_rows(bars: Bars, rows: slice) -> Bars:
+    return Bars(ids=bars.ids[rows], node_a=bars.node_a[rows], node_b=bars.node_b[rows], frames0=bars.frames0[rows],
+                lengths0=bars.lengths0[rows], k_natural=bars.k_natural[rows])
 
 
 def deformation_derivatives(bars: Bars, state: BarState) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -176,8 +189,11 @@ def internal_force(bars: Bars, state: BarState, n_dof: int) -> np.ndarray:
 
 def bar_energies(bars: Bars, state: BarState, natural_forces: np.ndarray, vectors: np.ndarray) -> np.ndarray:
     """(n_bar, n_vec) potential energy 1/2 v_e^T K_T,e v_e of each bar for global vectors (n_dof, n_vec)."""
-    _, bz, d2z = _reduced_derivatives(bars, state)
-    k_z = np.swapaxes(bz, 1, 2) @ bars.k_natural @ bz + np.einsum("nk,nkij->nij", natural_forces, d2z)
+    stressed = bool(np.any(natural_forces))  # unstressed (0-g): no geometric part, first derivatives suffice
+    _, bz, d2z = _reduced_derivatives(bars, state, second=stressed)
+    k_z = np.swapaxes(bz, 1, 2) @ bars.k_natural @ bz
+    if stressed:
+        k_z = k_z + np.einsum("nk,nkij->nij", natural_forces, d2z)
     v = vectors[bar_dof_indices(bars)]
     return 0.5 * np.einsum("nim,nij,njm->nm", v, _nodal_matrix(k_z), v)
 
