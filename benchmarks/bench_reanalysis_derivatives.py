@@ -23,13 +23,14 @@ import numpy as np
 from mace_fmu.iomodel.frf import frequency_response
 from mace_fmu.iomodel.parametric import ParametricSystem
 from mace_fmu.iomodel.parametric_data import parametric_arrays
+from mace_fmu.iomodel.model_options import ModelledElectronics
 from mace_fmu.iomodel.volts import volts_model
 from mace_fmu.parameters.kinds import MODULUS, kind_of_fmu_name
 from mace_fmu.parameters.sets import ParameterSet
 
 STEP = 1e-2  # 1e-3 left the full re-solve's derivatives of the suspension modes in round-off (eigen-solver and preload)
 FREQUENCIES_HZ = np.geomspace(0.5, 60.0, 300)
-OPTIONS = dict(servos=False, bessel="none", delays=False)
+OPTIONS = dict(electronics=ModelledElectronics(servos=False, bessel="none", delays=False))
 
 
 def response_full(name: str, value: float) -> np.ndarray:

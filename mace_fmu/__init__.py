@@ -5,7 +5,9 @@ The names a user starts with, in the order of the data flow (imported on first u
 
     deck = mace_fmu.read_deck("my.bdf")                       # the deck as NASTRAN reads it
     modes = mace_fmu.compute_modes(deck, structure="0g")      # modes [Hz], labelled
-    model = mace_fmu.volts_model("0g", structure_file="my.toml")  # volts in, volts out
+    model = mace_fmu.volts_model("0g", structure_file="my.toml",  # volts in, volts out
+                                 electronics=mace_fmu.ModelledElectronics(servos=False),
+                                 signals=mace_fmu.SignalSelection(outputs=["tip_z"]))
     mace_fmu.export_fmu(model, out_dir="fmus")                # an FMU (native: FMI 2 or 3; or kind="pythonfmu")
 
 The packages follow the same flow, each with its own ``__all__``: :mod:`mace_fmu.deck` (the deck),
@@ -26,6 +28,8 @@ __all__, __getattr__, __dir__ = lazy_exports(__name__, {
     "load_structure_file": "mace_fmu.structure.file",
     "compute_modes": "mace_fmu.fe.modes",
     "volts_model": "mace_fmu.iomodel.volts",
+    "ModelledElectronics": "mace_fmu.iomodel.model_options",
+    "SignalSelection": "mace_fmu.iomodel.model_options",
     "ParameterSet": "mace_fmu.parameters.sets",
     "export_fmu": "mace_fmu.fmu.export",
     "export_controller_fmu": "mace_fmu.fmu.controller",

@@ -20,6 +20,7 @@ from support.fmu_checks import (DURATION, check_close, initialised_slave, make_i
 
 from mace_fmu.fmu.export import export_fmu
 from mace_fmu.iomodel.motion import MOTION_COMPONENTS
+from mace_fmu.iomodel.model_options import ModelledElectronics, SignalSelection
 from mace_fmu.iomodel.volts import volts_model
 
 
@@ -205,8 +206,8 @@ def test_instantiate_simulate_free_cycles_do_not_grow_memory(tmp_path):
     small model (15 states: 10 ms a cycle against 87 ms for the 1-g model) stands in. After 300
     warm-up cycles (the allocator's pools settle: about 5 MB) 500 cycles grew the resident set by
     2.2-2.5 MB in four runs; at most 8 MB is allowed (16 kB per cycle): the leak would give 26 MB."""
-    model = volts_model("0g", max_hz=5.0, servos=False, bessel="none", delays=False, inputs=["gimbal_secondary_z"],
-                        outputs=["gyro_payload_z"])
+    model = volts_model("0g", max_hz=5.0, electronics=ModelledElectronics(servos=False, bessel="none", delays=False),
+                        signals=SignalSelection(inputs=["gimbal_secondary_z"], outputs=["gyro_payload_z"]))
     fmu_small = export_fmu(model, out_dir=tmp_path, kind="pythonfmu", name="small")
     unzipped = fmpy.extract(str(fmu_small), unzipdir=str(tmp_path / "unzipped"))
     ins, outs = value_references(unzipped)

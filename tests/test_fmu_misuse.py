@@ -31,6 +31,7 @@ from mace_fmu.errors import MaceError
 from mace_fmu.fmu.archive import check_fmu
 from mace_fmu.fmu.export import export_fmu
 from mace_fmu.fmu.simulate import simulate_input_response
+from mace_fmu.iomodel.model_options import SignalSelection
 from mace_fmu.iomodel.volts import volts_model
 
 WORKER = Path(__file__).parent / "support" / "fmu_misuse_worker.py"
@@ -172,8 +173,8 @@ def test_simulate_and_the_cli_raise_with_the_fmus_logged_reason(fmu_0g, tmp_path
                                         r"refused: non-finite input value\(s\): rwa_z"):
         simulate_input_response(fmu, input_name="rwa_z", amplitude_v=float("nan"), duration_s=0.01)
     # view response --fmu takes only an FMU with grid motion outputs (one grid is enough)
-    motion = export_fmu(volts_model("0g", modes=model.structure_modes, motion_grids=[16]), out_dir=tmp_path,
-                        kind="pythonfmu")
+    motion = export_fmu(volts_model("0g", modes=model.structure_modes, signals=SignalSelection(motion_grids=[16])),
+                        out_dir=tmp_path, kind="pythonfmu")
     code = main(["view", "response", "0g", "--input", "rwa_z", "--amplitude", "nan", "--duration", "0.01",
                  "--fmu", str(motion), "--html", str(tmp_path / "r.html")])
     last = capsys.readouterr().err.splitlines()[-1]  # the lines before are progress

@@ -36,6 +36,7 @@ from mace_fmu.fmu.native import compile as runtime
 from mace_fmu.fmu.native.export import export_native_fmu
 from mace_fmu.iomodel.parametric import ParametricSystem
 from mace_fmu.iomodel.parametric_data import parametric_arrays
+from mace_fmu.iomodel.model_options import ModelledElectronics
 from mace_fmu.iomodel.volts import volts_model
 
 RUNTIME_DIR = Path(runtime.__file__).with_name("c")
@@ -855,7 +856,7 @@ def test_windows_binary_exports_the_fmi_functions(fmus, tmp_path):
 def test_models_without_a_modal_form_step_exactly_in_the_dense_form(tmp_path):
     """With the servos open, the 0-g gimbals are free double integrators (a Jordan block): no
     diagonal form exists and the runtime steps with the dense matrix exponential, as exactly."""
-    model = volts_model("0g", servos=False, max_hz=30.0)
+    model = volts_model("0g", electronics=ModelledElectronics(servos=False), max_hz=30.0)
     folder = fmpy.extract(str(export_native_fmu(model, out_dir=tmp_path, name="MACE_0g_open")),
                           unzipdir=str(tmp_path / "open"))
     messages = Messages()

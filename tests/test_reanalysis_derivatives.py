@@ -11,11 +11,12 @@ import pytest
 from mace_fmu.iomodel.frf import frequency_response
 from mace_fmu.iomodel.parametric import ParametricSystem
 from mace_fmu.iomodel.parametric_data import parametric_arrays
+from mace_fmu.iomodel.model_options import ModelledElectronics
 from mace_fmu.iomodel.volts import volts_model
 from mace_fmu.parameters.sets import ParameterSet
 
 FREQUENCIES_HZ = np.geomspace(0.5, 60.0, 200)
-OPTIONS = dict(servos=False, bessel="none", delays=False)
+OPTIONS = dict(electronics=ModelledElectronics(servos=False, bessel="none", delays=False))
 
 
 @pytest.mark.parametrize("name, step", [("E_active_strut_piezo", 1e-3), ("E_cable_3", 1e-2)])

@@ -14,6 +14,7 @@ from mace_fmu.fe.modes import DEFAULT_MAX_HZ
 from mace_fmu.iomodel.frf import frequency_response
 from mace_fmu.iomodel.modal_ss import modal_data
 from mace_fmu.iomodel.poles import closed_loop_poles
+from mace_fmu.iomodel.model_options import ModelledElectronics, SignalSelection
 from mace_fmu.iomodel.volts import volts_model
 from mace_fmu.parameters.sets import ParameterSet, deck_values, parameter_names
 from mace_fmu.thesis import table_4_7_comparison, table_5_2_comparison
@@ -117,30 +118,35 @@ def test_fast_frequency_response_equals_python_control(v1, route):
 
 
 def test_bessel_delay_variant_and_open_loop_variant():
-    delay = volts_model("0g", bessel="delay")
+    delay = volts_model("0g", electronics=ModelledElectronics(bessel="delay"))
     # 13 analog channels x 3 Pade states (gyro extra delays merged) + 7 actuator delays x 3
     assert delay.system.nstates == 55 + 13 * 3 + 7 * 3
-    bare = volts_model("0g", bessel="none", delays=False, servos=False)
+    bare = volts_model("0g", electronics=ModelledElectronics(bessel="none", delays=False, servos=False))
     assert bare.system.nstates == 55
     # open loop: the gimbal mechanisms are free, so A has zero eigenvalues (rigid gimbal rotation)
     assert np.min(np.abs(np.linalg.eigvals(bare.system.A))) < 1e-6
 
 
 @pytest.mark.parametrize(("kwargs", "message"), [
-    (dict(outputs=["gyro_payload_q"]), "unknown output signal 'gyro_payload_q'; allowed: encoder_primary_x"),
-    (dict(inputs=["gimbal_tertiary"]), "unknown input signal 'gimbal_tertiary'; allowed: gimbal_primary_x"),
+    (lambda: dict(signals=SignalSelection(outputs=["gyro_payload_q"])), "unknown output signal 'gyro_payload_q'; allowed: encoder_primary_x"),
+    (lambda: dict(signals=SignalSelection(inputs=["gimbal_tertiary"])), "unknown input signal 'gimbal_tertiary'; allowed: gimbal_primary_x"),
     (dict(parameters=ParameterSet({"delay_gimbal_primary_x": -1e-3})), "= -0.001 is outside \\[0, 1\\] s, the range of every delay parameter"),
     (dict(parameters=ParameterSet({"delay_gyro_payload_y": 1e-3})), "no delayed channel 'gyro_payload_y'"),
     (dict(parameters=ParameterSet({"E_unobtainium": 1e9})), "no such material; known: E_lexan_end"),
-    (dict(pade_order=0), "pade_order must be an integer >= 1"),
+    (lambda: dict(electronics=ModelledElectronics(pade_order=0)), "pade_order must be an integer >= 1"),
     (dict(max_hz=1.0), "below the first flexible mode"),
-    (dict(bessel="elliptic"), "bessel must be 'full', 'delay' or 'none'"),
+    (lambda: dict(electronics=ModelledElectronics(bessel="elliptic")), "bessel must be 'full', 'delay' or 'none'"),
     (dict(parameters=ParameterSet({"damping:1st W bending": 0.02})),
      "no mode labelled '1st W bending' in the 0g structure"),
     (dict(parameters=ParameterSet({"damping:1st Z bending": 1.5})), "= 1.5 is outside \\[0, 1\\], the range of every damping parameter"),
-    (dict(motion_grids=[1, 999999]), "999999] are not in the 0g model; it has grids 1..112"),
-    (dict(motion_grids="some"), "motion_grids must be grid IDs or 'all'"),
-    (dict(motion_grids=1), "motion_grids must be a list of grid IDs or 'all', got 1"),
+    (lambda: dict(signals=SignalSelection(motion_grids=[1, 999999])), "999999] are not in the 0g model; it has grids 1..112"),
+    (lambda: dict(signals=SignalSelection(motion_grids="some")), "motion_grids must be grid IDs or 'all'"),
+    (lambda: dict(signals=SignalSelection(motion_grids=1)), "motion_grids must be a list of grid IDs or 'all', got 1"),
+    (lambda: dict(electronics=dict(servos=False)), "electronics must be a ModelledElectronics record, got dict"),
+    # the flat keywords of before say where they live now
+    (dict(servos=False, inputs=["rwa_x"]), "servos=, inputs= now belong\\(s\\) to a record: pass "
+                                           "electronics=ModelledElectronics\\(servos=False\\); "
+                                           "signals=SignalSelection\\(inputs=\\['rwa_x'\\]\\)"),
     # where the modes come from is said once
     (dict(deck="any.bdf"), "modes= already fix the deck, preload and structure file they were computed with; drop deck="),
     (dict(preload="linear", structure_file="x.toml"), "drop preload=, structure_file="),
@@ -148,12 +154,20 @@ def test_bessel_delay_variant_and_open_loop_variant():
                                                              "computed with"),
 ])
 def test_bad_requests_are_value_errors_that_say_what_is_allowed(v0, kwargs, message):
-    with pytest.raises(ValueError, match=message.replace("(", r"\(").replace(")", r"\)")):
-        volts_model("0g", modes=v0.structure_modes, **kwargs)
+    """Records refuse bad values when they are made (a callable here), volts_model what contradicts the modes."""
+    pattern = message if "\\(" in message else message.replace("(", r"\(").replace(")", r"\)")
+    with pytest.raises(ValueError, match=pattern):
+        volts_model("0g", modes=v0.structure_modes, **(kwargs() if callable(kwargs) else kwargs))
+
+
+def test_an_unknown_keyword_is_a_type_error(v0):
+    with pytest.raises(TypeError, match="unexpected keyword argument\\(s\\) 'servo'"):
+        volts_model("0g", modes=v0.structure_modes, servo=False)
 
 
 def test_signal_selection_keeps_names(v0):
-    sub = volts_model("0g", modes=v0.structure_modes, inputs=["gimbal_secondary_z"], outputs=["gyro_payload_z"])
+    sub = volts_model("0g", modes=v0.structure_modes,
+                      signals=SignalSelection(inputs=["gimbal_secondary_z"], outputs=["gyro_payload_z"]))
     assert list(sub.system.input_labels) == ["gimbal_secondary_z"]
     assert list(sub.system.output_labels) == ["gyro_payload_z"]
     f = np.array([1.0, 10.0])
@@ -166,20 +180,22 @@ def test_motion_outputs_add_grid_motion_and_leave_the_sensors_alone(v0):
     """Asking for grid motion keeps the states no sensor reads (the 3 wheel angles, in 0-g) and
     leaves the sensors' response as it was."""
     grids = v0.structure_modes.modes.dofs.grid_ids
-    moving = volts_model("0g", modes=v0.structure_modes, motion_grids=[grids[0], grids[-1]])
+    moving = volts_model("0g", modes=v0.structure_modes,
+                         signals=SignalSelection(motion_grids=[grids[0], grids[-1]]))
     assert list(moving.system.output_labels) == list(v0.system.output_labels) + [
         f"grid_{g}_{c}" for g in (grids[0], grids[-1]) for c in ("tx", "ty", "tz", "rx", "ry", "rz")]
     assert moving.system.nstates == v0.system.nstates + 3
     # asking only for sensors keeps the sensor model: no unread wheel-angle states
-    quiet = volts_model("0g", modes=v0.structure_modes, motion_grids=[grids[0]], outputs=["gyro_bus_x"])
+    quiet = volts_model("0g", modes=v0.structure_modes,
+                        signals=SignalSelection(motion_grids=[grids[0]], outputs=["gyro_bus_x"]))
     assert quiet.system.nstates == v0.system.nstates
     f = np.array([0.5, 2.0, 10.0, 40.0])
     h, hm = v0.frequency_response(f), moving.frequency_response(f)
     assert np.max(np.abs(hm[:, :20] - h) / np.abs(h).max(axis=0)) <= 1e-8  # of each channel's peak
     # open loop, no filters or delays: the motion is the plain modal sum over every retained mode,
     # zero-frequency ones included unreduced (1 / -w^2)
-    bare = volts_model("0g", modes=v0.structure_modes, motion_grids=[grids[-1]], servos=False, bessel="none",
-                       delays=False)
+    bare = volts_model("0g", modes=v0.structure_modes, signals=SignalSelection(motion_grids=[grids[-1]]),
+                       electronics=ModelledElectronics(servos=False, bessel="none", delays=False))
     data = modal_data(v0.structure_modes.modes, bare.instruments, max_hz=DEFAULT_MAX_HZ, motion_grids=[grids[-1]])
     w = 2 * np.pi * f
     wk = 2 * np.pi * np.where(np.abs(data.frequencies_hz) < 0.01, 0.0, data.frequencies_hz)

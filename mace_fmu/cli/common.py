@@ -111,12 +111,22 @@ def parameters(args: argparse.Namespace):
     return parameters
 
 
-def volts(args: argparse.Namespace, **overrides):
-    """The volts-volts model the command line asks for (model_options), errors as one message."""
+_FROM_ARGS = object()
+
+
+def volts(args: argparse.Namespace, *, parameter_set=_FROM_ARGS, every_grid_moves: bool = False):
+    """The volts-volts model the command line asks for (model_options), errors as one message.
+
+    ``parameter_set`` replaces the set ``--parameters`` names (SSP: only its built-in part);
+    ``every_grid_moves`` adds every grid's motion as outputs whatever ``--motion-grids`` says.
+    """
+    from mace_fmu.iomodel.model_options import ModelledElectronics, SignalSelection
     from mace_fmu.iomodel.volts import volts_model
 
-    options = dict(servos=not args.no_servos, bessel=args.bessel, delays=not args.no_delays,
-                   pade_order=args.pade_order, max_hz=args.max_hz, preload=args.preload, deck=read_deck(args.deck),
-                   motion_grids=motion_grids(getattr(args, "motion_grids", None)), parameters=parameters(args),
-                   structure_file=getattr(args, "structure_file", None))
-    return volts_model(args.structure, **{**options, **overrides})  # a bad option value: a MaceError
+    # a bad option value: a MaceError from the record that refuses it
+    electronics = ModelledElectronics(servos=not args.no_servos, bessel=args.bessel, delays=not args.no_delays,
+                                      pade_order=args.pade_order)
+    grids = "all" if every_grid_moves else motion_grids(getattr(args, "motion_grids", None))
+    return volts_model(args.structure, max_hz=args.max_hz, preload=args.preload, deck=read_deck(args.deck),
+                       parameters=parameters(args) if parameter_set is _FROM_ARGS else parameter_set, structure_file=getattr(args, "structure_file", None),
+                       electronics=electronics, signals=SignalSelection(motion_grids=grids))

@@ -36,7 +36,7 @@ def cmd_model(args: argparse.Namespace) -> int:
         print()
         return 0
     print(f"{args.structure} volts-volts model: {sys_.nstates} states, {sys_.ninputs} inputs, {sys_.noutputs} outputs "
-          f"(servos {'on' if model.servos else 'off'}, Bessel {model.bessel}, delays {'on' if model.delays else 'off'})")
+          f"({model.electronics.describe()})")
     for state, reason in model.plant.removed_states:
         print(f"  removed: {state}: {reason}")
     if args.poles:

@@ -25,7 +25,7 @@ def export_ssp(args: argparse.Namespace) -> int:
         raise MaceError(f"--controller {args.controller}: no such file")
     split = split_parameters(parameters(args))
     progress(f"{args.structure} volts-volts model")
-    model = volts(args, parameters=split.built_in)
+    model = volts(args, parameter_set=split.built_in)
     bounds = None
     if args.frequency_bounds:
         from mace_fmu.zero_g.table import read_frequency_bounds

@@ -132,7 +132,7 @@ def cmd_view_response(args: argparse.Namespace) -> int:
                                   structure_file=args.structure_file)
     else:
         progress(f"{args.structure} volts-volts model with the motion of every grid")
-        model = volts(args, motion_grids="all")
+        model = volts(args, every_grid_moves=True)
         modes = model.structure_modes
         fmu = export_fmu(model, out_dir=out_dir, kind="pythonfmu")  # the name `mace-fmu export --motion-grids all` gives it
         print(f"wrote {fmu} (reuse it with --fmu)")

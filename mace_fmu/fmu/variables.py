@@ -33,5 +33,4 @@ def model_summary(model: VoltsModel) -> str:
     from mace_fmu.structure.file import is_bundled_deck
 
     who = "MACE" if is_bundled_deck(structure.deck) else Path(structure.deck.path).stem
-    return (f"{who} {kind} volts-volts model: {sys_.nstates} states; servos {'closed' if model.servos else 'open'}, "
-            f"Bessel filters {model.bessel}, delays {'on' if model.delays else 'off'}")
+    return f"{who} {kind} volts-volts model: {sys_.nstates} states; {model.electronics.describe()}"

@@ -11,6 +11,8 @@ __all__, __getattr__, __dir__ = lazy_exports(__name__, {
     "apply_parameters": "volts",
     "scale_frequencies": "volts",
     "select_signals": "volts",
+    "ModelledElectronics": "model_options",
+    "SignalSelection": "model_options",
     "Instruments": "instruments",
     "load_instruments": "instruments",
     "Actuator": "instruments",

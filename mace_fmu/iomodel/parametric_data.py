@@ -34,8 +34,8 @@ _RELATIVE_STEP = 1e-3  # the material stiffness is linear in E and k: the differ
 def signal_descriptions(model: VoltsModel) -> tuple[list[str], list[str]]:
     """Input and output descriptions that say which actuator or sensor, which axis and what a volt means."""
     inst = model.instruments
-    gimbals = set(inst.servos.gimbals) if model.servos else set()
-    wheels = set(inst.servos.wheels) if model.servos else set()
+    gimbals = set(inst.servos.gimbals) if model.electronics.servos else set()
+    wheels = set(inst.servos.wheels) if model.electronics.servos else set()
     ins = []
     for name in model.system.input_labels:
         a = inst.actuator(name)
@@ -72,7 +72,7 @@ def _blocks(model: VoltsModel) -> tuple[dict, list[tuple[str, float, str]]]:
         elif isinstance(block, PadeDelay):
             kinds.append("delay"), params.append(name)
             what = name.removeprefix(DELAY.fmu_prefix)
-            parameters.append((name, float(block.delay), f"time delay of {what} [s] (Pade order {model.pade_order})"))
+            parameters.append((name, float(block.delay), f"time delay of {what} [s] (Pade order {model.electronics.pade_order})"))
         elif isinstance(block, Gain) and name.startswith(("kf_", "kb_")):
             gain = "K_f" if name.startswith("kf_") else "K_b"
             kinds.append("gain"), params.append(gain)
@@ -92,7 +92,7 @@ def _blocks(model: VoltsModel) -> tuple[dict, list[tuple[str, float, str]]]:
     outs = [list(ic.outputs).index(n) for n in model.system.output_labels]
     arrays.update(block_kinds=np.array(kinds), block_params=np.array(params),
                   block_names=np.array([b.name for b in ic.blocks]), wiring=ic.wiring, entry=ic.entry[:, ins],
-                  exit=ic.exit[outs], pade_order=np.array(model.pade_order))
+                  exit=ic.exit[outs], pade_order=np.array(model.electronics.pade_order))
     return arrays, parameters
 
 

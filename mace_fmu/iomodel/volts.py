@@ -16,7 +16,7 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass, replace
 from functools import cached_property
-from typing import Any, Literal, Mapping, Sequence
+from typing import Any, Mapping, Sequence
 
 import control as ct
 import numpy as np
@@ -29,6 +29,7 @@ from mace_fmu.iomodel.damping import modal_damping
 from mace_fmu.iomodel.frf import frequency_response
 from mace_fmu.iomodel.instruments import Instruments, load_instruments, resolve_bar_gauges
 from mace_fmu.iomodel.modal_ss import ModalPlant, modal_plant
+from mace_fmu.iomodel.model_options import ModelledElectronics, SignalSelection
 from mace_fmu.iomodel.motion import parse_motion_output
 from mace_fmu.parameters.kinds import DAMPING, DELAY, FREQUENCY_SCALE, SERVO_GAINS, ParameterKind, mode_label
 from mace_fmu.parameters.sets import ParameterSet, fe_overrides, parameter_names
@@ -37,7 +38,6 @@ from mace_fmu.util.frequency import ZERO_HZ
 from mace_fmu.util.threads import single_blas_thread
 from modelica_like import PD, Gain, LowPassFilter, PadeDelay, StateSpace, Sum, System
 
-BesselKind = Literal["full", "delay", "none"]
 DEG_PER_RAD = 180.0 / np.pi
 
 
@@ -50,10 +50,7 @@ class VoltsModel:
     plant: ModalPlant  #: the physical modal model inside
     structure_modes: StructureModes
     instruments: Instruments
-    servos: bool
-    bessel: BesselKind
-    delays: bool
-    pade_order: int
+    electronics: ModelledElectronics  #: which electronics the model contains, and how
 
     def frequency_response(self, frequencies_hz: np.ndarray) -> np.ndarray:
         """H[k, output, input] [V/V] at ``frequencies_hz`` [Hz], all channels at once.
@@ -80,20 +77,19 @@ class VoltsModel:
         """The model without its output filters (built once per model)."""
         el = self.instruments.electronics
         quiet = replace(self.instruments, electronics=replace(el, sensor_delays_s={k: 0.0 for k in el.sensor_delays_s}))
-        return build_diagram(self.plant, quiet, servos=self.servos, bessel="none", delays=self.delays,
-                             pade_order=self.pade_order).compile()
+        return build_diagram(self.plant, quiet, electronics=replace(self.electronics, bessel="none")).compile()
 
     def _output_filter(self, sensor: str, frequencies_hz: np.ndarray) -> np.ndarray:
         """Anti-aliasing filter and delay of one analog output channel, evaluated exactly."""
         el = self.instruments.electronics
-        extra = el.sensor_delays_s.get(sensor, 0.0) if self.delays else 0.0
+        extra = el.sensor_delays_s.get(sensor, 0.0) if self.electronics.delays else 0.0
         response = np.ones(len(frequencies_hz), dtype=complex)
-        if self.bessel == "full":
+        if self.electronics.bessel == "full":
             response *= frequency_response(LowPassFilter("f", el.filter_order, el.filter_cutoff_hz,
                                                          family=el.filter_kind).lti(), frequencies_hz)[:, 0, 0]
-        delay = extra + (el.filter_equivalent_delay_s if self.bessel == "delay" else 0.0)
+        delay = extra + (el.filter_equivalent_delay_s if self.electronics.bessel == "delay" else 0.0)
         if delay > 0.0:
-            response *= frequency_response(PadeDelay("d", delay, self.pade_order).lti(), frequencies_hz)[:, 0, 0]
+            response *= frequency_response(PadeDelay("d", delay, self.electronics.pade_order).lti(), frequencies_hz)[:, 0, 0]
         return response
 
 
@@ -103,11 +99,26 @@ def _check(condition: bool, message: str) -> None:
         raise MaceError(message)
 
 
-def build_diagram(plant: ModalPlant, instruments: Instruments, *, servos: bool = True, bessel: BesselKind = "full",
-                  delays: bool = True, pade_order: int = 3) -> System:
-    """The modelica_like System of one volts-volts model (see the module docstring)."""
-    _check(bessel in ("full", "delay", "none"), f"bessel must be 'full', 'delay' or 'none', got {bessel!r}")
-    _check(isinstance(pade_order, int) and pade_order >= 1, f"pade_order must be an integer >= 1, got {pade_order!r}")
+def build_diagram(plant: ModalPlant, instruments: Instruments, *,
+                  electronics: ModelledElectronics = ModelledElectronics()) -> System:
+    """The modelica_like System of one volts-volts model (see the module docstring).
+
+    Parameters
+    ----------
+    plant : ModalPlant
+        The structure's modal state space (generalised forces in, sensor units out).
+    instruments : Instruments
+        Gains, filters, delays and servo constants of the structure file.
+    electronics : ModelledElectronics
+        Which of the electronics the diagram contains.
+
+    Returns
+    -------
+    System
+        The block diagram; ``compile()`` gives its ``control.StateSpace``.
+    """
+    servos, bessel, delays, pade_order = (electronics.servos, electronics.bessel, electronics.delays,
+                                          electronics.pade_order)
     el, sv = instruments.electronics, instruments.servos
     act_names = [a.name for a in instruments.actuators]
     sen_names = [s.name for s in instruments.sensors]
@@ -210,24 +221,22 @@ def build_diagram(plant: ModalPlant, instruments: Instruments, *, servos: bool =
 
 
 @single_blas_thread
-def volts_model(structure: StructureKind = "1g", *, parameters: ParameterSet | None = None, servos: bool = True,
-                bessel: BesselKind = "full", delays: bool = True, pade_order: int = 3, max_hz: float | None = None,
-                preload: PreloadKind | None = None, deck: Deck | str | None = None, instruments: Instruments | None = None,
-                modes: StructureModes | None = None, inputs: Sequence[str] | None = None,
-                outputs: Sequence[str] | None = None, motion_grids: Sequence[int] | Literal["all"] = (),
-                structure_file: StructureFile | str | os.PathLike | None = None) -> VoltsModel:
+def volts_model(structure: StructureKind = "1g", *, modes: StructureModes | None = None, deck: Deck | str | None = None,
+                preload: PreloadKind | None = None, structure_file: StructureFile | str | os.PathLike | None = None,
+                max_hz: float | None = None, parameters: ParameterSet | None = None,
+                instruments: Instruments | None = None, electronics: ModelledElectronics = ModelledElectronics(),
+                signals: SignalSelection = SignalSelection(), **moved: Any) -> VoltsModel:
     """Volts-volts model of the 1-g or 0-g structure: actuator volts in, sensor volts out.
 
     Inputs: gimbal commands (relative angle, 1 V = 1 deg, with servos; motor volts without), wheel speed
     commands and active strut volts. Outputs: the sensors in volts (MACE: 20), then any grid motion.
+    Three groups of arguments, one stage each: where the modes come from, the modelled electronics
+    (one record), the signals kept (one record).
 
     Parameters
     ----------
     structure : {"1g", "0g"}
         The suspended, gravity-preloaded structure or the free one.
-
-    Where the modes come from (either ``modes`` or the rest of this group):
-
     modes : StructureModes, optional
         Modes computed before (:func:`~mace_fmu.fe.modes.compute_modes`); they fix the deck, the
         structure file, the preload and the moduli, so giving any of those too is an error.
@@ -247,24 +256,15 @@ def volts_model(structure: StructureKind = "1g", *, parameters: ParameterSet | N
         ``compute_modes(...).modes.labels``, e.g. "1st Z bending").
     instruments : Instruments, optional
         Replaces the structure file's actuators, sensors, electronics, servos and damping.
-
-    The electronics:
-
-    servos : bool
-        Close the wheel speed loops and gimbal servos.
-    bessel : {"full", "delay", "none"}
-        The anti-aliasing filters as filters, as their equivalent delay, or left out.
-    delays : bool
-        The actuator and sensor time delays, as Pade approximations of order ``pade_order``.
-    pade_order : int
-
-    Which signals come out:
-
-    inputs, outputs : sequence of str, optional
-        Keep only these inputs and outputs (default: all), in this order.
-    motion_grids : sequence of int or "all"
-        Adds each grid's translations [m] and rotations [rad] in basic axes as outputs
-        ``grid_<id>_<tx|ty|tz|rx|ry|rz>`` after the sensors, for animation.
+    electronics : ModelledElectronics
+        Servo loops closed or open, the Bessel filters as filters, as a delay or left out, the time
+        delays on or off and their Pade order (default: all of it, order 3).
+    signals : SignalSelection
+        The inputs and outputs kept (default: all) and the grids whose motion [m, rad] is added as
+        outputs (default: none).
+    **moved
+        Not accepted: the earlier flat keywords (``servos``, ``bessel``, ``delays``, ``pade_order``,
+        ``inputs``, ``outputs``, ``motion_grids``) get a message naming the record that holds them now.
 
     Returns
     -------
@@ -279,11 +279,16 @@ def volts_model(structure: StructureKind = "1g", *, parameters: ParameterSet | N
 
     Examples
     --------
-    >>> from mace_fmu import volts_model
-    >>> model = volts_model("0g", max_hz=5.0, outputs=["gyro_payload_z"], inputs=["gimbal_secondary_z"])
+    >>> from mace_fmu import SignalSelection, volts_model
+    >>> model = volts_model("0g", max_hz=5.0, signals=SignalSelection(inputs=["gimbal_secondary_z"],
+    ...                                                               outputs=["gyro_payload_z"]))
     >>> model.system.ninputs, model.system.noutputs
     (1, 1)
     """
+    _refuse_moved_keywords(moved)
+    _check(isinstance(electronics, ModelledElectronics),
+           f"electronics must be a ModelledElectronics record, got {type(electronics).__name__}")
+    _check(isinstance(signals, SignalSelection), f"signals must be a SignalSelection record, got {type(signals).__name__}")
     _check(structure in ("1g", "0g"), f"structure must be '1g' or '0g', got {structure!r}")
     if modes is not None:
         _check_modes_agree(modes, structure=structure, parameters=parameters,
@@ -311,11 +316,8 @@ def volts_model(structure: StructureKind = "1g", *, parameters: ParameterSet | N
            f"max_hz = {max_hz} Hz is below the first flexible mode ({flexible.min():.3f} Hz); allowed: >= that")
     zeta = modal_damping(modes.modes.labels, modes.modes.frequencies_hz, instruments.damping)
     grids = modes.modes.dofs.grid_ids
-    if isinstance(motion_grids, str):
-        _check(motion_grids == "all", f"motion_grids must be grid IDs or 'all', got {motion_grids!r}")
-        motion_grids = grids
-    _check(isinstance(motion_grids, Sequence) and all(isinstance(g, (int, np.integer)) for g in motion_grids),
-           f"motion_grids must be a list of grid IDs or 'all', got {motion_grids!r}")
+    inputs, outputs = signals.inputs, signals.outputs
+    motion_grids = grids if signals.motion_grids == "all" else signals.motion_grids
     if outputs is not None:  # only grids whose motion is asked for: the others' states would go unread
         named = {parse_motion_output(n)[0] for n in outputs if parse_motion_output(n) is not None}
         motion_grids = [g for g in motion_grids if g in named]
@@ -323,11 +325,26 @@ def volts_model(structure: StructureKind = "1g", *, parameters: ParameterSet | N
     _check(not unknown, f"motion_grids: grid(s) {unknown} are not in the {structure} model; it has grids "
                         f"{grids[0]}..{grids[-1]} ({len(grids)} in all)")
     plant = modal_plant(modes.modes, instruments, zeta, max_hz=max_hz, motion_grids=list(motion_grids))
-    diagram = build_diagram(plant, instruments, servos=servos, bessel=bessel, delays=delays, pade_order=pade_order)
+    diagram = build_diagram(plant, instruments, electronics=electronics)
     system = diagram.compile()
     return VoltsModel(system=select_signals(system, inputs=inputs, outputs=outputs), diagram=diagram, plant=plant,
-                      structure_modes=modes, instruments=instruments, servos=servos, bessel=bessel, delays=delays,
-                      pade_order=pade_order)
+                      structure_modes=modes, instruments=instruments, electronics=electronics)
+
+
+_MOVED = {"servos": "electronics", "bessel": "electronics", "delays": "electronics", "pade_order": "electronics",
+          "inputs": "signals", "outputs": "signals", "motion_grids": "signals"}
+
+
+def _refuse_moved_keywords(moved: Mapping[str, Any]) -> None:
+    """The flat keywords of before are refused with where they live now; any other unknown one is a TypeError."""
+    unknown = sorted(set(moved) - set(_MOVED))
+    if unknown:
+        raise TypeError(f"volts_model() got unexpected keyword argument(s) {', '.join(map(repr, unknown))}")
+    if moved:
+        record = {"electronics": "ModelledElectronics", "signals": "SignalSelection"}
+        hints = [f"{_MOVED[k]}={record[_MOVED[k]]}({k}={v!r})" for k, v in moved.items()]
+        raise MaceError(f"volts_model: {', '.join(f'{k}=' for k in moved)} now belong(s) to a record: pass "
+                        f"{'; '.join(hints)} (from mace_fmu import {', '.join(sorted({record[_MOVED[k]] for k in moved}))})")
 
 
 def _check_modes_agree(modes: StructureModes, *, structure: str, parameters: ParameterSet | None,

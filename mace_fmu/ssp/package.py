@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import Mapping, Sequence
 
 from mace_fmu.errors import MaceError
-from mace_fmu.ssp.ssv import SSC, SSV, units_element, values_ssv
+from mace_fmu.ssp.ssv import SSC, units_element, values_ssv
 from mace_fmu.util.atomic import atomic_path
 
 SSD = "http://ssp-standard.org/SSP1/SystemStructureDescription"

@@ -114,7 +114,7 @@ def update_fmu(*, family: FmuFamily, cost: Cost, start: Mapping[str, float], sta
         raise MaceError(f"no start value for {', '.join(missing)}")
     bad = [n for n in names if not start[n] > 0]
     if bad:
-        raise MaceError(f"update parameters must start positive (they move in relative terms): "
+        raise MaceError("update parameters must start positive (they move in relative terms): "
                         + ", ".join(f"{n} = {start[n]:g}" for n in bad))
     if family.interface.written_by_pythonfmu:
         if runner is map:

@@ -160,7 +160,7 @@ def uncertainty_toml(stages: tuple[StageUncertainty, ...]) -> str:
 
     lines = ["# mace-fmu: linearised uncertainty of an update (from its final cost sensitivities)", ""]
     for st in stages:
-        lines += [f"[[stage]]", f"name = {q(st.stage)}", f"residuals = {st.residuals}",
+        lines += ["[[stage]]", f"name = {q(st.stage)}", f"residuals = {st.residuals}",
                   f"noise_variance = {num(st.noise_variance)}", f"tolerance_percent = {num(st.tolerance_percent)}",
                   "parameters = [" + ", ".join(q(n) for n in st.names) + "]",
                   "values = [" + ", ".join(num(st.values[n]) for n in st.names) + "]",

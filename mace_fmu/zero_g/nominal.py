@@ -28,6 +28,7 @@ from scipy.optimize import least_squares
 
 from mace_fmu.deck.cards import Deck
 from mace_fmu.errors import MaceError
+from mace_fmu.iomodel.model_options import ModelledElectronics
 from mace_fmu.iomodel.parametric import ParametricSystem
 from mace_fmu.iomodel.parametric_data import parametric_arrays
 from mace_fmu.iomodel.pole_pairing import REAL_POLE_DAMPING, pair_poles
@@ -370,7 +371,7 @@ def predict_zero_g(*, parameters: ParameterSet | None = None, measured: Sequence
     target_zeta = np.array([p0[i0[j]].damping * measured[kept[j]].damping / p1[i1[kept[j]]].damping
                             for j in adjusted])
     # the output filters sit outside every loop: the closed-loop structural poles are those of the model without them
-    core = volts_model("0g", parameters=parameters, modes=v0.structure_modes, bessel="none")
+    core = volts_model("0g", parameters=parameters, modes=v0.structure_modes, electronics=ModelledElectronics(bessel="none"))
     adjuster = _Adjuster(core, modes)
     x, pinned = _solve_adjustment(adjuster, target_hz, target_zeta)
     for j in np.flatnonzero(pinned):
@@ -410,7 +411,7 @@ def predict_zero_g(*, parameters: ParameterSet | None = None, measured: Sequence
             if mode is not None else 1.0,
             open_loop_damping=float(nominal.plant.damping[mode]) if mode is not None else math.nan,
             adjusted=j in adjusted, damping_reached=j not in adjusted or not pinned[adjusted.index(j)]))
-    core = volts_model("0g", parameters=nominal_set, modes=v0.structure_modes, bessel="none")
+    core = volts_model("0g", parameters=nominal_set, modes=v0.structure_modes, electronics=ModelledElectronics(bessel="none"))
     rows = _with_closed_loop_shifts(rows, core)
     return ZeroGPrediction(rows=tuple(rows), parameters=nominal_set, model=nominal, rule=rule, source=source,
                            dropped=tuple(measured[k].label for k, p in enumerate(zero_g_patterns) if not p))
