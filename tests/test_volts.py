@@ -128,8 +128,10 @@ def test_bessel_delay_variant_and_open_loop_variant():
 
 
 @pytest.mark.parametrize(("kwargs", "message"), [
-    (lambda: dict(signals=SignalSelection(outputs=["gyro_payload_q"])), "unknown output signal 'gyro_payload_q'; allowed: encoder_primary_x"),
-    (lambda: dict(signals=SignalSelection(inputs=["gimbal_tertiary"])), "unknown input signal 'gimbal_tertiary'; allowed: gimbal_primary_x"),
+    (lambda: dict(signals=SignalSelection(outputs=["gyro_payload_q"])),
+     "unknown output signal 'gyro_payload_q'; allowed: encoder_primary_x"),
+    (lambda: dict(signals=SignalSelection(inputs=["gimbal_tertiary"])),
+     "unknown input signal 'gimbal_tertiary'; allowed: gimbal_primary_x"),
     (dict(parameters=ParameterSet({"delay_gimbal_primary_x": -1e-3})), "= -0.001 is outside \\[0, 1\\] s, the range of every delay parameter"),
     (dict(parameters=ParameterSet({"delay_gyro_payload_y": 1e-3})), "no delayed channel 'gyro_payload_y'"),
     (dict(parameters=ParameterSet({"E_unobtainium": 1e9})), "no such material; known: E_lexan_end"),
@@ -139,7 +141,8 @@ def test_bessel_delay_variant_and_open_loop_variant():
     (dict(parameters=ParameterSet({"damping:1st W bending": 0.02})),
      "no mode labelled '1st W bending' in the 0g structure"),
     (dict(parameters=ParameterSet({"damping:1st Z bending": 1.5})), "= 1.5 is outside \\[0, 1\\], the range of every damping parameter"),
-    (lambda: dict(signals=SignalSelection(motion_grids=[1, 999999])), "999999] are not in the 0g model; it has grids 1..112"),
+    (lambda: dict(signals=SignalSelection(motion_grids=[1, 999999])),
+     "999999] are not in the 0g model; it has grids 1..112"),
     (lambda: dict(signals=SignalSelection(motion_grids="some")), "motion_grids must be grid IDs or 'all'"),
     (lambda: dict(signals=SignalSelection(motion_grids=1)), "motion_grids must be a list of grid IDs or 'all', got 1"),
     (lambda: dict(electronics=dict(servos=False)), "electronics must be a ModelledElectronics record, got dict"),

@@ -79,16 +79,11 @@ def write_still(page: str | os.PathLike, png: str | os.PathLike, *, width_px: in
 
     Parameters
     ----------
-    page : path
-        The standalone HTML page.
-    png : path
-        The picture to write.
-    width_px, height_px : int
-        Window size [pixels].
-    virtual_time_s : float
-        Chromium's virtual time before the picture [s].
-    timeout_s : float
-        Real time Chromium may take [s].
+    page, png : path
+        The standalone HTML page and the picture to write.
+    width_px, height_px, virtual_time_s, timeout_s
+        As for :func:`render_page`: the window [pixels], Chromium's virtual time before the picture [s]
+        and the real time it may take [s].
 
     Returns
     -------

@@ -128,5 +128,6 @@ def volts(args: argparse.Namespace, *, parameter_set=_FROM_ARGS, every_grid_move
                                       pade_order=args.pade_order)
     grids = "all" if every_grid_moves else motion_grids(getattr(args, "motion_grids", None))
     return volts_model(args.structure, max_hz=args.max_hz, preload=args.preload, deck=read_deck(args.deck),
-                       parameters=parameters(args) if parameter_set is _FROM_ARGS else parameter_set, structure_file=getattr(args, "structure_file", None),
+                       parameters=parameters(args) if parameter_set is _FROM_ARGS else parameter_set,
+                       structure_file=getattr(args, "structure_file", None),
                        electronics=electronics, signals=SignalSelection(motion_grids=grids))

@@ -112,12 +112,16 @@ def large_displacement_preload(model: FEModel, constraints: Constraints, load: n
                                final_tolerance: float = 1e-14, progress: ProgressCallback | None = None) -> Preload:
     """Incremental Newton solution on the updated geometry (dead load), tangent of the final state.
 
-    Intermediate increments only have to stay on the load path: a secant predictor, then
-    modified Newton (the material stiffness of the current state plus the geometric stiffness of
-    the last full tangent scaled with the load; a full tangent again when an iteration stops
-    contracting) to NLPARM's work tolerance ``path_tolerance`` (EPSW). The last increment, whose tangent is the product, uses full Newton to
-    ``final_tolerance``. The work criterion is NASTRAN's (CONV=W): the force
-    residual itself stalls at round-off because the short aluminium links are ~1e10 N/m stiff.
+    Each increment starts from a secant predictor and iterates with modified Newton: full
+    tangents (second derivatives) in the first increment, where the unstressed cables have no
+    lateral stiffness, and whenever an iteration stops contracting; otherwise the material
+    stiffness of the current state plus the last full tangent's geometric stiffness scaled with
+    the load. Intermediate increments only have to stay on the load path, to NLPARM's work
+    tolerance ``path_tolerance`` (EPSW); the last one converges to ``final_tolerance``, and the
+    tangent of its end state is the product. The same equilibrium and tangent as plain Newton
+    (``tests/test_preload_iterations.py``) with a fifth of the full tangents. The work criterion
+    is NASTRAN's (CONV=W): the force residual itself stalls at round-off because the short
+    aluminium links are ~1e10 N/m stiff.
 
     Parameters
     ----------

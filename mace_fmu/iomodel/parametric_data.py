@@ -72,7 +72,8 @@ def _blocks(model: VoltsModel) -> tuple[dict, list[tuple[str, float, str]]]:
         elif isinstance(block, PadeDelay):
             kinds.append("delay"), params.append(name)
             what = name.removeprefix(DELAY.fmu_prefix)
-            parameters.append((name, float(block.delay), f"time delay of {what} [s] (Pade order {model.electronics.pade_order})"))
+            parameters.append((name, float(block.delay),
+                               f"time delay of {what} [s] (Pade order {model.electronics.pade_order})"))
         elif isinstance(block, Gain) and name.startswith(("kf_", "kb_")):
             gain = "K_f" if name.startswith("kf_") else "K_b"
             kinds.append("gain"), params.append(gain)

@@ -89,7 +89,8 @@ class VoltsModel:
                                                          family=el.filter_kind).lti(), frequencies_hz)[:, 0, 0]
         delay = extra + (el.filter_equivalent_delay_s if self.electronics.bessel == "delay" else 0.0)
         if delay > 0.0:
-            response *= frequency_response(PadeDelay("d", delay, self.electronics.pade_order).lti(), frequencies_hz)[:, 0, 0]
+            pade = PadeDelay("d", delay, self.electronics.pade_order).lti()
+            response *= frequency_response(pade, frequencies_hz)[:, 0, 0]
         return response
 
 
@@ -288,7 +289,8 @@ def volts_model(structure: StructureKind = "1g", *, modes: StructureModes | None
     _refuse_moved_keywords(moved)
     _check(isinstance(electronics, ModelledElectronics),
            f"electronics must be a ModelledElectronics record, got {type(electronics).__name__}")
-    _check(isinstance(signals, SignalSelection), f"signals must be a SignalSelection record, got {type(signals).__name__}")
+    _check(isinstance(signals, SignalSelection),
+           f"signals must be a SignalSelection record, got {type(signals).__name__}")
     _check(structure in ("1g", "0g"), f"structure must be '1g' or '0g', got {structure!r}")
     if modes is not None:
         _check_modes_agree(modes, structure=structure, parameters=parameters,
@@ -343,8 +345,9 @@ def _refuse_moved_keywords(moved: Mapping[str, Any]) -> None:
     if moved:
         record = {"electronics": "ModelledElectronics", "signals": "SignalSelection"}
         hints = [f"{_MOVED[k]}={record[_MOVED[k]]}({k}={v!r})" for k, v in moved.items()]
+        records = ", ".join(sorted({record[_MOVED[k]] for k in moved}))
         raise MaceError(f"volts_model: {', '.join(f'{k}=' for k in moved)} now belong(s) to a record: pass "
-                        f"{'; '.join(hints)} (from mace_fmu import {', '.join(sorted({record[_MOVED[k]] for k in moved}))})")
+                        f"{'; '.join(hints)} (from mace_fmu import {records})")
 
 
 def _check_modes_agree(modes: StructureModes, *, structure: str, parameters: ParameterSet | None,

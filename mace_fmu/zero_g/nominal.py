@@ -371,7 +371,8 @@ def predict_zero_g(*, parameters: ParameterSet | None = None, measured: Sequence
     target_zeta = np.array([p0[i0[j]].damping * measured[kept[j]].damping / p1[i1[kept[j]]].damping
                             for j in adjusted])
     # the output filters sit outside every loop: the closed-loop structural poles are those of the model without them
-    core = volts_model("0g", parameters=parameters, modes=v0.structure_modes, electronics=ModelledElectronics(bessel="none"))
+    core = volts_model("0g", parameters=parameters, modes=v0.structure_modes,
+                       electronics=ModelledElectronics(bessel="none"))
     adjuster = _Adjuster(core, modes)
     x, pinned = _solve_adjustment(adjuster, target_hz, target_zeta)
     for j in np.flatnonzero(pinned):
@@ -411,7 +412,8 @@ def predict_zero_g(*, parameters: ParameterSet | None = None, measured: Sequence
             if mode is not None else 1.0,
             open_loop_damping=float(nominal.plant.damping[mode]) if mode is not None else math.nan,
             adjusted=j in adjusted, damping_reached=j not in adjusted or not pinned[adjusted.index(j)]))
-    core = volts_model("0g", parameters=nominal_set, modes=v0.structure_modes, electronics=ModelledElectronics(bessel="none"))
+    core = volts_model("0g", parameters=nominal_set, modes=v0.structure_modes,
+                       electronics=ModelledElectronics(bessel="none"))
     rows = _with_closed_loop_shifts(rows, core)
     return ZeroGPrediction(rows=tuple(rows), parameters=nominal_set, model=nominal, rule=rule, source=source,
                            dropped=tuple(measured[k].label for k, p in enumerate(zero_g_patterns) if not p))
