@@ -18,7 +18,7 @@ import numpy as np
 import scipy
 from common import machine_line
 
-from mace_fmu import pipeline
+from mace_fmu.fe import modes as pipeline  # the deck -> modes route, whose stage functions are wrapped
 from mace_fmu.iomodel import volts
 from mace_fmu.structure.file import bundled_deck_path
 
