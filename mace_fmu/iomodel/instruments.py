@@ -21,10 +21,11 @@ from mace_fmu.fe.dofs import DofMap, cd_component_vector
 from mace_fmu.structure.file import StructureFile, bundled_structure_path, load_structure_file
 from modelica_like.filters import LOWPASS_KINDS, lowpass_realization
 
-SensorKind = Literal["displacement", "rate"]
+SensorKind = Literal["displacement", "rate", "acceleration"]
 #: the sensor kinds a structure file may name: a bar strain gauge is a displacement sensor whose weights
-#: the deck's bar gives (fe/bar_strain.py)
-SENSOR_KINDS = ("displacement", "rate", "bar_strain")
+#: the deck's bar gives (fe/bar_strain.py); an acceleration sensor (an accelerometer, or an angular one) reads
+#: the second derivative of its DOFs, with a feedthrough from the actuators (iomodel/modal_core.py)
+SENSOR_KINDS = ("displacement", "rate", "acceleration", "bar_strain")
 Dof = tuple[int, int, float]  #: (grid, component 1-6 in CD, weight)
 
 
@@ -223,12 +224,13 @@ DEFAULT_DAMPING = 0.01
 
 
 def _sensor_unit(kind: str, dofs: tuple[Dof, ...]) -> str:
-    """The unit a sensor reads when its structure file gives none: rad or m (per s for a rate sensor),
-    from its DOFs' components (a weighted sum of rotations reads radians)."""
+    """The unit a sensor reads when its structure file gives none: rad or m (per s for a rate sensor, per
+    s^2 for an acceleration sensor), from its DOFs' components (a weighted sum of rotations reads radians)."""
     rotational = all(c >= 4 for _, c, _ in dofs)
     translational = all(c <= 3 for _, c, _ in dofs)
     base = "rad" if rotational else "m" if translational else "physical unit"
-    return f"{base}/s" if kind == "rate" and base != "physical unit" else base
+    per = {"rate": "/s", "acceleration": "/s^2"}.get(kind, "")
+    return f"{base}{per}" if base != "physical unit" else base
 
 
 def _electronics(table: Mapping[str, Any], path: object) -> Electronics:

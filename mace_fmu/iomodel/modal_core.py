@@ -47,16 +47,19 @@ def _read_directions(rows: dict[str, np.ndarray], zero: np.ndarray, basis: np.nd
 
 def reduce_zero_cluster(zero: np.ndarray, phi: np.ndarray, labels: tuple[str, ...], modal_b: np.ndarray,
                          disp_out: dict[str, np.ndarray], rate_out: dict[str, np.ndarray],
-                         motion_out: dict[str, np.ndarray] | None = None):
+                         motion_out: dict[str, np.ndarray] | None = None,
+                         acc_out: dict[str, np.ndarray] | None = None):
     """Rotate the zero-frequency modes so that controllable and observable directions come first.
 
     Returns the rotated (phi, labels, modal_b), the numbers of controllable directions and of
     directions whose displacement is kept (read by a sensor or a motion output), and the reasons
-    for what goes; ``disp_out``, ``rate_out`` and ``motion_out`` (rows over the modes) are
-    rotated in place.
+    for what goes; ``disp_out``, ``rate_out``, ``motion_out`` and ``acc_out`` (rows over the modes)
+    are rotated in place. Acceleration rows do not decide what is kept: a zero-frequency direction's
+    acceleration is its modal force alone, a feedthrough.
     """
     removed: list[tuple[str, str]] = []
     motion_out = {} if motion_out is None else motion_out
+    acc_out = {} if acc_out is None else acc_out
     if not len(zero):
         return phi, labels, modal_b, 0, 0, removed
     u_b, s_b, _ = np.linalg.svd(modal_b[zero], full_matrices=True)
@@ -80,7 +83,7 @@ def reduce_zero_cluster(zero: np.ndarray, phi: np.ndarray, labels: tuple[str, ..
         new_labels[j] = labels[zero[int(np.argmax(np.abs(rot[:, k])))]]
     modal_b = modal_b.copy()
     modal_b[zero] = rot.T @ modal_b[zero]
-    for table in (disp_out, rate_out, motion_out):
+    for table in (disp_out, rate_out, motion_out, acc_out):
         for key in table:
             table[key] = table[key].copy()
             table[key][zero] = table[key][zero] @ rot
@@ -91,23 +94,28 @@ def reduce_zero_cluster(zero: np.ndarray, phi: np.ndarray, labels: tuple[str, ..
 
 def modal_matrices(freq_hz: np.ndarray, zeta: np.ndarray, labels: tuple[str, ...], shapes: np.ndarray,
                    modal_b: np.ndarray, disp_out: dict[str, np.ndarray], rate_out: dict[str, np.ndarray],
-                   output_order: list[str], motion_out: dict[str, np.ndarray] | None = None):
-    """(A, B, C, state names, rotated labels, rotated shapes, reasons for removed states).
+                   output_order: list[str], motion_out: dict[str, np.ndarray] | None = None,
+                   acc_out: dict[str, np.ndarray] | None = None):
+    """(A, B, C, D, state names, rotated labels, rotated shapes, reasons for removed states).
 
-    x = [eta; eta_dot] over the kept states; rows of C follow ``output_order`` (names of
-    ``disp_out``, ``rate_out`` and ``motion_out``, whose rows are over the modes); D = 0.
+    x = [eta; eta_dot] over the kept states; rows of C and D follow ``output_order`` (names of
+    ``disp_out``, ``rate_out``, ``motion_out`` and ``acc_out``, whose rows are over the modes).
     ``motion_out`` are displacement outputs that do not decide the sensors' model (grid motion).
+    An acceleration row a reads eta'' = -Omega^2 eta - 2 zeta Omega eta' + Phi^T b u: C gets
+    -a Omega^2 and -2 a zeta Omega, D = a Phi^T b over every retained mode (the rigid bodies'
+    and mechanisms' acceleration is all feedthrough); D is zero without acceleration outputs.
     """
     disp_out = {k: v.copy() for k, v in disp_out.items()}
     rate_out = {k: v.copy() for k, v in rate_out.items()}
     motion_out = {k: v.copy() for k, v in (motion_out or {}).items()}
+    acc_out = {k: v.copy() for k, v in (acc_out or {}).items()}
     # signed: a negative frequency is a negative eigenvalue (an unstable mode, e.g. a softened
     # spring), whose state-space block must diverge, not oscillate
     freq = np.where(np.abs(freq_hz) < ZERO_HZ, 0.0, freq_hz)
     omega2, omega = signed_omega2(freq), 2.0 * np.pi * np.abs(freq)
     zero = np.flatnonzero(np.abs(freq_hz) < ZERO_HZ)
     shapes, labels, modal_b, n_ctrl, n_obs, removed = reduce_zero_cluster(zero, shapes, labels, modal_b, disp_out,
-                                                                          rate_out, motion_out)
+                                                                          rate_out, motion_out, acc_out)
     n = len(freq_hz)
     keep_disp = np.ones(n, dtype=bool)
     keep_rate = np.ones(n, dtype=bool)
@@ -124,10 +132,16 @@ def modal_matrices(freq_hz: np.ndarray, zeta: np.ndarray, labels: tuple[str, ...
         a[pos_r[j], pos_r[j]] = -2.0 * zeta[j] * omega[j]
     b = np.vstack([np.zeros((nd, modal_b.shape[1])), modal_b[r_idx]])
     c = np.zeros((len(output_order), nd + nr))
+    d = np.zeros((len(output_order), modal_b.shape[1]))
     for i, name in enumerate(output_order):
-        if name in disp_out or name in motion_out:
+        if name in acc_out:
+            row = acc_out[name]
+            c[i, :nd] = (-omega2 * row)[d_idx]
+            c[i, nd:] = (-2.0 * zeta * omega * row)[r_idx]
+            d[i] = row @ modal_b
+        elif name in disp_out or name in motion_out:
             c[i, :nd] = (disp_out[name] if name in disp_out else motion_out[name])[d_idx]
         else:
             c[i, nd:] = rate_out[name][r_idx]
     states = [f"mode{j + 1}_disp" for j in d_idx] + [f"mode{j + 1}_vel" for j in r_idx]
-    return a, b, c, states, labels, shapes, removed
+    return a, b, c, d, states, labels, shapes, removed

@@ -1,7 +1,8 @@
 """Physical modal state-space model (thesis eq. 3.5-3.6): inputs [N m], outputs in physical units.
 
 x = [eta; eta_dot] per retained mode; A = [[0, I], [-Omega^2, -2 zeta Omega]], B = [0; Phi^T b],
-C = [c_d Phi, 0; 0, c_r Phi], D = 0. Besides the sensors, the model outputs the displacement
+C = [c_d Phi, 0; 0, c_r Phi], D = 0; an acceleration sensor c_a reads eta'' (C = c_a Phi [-Omega^2,
+-2 zeta Omega], D = c_a Phi Phi^T b). Besides the sensors, the model outputs the displacement
 reading (``<name>_angle``) of each rate sensor a gimbal servo integrates (the encoders) and, on
 request, the motion of named grids for animation (``grid_<id>_<tx|ty|tz|rx|ry|rz>``, basic axes,
 metres and radians).
@@ -65,11 +66,11 @@ def modal_plant(modes: Modes, instruments: Instruments, damping: np.ndarray, *, 
     """
     data = modal_data(modes, instruments, max_hz=max_hz, motion_grids=motion_grids)
     keep = modes.frequencies_hz <= max_hz
-    a, b, c, states, labels, shapes, removed = modal_matrices(
+    a, b, c, d, states, labels, shapes, removed = modal_matrices(
         data.frequencies_hz, damping[keep], data.labels, data.shapes, data.modal_b, data.disp_out, data.rate_out,
-        data.output_order, data.motion_out)
-    sys = ct.ss(a, b, c, np.zeros((len(data.output_order), b.shape[1])), inputs=[x.name for x in instruments.actuators],
-                outputs=data.output_order, states=states, name="structure")
+        data.output_order, data.motion_out, data.acc_out)
+    sys = ct.ss(a, b, c, d, inputs=[x.name for x in instruments.actuators], outputs=data.output_order, states=states,
+                name="structure")
     return ModalPlant(system=sys, frequencies_hz=data.frequencies_hz, damping=damping[keep], labels=labels,
                       shapes=shapes, removed_states=tuple(removed), motion_outputs=data.motion_outputs,
                       motion_grids=tuple(motion_grids))
@@ -87,6 +88,7 @@ class ModalData:
     rate_out: dict[str, np.ndarray]  #: rate outputs: rows over the modes
     output_order: list[str]  #: the 20 sensors, the integrated encoders' "<name>_angle", the motion outputs
     motion_out: dict[str, np.ndarray] = field(default_factory=dict)  #: grid motion outputs: rows over the modes
+    acc_out: dict[str, np.ndarray] = field(default_factory=dict)  #: acceleration outputs: rows over the modes
 
     @property
     def motion_outputs(self) -> tuple[str, ...]:
@@ -105,6 +107,7 @@ def modal_data(modes: Modes, instruments: Instruments, *, max_hz: float,
     disp_out = {s.name: rows[s.name] for s in instruments.sensors if s.kind == "displacement"}
     disp_out.update({f"{n}_angle": rows[n] for n in integrated})
     rate_out = {s.name: rows[s.name] for s in instruments.sensors if s.kind == "rate"}
+    acc_out = {s.name: rows[s.name] for s in instruments.sensors if s.kind == "acceleration"}
     order = [s.name for s in instruments.sensors] + [f"{n}_angle" for n in integrated]
     if len(set(motion_grids)) != len(motion_grids):
         raise MaceError(f"motion grids must be distinct, got {list(motion_grids)}")
@@ -112,4 +115,4 @@ def modal_data(modes: Modes, instruments: Instruments, *, max_hz: float,
                   for component, index in zip(MOTION_COMPONENTS, modes.dofs.indices(grid))}  # KeyError names a grid
     return ModalData(frequencies_hz=modes.frequencies_hz[keep], labels=tuple(l for l, k in zip(modes.labels, keep) if k),
                      shapes=phi, modal_b=phi.T @ b, disp_out=disp_out, rate_out=rate_out,
-                     output_order=order + list(motion_out), motion_out=motion_out)
+                     output_order=order + list(motion_out), motion_out=motion_out, acc_out=acc_out)

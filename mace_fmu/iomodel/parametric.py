@@ -74,8 +74,9 @@ class ParametricSystem:
         return signed_frequency_hz(w2), phi_r
 
     def structure(self, params: np.ndarray, *, frequencies_hz: np.ndarray | None = None,
-                  phi_r: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[str]]:
-        """(A, B, C, state names) of the modal structure block; modes by reanalysis unless given, then
+                  phi_r: np.ndarray | None = None
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, list[str]]:
+        """(A, B, C, D, state names) of the modal structure block; modes by reanalysis unless given, then
         scaled by the frequency scales."""
         d = self.data
         if frequencies_hz is None:
@@ -87,19 +88,20 @@ class ParametricSystem:
         disp = {str(name): row @ phi_r for name, row in zip(d["disp_names"], d["disp_rows"])}
         rate = {str(name): row @ phi_r for name, row in zip(d["rate_names"], d["rate_rows"])}
         motion = {str(name): row @ phi_r for name, row in zip(d["motion_names"], d["motion_rows"])}
-        a, b, c, states, labels, *_ = modal_matrices(frequencies_hz, zeta, self.mode_labels,
-                                                     np.zeros((0, len(zeta))), phi_r.T @ d["modal_b"], disp, rate,
-                                                     [str(x) for x in d["structure_outputs"]], motion)
+        acc = ({str(name): row @ phi_r for name, row in zip(d["acc_names"], d["acc_rows"])}
+               if "acc_names" in d else {})
+        a, b, c, dd, states, labels, *_ = modal_matrices(frequencies_hz, zeta, self.mode_labels,
+                                                         np.zeros((0, len(zeta))), phi_r.T @ d["modal_b"], disp, rate,
+                                                         [str(x) for x in d["structure_outputs"]], motion, acc)
         self.state_mode_labels = labels
-        return a, b, c, states
+        return a, b, c, dd, states
 
     def _block(self, i: int, params: np.ndarray, structure) -> tuple[np.ndarray, ...]:
         """(A, B, C, D) of block i for the parameter vector ``params``."""
         d = self.data
         kind, param = str(d["block_kinds"][i]), str(d["block_params"][i])
         if kind == "structure":
-            a, b, c, _ = structure
-            return a, b, c, np.zeros((c.shape[0], b.shape[1]))
+            return structure[:4]
         if kind == "delay":
             return pade(float(params[self._index[param]]), int(d["pade_order"]))
         if kind == "gain":
@@ -119,5 +121,5 @@ class ParametricSystem:
         blocks = [self._block(i, params, structure) for i in range(len(kinds))]
         names = [str(n) for n in self.data["block_names"]]
         self.state_names = [f"{names[i]}.{s}" for i, kind in enumerate(kinds) for s in
-                            (structure[3] if kind == "structure" else [f"x{k}" for k in range(blocks[i][0].shape[0])])]
+                            (structure[4] if kind == "structure" else [f"x{k}" for k in range(blocks[i][0].shape[0])])]
         return interconnect(blocks, self.data["wiring"], self.data["entry"], self.data["exit"])

@@ -211,6 +211,8 @@ def parametric_arrays(model: VoltsModel, *, physical: bool | Sequence[str] = Tru
         rate_names=np.array(list(data.rate_out)), rate_rows=np.array(list(data.rate_out.values())),
         motion_names=np.array(list(data.motion_out), dtype=str),
         motion_rows=np.array(list(data.motion_out.values())).reshape(len(data.motion_out), len(data.labels)),
+        acc_names=np.array(list(data.acc_out), dtype=str),
+        acc_rows=np.array(list(data.acc_out.values())).reshape(len(data.acc_out), len(data.labels)),
         structure_outputs=np.array(data.output_order))
     frequencies = {FREQUENCY_SCALE.fmu_name(k + 1): float(f) for k, f in enumerate(data.frequencies_hz)}
     arrays = _with_parameters(arrays, damping + scales + parameters, frequencies_hz=frequencies)

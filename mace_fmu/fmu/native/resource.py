@@ -30,6 +30,7 @@ MAX_PADE_ORDER = 10  #: the runtime's Pade coefficients are exact integer ratios
 BLOCK_KINDS = {"structure": 0, "const": 1, "delay": 2, "gain": 3, "pd": 4}
 PARAMETER_KINDS = {"damping": 0, "delay": 1, "gain": 2, "physical": 3, "frequency_scale": 4}
 _FLOAT, _INT, _TEXT = 1, 2, 3
+ROW_DISPLACEMENT, ROW_RATE, ROW_ACCELERATION = 0, 1, 2  #: struct_row_kind: what a structure output reads
 
 
 def _zero_cluster_reduced(arrays: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
@@ -40,23 +41,28 @@ def _zero_cluster_reduced(arrays: Mapping[str, np.ndarray]) -> dict[str, np.ndar
     disp = {str(k): np.asarray(v, dtype=float) for k, v in zip(arrays["disp_names"], arrays["disp_rows"])}
     rate = {str(k): np.asarray(v, dtype=float) for k, v in zip(arrays["rate_names"], arrays["rate_rows"])}
     motion = {str(k): np.asarray(v, dtype=float) for k, v in zip(arrays["motion_names"], arrays["motion_rows"])}
+    acc = ({str(k): np.asarray(v, dtype=float) for k, v in zip(arrays["acc_names"], arrays["acc_rows"])}
+           if "acc_names" in arrays else {})
     labels = tuple(str(x) for x in arrays["mode_labels"])
     _, _, modal_b, n_ctrl, n_kept, _ = reduce_zero_cluster(zero, np.zeros((0, n)), labels,
                                                            np.asarray(arrays["modal_b"], dtype=float),
-                                                           disp, rate, motion)
+                                                           disp, rate, motion, acc)
     keep_disp, keep_rate = np.ones(n, dtype=np.int64), np.ones(n, dtype=np.int64)
     keep_rate[zero[n_ctrl:]] = 0
     keep_disp[zero[n_kept:]] = 0
-    rows, is_rate = [], []
+    rows, row_kind = [], []  # what each structure output reads: 0 displacement, 1 rate, 2 acceleration
     for name in (str(x) for x in arrays["structure_outputs"]):
-        if name in disp or name in motion:
+        if name in acc:
+            rows.append(acc[name])
+            row_kind.append(ROW_ACCELERATION)
+        elif name in disp or name in motion:
             rows.append(disp[name] if name in disp else motion[name])
-            is_rate.append(0)
+            row_kind.append(ROW_DISPLACEMENT)
         else:
             rows.append(rate[name])
-            is_rate.append(1)
+            row_kind.append(ROW_RATE)
     return {"modal_b": modal_b, "struct_rows": np.array(rows).reshape(len(rows), n),
-            "struct_row_is_rate": np.array(is_rate, dtype=np.int64), "keep_disp": keep_disp,
+            "struct_row_kind": np.array(row_kind, dtype=np.int64), "keep_disp": keep_disp,
             "keep_rate": keep_rate, "flexible": np.flatnonzero(np.abs(freq) >= ZERO_HZ).astype(np.int64)}
 
 

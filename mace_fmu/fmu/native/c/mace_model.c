@@ -44,7 +44,7 @@ struct MaceModel {
     size_t n_structure_inputs, n_structure_outputs; /* the structure block's actuator and sensor rows */
     size_t n_block_inputs, n_block_outputs;         /* all blocks' inputs and outputs, stacked */
     const double *par_nominal, *par_min, *par_max, *freq0, *dk, *wiring, *entry, *exit_, *modal_b, *rows;
-    const int64_t *par_kind, *par_index, *block_info, *flex, *keep_disp, *keep_rate, *row_is_rate, *me_order;
+    const int64_t *par_kind, *par_index, *block_info, *flex, *keep_disp, *keep_rate, *row_kind, *me_order;
     /* the state vector's order: model exchange s[i] = x[perm[i]] (me_order of the data: dense-LU friendly),
        pos its inverse; co-simulation: the identity (its stepping coordinates are the zero-order hold's) */
     size_t *perm, *pos;
@@ -182,7 +182,7 @@ static int load(MaceModel *m, const char *resource_dir, char *err) {
         !(m->exit_ = (const double *)entry_2d(m, "exit", MACE_F64, m->n_out, m->n_block_outputs, err)) ||
         !(m->modal_b = (const double *)entry_2d(m, "modal_b", MACE_F64, m->n_modes, m->n_structure_inputs, err)) ||
         !(m->rows = (const double *)entry_2d(m, "struct_rows", MACE_F64, m->n_structure_outputs, m->n_modes, err)) ||
-        !(m->row_is_rate = (const int64_t *)entry_1d(m, "struct_row_is_rate", MACE_I64, m->n_structure_outputs, err)) ||
+        !(m->row_kind = (const int64_t *)entry_1d(m, "struct_row_kind", MACE_I64, m->n_structure_outputs, err)) ||
         !(m->keep_disp = (const int64_t *)entry_1d(m, "keep_disp", MACE_I64, m->n_modes, err)) ||
         !(m->keep_rate = (const int64_t *)entry_1d(m, "keep_rate", MACE_I64, m->n_modes, err)) ||
         !(m->flex = (const int64_t *)entry_1d(m, "flexible", MACE_I64, m->n_flex, err)) ||
@@ -533,8 +533,15 @@ done:
 
 /* The modal structure block into the block-diagonal matrices at state offset ox, input offset
  * ou, output offset oy (eq. 3.5-3.6; states: kept displacements, then kept rates, by mode). */
+/* struct_row_kind: what a structure output reads (mace_fmu/fmu/native/resource.py) */
+#define ROW_DISPLACEMENT 0
+#define ROW_RATE 1
+#define ROW_ACCELERATION 2
+
+/* The modal structure block (mace_fmu/iomodel/modal_core.py, modal_matrices): A, B and C, and for
+ * acceleration outputs C = a [-Omega^2, -2 zeta Omega] and the feedthrough D = a Phi^T b. */
 static int structure_block(MaceModel *m, const double *phi_r, int changed, double *ab, double *bb, double *cb,
-                           size_t N, size_t NU, size_t ox, size_t ou, size_t oy) {
+                           double *db, size_t N, size_t NU, size_t ox, size_t ou, size_t oy) {
     const size_t nm = m->n_modes, nf = m->n_flex;
     size_t j, k, o, q, nd = 0, pos;
     size_t *dpos = (size_t *)m->al.calloc(nm + 1, sizeof(size_t)), *rpos = (size_t *)m->al.calloc(nm + 1, sizeof(size_t));
@@ -576,9 +583,22 @@ static int structure_block(MaceModel *m, const double *phi_r, int changed, doubl
         }
     }
     for (o = 0; o < m->n_structure_outputs; o++) {
+        if (m->row_kind[o] == ROW_ACCELERATION) {
+            for (j = 0; j < nm; j++) {
+                const double f = fabs(m->freq[j]) < ZERO_HZ ? 0.0 : m->freq[j];
+                const double w2 = signed_omega2(f), w = TWO_PI * fabs(f), zeta = m->params[m->damping_of[j]];
+                const double a = rows[o * nm + j];
+                if (m->keep_disp[j]) cb[(oy + o) * N + ox + dpos[j]] = -w2 * a;
+                if (m->keep_rate[j]) cb[(oy + o) * N + ox + rpos[j]] = -2.0 * zeta * w * a;
+                for (q = 0; q < m->n_structure_inputs; q++)
+                    db[(oy + o) * NU + ou + q] += a * mb[j * m->n_structure_inputs + q];
+            }
+            continue;
+        }
         for (j = 0; j < nm; j++) {
-            if (m->row_is_rate[o] ? m->keep_rate[j] : m->keep_disp[j])
-                cb[(oy + o) * N + ox + (m->row_is_rate[o] ? rpos[j] : dpos[j])] = rows[o * nm + j];
+            const int rate = m->row_kind[o] == ROW_RATE;
+            if (rate ? m->keep_rate[j] : m->keep_disp[j])
+                cb[(oy + o) * N + ox + (rate ? rpos[j] : dpos[j])] = rows[o * nm + j];
         }
     }
     status = 0;
@@ -651,7 +671,7 @@ static int assemble(MaceModel *m, const double *phi_r, int changed, char *err) {
         const size_t nx = (size_t)info[INFO_NX], nu = (size_t)info[INFO_NU], ny = (size_t)info[INFO_NY];
         switch (info[INFO_KIND]) {
             case BLOCK_STRUCTURE:
-                if (structure_block(m, phi_r, changed, ab, bb, cb, N, NU, ox, ou, oy) != 0) {
+                if (structure_block(m, phi_r, changed, ab, bb, cb, db, N, NU, ox, ou, oy) != 0) {
                     snprintf(err, MACE_ERR_LEN, "out of memory building the structure block");
                     goto done;
                 }
