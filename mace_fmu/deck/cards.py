@@ -216,6 +216,19 @@ class Rigid:
 
 
 @dataclass(frozen=True)
+class Interpolation:
+    """RBE3 as NASTRAN reads it: components ``reference_components`` of grid ``reference`` follow the
+    weighted least-squares rigid motion of the independent grids' listed translations."""
+
+    id: int  #: element ID
+    reference: int  #: REFGRID: the grid whose DOFs become dependent
+    reference_components: str  #: REFC, "1".."123456" in the reference grid's CD system
+    #: (weight, components "1".."123" in each grid's CD system, grids) per WTi/Ci/Gi,j group
+    groups: tuple[tuple[float, str, tuple[int, ...]], ...]
+    source: Source  #: where the card is
+
+
+@dataclass(frozen=True)
 class Mat1:
     """MAT1: isotropic material exactly as written (blank G or NU stays None)."""
 
@@ -418,5 +431,6 @@ class Deck:
     scalar_masses: Mapping[int, ScalarMass] = field(default_factory=dict)  #: CMASS1 and CMASS2
     pmasses: Mapping[int, PMass] = field(default_factory=dict)
     rigids: Mapping[int, Rigid] = field(default_factory=dict)  #: RBAR and RBE2 (always in force, like NASTRAN's)
+    interpolations: Mapping[int, Interpolation] = field(default_factory=dict)  #: RBE3 (always in force)
     eigrs: Mapping[int, Eigr] = field(default_factory=dict)
     conm1s: Mapping[int, Conm1] = field(default_factory=dict)

@@ -14,9 +14,9 @@ from typing import Any, Callable
 
 import numpy as np
 
-from mace_fmu.deck.cards import (CBar, CBeam, Celas2, Conm1, Conm2, Cord1R, Cord2R, Deck, Eigr, Eigrl, Grav, Grid, Load,
-                                 Mat1, Mpc, MpcTerm, Nlparm, Param, PBar, PBeam, PMass, PRod, Rigid, Rod, ScalarMass,
-                                 SetUnion, Source, Spc1)
+from mace_fmu.deck.cards import (CBar, CBeam, Celas2, Conm1, Conm2, Cord1R, Cord2R, Deck, Eigr, Eigrl, Grav, Grid,
+                                 Interpolation, Load, Mat1, Mpc, MpcTerm, Nlparm, Param, PBar, PBeam, PMass, PRod, Rigid,
+                                 Rod, ScalarMass, SetUnion, Source, Spc1)
 from mace_fmu.deck.fields import (Fields, Selections, case_control, check_text, parse_int, parse_real, split_cards,
                                   split_sections)
 from mace_fmu.deck.sections import SECTIONS, section_properties
@@ -736,6 +736,54 @@ def _rbe2(f: Fields, src: Source) -> Rigid:
     return Rigid(id=eid, card="RBE2", independent=gn, dependent=tuple((g, cm) for g in grids), source=src)
 
 
+def _rbe3(f: Fields, src: Source) -> Interpolation:
+    """RBE3 (QRG): EID, blank, REFGRID, REFC, then groups WTi Ci Gi,1 Gi,2 ...; optional "UM" (dependent
+    DOFs moved to the independent grids) and "ALPHA" sections after them. mace-fmu takes translational
+    independent components (Ci within 123): NASTRAN weights rotational ones with a characteristic length
+    whose definition its Guide leaves open, and UM sets, both refused."""
+    eid = f.ident(1, "EID")
+    f.blank(2, "blank")
+    reference = f.integer(3, "REFGRID", minimum=1)
+    reference_components = f.components(4, "REFC")
+    groups: list[tuple[float, str, tuple[int, ...]]] = []
+    d = 5
+    while d <= len(f):
+        text = f.text(d)
+        if not text:
+            d += 1
+            continue
+        if text.upper() == "UM":
+            raise f.error("a UM section (dependent DOFs on the independent grids) is not supported by mace-fmu "
+                          "(expected the reference grid's REFC as the only dependent DOFs)", d, "UM")
+        if text.upper() == "ALPHA":  # thermal expansion only: read and left
+            f.real(d + 1, "ALPHA")
+            f.end(d + 1)
+            break
+        k = len(groups) + 1
+        weight = f.real(d, f"WT{k}", above=0.0)
+        components = f.components(d + 1, f"C{k}")
+        if set(components) - set("123"):
+            raise f.error(f"C{k} = {components}: rotational independent components are not supported by mace-fmu "
+                          "(expected translations, digits 1-3)", d + 1, f"C{k}")
+        grids: list[int] = []
+        d += 2
+        while d <= len(f) and (not f.text(d) or parse_int(f.text(d)) is not None):
+            if f.text(d):
+                grid = f.integer(d, f"G{k},{len(grids) + 1}", minimum=1)
+                if grid == reference:
+                    raise f.error(f"grid {grid} is REFGRID (expected independent grids other than the reference)",
+                                  d, f"G{k},{len(grids) + 1}")
+                grids.append(grid)
+            d += 1
+        if not grids:
+            raise f.error(f"no grid after WT{k} and C{k} (expected G{k},1 ...)", d - 1, f"G{k},1")
+        groups.append((weight, components, tuple(grids)))
+    if not groups:
+        raise f.error("no independent grids (expected WT1, C1, G1,1 ...)", 5, "WT1")
+    return Interpolation(id=eid, reference=reference, reference_components=reference_components,
+                         groups=tuple(groups), source=src)
+
+
 _EIGR_METHODS = ("LAN", "AHOU", "HOU", "MHOU", "GIV", "MGIV", "INV", "SINV")
 
 
@@ -856,16 +904,16 @@ _PARSERS: dict[str, Callable[[Fields, Source], Any]] = {
     "NLPARM": _nlparm, "PARAM": _param, "PBARL": _pbarl, "PBEAML": _pbeaml, "PBEAM": _pbeam, "CBEAM": _cbeam,
     "CROD": _crod, "CONROD": _conrod, "PROD": _prod, "CMASS1": _cmass1, "CMASS2": _cmass2, "PMASS": _pmass,
     "RBAR": _rbar, "RBE2": _rbe2, "EIGR": _eigr, "GRDSET": _grdset, "CELAS1": _celas1, "PELAS": _pelas,
-    "CONM1": _conm1, "SPCADD": _spcadd, "MPCADD": _spcadd, "CORD1R": _cord1r}
+    "CONM1": _conm1, "SPCADD": _spcadd, "MPCADD": _spcadd, "CORD1R": _cord1r, "RBE3": _rbe3}
 _TABLES = {"GRID": "grids", "CORD2R": "coords", "CBAR": "bars", "PBAR": "pbars", "MAT1": "mat1s",
            "CONM2": "conm2s", "CELAS2": "celas2s", "GRAV": "gravs", "LOAD": "loads", "EIGRL": "eigrls",
            "NLPARM": "nlparms", "PARAM": "params", "PBARL": "pbars", "PBEAML": "pbeams", "PBEAM": "pbeams",
            "CBEAM": "beams", "CROD": "rods", "CONROD": "rods", "PROD": "prods", "CMASS1": "scalar_masses",
            "CMASS2": "scalar_masses", "PMASS": "pmasses", "RBAR": "rigids", "RBE2": "rigids", "EIGR": "eigrs",
-           "CONM1": "conm1s", "CORD1R": "coords"}
+           "CONM1": "conm1s", "CORD1R": "coords", "RBE3": "interpolations"}
 #: one element ID namespace in NASTRAN. CONM2 has its own: MSC Nastran ran HA144D with CBAR 100 and CONM2 100
 #: (its sorted bulk echo is in the .f06 of tests/data/nastran/ha144ds), so a deck may reuse a CBAR's ID on a CONM2
-_ELEMENTS = ("CBAR", "CELAS1", "CELAS2", "CBEAM", "CROD", "CONROD", "CMASS1", "CMASS2", "RBAR", "RBE2")
+_ELEMENTS = ("CBAR", "CELAS1", "CELAS2", "CBEAM", "CROD", "CONROD", "CMASS1", "CMASS2", "RBAR", "RBE2", "RBE3")
 
 
 def _bulk_tables(raw_cards: list, file: str) -> tuple[dict[str, dict], tuple]:
@@ -1102,6 +1150,11 @@ def _check_new_elements(deck: Deck, grid: tuple[str, str]) -> None:
         _need(r.independent, deck.grids, r, f"{r.card} {r.id}", "independent grid", *grid)
         for k, (g, _) in enumerate(r.dependent, start=1):
             _need(g, deck.grids, r, f"{r.card} {r.id}", f"dependent grid {k}", *grid)
+    for e in deck.interpolations.values():
+        _need(e.reference, deck.grids, e, f"RBE3 {e.id}", "field 4 (REFGRID)", *grid)
+        for k, (_, _, grids) in enumerate(e.groups, start=1):
+            for j, g in enumerate(grids, start=1):
+                _need(g, deck.grids, e, f"RBE3 {e.id}", f"G{k},{j}", *grid)
 
 
 def _check_mpc_dofs(deck: Deck) -> None:

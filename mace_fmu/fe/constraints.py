@@ -72,15 +72,66 @@ def rigid_equations(deck: Deck, dofs: DofMap, cd_frames: np.ndarray, fixed: np.n
                 sources[d], labels[d] = r.source, label
 
 
+def interpolation_equations(deck: Deck, dofs: DofMap, cd_frames: np.ndarray, fixed: np.ndarray,
+                            equations: dict[int, list[tuple[int, float]]], sources: dict, labels: dict) -> None:
+    """Add the equations of every RBE3 to ``equations`` (dependent index -> [(index, coefficient)], CD components).
+
+    The reference grid moves with the rigid motion q = (u, theta) [m, rad] about it that best fits, in the
+    weighted least-squares sense, the listed translations of the independent grids (the QRG's RBE3: "the
+    motion at a reference grid point is the least square weighted average of the motions at the other grid
+    points"). Independent grid i at r_i from the reference, rigidly moved, translates by u + theta x r_i
+    = [I, -skew(r_i)] q; each listed CD component c is the row of Lambda_i^T [I, -skew(r_i)] it reads, with
+    the group's weight w. q = (H^T W H)^-1 H^T W o over the observations o; the reference's REFC components
+    are those rows of Lambda_ref^T q. A set of grids that cannot fix all six motions (fewer than three
+    points, or all on one line) is refused, as the fit has no unique answer.
+    """
+    if not deck.interpolations:
+        return
+    pos = grid_positions(deck)
+    for e in sorted(deck.interpolations.values(), key=lambda x: x.id):
+        label = f"RBE3 {e.id}"
+        rows, weights, columns = [], [], []
+        for weight, comps, grids in e.groups:
+            for grid in grids:
+                x, y, z = pos[grid] - pos[e.reference]
+                g = np.hstack([np.eye(3), -np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])])  # -skew(r)
+                reads = cd_frames[dofs.grid_index(grid)].T @ g
+                for c in comps:
+                    rows.append(reads[int(c) - 1])
+                    weights.append(weight)
+                    columns.append(dofs.index(grid, int(c)))
+        h, w = np.array(rows), np.array(weights)
+        normal = h.T @ (w[:, None] * h)
+        if np.linalg.cond(normal) > 1e12:
+            raise MaceError(f"{e.source}: {label}: its independent grids and components do not fix the reference "
+                            f"grid {e.reference}'s six rigid motions (expected at least three grids not on one "
+                            "line, with enough translations listed)")
+        fit = np.linalg.solve(normal, h.T * w)  # (6, n_observations): q from the observations
+        coupling = np.kron(np.eye(2), cd_frames[dofs.grid_index(e.reference)]).T @ fit
+        for c in e.reference_components:
+            d = dofs.index(e.reference, int(c))
+            if fixed[d]:
+                raise MaceError(f"{e.source}: {label}: dependent DOF {e.reference}-{c} is also fixed by an SPC or a "
+                                "GRID PS field; a DOF can be eliminated only once")
+            if d in equations:
+                raise MaceError(f"{e.source}: {label}: dependent DOF {e.reference}-{c} is already dependent in "
+                                f"{labels[d]} ({sources[d]}); a DOF can be dependent only once")
+            terms: dict[int, float] = {}
+            for column, value in zip(columns, coupling[int(c) - 1]):
+                terms[column] = terms.get(column, 0.0) + float(value)
+            equations[d] = [(i, v) for i, v in terms.items() if abs(v) > 1e-15]
+            sources[d], labels[d] = e.source, label
+
+
 def build_constraints(deck: Deck, dofs: DofMap, cd_frames: np.ndarray, *, spc_set: int | None,
                       mpc_set: int | None) -> Constraints:
     """Eliminate SPC1 set ``spc_set``, GRID PS fields, MPC set ``mpc_set`` (first term dependent) and the
-    dependent DOFs of every RBAR and RBE2.
+    dependent DOFs of every RBAR, RBE2 and RBE3.
 
     Parameters
     ----------
     deck : Deck
-        The deck whose SPC1, GRID PS, MPC, RBAR and RBE2 cards apply.
+        The deck whose SPC1, GRID PS, MPC, RBAR, RBE2 and RBE3 cards apply.
     dofs : DofMap
         The model's DOFs (grid, component).
     cd_frames : numpy.ndarray
@@ -118,6 +169,7 @@ def build_constraints(deck: Deck, dofs: DofMap, cd_frames: np.ndarray, *, spc_se
         sources[d] = mpc.source
     labels = {d: f"MPC {mpc_set}" for d in equations}
     rigid_equations(deck, dofs, cd_frames, fixed, equations, sources, labels)
+    interpolation_equations(deck, dofs, cd_frames, fixed, equations, sources, labels)
 
     independent = [i for i in range(n) if not fixed[i] and i not in equations]
     column = {i: k for k, i in enumerate(independent)}

@@ -69,7 +69,7 @@ def rotation_vector_small(r: np.ndarray) -> np.ndarray:
     s2 = np.sum(w * w, axis=-1)
     # trace = 1 + 2 cos(angle): the sine alone cannot tell 0.1 rad from pi - 0.1 rad
     trace = (r[..., 0, 0] + r[..., 1, 1] + r[..., 2, 2]).real
-    if np.min(trace) < 1 + 2 * np.cos(_MAX_LOCAL_ROTATION):
+    if trace.size and np.min(trace) < 1 + 2 * np.cos(_MAX_LOCAL_ROTATION):  # a deck may have no bars
         raise MaceError(f"a bar's local rotation exceeds {_MAX_LOCAL_ROTATION} rad: the preload deforms the "
                         f"structure beyond small-strain beam theory (or the solution diverged)")
     # asin(s)/s as a series in s^2 (no square root, so complex-step stays analytic)

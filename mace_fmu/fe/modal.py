@@ -13,6 +13,7 @@ structure leaves after reordering) where the dense one grows with the cube of th
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Callable
 
 import numpy as np
 import scipy.linalg as sla
@@ -119,6 +120,19 @@ def _massless(m_diag: np.ndarray) -> np.ndarray:
 def _dense_modes(k: np.ndarray, m: np.ndarray, constraints: Constraints) -> tuple[np.ndarray, np.ndarray]:
     """Every mode (signed frequencies [Hz], shapes over the independent DOFs) by static condensation of
     the massless DOFs and one dense generalised eigen-solution."""
+    eigval, phi = _condensed_eigh(k, m, lambda k_oo, o: _unrestrained_message(k_oo, o, constraints))
+    return np.sign(eigval) * np.sqrt(np.abs(eigval)) / (2.0 * np.pi), phi
+
+
+def _condensed_eigh(k: np.ndarray, m: np.ndarray, unrestrained: Callable[[np.ndarray, np.ndarray], str]
+                    ) -> tuple[np.ndarray, np.ndarray]:
+    """Eigenvalues [rad^2/s^2] and M-normalised vectors of K phi = w^2 M phi, the massless DOFs condensed.
+
+    Massless DOFs (a zero on M's diagonal) are condensed statically. A massless combination of massive
+    DOFs (M singular without a zero on its diagonal, e.g. grids whose only mass is an RBE3's or an MPC's
+    reference point) is found in M's eigenbasis and condensed there, since the generalised solver needs a
+    positive definite M.
+    """
     diag = np.diag(m)
     massless = _massless(diag)
     a, o = np.flatnonzero(~massless), np.flatnonzero(massless)
@@ -130,16 +144,35 @@ def _dense_modes(k: np.ndarray, m: np.ndarray, constraints: Constraints) -> tupl
         if len(o) and np.min(np.abs(np.diag(lu[0]))) <= 1e-12 * np.max(np.abs(np.diag(k_oo))):
             raise np.linalg.LinAlgError
     except (np.linalg.LinAlgError, ValueError):
-        raise MaceError(_unrestrained_message(k_oo, o, constraints)) from None
+        raise MaceError(unrestrained(k_oo, o)) from None
     coupling = sla.lu_solve(lu, k[np.ix_(o, a)])  # K_oo^-1 K_oa
     k_cond = k[np.ix_(a, a)] - k[np.ix_(a, o)] @ coupling
     k_cond = 0.5 * (k_cond + k_cond.T)
-    eigval, vec = sla.eigh(k_cond, m[np.ix_(a, a)])
-    freq = np.sign(eigval) * np.sqrt(np.abs(eigval)) / (2.0 * np.pi)
+    m_aa = m[np.ix_(a, a)]
+    if _positive_definite(m_aa):
+        eigval, vec = sla.eigh(k_cond, m_aa)
+    else:
+        lam, basis = sla.eigh(m_aa)
+        lam = np.where(_massless(lam), 0.0, lam)
+        eigval, vec = _condensed_eigh(basis.T @ k_cond @ basis, np.diag(lam), lambda *_: (
+            "the stiffness of a massless combination of DOFs is singular (it moves without mass or restraint: "
+            "check the MPC, RBE2 and RBE3 cards that carry the mass, or constrain it with an SPC)"))
+        vec = basis @ vec
     phi = np.zeros((len(diag), vec.shape[1]))
     phi[a] = vec
     phi[o] = -coupling @ vec
-    return freq, phi
+    return eigval, phi
+
+
+def _positive_definite(m: np.ndarray) -> bool:
+    """True when M has no massless combination of its DOFs (its Cholesky pivots stay above the tolerance)."""
+    if not m.size:
+        return True
+    try:
+        factor = sla.cholesky(m, lower=True)
+    except (np.linalg.LinAlgError, sla.LinAlgError):
+        return False
+    return bool(np.min(np.diag(factor)) ** 2 > MASSLESS_RELATIVE_TOLERANCE * np.max(np.diag(m)))
 
 
 def _sparse_modes(k: sparse.csr_array, m: sparse.csr_array, constraints: Constraints, *, massive: int,
