@@ -423,3 +423,18 @@ def test_predict_0g_takes_your_own_structure_with_its_measurement_model(tmp_path
               if v.name.startswith("frequency_scale_mode_") and v.name[len("frequency_scale_mode_"):].isdigit()
               and int(v.name[len("frequency_scale_mode_"):]) in {r["mode"] for r in rows.values()}}
     assert sorted(scales.values()) == [(0.99, 1.01)] * 2  # the 1 % bounds of lightly damped modes
+
+
+def test_the_0g_structure_drops_suspension_elements_of_every_kind(tmp_path):
+    """A suspension made of a CROD and a CMASS2 to a grid of its own (not CBAR/CONM2/CELAS2, MACE's kinds):
+    its 0-g structure is the beam without them (the same modes to 1e-12), and a structure file that leaves
+    one of them out is refused, naming the card and its line."""
+    plain = compute_modes(read_deck(_write(tmp_path / "plain.bdf", beam_deck())), structure="0g")
+    extra = ("GRID,99,,2.0,1.0,0.0,,123456\nCROD,201,7,99,21\nPROD,7,1,1.0e-6\nCMASS2,202,0.5,99,1\n")
+    hung = _write(tmp_path / "hung.bdf", beam_deck().replace("ENDDATA", extra + "ENDDATA"))
+    spec = _write(tmp_path / "hung.toml", '[suspension]\ngrids = [99]\nelements = [201, 202]\n')
+    free = compute_modes(read_deck(hung), structure="0g", structure_file=spec)
+    np.testing.assert_allclose(free.modes.frequencies_hz, plain.modes.frequencies_hz, rtol=1e-12)
+    missing = _write(tmp_path / "missing.toml", '[suspension]\ngrids = [99]\nelements = [202]\n')
+    with pytest.raises(MaceError, match=r"CROD 201.*connects suspension grid\(s\) \[99\] but is not listed"):
+        compute_modes(read_deck(hung), structure="0g", structure_file=missing)

@@ -215,6 +215,11 @@ class Rigid:
     source: Source
 
 
+#: the Deck fields that hold elements and masses (what a structure file's [suspension] elements may name)
+ELEMENT_TABLES: tuple[str, ...] = ("bars", "conm2s", "celas2s", "beams", "rods", "scalar_masses", "conm1s", "rigids",
+                                   "interpolations")
+
+
 @dataclass(frozen=True)
 class Interpolation:
     """RBE3 as NASTRAN reads it: components ``reference_components`` of grid ``reference`` follow the

@@ -14,7 +14,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from mace_fmu.deck.cards import Deck, Subcase
+from mace_fmu.deck.cards import ELEMENT_TABLES, Deck, Subcase
 from mace_fmu.deck.reader import check_deck
 from mace_fmu.errors import DeckError, MaceError
 from mace_fmu.structure.file import (_CARD_TABLES, StructureFile, StructureKind, StructureSpec, _ids_text,
@@ -120,23 +120,38 @@ def remove_suspension(deck: Deck, spec: StructureSpec) -> Deck:
         A copy without them.
     """
     gone_g, gone_e = spec.suspension_grids, spec.suspension_elements
-    bars = {i: b for i, b in deck.bars.items() if i not in gone_e}
-    conm2s = {i: m for i, m in deck.conm2s.items() if i not in gone_e}
-    celas2s = {i: s for i, s in deck.celas2s.items() if i not in gone_e}
-    for what, cards, grids_of in (("CBAR", bars, lambda c: (c.ga, c.gb)), ("CONM2", conm2s, lambda c: (c.grid,)),
-                                  ("CELAS2", celas2s, lambda c: (c.g1, c.g2))):
+    kept = {}
+    for table in ELEMENT_TABLES:
+        what, grids_of = _CONNECTIONS[table]
+        cards = {i: c for i, c in getattr(deck, table).items() if i not in gone_e}
         for card in cards.values():
             dangling = [g for g in grids_of(card) if g in gone_g]
             if dangling:
                 raise DeckError(f"connects suspension grid(s) {dangling} but is not listed as a suspension element in "
                                 f"{spec.source} (expected every element on a suspension grid listed there)",
-                                file=card.source.file, line=card.source.line, card=f"{what} {card.id}")
+                                file=card.source.file, line=card.source.line, card=f"{what(card)} {card.id}")
+        kept[table] = cards
     mpcs = {sid: tuple(e for e in eqs if not any(t.grid in gone_g for t in e.terms)) for sid, eqs in deck.mpcs.items()}
     spc1s = {sid: tuple(dataclasses.replace(c, grids=tuple(g for g in c.grids if g not in gone_g)) for c in cards)
              for sid, cards in deck.spc1s.items()}
     return dataclasses.replace(
-        deck, grids={i: g for i, g in deck.grids.items() if i not in gone_g}, bars=bars, conm2s=conm2s,
-        celas2s=celas2s, mpcs=mpcs, spc1s={sid: tuple(c for c in cards if c.grids) for sid, cards in spc1s.items()})
+        deck, grids={i: g for i, g in deck.grids.items() if i not in gone_g}, mpcs=mpcs,
+        spc1s={sid: tuple(c for c in cards if c.grids) for sid, cards in spc1s.items()}, **kept)
+
+
+#: Deck table -> (card name of an entry, the grids an entry connects): the 0-g structure drops the suspension's
+#: elements of every kind, and refuses one left on a removed grid
+_CONNECTIONS = {
+    "bars": (lambda c: "CBAR", lambda c: (c.ga, c.gb)),
+    "conm2s": (lambda c: "CONM2", lambda c: (c.grid,)),
+    "celas2s": (lambda c: "CELAS2", lambda c: (c.g1, c.g2)),
+    "beams": (lambda c: "CBEAM", lambda c: (c.ga, c.gb)),
+    "rods": (lambda c: c.card, lambda c: (c.ga, c.gb)),
+    "scalar_masses": (lambda c: c.card, lambda c: (c.g1, c.g2)),
+    "conm1s": (lambda c: "CONM1", lambda c: (c.grid,)),
+    "rigids": (lambda c: c.card, lambda c: (c.independent, *(g for g, _ in c.dependent))),
+    "interpolations": (lambda c: "RBE3", lambda c: (c.reference, *(g for _, _, grids in c.groups for g in grids))),
+}
 
 
 def _subcases(deck: Deck) -> tuple[Subcase | None, Subcase]:

@@ -21,7 +21,7 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Any, Literal, Mapping
 
-from mace_fmu.deck.cards import Deck
+from mace_fmu.deck.cards import ELEMENT_TABLES, Deck
 from mace_fmu.errors import MaceError
 from mace_fmu.util.textfile import read_text
 
@@ -284,7 +284,7 @@ def _ids_text(ids: list[int]) -> str:
 
 def check_spec_against_deck(spec: StructureSpec, deck: Deck) -> None:
     """A MaceError naming the structure file and the IDs when it names grids or elements the deck lacks."""
-    elements = set(deck.bars) | set(deck.conm2s) | set(deck.celas2s)
+    elements = set().union(*(getattr(deck, table) for table in ELEMENT_TABLES))
     problems = []
     for what, ids, have in (("[suspension] grids", spec.suspension_grids, deck.grids),
                             ("[suspension] elements", spec.suspension_elements, elements)):
