@@ -59,3 +59,41 @@ def test_every_public_function_has_numpydoc_parameters_and_returns():
         if not returns_nothing and "Returns\n-------" not in doc:
             offenders.append(f"{dotted}: no Returns section")
     assert offenders == [], "\n".join(offenders)
+
+
+def _documented_in_docstring(doc: str) -> set[str]:
+    """Names a numpydoc Parameters/Attributes list documents ("name : type" or "a, b : type" lines)."""
+    import re
+
+    names: set[str] = set()
+    for line in doc.splitlines():
+        match = re.match(r"^([A-Za-z_][\w]*(?:, [A-Za-z_][\w]*)*) :", line)
+        if match:
+            names.update(match.group(1).split(", "))
+    return names
+
+
+def test_every_public_dataclass_documents_its_fields():
+    """The API reference lists each field of a public record with what it is (units where physical): a ``#:``
+    comment on the field's line or the line above, or an entry of the class's numpydoc list."""
+    import dataclasses
+    import inspect
+
+    offenders, seen = [], set()
+    for name in PACKAGES:
+        package = importlib.import_module(name)
+        for public in package.__all__:
+            cls = getattr(package, public)
+            if not (inspect.isclass(cls) and dataclasses.is_dataclass(cls)) or id(cls) in seen:
+                continue
+            seen.add(id(cls))
+            lines = inspect.getsource(cls).splitlines()
+            in_doc = _documented_in_docstring(inspect.getdoc(cls) or "")
+            for f in dataclasses.fields(cls):
+                at = next((i for i, line in enumerate(lines) if line.strip().startswith(f.name + ":")), None)
+                if at is None or f.name in in_doc:
+                    continue
+                if "#:" not in lines[at] and not (at and lines[at - 1].strip().startswith("#:")):
+                    offenders.append(f"{name}.{public}.{f.name}")
+    assert len(seen) > 50
+    assert offenders == [], "\n".join(offenders)

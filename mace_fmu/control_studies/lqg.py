@@ -36,7 +36,7 @@ class LqgDesign:
 
     regulator_gain: np.ndarray  #: K, u = -K x_hat
     kalman_gain: np.ndarray  #: L, x_hat' = A x_hat + B u + L (y - C x_hat)
-    weights: LqgWeights
+    weights: LqgWeights  #: the LQG weights the design was made with
     compensator: ct.StateSpace  #: inputs: the model's outputs; outputs: its inputs
 
 

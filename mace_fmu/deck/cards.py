@@ -33,19 +33,19 @@ class Grid:
     xyz: Vec3  #: position [m] in system ``cp``
     cd: int  #: coordinate system in which the 6 displacement components are measured
     ps: str  #: permanent single-point constraints, digits 1-6, "" for none
-    source: Source
+    source: Source  #: where the card is
 
 
 @dataclass(frozen=True)
 class Cord2R:
     """CORD2R: rectangular system from origin A, point B on the z-axis, point C in the x-z plane."""
 
-    id: int
+    id: int  #: coordinate system ID
     rid: int  #: system in which A, B, C are given (0 = basic)
-    a: Vec3
-    b: Vec3
-    c: Vec3
-    source: Source
+    a: Vec3  #: origin [m], in system RID
+    b: Vec3  #: a point on the z axis [m], in system RID
+    c: Vec3  #: a point in the x-z plane [m], in system RID
+    source: Source  #: where the card is
 
 
 @dataclass(frozen=True)
@@ -64,13 +64,13 @@ class Cord1R:
 class CBar:
     """CBAR: two-node beam; orientation by vector ``v`` (in GA's CD system) or by grid ``g0``."""
 
-    id: int
+    id: int  #: element ID
     pid: int  #: PBAR property ID
-    ga: int
-    gb: int
+    ga: int  #: grid of end A
+    gb: int  #: grid of end B
     v: Vec3 | None  #: orientation vector, None when ``g0`` is used
     g0: int | None  #: orientation grid, None when ``v`` is used
-    source: Source
+    source: Source  #: where the card is
     orientation_basic: bool = False  #: OFFT B..: ``v`` is in the basic system, not in GA's CD system
 
 
@@ -78,7 +78,7 @@ class CBar:
 class PBar:
     """PBAR: bar section; ``k1``/``k2`` are shear area factors (None = rigid in shear)."""
 
-    id: int
+    id: int  #: property ID
     mid: int  #: MAT1 ID
     area: float  #: A [m^2]
     i1: float  #: I1, bending in plane 1 (element x-y plane) [m^4]
@@ -89,7 +89,7 @@ class PBar:
     k1: float | None  #: shear area factor, plane 1; None = blank = no shear flexibility
     k2: float | None  #: shear area factor, plane 2
     i12: float  #: product of inertia [m^4]
-    source: Source
+    source: Source  #: where the card is
     #: PBARL section type (e.g. "ROD") when the card was a PBARL, which NASTRAN replaces by this PBAR
     section: str | None = None
 
@@ -237,12 +237,12 @@ class Interpolation:
 class Mat1:
     """MAT1: isotropic material exactly as written (blank G or NU stays None)."""
 
-    id: int
+    id: int  #: material ID
     e: float | None  #: Young's modulus [Pa]
     g: float | None  #: shear modulus [Pa]
     nu: float | None  #: Poisson's ratio
     rho: float  #: density [kg/m^3]
-    source: Source
+    source: Source  #: where the card is
 
     @property
     def shear_modulus(self) -> float:
@@ -271,85 +271,85 @@ class Conm2:
     [[I11, -I21, -I31], [-I21, I22, -I32], [-I31, -I32, I33]].
     """
 
-    id: int
-    grid: int
+    id: int  #: element ID
+    grid: int  #: grid the mass sits on
     cid: int  #: system of offset and inertia (-1 = offset is the absolute c.g. position)
     mass: float  #: [kg]
     offset: Vec3  #: [m]
     inertia: tuple[float, float, float, float, float, float]  #: I11 I21 I22 I31 I32 I33 [kg m^2]
-    source: Source
+    source: Source  #: where the card is
 
 
 @dataclass(frozen=True)
 class Celas2:
     """CELAS2: scalar spring between two DOFs, or to ground when ``g2`` is None."""
 
-    id: int
+    id: int  #: element ID
     k: float  #: stiffness [N/m] or [N m/rad]
-    g1: int
+    g1: int  #: first grid
     c1: int  #: component 1-6 (0 for a scalar point)
-    g2: int | None
-    c2: int | None
-    source: Source
+    g2: int | None  #: second grid (None: to ground)
+    c2: int | None  #: component 1-6 at the second grid (None: to ground)
+    source: Source  #: where the card is
 
 
 @dataclass(frozen=True)
 class MpcTerm:
-    grid: int
+    grid: int  #: grid ID
     component: int  #: 1-6 in the grid's CD system
-    coefficient: float
+    coefficient: float  #: coefficient of the term in sum(a_i u_i) = 0
 
 
 @dataclass(frozen=True)
 class Mpc:
     """MPC: sum(coefficient * u) = 0; the first term is the dependent DOF."""
 
-    sid: int
-    terms: tuple[MpcTerm, ...]
-    source: Source
+    sid: int  #: set ID
+    terms: tuple[MpcTerm, ...]  #: the equation's terms, the dependent one first
+    source: Source  #: where the card is
 
 
 @dataclass(frozen=True)
 class Spc1:
     """SPC1: the listed components are fixed at every listed grid."""
 
-    sid: int
+    sid: int  #: set ID
     components: str  #: digits 1-6, sorted, no repeats
-    grids: tuple[int, ...]
-    source: Source
+    grids: tuple[int, ...]  #: constrained grids
+    source: Source  #: where the card is
 
 
 @dataclass(frozen=True)
 class Grav:
     """GRAV: acceleration vector scale * n in system ``cid`` [m/s^2]."""
 
-    sid: int
-    cid: int
-    scale: float
-    direction: Vec3
-    source: Source
+    sid: int  #: set ID
+    cid: int  #: coordinate system of the direction (0: basic)
+    scale: float  #: acceleration scale [m/s^2]
+    direction: Vec3  #: direction vector, in system CID
+    source: Source  #: where the card is
 
 
 @dataclass(frozen=True)
 class Load:
     """LOAD: combination scale * sum(s_i * L_i)."""
 
-    sid: int
-    scale: float
+    sid: int  #: set ID
+    scale: float  #: overall scale factor S
     terms: tuple[tuple[float, int], ...]  #: (s_i, load set ID)
-    source: Source
+    source: Source  #: where the card is
 
 
 @dataclass(frozen=True)
 class Eigrl:
     """EIGRL: Lanczos request for modes with frequencies in [v1, v2] Hz, at most ``nd`` of them."""
 
-    sid: int
+    sid: int  #: set ID (the case control's METHOD)
     v1: float | None  #: [Hz]
     v2: float | None  #: [Hz]
-    nd: int | None
-    msglvl: int
-    source: Source
+    nd: int | None  #: number of modes wanted (None: all in the range)
+    msglvl: int  #: NASTRAN's diagnostic level (read, not used)
+    source: Source  #: where the card is
 
 
 @dataclass(frozen=True)
@@ -371,16 +371,16 @@ class Eigr:
 class Nlparm:
     """NLPARM: nonlinear static controls (only the fields mace-fmu uses are typed)."""
 
-    id: int
+    id: int  #: NLPARM ID (the case control's NLPARM)
     ninc: int  #: number of load increments (default 10)
     kmethod: str  #: AUTO, SEMI or ITER
-    kstep: int | None
+    kstep: int | None  #: iterations between stiffness updates (None: NASTRAN's default)
     max_iter: int  #: default 25
     conv: str  #: convergence flags, e.g. "PW", "UPW", "W"
     eps_u: float  #: default 0.01
     eps_p: float  #: default 0.01
     eps_w: float  #: default 0.01
-    source: Source
+    source: Source  #: where the card is
 
 
 @dataclass(frozen=True)
@@ -388,43 +388,43 @@ class Param:
     """PARAM: a named parameter with its raw values (int, float or str)."""
 
     name: str  #: upper case
-    values: tuple[int | float | str, ...]
-    source: Source
+    values: tuple[int | float | str, ...]  #: the fields after the name, as read (integers, reals or text)
+    source: Source  #: where the card is
 
 
 @dataclass(frozen=True)
 class Subcase:
     """One SUBCASE of the case control, with the set selections mace-fmu uses."""
 
-    id: int
-    spc: int | None
-    mpc: int | None
-    load: int | None
-    nlparm: int | None
-    method: int | None
-    label: str
-    source: Source
+    id: int  #: subcase number (0: the selections above the first SUBCASE)
+    spc: int | None  #: SPC set (None: none)
+    mpc: int | None  #: MPC set (None: none)
+    load: int | None  #: LOAD (or GRAV) set (None: none)
+    nlparm: int | None  #: NLPARM ID (None: none)
+    method: int | None  #: EIGRL/EIGR set (None: none)
+    label: str  #: the subcase's LABEL text (empty when none)
+    source: Source  #: where the SUBCASE line is
 
 
 @dataclass(frozen=True)
 class Deck:
     """A whole deck: bulk data keyed by ID, plus the case-control subcases."""
 
-    path: str
-    grids: Mapping[int, Grid]
+    path: str  #: the deck's file (or a name for a deck read from text)
+    grids: Mapping[int, Grid]  #: GRID by ID
     coords: Mapping[int, Cord2R | Cord1R]  #: CORD2R and CORD1R (one ID namespace)
-    bars: Mapping[int, CBar]
-    pbars: Mapping[int, PBar]
-    mat1s: Mapping[int, Mat1]
-    conm2s: Mapping[int, Conm2]
-    celas2s: Mapping[int, Celas2]
+    bars: Mapping[int, CBar]  #: CBAR by element ID
+    pbars: Mapping[int, PBar]  #: PBAR (and the PBAR a PBARL stands for) by property ID
+    mat1s: Mapping[int, Mat1]  #: MAT1 by material ID
+    conm2s: Mapping[int, Conm2]  #: CONM2 by element ID
+    celas2s: Mapping[int, Celas2]  #: CELAS2 and CELAS1 (as the CELAS2 it amounts to) by element ID
     mpcs: Mapping[int, tuple[Mpc, ...]]  #: set ID -> equations, in deck order
     spc1s: Mapping[int, tuple[Spc1, ...]]  #: set ID -> cards, in deck order
-    gravs: Mapping[int, Grav]
-    loads: Mapping[int, Load]
-    eigrls: Mapping[int, Eigrl]
-    nlparms: Mapping[int, Nlparm]
-    params: Mapping[str, Param]
+    gravs: Mapping[int, Grav]  #: GRAV by set ID
+    loads: Mapping[int, Load]  #: LOAD combinations by set ID
+    eigrls: Mapping[int, Eigrl]  #: EIGRL by set ID
+    nlparms: Mapping[int, Nlparm]  #: NLPARM by ID
+    params: Mapping[str, Param]  #: PARAM by name
     subcases: Mapping[int, Subcase]  #: empty when the file has no case control
     global_case: Subcase | None = field(default=None)  #: selections above the first SUBCASE
     #: cards read but not modelled because they change neither mass nor stiffness: (name, count, file:line of the first)
@@ -432,10 +432,10 @@ class Deck:
     beams: Mapping[int, CBeam] = field(default_factory=dict)  #: CBEAM
     pbeams: Mapping[int, PBeam] = field(default_factory=dict)  #: PBEAM and PBEAML (as the PBEAM NASTRAN makes)
     rods: Mapping[int, Rod] = field(default_factory=dict)  #: CROD and CONROD
-    prods: Mapping[int, PRod] = field(default_factory=dict)
+    prods: Mapping[int, PRod] = field(default_factory=dict)  #: PROD by property ID
     scalar_masses: Mapping[int, ScalarMass] = field(default_factory=dict)  #: CMASS1 and CMASS2
-    pmasses: Mapping[int, PMass] = field(default_factory=dict)
+    pmasses: Mapping[int, PMass] = field(default_factory=dict)  #: PMASS by property ID
     rigids: Mapping[int, Rigid] = field(default_factory=dict)  #: RBAR and RBE2 (always in force, like NASTRAN's)
     interpolations: Mapping[int, Interpolation] = field(default_factory=dict)  #: RBE3 (always in force)
-    eigrs: Mapping[int, Eigr] = field(default_factory=dict)
-    conm1s: Mapping[int, Conm1] = field(default_factory=dict)
+    eigrs: Mapping[int, Eigr] = field(default_factory=dict)  #: EIGR by set ID
+    conm1s: Mapping[int, Conm1] = field(default_factory=dict)  #: CONM1 by element ID

@@ -33,12 +33,12 @@ class Bars:
 class FEModel:
     """Linear FE matrices of one structure in basic coordinates; DOFs named by DofMap."""
 
-    dofs: DofMap
+    dofs: DofMap  #: the DOFs (grid, component) of the matrices
     positions: np.ndarray  #: (n_grid, 3) undeformed grid positions [m]
     cd_frames: np.ndarray  #: (n_grid, 3, 3) columns = displacement-system axes in basic
     stiffness: sparse.csr_array  #: linear K [N/m, N, N m/rad], sparse: memory grows with DOFs, not DOFs^2
     mass: sparse.csr_array  #: M [kg, kg m, kg m^2]
-    bars: Bars
+    bars: Bars  #: every CBAR as arrays, for the corotational preload
     spring_stiffness: sparse.csr_array  #: the CELAS2 part of ``stiffness``
     spring_ids: tuple[int, ...]  #: CELAS2 IDs
     spring_vectors: sparse.csr_array  #: (n_spring, n_dof) spring elongation per unit DOF

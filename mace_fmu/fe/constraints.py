@@ -19,8 +19,8 @@ class Constraints:
 
     transform: sparse.csr_array  #: T, (n_dof, n_independent); mostly unit columns, so sparse
     independent: tuple[tuple[int, int], ...]  #: (grid, component) of each column of T
-    spc_set: int | None
-    mpc_set: int | None
+    spc_set: int | None  #: the SPC set applied (None: none)
+    mpc_set: int | None  #: the MPC set applied (None: none)
 
     def reduce(self, matrix: np.ndarray | sparse.sparray) -> np.ndarray:
         """T^T A T as a dense array, for a dense or a sparse A."""

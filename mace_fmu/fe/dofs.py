@@ -13,7 +13,7 @@ COMPONENT_NAMES = ("T1", "T2", "T3", "R1", "R2", "R3")
 class DofMap:
     """Six DOFs per grid, grids in ascending ID order; components 1-6 as in NASTRAN."""
 
-    grid_ids: tuple[int, ...]
+    grid_ids: tuple[int, ...]  #: grid IDs in DOF order, six DOFs each
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "_row", {g: i for i, g in enumerate(self.grid_ids)})

@@ -40,9 +40,9 @@ class Modes:
 
     frequencies_hz: np.ndarray  #: signed: a negative eigenvalue gives a negative frequency
     shapes: np.ndarray  #: (n_dof, n_modes), phi^T M phi = I; translations [m], rotations [rad]
-    dofs: DofMap
+    dofs: DofMap  #: the DOFs (grid, component) of the shapes' rows
     cd_frames: np.ndarray  #: (n_grid, 3, 3) displacement-system axes, for CD components
-    labels: tuple[str, ...] = field(default=())
+    labels: tuple[str, ...] = field(default=())  #: one label per mode (empty before labelling)
 
     def __len__(self) -> int:
         return len(self.frequencies_hz)

@@ -35,22 +35,22 @@ DEFAULT_MAX_HZ = 250.0
 class MassProperties:
     """Rigid-body mass properties of a structure (NASTRAN's grid point weight generator)."""
 
-    mass_kg: float
+    mass_kg: float  #: total mass [kg]
     center_of_mass_m: np.ndarray  #: (3,) in basic
     inertia_about_reference_kgm2: np.ndarray  #: (3, 3) about ``reference_point_m``, basic axes
     reference_grid: int | None  #: PARAM,GRDPNT grid (None: basic origin)
-    reference_point_m: np.ndarray
+    reference_point_m: np.ndarray  #: point the inertia is about [m], basic
 
 
 @dataclass(frozen=True)
 class StructureModes:
     """Everything one modal analysis produces, for tables, state-space models and the viewer."""
 
-    structure: Structure
-    model: FEModel
-    modes: Modes
-    mass_properties: MassProperties
-    preload: Preload | None
+    structure: Structure  #: the 1-g or 0-g structure (deck, subcases, structure file) the modes are of
+    model: FEModel  #: the FE matrices [N/m, kg] on the basic DOFs
+    modes: Modes  #: frequencies [Hz], mass-normalised shapes and labels
+    mass_properties: MassProperties  #: mass [kg], centre of mass [m] and inertia [kg m^2]
+    preload: Preload | None  #: the gravity preload (1-g; None for 0-g)
     #: (grid, component) DOFs constrained automatically (PARAM,AUTOSPC): neither stiffness nor mass
     auto_constrained: tuple[tuple[int, int], ...] = ()
 

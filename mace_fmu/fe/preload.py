@@ -36,11 +36,11 @@ _log = logging.getLogger(__name__)
 class Preload:
     """Result of a gravity preload: the deformed state and the stiffness about it."""
 
-    kind: PreloadKind
+    kind: PreloadKind  #: "large" (incremental, updated geometry) or "linear"
     displacements: np.ndarray  #: (n_dof,) translations [m] and rotation vectors [rad], basic
     tangent_stiffness: sparse.csr_array  #: K_T = K_material + K_geometric (+ springs), basic
     bar_forces: np.ndarray  #: (n_bar, 7) natural forces: axial [N], end moments [N m] (local)
-    increments: int
+    increments: int  #: load increments applied
     iterations: int  #: total Newton iterations
     residual_ratio: float  #: final ``|r| / |F|`` on the independent DOFs
     state: BarState  #: configuration the tangent is about (undeformed for the linear preload)

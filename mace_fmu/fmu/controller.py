@@ -40,7 +40,7 @@ class DiscreteController:
     b: np.ndarray  #: (n, m)
     c: np.ndarray  #: (p, n)
     d: np.ndarray  #: (p, m)
-    sample_time_s: float
+    sample_time_s: float  #: sample time of the discrete controller [s]
     inputs: tuple[str, ...]  #: m names, e.g. the plant outputs it reads ("gyro_payload_z")
     outputs: tuple[str, ...]  #: p names, e.g. the plant inputs it drives ("gimbal_primary_z")
 

@@ -43,9 +43,9 @@ class BarGauge:
 class Actuator:
     """An input: generalised force of 1 N m (physical) per unit, times ``gain`` N m per volt."""
 
-    name: str
-    description: str
-    dofs: tuple[Dof, ...]
+    name: str  #: input name
+    description: str  #: what it does, for reports and FMU descriptions
+    dofs: tuple[Dof, ...]  #: (grid, component in CD, weight): the generalised force of one physical unit
     gain: float  #: [N m / V] (Table 3.11)
 
 
@@ -53,10 +53,10 @@ class Actuator:
 class Sensor:
     """An output: the weighted DOFs (displacement) or their rate, times ``gain`` volts per unit."""
 
-    name: str
-    description: str
-    kind: SensorKind
-    dofs: tuple[Dof, ...]
+    name: str  #: output name
+    description: str  #: what it reads, for reports and FMU descriptions
+    kind: SensorKind  #: "displacement", "rate" or "acceleration" of its DOFs
+    dofs: tuple[Dof, ...]  #: (grid, component in CD, weight) read (for a bar gauge: filled in from its bar)
     gain: float  #: [V per strain, per rad/s, ...] (Table 3.12, notch DC gains of Table 3.13)
     unit: str = ""  #: the physical quantity's unit: rad, m, rad/s, m/s, or "strain" (given in the structure file)
     #: a bar strain gauge: its ``dofs`` come from the deck's bar (:func:`resolve_bar_gauges`); None otherwise
@@ -109,12 +109,12 @@ class DampingTable:
 class Instruments:
     """Everything between the FE modes and the volts-volts model."""
 
-    actuators: tuple[Actuator, ...]
-    sensors: tuple[Sensor, ...]
-    electronics: Electronics
-    servos: Servos
-    damping: DampingTable
-    source: str
+    actuators: tuple[Actuator, ...]  #: the inputs, in input order
+    sensors: tuple[Sensor, ...]  #: the outputs, in output order
+    electronics: Electronics  #: filters and delays
+    servos: Servos  #: local loops (wheel speed, gimbal servos)
+    damping: DampingTable  #: open-loop modal damping ratios by mode label
+    source: str  #: the structure file they come from
 
     def actuator(self, name: str) -> Actuator:
         return _by_name(self.actuators, name, "actuator")

@@ -30,8 +30,8 @@ class ModalPlant:
 
     system: ct.StateSpace  #: named inputs (actuators, N m), outputs (sensors; ``*_angle`` [rad])
     frequencies_hz: np.ndarray  #: of the retained modes
-    damping: np.ndarray
-    labels: tuple[str, ...]
+    damping: np.ndarray  #: open-loop damping ratio of each retained mode
+    labels: tuple[str, ...]  #: label of each retained mode
     shapes: np.ndarray  #: (n_dof, n_modes) mode shapes behind the states (zero cluster rotated)
     removed_states: tuple[tuple[str, str], ...]  #: (state name, reason)
     motion_outputs: tuple[str, ...] = ()  #: grid motion outputs [m, rad] (see motion_output_name)

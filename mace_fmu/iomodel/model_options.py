@@ -74,7 +74,7 @@ class SignalSelection:
         ``motion_grids`` that are neither grid IDs nor "all".
     """
 
-    inputs: Sequence[str] | None = None
+    inputs: Sequence[str] | None = None  #: inputs kept, by name and in this order (None: all)
     outputs: Sequence[str] | None = None
     motion_grids: Sequence[int] | Literal["all"] = ()
 

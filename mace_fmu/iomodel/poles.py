@@ -35,9 +35,9 @@ class ClosedLoopPole:
 
     frequency_hz: float  #: ``|lambda| / (2 pi)``
     damping: float  #: ``-Re(lambda) / |lambda|``
-    label: str
+    label: str  #: the mode it belongs to, e.g. "1st Z bending"
     share: float  #: participation of the naming group (0-1)
-    eigenvalue: complex
+    eigenvalue: complex  #: the pole [rad/s]
     #: 0-based index into the mode labels of the open-loop structural mode that participates most (None: none does)
     mode: int | None = None
 

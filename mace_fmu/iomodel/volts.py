@@ -48,8 +48,8 @@ class VoltsModel:
     system: ct.StateSpace  #: named inputs [V] and outputs [V]; states "block.state"
     diagram: System  #: the modelica_like block diagram (to_modelica() writes it as Modelica)
     plant: ModalPlant  #: the physical modal model inside
-    structure_modes: StructureModes
-    instruments: Instruments
+    structure_modes: StructureModes  #: the modes the model was built from
+    instruments: Instruments  #: actuators, sensors, electronics, loops and damping it was built with
     electronics: ModelledElectronics  #: which electronics the model contains, and how
 
     def frequency_response(self, frequencies_hz: np.ndarray) -> np.ndarray:

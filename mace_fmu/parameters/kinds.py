@@ -43,16 +43,16 @@ class ParameterKind:
     ``relative_to_nominal`` is set.
     """
 
-    name: KindName
+    name: KindName  #: the kind, e.g. "modulus"
     set_prefix: str  #: prefix of the name in a ParameterSet ("" for the gains, named in full)
     fmu_prefix: str  #: prefix of the name in an FMU
     unit: str  #: SI unit ("1" for dimensionless)
-    minimum: float
-    maximum: float
-    relative_to_nominal: bool = False
+    minimum: float  #: lowest valid value (relative to nominal when relative_to_nominal)
+    maximum: float  #: highest valid value (relative to nominal when relative_to_nominal)
+    relative_to_nominal: bool = False  #: the range is a multiple of the nominal value
     per_mode: bool = False  #: named by mode label in a set and by 1-based mode number in an FMU
     exact_names: Mapping[str, str] = field(default_factory=dict)  #: name -> unit, for kinds without a prefix
-    description: str = ""
+    description: str = ""  #: what a parameter of this kind is, with its unit
 
     def range_for(self, nominal: float) -> tuple[float, float]:
         """[min, max] of a parameter of this kind with nominal value ``nominal`` (SI)."""

@@ -70,7 +70,7 @@ class Provenance:
     method: str = ""  #: how the parameters entered the model, outer iterations, penalty
     initial_cost: float | None = None  #: j^T j at the start
     final_cost: float | None = None  #: j^T j at the end
-    notes: str = ""
+    notes: str = ""  #: free text written with the set
     fitted_to: str = ""  #: the model file the values were fitted to (an FMU), "" for the engine's own models
 
 
@@ -99,8 +99,9 @@ def now_utc() -> str:
 class ParameterSet:
     """Parameter values [SI] by name (see the module docstring), with where they come from."""
 
+    #: parameter name -> value (SI: Pa, N/m, s; ratios and scales dimensionless)
     values: Mapping[str, float] = field(default_factory=dict)
-    provenance: Provenance | None = None
+    provenance: Provenance | None = None  #: what the set was made from and fitted to (None: written by hand)
 
     def __post_init__(self) -> None:
         checked = {}

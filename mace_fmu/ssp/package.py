@@ -38,6 +38,7 @@ class SspComponent:
 
     name: str  #: instance name in the system, e.g. "plant"
     fmu: Path  #: the FMU file (copied into the archive's resources/)
+    #: parameter name -> start value written to the component's SSV file (SI)
     start_values: Mapping[str, float] = field(default_factory=dict)
 
 
@@ -45,10 +46,10 @@ class SspComponent:
 class SspConnection:
     """A signal from one component's output to another's input, by names."""
 
-    from_component: str
-    from_signal: str
-    to_component: str
-    to_signal: str
+    from_component: str  #: component whose output is connected
+    from_signal: str  #: that output's name
+    to_component: str  #: component whose input it feeds
+    to_signal: str  #: that input's name
 
 
 @dataclass(frozen=True)

@@ -62,7 +62,7 @@ class FrequencyBound:
 class SsvContent:
     """What an SSV file of ours holds: a parameter set and, for the 0-g nominal model, its bounds."""
 
-    parameters: ParameterSet
+    parameters: ParameterSet  #: the parameter values the SSV file holds
     frequency_bounds: tuple[FrequencyBound, ...] = ()  #: Table 5.3's, by mode; empty if none
 
 

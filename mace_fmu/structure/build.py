@@ -25,8 +25,8 @@ from mace_fmu.structure.file import (_CARD_TABLES, StructureFile, StructureKind,
 class Structure:
     """One analysable structure: its deck, its preload subcase (1-g only) and its modal subcase."""
 
-    kind: StructureKind
-    deck: Deck
+    kind: StructureKind  #: "1g" (suspended, preloaded) or "0g" (free)
+    deck: Deck  #: the deck of this structure (0-g: without the suspension)
     preload: Subcase | None  #: SPC/MPC/LOAD/NLPARM of the static preload; None for 0-g
     modal: Subcase  #: SPC/MPC of the eigen-solution
     spec: StructureSpec  #: empty when the deck has no structure file

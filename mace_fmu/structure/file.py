@@ -81,11 +81,11 @@ class Mechanism:
 class StructureSpec:
     """Non-deck data about the structure: suspension membership, components, mechanisms."""
 
-    suspension_grids: frozenset[int]
+    suspension_grids: frozenset[int]  #: grids removed for the 0-g structure
     suspension_elements: frozenset[int]  #: CBAR, CONM2 and CELAS2 IDs (one NASTRAN namespace)
     components: Mapping[str, frozenset[int]]  #: name -> grid IDs
-    mechanisms: tuple[Mechanism, ...]
-    source: str
+    mechanisms: tuple[Mechanism, ...]  #: mechanisms named for the labels
+    source: str  #: the file they come from
     label_rules: str = "generic"  #: "generic" (strain-energy families) or "mace" (MACE's component conventions)
 
     @classmethod
@@ -110,9 +110,9 @@ class StructureFile:
     ``damping``, ``parameters``) from ``tables``, never from the file again.
     """
 
-    path: Path
+    path: Path  #: the file
     tables: Mapping[str, Any]  #: the parsed TOML (read-only)
-    spec: StructureSpec
+    spec: StructureSpec  #: its suspension, components and mechanisms
 
     def has(self, table: str) -> bool:
         """Whether the file holds ``table`` (e.g. "actuators")."""

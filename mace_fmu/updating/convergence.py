@@ -121,10 +121,10 @@ def noise_floor(cost, *, noise_rms_fraction: float | None = None) -> NoiseFloor 
 class ConvergenceReport:
     """Whether an update may be trusted as an optimum, and why."""
 
-    converged: bool
+    converged: bool  #: every stage ended on a convergence test, no parameter at a bound
     reasons: tuple[str, ...]  #: the stages' stopping tests, and the noise-floor verdict when there is one
-    final_cost: float
-    noise_floor: NoiseFloor | None
+    final_cost: float  #: j^T j at the end
+    noise_floor: NoiseFloor | None  #: the time cost's expected value from the data's noise (None: not a time cost)
 
     def summary(self) -> str:
         """One line for the terminal."""

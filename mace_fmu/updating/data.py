@@ -129,11 +129,11 @@ def _units(units: Mapping[str, str], signals: tuple[str, ...], source: str) -> d
 class FrequencyResponseData:
     """Measured H[k, output, input] at ``frequencies_hz`` [Hz], signals named as the model's."""
 
-    frequencies_hz: np.ndarray
-    inputs: tuple[str, ...]
-    outputs: tuple[str, ...]
+    frequencies_hz: np.ndarray  #: frequencies [Hz]
+    inputs: tuple[str, ...]  #: input names of the columns
+    outputs: tuple[str, ...]  #: output names of the rows
     response: np.ndarray  #: complex (k, output, input)
-    source: str = "<memory>"
+    source: str = "<memory>"  #: the file it was read from
     units: Mapping[str, str] = field(default_factory=dict)  #: signal -> unit; "V" where not given
     coherence: np.ndarray | None = None  #: (k, output) multiple coherence of each output with all inputs
 
@@ -178,10 +178,10 @@ class FrequencyResponseData:
 class TimeHistory:
     """Measured inputs and outputs [model units] sampled at uniformly spaced ``times_s`` [s]."""
 
-    times_s: np.ndarray
-    inputs: Mapping[str, np.ndarray]
-    outputs: Mapping[str, np.ndarray]
-    source: str = "<memory>"
+    times_s: np.ndarray  #: sample times [s]
+    inputs: Mapping[str, np.ndarray]  #: input name -> samples [V]
+    outputs: Mapping[str, np.ndarray]  #: output name -> samples [V]
+    source: str = "<memory>"  #: the file it was read from
     units: Mapping[str, str] = field(default_factory=dict)  #: signal -> unit; "V" where not given
 
     def __post_init__(self) -> None:

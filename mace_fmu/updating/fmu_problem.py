@@ -28,10 +28,10 @@ class FmuProblem:
     family: FmuFamily  #: the FMU with every start value from the start file set on each run
     names: tuple[str, ...]  #: parameters to update
     start: Mapping[str, float]  #: their start values [FMU units]
-    history: TimeHistory
-    frequency_data: FrequencyResponseData | None
-    cost: Cost
-    data_files: tuple[str, ...]
+    history: TimeHistory  #: the measured time histories (the first test)
+    frequency_data: FrequencyResponseData | None  #: measured frequency responses (None: a time cost)
+    cost: Cost  #: the cost the update minimises
+    data_files: tuple[str, ...]  #: the measured data files read
     histories: tuple[TimeHistory, ...] = ()  #: every test's time history (``history`` is the first)
 
 

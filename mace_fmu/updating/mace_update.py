@@ -114,12 +114,12 @@ def default_bounds(names: Sequence[str], start: Mapping[str, float]) -> dict[str
 class MaceUpdate:
     """Everything the MACE update produced."""
 
-    family: MaceFamily
-    cost: ModalCost
-    start: ParameterSet
-    selection_sensitivities: CostSensitivities
-    selection: Selection
-    result: UpdateResult
+    family: MaceFamily  #: the MACE model family updated
+    cost: ModalCost  #: the modal cost (Table 4.7's measured modes)
+    start: ParameterSet  #: the pre-update parameter set
+    selection_sensitivities: CostSensitivities  #: cost sensitivities of every candidate parameter at the start
+    selection: Selection  #: the parameters chosen and why
+    result: UpdateResult  #: where the update ended
     parameters: ParameterSet  #: the updated set (start values for the rest), with provenance
     seconds: Mapping[str, float] = field(default_factory=dict)  #: wall time per stage
     measured: tuple[MeasuredMode, ...] = ()  #: every measured mode (the cost sees those in the update band)

@@ -42,7 +42,7 @@ from mace_fmu.util.progress import ProgressCallback
 class TestDesign:
     """One test as it would be run: which inputs are driven, which outputs recorded, for how long, how noisily."""
 
-    name: str
+    name: str  #: test name
     inputs: tuple[str, ...]  #: FMU inputs driven with band-limited white noise (every other input held at 0 V)
     outputs: tuple[str, ...]  #: FMU outputs recorded
     seconds: float = 8.0  #: record length [s]
@@ -58,8 +58,8 @@ class TestDesign:
 class Candidate:
     """One or more tests whose data one update would take together."""
 
-    name: str
-    tests: tuple[TestDesign, ...]
+    name: str  #: name of the candidate test campaign
+    tests: tuple[TestDesign, ...]  #: the tests it runs together
 
 
 @dataclass(frozen=True)

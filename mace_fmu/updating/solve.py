@@ -52,8 +52,8 @@ Method = Literal["cost-sensitivity", "full", "reanalysis", "modal-sensitivity"]
 class Bounds:
     """Allowed range [SI] of one update parameter, and its plausible change for the penalty."""
 
-    lower: float
-    upper: float
+    lower: float  #: lowest allowed value [SI]
+    upper: float  #: highest allowed value [SI]
     gamma_percent: float = 10.0  #: a change this large costs 1 % of the initial cost (eq. 4.18)
 
 
@@ -65,15 +65,16 @@ class Stage:
     e.g. frequencies for stiffnesses (thesis 4.3: stiffness and damping updated separately).
     """
 
-    name: str
-    parameters: tuple[str, ...]
-    cost: Cost | None = None
+    name: str  #: stage name in reports
+    parameters: tuple[str, ...]  #: parameters this stage updates
+    cost: Cost | None = None  #: the cost of this stage (None: the update's)
 
 
 @dataclass(frozen=True)
 class UpdateSettings:
     """How the update runs (see the module docstring)."""
 
+    #: the inclusion: "cost-sensitivity" (the thesis's), "full", "reanalysis" or "modal-sensitivity"
     method: Method = "cost-sensitivity"
     perturbation: Literal["full", "reanalysis"] = "reanalysis"  #: perturbed models of the cost-sensitivity method
     relative_step: float = 1e-2  #: finite-difference step, relative to each parameter
@@ -123,16 +124,16 @@ class StageOutcome:
 class UpdateResult:
     """Where the update ended and how it got there."""
 
-    start: Mapping[str, float]
+    start: Mapping[str, float]  #: parameter values at the start
     values: Mapping[str, float]  #: every parameter the update touched, final
     initial_cost: float  #: j^T j of the full model at the start
     final_cost: float  #: j^T j of the full model at the end
-    initial_residual: np.ndarray
-    final_residual: np.ndarray
-    history: tuple[Iteration, ...]
-    settings: UpdateSettings
-    seconds: float
-    stage_seconds: Mapping[str, float] = field(default_factory=dict)
+    initial_residual: np.ndarray  #: residual vector j at the start
+    final_residual: np.ndarray  #: residual vector j at the end
+    history: tuple[Iteration, ...]  #: every outer iteration, in order
+    settings: UpdateSettings  #: the settings the update ran with
+    seconds: float  #: wall time of the whole update [s]
+    stage_seconds: Mapping[str, float] = field(default_factory=dict)  #: wall time per stage [s]
     outcomes: tuple[StageOutcome, ...] = ()  #: how each stage of each round ended
 
     @property

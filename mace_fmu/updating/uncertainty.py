@@ -47,8 +47,8 @@ class WeakDirection:
 class StageUncertainty:
     """The linearised uncertainty of one stage's parameters at the end of the update."""
 
-    stage: str
-    names: tuple[str, ...]
+    stage: str  #: stage name
+    names: tuple[str, ...]  #: parameters of the stage
     values: dict  #: final values [SI]
     residuals: int  #: m
     noise_variance: float  #: sigma^2 per (normalised) residual
@@ -57,7 +57,7 @@ class StageUncertainty:
     interval_95: dict  #: name -> (low, high) [SI]
     singular_values: np.ndarray  #: of J (per unit relative change), largest first
     weak_directions: tuple[WeakDirection, ...]  #: combinations with sd above the tolerance, weakest first
-    tolerance_percent: float
+    tolerance_percent: float  #: standard deviation below which a parameter counts as determined [%]
 
     @property
     def not_fixed(self) -> tuple[str, ...]:

@@ -10,9 +10,9 @@ from typing import Callable
 class Step:
     """``done`` of ``total`` steps of ``task`` are finished, e.g. 3 of 20 gravity-preload increments."""
 
-    task: str
-    done: int
-    total: int
+    task: str  #: what is being done
+    done: int  #: steps done
+    total: int  #: steps in all
     detail: str = ""  #: e.g. "2 iterations, work ratio 3.5e-07"
 
 

@@ -79,14 +79,14 @@ class ZeroGRow:
 
     label: str  #: the measurement model's label, e.g. "1st Y bending"
     heavy: bool  #: heavily damped (measured 1-g damping ratio >= the rule's threshold)
-    measured_1g_hz: float
-    measured_1g_damping: float
+    measured_1g_hz: float  #: measured 1-g frequency (Table 4.7) [Hz]
+    measured_1g_damping: float  #: measured 1-g damping ratio
     model_1g_hz: float  #: our closed-loop 1-g pole paired with the measured mode
-    model_1g_damping: float
+    model_1g_damping: float  #: damping ratio of that model pole
     unaltered_hz: float  #: our closed-loop 0-g pole before the adjustments (Table 5.2's 0-g column)
-    unaltered_damping: float
+    unaltered_damping: float  #: its damping ratio
     nominal_hz: float  #: the updated nominal model's closed-loop pole
-    nominal_damping: float
+    nominal_damping: float  #: its damping ratio
     bound: float  #: relative frequency bound (0.011: +-1.1 %)
     pole_label: str  #: label of the nominal model's pole
     mode: int | None  #: 1-based open-loop mode (the FMU's frequency_scale_mode_<k>) carrying the bound, if flexible
@@ -113,10 +113,10 @@ class ZeroGRow:
 class ZeroGPrediction:
     """The updated nominal 0-g model with its bounds, and the parameter set that builds it."""
 
-    rows: tuple[ZeroGRow, ...]
+    rows: tuple[ZeroGRow, ...]  #: one row per mode of Table 5.3
     parameters: ParameterSet  #: volts_model("0g", parameters=this) is the nominal model
     model: VoltsModel  #: the updated nominal 0-g model
-    rule: BoundRule
+    rule: BoundRule  #: the rule that set the frequency bounds
     source: str  #: which measurement model the residual errors come from
     dropped: tuple[str, ...] = field(default=())  #: measured modes without a 0-g counterpart (suspension, violins)
 

@@ -22,16 +22,16 @@ LOG_CATEGORIES = (("logStatusError", "errors (always logged)"), ("logEvents", "d
 class FmuVariable:
     """One scalar Real/Float64 variable of a native FMU."""
 
-    name: str
-    value_reference: int
+    name: str  #: variable name in the model description
+    value_reference: int  #: FMI value reference
     causality: str  #: input, output, parameter, calculatedParameter or local
     variability: str  #: continuous or fixed
-    description: str
-    initial: str | None = None
-    start: float | None = None
-    unit: str | None = None
-    minimum: float | None = None
-    maximum: float | None = None
+    description: str  #: what it is, with its unit
+    initial: str | None = None  #: FMI initial attribute (None: not given)
+    start: float | None = None  #: start value (SI; None for outputs)
+    unit: str | None = None  #: unit (None: dimensionless)
+    minimum: float | None = None  #: declared minimum (None: none)
+    maximum: float | None = None  #: declared maximum (None: none)
     derivative_of: int | None = None  #: 1-based index (FMI 2) of the state this is the derivative of
 
 

@@ -38,8 +38,8 @@ class Channel:
 class ChannelMap:
     """Data channels mapped to model signals; ``source`` names the map file in error messages."""
 
-    channels: tuple[Channel, ...]
-    source: str = "<memory>"
+    channels: tuple[Channel, ...]  #: one entry per column of the data file
+    source: str = "<memory>"  #: the map file
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "channels", tuple(self.channels))

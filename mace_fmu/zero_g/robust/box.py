@@ -29,7 +29,7 @@ DEFAULT_PATTERN = "frequency_scale_mode_*"
 class ParameterBox:
     """Named parameters, each with its nominal value and its interval [low, high]."""
 
-    names: tuple[str, ...]
+    names: tuple[str, ...]  #: the parameters spanning the box
     nominal: np.ndarray  #: (n,) the FMU's start values
     low: np.ndarray  #: (n,)
     high: np.ndarray  #: (n,)

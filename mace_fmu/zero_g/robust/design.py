@@ -34,8 +34,8 @@ DEFAULT_REDUCED_STATES = 30
 class RobustDesign:
     """The compensator and what it was designed from."""
 
-    loop: LoopSpec
-    weights: LqgWeights
+    loop: LoopSpec  #: the loop the controller closes
+    weights: LqgWeights  #: the LQG weights
     channels: ct.StateSpace  #: nominal model, inputs (control, disturbance) -> measurement [V]
     reduced: ct.StateSpace  #: design model: control -> measurement, ``reduced_states`` states
     reduced_disturbance: np.ndarray  #: (n, 1) the disturbance input's column in the design model

@@ -46,8 +46,8 @@ class RobustStudy:
     """What ``robust_0g_study`` made and found."""
 
     fmu: Path  #: the 0-g FMU the sweep ran
-    design: RobustDesign
-    sweep: SweepResult
+    design: RobustDesign  #: the controller studied
+    sweep: SweepResult  #: its closed loop over the box
     cross_checks: tuple[CrossCheck, ...]  #: nominal and worst point
 
 

@@ -55,14 +55,14 @@ class Driver:
 class SweepResult:
     """Every run of the sweep, in order, with the summary numbers."""
 
-    box: ParameterBox
-    loop: LoopSpec
+    box: ParameterBox  #: the parameter box swept
+    loop: LoopSpec  #: the loop evaluated
     points: tuple[SweepPoint, ...]  #: nominal, screening, corners, samples
     runs: tuple[RunResult, ...]  #: one per point
     open_loop: RunResult  #: the FMU at nominal values with the loop open
     critical: tuple[str, ...]  #: the parameters whose corners were run
     drivers: tuple[Driver, ...]  #: every parameter, strongest first
-    seed: int
+    seed: int  #: seed of the random samples
 
     def _select(self, kind: str) -> list[int]:
         return [i for i, p in enumerate(self.points) if p.kind == kind]
