@@ -175,3 +175,28 @@ def test_pythonfmu_fmu_gives_the_acceleration_with_its_feedthrough(tmp_path):
     ref = zoh_reference(model, t, np.ones((1, len(t))))[:, :y.shape[1]]
     assert y[1, 0] == pytest.approx(model.system.D[1, 0], rel=1e-12)  # at t = 0 the feedthrough alone
     assert np.max(np.abs(y - ref) / np.ptp(ref, axis=1, keepdims=True)) <= 1e-10
+
+
+def test_a_structure_row_of_unknown_kind_in_the_model_data_is_refused_at_instantiation(tmp_path):
+    """The runtime checks what each structure output reads (0 displacement, 1 rate, 2 acceleration) when it
+    loads the data, rather than building a wrong model from a corrupted or foreign file."""
+    import zipfile
+
+    from mace_fmu.fmu.native.export import RESOURCE_NAME, export_native_fmu
+    from mace_fmu.fmu.native.resource import resource_bytes, runtime_arrays
+    from mace_fmu.iomodel.parametric_data import parametric_arrays
+
+    model = _model(tmp_path, free=False, max_hz=200.0)
+    good = export_native_fmu(model, out_dir=tmp_path, name="beam_good")
+    data = runtime_arrays(parametric_arrays(model))
+    data["struct_row_kind"] = np.array([0, 7, 2], dtype=np.int64)
+    bad = tmp_path / "beam_bad.fmu"
+    with zipfile.ZipFile(good) as source, zipfile.ZipFile(bad, "w") as target:
+        for item in source.infolist():
+            body = source.read(item)
+            target.writestr(item, resource_bytes(data) if item.filename.endswith(RESOURCE_NAME) else body)
+    messages = []
+    with pytest.raises(Exception):
+        fmpy.simulate_fmu(str(bad), stop_time=0.01, step_size=1e-3, validate=False, debug_logging=True,
+                          logger=lambda component, instance, status, category, message: messages.append(message))
+    assert any(b"structure output 1 reads an unknown quantity" in m for m in messages), messages

@@ -70,6 +70,11 @@ struct MaceModel {
     double *dir_x, *dir_u, *dir_dx, *dir_dy; /* directional derivatives: seeds and results */
 };
 
+/* struct_row_kind: what a structure output reads (mace_fmu/fmu/native/resource.py) */
+#define ROW_DISPLACEMENT 0
+#define ROW_RATE 1
+#define ROW_ACCELERATION 2
+
 /* ---- sparse matrices ------------------------------------------------------------------------ */
 
 static void csr_free(const MaceAlloc *al, MaceCsr *s) {
@@ -132,11 +137,11 @@ static const void *entry_2d(MaceModel *m, const char *name, unsigned type, size_
     return mace_file_get(&m->file, name, type, 2, dims, err);
 }
 
-static int load(MaceModel *m, const char *resource_dir, char *err) {
+/* The counts of the data file: how many inputs, outputs, parameters, modes, blocks and states. */
+static int load_counts(MaceModel *m, const char *resource_dir, char *err) {
     char path[4096];
-    size_t k, sum_x = 0, sum_u = 0, sum_y = 0;
+    size_t k, count_dims = N_COUNTS;
     const int64_t *counts, *version;
-    size_t dims[3], count_dims = N_COUNTS;
     if (mace_resource_read(&m->file, resource_dir, &m->al, path, sizeof(path), err) != 0) return -1;
     if (!(version = (const int64_t *)entry_1d(m, "format_version", MACE_I64, 1, err))) return -1;
     if (version[0] != 1) {
@@ -167,6 +172,12 @@ static int load(MaceModel *m, const char *resource_dir, char *err) {
         snprintf(err, MACE_ERR_LEN, "%.900s: inconsistent counts", path);
         return -1;
     }
+    return 0;
+}
+
+/* The arrays of the model data (sizes from the counts); every structure row says what it reads. */
+static int load_arrays(MaceModel *m, char *err) {
+    size_t k, dims[3];
     dims[0] = m->n_phys;
     dims[1] = dims[2] = m->n_flex;
     if (!(m->par_nominal = (const double *)entry_1d(m, "param_nominal", MACE_F64, m->n_par, err)) ||
@@ -188,6 +199,19 @@ static int load(MaceModel *m, const char *resource_dir, char *err) {
         !(m->flex = (const int64_t *)entry_1d(m, "flexible", MACE_I64, m->n_flex, err)) ||
         !(m->me_order = (const int64_t *)entry_1d(m, "me_order", MACE_I64, m->n, err)))
         return -1;
+    for (k = 0; k < m->n_structure_outputs; k++) {
+        if (m->row_kind[k] < ROW_DISPLACEMENT || m->row_kind[k] > ROW_ACCELERATION) {
+            snprintf(err, MACE_ERR_LEN, "model data: structure output %lu reads an unknown quantity",
+                     (unsigned long)k);
+            return -1;
+        }
+    }
+    return 0;
+}
+
+/* The state order: model exchange s[i] = x[perm[i]], co-simulation the identity. */
+static int load_state_order(MaceModel *m, char *err) {
+    size_t k;
     m->perm = (size_t *)m->al.calloc(m->n + 1, sizeof(size_t));
     m->pos = (size_t *)m->al.calloc(m->n + 1, sizeof(size_t));
     if (!m->perm || !m->pos) {
@@ -204,6 +228,12 @@ static int load(MaceModel *m, const char *resource_dir, char *err) {
         m->perm[k] = (size_t)q;
         m->pos[q] = k;
     }
+    return 0;
+}
+
+/* Names, and which parameter is each mode's damping ratio and frequency scale. */
+static int load_parameters(MaceModel *m, char *err) {
+    size_t k;
     m->names = (const char **)m->al.calloc(m->n_in + m->n_out + m->n_par + 1, sizeof(char *));
     m->blk = (const double **)m->al.calloc(4 * m->n_blocks + 1, sizeof(double *));
     m->damping_of = (size_t *)m->al.calloc(m->n_modes + 1, sizeof(size_t));
@@ -248,6 +278,12 @@ static int load(MaceModel *m, const char *resource_dir, char *err) {
             return -1;
         }
     }
+    return 0;
+}
+
+/* Each block's kind, sizes and parameters (constant blocks: their matrices), and that they add up. */
+static int load_blocks(MaceModel *m, char *err) {
+    size_t k, sum_x = 0, sum_u = 0, sum_y = 0;
     for (k = 0; k < m->n_blocks; k++) {
         const int64_t *info = m->block_info + k * N_INFO;
         const size_t nx = (size_t)info[INFO_NX], nu = (size_t)info[INFO_NU], ny = (size_t)info[INFO_NY];
@@ -291,6 +327,13 @@ static int load(MaceModel *m, const char *resource_dir, char *err) {
         snprintf(err, MACE_ERR_LEN, "model data: block sizes do not add up to the system's");
         return -1;
     }
+    return 0;
+}
+
+static int load(MaceModel *m, const char *resource_dir, char *err) {
+    if (load_counts(m, resource_dir, err) || load_arrays(m, err) || load_state_order(m, err) ||
+        load_parameters(m, err) || load_blocks(m, err))
+        return -1;
     return 0;
 }
 
@@ -533,11 +576,6 @@ done:
 
 /* The modal structure block into the block-diagonal matrices at state offset ox, input offset
  * ou, output offset oy (eq. 3.5-3.6; states: kept displacements, then kept rates, by mode). */
-/* struct_row_kind: what a structure output reads (mace_fmu/fmu/native/resource.py) */
-#define ROW_DISPLACEMENT 0
-#define ROW_RATE 1
-#define ROW_ACCELERATION 2
-
 /* The modal structure block (mace_fmu/iomodel/modal_core.py, modal_matrices): A, B and C, and for
  * acceleration outputs C = a [-Omega^2, -2 zeta Omega] and the feedthrough D = a Phi^T b. */
 static int structure_block(MaceModel *m, const double *phi_r, int changed, double *ab, double *bb, double *cb,
