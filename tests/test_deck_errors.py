@@ -321,10 +321,10 @@ def test_structure_errors_name_the_case_control_line() -> None:
 
     deck = read_deck_text(case("SUBCASE 1\n  SPC = 1", sf("SPC1", 1, 123456, 1)), name="deck.bdf")
     with pytest.raises(DeckError) as info:
-        build_structure(deck, kind="1g")
+        build_structure(deck, configuration="1g")
     assert str(info.value).startswith("deck.bdf:3: SUBCASE 1: the 1-g structure needs a subcase with a LOAD")
     with pytest.raises(DeckError) as info:
-        build_structure(read_deck_text(base(), name="bulk.bdf"), kind="0g")
+        build_structure(read_deck_text(base(), name="bulk.bdf"), configuration="0g")
     assert str(info.value).startswith("bulk.bdf:1: no case control")
 
 

@@ -31,7 +31,7 @@ def _outcome(path: Path) -> tuple[str, DeckError | None]:
     try:
         deck = read_deck(path)
         for kind in ("1g", "0g"):
-            build_structure(deck, kind=kind)
+            build_structure(deck, configuration=kind)
     except DeckError as exc:
         return "DeckError", exc
     return "valid", None

@@ -36,7 +36,7 @@ def test_model_description_validates_and_names_signals(built):
     model, fmu, _ = built
     assert validate_fmu(str(fmu)) == []
     md = fmpy.read_model_description(str(fmu))
-    assert md.modelName == f"MACE_{model.structure_modes.structure.kind}"
+    assert md.modelName == f"MACE_{model.structure_modes.structure.configuration}"
     assert md.defaultExperiment.startTime == "0.0" and md.defaultExperiment.stopTime == "10.0"
     assert md.defaultExperiment.stepSize == "0.002"
     ins = [v for v in md.modelVariables if v.causality == "input"]
@@ -264,7 +264,7 @@ def test_physical_parameter_reanalysis_matches_the_fe_rebuild(built):
     from mace_fmu.fe.modes import compute_modes
 
     model, _, unzipped = built
-    kind = model.structure_modes.structure.kind
+    kind = model.structure_modes.structure.configuration
     e = model.structure_modes.structure.deck.mat1s[2].youngs_modulus
     fmu = initialised_slave(model, unzipped, {"E_lexan_center": 1.05 * e})
     ours = _frequencies(fmu, unzipped)
@@ -315,7 +315,7 @@ def test_parameters_rebuild_the_same_model_as_volts_model(built, change):
     else:
         k = list(model.plant.labels).index("1st Z bending")
         start, values = {f"damping_mode_{k + 1}": 0.05}, {"damping:1st Z bending": 0.05}
-    rebuilt = volts_model(model.structure_modes.structure.kind, modes=model.structure_modes,
+    rebuilt = volts_model(model.structure_modes.structure.configuration, modes=model.structure_modes,
                           parameters=ParameterSet(values))
     t = np.arange(0.0, 0.4, 2e-3)
     u = make_inputs("multisine", t, model.system.ninputs)

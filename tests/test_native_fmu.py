@@ -240,7 +240,7 @@ def _changes(kind: str, nominal: dict[str, float]) -> dict[str, float]:
 
 def test_native_equals_pythonfmu_and_the_parametric_system_with_changed_parameters(fmus):
     model = fmus.model
-    kind = model.structure_modes.structure.kind
+    kind = model.structure_modes.structure.configuration
     system = ParametricSystem(fmus.arrays)
     nominal = dict(zip(system.parameter_names, system.nominal))
     change = _changes(kind, nominal)
@@ -726,7 +726,7 @@ def test_c_host_without_python_equals_the_exact_zoh_and_fmpy(fmus, host, tmp_pat
 def test_a_million_steps_end_at_the_exact_step_response(fmus, host, tmp_path):
     """10^6 steps of 0.1 ms with the inputs held (100 s) against the exact continuous step response."""
     model = fmus.model
-    if model.structure_modes.structure.kind != "0g":
+    if model.structure_modes.structure.configuration != "0g":
         pytest.skip("one model suffices; the 0-g model is the faster")
     n, step = 10**6, 1e-4
     u0 = 0.01 + 0.005 * np.arange(model.system.ninputs)
@@ -776,7 +776,7 @@ def test_model_exchange_directional_derivatives_from_c_are_clean_under_valgrind(
 
 
 def test_instantiate_simulate_free_cycles_do_not_grow_memory(fmus):
-    if fmus.model.structure_modes.structure.kind != "0g":
+    if fmus.model.structure_modes.structure.configuration != "0g":
         pytest.skip("one model suffices; the 0-g model initialises faster")
     model = fmus.model
     ins, outs = value_references(fmus.dir2)
@@ -819,7 +819,7 @@ def test_libcosim_gives_the_same_outputs_as_fmpy(fmus):
 
 def test_sources_rebuild_an_equivalent_binary(fmus, tmp_path):
     """sources/ lets a host build its own binary: fmpy's CMake build of them gives the same outputs."""
-    if fmus.model.structure_modes.structure.kind != "0g":
+    if fmus.model.structure_modes.structure.configuration != "0g":
         pytest.skip("one model suffices")
     from fmpy.build import build_platform_binary
 
@@ -890,7 +890,7 @@ def test_windows_binary_runs_under_wine_like_the_linux_one(fmus, host, tmp_path)
     wine = shutil.which("wine64") or ("/usr/lib/wine/wine64" if Path("/usr/lib/wine/wine64").exists() else None)
     if not (runtime.available(runtime.WIN64) and wine):
         pytest.skip("needs x86_64-w64-mingw32-gcc and wine64")
-    if fmus.model.structure_modes.structure.kind != "0g":
+    if fmus.model.structure_modes.structure.configuration != "0g":
         pytest.skip("one model suffices")
     exe = tmp_path / "native_host.exe"
     subprocess.run([runtime.WIN64.compiler, "-std=c99", "-O2", "-Wall", "-Werror", f"-I{RUNTIME_DIR}", "-o", str(exe),

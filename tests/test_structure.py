@@ -25,7 +25,7 @@ def deck():
 
 @pytest.fixture(scope="module")
 def zero_g(deck):
-    return build_structure(deck, kind="0g")
+    return build_structure(deck, configuration="0g")
 
 
 @pytest.fixture(scope="module")
@@ -45,7 +45,7 @@ def _first_z_bending(result) -> float:
 
 def test_0g_deck_has_the_78_nodal_points_of_the_free_free_model(deck, zero_g):
     d = zero_g.deck
-    assert zero_g.kind == "0g" and zero_g.preload is None
+    assert zero_g.configuration == "0g" and zero_g.preload is None
     connected = {g for b in d.bars.values() for g in (b.ga, b.gb)} | {m.grid for m in d.conm2s.values()}
     assert len(connected) == 78  # thesis 3.2: 78 nodal points
     # The deck keeps one unconnected grid: the fixed reference node 62 (SPC 53, all components).
@@ -84,7 +84,7 @@ def test_0g_constraint_sets_lose_the_suspension_grids(deck, zero_g):
 
 
 def test_1g_structure_is_the_deck_as_is(deck):
-    s = build_structure(deck, kind="1g")
+    s = build_structure(deck, configuration="1g")
     assert s.deck.grids == deck.grids and s.deck.bars == deck.bars
     assert (s.preload.spc, s.preload.mpc, s.preload.load, s.preload.nlparm) == (51, 5, 100, 10)
     assert (s.modal.spc, s.modal.mpc) == (53, 6)
@@ -107,7 +107,7 @@ def test_forgotten_suspension_element_is_named(deck, tmp_path):
     spec = load_spec(path)
     assert not spec.suspension_elements & set(range(103, 127))
     with pytest.raises(MaceError) as exc:
-        build_structure(deck, kind="0g", spec=spec)
+        build_structure(deck, configuration="0g", spec=spec)
     msg = str(exc.value)
     m = re.search(r"CBAR (\d+)", msg)
     assert m is not None and 103 <= int(m.group(1)) <= 126, msg
@@ -119,7 +119,7 @@ def test_one_forgotten_cable_bar_is_named_exactly(deck, tmp_path):
     old = '"103-126"'
     path = _write_toml(tmp_path, TOML_TEXT.replace(old, '"103-116", "118-126"'))
     with pytest.raises(MaceError, match=r"CBAR 117: connects suspension grid") as exc:
-        build_structure(deck, kind="0g", spec=load_spec(path))
+        build_structure(deck, configuration="0g", spec=load_spec(path))
     assert str(path) in str(exc.value)
 
 

@@ -17,7 +17,7 @@ from mace_fmu.util.frequency import ZERO_HZ, hz_text
 def _modes_json(result: StructureModes) -> dict:
     props = result.mass_properties
     return {
-        "structure": result.structure.kind,
+        "structure": result.structure.configuration,
         "deck": result.structure.deck.path,
         "structure_file": str(result.structure.file.path) if result.structure.file is not None else None,
         "auto_constrained": [[int(g), int(c)] for g, c in result.auto_constrained],
@@ -38,7 +38,7 @@ def _modes_json(result: StructureModes) -> dict:
 
 def _print_modes(result: StructureModes) -> None:
     pre = f", {result.preload.kind} preload" if result.preload else ""
-    print(f"{result.structure.kind} modes of {result.structure.deck.path}{pre}")
+    print(f"{result.structure.configuration} modes of {result.structure.deck.path}{pre}")
     file = result.structure.file
     print(f"structure file: {file.path}" if file is not None else
           "structure file: none (the deck's own SPC, MPC and EIGRL or EIGR; nothing removed; labels by motion)")

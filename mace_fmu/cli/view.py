@@ -87,7 +87,7 @@ def _check_signals(args: argparse.Namespace, deck) -> str:
         return collocated_sensor(instruments, args.input, grid_positions(deck))
     sensors = [s.name for s in instruments.sensors]
     motion = parse_motion_output(args.output)
-    grids = build_structure(deck, kind=args.structure, structure_file=file).deck.grids
+    grids = build_structure(deck, configuration=args.structure, structure_file=file).deck.grids
     if args.output in sensors or (motion is not None and motion[0] in grids):
         return args.output
     raise MaceError(f"--output {args.output!r} is not an output of the {args.structure} model: use a sensor "

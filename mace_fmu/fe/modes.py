@@ -240,7 +240,7 @@ def compute_modes(deck: Deck | str | os.PathLike | None = None, *, structure: St
     if parameters is not None:
         check_parameters_deck(parameters, deck)
         overrides = {**fe_overrides(parameters, parameter_names(deck, file)), **(overrides or {})}
-    struct = build_structure(deck, kind=structure, spec=spec, overrides=overrides, structure_file=file)
+    struct = build_structure(deck, configuration=structure, spec=spec, overrides=overrides, structure_file=file)
     model = assemble(struct.deck, mass=mass)
     props = mass_properties(model, struct.deck)
     stiffness, pre = model.stiffness, None

@@ -200,7 +200,7 @@ def export_pythonfmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str 
     MaceError
         A name that is not an identifier.
     """
-    kind = model.structure_modes.structure.kind
+    kind = model.structure_modes.structure.configuration
     name = name or fmu_name(kind, motion_grids=model.plant.motion_grids,
                             all_grids=model.structure_modes.model.dofs.grid_ids)
     if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", name):

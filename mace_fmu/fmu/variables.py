@@ -27,7 +27,7 @@ def variable_unit(name: str, causality: str) -> str | None:
 def model_summary(model: VoltsModel) -> str:
     """One-line description of a volts-volts model for an FMU's model description."""
     structure, sys_ = model.structure_modes.structure, model.system
-    kind = structure.kind
+    kind = structure.configuration
     # "MACE <kind>" names the bundled structure only (hosts and `view response` read it); another deck is
     # named by its file
     from mace_fmu.structure.file import is_bundled_deck

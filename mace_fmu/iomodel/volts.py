@@ -356,8 +356,8 @@ def _check_modes_agree(modes: StructureModes, *, structure: str, parameters: Par
     doubled = [name for name, value in given.items() if value is not None]
     _check(not doubled, f"modes= already fix the deck, preload and structure file they were computed with; drop "
                         f"{', '.join(f'{name}=' for name in doubled)} (or drop modes= to compute them)")
-    _check(modes.structure.kind == structure, f"modes= are of the {modes.structure.kind} structure, the model asked "
-                                              f"for is {structure}")
+    _check(modes.structure.configuration == structure,
+           f"modes= are of the {modes.structure.configuration} structure, the model asked for is {structure}")
     deck = modes.structure.deck
     for (card, cid), fields in fe_overrides(parameters, parameter_names(deck, modes.structure.file)).items():
         entry = (deck.mat1s if card == "MAT1" else deck.celas2s)[cid]

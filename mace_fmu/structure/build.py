@@ -25,7 +25,7 @@ from mace_fmu.structure.file import (_CARD_TABLES, StructureFile, StructureKind,
 class Structure:
     """One analysable structure: its deck, its preload subcase (1-g only) and its modal subcase."""
 
-    kind: StructureKind  #: "1g" (suspended, preloaded) or "0g" (free)
+    configuration: StructureKind  #: "1g" (suspended, preloaded) or "0g" (free)
     deck: Deck  #: the deck of this structure (0-g: without the suspension)
     preload: Subcase | None  #: SPC/MPC/LOAD/NLPARM of the static preload; None for 0-g
     modal: Subcase  #: SPC/MPC of the eigen-solution
@@ -164,7 +164,7 @@ def _subcases(deck: Deck) -> tuple[Subcase | None, Subcase]:
     return preload, cases[-1]
 
 
-def build_structure(deck: Deck, *, kind: StructureKind, spec: StructureSpec | None = None,
+def build_structure(deck: Deck, *, configuration: StructureKind, spec: StructureSpec | None = None,
                     overrides: Mapping[tuple[str, int], Mapping[str, Any]] | None = None,
                     structure_file: StructureFile | str | os.PathLike | None = None) -> Structure:
     """The 1-g structure (deck as is, preload subcase + modal subcase) or the 0-g structure.
@@ -173,7 +173,7 @@ def build_structure(deck: Deck, *, kind: StructureKind, spec: StructureSpec | No
     ----------
     deck : Deck
         The NASTRAN deck.
-    kind : {"1g", "0g"}
+    configuration : {"1g", "0g"}
         The suspended, gravity-preloaded structure or the free one.
     spec : StructureSpec, optional
         Replaces the structure file's structure part (e.g. ``StructureSpec.empty()``).
@@ -192,21 +192,22 @@ def build_structure(deck: Deck, *, kind: StructureKind, spec: StructureSpec | No
     Raises
     ------
     MaceError
-        An unknown kind, a structure file naming IDs the deck lacks, a 1-g structure without a gravity
+        An unknown configuration, a structure file naming IDs the deck lacks, a 1-g structure without a gravity
         subcase.
     """
-    if kind not in ("1g", "0g"):
-        raise MaceError(f"kind must be '1g' or '0g', got {kind!r}")
+    if configuration not in ("1g", "0g"):
+        raise MaceError(f"configuration must be '1g' or '0g', got {configuration!r}")
     file = structure_file_for(deck, structure_file)
     spec = spec if spec is not None else (file.spec if file is not None else StructureSpec.empty())
     check_spec_against_deck(spec, deck)
     deck = apply_overrides(deck, overrides or {})
     preload, modal = _subcases(deck)
-    if kind == "1g":
+    if configuration == "1g":
         if preload is None:
             raise DeckError("the 1-g structure needs a subcase with a LOAD (gravity preload); none of the subcases "
                             "selects one (expected LOAD = set ID in the preload subcase; for the deck's plain modes "
                             "ask for the 0-g structure)", file=deck.path,
                             line=modal.source.line, card=f"SUBCASE {modal.id}" if modal.id else "global case control")
-        return Structure(kind=kind, deck=deck, preload=preload, modal=modal, spec=spec, file=file)
-    return Structure(kind=kind, deck=remove_suspension(deck, spec), preload=None, modal=modal, spec=spec, file=file)
+        return Structure(configuration=configuration, deck=deck, preload=preload, modal=modal, spec=spec, file=file)
+    return Structure(configuration=configuration, deck=remove_suspension(deck, spec), preload=None, modal=modal,
+                     spec=spec, file=file)

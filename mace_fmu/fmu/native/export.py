@@ -143,7 +143,7 @@ def export_native_fmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str
     MaceError
         A name that is not a C identifier, an FMI version other than 2 or 3, a compiler failure.
     """
-    kind = model.structure_modes.structure.kind
+    kind = model.structure_modes.structure.configuration
     name = name or f"MACE_{kind}"
     if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", name):
         raise MaceError(f"FMU name must be a C identifier (it names the model and its binary), got {name!r}")
