@@ -113,3 +113,22 @@ def test_readme_headline_numbers_are_on_the_pages_it_links():
             assert number in text, f"README headline {number!r} is not on {pages}"
             checked += 1
     assert checked >= 12
+
+
+def test_the_first_model_notebook_runs_and_its_jupytext_pair_agrees(tmp_path):
+    """docs/getting_started/first_model.py (a script in cells) runs, its FMU equals the exact zero-order hold,
+    and first_model.ipynb holds the same cells (jupytext pairing: people who work in notebooks start there)."""
+    import subprocess
+    import sys
+
+    import jupytext
+
+    script = ROOT / "docs" / "getting_started" / "first_model.py"
+    run = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=300, cwd=tmp_path)
+    assert run.returncode == 0, run.stderr
+    assert "2.100 Hz  1st Z bending" in run.stdout
+    difference = float(re.search(r"exact zero-order hold: ([0-9.e+-]+) of", run.stdout).group(1))
+    assert difference <= 1e-10
+    cells = [(c.cell_type, c.source) for c in jupytext.read(script).cells]
+    paired = [(c.cell_type, c.source) for c in jupytext.read(script.with_suffix(".ipynb")).cells]
+    assert cells == paired, "run: jupytext --sync docs/getting_started/first_model.py"
