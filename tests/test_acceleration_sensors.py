@@ -159,6 +159,11 @@ def test_native_fmu_steps_as_the_exact_zoh_and_rebuilds_changed_damping_and_modu
 
 
 def test_pythonfmu_fmu_gives_the_acceleration_with_its_feedthrough(tmp_path):
+    """Run in a subprocess: loading a pythonfmu FMU has corrupted the heap of the process that did (see
+    conftest.py), which would take an xdist worker down in a later test."""
+    import subprocess
+    import sys
+
     from support.fmu_checks import zoh_reference
 
     from mace_fmu.fmu.export import export_fmu
@@ -167,11 +172,22 @@ def test_pythonfmu_fmu_gives_the_acceleration_with_its_feedthrough(tmp_path):
     fmu = export_fmu(model, kind="pythonfmu", out_dir=tmp_path, name="beam_acc_py")
     t = np.arange(0.0, 0.2 + 1e-12, 1e-3)
     outputs = list(model.system.output_labels)
-    inputs = np.zeros(len(t), dtype=[("time", float), ("tip_force_y", float)])
-    inputs["time"], inputs["tip_force_y"] = t, 1.0
-    run = fmpy.simulate_fmu(str(fmu), input=inputs, output=outputs, step_size=1e-3, output_interval=1e-3,
-                            stop_time=t[-1])
-    y = np.stack([run[o] for o in outputs])[:, :len(t)]
+    host = tmp_path / "host.py"
+    host.write_text(
+        "import os, sys, fmpy, numpy as np\n"
+        "t = np.arange(0.0, 0.2 + 1e-12, 1e-3)\n"
+        "u = np.zeros(len(t), dtype=[('time', float), ('tip_force_y', float)])\n"
+        "u['time'], u['tip_force_y'] = t, 1.0\n"
+        f"outs = {outputs!r}\n"
+        "run = fmpy.simulate_fmu(sys.argv[1], input=u, output=outs, step_size=1e-3, output_interval=1e-3,\n"
+        "                        stop_time=t[-1])\n"
+        "np.save(sys.argv[2], np.stack([run[o] for o in outs]))\n"
+        "sys.stdout.flush(); os._exit(0)\n")
+    saved = tmp_path / "y.npy"
+    done = subprocess.run([sys.executable, str(host), str(fmu), str(saved)], capture_output=True, text=True,
+                          timeout=300)
+    assert done.returncode == 0 and saved.exists(), done.stderr
+    y = np.load(saved)[:, :len(t)]
     ref = zoh_reference(model, t, np.ones((1, len(t))))[:, :y.shape[1]]
     assert y[1, 0] == pytest.approx(model.system.D[1, 0], rel=1e-12)  # at t = 0 the feedthrough alone
     assert np.max(np.abs(y - ref) / np.ptp(ref, axis=1, keepdims=True)) <= 1e-10
@@ -195,8 +211,21 @@ def test_a_structure_row_of_unknown_kind_in_the_model_data_is_refused_at_instant
         for item in source.infolist():
             body = source.read(item)
             target.writestr(item, resource_bytes(data) if item.filename.endswith(RESOURCE_NAME) else body)
-    messages = []
-    with pytest.raises(Exception):
-        fmpy.simulate_fmu(str(bad), stop_time=0.01, step_size=1e-3, validate=False, debug_logging=True,
-                          logger=lambda component, instance, status, category, message: messages.append(message))
-    assert any(b"structure output 1 reads an unknown quantity" in m for m in messages), messages
+    # in a subprocess: after this failed instantiation through fmpy, a later FMU in the same process has
+    # crashed an xdist worker (not understood yet; the instantiation error itself is the point here)
+    host = tmp_path / "host.py"
+    host.write_text(
+        "import os, sys, fmpy\n"
+        "messages = []\n"
+        "try:\n"
+        "    fmpy.simulate_fmu(sys.argv[1], stop_time=0.01, step_size=1e-3, validate=False, debug_logging=True,\n"
+        "                      logger=lambda c, i, s, k, m: messages.append(m))\n"
+        "except Exception:\n"
+        "    pass\n"
+        "print(b'|'.join(messages).decode(), flush=True)\n"
+        "os._exit(0)\n")
+    import subprocess
+    import sys
+
+    done = subprocess.run([sys.executable, str(host), str(bad)], capture_output=True, text=True, timeout=120)
+    assert "structure output 1 reads an unknown quantity" in done.stdout, done.stdout + done.stderr

@@ -37,6 +37,14 @@ def cd_rotation(cd_frames: np.ndarray) -> np.ndarray:
     return sparse.block_diag([blk for r in cd_frames for blk in (r, r)], format="csr")
 
 
+def _check_free(d: int, what: str, fixed: np.ndarray, equations: dict, sources: dict, labels: dict) -> None:
+    """A rigid or interpolation element may make DOF ``d`` dependent only if nothing eliminated it before."""
+    if fixed[d]:
+        raise MaceError(f"{what} is also fixed by an SPC or a GRID PS field; a DOF can be eliminated only once")
+    if d in equations:
+        raise MaceError(f"{what} is already dependent in {labels[d]} ({sources[d]}); a DOF can be dependent only once")
+
+
 def rigid_equations(deck: Deck, dofs: DofMap, cd_frames: np.ndarray, fixed: np.ndarray,
                     equations: dict[int, list[tuple[int, float]]], sources: dict, labels: dict) -> None:
     """Add the equations of every RBAR and RBE2 (always in force, like NASTRAN's rigid elements) to
@@ -61,12 +69,7 @@ def rigid_equations(deck: Deck, dofs: DofMap, cd_frames: np.ndarray, fixed: np.n
             for c in comps:
                 d = dofs.index(grid, int(c))
                 label = f"{r.card} {r.id}"
-                if fixed[d]:
-                    raise MaceError(f"{r.source}: {label}: dependent DOF {grid}-{c} is also fixed by an SPC or a "
-                                    "GRID PS field; a DOF can be eliminated only once")
-                if d in equations:
-                    raise MaceError(f"{r.source}: {label}: dependent DOF {grid}-{c} is already dependent in "
-                                    f"{labels[d]} ({sources[d]}); a DOF can be dependent only once")
+                _check_free(d, f"{r.source}: {label}: dependent DOF {grid}-{c}", fixed, equations, sources, labels)
                 row = coupling[int(c) - 1]
                 equations[d] = [(int(i_idx[k]), float(row[k])) for k in range(6) if abs(row[k]) > 1e-15]
                 sources[d], labels[d] = r.source, label
@@ -110,12 +113,7 @@ def interpolation_equations(deck: Deck, dofs: DofMap, cd_frames: np.ndarray, fix
         coupling = np.kron(np.eye(2), cd_frames[dofs.grid_index(e.reference)]).T @ fit
         for c in e.reference_components:
             d = dofs.index(e.reference, int(c))
-            if fixed[d]:
-                raise MaceError(f"{e.source}: {label}: dependent DOF {e.reference}-{c} is also fixed by an SPC or a "
-                                "GRID PS field; a DOF can be eliminated only once")
-            if d in equations:
-                raise MaceError(f"{e.source}: {label}: dependent DOF {e.reference}-{c} is already dependent in "
-                                f"{labels[d]} ({sources[d]}); a DOF can be dependent only once")
+            _check_free(d, f"{e.source}: {label}: dependent DOF {e.reference}-{c}", fixed, equations, sources, labels)
             terms: dict[int, float] = {}
             for column, value in zip(columns, coupling[int(c) - 1]):
                 terms[column] = terms.get(column, 0.0) + float(value)
