@@ -211,8 +211,10 @@ def test_a_structure_row_of_unknown_kind_in_the_model_data_is_refused_at_instant
         for item in source.infolist():
             body = source.read(item)
             target.writestr(item, resource_bytes(data) if item.filename.endswith(RESOURCE_NAME) else body)
-    # in a subprocess: after this failed instantiation through fmpy, a later FMU in the same process has
-    # crashed an xdist worker (not understood yet; the instantiation error itself is the point here)
+    # in a subprocess: fmpy's logger proxy (fmpy/logging, addLoggerProxy) keeps the last logger given to
+    # simulate_fmu(logger=...) in a global, and its default callbacks go through that proxy too; once the
+    # Python callback is collected, the next FMU in the process that logs jumps into freed memory (measured:
+    # a successful simulate_fmu with a logger, then the controller FMU's refused doStep: SIGSEGV/SIGILL)
     host = tmp_path / "host.py"
     host.write_text(
         "import os, sys, fmpy\n"
