@@ -37,6 +37,15 @@ def cd_rotation(cd_frames: np.ndarray) -> np.ndarray:
     return sparse.block_diag([blk for r in cd_frames for blk in (r, r)], format="csr")
 
 
+def _rigid_transfer(offset_m: np.ndarray) -> np.ndarray:
+    """G (6 x 6): the motion (u, theta) [m, rad] of a point ``offset_m`` [m] away that moves rigidly with
+    a point whose motion is (u0, theta0): u = u0 + theta0 x offset = u0 - skew(offset) theta0, theta = theta0."""
+    x, y, z = offset_m
+    g = np.eye(6)
+    g[:3, 3:] = -np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
+    return g
+
+
 def _check_free(d: int, what: str, fixed: np.ndarray, equations: dict, sources: dict, labels: dict) -> None:
     """A rigid or interpolation element may make DOF ``d`` dependent only if nothing eliminated it before."""
     if fixed[d]:
@@ -62,10 +71,7 @@ def rigid_equations(deck: Deck, dofs: DofMap, cd_frames: np.ndarray, fixed: np.n
         i_idx = dofs.indices(r.independent)
         for grid, comps in r.dependent:
             d_row = dofs.grid_index(grid)
-            x, y, z = pos[grid] - pos[r.independent]
-            g = np.eye(6)
-            g[:3, 3:] = -np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])  # -skew(r): theta x r
-            coupling = np.kron(np.eye(2), cd_frames[d_row]).T @ g @ lam_i
+            coupling = np.kron(np.eye(2), cd_frames[d_row]).T @ _rigid_transfer(pos[grid] - pos[r.independent]) @ lam_i
             for c in comps:
                 d = dofs.index(grid, int(c))
                 label = f"{r.card} {r.id}"
@@ -96,9 +102,7 @@ def interpolation_equations(deck: Deck, dofs: DofMap, cd_frames: np.ndarray, fix
         rows, weights, columns = [], [], []
         for weight, comps, grids in e.groups:
             for grid in grids:
-                x, y, z = pos[grid] - pos[e.reference]
-                g = np.hstack([np.eye(3), -np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])])  # -skew(r)
-                reads = cd_frames[dofs.grid_index(grid)].T @ g
+                reads = cd_frames[dofs.grid_index(grid)].T @ _rigid_transfer(pos[grid] - pos[e.reference])[:3]
                 for c in comps:
                     rows.append(reads[int(c) - 1])
                     weights.append(weight)
