@@ -27,37 +27,19 @@ from mace_fmu.iomodel.frf import frequency_response
 from mace_fmu.iomodel.model_options import ModelledElectronics
 from mace_fmu.iomodel.volts import volts_model
 
-STRUCTURE = """
-[components]
-beam = ["1-21"]
 
-[[actuators]]
-name = "tip_force_y"
-description = "force along Y at the beam's tip"
-dofs = [[21, 2, 1.0]]
-gain = 1.0
+def _instrument(table: str, name: str, description: str, grid: int, gain: float, kind: str = "") -> str:
+    """One [[actuators]] or [[sensors]] table of a structure file, reading component 2 (Y) of ``grid``."""
+    kind_line = f'kind = "{kind}"\n' if kind else ""
+    return (f'\n[[{table}]]\nname = "{name}"\ndescription = "{description}"\n{kind_line}'
+            f"dofs = [[{grid}, 2, 1.0]]\ngain = {gain}\n")
 
-[[sensors]]
-name = "tip_y"
-description = "tip displacement along Y"
-kind = "displacement"
-dofs = [[21, 2, 1.0]]
-gain = 1.0
 
-[[sensors]]
-name = "tip_acc_y"
-description = "tip acceleration along Y"
-kind = "acceleration"
-dofs = [[21, 2, 1.0]]
-gain = 1.0
-
-[[sensors]]
-name = "mid_acc_y"
-description = "mid-span acceleration along Y"
-kind = "acceleration"
-dofs = [[11, 2, 1.0]]
-gain = 2.0
-"""
+STRUCTURE = ('[components]\nbeam = ["1-21"]\n'
+             + _instrument("actuators", "tip_force_y", "force along Y at the beam's tip", 21, 1.0)
+             + _instrument("sensors", "tip_y", "tip displacement along Y", 21, 1.0, "displacement")
+             + _instrument("sensors", "tip_acc_y", "tip acceleration along Y", 21, 1.0, "acceleration")
+             + _instrument("sensors", "mid_acc_y", "mid-span acceleration along Y", 11, 2.0, "acceleration"))
 BARE = ModelledElectronics(servos=False, bessel="none", delays=False)
 
 

@@ -576,6 +576,15 @@ done:
 
 /* The modal structure block into the block-diagonal matrices at state offset ox, input offset
  * ou, output offset oy (eq. 3.5-3.6; states: kept displacements, then kept rates, by mode). */
+/* Mode j's signed omega^2 [rad^2/s^2] and 2 zeta omega [rad/s] (zero-frequency modes: 0, 0), as in
+ * modal_core.modal_matrices: eta'' = -omega^2 eta - 2 zeta omega eta' + Phi^T b u. */
+static void mode_terms(const MaceModel *m, size_t j, double *w2, double *damping) {
+    const double f = fabs(m->freq[j]) < ZERO_HZ ? 0.0 : m->freq[j];
+    const double w = TWO_PI * fabs(f), zeta = m->params[m->damping_of[j]];
+    *w2 = signed_omega2(f);
+    *damping = 2.0 * zeta * w;
+}
+
 /* The modal structure block (mace_fmu/iomodel/modal_core.py, modal_matrices): A, B and C, and for
  * acceleration outputs C = a [-Omega^2, -2 zeta Omega] and the feedthrough D = a Phi^T b. */
 static int structure_block(MaceModel *m, const double *phi_r, int changed, double *ab, double *bb, double *cb,
@@ -608,14 +617,14 @@ static int structure_block(MaceModel *m, const double *phi_r, int changed, doubl
     for (j = 0; j < nm; j++)
         if (m->keep_rate[j]) rpos[j] = pos++;
     for (j = 0; j < nm; j++) {
-        const double f = fabs(m->freq[j]) < ZERO_HZ ? 0.0 : m->freq[j];
-        const double w2 = signed_omega2(f), w = TWO_PI * fabs(f), zeta = m->params[m->damping_of[j]];
+        double w2, damping;
+        mode_terms(m, j, &w2, &damping);
         if (m->keep_disp[j]) {
             ab[(ox + dpos[j]) * N + ox + rpos[j]] = 1.0;
             ab[(ox + rpos[j]) * N + ox + dpos[j]] = -w2;
         }
         if (m->keep_rate[j]) {
-            ab[(ox + rpos[j]) * N + ox + rpos[j]] = -2.0 * zeta * w;
+            ab[(ox + rpos[j]) * N + ox + rpos[j]] = -damping;
             for (q = 0; q < m->n_structure_inputs; q++)
                 bb[(ox + rpos[j]) * NU + ou + q] = mb[j * m->n_structure_inputs + q];
         }
@@ -623,11 +632,11 @@ static int structure_block(MaceModel *m, const double *phi_r, int changed, doubl
     for (o = 0; o < m->n_structure_outputs; o++) {
         if (m->row_kind[o] == ROW_ACCELERATION) {
             for (j = 0; j < nm; j++) {
-                const double f = fabs(m->freq[j]) < ZERO_HZ ? 0.0 : m->freq[j];
-                const double w2 = signed_omega2(f), w = TWO_PI * fabs(f), zeta = m->params[m->damping_of[j]];
                 const double a = rows[o * nm + j];
+                double w2, damping;
+                mode_terms(m, j, &w2, &damping);
                 if (m->keep_disp[j]) cb[(oy + o) * N + ox + dpos[j]] = -w2 * a;
-                if (m->keep_rate[j]) cb[(oy + o) * N + ox + rpos[j]] = -2.0 * zeta * w * a;
+                if (m->keep_rate[j]) cb[(oy + o) * N + ox + rpos[j]] = -damping * a;
                 for (q = 0; q < m->n_structure_inputs; q++)
                     db[(oy + o) * NU + ou + q] += a * mb[j * m->n_structure_inputs + q];
             }
