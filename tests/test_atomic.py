@@ -105,7 +105,7 @@ def _kill_while_writing(folder: Path, signum: int) -> subprocess.Popen:
     while proc.poll() is None:
         if _leftovers(folder):
             proc.send_signal(signum)
-            proc.communicate(timeout=120)
+            _, proc.stderr_text = proc.communicate(timeout=120)  # kept for the failure message
             return proc
         time.sleep(0.002)
     proc.communicate()
@@ -127,7 +127,7 @@ def test_a_build_killed_mid_way_keeps_the_previous_fmu(tmp_path: Path, signum: i
         assert proc.returncode == -signal.SIGKILL
         assert all(name.startswith(".MACE_0g_native.fmu.") for name in _leftovers(tmp_path))
     else:
-        assert proc.returncode == (128 + signum if signum == signal.SIGTERM else 130)
+        assert proc.returncode == (128 + signum if signum == signal.SIGTERM else 130), proc.stderr_text[-2000:]
         assert _leftovers(tmp_path) == []
 
 
