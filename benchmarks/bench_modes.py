@@ -18,9 +18,9 @@ from mace_fmu.fe.modes import compute_modes
 from mace_fmu.structure.file import bundled_deck_path
 
 CASES = {
-    "deck -> 0-g modes": dict(structure="0g"),
-    "deck -> 1-g modes, large-displacement preload (20 increments)": dict(structure="1g", preload="large"),
-    "deck -> 1-g modes, linear preload": dict(structure="1g", preload="linear"),
+    "deck -> 0-g modes": dict(configuration="0g"),
+    "deck -> 1-g modes, large-displacement preload (20 increments)": dict(configuration="1g", preload="large"),
+    "deck -> 1-g modes, linear preload": dict(configuration="1g", preload="linear"),
 }
 
 

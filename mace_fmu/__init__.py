@@ -4,7 +4,7 @@ The names a user starts with, in the order of the data flow (imported on first u
 ``import mace_fmu`` stays cheap)::
 
     deck = mace_fmu.read_deck("my.bdf")                       # the deck as NASTRAN reads it
-    modes = mace_fmu.compute_modes(deck, structure="0g")      # modes [Hz], labelled
+    modes = mace_fmu.compute_modes(deck, configuration="0g")      # modes [Hz], labelled
     model = mace_fmu.volts_model("0g", structure_file="my.toml",  # volts in, volts out
                                  electronics=mace_fmu.ModelledElectronics(servos=False),
                                  signals=mace_fmu.SignalSelection(outputs=["tip_z"]))

@@ -41,9 +41,9 @@ def table_5_1_0g(m0: StructureModes) -> list[ComparisonRow]:
     """0-g flexible modes in frequency order against Table 5.1's 0-g column (paired by label)."""
     rows = []
     for ref in thesis_data()["table_5_1"]:
-        idx = [i for i, lab in enumerate(m0.modes.labels) if lab == ref["label"]]
-        i = idx[0] if idx else int(np.argmin(np.abs(m0.modes.frequencies_hz - ref["g0"])))
-        rows.append(ComparisonRow(ref["label"], ref["g0"], float(m0.modes.frequencies_hz[i]), m0.modes.labels[i], i))
+        idx = [i for i, lab in enumerate(m0.labels) if lab == ref["label"]]
+        i = idx[0] if idx else int(np.argmin(np.abs(m0.frequencies_hz - ref["g0"])))
+        rows.append(ComparisonRow(ref["label"], ref["g0"], float(m0.frequencies_hz[i]), m0.labels[i], i))
     return rows
 
 
@@ -52,7 +52,7 @@ def table_5_1_1g(m1: StructureModes, m0: StructureModes) -> list[ComparisonRow]:
     ref_rows = table_5_1_0g(m0)
     pairs = pair_by_mac(m0.modes, m0.model, m1.modes, [r.index for r in ref_rows])
     data = thesis_data()["table_5_1"]
-    return [ComparisonRow(ref["label"], ref["g1"], float(m1.modes.frequencies_hz[j]), m1.modes.labels[j], j, mac)
+    return [ComparisonRow(ref["label"], ref["g1"], float(m1.frequencies_hz[j]), m1.labels[j], j, mac)
             for ref, (_, j, mac) in zip(data, pairs)]
 
 

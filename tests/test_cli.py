@@ -20,8 +20,8 @@ def test_modes_0g_json(capsys):
     code, out, err = _run(capsys, ["modes", "0g", "--json"])
     assert code == 0
     data = json.loads(out)
-    assert {"structure", "modes", "mass_properties"} <= set(data)
-    assert data["structure"] == "0g" and data["preload"] is None
+    assert {"configuration", "modes", "mass_properties"} <= set(data)
+    assert data["configuration"] == "0g" and data["preload"] is None
     modes = data["modes"]
     assert len(modes) == 35  # thesis: 35 modes cover 0-250 Hz in 0-g
     assert [m["index"] for m in modes] == list(range(1, 36))
@@ -45,7 +45,7 @@ def test_modes_1g_linear_json(capsys):
     code, out, _ = _run(capsys, ["modes", "1g", "--json", "--preload", "linear", "--max-hz", "5"])
     assert code == 0
     data = json.loads(out)
-    assert data["structure"] == "1g" and data["preload"] == "linear"
+    assert data["configuration"] == "1g" and data["preload"] == "linear"
     modes = data["modes"]
     assert all(m["frequency_hz"] <= 5.0 for m in modes)
     zero = [m for m in modes if abs(m["frequency_hz"]) < 0.01]

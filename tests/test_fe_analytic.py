@@ -85,12 +85,12 @@ def test_taut_string_violin_frequencies_from_geometric_stiffness(preload):
     bulk = line_of_bars(n=40, length=length, e=2.0e11, nu=0.3, rho=rho, area=area, i=inertia,
                         direction=(0.0, -1.0, 0.0), ps="345")
     bulk += [f"CONM2,900,41,,{r(mass_end)}", "SPC1,1,123456,1", "SPC1,1,1,41"]
-    result = compute_modes(read_deck_text(_hanging_spec_deck(bulk, static_spc=1, modal_spc=1)), structure="1g",
+    result = compute_modes(read_deck_text(_hanging_spec_deck(bulk, static_spc=1, modal_spc=1)), configuration="1g",
                            preload=preload, spec=EMPTY_SPEC, max_hz=400.0)
     mu = rho * area
     tension = mass_end * 9.81 + 0.5 * mu * length * 9.81  # mean tension along the string
     exact = np.arange(1, 4) / (2 * length) * math.sqrt(tension / mu)
-    f = result.modes.frequencies_hz
+    f = result.frequencies_hz
     transverse = f[(f > 0.5 * exact[0]) & (f < 1.1 * exact[2])]  # the bounce of the mass is at 6 Hz
     np.testing.assert_allclose(transverse, exact, rtol=1e-2)
 
@@ -103,9 +103,9 @@ def test_pendulum_frequency_from_gravity_preload(preload):
                         direction=(0.0, -1.0, 0.0), ps="345")
     # the pin is locked for the static preload (as MACE's gimbals are) and released for the modes
     bulk += ["CONM2,900,5,,2.0", "SPC1,1,123456,1", "SPC1,2,123,1"]
-    result = compute_modes(read_deck_text(_hanging_spec_deck(bulk, static_spc=1, modal_spc=2)), structure="1g",
+    result = compute_modes(read_deck_text(_hanging_spec_deck(bulk, static_spc=1, modal_spc=2)), configuration="1g",
                            preload=preload, spec=EMPTY_SPEC, max_hz=50.0)
-    assert result.modes.frequencies_hz[0] == pytest.approx(math.sqrt(9.81 / length) / (2 * math.pi), rel=1e-2)
+    assert result.frequencies_hz[0] == pytest.approx(math.sqrt(9.81 / length) / (2 * math.pi), rel=1e-2)
 
 
 def test_euler_column_buckling_load_from_geometric_stiffness():

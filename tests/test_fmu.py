@@ -269,7 +269,7 @@ def test_physical_parameter_reanalysis_matches_the_fe_rebuild(built):
     fmu = initialised_slave(model, unzipped, {"E_lexan_center": 1.05 * e})
     ours = _frequencies(fmu, unzipped)
     fmu.freeInstance()
-    rebuilt = compute_modes(structure=kind, overrides={("MAT1", 2): {"e": 1.05 * e}}).modes
+    rebuilt = compute_modes(configuration=kind, overrides={("MAT1", 2): {"e": 1.05 * e}}).modes
     ref, labels = rebuilt.frequencies_hz[:len(ours)], rebuilt.labels[:len(ours)]
     nominal = model.plant.frequencies_hz
     flexible = np.abs(ref) > 0.01
@@ -291,7 +291,7 @@ def test_reanalysed_modes_keep_their_index_through_a_frequency_crossing(motion_f
     fmu = initialised_slave(model, unzipped, {param.name: 2.0 * float(param.start)})
     ours = _frequencies(fmu, unzipped)
     fmu.freeInstance()
-    rebuilt = compute_modes(structure="0g", overrides={("MAT1", mid): {"e": 2.0 * float(param.start)}}).modes
+    rebuilt = compute_modes(configuration="0g", overrides={("MAT1", mid): {"e": 2.0 * float(param.start)}}).modes
     labels = list(model.plant.labels)
     y, z = labels.index("2nd Y bending"), labels.index("2nd Z bending")
     want = {k: rebuilt.frequencies_hz[list(rebuilt.labels).index(labels[k])] for k in (y, z)}

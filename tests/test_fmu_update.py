@@ -222,7 +222,7 @@ def test_cli_updates_an_fmu_parameter_and_writes_it_by_the_fmus_name(capsys, fmu
                                    "--workers", "1", "-o", str(tmp_path / "o"), "--hold-input", UNRECORDED])
     assert code in (0, 3), err  # 3: written, but the verdict is not converged (see convergence.toml)
     written = tomllib.loads((tmp_path / "o" / "parameters.toml").read_text())
-    assert written["provenance"]["structure"] == "1g" and written["provenance"]["fitted_to"] == fmu.name
+    assert written["provenance"]["configuration"] == "1g" and written["provenance"]["fitted_to"] == fmu.name
     values = written["values"]
     assert abs(values["E_lexan_center"] / table_4_4_moduli()["E_lexan_center"] - 1.0) < 0.002
     assert "E_lexan_center" in out and "% lower" in out

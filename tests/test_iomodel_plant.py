@@ -19,12 +19,12 @@ def inst():
 
 @pytest.fixture(scope="module")
 def m0():
-    return compute_modes(structure="0g")
+    return compute_modes(configuration="0g")
 
 
 @pytest.fixture(scope="module")
 def m1():
-    return compute_modes(structure="1g", preload="linear")
+    return compute_modes(configuration="1g", preload="linear")
 
 
 def test_nine_actuators_and_twenty_sensors_in_thesis_order(inst):
@@ -69,14 +69,14 @@ def test_actuators_are_internal_no_net_force_or_moment(inst, m0):
 
 
 def test_damping_by_label_and_violin_family(inst, m1):
-    z = modal_damping(m1.modes.labels, m1.modes.frequencies_hz, inst.damping)
-    by = dict(zip(m1.modes.labels, z))
+    z = modal_damping(m1.labels, m1.frequencies_hz, inst.damping)
+    by = dict(zip(m1.labels, z))
     assert by["1st Z bending"] == 0.022 and by["Z tilt (Z rotation)"] == 0.038 and by["4th Y bending"] == 0.070
-    first = sorted((f, zz) for f, lab, zz in zip(m1.modes.frequencies_hz, m1.modes.labels, z)
+    first = sorted((f, zz) for f, lab, zz in zip(m1.frequencies_hz, m1.labels, z)
                    if lab.startswith("1st") and "violin" in lab and "cable 2" not in lab)
     assert [zz for _, zz in first] == [0.033, 0.024, 0.022, 0.024]
     assert by["torsion, primary end"] == inst.damping.default
-    assert all(zz == 0.0 for f, zz in zip(m1.modes.frequencies_hz, z) if abs(f) < 0.01)
+    assert all(zz == 0.0 for f, zz in zip(m1.frequencies_hz, z) if abs(f) < 0.01)
 
 
 @pytest.mark.parametrize("key", ["0g_large", "1g_large", "1g_linear"])
@@ -88,24 +88,24 @@ def test_unique_labels_leave_every_damping_ratio_as_it_was(inst, key):
 
     before = json.loads((Path(__file__).parent / "data" / "modal_damping_before_unique_labels.json").read_text())
     ref = before["models"][key]
-    structure, preload = key.split("_")
-    sm = compute_modes(structure=structure, preload=preload, max_hz=250.0)
+    configuration, preload = key.split("_")
+    sm = compute_modes(configuration=configuration, preload=preload, max_hz=250.0)
     # zero-frequency modes (rigid bodies, mechanisms) are rounding noise below 0.01 Hz, which moves
     # with the BLAS thread count: they must stay below it; the others within 2e-6 Hz
-    f, f_ref = sm.modes.frequencies_hz, np.array(ref["frequencies_hz"])
+    f, f_ref = sm.frequencies_hz, np.array(ref["frequencies_hz"])
     zero = np.abs(f_ref) < ZERO_HZ
     assert np.all(np.abs(f[zero]) < ZERO_HZ)
     np.testing.assert_allclose(f[~zero], f_ref[~zero], rtol=0, atol=2e-6)
-    z = modal_damping(sm.modes.labels, sm.modes.frequencies_hz, inst.damping)
+    z = modal_damping(sm.labels, sm.frequencies_hz, inst.damping)
     np.testing.assert_array_equal(z, ref["damping"])
-    assert len(set(sm.modes.labels)) == len(sm.modes.labels)
+    assert len(set(sm.labels)) == len(sm.labels)
     # only labels that used to repeat changed
-    changed = [(old, new) for old, new in zip(ref["labels"], sm.modes.labels) if old != new]
+    changed = [(old, new) for old, new in zip(ref["labels"], sm.labels) if old != new]
     assert changed and all(ref["labels"].count(old) > 1 for old, _ in changed)
 
 
 def test_1g_plant_keeps_80_modes_and_drops_the_wheel_angles(inst, m1):
-    z = modal_damping(m1.modes.labels, m1.modes.frequencies_hz, inst.damping)
+    z = modal_damping(m1.labels, m1.frequencies_hz, inst.damping)
     plant = modal_plant(m1.modes, inst, z, max_hz=250.0)
     assert len(plant.frequencies_hz) == 80  # thesis 3.3: 80 modes up to 250 Hz
     assert plant.system.nstates == 157  # 160 - 3 wheel angles (unobservable)
@@ -114,7 +114,7 @@ def test_1g_plant_keeps_80_modes_and_drops_the_wheel_angles(inst, m1):
 
 
 def test_0g_plant_drops_rigid_body_states_and_wheel_angles(inst, m0):
-    z = modal_damping(m0.modes.labels, m0.modes.frequencies_hz, inst.damping)
+    z = modal_damping(m0.labels, m0.frequencies_hz, inst.damping)
     plant = modal_plant(m0.modes, inst, z, max_hz=250.0)
     assert len(plant.frequencies_hz) == 35  # thesis 3.2
     # 22 flexible modes x 2 + 4 gimbal angles + 7 mechanism rates

@@ -19,12 +19,12 @@ def deck():
 
 @pytest.fixture(scope="module")
 def m0(deck):
-    return compute_modes(deck, structure="0g")
+    return compute_modes(deck, configuration="0g")
 
 
 @pytest.fixture(scope="module", params=["large", "linear"])
 def m1(request, deck):
-    return compute_modes(deck, structure="1g", preload=request.param, max_hz=60.0)
+    return compute_modes(deck, configuration="1g", preload=request.param, max_hz=60.0)
 
 
 def test_deck_counts_match_the_thesis_text(deck):
@@ -73,7 +73,7 @@ def test_0g_mass_properties_match_table_3_15(m0):
 
 
 def test_0g_has_13_zero_modes_rigid_gimbal_wheel(m0):
-    f, labels = m0.modes.frequencies_hz, m0.modes.labels
+    f, labels = m0.frequencies_hz, m0.labels
     zero = [lab for fr, lab in zip(f, labels) if abs(fr) < 0.01]
     assert len(zero) == 13
     assert sum(lab.startswith("rigid body") for lab in zero) == 6
@@ -93,7 +93,7 @@ def test_0g_flexible_modes_match_table_5_1_with_labels(m0):
 
 
 def test_1g_has_only_the_three_wheel_mechanisms_at_zero(m1):
-    f, labels = m1.modes.frequencies_hz, m1.modes.labels
+    f, labels = m1.frequencies_hz, m1.labels
     zero = [lab for fr, lab in zip(f, labels) if abs(fr) < 0.01]
     assert sorted(zero) == [f"mechanism: reaction wheel {i}" for i in (1, 2, 3)]
 
@@ -101,7 +101,7 @@ def test_1g_has_only_the_three_wheel_mechanisms_at_zero(m1):
 def test_1g_suspension_modes(m1):
     """Table 3.10: X/Z pendulum, Y twist and bounce near 0.23 Hz, Z tilt near 0.44 Hz (10 %)."""
     sus = thesis_data()["suspension_1g"]
-    by_label = dict(zip(m1.modes.labels, m1.modes.frequencies_hz))
+    by_label = dict(zip(m1.labels, m1.frequencies_hz))
     for name in ("X suspension pendulum (X translation)", "Z suspension pendulum (Z translation)",
                  "Y suspension twist (Y rotation)", "bounce (Y translation)"):
         assert by_label[name] == pytest.approx(sus["pendulum_twist_bounce_hz"], rel=0.10), name
@@ -112,7 +112,7 @@ def test_1g_violin_families(m1):
     """Table 4.7 FE column (servoed final model): 7.11-7.18, 12.93, 14.34, 21.58 Hz; within 2 %
     since the servos and the preload option move these unservoed modes by up to ~1.5 %."""
     sus = thesis_data()["suspension_1g"]
-    f, labels = m1.modes.frequencies_hz, m1.modes.labels
+    f, labels = m1.frequencies_hz, m1.labels
 
     def family(order, cable_filter):
         return sorted(fr for fr, lab in zip(f, labels)
@@ -137,14 +137,14 @@ def test_1g_structural_modes_match_table_5_1_paired_by_mac(m1, m0):
         assert abs(row.error_percent) < 1.5, row
 
 
-@pytest.mark.parametrize("structure", ["0g", "1g"])
-def test_every_label_is_unique_and_table_5_1_names_stay(deck, structure):
+@pytest.mark.parametrize("configuration", ["0g", "1g"])
+def test_every_label_is_unique_and_table_5_1_names_stay(deck, configuration):
     """Up to 250 Hz: no label repeats; each Table 5.1 name labels the lowest mode of its kind, and a repeat
     of it is the '2nd' (thesis: torsion modes at 10.3/12.4 Hz; ours also at 92.9/108.6 Hz in 0-g)."""
     from viewer import mode_index
 
-    sm = compute_modes(deck, structure=structure, max_hz=250.0)
-    labels, hz = list(sm.modes.labels), sm.modes.frequencies_hz
+    sm = compute_modes(deck, configuration=configuration, max_hz=250.0)
+    labels, hz = list(sm.labels), sm.frequencies_hz
     assert len(set(labels)) == len(labels)
     for row in thesis_data()["table_5_1"]:
         assert row["label"] in labels
@@ -162,17 +162,17 @@ def test_violin_pairs_say_whether_the_two_cables_swing_together(m1):
     """Cables 1 and 3 hang in the X-Y plane: the in-plane (X) deflections of their mid-span grids have
     the same sign in an 'in-phase' mode and opposite signs in an 'antiphase' one."""
     spec, model = m1.structure.spec, m1.model
-    pairs = [i for i, lab in enumerate(m1.modes.labels) if "cables 1 and 3" in lab and "violin" in lab]
-    assert {m1.modes.labels[i].split(" violin")[0].split()[-1] for i in pairs} >= {"in-phase", "antiphase"}
+    pairs = [i for i, lab in enumerate(m1.labels) if "cables 1 and 3" in lab and "violin" in lab]
+    assert {m1.labels[i].split(" violin")[0].split()[-1] for i in pairs} >= {"in-phase", "antiphase"}
     for i in pairs:
         mids = []
         for cable in ("cable_1", "cable_3"):
             grids = sorted((g for g in spec.components[cable] if g in model.dofs.grid_ids),
                            key=lambda g: model.positions[model.dofs.grid_index(g)][1])
-            component = 0 if "in-plane" in m1.modes.labels[i] else 2  # X in the cables' plane, Z normal to it
+            component = 0 if "in-plane" in m1.labels[i] else 2  # X in the cables' plane, Z normal to it
             mids.append(m1.modes.shapes[model.dofs.indices(grids[len(grids) // 2])[component], i])
         together = mids[0] * mids[1] > 0
-        assert ("in-phase" in m1.modes.labels[i]) == together, (m1.modes.labels[i], mids)
+        assert ("in-phase" in m1.labels[i]) == together, (m1.labels[i], mids)
 
 
 def test_unique_labels_number_repeats_in_frequency_order():

@@ -107,7 +107,7 @@ def test_the_parameter_set_says_where_it_comes_from(run):
     out, summary = run
     params = ParameterSet.read(out / "parameters.toml")
     prov = params.provenance
-    assert prov.structure == "1g" and "Table 4.7" in prov.data and prov.cost.startswith("modal")
+    assert prov.configuration == "1g" and "Table 4.7" in prov.data and prov.cost.startswith("modal")
     assert prov.final_cost == pytest.approx(summary["final_cost"], rel=1e-12)
     for name, value in summary["parameters"]["updated"].items():
         if not name.startswith("damping:"):  # a damping ratio may be keyed by its mode's fresh label

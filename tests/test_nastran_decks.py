@@ -69,10 +69,10 @@ def check_against_nastran(ours: np.ndarray, nastran: np.ndarray) -> float:
 @pytest.mark.parametrize("folder", sorted(DECKS))
 def test_published_deck_gives_nastrans_frequencies(folder):
     name, asked = DECKS[folder]
-    result = compute_modes(read_deck(DATA / folder / name), structure="0g")
+    result = compute_modes(read_deck(DATA / folder / name), configuration="0g")
     nastran = reference(folder)[:asked]
     assert len(result.modes) == asked  # the deck's EIGRL/EIGR decides how many
-    check_against_nastran(result.modes.frequencies_hz, nastran)
+    check_against_nastran(result.frequencies_hz, nastran)
 
 
 def test_the_decks_are_pynastrans_files_unedited():
@@ -92,8 +92,8 @@ def test_the_decks_are_pynastrans_files_unedited():
 
 def test_pt145_every_root_nastran_prints():
     """EIGR GIV finds every root: NASTRAN prints all 30 (vectors for the ND = 6 lowest); all 30 match."""
-    result = compute_modes(read_deck(DATA / "pt145" / "pt145.bdf"), structure="0g", max_hz=1e6)
-    check_against_nastran(result.modes.frequencies_hz, reference("pt145"))
+    result = compute_modes(read_deck(DATA / "pt145" / "pt145.bdf"), configuration="0g", max_hz=1e6)
+    check_against_nastran(result.frequencies_hz, reference("pt145"))
 
 
 def test_coupled_cbar_mass_has_no_torsional_inertia(monkeypatch):
@@ -104,17 +104,17 @@ def test_coupled_cbar_mass_has_no_torsional_inertia(monkeypatch):
     from mace_fmu.fe.beam import local_mass
 
     deck = read_deck(DATA / "pt145" / "pt145.bdf")
-    assert compute_modes(deck, structure="0g").modes.frequencies_hz[1] == pytest.approx(reference("pt145")[1],
+    assert compute_modes(deck, configuration="0g").modes.frequencies_hz[1] == pytest.approx(reference("pt145")[1],
                                                                                          rel=RELATIVE)
     monkeypatch.setattr(assembly, "bar_mass", lambda sec, length, kind, deck: local_mass(sec, length, kind))
-    with_torsion = compute_modes(deck, structure="0g").modes.frequencies_hz[1]
+    with_torsion = compute_modes(deck, configuration="0g").modes.frequencies_hz[1]
     assert abs(with_torsion / reference("pt145")[1] - 1.0) > 2 * RELATIVE
 
 
 def test_cbeam_lumped_mass_carries_the_torsional_inertia_nastran_reports():
     """beam_modes: NASTRAN's grid point weight generator (in its .f06) gives Ixx = 3.765757E-03 about the
     beam's axis: the CONM2's 2.59E-03 plus rho (I1 + I2) L of the one CBEAM; the CBARs add none."""
-    result = compute_modes(read_deck(DATA / "beam_modes" / "beam_modes.dat"), structure="0g")
+    result = compute_modes(read_deck(DATA / "beam_modes" / "beam_modes.dat"), configuration="0g")
     assert result.mass_properties.mass_kg == pytest.approx(2.610514e-02, rel=1e-6)
     assert result.mass_properties.inertia_about_reference_kgm2[0, 0] == pytest.approx(3.765757e-03, rel=1e-6)
 
@@ -191,7 +191,7 @@ def test_undefined_property_and_rigid_cycle_are_named():
     deck = read_deck_text(BASE.format(card="RBAR,5,1,2,123456\nRBAR,6,2,1,123456\nCONM2,9,1,,1.0"), name="x.bdf")
     with pytest.raises(MaceError, match=r"x.bdf:10: RBAR 6: dependent DOF 1-1 is already dependent in RBAR 5|"
                                         r"depends on itself"):
-        compute_modes(deck, structure="0g")
+        compute_modes(deck, configuration="0g")
 
 
 # ----------------------------------------------------------------------------------------------
@@ -200,7 +200,7 @@ def test_undefined_property_and_rigid_cycle_are_named():
 def _modes(tmp_path, bulk: list[str], name: str, case: str = "SPC = 7\n") -> np.ndarray:
     path = tmp_path / f"{name}.bdf"
     path.write_text(f"SOL 103\nCEND\n{case}METHOD = 1\nBEGIN BULK\nEIGRL,1,,,6\n" + "\n".join(bulk) + "\nENDDATA\n")
-    return compute_modes(read_deck(path), structure="0g").modes.frequencies_hz
+    return compute_modes(read_deck(path), configuration="0g").modes.frequencies_hz
 
 
 def _cantilever(ps: str = "345", grdset: str | None = None) -> list[str]:
@@ -263,7 +263,7 @@ def test_offt_b_reads_the_orientation_vector_in_basic(tmp_path):
         cards += [f"CBAR,{k + 1},1,{k + 1},{k + 2},{v},{offt}" for k in range(8)]
         path = tmp_path / "offt.bdf"
         path.write_text("SOL 103\nCEND\nSPC = 7\nMETHOD = 1\nBEGIN BULK\n" + "\n".join(cards) + "\nENDDATA\n")
-        modes = compute_modes(read_deck(path), structure="0g").modes
+        modes = compute_modes(read_deck(path), configuration="0g").modes
         return np.abs([modes.shape(9, c)[0] for c in (1, 2, 3)])
 
     for v, offt in (("0.,1.,0.", "BGG"), ("0.,0.,-1.", "GGG"), ("0.,0.,-1.", "")):
@@ -300,10 +300,10 @@ def test_a_gravity_preload_with_beams_or_rods_is_refused_not_solved_without_them
     path.write_text("SOL 103\nCEND\nSUBCASE 1\n  SPC = 7\n  LOAD = 5\nSUBCASE 2\n  SPC = 7\n  METHOD = 1\n"
                     "BEGIN BULK\nEIGRL,1,,,4\n" + "\n".join(cards) + "\nENDDATA\n")
     deck = read_deck(path)
-    assert len(compute_modes(deck, structure="0g").modes) == 4
+    assert len(compute_modes(deck, configuration="0g").modes) == 4
     with pytest.raises(MaceError, match=r"1-g gravity preload models CBAR and CELAS2 elements only, and this deck "
                                         r"has 1 CBEAM \(first .*g.bdf:\d+\)"):
-        compute_modes(deck, structure="1g")
+        compute_modes(deck, configuration="1g")
 
 
 @pytest.mark.parametrize("rigid", ["RBE2,40,9,123456,30", "RBAR,40,9,30,123456", "RBAR,40,30,9,,123456"])
@@ -323,10 +323,10 @@ def test_a_mass_on_a_rigid_element_is_the_offset_mass(tmp_path, rigid):
 if __name__ == "__main__":  # python tests/test_nastran_decks.py: the worst relative error of each deck
     worst = {}
     for folder, (name, asked) in sorted(DECKS.items()):
-        ours = compute_modes(read_deck(DATA / folder / name), structure="0g").modes.frequencies_hz
+        ours = compute_modes(read_deck(DATA / folder / name), configuration="0g").modes.frequencies_hz
         worst[folder] = check_against_nastran(ours, reference(folder)[:asked])
-    every_root = compute_modes(read_deck(DATA / "pt145" / "pt145.bdf"), structure="0g", max_hz=1e6)
-    worst["pt145, all 30 roots"] = check_against_nastran(every_root.modes.frequencies_hz, reference("pt145"))
+    every_root = compute_modes(read_deck(DATA / "pt145" / "pt145.bdf"), configuration="0g", max_hz=1e6)
+    worst["pt145, all 30 roots"] = check_against_nastran(every_root.frequencies_hz, reference("pt145"))
     for folder, error in worst.items():
         print(f"{folder:20s} worst relative error of the elastic modes {error:.2g}")
     print(f"{'all':20s} {max(worst.values()):.2g}")

@@ -66,15 +66,15 @@ def test_a_beam_numbered_like_mace_suspension_keeps_its_tip_mass(beam, tmp_path)
     renumbered = tmp_path / "renumbered.bdf"
     renumbered.write_text(beam_deck(first_grid=1001, mass_id=9022))
     for kind in ("0g",):
-        ours = compute_modes(read_deck(beam), structure=kind)
-        other = compute_modes(read_deck(renumbered), structure=kind)
+        ours = compute_modes(read_deck(beam), configuration=kind)
+        other = compute_modes(read_deck(renumbered), configuration=kind)
         assert ours.structure.file is None and len(ours.structure.deck.conm2s) == 1
         assert len(ours.structure.deck.bars) == N
-        np.testing.assert_allclose(ours.modes.frequencies_hz, other.modes.frequencies_hz, rtol=1e-12)
-    bending = [f for f, lab in zip(ours.modes.frequencies_hz, ours.modes.labels) if "bending" in lab]
+        np.testing.assert_allclose(ours.frequencies_hz, other.frequencies_hz, rtol=1e-12)
+    bending = [f for f, lab in zip(ours.frequencies_hz, ours.labels) if "bending" in lab]
     # NASTRAN's lumped bar mass converges from below as (n pi / N)^2: 0.3 % covers the 2nd mode at 20 bars
     np.testing.assert_allclose(bending[:2], tip_mass_cantilever_hz(2), rtol=3e-3)
-    assert ours.modes.labels[:2] == ("1st bending about Z", "2nd bending about Z")
+    assert ours.labels[:2] == ("1st bending about Z", "2nd bending about Z")
 
 
 def test_cli_modes_of_another_deck_say_there_is_no_structure_file(beam, capsys):
@@ -86,13 +86,13 @@ def test_cli_modes_of_another_deck_say_there_is_no_structure_file(beam, capsys):
 def test_eigrl_count_decides_when_no_range_is_given(tmp_path):
     """EIGRL ND = 4 with V1, V2 blank: the four lowest modes, wherever they are (here all above 250 Hz,
     where the 250 Hz default gave none and exited 0)."""
-    short = compute_modes(read_deck(_write(tmp_path / "short.bdf", beam_deck(length=L / 12))), structure="0g")
-    assert len(short.modes) == 4 and short.modes.frequencies_hz[0] > 250.0
+    short = compute_modes(read_deck(_write(tmp_path / "short.bdf", beam_deck(length=L / 12))), configuration="0g")
+    assert len(short.modes) == 4 and short.frequencies_hz[0] > 250.0
     # the same beam 12x longer (tip mass in proportion): bending frequencies 1/144 of these, exactly
-    long = compute_modes(read_deck(_write(tmp_path / "long.bdf", beam_deck())), structure="0g")
+    long = compute_modes(read_deck(_write(tmp_path / "long.bdf", beam_deck())), configuration="0g")
 
     def bending(result):
-        return np.array([f for f, lab in zip(result.modes.frequencies_hz, result.modes.labels) if "bending" in lab])
+        return np.array([f for f, lab in zip(result.frequencies_hz, result.labels) if "bending" in lab])
 
     np.testing.assert_allclose(bending(short)[:2] / 144.0, bending(long)[:2], rtol=1e-9)
 
@@ -119,14 +119,14 @@ def test_a_structure_file_that_names_ids_the_deck_lacks_is_refused(beam, tmp_pat
     spec = tmp_path / "beam.toml"
     spec.write_text('[components]\nbeam = ["1-21"]\ntip = [99]\n')
     with pytest.raises(MaceError, match=r"beam.toml: names IDs that .*beam.bdf lacks: \[components\] tip: grids 99"):
-        compute_modes(read_deck(beam), structure="0g", structure_file=spec)
+        compute_modes(read_deck(beam), configuration="0g", structure_file=spec)
 
 
 def test_a_structure_file_with_an_unknown_table_names_file_and_line(beam, tmp_path):
     spec = tmp_path / "beam.toml"
     spec.write_text('# a comment\n[components]\nbeam = ["1-21"]\n\n[sensor]\nname = "tip"\n')
     with pytest.raises(MaceError, match=r"beam.toml:5: \[sensor\]: unknown table 'sensor'; a structure file has"):
-        compute_modes(read_deck(beam), structure="0g", structure_file=spec)
+        compute_modes(read_deck(beam), configuration="0g", structure_file=spec)
 
 
 def test_the_bundled_structure_file_applies_to_a_copy_of_the_bundled_deck(tmp_path):
@@ -134,10 +134,10 @@ def test_the_bundled_structure_file_applies_to_a_copy_of_the_bundled_deck(tmp_pa
 
     copy = tmp_path / "copy.bdf"
     copy.write_bytes(bundled_deck_path().read_bytes())
-    assert compute_modes(read_deck(copy), structure="0g").structure.file is not None
+    assert compute_modes(read_deck(copy), configuration="0g").structure.file is not None
     edited = tmp_path / "edited.bdf"
     edited.write_text(bundled_deck_path().read_text() + "$ a comment\n")
-    result = compute_modes(read_deck(edited), structure="0g", max_hz=3.5)
+    result = compute_modes(read_deck(edited), configuration="0g", max_hz=3.5)
     assert result.structure.file is None and 22 in result.structure.deck.conm2s  # nothing removed
 
 
@@ -146,10 +146,10 @@ def test_a_grid_attached_to_nothing_is_constrained_automatically_and_reported(tm
     beam's frequencies are those without it. With PARAM,AUTOSPC,NO the grid is named in the error."""
     text = beam_deck().replace("ENDDATA", "GRID,99,,5.0,5.0,5.0\nENDDATA")
     free = _write(tmp_path / "free.bdf", text)
-    with_free = compute_modes(read_deck(free), structure="0g")
-    without = compute_modes(read_deck(_write(tmp_path / "beam.bdf", beam_deck())), structure="0g")
+    with_free = compute_modes(read_deck(free), configuration="0g")
+    without = compute_modes(read_deck(_write(tmp_path / "beam.bdf", beam_deck())), configuration="0g")
     assert with_free.auto_constrained == tuple((99, c) for c in range(1, 7))
-    np.testing.assert_allclose(with_free.modes.frequencies_hz, without.modes.frequencies_hz, rtol=1e-10)
+    np.testing.assert_allclose(with_free.frequencies_hz, without.frequencies_hz, rtol=1e-10)
     assert main(["modes", "0g", "--deck", str(free)]) == 0
     assert "AUTOSPC: constrained 6 DOFs with neither stiffness nor mass: grid 99 (1-6)" in capsys.readouterr().out
     strict = _write(tmp_path / "strict.bdf", text.replace("ENDDATA", "PARAM,AUTOSPC,NO\nENDDATA"))
@@ -264,9 +264,9 @@ def test_include_files_nested_and_relative_read_as_one_deck(tmp_path):
     (tmp_path / "parts" / "more_grids.blk").write_text("\n".join(grids[5:]) + "\n")
     main_deck = _write(tmp_path / "main.bdf", head + "BEGIN BULK\n" + "\n".join(rest)
                        + "\nINCLUDE 'parts/grids.blk'\nUSET,U2,1,123\nENDDATA\n")
-    one = compute_modes(read_deck(_write(tmp_path / "one.bdf", whole)), structure="0g")
-    split = compute_modes(read_deck(main_deck), structure="0g")
-    np.testing.assert_allclose(split.modes.frequencies_hz, one.modes.frequencies_hz, rtol=1e-14)
+    one = compute_modes(read_deck(_write(tmp_path / "one.bdf", whole)), configuration="0g")
+    split = compute_modes(read_deck(main_deck), configuration="0g")
+    np.testing.assert_allclose(split.frequencies_hz, one.frequencies_hz, rtol=1e-14)
     assert split.structure.deck.skipped == (("USET", 1, f"{main_deck}:{len((head + 'BEGIN BULK').splitlines()) + len(rest) + 2}"),)
     (tmp_path / "parts" / "more_grids.blk").write_text("\n".join(grids[5:]) + "\nGRID,abc\n")
     with pytest.raises(Exception, match=r"more_grids.blk:\d+: GRID"):
@@ -297,10 +297,10 @@ def test_every_card_we_cannot_model_is_listed_at_once(tmp_path, capsys):
 
 def test_spc_cards_fix_dofs_like_spc1(tmp_path):
     """SPC (grid, components, 0.0 pairs) fixes the same DOFs as SPC1; an enforced displacement is refused."""
-    one = compute_modes(read_deck(_write(tmp_path / "spc1.bdf", beam_deck())), structure="0g")
+    one = compute_modes(read_deck(_write(tmp_path / "spc1.bdf", beam_deck())), configuration="0g")
     spc = beam_deck().replace("SPC1,7,123456,1", "SPC,7,1,123,0.0,1,456")
-    two = compute_modes(read_deck(_write(tmp_path / "spc.bdf", spc)), structure="0g")
-    np.testing.assert_allclose(two.modes.frequencies_hz, one.modes.frequencies_hz, rtol=1e-14)
+    two = compute_modes(read_deck(_write(tmp_path / "spc.bdf", spc)), configuration="0g")
+    np.testing.assert_allclose(two.frequencies_hz, one.frequencies_hz, rtol=1e-14)
     with pytest.raises(Exception, match="enforced displacement is not supported"):
         read_deck(_write(tmp_path / "bad.bdf", beam_deck().replace("SPC1,7,123456,1", "SPC,7,1,123456,0.01")))
 
@@ -311,11 +311,11 @@ def test_param_wtmass_scales_every_mass(tmp_path):
     w = 1.0 / 386.1
     text = beam_deck().replace(f"{r(RHO)}", f"{r(RHO / w)}").replace(f"{r(TIP_MASS)}", f"{r(TIP_MASS / w)}")
     text = text.replace("ENDDATA", f"PARAM,WTMASS,{r(w)}\nENDDATA")
-    weighted = compute_modes(read_deck(_write(tmp_path / "weight.bdf", text)), structure="0g")
-    plain = compute_modes(read_deck(_write(tmp_path / "mass.bdf", beam_deck())), structure="0g")
+    weighted = compute_modes(read_deck(_write(tmp_path / "weight.bdf", text)), configuration="0g")
+    plain = compute_modes(read_deck(_write(tmp_path / "mass.bdf", beam_deck())), configuration="0g")
     # the decks print 11 significant digits: 1e-9 is their rounding, not the method's
     assert weighted.mass_properties.mass_kg == pytest.approx(plain.mass_properties.mass_kg, rel=1e-9)
-    np.testing.assert_allclose(weighted.modes.frequencies_hz, plain.modes.frequencies_hz, rtol=1e-9)
+    np.testing.assert_allclose(weighted.frequencies_hz, plain.frequencies_hz, rtol=1e-9)
 
 
 def test_a_butterworth_filter_from_the_structure_file_filters_exactly_its_sensors(tmp_path):
@@ -429,12 +429,12 @@ def test_the_0g_structure_drops_suspension_elements_of_every_kind(tmp_path):
     """A suspension made of a CROD and a CMASS2 to a grid of its own (not CBAR/CONM2/CELAS2, MACE's kinds):
     its 0-g structure is the beam without them (the same modes to 1e-12), and a structure file that leaves
     one of them out is refused, naming the card and its line."""
-    plain = compute_modes(read_deck(_write(tmp_path / "plain.bdf", beam_deck())), structure="0g")
+    plain = compute_modes(read_deck(_write(tmp_path / "plain.bdf", beam_deck())), configuration="0g")
     extra = ("GRID,99,,2.0,1.0,0.0,,123456\nCROD,201,7,99,21\nPROD,7,1,1.0e-6\nCMASS2,202,0.5,99,1\n")
     hung = _write(tmp_path / "hung.bdf", beam_deck().replace("ENDDATA", extra + "ENDDATA"))
     spec = _write(tmp_path / "hung.toml", '[suspension]\ngrids = [99]\nelements = [201, 202]\n')
-    free = compute_modes(read_deck(hung), structure="0g", structure_file=spec)
-    np.testing.assert_allclose(free.modes.frequencies_hz, plain.modes.frequencies_hz, rtol=1e-12)
+    free = compute_modes(read_deck(hung), configuration="0g", structure_file=spec)
+    np.testing.assert_allclose(free.frequencies_hz, plain.frequencies_hz, rtol=1e-12)
     missing = _write(tmp_path / "missing.toml", '[suspension]\ngrids = [99]\nelements = [202]\n')
     with pytest.raises(MaceError, match=r"CROD 201.*connects suspension grid\(s\) \[99\] but is not listed"):
-        compute_modes(read_deck(hung), structure="0g", structure_file=missing)
+        compute_modes(read_deck(hung), configuration="0g", structure_file=missing)

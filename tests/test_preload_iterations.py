@@ -14,7 +14,7 @@ from mace_fmu.fe.preload import large_displacement_preload
 
 
 def test_mace_preload_ends_where_full_newton_ends_with_a_fifth_of_the_tangents():
-    modes = compute_modes(structure="1g")
+    modes = compute_modes(configuration="1g")
     pre = modes.preload
     assert pre.increments == 20  # NLPARM NINC of the bundled deck
     assert pre.full_tangents <= 5, pre.full_tangents  # one a Newton iteration would be 27 (2026-11-24)

@@ -84,3 +84,37 @@ def test_no_public_name_is_shadowed_by_a_module_of_its_package():
         package = importlib.import_module(name)
         modules = {m.name for m in pkgutil.iter_modules(package.__path__)}
         assert not modules & set(package.__all__), name
+
+
+def test_the_renamed_configuration_keyword_still_works_with_a_warning_that_names_both():
+    """``structure="0g"`` was the earlier name of ``configuration="0g"``: the same modes, and a
+    DeprecationWarning at the caller's line; both names at once are refused."""
+    import warnings
+
+    import numpy as np
+    import pytest
+
+    from mace_fmu import compute_modes
+
+    new = compute_modes(configuration="0g", max_hz=3.5)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        old = compute_modes(structure="0g", max_hz=3.5)
+    assert old.structure.configuration == "0g"
+    np.testing.assert_array_equal(old.frequencies_hz, new.frequencies_hz)
+    assert old.labels == new.labels and old.labels == new.modes.labels
+    [warning] = [w for w in caught if issubclass(w.category, DeprecationWarning)]
+    assert warning.filename == __file__
+    assert "compute_modes(structure=...) is now compute_modes(configuration=...)" in str(warning.message)
+    with pytest.raises(TypeError, match="give configuration= only"):
+        compute_modes(structure="0g", configuration="0g")
+
+
+def test_a_parameter_set_written_with_the_earlier_provenance_key_reads_as_configuration():
+    from mace_fmu.parameters import ParameterSet
+
+    head = '[provenance]\ncreated = "2026-11-24T00:00:00+00:00"\ntool = "mace-fmu"\n'
+    earlier = ParameterSet.from_toml(head + 'structure = "0g"\n\n[values]\nE_lexan_center = 2.4e9\n')
+    now = ParameterSet.from_toml(earlier.to_toml())
+    assert earlier.provenance.configuration == now.provenance.configuration == "0g"
+    assert 'configuration = "0g"' in earlier.to_toml() and "structure" not in earlier.to_toml()

@@ -45,8 +45,8 @@ def test_compute_modes_reports_progress_only_to_its_callback_and_the_log(capfd, 
 
     steps: list[Step] = []
     with caplog.at_level(logging.DEBUG, logger="mace_fmu"):
-        compute_modes(structure="1g", max_hz=3.0, progress=steps.append)
-        compute_modes(structure="1g", max_hz=3.0)
+        compute_modes(configuration="1g", max_hz=3.0, progress=steps.append)
+        compute_modes(configuration="1g", max_hz=3.0)
     assert capfd.readouterr() == ("", "")
     assert [(s.task, s.done, s.total) for s in steps] == [("gravity preload", k, 20) for k in range(1, 21)]
     assert "work ratio" in steps[-1].detail

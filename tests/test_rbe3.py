@@ -40,8 +40,8 @@ def _platform(rbe3: str) -> str:
 def test_a_mass_on_an_rbe3_over_four_springs_bounces_and_tilts_as_the_closed_form(tmp_path):
     path = tmp_path / "platform.bdf"
     path.write_text(_platform("RBE3,40,,10,123456,1.0,123,1,2,\n,3,4"))
-    modes = compute_modes(read_deck(path), structure="0g")
-    f = np.sort(modes.modes.frequencies_hz)
+    modes = compute_modes(read_deck(path), configuration="0g")
+    f = np.sort(modes.frequencies_hz)
     expected = np.sort([math.sqrt(4 * K / M), math.sqrt(4 * K * A**2 / IXX), math.sqrt(4 * K * A**2 / IYY)])
     np.testing.assert_allclose(f[:3], expected / (2 * math.pi), rtol=1e-10)
 
@@ -91,4 +91,4 @@ def test_grids_on_one_line_cannot_fix_the_reference_and_are_refused(tmp_path):
     path = tmp_path / "line.bdf"
     path.write_text(_platform("RBE3,40,,10,123456,1.0,123,1,3"))  # two opposite corners: a line
     with pytest.raises(MaceError, match="RBE3 40: its independent grids and components do not fix the reference"):
-        compute_modes(read_deck(path), structure="0g")
+        compute_modes(read_deck(path), configuration="0g")

@@ -36,7 +36,7 @@ SET = {"E_lexan_end": 2.9e9, "damping:1st Z bending": 0.031, "frequency_scale:1s
 
 def test_ssv_round_trip_is_lossless_and_schema_valid():
     values = {**SET, "k_suspension_device_1": 1234.5678901234567, "damping:2nd Y bending": 1 / 3}
-    prov = Provenance(created="2026-11-24T10:00:00+00:00", tool="mace-fmu test", structure="0g",
+    prov = Provenance(created="2026-11-24T10:00:00+00:00", tool="mace-fmu test", configuration="0g",
                       final_cost=0.1 + 0.2, initial_cost=math.pi, notes="a \"quoted\" <note> & more")
     bounds = (FrequencyBound(mode=7, mode_label="1st Z bending", bound_percent=1.1),
               FrequencyBound(mode=9, mode_label="2nd Y bending", bound_percent=100 / 7))
@@ -49,7 +49,7 @@ def test_ssv_round_trip_is_lossless_and_schema_valid():
 
 
 def test_ssv_cli_round_trip_through_toml(tmp_path):
-    ParameterSet(SET, Provenance(created="2026-11-24T10:00:00+00:00", tool="t", structure="0g")).write(tmp_path / "p.toml")
+    ParameterSet(SET, Provenance(created="2026-11-24T10:00:00+00:00", tool="t", configuration="0g")).write(tmp_path / "p.toml")
     (tmp_path / "b.toml").write_text('[[mode]]\nmode = 7\nmode_label = "1st Z bending"\nbound_percent = 1.1\n\n'
                                      '[[mode]]\nlabel = "servo"\n')
     assert main(["params", "to-ssv", str(tmp_path / "p.toml"), "--frequency-bounds", str(tmp_path / "b.toml"),

@@ -32,7 +32,7 @@ TRUTH = {"k_1": 0.75, "k_2": 1.2, "damping:mode 1": 0.004, "damping:mode 2": 0.0
 # --- parameter sets ---------------------------------------------------------------------------
 def test_parameter_set_round_trips_through_toml(tmp_path):
     prov = Provenance(created="2026-11-23T10:00:00+00:00", tool="mace-fmu test", deck="mace_em.bdf",
-                      deck_sha256=deck_fingerprint(bundled_deck_path()), structure="1g", data="Table 4.7",
+                      deck_sha256=deck_fingerprint(bundled_deck_path()), configuration="1g", data="Table 4.7",
                       cost="modal", initial_cost=0.0223, final_cost=0.0145, notes='quote " and\nnewline')
     values = {"E_lexan_center": 2.335e9, "k_suspension_device_1": 17.04, "delay_gimbal_primary_x": 4.56e-3,
               "K_a": -2.0, "damping:1st Z bending": 0.022}
@@ -72,16 +72,16 @@ def test_a_parameter_set_made_for_another_deck_is_refused(tmp_path):
     made_for_other = ParameterSet({"E_lexan_center": 2.4e9}, Provenance(created="now", tool="t", deck="other.bdf",
                                                                          deck_sha256=deck_fingerprint(other)))
     with pytest.raises(MaceError, match="made for deck 'other.bdf'"):
-        compute_modes(structure="0g", parameters=made_for_other)
+        compute_modes(configuration="0g", parameters=made_for_other)
 
 
 def test_moduli_in_a_parameter_set_are_deck_overrides():
     """E_ and k_ names resolve to MAT1 and CELAS2 cards through the data file's [parameters] table."""
     assert fe_overrides(ParameterSet({"E_lexan_center": 2.4e9, "k_suspension_device_2": 20.0})) == {
         ("MAT1", 2): {"e": 2.4e9}, ("CELAS2", 139): {"k": 20.0}}
-    a = compute_modes(structure="0g", parameters=ParameterSet({"E_lexan_center": 2.4e9}))
-    b = compute_modes(structure="0g", overrides={("MAT1", 2): {"e": 2.4e9}})
-    np.testing.assert_array_equal(a.modes.frequencies_hz, b.modes.frequencies_hz)
+    a = compute_modes(configuration="0g", parameters=ParameterSet({"E_lexan_center": 2.4e9}))
+    b = compute_modes(configuration="0g", overrides={("MAT1", 2): {"e": 2.4e9}})
+    np.testing.assert_array_equal(a.frequencies_hz, b.frequencies_hz)
     with pytest.raises(MaceError, match="no such material; known: E_lexan_end"):
         fe_overrides(ParameterSet({"E_unobtainium": 1e9}))
 

@@ -26,12 +26,12 @@ BUILD = Path(__file__).resolve().parents[1] / "build"
 
 @pytest.fixture(scope="module")
 def modes_0g():
-    return compute_modes(structure="0g", max_hz=60.0)
+    return compute_modes(configuration="0g", max_hz=60.0)
 
 
 @pytest.fixture(scope="module")
 def modes_1g():
-    return compute_modes(structure="1g", max_hz=20.0)
+    return compute_modes(configuration="1g", max_hz=20.0)
 
 
 def _decoded_commands(html: str) -> list[dict]:
@@ -438,7 +438,7 @@ def test_cli_view_response_exports_its_own_motion_fmu(tmp_path, capsys):
 
 @pytest.fixture(scope="module")
 def modes_1g_table():
-    return compute_modes(structure="1g", max_hz=60.0)  # Table 5.1 reaches 53 Hz in 1-g
+    return compute_modes(configuration="1g", max_hz=60.0)  # Table 5.1 reaches 53 Hz in 1-g
 
 
 @pytest.fixture(scope="module")

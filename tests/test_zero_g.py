@@ -337,13 +337,13 @@ def test_a_1g_parameter_set_from_an_update_is_carried_to_0g(run):
     start = ParameterSet({"E_lexan_center": 2.3e9, "damping:Y suspension twist (Y rotation)": 0.09,
                           "damping:1st Z bending": 0.02},
                          Provenance(created="2026-01-01T00:00:00+00:00", tool="test", deck=deck.name,
-                                    deck_sha256=deck_fingerprint(deck), structure="1g"))
+                                    deck_sha256=deck_fingerprint(deck), configuration="1g"))
     prediction = predict_zero_g(parameters=start)
     values = prediction.parameters.values
     assert values["E_lexan_center"] == 2.3e9 and "damping:Y suspension twist (Y rotation)" not in values
     assert {parameter_kind(n) for n in values} == {"modulus", "damping", "frequency_scale"}
     prov = prediction.parameters.provenance
-    assert (prov.structure, prov.deck_sha256) == ("0g", deck_fingerprint(deck))
+    assert (prov.configuration, prov.deck_sha256) == ("0g", deck_fingerprint(deck))
     default = {r["label"]: r for r in _rows(run)}
     first = next(r for r in prediction.rows if r.label == "1st Y bending")
     assert abs(first.unaltered_hz / default["1st Y bending"]["unaltered_hz"] - 1) > 1e-4  # the modulus acts in 0-g
@@ -356,12 +356,12 @@ def test_frequency_scales_of_a_0g_set_leave_a_1g_model_alone(run, nominal):
 
     nominal_set = ParameterSet.read(run[1] / "zero_g_nominal.toml")
     modes = nominal.structure_modes
-    assert scale_frequencies(modes, nominal_set, structure="1g") is modes
+    assert scale_frequencies(modes, nominal_set, configuration="1g") is modes
     label, factor = next((n.split(":", 1)[1], v) for n, v in nominal_set.values.items()
                          if n.startswith("frequency_scale:"))
-    scaled = scale_frequencies(modes, nominal_set, structure="0g")
-    k = modes.modes.labels.index(label)
-    assert scaled.modes.frequencies_hz[k] == modes.modes.frequencies_hz[k] * factor
-    others = np.array([n for n in range(len(modes.modes.labels))
-                       if f"frequency_scale:{modes.modes.labels[n]}" not in nominal_set])
-    assert np.array_equal(scaled.modes.frequencies_hz[others], modes.modes.frequencies_hz[others])
+    scaled = scale_frequencies(modes, nominal_set, configuration="0g")
+    k = modes.labels.index(label)
+    assert scaled.frequencies_hz[k] == modes.frequencies_hz[k] * factor
+    others = np.array([n for n in range(len(modes.labels))
+                       if f"frequency_scale:{modes.labels[n]}" not in nominal_set])
+    assert np.array_equal(scaled.frequencies_hz[others], modes.frequencies_hz[others])

@@ -27,8 +27,8 @@ class ModeAnimation(ShownInline):
 
 def mode_index(structure_modes: StructureModes, mode: int | str) -> int:
     """1-based index of a mode given by index or by label (exact, then unique prefix)."""
-    labels = structure_modes.modes.labels
-    count = structure_modes.modes.frequencies_hz.size
+    labels = structure_modes.labels
+    count = structure_modes.frequencies_hz.size
     if isinstance(mode, (int, np.integer)) or (isinstance(mode, str) and mode.isdigit()):
         index = int(mode)
         if not 1 <= index <= count:
@@ -81,8 +81,8 @@ def animate_modes(structure_modes: StructureModes, modes: Sequence[int | str], *
         sc = readable_scale(scene, shape, fraction_of_length) if scale is None else float(scale)
         scales.append(sc)
         blocks.append(np.sin(phase)[:, None, None] * (sc * shape)[None])
-        hz = structure_modes.modes.frequencies_hz[index - 1]
-        label = structure_modes.modes.labels[index - 1] if structure_modes.modes.labels else ""
+        hz = structure_modes.frequencies_hz[index - 1]
+        label = structure_modes.labels[index - 1] if structure_modes.labels else ""
         clips.append(Clip(title=f"mode {index}: {hz_text(hz, decimals=3)} Hz {label}".rstrip(),
                           start_s=k * per_mode / fps, end_s=(k + 1) * per_mode / fps, motion_scale=sc))
     blocks.append(np.zeros((1,) + blocks[0].shape[1:]))  # close the loop at rest

@@ -163,11 +163,11 @@ def viewer_pages() -> None:
 
     from mace_fmu.fe.modes import compute_modes
 
-    for structure, max_hz in (("0g", 12.0), ("1g", 12.0)):
-        modes = compute_modes(structure=structure, max_hz=max_hz)
-        flexible = [k + 1 for k, hz in enumerate(modes.modes.frequencies_hz) if hz > 1.5][:4]
-        write_animation_html(animate_modes(modes, flexible), DOCS / "_static" / "viewer" / f"modes_{structure}.html",
-                             title=f"MACE {structure} modes")
+    for configuration, max_hz in (("0g", 12.0), ("1g", 12.0)):
+        modes = compute_modes(configuration=configuration, max_hz=max_hz)
+        flexible = [k + 1 for k, hz in enumerate(modes.frequencies_hz) if hz > 1.5][:4]
+        write_animation_html(animate_modes(modes, flexible), DOCS / "_static" / "viewer" / f"modes_{configuration}.html",
+                             title=f"MACE {configuration} modes")
     viewer_still()
 
 

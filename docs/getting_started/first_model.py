@@ -5,6 +5,8 @@
 #     text_representation:
 #       extension: .py
 #       format_name: percent
+#       format_version: '1.3'
+#       jupytext_version: 1.19.6
 #   kernelspec:
 #     display_name: Python 3
 #     language: python
@@ -35,8 +37,8 @@ from mace_fmu.util.frequency import ZERO_HZ
 # bodies and mechanisms, whose computed frequencies are round-off, read 0 Hz):
 
 # %%
-modes = compute_modes(structure="0g", max_hz=10.0)
-for f, label in zip(modes.modes.frequencies_hz, modes.modes.labels):
+modes = compute_modes(configuration="0g", max_hz=10.0)
+for f, label in zip(modes.frequencies_hz, modes.labels):
     print(f"{f if abs(f) >= ZERO_HZ else 0.0:8.3f} Hz  {label}")
 
 # %% [markdown]

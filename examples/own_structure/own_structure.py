@@ -73,12 +73,12 @@ def main(out: Path) -> dict:
     deck = read_deck(DECK)
     summary: dict = {}
     for kind in ("1g", "0g"):
-        result = compute_modes(deck, structure=kind, structure_file=STRUCTURE)
+        result = compute_modes(deck, configuration=kind, structure_file=STRUCTURE)
         print(f"{kind} modes ({'on the test stand, gravity preload' if kind == '1g' else 'in orbit, free'}):")
-        for f, label in zip(result.modes.frequencies_hz, result.modes.labels):
+        for f, label in zip(result.frequencies_hz, result.labels):
             print(f"  {f:9.3f} Hz  {label}")
-        summary[f"modes_{kind}"] = [(float(f), label) for f, label in zip(result.modes.frequencies_hz,
-                                                                         result.modes.labels)]
+        summary[f"modes_{kind}"] = [(float(f), label) for f, label in zip(result.frequencies_hz,
+                                                                         result.labels)]
         if kind == "0g":
             animation = animate_modes(result, list(range(7, len(result.modes) + 1)))
             page = out / "spacecraft_0g_modes.html"

@@ -24,13 +24,13 @@ def cmd_build(args: argparse.Namespace) -> int:
         progress(f"parameter set {args.parameters} ({len(params)} values)")
     progress("0-g modes (suspension removed, linear)")
     # the modes the FMUs are built from: up to 250 Hz, the thesis's cut-off, whatever a deck's EIGRL says
-    m0 = compute_modes(deck, structure="0g", max_hz=DEFAULT_MAX_HZ, parameters=params,
+    m0 = compute_modes(deck, configuration="0g", max_hz=DEFAULT_MAX_HZ, parameters=params,
                        structure_file=args.structure_file)
     results = {}
     for kind in ("large", "linear"):
         progress(f"1-g modes ({kind} gravity preload)")
         with progress_bar() as bar:
-            results[kind] = compute_modes(deck, structure="1g", preload=kind, max_hz=DEFAULT_MAX_HZ, progress=bar,
+            results[kind] = compute_modes(deck, configuration="1g", preload=kind, max_hz=DEFAULT_MAX_HZ, progress=bar,
                                           parameters=params, structure_file=args.structure_file)
     print(thesis_tables(m0, results))
     print()
@@ -54,8 +54,8 @@ def main_job_text() -> str:
     what the documentation shows and its test compares."""
     from mace_fmu.fe.modes import DEFAULT_MAX_HZ
 
-    m0 = compute_modes(structure="0g", max_hz=DEFAULT_MAX_HZ)
-    results = {kind: compute_modes(structure="1g", preload=kind, max_hz=DEFAULT_MAX_HZ) for kind in ("large", "linear")}
+    m0 = compute_modes(configuration="0g", max_hz=DEFAULT_MAX_HZ)
+    results = {kind: compute_modes(configuration="1g", preload=kind, max_hz=DEFAULT_MAX_HZ) for kind in ("large", "linear")}
     return thesis_tables(m0, results) + "\n\n" + low_modes(results)
 
 

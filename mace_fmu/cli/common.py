@@ -101,13 +101,13 @@ def parameters(args: argparse.Namespace):
     if not path:
         return None
     parameters = ParameterSet.read(path)
-    prov, structure = parameters.provenance, getattr(args, "structure", None)
+    prov, structure = parameters.provenance, getattr(args, "configuration", None)
     # a fit to one structure's FMU absorbed that structure's errors: it is not carried to the other
     # (the engine's 1-g sets are, on purpose: predict-0g); the provenance says which kind a set is
-    if prov is not None and prov.fitted_to and prov.structure and structure in ("1g", "0g") \
-            and prov.structure != structure:
-        raise MaceError(f"{path}: fitted to the {prov.structure} FMU {prov.fitted_to}, not to the {structure} model; "
-                        f"refit it, or remove 'structure' from its [provenance] to use it anyway")
+    if prov is not None and prov.fitted_to and prov.configuration and structure in ("1g", "0g") \
+            and prov.configuration != structure:
+        raise MaceError(f"{path}: fitted to the {prov.configuration} FMU {prov.fitted_to}, not to the {structure} model; "
+                        f"refit it, or remove 'configuration' from its [provenance] to use it anyway")
     return parameters
 
 
@@ -127,7 +127,7 @@ def volts(args: argparse.Namespace, *, parameter_set=_FROM_ARGS, every_grid_move
     electronics = ModelledElectronics(servos=not args.no_servos, bessel=args.bessel, delays=not args.no_delays,
                                       pade_order=args.pade_order)
     grids = "all" if every_grid_moves else motion_grids(getattr(args, "motion_grids", None))
-    return volts_model(args.structure, max_hz=args.max_hz, preload=args.preload, deck=read_deck(args.deck),
+    return volts_model(args.configuration, max_hz=args.max_hz, preload=args.preload, deck=read_deck(args.deck),
                        parameters=parameters(args) if parameter_set is _FROM_ARGS else parameter_set,
                        structure_file=getattr(args, "structure_file", None),
                        electronics=electronics, signals=SignalSelection(motion_grids=grids))

@@ -30,14 +30,14 @@ def cmd_export(args: argparse.Namespace) -> int:
         from mace_fmu.cli.ssp import export_ssp
 
         return export_ssp(args)
-    progress(f"{args.structure} volts-volts model")
+    progress(f"{args.configuration} volts-volts model")
     model = volts(args)
     bounds = None
     if args.frequency_bounds:
         from mace_fmu.zero_g.table import read_frequency_bounds
 
         bounds = read_frequency_bounds(args.frequency_bounds, mode_labels=model.plant.labels)
-    name = fmu_name(args.structure, kind=args.kind, fmi_version=args.fmi_version,
+    name = fmu_name(args.configuration, kind=args.kind, fmi_version=args.fmi_version,
                     motion_grids=model.plant.motion_grids, all_grids=model.structure_modes.modes.dofs.grid_ids,
                     variant=model_variant(args), prefix=model_prefix(model))
     progress(f"{args.kind} FMU {name}.fmu")
@@ -51,7 +51,7 @@ def cmd_export(args: argparse.Namespace) -> int:
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("export", help="FMU of the 1-g or 0-g volts-volts model (native C runtime or pythonfmu)")
-    p.add_argument("structure", choices=["1g", "0g"])
+    p.add_argument("configuration", choices=["1g", "0g"])
     deck_option(p)
     p.add_argument("-o", "--out", default=".", help="output directory (writes e.g. MACE_1g_native.fmu; with "
                    "--motion-grids MACE_1g_native_motion.fmu; with --parameters P.toml MACE_1g_native_P.fmu, with "

@@ -20,7 +20,7 @@ def cmd_model(args: argparse.Namespace) -> int:
     sys_ = model.system
     poles = closed_loop_poles(model)
     if args.modelica:
-        write_text_atomic(args.modelica, model.diagram.to_modelica(f"MACE_{args.structure}_volts"))
+        write_text_atomic(args.modelica, model.diagram.to_modelica(f"MACE_{args.configuration}_volts"))
         print(f"wrote {args.modelica}", file=sys.stderr if args.json else sys.stdout)
     if args.npz:
         # np.savez appends .npz to a file name without it; a file object keeps the temporary name
@@ -29,19 +29,19 @@ def cmd_model(args: argparse.Namespace) -> int:
                      outputs=np.array(sys_.output_labels), states=np.array(sys_.state_labels))
         print(f"wrote {args.npz}", file=sys.stderr if args.json else sys.stdout)
     if args.json:
-        json.dump({"structure": args.structure, "states": sys_.nstates, "inputs": list(sys_.input_labels),
+        json.dump({"configuration": args.configuration, "states": sys_.nstates, "inputs": list(sys_.input_labels),
                    "outputs": list(sys_.output_labels),
                    "poles": [{"frequency_hz": p.frequency_hz, "damping": p.damping, "label": p.label} for p in poles]},
                   sys.stdout, indent=1)
         print()
         return 0
-    print(f"{args.structure} volts-volts model: {sys_.nstates} states, {sys_.ninputs} inputs, {sys_.noutputs} outputs "
+    print(f"{args.configuration} volts-volts model: {sys_.nstates} states, {sys_.ninputs} inputs, {sys_.noutputs} outputs "
           f"({model.electronics.describe()})")
     for state, reason in model.plant.removed_states:
         print(f"  removed: {state}: {reason}")
     if args.poles:
-        rows = table_4_7_comparison(poles) if args.structure == "1g" else table_5_2_comparison(poles, column="g0")
-        title = "Table 4.7, FE columns (closed loop)" if args.structure == "1g" else "Table 5.2, 0-g column (closed loop)"
+        rows = table_4_7_comparison(poles) if args.configuration == "1g" else table_5_2_comparison(poles, column="g0")
+        title = "Table 4.7, FE columns (closed loop)" if args.configuration == "1g" else "Table 5.2, 0-g column (closed loop)"
         print(format_pole_rows(rows, title=title))
         print()
         print(f"all closed-loop poles up to {args.list_max_hz} Hz")
@@ -53,7 +53,7 @@ def cmd_model(args: argparse.Namespace) -> int:
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("model", help="volts-volts state-space model of the 1-g or 0-g structure")
-    p.add_argument("structure", choices=["1g", "0g"])
+    p.add_argument("configuration", choices=["1g", "0g"])
     deck_option(p)
     p.add_argument("--poles", action="store_true", help="closed-loop poles next to Table 4.7 (1g) or 5.2 (0g)")
     p.add_argument("--list-max-hz", type=float, default=60.0, help="with --poles: list all poles up to this [Hz]")

@@ -17,7 +17,7 @@ from mace_fmu.util.frequency import ZERO_HZ, hz_text
 def _modes_json(result: StructureModes) -> dict:
     props = result.mass_properties
     return {
-        "structure": result.structure.configuration,
+        "configuration": result.structure.configuration,
         "deck": result.structure.deck.path,
         "structure_file": str(result.structure.file.path) if result.structure.file is not None else None,
         "auto_constrained": [[int(g), int(c)] for g, c in result.auto_constrained],
@@ -26,7 +26,7 @@ def _modes_json(result: StructureModes) -> dict:
         # a rigid-body or mechanism mode reads 0 Hz; its eigenvalue (round-off, either sign) is kept apart
         "modes": [{"index": i + 1, "frequency_hz": 0.0 if abs(f) < ZERO_HZ else float(f), "label": lab,
                    "eigenvalue_rad2_per_s2": float(np.sign(f) * (2 * np.pi * f) ** 2)}
-                  for i, (f, lab) in enumerate(zip(result.modes.frequencies_hz, result.modes.labels))],
+                  for i, (f, lab) in enumerate(zip(result.frequencies_hz, result.labels))],
         "mass_properties": {
             "mass_kg": props.mass_kg,
             "center_of_mass_m": [float(x) for x in props.center_of_mass_m],
@@ -51,7 +51,7 @@ def _print_modes(result: StructureModes) -> None:
         print(f"AUTOSPC: constrained {len(result.auto_constrained)} DOFs with neither stiffness nor mass: "
               f"{describe_dofs(result.auto_constrained)}")
     print(f"{'mode':>4s} {'frequency Hz':>13s}  label")
-    for i, (f, lab) in enumerate(zip(result.modes.frequencies_hz, result.modes.labels)):
+    for i, (f, lab) in enumerate(zip(result.frequencies_hz, result.labels)):
         print(f"{i + 1:4d} {hz_text(f, decimals=4):>13s}  {lab}")
     p = result.mass_properties
     j = np.diag(p.inertia_about_reference_kgm2)
@@ -62,7 +62,7 @@ def _print_modes(result: StructureModes) -> None:
 def cmd_modes(args: argparse.Namespace) -> int:
     deck = read_deck(args.deck)
     with progress_bar() as bar:
-        result = compute_modes(deck, structure=args.structure, preload=args.preload, mass=args.mass,
+        result = compute_modes(deck, configuration=args.configuration, preload=args.preload, mass=args.mass,
                                max_hz=args.max_hz, progress=bar, structure_file=args.structure_file)
     if args.json:
         json.dump(_modes_json(result), sys.stdout, indent=1)
@@ -74,7 +74,7 @@ def cmd_modes(args: argparse.Namespace) -> int:
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("modes", help="natural frequencies [Hz] and labels of the 1-g or 0-g structure")
-    p.add_argument("structure", choices=["1g", "0g"])
+    p.add_argument("configuration", choices=["1g", "0g"])
     deck_option(p)
     p.add_argument("--max-hz", type=positive_hz, default=None,
                    help=f"upper frequency [Hz] (default: the deck's EIGRL, else {DEFAULT_MAX_HZ:g})")

@@ -24,7 +24,7 @@ def export_ssp(args: argparse.Namespace) -> int:
     if args.controller and not Path(args.controller).is_file():
         raise MaceError(f"--controller {args.controller}: no such file")
     split = split_parameters(parameters(args))
-    progress(f"{args.structure} volts-volts model")
+    progress(f"{args.configuration} volts-volts model")
     model = volts(args, parameter_set=split.built_in)
     bounds = None
     if args.frequency_bounds:
@@ -34,7 +34,7 @@ def export_ssp(args: argparse.Namespace) -> int:
     from mace_fmu.cli.export import model_variant
     from mace_fmu.fmu.naming import model_prefix
 
-    name = fmu_name(args.structure, kind=args.kind, fmi_version=2, motion_grids=model.plant.motion_grids,
+    name = fmu_name(args.configuration, kind=args.kind, fmi_version=2, motion_grids=model.plant.motion_grids,
                     all_grids=model.structure_modes.modes.dofs.grid_ids, variant=model_variant(args),
                     prefix=model_prefix(model))
     with tempfile.TemporaryDirectory(prefix="mace_ssp_") as tmp:
@@ -53,7 +53,7 @@ def export_ssp(args: argparse.Namespace) -> int:
             controller = SspComponent(name="controller", fmu=Path(args.controller))
             wires = wiring_by_name(plant=plant, controller=controller)
             components.append(controller)
-        path = write_ssp(args.ssp, components=components, connections=wires, system_name=f"MACE_{args.structure}")
+        path = write_ssp(args.ssp, components=components, connections=wires, system_name=f"MACE_{args.configuration}")
     loop = f", closed by {Path(args.controller).name} through {len(wires)} connections" if args.controller else ""
     print(f"wrote {path} (plant {name}.fmu, {len(start)} start values bound{loop})")
     return 0

@@ -87,16 +87,16 @@ def _check_signals(args: argparse.Namespace, deck) -> str:
         return collocated_sensor(instruments, args.input, grid_positions(deck))
     sensors = [s.name for s in instruments.sensors]
     motion = parse_motion_output(args.output)
-    grids = build_structure(deck, configuration=args.structure, structure_file=file).deck.grids
+    grids = build_structure(deck, configuration=args.configuration, structure_file=file).deck.grids
     if args.output in sensors or (motion is not None and motion[0] in grids):
         return args.output
-    raise MaceError(f"--output {args.output!r} is not an output of the {args.structure} model: use a sensor "
+    raise MaceError(f"--output {args.output!r} is not an output of the {args.configuration} model: use a sensor "
                     f"({', '.join(sensors)}) or grid_<id>_<{'|'.join(MOTION_COMPONENTS)}> for one of its "
                     f"{len(grids)} grids")
 
 
-def _checked_fmu(path: str, structure: str) -> Path:
-    """--fmu: an existing MACE FMU of this structure with grid motion outputs."""
+def _checked_fmu(path: str, configuration: str) -> Path:
+    """--fmu: an existing MACE FMU of this configuration with grid motion outputs."""
     import fmpy
 
     from mace_fmu.fmu.archive import check_fmu
@@ -107,11 +107,11 @@ def _checked_fmu(path: str, structure: str) -> Path:
         raise MaceError(f"--fmu {fmu}: no such file")
     check_fmu(fmu)  # a foreign, damaged or malicious archive is refused before fmpy opens it
     md = fmpy.read_model_description(str(fmu))
-    if not (md.description or "").startswith(f"MACE {structure} "):
-        raise MaceError(f"--fmu {fmu} is not a MACE {structure} model (its description: {md.description!r})")
+    if not (md.description or "").startswith(f"MACE {configuration} "):
+        raise MaceError(f"--fmu {fmu} is not a MACE {configuration} model (its description: {md.description!r})")
     if not any(parse_motion_output(v.name) for v in md.modelVariables if v.causality == "output"):
         raise MaceError(f"--fmu {fmu} has no grid motion outputs; export one with "
-                        f"mace-fmu export {structure} --motion-grids all")
+                        f"mace-fmu export {configuration} --motion-grids all")
     return fmu
 
 
@@ -125,13 +125,13 @@ def cmd_view_response(args: argparse.Namespace) -> int:
     output = _check_signals(args, deck)
     out_dir = Path(args.html or args.png).parent if (args.html or args.png) else Path(".")  # FMU next to the page
     if args.fmu:
-        fmu = _checked_fmu(args.fmu, args.structure)
+        fmu = _checked_fmu(args.fmu, args.configuration)
         # only the scene is needed from the FE model: its lowest modes are enough
         with progress_bar() as bar:
-            modes = compute_modes(deck, structure=args.structure, preload=args.preload, max_hz=1.0, progress=bar,
+            modes = compute_modes(deck, configuration=args.configuration, preload=args.preload, max_hz=1.0, progress=bar,
                                   structure_file=args.structure_file)
     else:
-        progress(f"{args.structure} volts-volts model with the motion of every grid")
+        progress(f"{args.configuration} volts-volts model with the motion of every grid")
         model = volts(args, every_grid_moves=True)
         modes = model.structure_modes
         fmu = export_fmu(model, out_dir=out_dir, kind="pythonfmu")  # the name `mace-fmu export --motion-grids all` gives it
@@ -144,9 +144,9 @@ def cmd_view_response(args: argparse.Namespace) -> int:
           f"{args.speed:g} simulated s per s, motion drawn x {animation.scale:.4g}")
     if args.html:
         png = plot_response(run, output_name=output, path=signals_plot_path(args.html),
-                            title=f"MACE {args.structure}: {args.signal} on {args.input}")
+                            title=f"MACE {args.configuration}: {args.signal} on {args.input}")
         print(f"wrote {png} ({args.input} and {output} over time)")
-    _show(animation, args, title=f"MACE {args.structure}: {args.signal} response to {args.input}")
+    _show(animation, args, title=f"MACE {args.configuration}: {args.signal} response to {args.input}")
     return 0
 
 
@@ -163,14 +163,14 @@ def cmd_view(args: argparse.Namespace) -> int:
     deck = read_deck(args.deck)
     max_hz = args.max_hz if args.max_hz is not None else (None if args.mode else 60.0)
     with progress_bar() as bar:
-        result = compute_modes(deck, structure=args.structure, max_hz=max_hz, progress=bar,
+        result = compute_modes(deck, configuration=args.configuration, max_hz=max_hz, progress=bar,
                                structure_file=args.structure_file)
-    modes = args.mode or list(range(1, result.modes.frequencies_hz.size + 1))
+    modes = args.mode or list(range(1, result.frequencies_hz.size + 1))
     animation = animate_modes(result, modes, scale=args.scale, cycles=args.cycles,
                               seconds_per_cycle=args.seconds_per_cycle)
     for clip in animation.frames.clips:
         print(f"  {clip.start_s:6.1f}-{clip.end_s:6.1f} s  {clip.title}")
-    _show(animation, args, title=f"MACE {args.structure} modes")
+    _show(animation, args, title=f"MACE {args.configuration} modes")
     return 0
 
 
@@ -180,10 +180,10 @@ def cmd_view_pairs(args: argparse.Namespace) -> int:
     _need_target(args)
     deck = read_deck(args.deck)
     progress("0-g modes")
-    zero_g = compute_modes(deck, structure="0g", max_hz=args.max_hz, structure_file=args.structure_file)
+    zero_g = compute_modes(deck, configuration="0g", max_hz=args.max_hz, structure_file=args.structure_file)
     progress(f"1-g modes ({args.preload} gravity preload)")
     with progress_bar() as bar:
-        one_g = compute_modes(deck, structure="1g", preload=args.preload, max_hz=args.max_hz, progress=bar,
+        one_g = compute_modes(deck, configuration="1g", preload=args.preload, max_hz=args.max_hz, progress=bar,
                               structure_file=args.structure_file)
     animation = animate_pairs(one_g, zero_g, labels=args.mode, view=args.camera, cycles=args.cycles,
                               seconds_per_cycle=args.seconds_per_cycle)
@@ -211,7 +211,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("view", help="meshcat animation of mode shapes or FMU time responses (standalone HTML)")
     view = p.add_subparsers(dest="what", required=True)
     p = view.add_parser("modes", help="animate mode shapes (one clip per mode, one after the other)")
-    p.add_argument("structure", choices=["1g", "0g"])
+    p.add_argument("configuration", choices=["1g", "0g"])
     deck_option(p)
     p.add_argument("--mode", action="append", help="1-based index or label (prefix); repeat for several "
                    "(default: every mode up to --max-hz)")
@@ -237,7 +237,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=cmd_view_pairs)
 
     p = view.add_parser("response", help="an FMU's time response to one input, played on the mesh (fmpy)")
-    p.add_argument("structure", choices=["1g", "0g"])
+    p.add_argument("configuration", choices=["1g", "0g"])
     deck_option(p)
     instruments = load_instruments()
     p.add_argument("--input", required=True, metavar="INPUT",

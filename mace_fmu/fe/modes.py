@@ -22,9 +22,10 @@ from mace_fmu.fe.modal import Modes, solve_modes
 from mace_fmu.fe.preload import Preload, PreloadKind, large_displacement_preload, linear_preload
 from mace_fmu.parameters.sets import ParameterSet, deck_fingerprint, fe_overrides, parameter_names
 from mace_fmu.structure.build import Structure, build_structure
-from mace_fmu.structure.file import StructureFile, StructureKind, StructureSpec, bundled_deck_path, structure_file_for
+from mace_fmu.structure.file import StructureFile, Configuration, StructureSpec, bundled_deck_path, structure_file_for
 from mace_fmu.util.progress import ProgressCallback
 from mace_fmu.util.threads import single_blas_thread
+from mace_fmu.util.deprecation import renamed_keyword
 
 #: highest mode [Hz] found when the deck has no EIGRL/EIGR range (thesis 3.4: the MACE models keep modes to
 #: 250 Hz)
@@ -53,6 +54,18 @@ class StructureModes:
     preload: Preload | None  #: the gravity preload (1-g; None for 0-g)
     #: (grid, component) DOFs constrained automatically (PARAM,AUTOSPC): neither stiffness nor mass
     auto_constrained: tuple[tuple[int, int], ...] = ()
+
+    # What tables and plots read most, one attribute away: ``modes.labels``, not ``modes.labels``.
+    # Shapes stay on :class:`Modes`, which knows their DOFs (``modes.modes.shape(grid, component)``).
+    @property
+    def frequencies_hz(self) -> np.ndarray:
+        """Natural frequencies [Hz] of the modes (signed: a negative eigenvalue gives a negative one)."""
+        return self.modes.frequencies_hz
+
+    @property
+    def labels(self) -> tuple[str, ...]:
+        """One label per mode, e.g. "1st Z bending" (MACE's names) or "bending Z 1" (generic)."""
+        return self.modes.labels
 
 
 def mass_properties(model: FEModel, deck: Deck) -> MassProperties:
@@ -172,11 +185,12 @@ def _check_preload_elements(deck: Deck) -> None:
     if others:
         listed = ", ".join(f"{len(table)} {name} (first {next(iter(table.values())).source})" for name, table in others)
         raise MaceError(f"{deck.path}: the 1-g gravity preload models CBAR and CELAS2 elements only, and this deck "
-                        f"has {listed}; compute the 0-g modes (structure='0g'), or model them as CBARs")
+                        f"has {listed}; compute the 0-g modes (configuration='0g'), or model them as CBARs")
 
 
+@renamed_keyword(old="structure", new="configuration")
 @single_blas_thread
-def compute_modes(deck: Deck | str | os.PathLike | None = None, *, structure: StructureKind = "1g",
+def compute_modes(deck: Deck | str | os.PathLike | None = None, *, configuration: Configuration = "1g",
                   preload: PreloadKind = "large", mass: MassKind = "lumped", max_hz: float | None = None,
                   overrides: Mapping[tuple[str, int], Mapping[str, Any]] | None = None,
                   spec: StructureSpec | None = None, progress: ProgressCallback | None = None,
@@ -188,7 +202,7 @@ def compute_modes(deck: Deck | str | os.PathLike | None = None, *, structure: St
     ----------
     deck : Deck, path or None
         The NASTRAN deck (default: the bundled MACE deck).
-    structure : {"1g", "0g"}
+    configuration : {"1g", "0g"}
         1-g: the deck's gravity subcase preloads the structure and the modes are those about the
         preloaded state; 0-g: the suspension the structure file names is removed, no preload.
     preload : {"large", "linear"}
@@ -226,8 +240,8 @@ def compute_modes(deck: Deck | str | os.PathLike | None = None, *, structure: St
     Examples
     --------
     >>> from mace_fmu import compute_modes
-    >>> modes = compute_modes(structure="0g", max_hz=5.0)
-    >>> [f"{hz:.2f} Hz {label}" for hz, label in zip(modes.modes.frequencies_hz, modes.modes.labels) if hz > 1]
+    >>> modes = compute_modes(configuration="0g", max_hz=5.0)
+    >>> [f"{hz:.2f} Hz {label}" for hz, label in zip(modes.frequencies_hz, modes.labels) if hz > 1]
     ['2.10 Hz 1st Z bending', '3.07 Hz 1st Y bending']
     """
     if preload not in ("large", "linear"):
@@ -240,7 +254,7 @@ def compute_modes(deck: Deck | str | os.PathLike | None = None, *, structure: St
     if parameters is not None:
         check_parameters_deck(parameters, deck)
         overrides = {**fe_overrides(parameters, parameter_names(deck, file)), **(overrides or {})}
-    struct = build_structure(deck, configuration=structure, spec=spec, overrides=overrides, structure_file=file)
+    struct = build_structure(deck, configuration=configuration, spec=spec, overrides=overrides, structure_file=file)
     model = assemble(struct.deck, mass=mass)
     props = mass_properties(model, struct.deck)
     stiffness, pre = model.stiffness, None

@@ -8,7 +8,7 @@ from collections.abc import Sequence
 LISTED_GRIDS = 6
 
 
-def fmu_name(structure: str, *, kind: str | None = None, fmi_version: int = 2, motion_grids: Sequence[int] = (),
+def fmu_name(configuration: str, *, kind: str | None = None, fmi_version: int = 2, motion_grids: Sequence[int] = (),
              all_grids: Sequence[int] = (), variant: str = "", prefix: str = "MACE") -> str:
     """Model name (and .fmu file stem) of a MACE FMU, e.g. MACE_1g_native, MACE_1g_native_fmi3,
     MACE_1g_pythonfmu, MACE_0g_native_motion_1_7 (MACE_1g, MACE_1g_motion without ``kind``).
@@ -21,7 +21,7 @@ def fmu_name(structure: str, *, kind: str | None = None, fmi_version: int = 2, m
 
     Parameters
     ----------
-    structure : str
+    configuration : str
         "1g" or "0g".
     kind : str, optional
         "native" or "pythonfmu" (None: neither in the name).
@@ -41,7 +41,7 @@ def fmu_name(structure: str, *, kind: str | None = None, fmi_version: int = 2, m
     str
         A C identifier, the FMU's model name and file stem.
     """
-    base = f"{variant_identifier(prefix)}_{structure}" + (f"_{kind}" if kind else "") + ("_fmi3" if fmi_version == 3 else "")
+    base = f"{variant_identifier(prefix)}_{configuration}" + (f"_{kind}" if kind else "") + ("_fmi3" if fmi_version == 3 else "")
     if variant:
         base += "_" + variant_identifier(variant)
     grids = sorted(set(int(g) for g in motion_grids))

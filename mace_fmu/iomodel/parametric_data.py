@@ -174,7 +174,7 @@ def physical_sensitivities(model: VoltsModel, shapes: np.ndarray, *, only: Seque
     # Rigid-body and mechanism modes carry no strain energy: their computed sensitivities (3e-9
     # of the largest, the round-off of the mechanism shapes) are noise, which the reanalysis
     # would couple into the flexible modes (up to 6e-7 of an output's range for E x 0.5).
-    zero = np.abs(model.structure_modes.modes.frequencies_hz[:n]) < ZERO_HZ
+    zero = np.abs(model.structure_modes.frequencies_hz[:n]) < ZERO_HZ
     dk[:, zero, :] = 0.0
     dk[:, :, zero] = 0.0
     return parameters, dk

@@ -33,9 +33,10 @@ from mace_fmu.iomodel.model_options import ModelledElectronics, SignalSelection
 from mace_fmu.iomodel.motion import parse_motion_output
 from mace_fmu.parameters.kinds import DAMPING, DELAY, FREQUENCY_SCALE, SERVO_GAINS, ParameterKind, mode_label
 from mace_fmu.parameters.sets import ParameterSet, fe_overrides, parameter_names
-from mace_fmu.structure.file import StructureFile, StructureKind
+from mace_fmu.structure.file import StructureFile, Configuration
 from mace_fmu.util.frequency import ZERO_HZ
 from mace_fmu.util.threads import single_blas_thread
+from mace_fmu.util.deprecation import renamed_keyword
 from modelica_like import PD, Gain, LowPassFilter, PadeDelay, StateSpace, Sum, System
 
 DEG_PER_RAD = 180.0 / np.pi
@@ -221,8 +222,9 @@ def build_diagram(plant: ModalPlant, instruments: Instruments, *,
 
 
 
+@renamed_keyword(old="structure", new="configuration")
 @single_blas_thread
-def volts_model(structure: StructureKind = "1g", *, modes: StructureModes | None = None, deck: Deck | str | None = None,
+def volts_model(configuration: Configuration = "1g", *, modes: StructureModes | None = None, deck: Deck | str | None = None,
                 preload: PreloadKind | None = None, structure_file: StructureFile | str | os.PathLike | None = None,
                 max_hz: float | None = None, parameters: ParameterSet | None = None,
                 instruments: Instruments | None = None, electronics: ModelledElectronics = ModelledElectronics(),
@@ -236,7 +238,7 @@ def volts_model(structure: StructureKind = "1g", *, modes: StructureModes | None
 
     Parameters
     ----------
-    structure : {"1g", "0g"}
+    configuration : {"1g", "0g"}
         The suspended, gravity-preloaded structure or the free one.
     modes : StructureModes, optional
         Modes computed before (:func:`~mace_fmu.fe.modes.compute_modes`); they fix the deck, the
@@ -291,12 +293,12 @@ def volts_model(structure: StructureKind = "1g", *, modes: StructureModes | None
            f"electronics must be a ModelledElectronics record, got {type(electronics).__name__}")
     _check(isinstance(signals, SignalSelection),
            f"signals must be a SignalSelection record, got {type(signals).__name__}")
-    _check(structure in ("1g", "0g"), f"structure must be '1g' or '0g', got {structure!r}")
+    _check(configuration in ("1g", "0g"), f"configuration must be '1g' or '0g', got {configuration!r}")
     if modes is not None:
-        _check_modes_agree(modes, structure=structure, parameters=parameters,
+        _check_modes_agree(modes, configuration=configuration, parameters=parameters,
                            given={"deck": deck, "preload": preload, "structure_file": structure_file})
     else:
-        modes = compute_modes(deck, structure=structure, preload=preload or "large",
+        modes = compute_modes(deck, configuration=configuration, preload=preload or "large",
                               max_hz=max(max_hz, 1.0) if max_hz is not None else None,
                               parameters=parameters, structure_file=structure_file)
     file = modes.structure.file
@@ -309,14 +311,14 @@ def volts_model(structure: StructureKind = "1g", *, modes: StructureModes | None
     instruments = resolve_bar_gauges(instruments, modes.model, modes.structure.deck)
     # the moduli and springs must name cards, whether or not modes were given
     fe_overrides(parameters, parameter_names(modes.structure.deck, file))
-    instruments = apply_parameters(instruments, parameters, modes.modes.labels, structure=structure)
-    modes = scale_frequencies(modes, parameters, structure=structure)
-    flexible = modes.modes.frequencies_hz[np.abs(modes.modes.frequencies_hz) >= ZERO_HZ]
+    instruments = apply_parameters(instruments, parameters, modes.labels, configuration=configuration)
+    modes = scale_frequencies(modes, parameters, configuration=configuration)
+    flexible = modes.frequencies_hz[np.abs(modes.frequencies_hz) >= ZERO_HZ]
     if max_hz is None:
-        max_hz = float(np.max(modes.modes.frequencies_hz))
+        max_hz = float(np.max(modes.frequencies_hz))
     _check(len(flexible) > 0 and max_hz >= flexible.min(),
            f"max_hz = {max_hz} Hz is below the first flexible mode ({flexible.min():.3f} Hz); allowed: >= that")
-    zeta = modal_damping(modes.modes.labels, modes.modes.frequencies_hz, instruments.damping)
+    zeta = modal_damping(modes.labels, modes.frequencies_hz, instruments.damping)
     grids = modes.modes.dofs.grid_ids
     inputs, outputs = signals.inputs, signals.outputs
     motion_grids = grids if signals.motion_grids == "all" else signals.motion_grids
@@ -324,7 +326,7 @@ def volts_model(structure: StructureKind = "1g", *, modes: StructureModes | None
         named = {parse_motion_output(n)[0] for n in outputs if parse_motion_output(n) is not None}
         motion_grids = [g for g in motion_grids if g in named]
     unknown = sorted(set(motion_grids) - set(grids))
-    _check(not unknown, f"motion_grids: grid(s) {unknown} are not in the {structure} model; it has grids "
+    _check(not unknown, f"motion_grids: grid(s) {unknown} are not in the {configuration} model; it has grids "
                         f"{grids[0]}..{grids[-1]} ({len(grids)} in all)")
     plant = modal_plant(modes.modes, instruments, zeta, max_hz=max_hz, motion_grids=list(motion_grids))
     diagram = build_diagram(plant, instruments, electronics=electronics)
@@ -350,14 +352,14 @@ def _refuse_moved_keywords(moved: Mapping[str, Any]) -> None:
                         f"{'; '.join(hints)} (from mace_fmu import {records})")
 
 
-def _check_modes_agree(modes: StructureModes, *, structure: str, parameters: ParameterSet | None,
+def _check_modes_agree(modes: StructureModes, *, configuration: str, parameters: ParameterSet | None,
                        given: Mapping[str, Any]) -> None:
     """Refuse a model whose given ``modes`` contradict the other arguments (they would be ignored)."""
     doubled = [name for name, value in given.items() if value is not None]
     _check(not doubled, f"modes= already fix the deck, preload and structure file they were computed with; drop "
                         f"{', '.join(f'{name}=' for name in doubled)} (or drop modes= to compute them)")
-    _check(modes.structure.configuration == structure,
-           f"modes= are of the {modes.structure.configuration} structure, the model asked for is {structure}")
+    _check(modes.structure.configuration == configuration,
+           f"modes= are of the {modes.structure.configuration} structure, the model asked for is {configuration}")
     deck = modes.structure.deck
     for (card, cid), fields in fe_overrides(parameters, parameter_names(deck, modes.structure.file)).items():
         entry = (deck.mat1s if card == "MAT1" else deck.celas2s)[cid]
@@ -370,7 +372,7 @@ def _check_modes_agree(modes: StructureModes, *, structure: str, parameters: Par
 
 
 def apply_parameters(instruments: Instruments, parameters: ParameterSet | None, mode_labels: Sequence[str], *,
-                     structure: str = "") -> Instruments:
+                     configuration: str = "") -> Instruments:
     """Instruments with the set's delays [s], servo gains and damping ratios by mode label replaced.
 
     Names are checked against the instrument file and ``mode_labels``; a MaceError names the
@@ -386,7 +388,7 @@ def apply_parameters(instruments: Instruments, parameters: ParameterSet | None, 
         The set whose delays [s], servo gains and damping ratios apply (None: no change).
     mode_labels : sequence of str
         The structure's mode labels, which damping names refer to.
-    structure : str
+    configuration : str
         "1g" or "0g": the structure the instruments are for.
 
     Returns
@@ -414,14 +416,14 @@ def apply_parameters(instruments: Instruments, parameters: ParameterSet | None, 
     gains = {SERVO_GAINS[name]: value for name, value in parameters.of_kind("gain").items()}
     known = set(mode_labels)
     prov = parameters.provenance
-    other_structure = prov is not None and prov.structure not in ("", structure)
+    other_structure = prov is not None and prov.configuration not in ("", configuration)
     damping = {}
     for name, value in parameters.of_kind("damping").items():
         label = mode_label(name)
         if label not in known and other_structure:
             continue
         if label not in known:
-            raise MaceError(f"parameter {name!r}: no mode labelled {label!r} in the {structure} structure; labels: "
+            raise MaceError(f"parameter {name!r}: no mode labelled {label!r} in the {configuration} structure; labels: "
                             f"{', '.join(sorted(known))}")
         _check_range(name, value, DAMPING)
         damping[label] = value
@@ -440,7 +442,7 @@ def _check_range(name: str, value: float, kind: ParameterKind) -> None:
                         f"{kind.name.replace('_', ' ')} parameter")
 
 
-def scale_frequencies(modes: StructureModes, parameters: ParameterSet | None, *, structure: str = "") -> StructureModes:
+def scale_frequencies(modes: StructureModes, parameters: ParameterSet | None, *, configuration: str = "") -> StructureModes:
     """``modes`` with each ``frequency_scale:<label>`` of the set multiplying its label's frequencies [Hz].
 
     Shapes are kept: the scale is a modal adjustment of the open-loop model (thesis 5.3), not an FE
@@ -454,7 +456,7 @@ def scale_frequencies(modes: StructureModes, parameters: ParameterSet | None, *,
         The structure's modes.
     parameters : ParameterSet or None
         The set whose ``frequency_scale:<label>`` entries apply (None: no change).
-    structure : str
+    configuration : str
         "1g" or "0g": the structure the modes are of.
 
     Returns
@@ -469,14 +471,14 @@ def scale_frequencies(modes: StructureModes, parameters: ParameterSet | None, *,
     """
     scales = parameters.of_kind("frequency_scale") if parameters is not None else {}
     prov = parameters.provenance if parameters is not None else None
-    if not scales or (prov is not None and prov.structure not in ("", structure)):
+    if not scales or (prov is not None and prov.configuration not in ("", configuration)):
         return modes
-    labels = modes.modes.labels
-    frequencies = np.array(modes.modes.frequencies_hz, dtype=float)
+    labels = modes.labels
+    frequencies = np.array(modes.frequencies_hz, dtype=float)
     for name, value in scales.items():
         label = mode_label(name)
         if label not in labels:
-            raise MaceError(f"parameter {name!r}: no mode labelled {label!r} in the {structure} structure; labels: "
+            raise MaceError(f"parameter {name!r}: no mode labelled {label!r} in the {configuration} structure; labels: "
                             f"{', '.join(sorted(set(labels)))}")
         _check_range(name, value, FREQUENCY_SCALE)
         frequencies[[k for k, x in enumerate(labels) if x == label]] *= value

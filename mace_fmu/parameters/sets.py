@@ -64,7 +64,7 @@ class Provenance:
     tool: str  #: e.g. "mace-fmu 0.1.0"
     deck: str = ""  #: file name of the deck the values belong to
     deck_sha256: str = ""  #: its content hash: a set made for another deck is refused
-    structure: str = ""  #: "1g" or "0g", the model that was fitted
+    configuration: str = ""  #: "1g" or "0g", the model that was fitted
     data: str = ""  #: what was measured
     cost: str = ""  #: which cost was minimised
     method: str = ""  #: how the parameters entered the model, outer iterations, penalty
@@ -161,6 +161,7 @@ class ParameterSet:
             raise MaceError(f"{source}: no [values] table")
         prov = None
         if "provenance" in data:
+            data["provenance"] = _renamed_provenance_keys(dict(data["provenance"]))
             allowed = {f.name for f in dataclasses.fields(Provenance)}
             extra = set(data["provenance"]) - allowed
             if extra:
@@ -181,6 +182,18 @@ class ParameterSet:
     def read(cls, path: str | Path) -> ParameterSet:
         """Read a parameter set written by :meth:`write` (or by hand)."""
         return cls.from_toml(read_text(path, what="parameter"), source=str(path))
+
+
+#: [provenance] keys of sets written by earlier versions, and their names now
+_EARLIER_PROVENANCE_KEYS = {"structure": "configuration"}
+
+
+def _renamed_provenance_keys(provenance: dict[str, Any]) -> dict[str, Any]:
+    """A [provenance] table with earlier key names read as today's (sets on disk stay readable)."""
+    for old, new in _EARLIER_PROVENANCE_KEYS.items():
+        if old in provenance and new not in provenance:
+            provenance[new] = provenance.pop(old)
+    return provenance
 
 
 def toml_key(name: str) -> str:

@@ -8,7 +8,7 @@ from mace_fmu.util.lazy import lazy_exports
 __all__, __getattr__, __dir__ = lazy_exports(__name__, {
     "StructureFile": "file",
     "StructureSpec": "file",
-    "StructureKind": "file",
+    "Configuration": "file",
     "STRUCTURE_FILE_TABLES": "file",
     "load_structure_file": "file",
     "structure_file_for": "file",

@@ -17,7 +17,7 @@ import numpy as np
 from mace_fmu.deck.cards import ELEMENT_TABLES, Deck, Subcase
 from mace_fmu.deck.reader import check_deck
 from mace_fmu.errors import DeckError, MaceError
-from mace_fmu.structure.file import (_CARD_TABLES, StructureFile, StructureKind, StructureSpec, _ids_text,
+from mace_fmu.structure.file import (_CARD_TABLES, StructureFile, Configuration, StructureSpec, _ids_text,
                                      check_spec_against_deck, structure_file_for)
 
 
@@ -25,7 +25,7 @@ from mace_fmu.structure.file import (_CARD_TABLES, StructureFile, StructureKind,
 class Structure:
     """One analysable structure: its deck, its preload subcase (1-g only) and its modal subcase."""
 
-    configuration: StructureKind  #: "1g" (suspended, preloaded) or "0g" (free)
+    configuration: Configuration  #: "1g" (suspended, preloaded) or "0g" (free)
     deck: Deck  #: the deck of this structure (0-g: without the suspension)
     preload: Subcase | None  #: SPC/MPC/LOAD/NLPARM of the static preload; None for 0-g
     modal: Subcase  #: SPC/MPC of the eigen-solution
@@ -164,7 +164,7 @@ def _subcases(deck: Deck) -> tuple[Subcase | None, Subcase]:
     return preload, cases[-1]
 
 
-def build_structure(deck: Deck, *, configuration: StructureKind, spec: StructureSpec | None = None,
+def build_structure(deck: Deck, *, configuration: Configuration, spec: StructureSpec | None = None,
                     overrides: Mapping[tuple[str, int], Mapping[str, Any]] | None = None,
                     structure_file: StructureFile | str | os.PathLike | None = None) -> Structure:
     """The 1-g structure (deck as is, preload subcase + modal subcase) or the 0-g structure.

@@ -25,7 +25,7 @@ from mace_fmu.deck.cards import ELEMENT_TABLES, Deck
 from mace_fmu.errors import MaceError
 from mace_fmu.util.textfile import read_text
 
-StructureKind = Literal["1g", "0g"]
+Configuration = Literal["1g", "0g"]
 
 _CARD_TABLES = {"GRID": "grids", "CBAR": "bars", "PBAR": "pbars", "MAT1": "mat1s", "CONM2": "conm2s",
                 "CELAS2": "celas2s", "CORD2R": "coords", "GRAV": "gravs"}

@@ -55,7 +55,7 @@ class FmuInterface:
     description: str = ""  #: the model description's description attribute ("MACE 1g volts-volts model: ...")
 
     @property
-    def structure(self) -> str:
+    def configuration(self) -> str:
         """"1g" or "0g" for a MACE FMU (from its description), else ""."""
         words = self.description.split()
         return words[1] if len(words) > 1 and words[0] == "MACE" and words[1] in ("1g", "0g") else ""

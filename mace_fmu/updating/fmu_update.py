@@ -140,7 +140,7 @@ class FmuParameters:
         """[provenance] and [values] tables as in :class:`~mace_fmu.parameters.sets.ParameterSet` files."""
         lines = ["# mace-fmu: FMU parameters after an update (names and units as the FMU declares them)", "",
                  "[provenance]"]
-        for key in ("created", "tool", "structure", "fitted_to", "data", "cost", "method", "initial_cost",
+        for key in ("created", "tool", "configuration", "fitted_to", "data", "cost", "method", "initial_cost",
                     "final_cost", "notes"):
             value = getattr(self.provenance, key)
             if value is not None and value != "":
@@ -191,7 +191,7 @@ def fmu_parameters(result: UpdateResult, *, family: FmuFamily, data: str, cost: 
                              f"{s.relative_step}), penalty "
                              f"{'on' if s.penalty else 'off'}, {len(result.history)} outer iterations",
                       initial_cost=result.initial_cost, final_cost=result.final_cost, notes=notes,
-                      structure=family.interface.structure, fitted_to=Path(family.interface.path).name)
+                      configuration=family.interface.configuration, fitted_to=Path(family.interface.path).name)
     gains = {o: result.values[g] for o, g in zip(family.gain_outputs, family.gain_parameters) if g in result.values}
     values = {n: v for n, v in result.values.items() if n not in family.gain_parameters}
     return FmuParameters(values=values, units={n: family.interface.units.get(n, "") for n in values},

@@ -27,8 +27,9 @@ from mace_fmu.iomodel.parametric_data import parametric_arrays, physical_sensiti
 from mace_fmu.iomodel.volts import VoltsModel, volts_model
 from mace_fmu.parameters.kinds import DAMPING, kind_of_set_name, mode_label
 from mace_fmu.parameters.sets import ParameterSet, deck_values, parameter_kind
-from mace_fmu.structure.file import StructureKind, bundled_deck_path
+from mace_fmu.structure.file import Configuration, bundled_deck_path
 from mace_fmu.updating.model import LinearModel
+from mace_fmu.util.deprecation import renamed_keyword
 
 Values = Mapping[str, float]
 _CACHE_SIZE = 4  # base point, perturbed points of a modal-sensitivity step come and go
@@ -52,7 +53,7 @@ class MaceSolution:
         if key not in self._systems:
             missing = [n for n in key if n not in self._sensitivities]
             if missing:
-                keep = self.volts.structure_modes.modes.frequencies_hz <= np.max(self.volts.plant.frequencies_hz)
+                keep = self.volts.structure_modes.frequencies_hz <= np.max(self.volts.plant.frequencies_hz)
                 shapes = self.volts.structure_modes.modes.shapes[:, keep]
                 entries, dk = physical_sensitivities(self.volts, shapes, only=missing)
                 self._sensitivities.update({e[0]: (e, d) for e, d in zip(entries, dk)})
@@ -72,9 +73,10 @@ def linear_model(system: ParametricSystem, vector: np.ndarray, **modes) -> Linea
 class MaceFamily:
     """The 1-g or 0-g volts-volts model (servos closed) at any parameter values."""
 
-    def __init__(self, *, structure: StructureKind = "1g", base: ParameterSet | None = None,
+    @renamed_keyword(old="structure", new="configuration")
+    def __init__(self, *, configuration: Configuration = "1g", base: ParameterSet | None = None,
                  deck: Deck | str | None = None, preload: PreloadKind = "large", max_hz: float = DEFAULT_MAX_HZ):
-        self.structure = structure
+        self.configuration = configuration
         self.base = base if base is not None else ParameterSet()
         self.deck = deck if isinstance(deck, Deck) else read_deck(deck if deck is not None else bundled_deck_path())
         self.preload = preload
@@ -101,12 +103,12 @@ class MaceFamily:
         if key in self._cache:
             self._cache.move_to_end(key)
             return self._cache[key]
-        modes = compute_modes(self.deck, structure=self.structure, preload=self.preload, max_hz=self.max_hz,
+        modes = compute_modes(self.deck, configuration=self.configuration, preload=self.preload, max_hz=self.max_hz,
                               parameters=params)
         if self._reference is not None:  # labels (and the damping ratios keyed by them) follow the mode
             ref = self._reference.volts.structure_modes
             modes = dataclasses.replace(modes, modes=carry_labels(ref.modes, ref.model, modes.modes))
-        volts = volts_model(self.structure, modes=modes, parameters=self._non_modal(params), max_hz=self.max_hz)
+        volts = volts_model(self.configuration, modes=modes, parameters=self._non_modal(params), max_hz=self.max_hz)
         solution = MaceSolution(volts, physical)
         self.solves += 1
         self._cache[key] = solution
@@ -127,7 +129,7 @@ class MaceFamily:
             if kind == "damping":
                 hits = np.flatnonzero(labels == mode_label(name))
                 if not hits.size:
-                    raise MaceError(f"parameter {name!r}: no mode with that label in the {self.structure} model")
+                    raise MaceError(f"parameter {name!r}: no mode with that label in the {self.configuration} model")
                 for k in hits:
                     vec[system.index(DAMPING.fmu_name(k + 1))] = value
             elif kind in ("modulus", "spring"):
@@ -137,7 +139,7 @@ class MaceFamily:
                 try:
                     vec[system.index(name)] = value
                 except KeyError:
-                    raise MaceError(f"parameter {name!r} is not a parameter of the {self.structure} model") from None
+                    raise MaceError(f"parameter {name!r} is not a parameter of the {self.configuration} model") from None
         return vec
 
     # --- the ModelFamily interface ---------------------------------------------------------------
@@ -162,12 +164,12 @@ class MaceFamily:
             elif kind_of_set_name(n) is DAMPING:
                 hits = np.flatnonzero(labels == mode_label(n))
                 if not hits.size:
-                    raise MaceError(f"parameter {n!r}: no mode with that label in the {self.structure} model")
+                    raise MaceError(f"parameter {n!r}: no mode with that label in the {self.configuration} model")
                 out[n] = float(sol.system.nominal[sol.system.index(DAMPING.fmu_name(hits[0] + 1))])
             elif n in sol.system.parameter_names:
                 out[n] = float(sol.system.nominal[sol.system.index(n)])
             else:
-                raise MaceError(f"parameter {n!r} is not a parameter of the {self.structure} model")
+                raise MaceError(f"parameter {n!r} is not a parameter of the {self.configuration} model")
         return out
 
     def values_for_rebuild(self, values: Values) -> dict[str, float]:
@@ -183,7 +185,7 @@ class MaceFamily:
         carried = np.array([vector[system.index(DAMPING.fmu_name(k + 1))] for k in range(len(system.mode_labels))])
         out = dict(values)
         for _ in range(3):
-            fresh = volts_model(self.structure, deck=self.deck, preload=self.preload, max_hz=self.max_hz,
+            fresh = volts_model(self.configuration, deck=self.deck, preload=self.preload, max_hz=self.max_hz,
                                 parameters=self.parameter_set(out)).plant
             differ = np.flatnonzero(fresh.damping != carried)
             if not differ.size:
@@ -195,7 +197,7 @@ class MaceFamily:
     def volts_model(self, values: Values) -> VoltsModel:
         """The full volts-volts model (python-control, exact FRF) at ``values``."""
         params = self.parameter_set(values)
-        return volts_model(self.structure, modes=self.solution(values).volts.structure_modes, parameters=params,
+        return volts_model(self.configuration, modes=self.solution(values).volts.structure_modes, parameters=params,
                            max_hz=self.max_hz)
 
 
@@ -207,7 +209,7 @@ class MaceBasis:
         self.solution = solution
         self.physical = family.physical
         modes: StructureModes = solution.volts.structure_modes
-        keep = modes.modes.frequencies_hz <= family.max_hz
+        keep = modes.frequencies_hz <= family.max_hz
         self._phi0 = modes.modes.shapes[:, keep]
         self._mass = modes.model.mass
 
@@ -223,6 +225,6 @@ class MaceBasis:
 
     def modes_of(self, values: Values) -> tuple[np.ndarray, np.ndarray]:
         fam = self.family
-        modes = compute_modes(fam.deck, structure=fam.structure, preload=fam.preload, max_hz=1.1 * fam.max_hz,
+        modes = compute_modes(fam.deck, configuration=fam.configuration, preload=fam.preload, max_hz=1.1 * fam.max_hz,
                               parameters=fam.parameter_set(values))
-        return modes.modes.frequencies_hz, self._phi0.T @ self._mass @ modes.modes.shapes
+        return modes.frequencies_hz, self._phi0.T @ self._mass @ modes.modes.shapes

@@ -165,7 +165,7 @@ def run_mace_update(*, start: ParameterSet | None = None, measured: Sequence[Mea
     start = start if start is not None else pre_update_parameters()
     t0 = time.perf_counter()
     say("1-g model at the start point")
-    family = MaceFamily(structure="1g", base=start, deck=deck, preload=preload)
+    family = MaceFamily(configuration="1g", base=start, deck=deck, preload=preload)
     data = "thesis Table 4.7, measurement model column (frequencies and damping ratios)"
     if measured is None:
         measured = measured_modes(band_hz=None)
@@ -205,7 +205,7 @@ def run_mace_update(*, start: ParameterSet | None = None, measured: Sequence[Mea
         seconds[f"update: {k}"] = v
     deck_path = family.deck.path
     prov = Provenance(created=now_utc(), tool=tool_version(), deck=str(deck_path).rsplit("/", 1)[-1],
-                      deck_sha256=deck_fingerprint(deck_path), structure="1g",
+                      deck_sha256=deck_fingerprint(deck_path), configuration="1g",
                       data=data,
                       cost=f"modal (eq. 4.2 + damping term, damping weight {cost.damping_weight}; modes with "
                            f"zeta >= {HEAVY_DAMPING} weighted {HEAVY_WEIGHT}, lightly damped bending modes "

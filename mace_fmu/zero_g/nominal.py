@@ -197,7 +197,7 @@ def _adjustable_modes(model: VoltsModel, poles: Sequence[tuple[str, ClosedLoopPo
     """The open-loop mode (0-based) behind each (measured label, 0-g pole); a MaceError where it cannot be
     adjusted alone: no structural vibration mode, shared by two measured modes, or a label other modes carry."""
     modes = [pole.mode for _, pole in poles]
-    labels = model.structure_modes.modes.labels
+    labels = model.structure_modes.labels
     for (label, pole), m in zip(poles, modes):
         what = f"measured mode {label!r}: its 0-g pole ({pole.label})"
         if m is None or abs(model.plant.frequencies_hz[m]) < ZERO_HZ:
@@ -289,10 +289,10 @@ def _deck_provenance(parameters: ParameterSet | None, deck: Deck | None, *, sour
 
         path = Path(deck.path) if deck is not None else bundled_deck_path()
         return Provenance(created=now_utc(), tool=tool_version(), deck=path.name, deck_sha256=deck_fingerprint(path),
-                          structure="0g", data=source, method=method)
+                          configuration="0g", data=source, method=method)
     return Provenance(created=now_utc(), tool=tool_version(), deck=base.deck, deck_sha256=base.deck_sha256,
-                      structure="0g", data=source, method=method,
-                      notes=f"from a {base.structure or 'parameter'} set made {base.created} ({base.method})".strip())
+                      configuration="0g", data=source, method=method,
+                      notes=f"from a {base.configuration or 'parameter'} set made {base.created} ({base.method})".strip())
 
 
 @single_blas_thread
@@ -363,7 +363,7 @@ def predict_zero_g(*, parameters: ParameterSet | None = None, measured: Sequence
     heavy = [measured[k].damping >= rule.heavy_damping for k in kept]
     adjusted = [j for j, h in enumerate(heavy) if rule.correct_heavy or not h]
     modes = _adjustable_modes(v0, [(measured[kept[j]].label, p0[i0[j]]) for j in adjusted])
-    labels = v0.structure_modes.modes.labels
+    labels = v0.structure_modes.labels
 
     say(f"adjusting {len(adjusted)} open-loop 0-g modes")
     target_hz = np.array([p0[i0[j]].frequency_hz * measured[kept[j]].frequency_hz / p1[i1[kept[j]]].frequency_hz

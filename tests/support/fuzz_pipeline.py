@@ -24,7 +24,7 @@ from mace_fmu.structure.file import bundled_deck_path
 
 def main(first: int, count: int) -> None:
     base = bundled_deck_path().read_bytes()
-    nominal = compute_modes(structure="0g").modes.frequencies_hz
+    nominal = compute_modes(configuration="0g").modes.frequencies_hz
     outcomes, notes = collections.Counter(), []
     with tempfile.TemporaryDirectory() as folder:
         path = Path(folder) / "mutant.bdf"
@@ -36,8 +36,8 @@ def main(first: int, count: int) -> None:
             except MaceError:
                 continue  # the reader's outcome; tests/test_deck_fuzz.py checks those
             try:
-                f = compute_modes(parsed, structure="0g").modes.frequencies_hz
-                compute_modes(parsed, structure="1g", preload="linear")
+                f = compute_modes(parsed, configuration="0g").modes.frequencies_hz
+                compute_modes(parsed, configuration="1g", preload="linear")
                 same = len(f) == len(nominal) and np.allclose(f, nominal, rtol=1e-6, atol=1e-3)
                 outcomes["model, same 0-g modes" if same else "model, changed"] += 1
             except MaceError as exc:
