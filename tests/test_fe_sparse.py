@@ -96,3 +96,33 @@ def test_mace_0g_by_lanczos_equals_the_dense_route(monkeypatch):
     flexible = np.abs(a) > 0.01
     np.testing.assert_allclose(b[flexible], a[flexible], rtol=1e-7)
     assert np.all(np.abs(b[~flexible]) < 0.01)
+
+
+def _tower_matrix(shift: float) -> sparse.csr_array:
+    """K - shift M of a small clamped tower (positive definite for a negative shift)."""
+    deck = read_deck_text(frame_tower(nx=2, ny=2, levels=6, with_gravity=False), name="tower.bdf")
+    model = assemble(deck)
+    constraints = build_constraints(deck, model.dofs, model.cd_frames, spc_set=1, mpc_set=None)
+    k = constraints.reduce_sparse(model.stiffness)
+    m = constraints.reduce_sparse(model.mass)
+    return sparse.csr_array(0.5 * (k + k.T) - shift * 0.5 * (m + m.T))
+
+
+def test_the_cholesky_and_the_lu_solve_alike_and_an_indefinite_matrix_falls_back_to_the_lu():
+    """CHOLMOD's L L^T (in the RCM order) and SuperLU's LU give the same x to rounding; a matrix that is
+    not positive definite is refused by the Cholesky and solved by the LU all the same."""
+    pytest.importorskip("cvxopt")
+    from mace_fmu.fe.factor import _cholesky, factorize
+
+    definite = _tower_matrix(-1.0)
+    b = np.random.default_rng(3).standard_normal(definite.shape[0])
+    by_cholesky, by_lu = factorize(definite, positive_definite=True)(b), factorize(definite)(b)
+    scale = np.linalg.norm(by_lu)
+    assert np.linalg.norm(by_cholesky - by_lu) <= 1e-9 * scale
+    assert np.linalg.norm(definite @ by_cholesky - b) <= 1e-9 * np.linalg.norm(b)
+    # shifted past the lowest eigenvalues: indefinite, yet regular
+    indefinite = _tower_matrix(4 * math.pi**2 * 40.0**2)
+    from scipy.sparse.csgraph import reverse_cuthill_mckee
+    assert _cholesky(indefinite, reverse_cuthill_mckee(sparse.csr_matrix(indefinite), symmetric_mode=True)) is None
+    x = factorize(indefinite, positive_definite=True)(b)
+    assert np.linalg.norm(indefinite @ x - b) <= 1e-8 * np.linalg.norm(b)

@@ -188,6 +188,11 @@ def split_cards(lines: Iterable[tuple[int, str]], file: str) -> list[RawCard]:
     return cards
 
 
+def _bound(minimum: float | None, above: float | None) -> str:
+    """The range a real field expects, for its messages: " >= 0.0", " > 0.0" or ""."""
+    return (f" >= {minimum}" if minimum is not None else "") + (f" > {above}" if above is not None else "")
+
+
 class Fields:
     """Typed, checked access to the data fields of one card; errors carry file:line and field."""
 
@@ -217,13 +222,14 @@ class Fields:
     def integer(self, d: int, name: str, default: Any = REQUIRED, minimum: int | None = None) -> Any:
         """Integer field; a real or a word is an error."""
         text = self.text(d)
+        value = parse_int(text) if text else None
+        if value is not None and (minimum is None or value >= minimum):
+            return value
+        # the messages are built only for a field that needs one: a large deck reads millions of fields
         expected = "an integer" if minimum is None else f"an integer >= {minimum}"
         if not text:
             return self._blank(d, name, default, expected)
-        value = parse_int(text)
-        if value is None or (minimum is not None and value < minimum):
-            raise self.error(f"expected {expected}, got {text!r}", d, name)
-        return value
+        raise self.error(f"expected {expected}, got {text!r}", d, name)
 
     def ident(self, d: int, name: str) -> int:
         """The card's required positive ID; later errors name the card with it."""
@@ -235,9 +241,8 @@ class Fields:
              above: float | None = None) -> Any:
         """Real field (decimal point required, as in NASTRAN), optionally >= ``minimum`` or > ``above``."""
         text = self.text(d)
-        bound = (f" >= {minimum}" if minimum is not None else "") + (f" > {above}" if above is not None else "")
         if not text:
-            return self._blank(d, name, default, f"a real number{bound}")
+            return self._blank(d, name, default, f"a real number{_bound(minimum, above)}")
         value = parse_real(text)
         if value is None:
             hint = " with a decimal point" if parse_int(text) is not None else ""
@@ -245,7 +250,7 @@ class Fields:
         if not math.isfinite(value):
             raise self.error(f"real number {text!r} is out of range (expected a finite value)", d, name)
         if (minimum is not None and value < minimum) or (above is not None and value <= above):
-            raise self.error(f"value {text!r} is out of range (expected a real number{bound})", d, name)
+            raise self.error(f"value {text!r} is out of range (expected a real number{_bound(minimum, above)})", d, name)
         return value
 
     def word(self, d: int, name: str, default: Any = REQUIRED, allowed: Iterable[str] | None = None) -> Any:

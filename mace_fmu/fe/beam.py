@@ -127,6 +127,8 @@ def to_basic(matrix_local: np.ndarray, frame: np.ndarray) -> np.ndarray:
 def to_basic_many(matrices_local: np.ndarray, frames: np.ndarray) -> np.ndarray:
     """:func:`to_basic` for n element matrices (n, 12, 12) with their frames (n, 3, 3) at once."""
     n = len(matrices_local)
-    k = matrices_local.reshape(n, 4, 3, 4, 3)
-    # T = blockdiag(frame x 4): (T^T K T)[a i, b j] = frame[p, i] K[a p, b q] frame[q, j]
-    return np.einsum("npi,napbq,nqj->naibj", frames, k, frames, optimize=True).reshape(n, 12, 12)
+    # T = blockdiag(frame x 4): (T^T K T)[a i, b j] = frame[p, i] K[a p, b q] frame[q, j], as two batched
+    # 3x3 products (frame^T on each 3-row block, then frame on each 3-column block); numpy's einsum
+    # of the same took nine times as long for 70k bars
+    rows = np.matmul(frames.transpose(0, 2, 1)[:, None], matrices_local.reshape(n, 4, 3, 12))
+    return np.matmul(rows.reshape(n, 12, 4, 3), frames[:, None]).reshape(n, 12, 12)

@@ -71,6 +71,10 @@ def _grid_mask(model: FEModel, grids: frozenset[int]) -> np.ndarray:
     return np.array([g in grids for g in model.dofs.grid_ids])
 
 
+#: bars per chunk when the modes' natural deformations are computed
+_CHUNK = 4000
+
+
 class _Energies:
     """Per-mode energy bookkeeping shared by the rules."""
 
@@ -85,35 +89,34 @@ class _Energies:
             bus_bar = np.array([model.dofs.grid_ids[a] in bus and model.dofs.grid_ids[b] in bus
                                 for a, b in zip(model.bars.node_a, model.bars.node_b)], dtype=bool)
         _, b = deformation_jacobian(model.bars, state)
-        d = np.einsum("nki,nim->nkm", b, phi[bar_dof_indices(model.bars)])[bus_bar]
+        b, dof_index = b[bus_bar], bar_dof_indices(model.bars)[bus_bar]
+        # natural deformations per mode, in chunks of bars: the gathered shapes of 70k bars would be 350 MB
+        d = np.concatenate([np.matmul(b[s:s + _CHUNK], phi[dof_index[s:s + _CHUNK]])
+                            for s in range(0, len(b), _CHUNK)]) if len(b) else np.zeros((0, 7, phi.shape[1]))
         kn = model.bars.k_natural[bus_bar]
 
         def part(idx: list[int]) -> np.ndarray:
             sub = kn[:, idx][:, :, idx]
-            return 0.5 * np.einsum("nim,nij,njm->nm", d[:, idx], sub, d[:, idx])
+            d_part = d[:, idx]
+            return 0.5 * (d_part * np.matmul(sub, d_part)).sum(axis=1)
 
         # natural DOFs: 0 stretch, 1/4 torsion, 2/5 rotation about element y, 3/6 about element z
         self.bus_torsion = part([1, 4])
         plane_z = part([3, 6])  # bending in the element x-y plane
         plane_y = part([2, 5])
         frames = model.bars.frames0[bus_bar]
-        # Assign each bar's plane energy to the basic axis it bends about.
-        about_y = np.zeros(phi.shape[1])
-        about_z = np.zeros(phi.shape[1])
-        for k in range(len(frames)):
-            for energy, axis in ((plane_z[k], frames[k][2]), (plane_y[k], frames[k][1])):
-                if abs(axis[1]) >= abs(axis[2]):
-                    about_y += energy
-                else:
-                    about_z += energy
+        # each plane's energy with the bending axis of that plane: element z for x-y, element y for x-z
+        energies = np.concatenate([plane_z, plane_y])  # (2 n_bar, n_modes)
+        axes = np.abs(np.concatenate([frames[:, 2], frames[:, 1]]))  # (2 n_bar, 3)
+        # Assign each bar's plane energy to the basic axis it bends about (Y or Z: MACE's bus lies along X).
+        about_y = energies[axes[:, 1] >= axes[:, 2]].sum(0)
+        about_z = energies[axes[:, 1] < axes[:, 2]].sum(0)
         self.bus_bending = {"Y": about_y, "Z": about_z}
         self.bus_stretch = part([0]).sum(0)
         self.bus_strain = self.bus_torsion.sum(0) + about_y + about_z + self.bus_stretch
         # the same plane energies by the basic axis each bar's bending axis lies closest to
-        self.bending_about = np.zeros((3, phi.shape[1]))
-        for k in range(len(frames)):
-            for energy, axis in ((plane_z[k], frames[k][2]), (plane_y[k], frames[k][1])):
-                self.bending_about[int(np.argmax(np.abs(axis)))] += energy
+        closest = np.argmax(axes, axis=1)
+        self.bending_about = np.array([energies[closest == axis].sum(0) for axis in range(3)])
         xa = model.positions[model.bars.node_a[bus_bar], 0]
         self.torsion_x = (self.bus_torsion * xa[:, None]).sum(0) / np.maximum(self.bus_torsion.sum(0), 1e-300)
 

@@ -16,20 +16,22 @@ class MatrixTriplets:
 
     def __init__(self, size: int) -> None:
         self.size = size  #: number of rows and columns (DOFs)
+        # int32 indices where they fit, as scipy would pick for the matrix: half the memory traffic
+        self._index = np.int32 if size < 2**31 - 1 else np.int64
         self._rows: list[np.ndarray] = []
         self._cols: list[np.ndarray] = []
         self._values: list[np.ndarray] = []
 
     def add(self, idx: np.ndarray, block: np.ndarray) -> None:
         """Add the square ``block`` at the DOFs ``idx`` (rows and columns alike)."""
-        idx = np.asarray(idx, dtype=np.int64)
+        idx = np.asarray(idx, dtype=self._index)
         self._rows.append(np.repeat(idx, len(idx)))
         self._cols.append(np.tile(idx, len(idx)))
         self._values.append(np.asarray(block, dtype=float).ravel())
 
     def add_many(self, idx: np.ndarray, blocks: np.ndarray) -> None:
         """Add blocks (n, k, k) at DOFs idx (n, k): one call for a batch of like elements."""
-        idx = np.asarray(idx, dtype=np.int64)
+        idx = np.asarray(idx, dtype=self._index)
         k = idx.shape[1]
         self._rows.append(np.repeat(idx, k, axis=1).ravel())
         self._cols.append(np.tile(idx, (1, k)).ravel())
@@ -39,6 +41,9 @@ class MatrixTriplets:
         """The sum of every block added, as CSR."""
         if not self._values:
             return sparse.csr_array((self.size, self.size))
-        return sparse.coo_array((np.concatenate(self._values), (np.concatenate(self._rows),
-                                                                np.concatenate(self._cols))),
-                                shape=(self.size, self.size)).tocsr()
+        values = np.concatenate(self._values)
+        # exact zeros (a lumped mass block's off-diagonal, an axis-aligned bar's uncoupled terms) are
+        # dropped before the sort that sums duplicates: most of a lumped mass matrix's entries
+        kept = values != 0.0
+        rows, cols = np.concatenate(self._rows)[kept], np.concatenate(self._cols)[kept]
+        return sparse.coo_array((values[kept], (rows, cols)), shape=(self.size, self.size)).tocsr()
