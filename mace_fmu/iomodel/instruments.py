@@ -7,7 +7,8 @@ grid's displacement (CD) system, so nothing indexes a mode-shape vector by posit
 from __future__ import annotations
 
 import fnmatch
-from dataclasses import dataclass, replace
+import math
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Literal, Mapping
 
@@ -76,16 +77,41 @@ class Electronics:
     filter_kind: str = "bessel"  #: the low-pass family: "bessel" (MACE's) or "butterworth"
 
 
+#: the gain symbols of each kind of local loop, as the FMU names its parameters
+SPEED_LOOP_GAINS = ("K_f", "K_b")
+POSITION_LOOP_GAINS = ("K_a", "K_r")
+#: structure-file key of each symbol in a loop's own table ([servos] wheels / gimbals entries)
+LOOP_GAIN_KEYS = {"K_f": "forward_gain", "K_b": "backward_gain", "K_a": "angle_gain", "K_r": "rate_gain"}
+
+
 @dataclass(frozen=True)
 class Servos:
-    """Local loops: wheel speed (eq. 3.18) and gimbal angle (eq. 3.19-3.20)."""
+    """Local loops: wheel speed (eq. 3.18) and gimbal angle (eq. 3.19-3.20).
 
-    wheel_forward_gain: float  #: K_f
-    wheel_backward_gain: float  #: K_b
+    Every loop of a kind shares that kind's gains unless the structure file gives the loop its own
+    (``loop_gains``); a loop with its own gains gets its own FMU parameters, ``K_f_<actuator>`` and so on.
+    """
+
+    wheel_forward_gain: float  #: K_f, shared by the speed loops
+    wheel_backward_gain: float  #: K_b, shared by the speed loops
     wheels: Mapping[str, str]  #: wheel actuator -> its tachometer
-    gimbal_angle_gain: float  #: K_a [V / deg]
-    gimbal_rate_gain: float  #: K_r [V / (deg/s)]
+    gimbal_angle_gain: float  #: K_a [V / deg], shared by the position loops
+    gimbal_rate_gain: float  #: K_r [V / (deg/s)], shared by the position loops
     gimbals: Mapping[str, str]  #: gimbal actuator -> its encoder
+    #: actuator -> {symbol: value}: the gains a loop has of its own ("K_f", "K_b" or "K_a", "K_r")
+    loop_gains: Mapping[str, Mapping[str, float]] = field(default_factory=dict)
+
+    def gain(self, actuator: str, symbol: str) -> float:
+        """The gain ``symbol`` ("K_f", "K_b", "K_a" or "K_r") of the loop closed on ``actuator``."""
+        own = self.loop_gains.get(actuator, {})
+        if symbol in own:
+            return own[symbol]
+        return {"K_f": self.wheel_forward_gain, "K_b": self.wheel_backward_gain, "K_a": self.gimbal_angle_gain,
+                "K_r": self.gimbal_rate_gain}[symbol]
+
+    def parameter_name(self, actuator: str, symbol: str) -> str:
+        """The FMU parameter that carries this gain: ``K_f`` when shared, ``K_f_<actuator>`` when the loop's own."""
+        return f"{symbol}_{actuator}" if symbol in self.loop_gains.get(actuator, {}) else symbol
 
 
 @dataclass(frozen=True)
@@ -256,6 +282,42 @@ def _electronics(table: Mapping[str, Any], path: object) -> Electronics:
                        actuator_delays_s=dict(table.get("actuator_delays_s", {})))
 
 
+def _servos(table: Mapping[str, Any], path: str) -> Servos:
+    """The [servos] table: shared gains, and per loop either the sensor's name (the shared gains) or a
+    table ``{ sensor = "...", <gain key> = value, ... }`` whose gains are the loop's own."""
+    loops: dict[str, dict[str, str]] = {}
+    own: dict[str, dict[str, float]] = {}
+    for kind, symbols in (("wheels", SPEED_LOOP_GAINS), ("gimbals", POSITION_LOOP_GAINS)):
+        loops[kind] = {}
+        for actuator, entry in dict(table.get(kind, {})).items():
+            where = f"{path}: [servos] {kind}.{actuator}"
+            if isinstance(entry, str):
+                loops[kind][actuator] = entry
+                continue
+            if not isinstance(entry, Mapping) or not isinstance(entry.get("sensor"), str):
+                raise MaceError(f"{where}: expected a sensor name or a table with 'sensor' and the loop's own gains")
+            keys = {LOOP_GAIN_KEYS[s]: s for s in symbols}
+            unknown = sorted(set(entry) - {"sensor", *keys})
+            if unknown:
+                raise MaceError(f"{where}: unknown key(s) {unknown}; a {kind[:-1]} loop takes 'sensor' and "
+                                f"{', '.join(repr(k) for k in keys)}")
+            loops[kind][actuator] = entry["sensor"]
+            gains = {}
+            for key, symbol in keys.items():
+                if key in entry:
+                    value = entry[key]
+                    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+                        raise MaceError(f"{where}: {key} must be a finite number, got {value!r}")
+                    gains[symbol] = float(value)
+            if gains:
+                own[actuator] = gains
+    return Servos(wheel_forward_gain=float(table.get("wheel_forward_gain", 0.0)),
+                  wheel_backward_gain=float(table.get("wheel_backward_gain", 0.0)), wheels=loops["wheels"],
+                  gimbal_angle_gain=float(table.get("gimbal_angle_gain", 0.0)),
+                  gimbal_rate_gain=float(table.get("gimbal_rate_gain", 0.0)), gimbals=loops["gimbals"],
+                  loop_gains=own)
+
+
 def load_instruments(structure_file: StructureFile | str | Path | None = None) -> Instruments:
     """Instruments, electronics, servos and damping of a structure file (read once; see
     :class:`~mace_fmu.structure.file.StructureFile`), or of the file at a path; default: the bundled mace_em.toml.
@@ -286,10 +348,7 @@ def load_instruments(structure_file: StructureFile | str | Path | None = None) -
         # delays, no local loops, and every mode DEFAULT_DAMPING (rigid-body and mechanism modes none)
         el, sv, dm = data.get("electronics", {}), data.get("servos", {}), data.get("damping", {})
         electronics = _electronics(el, path)
-        servos = Servos(wheel_forward_gain=float(sv.get("wheel_forward_gain", 0.0)),
-                        wheel_backward_gain=float(sv.get("wheel_backward_gain", 0.0)), wheels=dict(sv.get("wheels", {})),
-                        gimbal_angle_gain=float(sv.get("gimbal_angle_gain", 0.0)),
-                        gimbal_rate_gain=float(sv.get("gimbal_rate_gain", 0.0)), gimbals=dict(sv.get("gimbals", {})))
+        servos = _servos(sv, path)
         damping = DampingTable(default=float(dm.get("default", DEFAULT_DAMPING)),
                                zero_frequency=float(dm.get("zero_frequency", 0.0)),
                                by_label=dict(dm.get("by_label", {})),
@@ -303,10 +362,18 @@ def load_instruments(structure_file: StructureFile | str | Path | None = None) -
     inst = Instruments(actuators=actuators, sensors=sensors, electronics=electronics, servos=servos, damping=damping,
                        source=str(path))
     names = [a.name for a in actuators] + [s.name for s in sensors]
-    for key in list(electronics.sensor_delays_s) + list(servos.wheels.values()) + list(servos.gimbals.values()):
-        inst.sensor(key)
-    for key in list(electronics.actuator_delays_s) + list(servos.wheels) + list(servos.gimbals):
-        inst.actuator(key)
+    # every name the electronics and the loops refer to must be an instrument of this file
+    references = ([("[electronics] gyro_delays_s", name, inst.sensor) for name in electronics.sensor_delays_s]
+                  + [("[electronics] actuator_delays_s", name, inst.actuator) for name in electronics.actuator_delays_s])
+    for kind, loops in (("wheels", servos.wheels), ("gimbals", servos.gimbals)):
+        for actuator, sensor in loops.items():
+            references += [(f"[servos] {kind}.{actuator}", actuator, inst.actuator),
+                           (f"[servos] {kind}.{actuator}", sensor, inst.sensor)]
+    for where, name, look_up in references:
+        try:
+            look_up(name)
+        except MaceError as exc:
+            raise MaceError(f"{path}: {where}: {exc}") from None
     if len(set(names)) != len(names):
         raise MaceError(f"{path}: actuator and sensor names must be unique")
     return inst

@@ -23,7 +23,8 @@ from mace_fmu.fe.preload import Preload, preload_solver, tangent_sensitivity
 from mace_fmu.iomodel.modal_ss import modal_data
 from mace_fmu.iomodel.motion import motion_unit, parse_motion_output
 from mace_fmu.iomodel.volts import VoltsModel
-from mace_fmu.parameters.kinds import DAMPING, DELAY, FREQUENCY_SCALE, declared_range, kind_of_fmu_name, mode_number
+from mace_fmu.parameters.kinds import (DAMPING, DELAY, FREQUENCY_SCALE, declared_range, kind_of_fmu_name, mode_number,
+                                       split_loop_name)
 from mace_fmu.parameters.sets import parameter_names
 from mace_fmu.util.frequency import ZERO_HZ
 from modelica_like import PD, Gain, PadeDelay
@@ -75,26 +76,48 @@ def _blocks(model: VoltsModel) -> tuple[dict, list[tuple[str, float, str]]]:
             parameters.append((name, float(block.delay),
                                f"time delay of {what} [s] (Pade order {model.electronics.pade_order})"))
         elif isinstance(block, Gain) and name.startswith(("kf_", "kb_")):
-            gain = "K_f" if name.startswith("kf_") else "K_b"
-            kinds.append("gain"), params.append(gain)
+            wheel = name[len("kf_"):]
+            kinds.append("gain"), params.append(sv.parameter_name(wheel, "K_f" if name.startswith("kf_") else "K_b"))
         elif isinstance(block, PD):
-            kinds.append("pd"), params.append("K_a,K_r")
+            gimbal = name.removeprefix("servo_")
+            kinds.append("pd"), params.append(f"{sv.parameter_name(gimbal, 'K_a')},{sv.parameter_name(gimbal, 'K_r')}")
         else:
             kinds.append("const"), params.append("")
         for m in "ABCD":
             arrays[f"block{i}_{m}"] = np.asarray(getattr(block, m), dtype=float)
-    if "K_f" in params:
-        parameters += [("K_f", sv.wheel_forward_gain, "reaction wheel speed loop forward gain (eq. 3.18)"),
-                       ("K_b", sv.wheel_backward_gain, "reaction wheel speed loop backward (tachometer) gain")]
-    if "K_a,K_r" in params:
-        parameters += [("K_a", sv.gimbal_angle_gain, "gimbal servo angle gain [V/deg] (eq. 3.20)"),
-                       ("K_r", sv.gimbal_rate_gain, "gimbal servo rate gain [V/(deg/s)] (eq. 3.20)")]
+    parameters += _loop_gain_parameters(sv, [p for field in params for p in field.split(",")])
     ins = [list(ic.inputs).index(n) for n in model.system.input_labels]
     outs = [list(ic.outputs).index(n) for n in model.system.output_labels]
     arrays.update(block_kinds=np.array(kinds), block_params=np.array(params),
                   block_names=np.array([b.name for b in ic.blocks]), wiring=ic.wiring, entry=ic.entry[:, ins],
                   exit=ic.exit[outs], pade_order=np.array(model.electronics.pade_order))
     return arrays, parameters
+
+
+#: what each servo gain is, for the FMU's parameter descriptions
+_GAIN_DESCRIPTIONS = {"K_f": "reaction wheel speed loop forward gain (eq. 3.18)",
+                      "K_b": "reaction wheel speed loop backward (tachometer) gain",
+                      "K_a": "gimbal servo angle gain [V/deg] (eq. 3.20)",
+                      "K_r": "gimbal servo rate gain [V/(deg/s)] (eq. 3.20)"}
+
+
+def _loop_gain_parameters(servos, names: list[str]) -> list[tuple[str, float, str]]:
+    """(name, value, description) of every servo gain the blocks name, once each: the shared ones first
+    (K_f, K_b, K_a, K_r, the order MACE's FMUs have always had), then each loop's own in block order."""
+    shared = [n for n in _GAIN_DESCRIPTIONS if n in names]
+    own = [n for n in dict.fromkeys(names) if n not in _GAIN_DESCRIPTIONS]
+    out = []
+    for name in shared + own:
+        symbol, actuator = split_loop_name(name)
+        if not symbol:
+            continue
+        if actuator:
+            out.append((name, servos.gain(actuator, symbol), f"{_GAIN_DESCRIPTIONS[symbol]} of {actuator}'s loop alone"))
+        else:
+            shared = {"K_f": servos.wheel_forward_gain, "K_b": servos.wheel_backward_gain,
+                      "K_a": servos.gimbal_angle_gain, "K_r": servos.gimbal_rate_gain}[symbol]
+            out.append((name, shared, _GAIN_DESCRIPTIONS[symbol]))
+    return out
 
 
 def material_sensitivity(fe: FEModel, deck, preload: Preload | None, mid: int, *,

@@ -27,13 +27,14 @@ from mace_fmu.fe.modes import StructureModes, compute_modes
 from mace_fmu.fe.preload import PreloadKind
 from mace_fmu.iomodel.damping import modal_damping
 from mace_fmu.iomodel.frf import frequency_response
-from mace_fmu.iomodel.instruments import Instruments, load_instruments, resolve_bar_gauges
+from mace_fmu.iomodel.instruments import SPEED_LOOP_GAINS, Instruments, load_instruments, resolve_bar_gauges
 from mace_fmu.iomodel.modal_ss import ModalPlant, modal_plant
 from mace_fmu.iomodel.model_options import ModelledElectronics, SignalSelection
 from mace_fmu.iomodel.motion import parse_motion_output
-from mace_fmu.parameters.kinds import DAMPING, DELAY, FREQUENCY_SCALE, SERVO_GAINS, ParameterKind, mode_label
+from mace_fmu.parameters.kinds import (DAMPING, DELAY, FREQUENCY_SCALE, SERVO_GAINS, ParameterKind, mode_label,
+                                       split_loop_name)
 from mace_fmu.parameters.sets import ParameterSet, fe_overrides, parameter_names
-from mace_fmu.structure.file import StructureFile, Configuration
+from mace_fmu.structure.file import Configuration, StructureFile
 from mace_fmu.util.frequency import ZERO_HZ
 from mace_fmu.util.threads import single_blas_thread
 from mace_fmu.util.deprecation import renamed_keyword
@@ -183,8 +184,8 @@ def build_diagram(plant: ModalPlant, instruments: Instruments, *,
     def wheel_loop(wheel: str, tach: str) -> None:
         """eq. 3.18: v = K_f (u - K_b tach); the command delay is outside the analog loop."""
         s.add(Sum(f"speed_{wheel}", signs=(1, -1)))
-        s.add(Gain(f"kb_{wheel}", sv.wheel_backward_gain))
-        s.add(Gain(f"kf_{wheel}", sv.wheel_forward_gain))
+        s.add(Gain(f"kb_{wheel}", sv.gain(wheel, "K_b")))
+        s.add(Gain(f"kf_{wheel}", sv.gain(wheel, "K_f")))
         s.connect(f"sensor_gain.y[{tach}]", f"kb_{wheel}.u")
         s.connect(f"kb_{wheel}.y", f"speed_{wheel}.u2")
         s.connect(f"speed_{wheel}.y", f"kf_{wheel}.u")
@@ -201,7 +202,7 @@ def build_diagram(plant: ModalPlant, instruments: Instruments, *,
         s.add(Gain(f"angle_deg_{gimbal}", DEG_PER_RAD))
         s.add(Gain(f"rate_deg_{gimbal}", -DEG_PER_RAD))
         s.add(Sum(f"error_{gimbal}", signs=(1, -1)))
-        s.add(PD(f"servo_{gimbal}", kp=sv.gimbal_angle_gain, kd=sv.gimbal_rate_gain))
+        s.add(PD(f"servo_{gimbal}", kp=sv.gain(gimbal, "K_a"), kd=sv.gain(gimbal, "K_r")))
         s.connect(f"structure.y[{encoder}_angle]", f"angle_deg_{gimbal}.u")
         s.connect(f"structure.y[{encoder}]", f"rate_deg_{gimbal}.u")
         s.connect(f"angle_deg_{gimbal}.y", f"error_{gimbal}.u2")
@@ -413,7 +414,17 @@ def apply_parameters(instruments: Instruments, parameters: ParameterSet | None, 
                             f"{', '.join(DELAY.set_prefix + c for c in [*actuators, *sensors])}")
         _check_range(name, value, DELAY)
         table[channel] = value
-    gains = {SERVO_GAINS[name]: value for name, value in parameters.of_kind("gain").items()}
+    gains, loop_gains = {}, {actuator: dict(own) for actuator, own in sv.loop_gains.items()}
+    for name, value in parameters.of_kind("gain").items():
+        symbol, actuator = split_loop_name(name)
+        if not actuator:
+            gains[SERVO_GAINS[symbol]] = value
+            continue
+        loops = sv.wheels if symbol in SPEED_LOOP_GAINS else sv.gimbals
+        if actuator not in loops:
+            raise MaceError(f"parameter {name!r}: no {'speed' if loops is sv.wheels else 'position'} loop on an "
+                            f"actuator {actuator!r}; loops: {', '.join(loops) or 'none'}")
+        loop_gains.setdefault(actuator, {})[symbol] = value
     known = set(mode_labels)
     prov = parameters.provenance
     other_structure = prov is not None and prov.configuration not in ("", configuration)
@@ -428,7 +439,7 @@ def apply_parameters(instruments: Instruments, parameters: ParameterSet | None, 
         _check_range(name, value, DAMPING)
         damping[label] = value
     return replace(instruments, electronics=replace(el, actuator_delays_s=actuators, sensor_delays_s=sensors),
-                   servos=replace(sv, **gains),
+                   servos=replace(sv, **gains, loop_gains=loop_gains),
                    damping=replace(instruments.damping, by_label={**instruments.damping.by_label, **damping}))
 
 

@@ -53,6 +53,8 @@ class ParameterKind:
     per_mode: bool = False  #: named by mode label in a set and by 1-based mode number in an FMU
     exact_names: Mapping[str, str] = field(default_factory=dict)  #: name -> unit, for kinds without a prefix
     description: str = ""  #: what a parameter of this kind is, with its unit
+    #: an exact name may also carry an actuator, ``K_a_<actuator>``: the gain of that actuator's loop alone
+    per_actuator: bool = False
 
     def range_for(self, nominal: float) -> tuple[float, float]:
         """[min, max] of a parameter of this kind with nominal value ``nominal`` (SI)."""
@@ -80,7 +82,7 @@ SPRING = ParameterKind("spring", "k_", "k_", "N/m", 0.0, 100.0, relative_to_nomi
 DELAY = ParameterKind("delay", "delay_", "delay_", "s", 0.0, 1.0, description="time delay of a channel")
 GAIN = ParameterKind("gain", "", "", "1", -math.inf, math.inf,
                      exact_names=MappingProxyType({"K_a": "V/deg", "K_r": "V/(deg/s)", "K_f": "1", "K_b": "1"}),
-                     description="servo loop gain")
+                     description="servo loop gain", per_actuator=True)
 DAMPING = ParameterKind("damping", "damping:", "damping_mode_", "1", 0.0, 1.0, per_mode=True,
                         description="open-loop modal damping ratio")
 FREQUENCY_SCALE = ParameterKind("frequency_scale", "frequency_scale:", "frequency_scale_mode_", "1", 0.1, 10.0,
@@ -95,7 +97,7 @@ SERVO_GAINS = MappingProxyType({"K_a": "gimbal_angle_gain", "K_r": "gimbal_rate_
 def _match(name: str, *, in_fmu: bool) -> ParameterKind | None:
     """The kind whose name (exact) or prefix ``name`` carries, in an FMU's spelling or a set's."""
     for kind in KINDS:
-        if name in kind.exact_names:
+        if name in kind.exact_names or (kind.per_actuator and split_loop_name(name)[1]):
             return kind
         prefix = kind.fmu_prefix if in_fmu else kind.set_prefix
         rest = name[len(prefix):]
@@ -154,8 +156,20 @@ def mode_label(name: str) -> str:
 
 
 def unit_of(kind: ParameterKind, name: str) -> str:
-    """SI unit of parameter ``name`` of ``kind`` (a gain's unit is its own)."""
-    return kind.exact_names.get(name, kind.unit)
+    """SI unit of parameter ``name`` of ``kind`` (a gain's unit is its own, one loop's that of its symbol)."""
+    return kind.exact_names.get(split_loop_name(name)[0], kind.unit)
+
+
+def split_loop_name(name: str) -> tuple[str, str]:
+    """(gain symbol, actuator) of a servo gain's name: ``K_a`` -> ("K_a", ""), the shared gain;
+    ``K_a_gimbal_z`` -> ("K_a", "gimbal_z"), the gain of that actuator's loop alone; ("", "") for any
+    other name."""
+    for symbol in GAIN.exact_names:
+        if name == symbol:
+            return symbol, ""
+        if name.startswith(symbol + "_") and len(name) > len(symbol) + 1:
+            return symbol, name[len(symbol) + 1:]
+    return "", ""
 
 
 def declared_range(name: str, nominal: float, *, frequency_hz: float | None = None) -> tuple[float, float]:

@@ -17,8 +17,9 @@ import numpy as np
 from mace_fmu.deck.cards import ELEMENT_TABLES, Deck, Subcase
 from mace_fmu.deck.reader import check_deck
 from mace_fmu.errors import DeckError, MaceError
-from mace_fmu.structure.file import (_CARD_TABLES, StructureFile, Configuration, StructureSpec, _ids_text,
+from mace_fmu.structure.file import (_CARD_TABLES, Configuration, StructureFile, StructureSpec, _ids_text,
                                      check_spec_against_deck, structure_file_for)
+from mace_fmu.util.deprecation import renamed_keyword
 
 
 @dataclass(frozen=True)
@@ -164,6 +165,7 @@ def _subcases(deck: Deck) -> tuple[Subcase | None, Subcase]:
     return preload, cases[-1]
 
 
+@renamed_keyword(old="kind", new="configuration")
 def build_structure(deck: Deck, *, configuration: Configuration, spec: StructureSpec | None = None,
                     overrides: Mapping[tuple[str, int], Mapping[str, Any]] | None = None,
                     structure_file: StructureFile | str | os.PathLike | None = None) -> Structure:
