@@ -3,12 +3,12 @@
 The names a user starts with, in the order of the data flow (imported on first use, so that
 ``import mace_fmu`` stays cheap)::
 
-    deck = mace_fmu.read_deck("my.bdf")                       # the deck as NASTRAN reads it
-    modes = mace_fmu.compute_modes(deck, configuration="0g")      # modes [Hz], labelled
+    deck = mace_fmu.read_deck("my.bdf")                           # the deck as NASTRAN reads it
+    modes = mace_fmu.compute_modes(deck, configuration="0g")      # modes.frequencies_hz, modes.labels
     model = mace_fmu.volts_model("0g", structure_file="my.toml",  # volts in, volts out
                                  electronics=mace_fmu.ModelledElectronics(servos=False),
                                  signals=mace_fmu.SignalSelection(outputs=["tip_z"]))
-    mace_fmu.export_fmu(model, out_dir="fmus")                # an FMU (native: FMI 2 or 3; or kind="pythonfmu")
+    mace_fmu.export_fmu(model, out_dir="fmus")                    # an FMU (native: FMI 2 or 3; or kind="pythonfmu")
 
 The packages follow the same flow, each with its own ``__all__``: :mod:`mace_fmu.deck` (the deck),
 :mod:`mace_fmu.structure` (the structure file; 1-g and 0-g structures), :mod:`mace_fmu.parameters`

@@ -22,9 +22,9 @@ from mace_fmu.deck.reader import read_deck_text
 from mace_fmu.errors import MaceError
 from mace_fmu.fe.assembly import Bars, assemble, bar_section
 from mace_fmu.fe.beam import local_stiffness, to_basic
-from mace_fmu.fe.corotational import (BarState, bar_dof_indices, deformation_derivatives, material_tangent,
-                                      natural_deformations, rotation_matrix, rotation_vector_small, tangent,
-                                      tangent_parts)
+from mace_fmu.fe.corotational import (BarState, bar_dof_indices, deformation_derivatives, deformation_jacobian,
+                                      material_tangent, natural_deformations, rotation_matrix, rotation_vector_small,
+                                      tangent, tangent_parts, undeformed_jacobian)
 
 E, NU, RHO = 2.0e11, 0.3, 7800.0
 SKEW = np.array([1.0, 2.0, -0.5]) / np.linalg.norm([1.0, 2.0, -0.5])
@@ -149,6 +149,18 @@ def test_first_derivatives_at_undeformed_state_match_linear_kinematics(model):
             q = rng.standard_normal(12)
             expected = _analytic_natural(frame, length, q)
             np.testing.assert_allclose(b[k] @ q, expected, rtol=1e-9, atol=1e-12 * np.abs(expected).max())
+
+
+def test_closed_form_undeformed_jacobian_equals_the_complex_step_one(model):
+    """The labels of an unloaded structure take B in closed form: the same matrix, for bars along skew
+    axes, with a G0 and a CORD2R orientation."""
+    closed = undeformed_jacobian(model.bars)
+    _, stepped = deformation_jacobian(model.bars, _undeformed(model))
+    np.testing.assert_allclose(closed, stepped, rtol=0, atol=1e-12 * np.abs(stepped).max())
+    for k in range(len(model.bars.ids)):  # and the linear kinematics of the test above
+        q = np.random.default_rng(k).standard_normal(12)
+        expected = _analytic_natural(model.bars.frames0[k], model.bars.lengths0[k], q)
+        np.testing.assert_allclose(closed[k] @ q, expected, rtol=1e-9, atol=1e-12 * np.abs(expected).max())
 
 
 def test_twist_follows_mean_end_rotation(model):

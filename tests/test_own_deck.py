@@ -189,7 +189,7 @@ def test_your_own_deck_with_a_structure_file_gives_a_volts_model_and_an_fmu(tmp_
     FMU (FMI 2 and 3) steps as the exact ZOH of its state space."""
     import control as ct
     import fmpy
-    from support.fmu_checks import check_close, make_inputs, zoh_reference
+    from support.fmu_checks import make_inputs, zoh_reference
 
     from mace_fmu.fmu.native.export import export_native_fmu
     from mace_fmu.iomodel.volts import volts_model

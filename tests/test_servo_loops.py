@@ -44,7 +44,8 @@ def _deck() -> str:
 
 def _instrument(table: str, name: str, grid: int, gain: float, kind: str = "") -> str:
     kind_line = f'kind = "{kind}"\n' if kind else ""
-    return f'\n[[{table}]]\nname = "{name}"\ndescription = "{name}"\n{kind_line}dofs = [[{grid}, 6, 1.0]]\ngain = {gain}\n'
+    return (f'\n[[{table}]]\nname = "{name}"\ndescription = "{name}"\n{kind_line}'
+            f"dofs = [[{grid}, 6, 1.0]]\ngain = {gain}\n")
 
 
 def _structure(*, own: bool = True, wheel_2: str | None = None) -> str:

@@ -49,7 +49,8 @@ def test_ssv_round_trip_is_lossless_and_schema_valid():
 
 
 def test_ssv_cli_round_trip_through_toml(tmp_path):
-    ParameterSet(SET, Provenance(created="2026-11-24T10:00:00+00:00", tool="t", configuration="0g")).write(tmp_path / "p.toml")
+    provenance = Provenance(created="2026-11-24T10:00:00+00:00", tool="t", configuration="0g")
+    ParameterSet(SET, provenance).write(tmp_path / "p.toml")
     (tmp_path / "b.toml").write_text('[[mode]]\nmode = 7\nmode_label = "1st Z bending"\nbound_percent = 1.1\n\n'
                                      '[[mode]]\nlabel = "servo"\n')
     assert main(["params", "to-ssv", str(tmp_path / "p.toml"), "--frequency-bounds", str(tmp_path / "b.toml"),

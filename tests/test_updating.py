@@ -18,7 +18,7 @@ from mace_fmu.parameters.sets import ParameterSet, Provenance, deck_fingerprint,
 from mace_fmu.structure.file import bundled_deck_path
 from mace_fmu.updating.costs import FrequencyResponseCost, ModalCost, TimeResponseCost, UnpairedModeError
 from mace_fmu.updating.data import FrequencyResponseData, MeasuredMode, TimeHistory
-from mace_fmu.updating.inclusion import evaluator, modal_sensitivity, track_modes
+from mace_fmu.updating.inclusion import modal_sensitivity, track_modes
 from mace_fmu.updating.sample_family import TwoMassFamily
 from mace_fmu.updating.selection import SelectionRule, select_parameters
 from mace_fmu.updating.sensitivity import CostSensitivities, cost_sensitivities

@@ -166,8 +166,8 @@ def viewer_pages() -> None:
     for configuration, max_hz in (("0g", 12.0), ("1g", 12.0)):
         modes = compute_modes(configuration=configuration, max_hz=max_hz)
         flexible = [k + 1 for k, hz in enumerate(modes.frequencies_hz) if hz > 1.5][:4]
-        write_animation_html(animate_modes(modes, flexible), DOCS / "_static" / "viewer" / f"modes_{configuration}.html",
-                             title=f"MACE {configuration} modes")
+        page = DOCS / "_static" / "viewer" / f"modes_{configuration}.html"
+        write_animation_html(animate_modes(modes, flexible), page, title=f"MACE {configuration} modes")
     viewer_still()
 
 

@@ -55,7 +55,8 @@ def main_job_text() -> str:
     from mace_fmu.fe.modes import DEFAULT_MAX_HZ
 
     m0 = compute_modes(configuration="0g", max_hz=DEFAULT_MAX_HZ)
-    results = {kind: compute_modes(configuration="1g", preload=kind, max_hz=DEFAULT_MAX_HZ) for kind in ("large", "linear")}
+    results = {kind: compute_modes(configuration="1g", preload=kind, max_hz=DEFAULT_MAX_HZ)
+               for kind in ("large", "linear")}
     return thesis_tables(m0, results) + "\n\n" + low_modes(results)
 
 

@@ -106,7 +106,8 @@ def parameters(args: argparse.Namespace):
     # (the engine's 1-g sets are, on purpose: predict-0g); the provenance says which kind a set is
     if prov is not None and prov.fitted_to and prov.configuration and structure in ("1g", "0g") \
             and prov.configuration != structure:
-        raise MaceError(f"{path}: fitted to the {prov.configuration} FMU {prov.fitted_to}, not to the {structure} model; "
+        raise MaceError(f"{path}: fitted to the {prov.configuration} FMU {prov.fitted_to}, not to the {structure} "
+                        "model; "
                         f"refit it, or remove 'configuration' from its [provenance] to use it anyway")
     return parameters
 

@@ -35,13 +35,14 @@ def cmd_model(args: argparse.Namespace) -> int:
                   sys.stdout, indent=1)
         print()
         return 0
-    print(f"{args.configuration} volts-volts model: {sys_.nstates} states, {sys_.ninputs} inputs, {sys_.noutputs} outputs "
-          f"({model.electronics.describe()})")
+    print(f"{args.configuration} volts-volts model: {sys_.nstates} states, {sys_.ninputs} inputs, "
+          f"{sys_.noutputs} outputs ({model.electronics.describe()})")
     for state, reason in model.plant.removed_states:
         print(f"  removed: {state}: {reason}")
     if args.poles:
-        rows = table_4_7_comparison(poles) if args.configuration == "1g" else table_5_2_comparison(poles, column="g0")
-        title = "Table 4.7, FE columns (closed loop)" if args.configuration == "1g" else "Table 5.2, 0-g column (closed loop)"
+        one_g = args.configuration == "1g"
+        rows = table_4_7_comparison(poles) if one_g else table_5_2_comparison(poles, column="g0")
+        title = "Table 4.7, FE columns (closed loop)" if one_g else "Table 5.2, 0-g column (closed loop)"
         print(format_pole_rows(rows, title=title))
         print()
         print(f"all closed-loop poles up to {args.list_max_hz} Hz")

@@ -128,8 +128,8 @@ def cmd_view_response(args: argparse.Namespace) -> int:
         fmu = _checked_fmu(args.fmu, args.configuration)
         # only the scene is needed from the FE model: its lowest modes are enough
         with progress_bar() as bar:
-            modes = compute_modes(deck, configuration=args.configuration, preload=args.preload, max_hz=1.0, progress=bar,
-                                  structure_file=args.structure_file)
+            modes = compute_modes(deck, configuration=args.configuration, preload=args.preload, max_hz=1.0,
+                                  progress=bar, structure_file=args.structure_file)
     else:
         progress(f"{args.configuration} volts-volts model with the motion of every grid")
         model = volts(args, every_grid_moves=True)

@@ -26,6 +26,8 @@ _WORD = re.compile(r"[A-Z][A-Z0-9]*")
 
 def parse_int(text: str) -> int | None:
     """The integer written in ``text``, or None when it is not a NASTRAN integer."""
+    if text.isdecimal():  # the usual unsigned ID, without the regular expression (the same digits as \d)
+        return int(text)
     return int(text) if _INT.fullmatch(text) else None
 
 
@@ -250,7 +252,8 @@ class Fields:
         if not math.isfinite(value):
             raise self.error(f"real number {text!r} is out of range (expected a finite value)", d, name)
         if (minimum is not None and value < minimum) or (above is not None and value <= above):
-            raise self.error(f"value {text!r} is out of range (expected a real number{_bound(minimum, above)})", d, name)
+            expected = f"a real number{_bound(minimum, above)}"
+            raise self.error(f"value {text!r} is out of range (expected {expected})", d, name)
         return value
 
     def word(self, d: int, name: str, default: Any = REQUIRED, allowed: Iterable[str] | None = None) -> Any:

@@ -71,6 +71,14 @@ def mass_factor(deck: Deck) -> float:
     return 1.0 if param is None else float(param.values[0])  # the reader checked it is a positive number
 
 
+def _rotation_invariant(matrix: np.ndarray) -> bool:
+    """Whether an element matrix (12 x 12) is diagonal with each 3 x 3 block a multiple of the identity:
+    then T^T M T = M for every element frame T."""
+    diagonal = np.diag(matrix)
+    return (np.count_nonzero(matrix - np.diag(diagonal)) == 0
+            and bool(np.all(diagonal.reshape(4, 3) == diagonal.reshape(4, 3)[:, :1])))
+
+
 def assemble(deck: Deck, *, mass: MassKind = "lumped") -> FEModel:
     """Assemble K and M of every element of ``deck`` (no constraints applied), as sparse matrices.
 
@@ -120,7 +128,12 @@ def assemble(deck: Deck, *, mass: MassKind = "lumped") -> FEModel:
     if bar_cards:
         idx = np.concatenate([6 * ga[:, None] + np.arange(6), 6 * gb[:, None] + np.arange(6)], axis=1)
         k_glob.add_many(idx, to_basic_many(np.array(k_loc), fr))
-        m_glob.add_many(idx, to_basic_many(np.array(m_loc), fr))
+        if all(_rotation_invariant(m_e) for _, m_e, _ in cache.values()):
+            # NASTRAN's lumped bar mass: m I on each end's translations, the same in every frame, so
+            # only its diagonal is added (a 100k-DOF tower's mass blocks would be 80 MB of zeros)
+            m_glob.add_diagonal(idx, np.array([np.diag(m_e) for m_e in m_loc]))
+        else:
+            m_glob.add_many(idx, to_basic_many(np.array(m_loc), fr))
     ids, na, nb, ln = [b.id for b in bar_cards], ga, gb, lengths
 
     for cm in deck.conm2s.values():

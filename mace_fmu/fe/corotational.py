@@ -181,6 +181,28 @@ def deformation_jacobian(bars: Bars, state: BarState) -> tuple[np.ndarray, np.nd
     return d, _nodal_vector(bz)
 
 
+def undeformed_jacobian(bars: Bars) -> np.ndarray:
+    """B = dd/dq (n, 7, 12) at the undeformed state, in closed form: what :func:`deformation_jacobian` gives
+    there, without its nine complex-step evaluations per bar.
+
+    With the chord change dc = dx_B - dx_A and the end spins phi_A, phi_B (basic), the corotated frame
+    turns by w = (phi_A + phi_B)/2 . e1 about e1 (its y axis follows the mean of the rotated ends' y axes),
+    -dc . e3 / L about e2 and dc . e2 / L about e3 (its x axis follows the chord); the stretch is
+    dc . e1 and each end's local rotation is its spin less w, in element axes (e1, e2, e3: the rows of
+    ``frames0``). ``tests/test_corotational.py`` checks it against the complex-step derivative.
+    """
+    e1, e2, e3 = bars.frames0[:, 0], bars.frames0[:, 1], bars.frames0[:, 2]
+    per_length = 1.0 / bars.lengths0[:, None]
+    bz = np.zeros((len(bars.ids), 7, 9))
+    chord, spin_a, spin_b = slice(0, 3), slice(3, 6), slice(6, 9)
+    bz[:, 0, chord] = e1
+    for row, own, other in ((1, spin_a, spin_b), (4, spin_b, spin_a)):  # torsion: own spin less the mean
+        bz[:, row, own], bz[:, row, other] = 0.5 * e1, -0.5 * e1
+        bz[:, row + 1, chord], bz[:, row + 1, own] = e3 * per_length, e2  # about element y
+        bz[:, row + 2, chord], bz[:, row + 2, own] = -e2 * per_length, e3  # about element z
+    return _nodal_vector(bz)
+
+
 def internal_force(bars: Bars, state: BarState, n_dof: int) -> np.ndarray:
     """Internal force vector [N, N m] of all bars at ``state`` (first derivatives only: cheap)."""
     d, bz, _ = _reduced_derivatives(bars, state, second=False)

@@ -35,7 +35,8 @@ from dataclasses import replace
 import numpy as np
 
 from mace_fmu.fe.assembly import FEModel
-from mace_fmu.fe.corotational import BarState, bar_dof_indices, bar_energies, deformation_jacobian
+from mace_fmu.fe.corotational import (BarState, bar_dof_indices, bar_energies, deformation_jacobian,
+                                      undeformed_jacobian)
 from mace_fmu.fe.modal import Modes
 from mace_fmu.structure.file import StructureSpec
 from mace_fmu.util.frequency import ZERO_HZ
@@ -78,7 +79,7 @@ _CHUNK = 4000
 class _Energies:
     """Per-mode energy bookkeeping shared by the rules."""
 
-    def __init__(self, model: FEModel, modes: Modes, spec: StructureSpec, state: BarState,
+    def __init__(self, model: FEModel, modes: Modes, spec: StructureSpec, state: BarState | None,
                  bus_bar: np.ndarray | None = None):
         self.model, self.modes, self.spec = model, modes, spec
         phi = modes.shapes
@@ -88,7 +89,8 @@ class _Energies:
             bus = spec.components.get("bus", frozenset())
             bus_bar = np.array([model.dofs.grid_ids[a] in bus and model.dofs.grid_ids[b] in bus
                                 for a, b in zip(model.bars.node_a, model.bars.node_b)], dtype=bool)
-        _, b = deformation_jacobian(model.bars, state)
+        # None: the undeformed structure, whose jacobian has a closed form
+        b = undeformed_jacobian(model.bars) if state is None else deformation_jacobian(model.bars, state)[1]
         b, dof_index = b[bus_bar], bar_dof_indices(model.bars)[bus_bar]
         # natural deformations per mode, in chunks of bars: the gathered shapes of 70k bars would be 350 MB
         d = np.concatenate([np.matmul(b[s:s + _CHUNK], phi[dof_index[s:s + _CHUNK]])
@@ -242,7 +244,8 @@ def unique_labels(labels: list[str], frequencies_hz: np.ndarray) -> tuple[str, .
     return tuple(out)
 
 
-def _generic_labels(model: FEModel, modes: Modes, state: BarState, zero: np.ndarray, labels: list[str]) -> list[str]:
+def _generic_labels(model: FEModel, modes: Modes, state: BarState | None, zero: np.ndarray,
+                    labels: list[str]) -> list[str]:
     """Labels that are true of any structure: the family holding most of a mode's strain energy.
 
     Families: axial, torsion and bending about the basic X, Y or Z axis (bar strain energy, each
@@ -313,8 +316,6 @@ def label_modes(model: FEModel, modes: Modes, spec: StructureSpec, *, reference:
         flex -= rotated @ (rotated.T @ model.mass @ flex)
         shapes[:, ~zero] = flex / np.sqrt(np.einsum("im,im->m", flex, model.mass @ flex))
     modes = replace(modes, shapes=shapes)
-    if state is None:
-        state = BarState(model.positions, np.broadcast_to(np.eye(3), (len(model.positions), 3, 3)))
     if spec.label_rules != "mace":
         return replace(modes, labels=unique_labels(_generic_labels(model, modes, state, zero, labels),
                                                    modes.frequencies_hz))
@@ -322,7 +323,8 @@ def label_modes(model: FEModel, modes: Modes, spec: StructureSpec, *, reference:
     cable_names = sorted(n for n in spec.components if n.startswith("cable_"))
     ke_cable = {n: en.component_ke(lambda c, n=n: c == n) for n in cable_names}
     forces = bar_forces if bar_forces is not None else np.zeros((len(model.bars.ids), 7))
-    pe_bar = bar_energies(model.bars, state, forces, modes.shapes)
+    undeformed = BarState(model.positions, np.broadcast_to(np.eye(3), (len(model.positions), 3, 3)))
+    pe_bar = bar_energies(model.bars, state if state is not None else undeformed, forces, modes.shapes)
     pe_spring = 0.5 * model.spring_constants[:, None] * (model.spring_vectors @ modes.shapes) ** 2
     in_suspension = np.array([i in spec.suspension_elements for i in model.bars.ids])
     gimbal_grids = frozenset().union(*(g for n, g in spec.components.items() if "gimbal" in n))

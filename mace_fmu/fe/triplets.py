@@ -37,6 +37,13 @@ class MatrixTriplets:
         self._cols.append(np.tile(idx, (1, k)).ravel())
         self._values.append(np.asarray(blocks, dtype=float).ravel())
 
+    def add_diagonal(self, idx: np.ndarray, diagonals: np.ndarray) -> None:
+        """Add diagonal blocks, given by their diagonals (n, k), at DOFs idx (n, k)."""
+        idx = np.asarray(idx, dtype=self._index).ravel()
+        self._rows.append(idx)
+        self._cols.append(idx)
+        self._values.append(np.asarray(diagonals, dtype=float).ravel())
+
     def matrix(self) -> sparse.csr_array:
         """The sum of every block added, as CSR."""
         if not self._values:

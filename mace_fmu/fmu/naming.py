@@ -41,7 +41,8 @@ def fmu_name(configuration: str, *, kind: str | None = None, fmi_version: int = 
     str
         A C identifier, the FMU's model name and file stem.
     """
-    base = f"{variant_identifier(prefix)}_{configuration}" + (f"_{kind}" if kind else "") + ("_fmi3" if fmi_version == 3 else "")
+    base = (f"{variant_identifier(prefix)}_{configuration}" + (f"_{kind}" if kind else "")
+            + ("_fmi3" if fmi_version == 3 else ""))
     if variant:
         base += "_" + variant_identifier(variant)
     grids = sorted(set(int(g) for g in motion_grids))

@@ -364,7 +364,8 @@ def load_instruments(structure_file: StructureFile | str | Path | None = None) -
     names = [a.name for a in actuators] + [s.name for s in sensors]
     # every name the electronics and the loops refer to must be an instrument of this file
     references = ([("[electronics] gyro_delays_s", name, inst.sensor) for name in electronics.sensor_delays_s]
-                  + [("[electronics] actuator_delays_s", name, inst.actuator) for name in electronics.actuator_delays_s])
+                  + [("[electronics] actuator_delays_s", name, inst.actuator)
+                     for name in electronics.actuator_delays_s])
     for kind, loops in (("wheels", servos.wheels), ("gimbals", servos.gimbals)):
         for actuator, sensor in loops.items():
             references += [(f"[servos] {kind}.{actuator}", actuator, inst.actuator),

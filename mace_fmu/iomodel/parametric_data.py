@@ -112,7 +112,8 @@ def _loop_gain_parameters(servos, names: list[str]) -> list[tuple[str, float, st
         if not symbol:
             continue
         if actuator:
-            out.append((name, servos.gain(actuator, symbol), f"{_GAIN_DESCRIPTIONS[symbol]} of {actuator}'s loop alone"))
+            what = f"{_GAIN_DESCRIPTIONS[symbol]} of {actuator}'s loop alone"
+            out.append((name, servos.gain(actuator, symbol), what))
         else:
             shared = {"K_f": servos.wheel_forward_gain, "K_b": servos.wheel_backward_gain,
                       "K_a": servos.gimbal_angle_gain, "K_r": servos.gimbal_rate_gain}[symbol]

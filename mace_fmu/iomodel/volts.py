@@ -225,11 +225,12 @@ def build_diagram(plant: ModalPlant, instruments: Instruments, *,
 
 @renamed_keyword(old="structure", new="configuration")
 @single_blas_thread
-def volts_model(configuration: Configuration = "1g", *, modes: StructureModes | None = None, deck: Deck | str | None = None,
-                preload: PreloadKind | None = None, structure_file: StructureFile | str | os.PathLike | None = None,
-                max_hz: float | None = None, parameters: ParameterSet | None = None,
-                instruments: Instruments | None = None, electronics: ModelledElectronics = ModelledElectronics(),
-                signals: SignalSelection = SignalSelection(), **moved: Any) -> VoltsModel:
+def volts_model(configuration: Configuration = "1g", *, modes: StructureModes | None = None,
+                deck: Deck | str | None = None, preload: PreloadKind | None = None,
+                structure_file: StructureFile | str | os.PathLike | None = None, max_hz: float | None = None,
+                parameters: ParameterSet | None = None, instruments: Instruments | None = None,
+                electronics: ModelledElectronics = ModelledElectronics(), signals: SignalSelection = SignalSelection(),
+                **moved: Any) -> VoltsModel:
     """Volts-volts model of the 1-g or 0-g structure: actuator volts in, sensor volts out.
 
     Inputs: gimbal commands (relative angle, 1 V = 1 deg, with servos; motor volts without), wheel speed
@@ -453,7 +454,8 @@ def _check_range(name: str, value: float, kind: ParameterKind) -> None:
                         f"{kind.name.replace('_', ' ')} parameter")
 
 
-def scale_frequencies(modes: StructureModes, parameters: ParameterSet | None, *, configuration: str = "") -> StructureModes:
+def scale_frequencies(modes: StructureModes, parameters: ParameterSet | None, *,
+                      configuration: str = "") -> StructureModes:
     """``modes`` with each ``frequency_scale:<label>`` of the set multiplying its label's frequencies [Hz].
 
     Shapes are kept: the scale is a modal adjustment of the open-loop model (thesis 5.3), not an FE

@@ -139,7 +139,8 @@ class MaceFamily:
                 try:
                     vec[system.index(name)] = value
                 except KeyError:
-                    raise MaceError(f"parameter {name!r} is not a parameter of the {self.configuration} model") from None
+                    raise MaceError(f"parameter {name!r} is not a parameter of the {self.configuration} "
+                                    "model") from None
         return vec
 
     # --- the ModelFamily interface ---------------------------------------------------------------

@@ -292,7 +292,8 @@ def _deck_provenance(parameters: ParameterSet | None, deck: Deck | None, *, sour
                           configuration="0g", data=source, method=method)
     return Provenance(created=now_utc(), tool=tool_version(), deck=base.deck, deck_sha256=base.deck_sha256,
                       configuration="0g", data=source, method=method,
-                      notes=f"from a {base.configuration or 'parameter'} set made {base.created} ({base.method})".strip())
+                      notes=f"from a {base.configuration or 'parameter'} set made {base.created} "
+                            f"({base.method})".strip())
 
 
 @single_blas_thread
