@@ -101,13 +101,14 @@ class Servos:
     #: actuator -> {symbol: value}: the gains a loop has of its own ("K_f", "K_b" or "K_a", "K_r")
     loop_gains: Mapping[str, Mapping[str, float]] = field(default_factory=dict)
 
-    def gain(self, actuator: str, symbol: str) -> float:
-        """The gain ``symbol`` ("K_f", "K_b", "K_a" or "K_r") of the loop closed on ``actuator``."""
-        own = self.loop_gains.get(actuator, {})
-        if symbol in own:
-            return own[symbol]
+    def shared_gain(self, symbol: str) -> float:
+        """The shared gain ``symbol`` ("K_f", "K_b", "K_a" or "K_r") of the loops without their own."""
         return {"K_f": self.wheel_forward_gain, "K_b": self.wheel_backward_gain, "K_a": self.gimbal_angle_gain,
                 "K_r": self.gimbal_rate_gain}[symbol]
+
+    def gain(self, actuator: str, symbol: str) -> float:
+        """The gain ``symbol`` ("K_f", "K_b", "K_a" or "K_r") of the loop closed on ``actuator``."""
+        return self.loop_gains.get(actuator, {}).get(symbol, self.shared_gain(symbol))
 
     def parameter_name(self, actuator: str, symbol: str) -> str:
         """The FMU parameter that carries this gain: ``K_f`` when shared, ``K_f_<actuator>`` when the loop's own."""

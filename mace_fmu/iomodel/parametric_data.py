@@ -20,6 +20,7 @@ from mace_fmu.fe.assembly import FEModel, bar_section
 from mace_fmu.fe.beam import natural_stiffness
 from mace_fmu.fe.corotational import BarState, material_tangent
 from mace_fmu.fe.preload import Preload, preload_solver, tangent_sensitivity
+from mace_fmu.iomodel.instruments import Servos
 from mace_fmu.iomodel.modal_ss import modal_data
 from mace_fmu.iomodel.motion import motion_unit, parse_motion_output
 from mace_fmu.iomodel.volts import VoltsModel
@@ -101,7 +102,7 @@ _GAIN_DESCRIPTIONS = {"K_f": "reaction wheel speed loop forward gain (eq. 3.18)"
                       "K_r": "gimbal servo rate gain [V/(deg/s)] (eq. 3.20)"}
 
 
-def _loop_gain_parameters(servos, names: list[str]) -> list[tuple[str, float, str]]:
+def _loop_gain_parameters(servos: Servos, names: list[str]) -> list[tuple[str, float, str]]:
     """(name, value, description) of every servo gain the blocks name, once each: the shared ones first
     (K_f, K_b, K_a, K_r, the order MACE's FMUs have always had), then each loop's own in block order."""
     shared = [n for n in _GAIN_DESCRIPTIONS if n in names]
@@ -115,9 +116,7 @@ def _loop_gain_parameters(servos, names: list[str]) -> list[tuple[str, float, st
             what = f"{_GAIN_DESCRIPTIONS[symbol]} of {actuator}'s loop alone"
             out.append((name, servos.gain(actuator, symbol), what))
         else:
-            shared = {"K_f": servos.wheel_forward_gain, "K_b": servos.wheel_backward_gain,
-                      "K_a": servos.gimbal_angle_gain, "K_r": servos.gimbal_rate_gain}[symbol]
-            out.append((name, shared, _GAIN_DESCRIPTIONS[symbol]))
+            out.append((name, servos.shared_gain(symbol), _GAIN_DESCRIPTIONS[symbol]))
     return out
 
 
