@@ -216,7 +216,7 @@ def test_override_unknown_field(deck):
 @pytest.mark.parametrize(("kwargs", "allowed"), [
     ({"preload": "huge"}, ("'large'", "'linear'")),
     ({"mass": "diagonal"}, ("'lumped'", "'consistent'")),
-    ({"structure": "2g"}, ("'1g'", "'0g'")),
+    ({"configuration": "2g"}, ("'1g'", "'0g'")),
 ])
 def test_compute_modes_bad_options(deck, kwargs, allowed):
     with pytest.raises(ValueError) as exc:
