@@ -101,14 +101,14 @@ def parameters(args: argparse.Namespace):
     if not path:
         return None
     parameters = ParameterSet.read(path)
-    prov, structure = parameters.provenance, getattr(args, "configuration", None)
+    prov, configuration = parameters.provenance, getattr(args, "configuration", None)
     # a fit to one structure's FMU absorbed that structure's errors: it is not carried to the other
     # (the engine's 1-g sets are, on purpose: predict-0g); the provenance says which kind a set is
-    if prov is not None and prov.fitted_to and prov.configuration and structure in ("1g", "0g") \
-            and prov.configuration != structure:
-        raise MaceError(f"{path}: fitted to the {prov.configuration} FMU {prov.fitted_to}, not to the {structure} "
-                        "model; "
-                        f"refit it, or remove 'configuration' from its [provenance] to use it anyway")
+    if prov is not None and prov.fitted_to and prov.configuration and configuration in ("1g", "0g") \
+            and prov.configuration != configuration:
+        raise MaceError(f"{path}: fitted to the {prov.configuration} FMU {prov.fitted_to}, not to the "
+                        f"{configuration} model; refit it, or remove 'configuration' from its [provenance] to use "
+                        "it anyway")
     return parameters
 
 

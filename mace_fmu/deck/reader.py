@@ -15,8 +15,8 @@ from typing import Any, Callable
 import numpy as np
 
 from mace_fmu.deck.cards import (CBar, CBeam, Celas2, Conm1, Conm2, Cord1R, Cord2R, Deck, Eigr, Eigrl, Grav, Grid,
-                                 Interpolation, Load, Mat1, Mpc, MpcTerm, Nlparm, Param, PBar, PBeam, PMass, PRod, Rigid,
-                                 Rod, ScalarMass, SetUnion, Source, Spc1)
+                                 Interpolation, Load, Mat1, Mpc, MpcTerm, Nlparm, Param, PBar, PBeam, PMass, PRod,
+                                 Rigid, Rod, ScalarMass, SetUnion, Source, Spc1)
 from mace_fmu.deck.fields import (Fields, Selections, case_control, check_text, parse_int, parse_real, split_cards,
                                   split_sections)
 from mace_fmu.deck.sections import SECTIONS, section_properties

@@ -209,15 +209,23 @@ def internal_force(bars: Bars, state: BarState, n_dof: int) -> np.ndarray:
     return _force(bars, bz, np.einsum("nij,nj->ni", bars.k_natural, d), n_dof)
 
 
-def bar_energies(bars: Bars, state: BarState, natural_forces: np.ndarray, vectors: np.ndarray) -> np.ndarray:
-    """(n_bar, n_vec) potential energy 1/2 v_e^T K_T,e v_e of each bar for global vectors (n_dof, n_vec)."""
+def bar_energies(bars: Bars, state: BarState | None, natural_forces: np.ndarray, vectors: np.ndarray) -> np.ndarray:
+    """(n_bar, n_vec) potential energy 1/2 v_e^T K_T,e v_e of each bar for global vectors (n_dof, n_vec);
+    ``state`` None: the undeformed geometry, unstressed (its jacobian in closed form)."""
     stressed = bool(np.any(natural_forces))  # unstressed (0-g): no geometric part, first derivatives suffice
-    _, bz, d2z = _reduced_derivatives(bars, state, second=stressed)
-    k_z = np.swapaxes(bz, 1, 2) @ bars.k_natural @ bz
-    if stressed:
-        k_z = k_z + np.einsum("nk,nkij->nij", natural_forces, d2z)
+    if state is None:
+        if stressed:
+            raise ValueError("bar forces need the state they act in")
+        b = undeformed_jacobian(bars)
+        k_e = np.swapaxes(b, 1, 2) @ bars.k_natural @ b
+    else:
+        _, bz, d2z = _reduced_derivatives(bars, state, second=stressed)
+        k_z = np.swapaxes(bz, 1, 2) @ bars.k_natural @ bz
+        if stressed:
+            k_z = k_z + np.einsum("nk,nkij->nij", natural_forces, d2z)
+        k_e = _nodal_matrix(k_z)
     v = vectors[bar_dof_indices(bars)]
-    return 0.5 * np.einsum("nim,nij,njm->nm", v, _nodal_matrix(k_z), v)
+    return 0.5 * np.einsum("nim,nij,njm->nm", v, k_e, v)
 
 
 def bar_dof_indices(bars: Bars) -> np.ndarray:

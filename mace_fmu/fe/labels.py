@@ -323,8 +323,7 @@ def label_modes(model: FEModel, modes: Modes, spec: StructureSpec, *, reference:
     cable_names = sorted(n for n in spec.components if n.startswith("cable_"))
     ke_cable = {n: en.component_ke(lambda c, n=n: c == n) for n in cable_names}
     forces = bar_forces if bar_forces is not None else np.zeros((len(model.bars.ids), 7))
-    undeformed = BarState(model.positions, np.broadcast_to(np.eye(3), (len(model.positions), 3, 3)))
-    pe_bar = bar_energies(model.bars, state if state is not None else undeformed, forces, modes.shapes)
+    pe_bar = bar_energies(model.bars, state, forces, modes.shapes)  # state None: undeformed, unstressed
     pe_spring = 0.5 * model.spring_constants[:, None] * (model.spring_vectors @ modes.shapes) ** 2
     in_suspension = np.array([i in spec.suspension_elements for i in model.bars.ids])
     gimbal_grids = frozenset().union(*(g for n, g in spec.components.items() if "gimbal" in n))

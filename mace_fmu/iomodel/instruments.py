@@ -19,6 +19,7 @@ from mace_fmu.errors import MaceError
 from mace_fmu.fe.assembly import FEModel
 from mace_fmu.fe.bar_strain import bar_strain_weights
 from mace_fmu.fe.dofs import DofMap, cd_component_vector
+from mace_fmu.parameters.kinds import SERVO_GAINS
 from mace_fmu.structure.file import StructureFile, bundled_structure_path, load_structure_file
 from modelica_like.filters import LOWPASS_KINDS, lowpass_realization
 
@@ -103,8 +104,7 @@ class Servos:
 
     def shared_gain(self, symbol: str) -> float:
         """The shared gain ``symbol`` ("K_f", "K_b", "K_a" or "K_r") of the loops without their own."""
-        return {"K_f": self.wheel_forward_gain, "K_b": self.wheel_backward_gain, "K_a": self.gimbal_angle_gain,
-                "K_r": self.gimbal_rate_gain}[symbol]
+        return getattr(self, SERVO_GAINS[symbol])
 
     def gain(self, actuator: str, symbol: str) -> float:
         """The gain ``symbol`` ("K_f", "K_b", "K_a" or "K_r") of the loop closed on ``actuator``."""
