@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 from mace_fmu.cli import main
-from mace_fmu.util.atomic import atomic_path, save_figure_atomic, write_text_atomic
+from mace_fmu.util.atomic import atomic_path, atomic_zip, save_figure_atomic, write_text_atomic
 
 PREVIOUS = b"the previous good file\n"
 
@@ -49,6 +49,26 @@ def test_failed_write_keeps_the_previous_file_and_removes_the_temporary(tmp_path
     write_text_atomic(final, "new\n")
     assert final.read_text() == "new\n" and _leftovers(tmp_path) == []
     assert oct(final.stat().st_mode & 0o777) == oct(0o666 & ~_umask())  # not mkstemp's private 0600
+
+
+def test_an_interrupt_while_an_archive_entry_is_open_stays_the_interrupt(tmp_path: Path) -> None:
+    """SIGTERM (SystemExit 143 from the CLI's handler) arriving inside an entry's write: the exit status
+    stays 143 and the previous FMU stays. ``with ZipFile(...)`` turned it into a ValueError traceback
+    ("Can't close the ZIP file while there is an open writing handle") and exit 1."""
+    final = tmp_path / "MACE_0g_native.fmu"
+    final.write_bytes(PREVIOUS)
+    with pytest.raises(SystemExit) as stopped:
+        with atomic_zip(final) as archive:
+            # the signal arrives while the entry is still open (inside its own close, in the export)
+            entry = archive.open("binaries/linux64/MACE_0g_native.so", "w")
+            entry.write(b"\x7fELF half of a shared object")
+            raise SystemExit(128 + signal.SIGTERM)
+    assert stopped.value.code == 143
+    assert final.read_bytes() == PREVIOUS and _leftovers(tmp_path) == []
+    with atomic_zip(final) as archive:
+        archive.writestr("modelDescription.xml", "<fmiModelDescription/>")
+    with zipfile.ZipFile(final) as written:
+        assert written.testzip() is None and written.read("modelDescription.xml") == b"<fmiModelDescription/>"
 
 
 def _umask() -> int:

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import hashlib
 import re
-import shutil
 import sys
 import tempfile
 import zipfile
@@ -32,16 +31,16 @@ from mace_fmu.iomodel import modal_core, parametric, reanalysis
 from mace_fmu.iomodel.parametric_data import parametric_arrays, with_frequency_bounds
 from mace_fmu.iomodel.volts import VoltsModel
 from mace_fmu.util import frequency
-from mace_fmu.util.atomic import atomic_path
+from mace_fmu.util.atomic import atomic_zip
 from modelica_like import algebra
 
 SLAVE_SOURCE = Path(__file__).with_name("slave.py")
 
 
 def _patch_model_description(fmu: Path, *, description: str, version: str,
-                              ranges: dict[str, tuple[float, float]]) -> None:
-    """Add units, parameter ranges (min/max where finite), a default experiment, initial unknowns, description
-    and version."""
+                              ranges: dict[str, tuple[float, float]]) -> dict[str, bytes]:
+    """The entries of pythonfmu's ``fmu`` with units, parameter ranges (min/max where finite), a default
+    experiment, initial unknowns, description and version added to its model description."""
     with zipfile.ZipFile(fmu) as z:
         entries = {n: z.read(n) for n in z.namelist()}
     root = ET.fromstring(entries["modelDescription.xml"])
@@ -78,9 +77,7 @@ def _patch_model_description(fmu: Path, *, description: str, version: str,
         position = list(structure).index(outputs) + 1 if outputs is not None else 0
         structure.insert(position, initial)
     entries["modelDescription.xml"] = ET.tostring(root, encoding="UTF-8", xml_declaration=True)
-    with zipfile.ZipFile(fmu, "w", zipfile.ZIP_DEFLATED) as z:
-        for name, data in entries.items():
-            z.writestr(name, data)
+    return entries
 
 
 _CACHE_PREFIX = "_mace_fmu_slave_"  #: sys.modules key of an FMU's cached implementation
@@ -212,7 +209,7 @@ def export_pythonfmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str 
     if frequency_bounds:
         arrays = with_frequency_bounds(arrays, frequency_bounds)
     final = out / f"{name}.fmu"
-    with tempfile.TemporaryDirectory(prefix="mace_fmu_") as tmp, atomic_path(final) as part:
+    with tempfile.TemporaryDirectory(prefix="mace_fmu_") as tmp:
         tmp = Path(tmp)
         script = tmp / f"{name.lower()}_fmu.py"
         script.write_text(_entry_script(name, description))
@@ -224,7 +221,9 @@ def export_pythonfmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str 
             del sys.modules[key]  # the builder ran the entry script here; loading the FMU rebuilds it
         ranges = {str(n): (float(lo), float(hi)) for n, lo, hi in zip(arrays["param_names"], arrays["param_min"],
                                                                        arrays["param_max"])}
-        _patch_model_description(Path(path), description=description, version=metadata.version("mace-fmu"),
-                                 ranges=ranges)
-        shutil.copyfile(path, part)
+        entries = _patch_model_description(Path(path), description=description,
+                                           version=metadata.version("mace-fmu"), ranges=ranges)
+    with atomic_zip(final) as z:
+        for entry, data in entries.items():
+            z.writestr(entry, data)
     return final

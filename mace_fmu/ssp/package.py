@@ -16,14 +16,13 @@ from __future__ import annotations
 
 import os
 import xml.etree.ElementTree as ET
-import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Mapping, Sequence
 
 from mace_fmu.errors import MaceError
 from mace_fmu.ssp.ssv import SSC, units_element, values_ssv
-from mace_fmu.util.atomic import atomic_path
+from mace_fmu.util.atomic import atomic_zip
 
 SSD = "http://ssp-standard.org/SSP1/SystemStructureDescription"
 ET.register_namespace("ssd", SSD)
@@ -214,13 +213,12 @@ def write_ssp(path: str | os.PathLike, *, components: Sequence[SspComponent],
     """
     ssd = system_structure(components, connections, system_name=system_name, stop_time_s=stop_time_s)
     ssvs = {c.name: component_ssv(c) for c in components if c.start_values}
-    with atomic_path(path) as tmp:
-        with zipfile.ZipFile(tmp, "w", compression=zipfile.ZIP_DEFLATED) as z:
-            z.writestr("SystemStructure.ssd", ssd)
-            for c in components:
-                z.write(c.fmu, f"resources/{c.name}.fmu")
-                if c.name in ssvs:
-                    z.writestr(f"resources/{c.name}.ssv", ssvs[c.name])
+    with atomic_zip(path) as z:
+        z.writestr("SystemStructure.ssd", ssd)
+        for c in components:
+            z.write(c.fmu, f"resources/{c.name}.fmu")
+            if c.name in ssvs:
+                z.writestr(f"resources/{c.name}.ssv", ssvs[c.name])
     return Path(path)
 
 

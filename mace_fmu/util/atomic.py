@@ -5,6 +5,7 @@ from __future__ import annotations
 import contextlib
 import os
 import secrets
+import zipfile
 from pathlib import Path
 from typing import TYPE_CHECKING, Iterator
 
@@ -35,6 +36,26 @@ def atomic_path(final: str | os.PathLike) -> Iterator[Path]:
     finally:
         with contextlib.suppress(FileNotFoundError):
             tmp_path.unlink()
+
+
+@contextlib.contextmanager
+def atomic_zip(final: str | os.PathLike) -> Iterator[zipfile.ZipFile]:
+    """A deflated ZIP archive written to a temporary file and renamed onto ``final`` when the block succeeds.
+
+    The archive is finished (its central directory written) only when every entry was: a ``SIGTERM`` or
+    Ctrl-C arriving while an entry is being written leaves the interrupt to propagate and the temporary
+    file to :func:`atomic_path`'s cleanup. Closing a ``ZipFile`` on the way out, as its own context
+    manager does, would replace the interrupt by ``ValueError: Can't close the ZIP file while there is an
+    open writing handle``.
+    """
+    with atomic_path(final) as part, open(part, "wb") as handle:
+        archive = zipfile.ZipFile(handle, "w", zipfile.ZIP_DEFLATED)
+        try:
+            yield archive
+        except BaseException:
+            archive.fp = None  # abandoned: the state close() leaves, so that __del__ does not finish it either
+            raise
+        archive.close()
 
 
 def save_figure_atomic(figure: Figure, path: str | os.PathLike, **savefig_options) -> Path:

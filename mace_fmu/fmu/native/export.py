@@ -13,7 +13,6 @@ from __future__ import annotations
 import hashlib
 import re
 import uuid
-import zipfile
 from collections.abc import Mapping
 from importlib import metadata
 from pathlib import Path
@@ -30,7 +29,7 @@ from mace_fmu.fmu.variables import model_summary
 from mace_fmu.iomodel.parametric import ParametricSystem
 from mace_fmu.iomodel.parametric_data import parametric_arrays, with_frequency_bounds
 from mace_fmu.iomodel.volts import VoltsModel
-from mace_fmu.util.atomic import atomic_path
+from mace_fmu.util.atomic import atomic_zip
 
 FmiVersion = Literal[2, 3]
 RESOURCE_NAME = "mace_model.bin"
@@ -72,18 +71,17 @@ def write_native_fmu(final: Path, *, name: str, fmi_version: int, description: b
         ``final``, written atomically.
     """
     c_files = [p.name for p in sources if p.suffix == ".c"]
-    with atomic_path(final) as part:
-        with zipfile.ZipFile(part, "w", zipfile.ZIP_DEFLATED) as z:
-            z.writestr("modelDescription.xml", description)
-            z.writestr(f"resources/{RESOURCE_NAME}", resource_bytes(data))
-            for platform, binary in binaries.items():
-                folder = platform.fmi2_folder if fmi_version == 2 else platform.fmi3_folder
-                z.writestr(f"binaries/{folder}/{name}{platform.suffix}", binary)
-            for path in sources:
-                z.write(path, f"sources/{path.name}")
-            if fmi_version == 3:
-                z.writestr("sources/buildDescription.xml",
-                           fmi3_build_description(model_identifier=name, source_files=c_files))
+    with atomic_zip(final) as z:
+        z.writestr("modelDescription.xml", description)
+        z.writestr(f"resources/{RESOURCE_NAME}", resource_bytes(data))
+        for platform, binary in binaries.items():
+            folder = platform.fmi2_folder if fmi_version == 2 else platform.fmi3_folder
+            z.writestr(f"binaries/{folder}/{name}{platform.suffix}", binary)
+        for path in sources:
+            z.write(path, f"sources/{path.name}")
+        if fmi_version == 3:
+            z.writestr("sources/buildDescription.xml",
+                       fmi3_build_description(model_identifier=name, source_files=c_files))
     return final
 
 
