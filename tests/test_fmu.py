@@ -279,8 +279,8 @@ def test_physical_parameter_reanalysis_matches_the_fe_rebuild(built):
 
 
 def test_reanalysed_modes_keep_their_index_through_a_frequency_crossing(motion_fmu_0g):
-    """Doubling the piezo stack modulus lifts 2nd Y bending (8.638 Hz) above 2nd Z bending
-    (8.667 Hz). frequency_mode_k (and damping_mode_k) must follow the physical mode: checked
+    """The piezo stack modulus x 1.5 (the top of its declared range) lifts 2nd Y bending (8.638 Hz) above
+    2nd Z bending (8.667 Hz). frequency_mode_k (and damping_mode_k) must follow the physical mode: checked
     against the FE rebuild, whose modes are labelled from their energy distributions."""
     from mace_fmu.fe.modes import compute_modes
 
@@ -288,17 +288,19 @@ def test_reanalysed_modes_keep_their_index_through_a_frequency_crossing(motion_f
     md = fmpy.read_model_description(unzipped)
     param = next(v for v in md.modelVariables if v.name == "E_active_strut_piezo")
     mid = int(param.description.split("MAT1 ")[1].split(")")[0])
-    fmu = initialised_slave(model, unzipped, {param.name: 2.0 * float(param.start)})
+    fmu = initialised_slave(model, unzipped, {param.name: 1.5 * float(param.start)})
     ours = _frequencies(fmu, unzipped)
     fmu.freeInstance()
-    rebuilt = compute_modes(configuration="0g", overrides={("MAT1", mid): {"e": 2.0 * float(param.start)}}).modes
+    rebuilt = compute_modes(configuration="0g", overrides={("MAT1", mid): {"e": 1.5 * float(param.start)}}).modes
     labels = list(model.plant.labels)
     y, z = labels.index("2nd Y bending"), labels.index("2nd Z bending")
     want = {k: rebuilt.frequencies_hz[list(rebuilt.labels).index(labels[k])] for k in (y, z)}
     assert model.plant.frequencies_hz[y] < model.plant.frequencies_hz[z]
     assert want[y] > want[z] and ours[y] > ours[z]  # crossed in the FE rebuild, and in the FMU at the same index
-    for k in (y, z):  # Ritz on the retained modes is an upper bound: +1.3 % and +0.8 % for this 100 % change
-        assert want[k] <= ours[k] <= 1.015 * want[k]
+    # Ritz is an upper bound; with the static corrections in its basis it is 1.1e-8 above the rebuild (on the
+    # retained modes alone: +1.3 % and +0.8 % for twice the modulus)
+    for k in (y, z):
+        assert want[k] <= ours[k] <= (1 + 1e-6) * want[k]
 
 
 @pytest.mark.parametrize("change", ["delay", "servo", "damping"])

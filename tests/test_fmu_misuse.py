@@ -86,7 +86,11 @@ def test_step_before_initialisation_is_refused(fmu_0g) -> None:
     ("damping_mode_7", "-0.01", "damping_mode_7 = -0.01 is outside its declared range [0, 1]"),
     ("delay_gyro_payload_x", "-0.001", "delay_gyro_payload_x = -0.001 is outside its declared range [0, 1]"),
     ("K_a", "nan", "K_a = nan is not a finite number"),
-    ("E_lexan_center", "-1.0", "E_lexan_center = -1 is outside its declared range [0, 233500000000]"),
+    ("E_lexan_center", "-1.0", "E_lexan_center = -1 is outside its declared range [1634500000, 3502500000]"),
+    # zero ran before, 0-g mode 14 at 0.92 Hz: the range is where the route was validated (0.7 to 1.5 x nominal)
+    ("E_lexan_center", "0.0", "E_lexan_center = 0 is outside its declared range [1634500000, 3502500000]"),
+    ("E_lexan_center", "1634000000.0", "E_lexan_center = 1634000000 is outside its declared range [1634500000, "
+                                       "3502500000]"),
 ])
 def test_invalid_parameters_are_refused_at_initialisation(fmu_0g, name: str, value: str, reason: str) -> None:
     r = run(fmu_0g[2], f"parameter:{name}:{value}")
@@ -100,7 +104,7 @@ def test_declared_ranges_are_in_the_model_description(fmu_0g) -> None:
     variables = {v.name: v for v in description.modelVariables}
     assert (variables["damping_mode_7"].min, variables["damping_mode_7"].max) == ("0.0", "1.0")
     assert (variables["delay_gyro_payload_x"].min, variables["delay_gyro_payload_x"].max) == ("0.0", "1.0")
-    assert (variables["E_lexan_center"].min, variables["E_lexan_center"].max) == ("0.0", "233500000000.0")
+    assert (variables["E_lexan_center"].min, variables["E_lexan_center"].max) == ("1634500000.0", "3502500000.0")
     assert (variables["K_a"].min, variables["K_a"].max) == (None, None)
 
 

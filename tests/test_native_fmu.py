@@ -138,7 +138,8 @@ def test_model_descriptions_validate_and_match_the_pythonfmu_fmu(fmus):
         assert md.defaultExperiment.stepSize == "0.002" and md.description == mdp.description
     params = {v.name: v for v in md2.modelVariables if v.causality == "parameter"}
     assert params["damping_mode_20"].min == "0.0" and params["damping_mode_20"].max == "1.0"
-    assert params["E_lexan_center"].min == "0.0" and float(params["E_lexan_center"].max) == 100 * 2.335e9
+    assert float(params["E_lexan_center"].min) == 0.7 * 2.335e9
+    assert float(params["E_lexan_center"].max) == 1.5 * 2.335e9
     n_states = fmus.model.system.nstates
     assert len(md2.derivatives) == n_states
     with zipfile.ZipFile(fmus.fmi2) as z2, zipfile.ZipFile(fmus.fmi3) as z3:
@@ -230,7 +231,7 @@ def test_tiny_and_long_steps_are_exact(fmus):
 
 def _changes(kind: str, nominal: dict[str, float]) -> dict[str, float]:
     """One parameter of each kind changed, a physical one included (1-g: also a suspension spring)."""
-    change = {"E_lexan_center": 1.05 * nominal["E_lexan_center"], "E_active_strut_piezo": 2.0 *
+    change = {"E_lexan_center": 1.05 * nominal["E_lexan_center"], "E_active_strut_piezo": 1.5 *
               nominal["E_active_strut_piezo"], "damping_mode_20": 0.05, "delay_gimbal_primary_x": 6.0e-3,
               "delay_gyro_bus_y": 4.0e-3, "K_a": -1.5, "K_r": -0.12, "K_f": 4.0}
     if kind == "1g":
@@ -260,11 +261,13 @@ def test_native_equals_pythonfmu_and_the_parametric_system_with_changed_paramete
         fmu.freeInstance()
     reference = _zoh(*system.build(params), t, u)
     reference_hz = system.frequencies_hz.copy()
-    assert _relative(runs["native"], runs["pythonfmu"]) <= 1e-10
-    assert _relative(runs["native"], reference) <= 1e-10
+    # The two reanalyses are one algorithm with two eigen-solvers: the runtime's Jacobi (relative accuracy) and
+    # LAPACK's (absolute, eps times the norm of the condensed stiffness, whose static corrections reach
+    # (2 pi 1.7 kHz)^2 beside the 1-g pendulums' (2 pi 0.23 Hz)^2): their vectors 1.4e-10 apart on 1-g.
+    assert _relative(runs["native"], runs["pythonfmu"]) <= 1e-9
+    assert _relative(runs["native"], reference) <= 1e-9
     assert _relative(reference, _zoh(*system.build(system.nominal), t, u)) > 1e-3  # the changes do matter
-    # LAPACK's eigh (the reference) is accurate to eps |K| absolute: 1.7e-10 relative at the 0.23 Hz
-    # suspension modes of the 1-g model; the runtime's Jacobi rotations are accurate relatively
+    # the frequencies are Rayleigh quotients on both sides (mace_fmu/iomodel/reanalysis.py): exact relatively
     assert np.max(np.abs(runs["native Hz"] / runs["pythonfmu Hz"] - 1)) <= 1e-9
     assert np.max(np.abs(runs["native Hz"] / reference_hz - 1)) <= 1e-9
 

@@ -42,7 +42,7 @@ def factorize(matrix: sparse.sparray | np.ndarray, *, positive_definite: bool = 
     Returns
     -------
     callable
-        ``solve(b)`` for a vector ``b`` of the matrix's size.
+        ``solve(b)`` for a vector ``b`` of the matrix's size, or a matrix of such columns.
 
     Raises
     ------
@@ -87,7 +87,7 @@ def _cholesky(a: sparse.csr_array, perm: np.ndarray) -> Solve | None:
         return None
 
     def solve(b: np.ndarray) -> np.ndarray:
-        x = cvxopt.matrix(np.asarray(b, dtype=float).reshape(-1, 1))
+        x = cvxopt.matrix(np.ascontiguousarray(np.asarray(b, dtype=float).reshape(n, -1)))  # one or more columns
         cvxopt.cholmod.solve(factor, x)
         return np.asarray(x).reshape(np.shape(b))
 

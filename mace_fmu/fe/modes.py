@@ -16,7 +16,7 @@ from mace_fmu.errors import MaceError
 from mace_fmu.fe.assembly import FEModel, assemble
 from mace_fmu.fe.autospc import autospc_enabled, constrain_singular_dofs
 from mace_fmu.fe.beam import MassKind
-from mace_fmu.fe.constraints import build_constraints
+from mace_fmu.fe.constraints import Constraints, build_constraints
 from mace_fmu.fe.labels import label_modes, rigid_body_vectors
 from mace_fmu.fe.modal import Modes, solve_modes
 from mace_fmu.fe.preload import Preload, PreloadKind, large_displacement_preload, linear_preload
@@ -54,6 +54,13 @@ class StructureModes:
     preload: Preload | None  #: the gravity preload (1-g; None for 0-g)
     #: (grid, component) DOFs constrained automatically (PARAM,AUTOSPC): neither stiffness nor mass
     auto_constrained: tuple[tuple[int, int], ...] = ()
+    #: the modal subcase's constraints (SPC, MPC, rigid elements, AUTOSPC): the shapes are T @ phi_independent
+    constraints: Constraints | None = None
+
+    @property
+    def stiffness(self):
+        """The stiffness the modes are of [N/m, N m/rad], basic DOFs: the preload's tangent (1-g) or K."""
+        return self.preload.tangent_stiffness if self.preload is not None else self.model.stiffness
 
     # What tables and plots read most, one attribute away: ``modes.labels``, not ``modes.labels``.
     # Shapes stay on :class:`Modes`, which knows their DOFs (``modes.modes.shape(grid, component)``).
@@ -288,4 +295,4 @@ def compute_modes(deck: Deck | str | os.PathLike | None = None, *, configuration
                         state=pre.state if pre is not None else None,
                         bar_forces=pre.bar_forces if pre is not None else None)
     return StructureModes(structure=struct, model=model, modes=modes, mass_properties=props, preload=pre,
-                          auto_constrained=removed)
+                          auto_constrained=removed, constraints=modal)

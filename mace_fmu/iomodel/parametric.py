@@ -5,7 +5,9 @@ the diagram, the 0/1 wiring matrices, the retained modes projected on the instru
 projected stiffness sensitivities of the physical parameters. ``build`` turns a parameter vector
 into (A, B, C, D):
 - physical parameters (Young's moduli, spring stiffnesses) by Ritz reanalysis on the retained
-  modes (mace_fmu.iomodel.reanalysis);
+  modes and static-correction vectors (mace_fmu.iomodel.reanalysis), the sensor rows and modal
+  inputs carried by the same coefficients, plus each parameter's first-order change of the mode
+  shapes through the 1-g preload (mace_fmu.iomodel.stiffness_route);
 - modal frequency scales: each mode's frequency after the reanalysis times its scale;
 - modal damping ratios, time delays (Pade), servo gains: the blocks they belong to.
 
@@ -66,33 +68,68 @@ class ParametricSystem:
         """Position of parameter ``name`` in the parameter vector."""
         return self._index[name]
 
+    def relative_changes(self, params: np.ndarray) -> np.ndarray:
+        """p_i / p_i0 - 1 of the physical parameters, in the order of ``physical_dk``."""
+        return params[self._physical] / self.nominal[self._physical] - 1.0
+
     def modes(self, params: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(frequencies [Hz], Phi_R) of the retained modes after reanalysis of the physical parameters."""
+        """(frequencies [Hz], coefficients) of the retained modes after reanalysis of the physical
+        parameters: new mode k is Phi0 c[:n, k] + W c[n:, k], W the static-correction vectors (none in
+        arrays written before they existed: c is then n x n, Phi_R of eq. 4.9)."""
         d = self.data
-        rel = params[self._physical] / self.nominal[self._physical] - 1.0
-        w2, phi_r = ritz_reanalysis(signed_omega2(d["frequencies_hz"]), d["physical_dk"], rel)
-        return signed_frequency_hz(w2), phi_r
+        correction = {}
+        if "correction_stiffness" in d:
+            correction = dict(correction_stiffness=d["correction_stiffness"], correction_dk=d["correction_dk"],
+                              correction_coupling=d["correction_coupling"],
+                              correction_massive=int(d["correction_massive"]))
+        w2, coefficients = ritz_reanalysis(signed_omega2(d["frequencies_hz"]), d["physical_dk"],
+                                           self.relative_changes(params), **correction)
+        return signed_frequency_hz(w2), coefficients
+
+    def _rows(self, kind: str, coefficients: np.ndarray, rel: np.ndarray) -> dict[str, np.ndarray]:
+        """Output rows of one kind (``disp``, ``rate``, ``motion``, ``acc``) over the new modes: the nominal
+        rows with each parameter's preload shape change, and the static corrections' rows."""
+        d = self.data
+        if f"{kind}_names" not in d:
+            return {}
+        names, rows = [str(x) for x in d[f"{kind}_names"]], np.asarray(d[f"{kind}_rows"], dtype=np.float64)
+        rows = rows.reshape(len(names), len(self.mode_labels))
+        if f"{kind}_preload" in d and rel is not None:
+            rows = rows + np.tensordot(rel, d[f"{kind}_preload"], axes=1)
+        if f"{kind}_correction" in d:
+            n_w = np.shape(d["correction_stiffness"])[0]
+            rows = np.hstack([rows, np.asarray(d[f"{kind}_correction"]).reshape(len(names), n_w)])
+        rows = rows[:, :coefficients.shape[0]]  # modes given from outside: no correction vectors
+        return {name: row @ coefficients for name, row in zip(names, rows)}
+
+    def _modal_b(self, coefficients: np.ndarray, rel: np.ndarray | None) -> np.ndarray:
+        """Modal inputs of the new modes (n_modes x n_inputs), as :meth:`_rows` for the outputs."""
+        d = self.data
+        b = np.asarray(d["modal_b"], dtype=np.float64)
+        if "preload_b" in d and rel is not None:
+            b = b + np.tensordot(rel, d["preload_b"], axes=1)
+        if "correction_b" in d:
+            b = np.vstack([b, d["correction_b"]])
+        return coefficients.T @ b[:coefficients.shape[0]]
 
     def structure(self, params: np.ndarray, *, frequencies_hz: np.ndarray | None = None,
                   phi_r: np.ndarray | None = None
                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, list[str]]:
-        """(A, B, C, D, state names) of the modal structure block; modes by reanalysis unless given, then
-        scaled by the frequency scales."""
+        """(A, B, C, D, state names) of the modal structure block; modes by reanalysis unless given
+        (``phi_r``: new modes over the nominal ones, n x n), then scaled by the frequency scales."""
         d = self.data
+        rel = None
         if frequencies_hz is None:
             frequencies_hz, phi_r = self.modes(params)
+            rel = self.relative_changes(params)
         frequencies_hz = np.array(frequencies_hz, dtype=np.float64)
         frequencies_hz[self._scaled] *= params[self._scale]
         self.frequencies_hz = frequencies_hz
         zeta = params[self._damping]
-        disp = {str(name): row @ phi_r for name, row in zip(d["disp_names"], d["disp_rows"])}
-        rate = {str(name): row @ phi_r for name, row in zip(d["rate_names"], d["rate_rows"])}
-        motion = {str(name): row @ phi_r for name, row in zip(d["motion_names"], d["motion_rows"])}
-        acc = ({str(name): row @ phi_r for name, row in zip(d["acc_names"], d["acc_rows"])}
-               if "acc_names" in d else {})
+        disp, rate, motion, acc = (self._rows(kind, phi_r, rel) for kind in ("disp", "rate", "motion", "acc"))
         a, b, c, dd, states, labels, *_ = modal_matrices(frequencies_hz, zeta, self.mode_labels,
-                                                         np.zeros((0, len(zeta))), phi_r.T @ d["modal_b"], disp, rate,
-                                                         [str(x) for x in d["structure_outputs"]], motion, acc)
+                                                         np.zeros((0, len(zeta))), self._modal_b(phi_r, rel), disp,
+                                                         rate, [str(x) for x in d["structure_outputs"]], motion, acc)
         self.state_mode_labels = labels
         return a, b, c, dd, states
 

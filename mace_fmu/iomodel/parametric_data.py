@@ -9,28 +9,20 @@ carry these arrays as ``resources/model.npz``; the updating engine re-analyses w
 
 from __future__ import annotations
 
-import dataclasses
 from typing import Mapping, Sequence
 
 import numpy as np
-from scipy import sparse
 
 from mace_fmu.errors import MaceError
-from mace_fmu.fe.assembly import FEModel, bar_section
-from mace_fmu.fe.beam import natural_stiffness
-from mace_fmu.fe.corotational import BarState, material_tangent
-from mace_fmu.fe.preload import Preload, preload_solver, tangent_sensitivity
 from mace_fmu.iomodel.instruments import Servos
 from mace_fmu.iomodel.modal_ss import modal_data
 from mace_fmu.iomodel.motion import motion_unit, parse_motion_output
+from mace_fmu.iomodel.stiffness_route import PhysicalRoute, physical_route, stiffness_sensitivities
 from mace_fmu.iomodel.volts import VoltsModel
 from mace_fmu.parameters.kinds import (DAMPING, DELAY, FREQUENCY_SCALE, declared_range, kind_of_fmu_name, mode_number,
                                        split_loop_name)
-from mace_fmu.parameters.sets import parameter_names
 from mace_fmu.util.frequency import ZERO_HZ
 from modelica_like import PD, Gain, PadeDelay
-
-_RELATIVE_STEP = 1e-3  # the material stiffness is linear in E and k: the difference quotient is exact
 
 
 def signal_descriptions(model: VoltsModel) -> tuple[list[str], list[str]]:
@@ -120,89 +112,6 @@ def _loop_gain_parameters(servos: Servos, names: list[str]) -> list[tuple[str, f
     return out
 
 
-def material_sensitivity(fe: FEModel, deck, preload: Preload | None, mid: int, *,
-                         solve=None) -> sparse.csr_array:
-    """dK/d(ln E) [N/m, N m/rad] of MAT1 ``mid``: the material stiffness of its bars per unit relative change.
-
-    About the configuration the modes are computed in. 1-g with the large-displacement preload: the
-    tangent's total derivative with the preload re-solved to first order
-    (:func:`~mace_fmu.fe.preload.tangent_sensitivity`: a stiffer cable takes more of the weight, and the
-    forces and geometry move with it). Otherwise (the linear preload; 0-g) the preloaded geometry with
-    the preload's bar forces held, so a change of E changes only the material part. Taking the
-    undeformed geometry instead puts
-    spurious strain into the near-rigid suspension modes: Z tilt, X twist and 1st Y bending then
-    came out 1.9e-3 to 2.9e-3 off after E of the Lexan center +5 %, against 7.8e-4 at most this
-    way. The bar stiffness is linear in E (and in G, which NASTRAN derives from E when blank), so
-    the difference of the natural stiffnesses is exact; only this material's bars are evaluated.
-    """
-    ids = fe.bars.ids
-    mine = np.array([deck.pbars[deck.bars[int(i)].pid].mid == mid for i in ids])
-    mat = deck.mat1s[mid]
-    plus = dataclasses.replace(mat, e=mat.youngs_modulus * (1 + _RELATIVE_STEP))  # G follows E when blank
-
-    def section_delta(pid: int, length: float) -> np.ndarray:
-        sec = bar_section(deck, pid)
-        stiffer = dataclasses.replace(sec, e=plus.youngs_modulus, g=plus.shear_modulus)
-        return (natural_stiffness(stiffer, length) - natural_stiffness(sec, length)) / _RELATIVE_STEP
-
-    dkn = np.array([section_delta(deck.bars[int(i)].pid, length)
-                    for i, length in zip(ids[mine], fe.bars.lengths0[mine])]).reshape(-1, 7, 7)
-    if preload is not None and preload.kind == "large" and preload.constraints is not None:
-        # the gravity load redistributes (suspension cables, springs): the preload re-solved to first order
-        return tangent_sensitivity(fe, preload, bar_mask=mine, dk_natural=dkn, solve=solve)
-    bars = dataclasses.replace(fe.bars, ids=ids[mine], node_a=fe.bars.node_a[mine], node_b=fe.bars.node_b[mine],
-                               frames0=fe.bars.frames0[mine], lengths0=fe.bars.lengths0[mine], k_natural=dkn)
-    if preload is not None:
-        state = preload.state
-    else:  # 0-g: the undeformed geometry, where the corotational tangent is the linear stiffness
-        state = BarState(fe.positions, np.broadcast_to(np.eye(3), (len(fe.positions), 3, 3)))
-    # forces held (zero change): only the material part B^T dK_n B of the tangent remains
-    return material_tangent(bars, state, fe.dofs.size)[1]
-
-
-def physical_sensitivities(model: VoltsModel, shapes: np.ndarray, *, only: Sequence[str] | None = None
-                           ) -> tuple[list[tuple[str, float, str]], np.ndarray]:
-    """Physical parameters (name, value, description) and Phi0^T dK/d(ln p) Phi0 for each (or for ``only``)."""
-    deck, fe = model.structure_modes.structure.deck, model.structure_modes.model
-    names = parameter_names(deck, model.structure_modes.structure.file)
-    material_name = {mid: name for name, mid in names.materials.items()}
-    spring_name = {sid: name for name, sid in names.springs.items()}
-    used = sorted({deck.pbars[b.pid].mid for b in deck.bars.values()})
-    pre = model.structure_modes.preload
-    solve = preload_solver(pre) if pre is not None and pre.kind == "large" and pre.constraints is not None else None
-    parameters, sensitivities = [], []
-    for mid in used:
-        e = deck.mat1s[mid].youngs_modulus
-        label = material_name[mid]
-        if only is not None and f"E_{label}" not in only:
-            continue
-        dk = material_sensitivity(fe, deck, pre, mid, solve=solve)
-        parameters.append((f"E_{label}", e, f"Young's modulus of {label} (MAT1 {mid}) [Pa]; takes effect by "
-                                            "reanalysis on the retained modes"))
-        sensitivities.append(shapes.T @ (dk @ shapes))
-    for row, (sid, k) in enumerate(zip(fe.spring_ids, fe.spring_constants)):
-        label = spring_name[sid]
-        if only is not None and f"k_{label}" not in only:
-            continue
-        parameters.append((f"k_{label}", float(k), f"stiffness of {label} (CELAS2 {sid}) [N/m]; reanalysis"))
-        if pre is not None and pre.kind == "large" and pre.constraints is not None:
-            e = sparse.csr_array(fe.spring_vectors[[row]])  # (1, n_dof)
-            dk = tangent_sensitivity(fe, pre, dk_springs=k * (e.T @ e), solve=solve)
-            sensitivities.append(shapes.T @ (dk @ shapes))
-            continue
-        v = (fe.spring_vectors[[row]] @ shapes)[0]
-        sensitivities.append(k * np.outer(v, v))
-    n = shapes.shape[1]
-    dk = np.array(sensitivities).reshape(len(parameters), n, n)
-    # Rigid-body and mechanism modes carry no strain energy: their computed sensitivities (3e-9
-    # of the largest, the round-off of the mechanism shapes) are noise, which the reanalysis
-    # would couple into the flexible modes (up to 6e-7 of an output's range for E x 0.5).
-    zero = np.abs(model.structure_modes.frequencies_hz[:n]) < ZERO_HZ
-    dk[:, zero, :] = 0.0
-    dk[:, :, zero] = 0.0
-    return parameters, dk
-
-
 def parametric_arrays(model: VoltsModel, *, physical: bool | Sequence[str] = True,
                       frequency_bounds: Mapping[int, float] | None = None) -> dict[str, np.ndarray]:
     """Everything a ParametricSystem (and an FMU) needs to rebuild ``model`` for new parameter values.
@@ -243,8 +152,8 @@ def parametric_arrays(model: VoltsModel, *, physical: bool | Sequence[str] = Tru
         arrays = with_frequency_bounds(arrays, frequency_bounds)
     if physical is False:
         return arrays
-    entries, dk = physical_sensitivities(model, data.shapes, only=None if physical is True else physical)
-    return with_physical(arrays, entries, dk)
+    sensitivities = stiffness_sensitivities(model, only=None if physical is True else physical)
+    return with_physical(arrays, physical_route(model, data.shapes, sensitivities))
 
 
 def with_frequency_bounds(arrays: Mapping[str, np.ndarray], bounds: Mapping[int, float]) -> dict[str, np.ndarray]:
@@ -288,11 +197,10 @@ def _with_parameters(arrays: dict[str, np.ndarray], parameters: Sequence[tuple[s
     return out
 
 
-def with_physical(arrays: dict[str, np.ndarray], parameters: Sequence[tuple[str, float, str]],
-                  projected_dk: np.ndarray) -> dict[str, np.ndarray]:
-    """``arrays`` with physical parameters (name, value, description) and their Phi0^T dK Phi0 added."""
-    out = _with_parameters(arrays, parameters)
-    out["physical_names"] = np.array(list(arrays["physical_names"]) + [p[0] for p in parameters])
-    out["physical_dk"] = np.concatenate([arrays["physical_dk"], np.asarray(projected_dk).reshape(
-        len(parameters), *arrays["physical_dk"].shape[1:])])
+def with_physical(arrays: dict[str, np.ndarray], route: PhysicalRoute) -> dict[str, np.ndarray]:
+    """``arrays`` (written without physical parameters) with ``route``'s parameters and arrays added."""
+    if len(arrays["physical_names"]):
+        raise MaceError("with_physical: the arrays already have physical parameters")
+    out = _with_parameters(arrays, route.parameters)
+    out.update(route.arrays)
     return out

@@ -1,9 +1,23 @@
-"""Ritz reanalysis on retained modes (thesis eq. 4.6-4.9), numpy and scipy only.
+"""Ritz reanalysis on retained modes and static-correction vectors (thesis eq. 4.6-4.9), numpy and scipy only.
 
-K_r = Omega0^2 + sum_i dp_i Phi0^T dK_i Phi0 with dp_i the relative change of parameter i and
-dK_i its stiffness sensitivity per unit relative change; the eigen-solution of the reduced
-problem gives the new omega^2 and Phi_R, and Phi = Phi0 Phi_R. Mass-normalised nominal modes make
-the reduced mass matrix the identity (the parameters here are stiffnesses only).
+The nominal retained modes Phi0 alone cannot follow a stiffness change where the change is local:
+a strain gauge or a piezo patch on the changed element reads the rotations of massless grids, whose
+motion is the static response to the others, condensed with the nominal stiffness, and the
+element's own flexibility lies in modes far above the retained ones. The Ritz basis is therefore
+``[Phi0, W]``: W are static-correction vectors, the residual flexibility's response to the forces
+each parameter's stiffness change puts on each retained mode (built at export, see
+:mod:`mace_fmu.iomodel.stiffness_route`), orthonormal in stiffness, the first ``massive`` of them
+orthonormal in mass and the rest massless. In that basis, with p_i the relative change of parameter i,
+
+    K_r = [[Omega0^2 + sum p_i Phi0^T dK_i Phi0,  sum p_i (W^T dK_i Phi0)^T],
+           [sum p_i W^T dK_i Phi0,                 W^T K0 W + sum p_i W^T dK_i W]],   M_r = diag(I, I, 0);
+
+the massless part of W is condensed statically (exactly, with the changed stiffness), the rest is an
+eigen-solution of the size of the retained modes plus the massive corrections. Each new mode takes the
+index of the nominal mode it continues (the one-to-one pairing with the largest total squared overlap,
+a MAC in the mass-normalised basis), so per-mode data (damping ratios, labels) follow the physical mode
+through a crossing; the other eigenpairs (the corrections' own, far above the retained band) are left
+out. Without W (no corrections) this is the reanalysis of eq. 4.6-4.9.
 
 Shared by the updating engine and copied verbatim into FMUs, which re-analyse their physical
 parameters at initialisation.
@@ -15,20 +29,53 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 
-def ritz_reanalysis(omega2_0: np.ndarray, projected_dk: np.ndarray,
-                    relative_change: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(omega^2 [rad^2/s^2], Phi_R) after relative stiffness-parameter changes.
+def ritz_reanalysis(omega2_0: np.ndarray, projected_dk: np.ndarray, relative_change: np.ndarray, *,
+                    correction_stiffness: np.ndarray | None = None, correction_dk: np.ndarray | None = None,
+                    correction_coupling: np.ndarray | None = None, correction_massive: int = 0
+                    ) -> tuple[np.ndarray, np.ndarray]:
+    """(omega^2 [rad^2/s^2], coefficients) after relative stiffness-parameter changes.
 
-    ``projected_dk`` is (n_parameters, n_modes, n_modes): Phi0^T dK_i Phi0 per unit relative
-    change. Each new mode takes the index of the nominal mode it continues (the one-to-one
-    pairing with the largest total squared overlap, a MAC in the mass-normalised basis), so
-    per-mode data (damping ratios, labels) follow the physical mode through a crossing.
+    Parameters
+    ----------
+    omega2_0 : numpy.ndarray
+        (n_modes,) nominal eigenvalues [rad^2/s^2] of the retained modes (mass-normalised).
+    projected_dk : numpy.ndarray
+        (n_parameters, n_modes, n_modes): Phi0^T dK_i Phi0 per unit relative change.
+    relative_change : numpy.ndarray
+        (n_parameters,) p_i / p_i0 - 1.
+    correction_stiffness, correction_dk, correction_coupling : numpy.ndarray, optional
+        W^T K0 W (n_w, n_w), W^T dK_i W (n_parameters, n_w, n_w) and W^T dK_i Phi0
+        (n_parameters, n_w, n_modes) of the static-correction vectors W; none: the plain reanalysis.
+    correction_massive : int
+        How many of the vectors (the first ones) carry mass; the rest are massless.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        The new eigenvalues (n_modes,) and the coefficients (n_modes + n_w, n_modes): new mode k is
+        ``Phi0 @ c[:n_modes, k] + W @ c[n_modes:, k]``.
     """
     rel = np.asarray(relative_change, dtype=float)
+    omega2_0 = np.asarray(omega2_0, dtype=float)
     n = len(omega2_0)
+    n_w = 0 if correction_stiffness is None else correction_stiffness.shape[0]
     if not np.any(rel != 0.0):
-        return np.asarray(omega2_0, dtype=float).copy(), np.eye(n)
-    k_r = np.diag(omega2_0) + np.tensordot(rel, projected_dk, axes=1)
-    w2, phi_r = np.linalg.eigh(0.5 * (k_r + k_r.T))
-    _, order = linear_sum_assignment(-(phi_r**2))
-    return w2[order], phi_r[:, order]
+        return omega2_0.copy(), np.eye(n + n_w, n)
+    k_r = np.zeros((n + n_w, n + n_w))
+    k_r[:n, :n] = np.diag(omega2_0) + np.tensordot(rel, projected_dk, axes=1)
+    if n_w:
+        coupling = np.tensordot(rel, correction_coupling, axes=1)
+        k_r[n:, :n], k_r[:n, n:] = coupling, coupling.T
+        k_r[n:, n:] = correction_stiffness + np.tensordot(rel, correction_dk, axes=1)
+    k_r = 0.5 * (k_r + k_r.T)
+    kept = n + int(correction_massive)  # retained modes and massive corrections; the rest is condensed
+    condensation = np.linalg.solve(k_r[kept:, kept:], k_r[kept:, :kept]) if kept < n + n_w else np.zeros((0, kept))
+    k_c = k_r[:kept, :kept] - k_r[:kept, kept:] @ condensation
+    k_c = 0.5 * (k_c + k_c.T)
+    _, vectors = np.linalg.eigh(k_c)
+    _, order = linear_sum_assignment(-(vectors[:n] ** 2))  # row i: nominal mode i; order[i]: the mode it becomes
+    chosen = vectors[:, order]
+    # LAPACK's eigenvalues are exact to eps |K_c| absolute, and K_c spans the corrections' stiffness beside
+    # the slowest modes'; the Rayleigh quotients of its vectors are exact to eps relative
+    w2 = np.einsum("ik,ij,jk->k", chosen, k_c, chosen)
+    return w2, np.vstack([chosen, -condensation @ chosen])

@@ -53,6 +53,8 @@ class FmuInterface:
     references: Mapping[str, int]  #: value reference of every input, output and parameter
     units: Mapping[str, str]  #: unit of each of them ("" when the FMU declares none)
     description: str = ""  #: the model description's description attribute ("MACE 1g volts-volts model: ...")
+    #: the declared [min, max] of each parameter (-inf, inf where the FMU declares none) [FMU units]
+    ranges: Mapping[str, tuple[float, float]] = field(default_factory=dict)
 
     @property
     def configuration(self) -> str:
@@ -99,7 +101,10 @@ def read_fmu_interface(path: str | os.PathLike) -> FmuInterface:
                         inputs=tuple(v.name for v in real if v.causality == "input"),
                         outputs=tuple(v.name for v in real if v.causality == "output"),
                         parameters=parameters, references={v.name: int(v.valueReference) for v in used},
-                        units={v.name: v.unit or "" for v in used}, description=md.description or "")
+                        units={v.name: v.unit or "" for v in used}, description=md.description or "",
+                        ranges={v.name: (float(v.min) if v.min is not None else -np.inf,
+                                         float(v.max) if v.max is not None else np.inf)
+                                for v in real if v.name in parameters})
 
 
 def _in_worker_process() -> bool:

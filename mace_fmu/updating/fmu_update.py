@@ -11,6 +11,7 @@ physical parameters at initialisation.
 from __future__ import annotations
 
 import dataclasses
+import math
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -23,7 +24,7 @@ from mace_fmu.updating.data import FrequencyResponseData, TimeHistory
 from mace_fmu.updating.fmu_model import FmuFamily
 from mace_fmu.updating.mace_update import default_bounds
 from mace_fmu.updating.simulated_frf import H1Estimator, SimulatedFrequencyResponseCost, log_h1_weights, principal_pairs
-from mace_fmu.updating.solve import Stage, UpdateResult, UpdateSettings, update
+from mace_fmu.updating.solve import Bounds, Stage, UpdateResult, UpdateSettings, update
 from mace_fmu.util.atomic import write_text_atomic
 from mace_fmu.util.progress import ProgressCallback
 
@@ -103,7 +104,8 @@ def update_fmu(*, family: FmuFamily, cost: Cost, start: Mapping[str, float], sta
 
     Notes
     -----
-    Bounds by kind of name: moduli x0.5-1.5, delays x0.2-3, others x0.2-5.
+    Bounds by kind of name: moduli x0.5-1.5, delays x0.2-3, others x0.2-5, each within the range the FMU
+    declares for the parameter.
     """
     names = [n for s in stages for n in s]
     if not names:
@@ -122,9 +124,25 @@ def update_fmu(*, family: FmuFamily, cost: Cost, start: Mapping[str, float], sta
                             "have corrupted the heap of the process that loaded them): pass a Dask runner "
                             "(runner=DaskRunner(...); the CLI always uses one), or export a native FMU")
         family = dataclasses.replace(family, runner=runner)  # every run of it, the base point's too, goes there
+    outside = [f"{n} = {start[n]:.6g} (declared [{lo:.6g}, {hi:.6g}])" for n in names
+               for lo, hi in [family.interface.ranges.get(n, (-math.inf, math.inf))] if not lo <= start[n] <= hi]
+    if outside:
+        raise MaceError(f"{family.interface.path}: start values outside the FMU's declared ranges: "
+                        + "; ".join(outside))
     plan = [Stage(name=f"stage {k + 1}", parameters=tuple(s)) for k, s in enumerate(stages)]
-    return update(family, cost, start=dict(start), stages=plan, bounds=default_bounds(names, start),
+    return update(family, cost, start=dict(start), stages=plan, bounds=declared_bounds(family, names, start),
                   settings=settings, runner=runner, progress=progress)
+
+
+def declared_bounds(family: FmuFamily, names: Sequence[str], start: Mapping[str, float]) -> dict[str, Bounds]:
+    """:func:`~mace_fmu.updating.mace_update.default_bounds` within the FMU's declared ranges: a step never
+    asks the FMU for a value it refuses (a MACE FMU's moduli and springs: 0.7 to 1.5 x nominal, where its
+    parameter route was validated against full re-solves)."""
+    out = {}
+    for name, bound in default_bounds(names, start).items():
+        low, high = family.interface.ranges.get(name, (-math.inf, math.inf))
+        out[name] = dataclasses.replace(bound, lower=max(bound.lower, low), upper=min(bound.upper, high))
+    return out
 
 
 @dataclass(frozen=True)

@@ -23,7 +23,8 @@ from mace_fmu.fe.modes import DEFAULT_MAX_HZ, StructureModes, compute_modes
 from mace_fmu.fe.pairing import carry_labels
 from mace_fmu.fe.preload import PreloadKind
 from mace_fmu.iomodel.parametric import ParametricSystem
-from mace_fmu.iomodel.parametric_data import parametric_arrays, physical_sensitivities, with_physical
+from mace_fmu.iomodel.parametric_data import parametric_arrays, with_physical
+from mace_fmu.iomodel.stiffness_route import StiffnessSensitivity, physical_route, stiffness_sensitivities
 from mace_fmu.iomodel.volts import VoltsModel, volts_model
 from mace_fmu.parameters.kinds import DAMPING, kind_of_set_name, mode_label
 from mace_fmu.parameters.sets import ParameterSet, deck_values, parameter_kind
@@ -43,23 +44,22 @@ class MaceSolution:
         self.physical = dict(physical)  #: moduli and springs [Pa, N/m] of this solve
         self._arrays = parametric_arrays(volts, physical=False)
         self.system = ParametricSystem(self._arrays)  #: rebuilds for damping ratios, delays and gains
-        self._sensitivities: dict[str, tuple[tuple[str, float, str], np.ndarray]] = {}
+        self._sensitivities: dict[str, StiffnessSensitivity] = {}
         self._systems: dict[tuple[str, ...], ParametricSystem] = {}
 
     def reanalysis(self, names: Sequence[str]) -> ParametricSystem:
         """The system that also re-analyses the moduli and springs ``names`` (stiffness sensitivities
-        computed once per name: each costs a tangent of that material's bars)."""
+        computed once per name: each costs a tangent of that material's bars; the static corrections
+        once per set of names)."""
         key = tuple(sorted(names))
         if key not in self._systems:
             missing = [n for n in key if n not in self._sensitivities]
             if missing:
-                keep = self.volts.structure_modes.frequencies_hz <= np.max(self.volts.plant.frequencies_hz)
-                shapes = self.volts.structure_modes.modes.shapes[:, keep]
-                entries, dk = physical_sensitivities(self.volts, shapes, only=missing)
-                self._sensitivities.update({e[0]: (e, d) for e, d in zip(entries, dk)})
-            chosen = [self._sensitivities[n] for n in key]
-            arrays = with_physical(self._arrays, [c[0] for c in chosen], np.array([c[1] for c in chosen]))
-            self._systems[key] = ParametricSystem(arrays)
+                self._sensitivities.update({s.name: s for s in stiffness_sensitivities(self.volts, only=missing)})
+            keep = self.volts.structure_modes.frequencies_hz <= np.max(self.volts.plant.frequencies_hz)
+            shapes = self.volts.structure_modes.modes.shapes[:, keep]
+            route = physical_route(self.volts, shapes, [self._sensitivities[n] for n in key])
+            self._systems[key] = ParametricSystem(with_physical(self._arrays, route))
         return self._systems[key]
 
 

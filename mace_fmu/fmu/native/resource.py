@@ -25,7 +25,8 @@ from mace_fmu.parameters.kinds import kind_of_fmu_name, mode_number
 from mace_fmu.util.frequency import ZERO_HZ
 
 MAGIC = b"MACEFMU1"
-FORMAT_VERSION = 1
+FORMAT_VERSION = 1  #: the file layout (shared with the controller FMU's data)
+MODEL_FORMAT = 2  #: the plant's arrays (``format_version``): 2 added the static corrections of the reanalysis
 MAX_PADE_ORDER = 10  #: the runtime's Pade coefficients are exact integer ratios up to this order
 BLOCK_KINDS = {"structure": 0, "const": 1, "delay": 2, "gain": 3, "pd": 4}
 PARAMETER_KINDS = {"damping": 0, "delay": 1, "gain": 2, "physical": 3, "frequency_scale": 4}
@@ -64,6 +65,46 @@ def _zero_cluster_reduced(arrays: Mapping[str, np.ndarray]) -> dict[str, np.ndar
     return {"modal_b": modal_b, "struct_rows": np.array(rows).reshape(len(rows), n),
             "struct_row_kind": np.array(row_kind, dtype=np.int64), "keep_disp": keep_disp,
             "keep_rate": keep_rate, "flexible": np.flatnonzero(np.abs(freq) >= ZERO_HZ).astype(np.int64)}
+
+
+def _kind_of_rows(arrays: Mapping[str, np.ndarray]) -> list[tuple[str, int]]:
+    """For each structure output: which row kind holds it (``acc``, ``disp``, ``motion``, ``rate``) and where."""
+    where = {}
+    for kind in ("rate", "motion", "disp", "acc"):  # later kinds win, as in _zero_cluster_reduced
+        for k, name in enumerate(arrays.get(f"{kind}_names", [])):
+            where[str(name)] = (kind, k)
+    return [where[str(name)] for name in arrays["structure_outputs"]]
+
+
+def _corrections(arrays: Mapping[str, np.ndarray], flexible: np.ndarray) -> dict[str, np.ndarray]:
+    """The static corrections and preload shape changes over the flexible modes, rows in structure-output order
+    (zeros of the right sizes for arrays without them)."""
+    n_phys, n_in = len(arrays["physical_names"]), np.shape(arrays["modal_b"])[1]
+    n_flex, outputs = len(flexible), _kind_of_rows(arrays)
+    n_w = np.shape(arrays["correction_stiffness"])[0] if "correction_stiffness" in arrays else 0
+
+    def table(suffix: str, width: int) -> np.ndarray:
+        if f"disp_{suffix}" not in arrays:
+            return np.zeros((len(outputs), width))
+        return np.array([np.asarray(arrays[f"{kind}_{suffix}"], dtype=float).reshape(-1, width)[k]
+                         for kind, k in outputs]).reshape(len(outputs), width)
+
+    def preload(kind_k: tuple[str, int]) -> np.ndarray:
+        kind, k = kind_k
+        return np.asarray(arrays[f"{kind}_preload"], dtype=float)[:, k][:, flexible]
+
+    return {
+        "correction_stiffness": np.asarray(arrays.get("correction_stiffness", np.zeros((0, 0))), dtype=float),
+        "correction_dk": np.asarray(arrays.get("correction_dk", np.zeros((n_phys, 0, 0))), dtype=float),
+        "correction_coupling": np.asarray(arrays.get("correction_coupling", np.zeros((n_phys, 0, len(
+            arrays["frequencies_hz"])))), dtype=float)[:, :, flexible].reshape(n_phys, n_w, n_flex),
+        "correction_b": np.asarray(arrays.get("correction_b", np.zeros((0, n_in))), dtype=float).reshape(n_w, n_in),
+        "correction_rows": table("correction", n_w),
+        "preload_rows": (np.stack([preload(o) for o in outputs], axis=1) if "disp_preload" in arrays and outputs
+                         else np.zeros((n_phys, len(outputs), n_flex))).reshape(n_phys, len(outputs), n_flex),
+        "preload_b": (np.asarray(arrays["preload_b"], dtype=float)[:, flexible] if "preload_b" in arrays
+                      else np.zeros((n_phys, n_flex, n_in))).reshape(n_phys, n_flex, n_in),
+    }
 
 
 def runtime_arrays(arrays: Mapping[str, np.ndarray]) -> dict[str, np.ndarray | list[str]]:
@@ -120,11 +161,14 @@ def runtime_arrays(arrays: Mapping[str, np.ndarray]) -> dict[str, np.ndarray | l
     n_in, n_out = len(arrays["inputs"]), len(arrays["outputs"])
     n_states = int(info[:, 1].sum())
     dk = np.asarray(arrays["physical_dk"], dtype=float)[:, flexible][:, :, flexible]
+    corrections = _corrections(arrays, flexible)
+    massive = int(arrays["correction_massive"]) if "correction_massive" in arrays else 0
     counts = [n_in, n_out, len(names), n_modes, len(flexible), len(kinds), pade_order, n_states,
               len(arrays["structure_outputs"]), cluster["modal_b"].shape[1], len(physical),
-              arrays["wiring"].shape[0], arrays["wiring"].shape[1]]
+              arrays["wiring"].shape[0], arrays["wiring"].shape[1], corrections["correction_stiffness"].shape[0],
+              massive]
     out: dict[str, np.ndarray | list[str]] = {
-        "format_version": np.array([FORMAT_VERSION], dtype=np.int64),
+        "format_version": np.array([MODEL_FORMAT], dtype=np.int64),
         "counts": np.array(counts, dtype=np.int64),
         "param_nominal": np.asarray(arrays["param_values"], dtype=float),
         "param_min": np.asarray(arrays["param_min"], dtype=float),
@@ -139,6 +183,7 @@ def runtime_arrays(arrays: Mapping[str, np.ndarray]) -> dict[str, np.ndarray | l
     }
     out["me_order"] = model_exchange_order(info)
     out.update(cluster)
+    out.update(corrections)
     out.update(blocks)
     return out
 

@@ -22,7 +22,7 @@ enum { BLOCK_STRUCTURE = 0, BLOCK_CONST, BLOCK_DELAY, BLOCK_GAIN, BLOCK_PD };
 enum { PARAM_DAMPING = 0, PARAM_DELAY, PARAM_GAIN, PARAM_PHYSICAL, PARAM_FREQUENCY_SCALE };
 enum {
     COUNT_IN = 0, COUNT_OUT, COUNT_PAR, COUNT_MODES, COUNT_FLEX, COUNT_BLOCKS, COUNT_PADE, COUNT_STATES,
-    COUNT_SO, COUNT_MS, COUNT_PHYS, COUNT_UB, COUNT_YB, N_COUNTS
+    COUNT_SO, COUNT_MS, COUNT_PHYS, COUNT_UB, COUNT_YB, COUNT_CORR, COUNT_MASSIVE, N_COUNTS
 };
 enum { INFO_KIND = 0, INFO_NX, INFO_NU, INFO_NY, INFO_P0, INFO_P1, N_INFO };
 
@@ -33,6 +33,8 @@ typedef struct MaceCsr {
     double *val;
 } MaceCsr;
 
+#define MODEL_FORMAT 2 /* mace_fmu.fmu.native.resource.MODEL_FORMAT: 2 added the static corrections */
+
 static const char STATE_MAGIC[8] = {'M', 'A', 'C', 'E', 'S', 'T', 'A', '1'};
 #define STATE_HEADER 7 /* magic, phase, built, coordinates, n_par, n_in, n */
 
@@ -41,9 +43,13 @@ struct MaceModel {
     MaceKind kind;
     MaceFile file;
     size_t n_in, n_out, n_par, n_modes, n_flex, n_blocks, pade, n, n_phys;
+    size_t n_corr, n_massive; /* static-correction vectors of the reanalysis; the first n_massive carry mass */
     size_t n_structure_inputs, n_structure_outputs; /* the structure block's actuator and sensor rows */
     size_t n_block_inputs, n_block_outputs;         /* all blocks' inputs and outputs, stacked */
     const double *par_nominal, *par_min, *par_max, *freq0, *dk, *wiring, *entry, *exit_, *modal_b, *rows;
+    /* the static corrections (mace_fmu/iomodel/stiffness_route.py): W^T K0 W, W^T dK_i W, W^T dK_i Phi0 over the
+       flexible modes, their modal inputs and structure output rows; the preload's shape changes per parameter */
+    const double *corr_k, *corr_dk, *corr_coupling, *corr_b, *corr_rows, *pre_rows, *pre_b;
     const int64_t *par_kind, *par_index, *block_info, *flex, *keep_disp, *keep_rate, *row_kind, *me_order;
     /* the state vector's order: model exchange s[i] = x[perm[i]] (me_order of the data: dense-LU friendly),
        pos its inverse; co-simulation: the identity (its stepping coordinates are the zero-order hold's) */
@@ -54,6 +60,7 @@ struct MaceModel {
     size_t *damping_of;   /* parameter index of each mode's damping ratio */
     size_t *scale_of;     /* parameter index of each mode's frequency scale (n_par: none) */
     double *params, *built_params, *freq, *u;
+    double *rel; /* relative change of each physical parameter in the last reanalysis */
     int built, y_valid, x_valid;
     int params_changed; /* set since the last build */
     double time;
@@ -144,8 +151,9 @@ static int load_counts(MaceModel *m, const char *resource_dir, char *err) {
     const int64_t *counts, *version;
     if (mace_resource_read(&m->file, resource_dir, &m->al, path, sizeof(path), err) != 0) return -1;
     if (!(version = (const int64_t *)entry_1d(m, "format_version", MACE_I64, 1, err))) return -1;
-    if (version[0] != 1) {
-        snprintf(err, MACE_ERR_LEN, "%.900s: data format %lld, this runtime reads format 1", path, (long long)version[0]);
+    if (version[0] != MODEL_FORMAT) {
+        snprintf(err, MACE_ERR_LEN, "%.900s: data format %lld, this runtime reads format %d", path,
+                 (long long)version[0], MODEL_FORMAT);
         return -1;
     }
     if (!(counts = (const int64_t *)mace_file_get(&m->file, "counts", MACE_I64, 1, &count_dims, err))) return -1;
@@ -168,10 +176,35 @@ static int load_counts(MaceModel *m, const char *resource_dir, char *err) {
     m->n_phys = (size_t)counts[COUNT_PHYS];
     m->n_block_inputs = (size_t)counts[COUNT_UB];
     m->n_block_outputs = (size_t)counts[COUNT_YB];
-    if (m->pade < 1 || m->pade > 10 || m->n_flex > m->n_modes) {
+    m->n_corr = (size_t)counts[COUNT_CORR];
+    m->n_massive = (size_t)counts[COUNT_MASSIVE];
+    if (m->pade < 1 || m->pade > 10 || m->n_flex > m->n_modes || m->n_massive > m->n_corr) {
         snprintf(err, MACE_ERR_LEN, "%.900s: inconsistent counts", path);
         return -1;
     }
+    return 0;
+}
+
+/* The static corrections and the preload's shape changes (sizes from the counts). */
+static int load_corrections(MaceModel *m, char *err) {
+    const size_t nc = m->n_corr, nf = m->n_flex, np = m->n_phys, so = m->n_structure_outputs;
+    const size_t si = m->n_structure_inputs;
+    size_t dims[3];
+    dims[0] = np;
+    dims[1] = dims[2] = nc;
+    if (!(m->corr_dk = (const double *)mace_file_get(&m->file, "correction_dk", MACE_F64, 3, dims, err))) return -1;
+    dims[2] = nf;
+    if (!(m->corr_coupling = (const double *)mace_file_get(&m->file, "correction_coupling", MACE_F64, 3, dims, err)))
+        return -1;
+    dims[1] = so;
+    if (!(m->pre_rows = (const double *)mace_file_get(&m->file, "preload_rows", MACE_F64, 3, dims, err))) return -1;
+    dims[1] = nf;
+    dims[2] = si;
+    if (!(m->pre_b = (const double *)mace_file_get(&m->file, "preload_b", MACE_F64, 3, dims, err))) return -1;
+    if (!(m->corr_k = (const double *)entry_2d(m, "correction_stiffness", MACE_F64, nc, nc, err)) ||
+        !(m->corr_b = (const double *)entry_2d(m, "correction_b", MACE_F64, nc, si, err)) ||
+        !(m->corr_rows = (const double *)entry_2d(m, "correction_rows", MACE_F64, so, nc, err)))
+        return -1;
     return 0;
 }
 
@@ -197,7 +230,8 @@ static int load_arrays(MaceModel *m, char *err) {
         !(m->keep_disp = (const int64_t *)entry_1d(m, "keep_disp", MACE_I64, m->n_modes, err)) ||
         !(m->keep_rate = (const int64_t *)entry_1d(m, "keep_rate", MACE_I64, m->n_modes, err)) ||
         !(m->flex = (const int64_t *)entry_1d(m, "flexible", MACE_I64, m->n_flex, err)) ||
-        !(m->me_order = (const int64_t *)entry_1d(m, "me_order", MACE_I64, m->n, err)))
+        !(m->me_order = (const int64_t *)entry_1d(m, "me_order", MACE_I64, m->n, err)) ||
+        load_corrections(m, err))
         return -1;
     for (k = 0; k < m->n_structure_outputs; k++) {
         if (m->row_kind[k] < ROW_DISPLACEMENT || m->row_kind[k] > ROW_ACCELERATION) {
@@ -352,6 +386,7 @@ MaceModel *mace_create(const char *resource_dir, MaceKind kind, const MaceAlloc 
     m->params = ml_zeros(al, m->n_par);
     m->built_params = ml_zeros(al, m->n_par);
     m->freq = ml_zeros(al, m->n_modes);
+    m->rel = ml_zeros(al, m->n_phys);
     m->u = ml_zeros(al, m->n_in);
     m->a = ml_zeros(al, m->n * m->n);
     m->b = ml_zeros(al, m->n * m->n_in);
@@ -368,7 +403,7 @@ MaceModel *mace_create(const char *resource_dir, MaceKind kind, const MaceAlloc 
     m->dir_dx = ml_zeros(al, m->n);
     m->dir_dy = ml_zeros(al, m->n_out);
     m->zoh = zoh_create(al, m->n, m->n_in, m->n_out);
-    if (!m->params || !m->built_params || !m->freq || !m->u || !m->a || !m->b || !m->c || !m->d || !m->s || !m->x ||
+    if (!m->params || !m->built_params || !m->freq || !m->rel || !m->u || !m->a || !m->b || !m->c || !m->d || !m->s || !m->x ||
         !m->y || !m->nominal || !m->zb || !m->ub || !m->dir_x || !m->dir_u || !m->dir_dx || !m->dir_dy || !m->zoh) {
         snprintf(err, MACE_ERR_LEN, "out of memory");
         mace_destroy(m);
@@ -391,6 +426,7 @@ void mace_destroy(MaceModel *m) {
     m->al.free(m->params);
     m->al.free(m->built_params);
     m->al.free(m->freq);
+    m->al.free(m->rel);
     m->al.free(m->u);
     m->al.free(m->a);
     m->al.free(m->b);
@@ -504,47 +540,97 @@ static double signed_frequency_hz(double w2) {
     return sgn * sqrt(fabs(w2)) / TWO_PI;
 }
 
-/* New frequencies of all modes (m->freq) and the flexible modes' Ritz vectors phi_r (n_flex x
- * n_flex, column k: new mode k over the nominal flexible modes); *changed = 0 means identity.
- * Each mode's frequency scale multiplies its frequency after the reanalysis (shapes unchanged). */
-static int reanalyse(MaceModel *m, double *phi_r, int *changed, char *err) {
-    const size_t nf = m->n_flex;
-    double *rel = ml_zeros(&m->al, m->n_phys), *k_r = NULL, *w = NULL, *v = NULL, *score = NULL;
-    size_t *col = NULL, i, j, q;
+/* The reduced stiffness in the basis [flexible modes, corrections] (mace_fmu/iomodel/reanalysis.py):
+ * Omega0^2 + sum p_i Phi0^T dK_i Phi0, the couplings sum p_i W^T dK_i Phi0 and W^T K0 W + sum p_i W^T dK_i W. */
+static void reduced_stiffness(const MaceModel *m, double *k) {
+    const size_t nf = m->n_flex, nc = m->n_corr, nt = nf + nc;
+    size_t i, j, q;
+    for (i = 0; i < nf; i++) k[i * nt + i] = signed_omega2(m->freq0[m->flex[i]]);
+    for (i = 0; i < nc; i++)
+        for (j = 0; j < nc; j++) k[(nf + i) * nt + nf + j] = m->corr_k[i * nc + j];
+    for (q = 0; q < m->n_phys; q++) {
+        const double r = m->rel[q], *dk = m->dk + q * nf * nf, *dw = m->corr_dk + q * nc * nc;
+        const double *cw = m->corr_coupling + q * nc * nf;
+        if (r == 0.0) continue;
+        for (i = 0; i < nf; i++)
+            for (j = 0; j < nf; j++) k[i * nt + j] += r * dk[i * nf + j];
+        for (i = 0; i < nc; i++) {
+            for (j = 0; j < nf; j++) {
+                k[(nf + i) * nt + j] += r * cw[i * nf + j];
+                k[j * nt + nf + i] += r * cw[i * nf + j];
+            }
+            for (j = 0; j < nc; j++) k[(nf + i) * nt + nf + j] += r * dw[i * nc + j];
+        }
+    }
+    for (i = 0; i < nt; i++)
+        for (j = 0; j < i; j++) k[i * nt + j] = k[j * nt + i] = 0.5 * (k[i * nt + j] + k[j * nt + i]);
+}
+
+/* New frequencies of all modes (m->freq) and the coefficients of the new flexible modes, coef
+ * ((n_flex + n_corr) x n_flex, column k: new mode k over the nominal flexible modes and the
+ * corrections); *changed = 0 means the identity. The massless corrections are condensed with the
+ * changed stiffness; each new mode continues the nominal mode it overlaps most (one-to-one). Each
+ * mode's frequency scale multiplies its frequency after the reanalysis (shapes unchanged). */
+static int reanalyse(MaceModel *m, double *coef, int *changed, char *err) {
+    const size_t nf = m->n_flex, nc = m->n_corr, nt = nf + nc, na = nf + m->n_massive, nz = nt - na;
+    double *k = NULL, *kc = NULL, *g = NULL, *lu = NULL, *w = NULL, *v = NULL, *score = NULL;
+    size_t *col = NULL, *piv = NULL, i, j, q;
     int status = -1;
     *changed = 0;
-    if (!rel) goto oom;
     for (q = 0; q < m->n_par; q++) {
         if (m->par_kind[q] == PARAM_PHYSICAL) {
-            rel[m->par_index[q]] = m->params[q] / m->par_nominal[q] - 1.0;
-            if (rel[m->par_index[q]] != 0.0) *changed = 1;
+            m->rel[m->par_index[q]] = m->params[q] / m->par_nominal[q] - 1.0;
+            if (m->rel[m->par_index[q]] != 0.0) *changed = 1;
         }
     }
     for (i = 0; i < m->n_modes; i++) m->freq[i] = signed_frequency_hz(signed_omega2(m->freq0[i]));
     if (*changed) {
-        k_r = ml_zeros(&m->al, nf * nf);
-        w = ml_zeros(&m->al, nf);
-        v = ml_zeros(&m->al, nf * nf);
-        score = ml_zeros(&m->al, nf * nf);
-        col = (size_t *)m->al.calloc(nf + 1, sizeof(size_t));
-        if (!k_r || !w || !v || !score || !col) goto oom;
-        for (i = 0; i < nf; i++) k_r[i * nf + i] = signed_omega2(m->freq0[m->flex[i]]);
-        for (q = 0; q < m->n_phys; q++) {
-            const double *dk = m->dk + q * nf * nf;
-            if (rel[q] == 0.0) continue;
-            for (i = 0; i < nf * nf; i++) k_r[i] += rel[q] * dk[i];
+        k = ml_zeros(&m->al, nt * nt);
+        kc = ml_zeros(&m->al, na * na);
+        g = ml_zeros(&m->al, nz * na);
+        lu = ml_zeros(&m->al, nz * nz);
+        w = ml_zeros(&m->al, na);
+        v = ml_zeros(&m->al, na * na);
+        score = ml_zeros(&m->al, na * na);
+        col = (size_t *)m->al.calloc(na + 1, sizeof(size_t));
+        piv = (size_t *)m->al.calloc(nz + 1, sizeof(size_t));
+        if (!k || !kc || !g || !lu || !w || !v || !score || !col || !piv) goto oom;
+        reduced_stiffness(m, k);
+        for (i = 0; i < na; i++) memcpy(kc + i * na, k + i * nt, na * sizeof(double));
+        if (nz) { /* K_c = K_aa - K_az K_zz^-1 K_za, g = K_zz^-1 K_za */
+            for (i = 0; i < nz; i++) {
+                memcpy(lu + i * nz, k + (na + i) * nt + na, nz * sizeof(double));
+                memcpy(g + i * na, k + (na + i) * nt, na * sizeof(double));
+            }
+            if (ml_lu(lu, nz, piv) != 0) {
+                snprintf(err, MACE_ERR_LEN, "the reanalysis: the massless static corrections' stiffness is singular");
+                goto done;
+            }
+            ml_lu_solve(lu, nz, piv, g, na);
+            for (i = 0; i < na; i++)
+                for (j = 0; j < na; j++) {
+                    double acc = 0.0;
+                    for (q = 0; q < nz; q++) acc += k[i * nt + na + q] * g[q * na + j];
+                    kc[i * na + j] -= acc;
+                }
+            for (i = 0; i < na; i++)
+                for (j = 0; j < i; j++) kc[i * na + j] = kc[j * na + i] = 0.5 * (kc[i * na + j] + kc[j * na + i]);
         }
-        for (i = 0; i < nf; i++)
-            for (j = 0; j < i; j++) k_r[i * nf + j] = k_r[j * nf + i] = 0.5 * (k_r[i * nf + j] + k_r[j * nf + i]);
-        if (ml_jacobi_eigh(k_r, nf, w, v) != 0) {
+        if (ml_jacobi_eigh(kc, na, w, v) != 0) {
             snprintf(err, MACE_ERR_LEN, "the reanalysis eigen-solution did not converge");
             goto done;
         }
-        for (i = 0; i < nf * nf; i++) score[i] = v[i] * v[i];
-        if (ml_assign_max(&m->al, score, nf, col) != 0) goto oom;
+        for (i = 0; i < nf; i++) /* rows of the nominal modes; the corrections' rows score nothing */
+            for (j = 0; j < na; j++) score[i * na + j] = v[i * na + j] * v[i * na + j];
+        if (ml_assign_max(&m->al, score, na, col) != 0) goto oom;
         for (i = 0; i < nf; i++) { /* new mode i continues nominal mode i */
             m->freq[m->flex[i]] = signed_frequency_hz(w[col[i]]);
-            for (j = 0; j < nf; j++) phi_r[j * nf + i] = v[j * nf + col[i]];
+            for (j = 0; j < na; j++) coef[j * nf + i] = v[j * na + col[i]];
+            for (j = 0; j < nz; j++) {
+                double acc = 0.0;
+                for (q = 0; q < na; q++) acc += g[j * na + q] * v[q * na + col[i]];
+                coef[(na + j) * nf + i] = -acc;
+            }
         }
     }
     for (i = 0; i < m->n_modes; i++)
@@ -563,12 +649,15 @@ static int reanalyse(MaceModel *m, double *phi_r, int *changed, char *err) {
 oom:
     snprintf(err, MACE_ERR_LEN, "out of memory in the reanalysis");
 done:
-    m->al.free(rel);
-    m->al.free(k_r);
+    m->al.free(k);
+    m->al.free(kc);
+    m->al.free(g);
+    m->al.free(lu);
     m->al.free(w);
     m->al.free(v);
     m->al.free(score);
     m->al.free(col);
+    m->al.free(piv);
     return status;
 }
 
@@ -587,7 +676,7 @@ static void mode_terms(const MaceModel *m, size_t j, double *w2, double *damping
 
 /* The modal structure block (mace_fmu/iomodel/modal_core.py, modal_matrices): A, B and C, and for
  * acceleration outputs C = a [-Omega^2, -2 zeta Omega] and the feedthrough D = a Phi^T b. */
-static int structure_block(MaceModel *m, const double *phi_r, int changed, double *ab, double *bb, double *cb,
+static int structure_block(MaceModel *m, const double *coef, int changed, double *ab, double *bb, double *cb,
                            double *db, size_t N, size_t NU, size_t ox, size_t ou, size_t oy) {
     const size_t nm = m->n_modes, nf = m->n_flex;
     size_t j, k, o, q, nd = 0, pos;
@@ -597,16 +686,29 @@ static int structure_block(MaceModel *m, const double *phi_r, int changed, doubl
     if (!dpos || !rpos || !mb || !rows) goto done;
     memcpy(mb, m->modal_b, nm * m->n_structure_inputs * sizeof(double));
     memcpy(rows, m->rows, m->n_structure_outputs * nm * sizeof(double));
-    if (changed) { /* Phi_R^T modal_b and rows Phi_R on the flexible modes */
+    if (changed) { /* the new flexible modes' inputs and rows: coef^T [b + preload; b_W], [rows + preload, rows_W] coef */
+        const size_t ni = m->n_structure_inputs, no = m->n_structure_outputs, nc = m->n_corr;
         for (k = 0; k < nf; k++) {
-            for (q = 0; q < m->n_structure_inputs; q++) {
+            for (q = 0; q < ni; q++) {
                 double acc = 0.0;
-                for (j = 0; j < nf; j++) acc += phi_r[j * nf + k] * m->modal_b[m->flex[j] * m->n_structure_inputs + q];
-                mb[m->flex[k] * m->n_structure_inputs + q] = acc;
+                for (j = 0; j < nf; j++) {
+                    double b = m->modal_b[m->flex[j] * ni + q];
+                    size_t p;
+                    for (p = 0; p < m->n_phys; p++) b += m->rel[p] * m->pre_b[(p * nf + j) * ni + q];
+                    acc += coef[j * nf + k] * b;
+                }
+                for (j = 0; j < nc; j++) acc += coef[(nf + j) * nf + k] * m->corr_b[j * ni + q];
+                mb[m->flex[k] * ni + q] = acc;
             }
-            for (o = 0; o < m->n_structure_outputs; o++) {
+            for (o = 0; o < no; o++) {
                 double acc = 0.0;
-                for (j = 0; j < nf; j++) acc += m->rows[o * nm + m->flex[j]] * phi_r[j * nf + k];
+                for (j = 0; j < nf; j++) {
+                    double r = m->rows[o * nm + m->flex[j]];
+                    size_t p;
+                    for (p = 0; p < m->n_phys; p++) r += m->rel[p] * m->pre_rows[(p * no + o) * nf + j];
+                    acc += r * coef[j * nf + k];
+                }
+                for (j = 0; j < nc; j++) acc += m->corr_rows[o * nc + j] * coef[(nf + j) * nf + k];
                 rows[o * nm + m->flex[k]] = acc;
             }
         }
@@ -701,7 +803,7 @@ static int pade_block(size_t n, double delay, double *a, double *b, double *c, d
 
 /* ---- the system ----------------------------------------------------------------------------- */
 
-static int assemble(MaceModel *m, const double *phi_r, int changed, char *err) {
+static int assemble(MaceModel *m, const double *coef, int changed, char *err) {
     const size_t N = m->n, NU = m->n_block_inputs, NY = m->n_block_outputs, ni = m->n_in, no = m->n_out;
     double *ab = ml_zeros(&m->al, N * N), *bb = ml_zeros(&m->al, N * NU), *cb = ml_zeros(&m->al, NY * N);
     double *db = ml_zeros(&m->al, NY * NU), *w = ml_zeros(&m->al, NU * NU), *rhs = ml_zeros(&m->al, NU * (N + ni));
@@ -718,7 +820,7 @@ static int assemble(MaceModel *m, const double *phi_r, int changed, char *err) {
         const size_t nx = (size_t)info[INFO_NX], nu = (size_t)info[INFO_NU], ny = (size_t)info[INFO_NY];
         switch (info[INFO_KIND]) {
             case BLOCK_STRUCTURE:
-                if (structure_block(m, phi_r, changed, ab, bb, cb, db, N, NU, ox, ou, oy) != 0) {
+                if (structure_block(m, coef, changed, ab, bb, cb, db, N, NU, ox, ou, oy) != 0) {
                     snprintf(err, MACE_ERR_LEN, "out of memory building the structure block");
                     goto done;
                 }
@@ -825,19 +927,19 @@ done:
 }
 
 int mace_build(MaceModel *m, char *err) {
-    double *phi_r;
+    double *coef;
     int changed, status = -1;
     if (m->built && !m->params_changed) return 0;
     if (check_parameters(m, err) != 0) return -1;
     m->params_changed = 0;
     if (m->built && memcmp(m->params, m->built_params, m->n_par * sizeof(double)) == 0) return 0;
     m->built = 0;
-    phi_r = ml_zeros(&m->al, m->n_flex * m->n_flex);
-    if (!phi_r) {
+    coef = ml_zeros(&m->al, (m->n_flex + m->n_corr) * m->n_flex);
+    if (!coef) {
         snprintf(err, MACE_ERR_LEN, "out of memory");
         return -1;
     }
-    if (reanalyse(m, phi_r, &changed, err) == 0 && assemble(m, phi_r, changed, err) == 0 &&
+    if (reanalyse(m, coef, &changed, err) == 0 && assemble(m, coef, changed, err) == 0 &&
         zoh_prepare(m->zoh, m->a, m->b, m->c, m->d, err) == 0) {
         size_t i;
         if (m->kind == MACE_MODEL_EXCHANGE) {
@@ -851,7 +953,7 @@ int mace_build(MaceModel *m, char *err) {
         m->y_valid = m->x_valid = 0;
         status = 0;
     }
-    m->al.free(phi_r);
+    m->al.free(coef);
     return status;
 }
 

@@ -1,0 +1,297 @@
+"""How a Young's modulus or a spring stiffness reaches the modal model, so that it moves every channel as
+a full re-solve does.
+
+Three pieces per physical parameter p, all about the configuration the modes are of:
+
+1. the modal stiffness change Phi0^T dK/d(ln p) Phi0 (eq. 4.6-4.9), dK the tangent's total derivative:
+   in 1-g with the large-displacement preload, the preload re-solved to first order (a stiffer cable
+   takes more of the weight, and the forces and geometry move with it);
+2. static-correction vectors W: the residual flexibility's response to the forces the *material*
+   part of dK (the preload's forces held) puts on each retained mode. The retained modes cannot
+   follow a local change: a gauge or a piezo patch on the changed element reads the rotations of
+   massless grids, condensed with the nominal stiffness, and the element's own flexibility lies in
+   modes far above the retained band. With W in the Ritz basis (:mod:`mace_fmu.iomodel.reanalysis`)
+   the massless DOFs are condensed with the changed stiffness and the truncated modes' static part
+   follows. Only the material part enters W's blocks: it is linear in p and positive, so the reduced
+   problem stays positive definite for any change; the preload's part, linearised, is not (a cable's
+   axial stiffness turned by a first-order rotation);
+3. the preload part's first-order change of each retained mode shape, -K^-1 (dK - dK_material) phi_k
+   without the retained modes' components, carried as changes of the output rows and modal inputs
+   per unit relative change.
+
+Measured on MACE (tests/test_parameter_route.py, benchmarks/RESULTS.md): the strain gauge on the
+active strut, whose modulus the nominal modes alone moved 31-85 % wrong, follows the re-solve to
+better than 0.1 %.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+from scipy import sparse
+
+from mace_fmu.errors import MaceError
+from mace_fmu.fe.assembly import FEModel, bar_section
+from mace_fmu.fe.beam import natural_stiffness
+from mace_fmu.fe.corotational import BarState, material_tangent
+from mace_fmu.fe.factor import factorize
+from mace_fmu.fe.modal import Modes
+from mace_fmu.fe.preload import Preload, preload_solver, tangent_sensitivity
+from mace_fmu.iomodel.modal_ss import modal_data
+from mace_fmu.iomodel.volts import VoltsModel
+from mace_fmu.parameters.sets import parameter_names
+from mace_fmu.util.frequency import ZERO_HZ
+
+_RELATIVE_STEP = 1e-3  # the material stiffness is linear in E and k: the difference quotient is exact
+#: correction directions (K-orthonormal) kept: eigenvalues of their stiffness Gram matrix above this
+#: fraction of the largest; below it they repeat others to round-off
+GRAM_TOLERANCE = 1e-10
+#: a correction direction whose own frequency lies above this multiple of the highest retained mode
+#: acts statically in the retained band: it is condensed as massless (keeping its tiny mass would only
+#: bring its round-off into the eigen-solution)
+MASSIVE_FACTOR = 10.0
+#: the correction solves use K + s M, s this fraction of the lowest flexible omega^2 (rigid bodies and
+#: mechanisms make K singular; the loads carry no component along them, so s changes nothing else)
+SHIFT_FRACTION = 1e-3
+#: kinds of output rows (ParametricSystem) that the corrections are projected on
+ROW_KINDS = ("disp", "rate", "motion", "acc")
+
+
+@dataclass(frozen=True)
+class StiffnessSensitivity:
+    """One physical parameter and its stiffness derivatives [N/m, N m/rad per unit ln p] on the basic DOFs."""
+
+    name: str  #: FMU and parameter-set name, e.g. "E_active_strut_center"
+    value: float  #: nominal value [Pa, N/m]
+    description: str  #: what it is, for the FMU's parameter description
+    total: sparse.csr_array  #: dK/d(ln p), the preload re-solved to first order (1-g large preload)
+    material: sparse.csr_array  #: the same with the preload's forces held (equal to ``total`` otherwise)
+
+
+def material_sensitivity(fe: FEModel, deck, preload: Preload | None, mid: int, *, solve=None,
+                         forces_held: bool = False) -> sparse.csr_array:
+    """dK/d(ln E) [N/m, N m/rad] of MAT1 ``mid``: the material stiffness of its bars per unit relative change.
+
+    About the configuration the modes are computed in. 1-g with the large-displacement preload: the
+    tangent's total derivative with the preload re-solved to first order
+    (:func:`~mace_fmu.fe.preload.tangent_sensitivity`), unless ``forces_held``. Otherwise (the linear
+    preload; 0-g; ``forces_held``) the preloaded geometry with the preload's bar forces held, so a change
+    of E changes only the material part. Taking the undeformed geometry instead puts spurious strain
+    into the near-rigid suspension modes: Z tilt, X twist and 1st Y bending then came out 1.9e-3 to
+    2.9e-3 off after E of the Lexan center +5 %, against 7.8e-4 at most this way. The bar stiffness is
+    linear in E (and in G, which NASTRAN derives from E when blank), so the difference of the natural
+    stiffnesses is exact; only this material's bars are evaluated.
+    """
+    ids = fe.bars.ids
+    mine = np.array([deck.pbars[deck.bars[int(i)].pid].mid == mid for i in ids])
+    mat = deck.mat1s[mid]
+    plus = dataclasses.replace(mat, e=mat.youngs_modulus * (1 + _RELATIVE_STEP))  # G follows E when blank
+
+    def section_delta(pid: int, length: float) -> np.ndarray:
+        sec = bar_section(deck, pid)
+        stiffer = dataclasses.replace(sec, e=plus.youngs_modulus, g=plus.shear_modulus)
+        return (natural_stiffness(stiffer, length) - natural_stiffness(sec, length)) / _RELATIVE_STEP
+
+    dkn = np.array([section_delta(deck.bars[int(i)].pid, length)
+                    for i, length in zip(ids[mine], fe.bars.lengths0[mine])]).reshape(-1, 7, 7)
+    if _redistributes(preload) and not forces_held:
+        # the gravity load redistributes (suspension cables, springs): the preload re-solved to first order
+        return tangent_sensitivity(fe, preload, bar_mask=mine, dk_natural=dkn, solve=solve)
+    bars = dataclasses.replace(fe.bars, ids=ids[mine], node_a=fe.bars.node_a[mine], node_b=fe.bars.node_b[mine],
+                               frames0=fe.bars.frames0[mine], lengths0=fe.bars.lengths0[mine], k_natural=dkn)
+    if preload is not None:
+        state = preload.state
+    else:  # 0-g: the undeformed geometry, where the corotational tangent is the linear stiffness
+        state = BarState(fe.positions, np.broadcast_to(np.eye(3), (len(fe.positions), 3, 3)))
+    # forces held (zero change): only the material part B^T dK_n B of the tangent remains
+    return sparse.csr_array(material_tangent(bars, state, fe.dofs.size)[1])
+
+
+def _redistributes(preload: Preload | None) -> bool:
+    """A large-displacement preload with its constraints: a stiffness change moves the preload itself."""
+    return preload is not None and preload.kind == "large" and preload.constraints is not None
+
+
+def stiffness_sensitivities(model: VoltsModel, *, only: Sequence[str] | None = None) -> list[StiffnessSensitivity]:
+    """The moduli (of the MAT1 cards the bars use) and springs of ``model``'s structure, or those named ``only``,
+    with their stiffness derivatives."""
+    modes = model.structure_modes
+    deck, fe, pre = modes.structure.deck, modes.model, modes.preload
+    names = parameter_names(deck, modes.structure.file)
+    material_name = {mid: name for name, mid in names.materials.items()}
+    spring_name = {sid: name for name, sid in names.springs.items()}
+    solve = preload_solver(pre) if _redistributes(pre) else None
+    out = []
+    for mid in sorted({deck.pbars[b.pid].mid for b in deck.bars.values()}):
+        name = f"E_{material_name[mid]}"
+        if only is not None and name not in only:
+            continue
+        held = material_sensitivity(fe, deck, pre, mid, forces_held=True)
+        total = material_sensitivity(fe, deck, pre, mid, solve=solve) if _redistributes(pre) else held
+        out.append(StiffnessSensitivity(
+            name, deck.mat1s[mid].youngs_modulus, f"Young's modulus of {material_name[mid]} (MAT1 {mid}) [Pa]; "
+            "takes effect by reanalysis on the retained modes and static corrections", total, held))
+    for row, (sid, k) in enumerate(zip(fe.spring_ids, fe.spring_constants)):
+        name = f"k_{spring_name[sid]}"
+        if only is not None and name not in only:
+            continue
+        e = sparse.csr_array(fe.spring_vectors[[row]])  # (1, n_dof)
+        held = sparse.csr_array(k * (e.T @ e))
+        total = sparse.csr_array(tangent_sensitivity(fe, pre, dk_springs=held, solve=solve)) if _redistributes(pre) \
+            else held
+        out.append(StiffnessSensitivity(name, float(k), f"stiffness of {spring_name[sid]} (CELAS2 {sid}) [N/m]; "
+                                        "reanalysis", total, held))
+    return out
+
+
+@dataclass(frozen=True)
+class PhysicalRoute:
+    """The physical parameters of a ParametricSystem and the arrays that carry them (module docstring)."""
+
+    parameters: tuple[tuple[str, float, str], ...]  #: (name, nominal value [SI], description)
+    arrays: dict[str, np.ndarray]  #: physical_names, physical_dk, correction_*, *_correction, *_preload, preload_b
+
+
+def physical_route(model: VoltsModel, shapes: np.ndarray, sensitivities: Sequence[StiffnessSensitivity]
+                   ) -> PhysicalRoute:
+    """The arrays through which ``sensitivities`` act on the retained modes ``shapes`` (n_dof, n_modes) of ``model``.
+
+    Parameters
+    ----------
+    model : VoltsModel
+        The model whose structure, instruments and motion outputs the rows are for.
+    shapes : numpy.ndarray
+        Its retained mode shapes on the basic DOFs (mass-normalised).
+    sensitivities : sequence of StiffnessSensitivity
+        The physical parameters, in the order the arrays keep.
+
+    Returns
+    -------
+    PhysicalRoute
+        Parameters and arrays for :func:`mace_fmu.iomodel.parametric_data.with_physical`.
+    """
+    modes = model.structure_modes
+    n = shapes.shape[1]
+    frequencies = _frequencies_of(model, n)
+    flexible = np.abs(frequencies) >= ZERO_HZ
+    dk = np.array([shapes.T @ (s.total @ shapes) for s in sensitivities]).reshape(len(sensitivities), n, n)
+    # Rigid-body and mechanism modes carry no strain energy: their computed sensitivities (3e-9
+    # of the largest, the round-off of the mechanism shapes) are noise, which the reanalysis
+    # would couple into the flexible modes (up to 6e-7 of an output's range for E x 0.5).
+    dk[:, ~flexible, :] = 0.0
+    dk[:, :, ~flexible] = 0.0
+    arrays = {"physical_names": np.array([s.name for s in sensitivities]), "physical_dk": dk}
+    if sensitivities and modes.constraints is not None and np.any(flexible):
+        arrays.update(_corrections(model, shapes, frequencies, flexible, sensitivities))
+    return PhysicalRoute(tuple((s.name, s.value, s.description) for s in sensitivities), arrays)
+
+
+def _frequencies_of(model: VoltsModel, n: int) -> np.ndarray:
+    """Frequencies [Hz] of the first ``n`` modes of the model's structure (the retained ones)."""
+    return np.asarray(model.structure_modes.frequencies_hz[:n], dtype=float)
+
+
+class _Independent:
+    """The constrained problem the modes solve, on the independent DOFs: K + s M factored once."""
+
+    def __init__(self, model: VoltsModel, shapes: np.ndarray, frequencies: np.ndarray, flexible: np.ndarray):
+        modes = model.structure_modes
+        t = modes.constraints.transform
+        self.t = t
+        self.k = sparse.csr_array(t.T @ modes.stiffness @ t)
+        self.m = sparse.csr_array(t.T @ modes.model.mass @ t)
+        self.phi = factorize(sparse.csr_array(t.T @ t), positive_definite=True)(t.T @ shapes)  # T phi_i = shapes
+        shift = SHIFT_FRACTION * float(np.min((2.0 * np.pi * frequencies[flexible]) ** 2))
+        try:
+            self.solve = factorize(self.k + shift * self.m, positive_definite=True)
+        except RuntimeError:
+            raise MaceError("static corrections: K + s M is singular (a DOF with neither stiffness nor mass)") from None
+
+    def reduce(self, matrix: sparse.sparray) -> sparse.csr_array:
+        return sparse.csr_array(self.t.T @ matrix @ self.t)
+
+    def residual(self, forces: np.ndarray) -> np.ndarray:
+        """K^-1 of ``forces`` without their components along the retained modes: the part the truncated
+        modes and the massless DOFs take; the result carries no retained mode either."""
+        forces = forces - self.m @ (self.phi @ (self.phi.T @ forces))  # no work on any retained mode
+        response = self.solve(forces) if forces.shape[1] else forces
+        return response - self.phi @ (self.phi.T @ (self.m @ response))
+
+
+def _corrections(model: VoltsModel, shapes: np.ndarray, frequencies: np.ndarray, flexible: np.ndarray,
+                 sensitivities: Sequence[StiffnessSensitivity]) -> dict[str, np.ndarray]:
+    """The static-correction vectors' blocks and rows, and the preload's shape changes (module docstring)."""
+    ind = _Independent(model, shapes, frequencies, flexible)
+    material = [ind.reduce(s.material) for s in sensitivities]
+    flex = ind.phi[:, flexible]
+    w = np.hstack([ind.residual(dk @ flex) for dk in material]) if material else np.zeros((ind.phi.shape[0], 0))
+    w, massive = _orthonormal(ind, w, max_hz=float(np.max(np.abs(frequencies))))
+    n, n_w = shapes.shape[1], w.shape[1]
+    out: dict[str, np.ndarray] = {
+        "correction_massive": np.array(massive, dtype=np.int64),
+        "correction_stiffness": _symmetric(w.T @ (ind.k @ w)),
+        "correction_dk": np.array([_symmetric(w.T @ (dk @ w)) for dk in material]).reshape(len(material), n_w, n_w),
+        "correction_coupling": np.zeros((len(material), n_w, n))}
+    out["correction_coupling"][:, :, flexible] = np.array([w.T @ (dk @ flex) for dk in material]).reshape(
+        len(material), n_w, int(flexible.sum()))
+    projected = _project(model, ind.t @ w)
+    out["correction_b"] = projected.pop("b")
+    out.update({f"{kind}_correction": rows for kind, rows in projected.items()})
+    # the preload's part of each parameter: first-order shape changes of the flexible modes
+    preload = {f"{kind}_preload": [] for kind in ROW_KINDS} | {"preload_b": []}
+    for s in sensitivities:
+        change = np.zeros((ind.phi.shape[0], n))
+        part = ind.reduce(s.total - s.material)
+        if part.nnz:
+            change[:, flexible] = -ind.residual(part @ flex)
+        rows = _project(model, ind.t @ change)
+        preload["preload_b"].append(rows.pop("b"))
+        for kind, value in rows.items():
+            preload[f"{kind}_preload"].append(value)
+    out.update({key: np.array(value).reshape(len(sensitivities), *_shape_of(value, n)) for key, value in
+                preload.items()})
+    return out
+
+
+def _shape_of(value: list[np.ndarray], n: int) -> tuple[int, ...]:
+    return value[0].shape if value else (0, n)
+
+
+def _symmetric(a: np.ndarray) -> np.ndarray:
+    return 0.5 * (a + a.T)
+
+
+def _orthonormal(ind: _Independent, w: np.ndarray, *, max_hz: float) -> tuple[np.ndarray, int]:
+    """The span of ``w`` as stiffness-orthonormal vectors without their repeats, ordered massive first
+    (mass-orthonormal: the directions whose own frequency lies within MASSIVE_FACTOR x ``max_hz``), then the
+    massless ones; and how many are massive."""
+    if not w.shape[1]:
+        return w, 0
+    gram = _symmetric(w.T @ (ind.k @ w) + 0.0)
+    lam, u = np.linalg.eigh(gram)
+    keep = lam > GRAM_TOLERANCE * max(float(lam.max()), 1e-300)
+    w = w @ (u[:, keep] / np.sqrt(lam[keep]))
+    w = w - ind.phi @ (ind.phi.T @ (ind.m @ w))
+    lam, u = np.linalg.eigh(_symmetric(w.T @ (ind.m @ w)))
+    # w is K-normalised: lam = 1 / omega^2 of each direction
+    massive = lam > 1.0 / (2.0 * np.pi * MASSIVE_FACTOR * max(max_hz, ZERO_HZ)) ** 2
+    return np.hstack([w @ (u[:, massive] / np.sqrt(lam[massive])), w @ u[:, ~massive]]), int(massive.sum())
+
+
+def _project(model: VoltsModel, vectors: np.ndarray) -> dict[str, np.ndarray]:
+    """Output rows of each kind (n_rows, n_vectors) and the modal inputs ``b`` (n_vectors, n_actuators) of
+    basic-DOF ``vectors``, as :func:`~mace_fmu.iomodel.modal_ss.modal_data` reads modes."""
+    modes = model.structure_modes.modes
+    count = vectors.shape[1]
+    as_modes = Modes(frequencies_hz=np.zeros(count), shapes=vectors, dofs=modes.dofs, cd_frames=modes.cd_frames,
+                     labels=("",) * count)
+    data = modal_data(as_modes, model.instruments, max_hz=np.inf, motion_grids=list(model.plant.motion_grids))
+
+    def table(rows: dict[str, np.ndarray]) -> np.ndarray:
+        return np.array(list(rows.values())).reshape(len(rows), count)
+
+    return {"disp": table(data.disp_out), "rate": table(data.rate_out), "motion": table(data.motion_out),
+            "acc": table(data.acc_out), "b": data.modal_b}
