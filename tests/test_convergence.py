@@ -77,10 +77,20 @@ def test_an_update_stopped_by_its_cap_says_so_in_the_result_and_the_written_repo
     assert parsed["noise_floor"]["sigmas_above"] == pytest.approx(floor.sigmas_above(result.final_cost))
 
 
-def test_an_update_that_ends_at_a_bound_is_not_converged():
+def test_an_update_that_ends_at_a_bound_has_converged_and_names_it_and_strict_fails_it():
+    """The fit meets its test with k_2 at its upper bound (the truth, 1.20, is outside [0.5, 1.19]): converged,
+    the bound named with what it means; --strict (``strict=True``) counts it as not converged."""
+    from mace_fmu.updating.convergence import convergence_report
+
     cost = TimeResponseCost(_record(band_limited=False))
-    result = _update(cost, off=-0.02, bounds={"k_2": Bounds(0.5, 1.19)})  # from 1.176: the truth, 1.20, is outside
-    assert not result.converged and "k_2 at its upper bound" in result.reasons[0]
+    result = _update(cost, off=-0.02, bounds={"k_2": Bounds(0.5, 1.19)})  # from 1.176
+    assert result.converged and "k_2 at its upper bound" in result.reasons[0]
+    assert result.at_bounds == (("k_2", "upper"),)
+    report = convergence_report(result)
+    assert report.converged and report.summary().startswith("converged (with k_2 at its upper bound: the data ask")
+    assert "[at_bounds]\n\"k_2\" = \"upper\"" in report.to_toml()
+    strict = convergence_report(result, strict=True)
+    assert not strict.converged and strict.summary().startswith("NOT CONVERGED")
 
 
 def test_the_noise_is_estimated_from_the_spectrum_above_a_band_limited_input():
@@ -100,7 +110,8 @@ def test_help_documents_the_exit_status(capsys):
     with pytest.raises(SystemExit):
         main(["update", "--help"])
     text = " ".join(capsys.readouterr().out.split())
-    assert "exit status: 0 converged; 2 bad input (nothing written); 3 the update stopped without converging" in text
+    assert "exit status: 0 converged (a parameter that ends at a bound is named" in text
+    assert "--strict makes it 3); 2 bad input (nothing written); 3 the update stopped without converging" in text
 
 
 def test_the_trust_radius_grows_while_the_linearisation_holds_and_shrinks_when_it_does_not():

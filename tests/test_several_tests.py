@@ -91,9 +91,10 @@ def test_two_tests_converge_to_the_noise_floor_with_the_truth_inside_the_reporte
     assert report["converged"] and abs(report["noise_floor"]["sigmas_above"]) < 3.0, report
     for n, e in errors.items():  # the truth inside the reported 95 % interval
         assert abs(e) <= 1.96 * sd[n], (n, e, sd[n])
-    assert sd["E_active_strut_end"] < 3.0  # the end section is fixed to a few percent
-    weak = uncertainty["weak_directions"][0]
-    assert "E_active_strut_center" in weak and "E_active_strut_piezo" in weak
+    # the strut test's gauges sit on the sections: each is fixed on its own (plan-test predicts the same
+    # from full re-solves, tests/test_test_planning.py), no combination is weak
+    print("SD", sd, errors)
+    assert max(sd[n] for n in STRUT) < 0.2 and not uncertainty["weak_directions"]
 
 
 def test_a_second_test_adds_information(lab, tmp_path, capsys):
@@ -114,15 +115,12 @@ def test_tests_with_different_sample_times_are_refused(lab, tmp_path, capsys):
     assert not (tmp_path / "out").exists()
 
 
-def test_from_the_pre_update_moduli_bounded_first_steps_reach_the_floor_where_an_unbounded_one_did_not(lab, tmp_path):
+def test_from_the_pre_update_moduli_bounded_first_steps_reach_the_floor(lab, tmp_path):
     """Regression of the first step: the 8 kept moduli a few percent off the bundled ones (the truth), two 8 s
     tests (the gimbals to the gyros and gauges; the strut test), start at the pre-update moduli (up to 12 %
-    off). Unbounded, the first linearised step threw cable 3 to its bound (+44 %) and the fit into another
-    minimum, 190 standard deviations above the noise floor (reported as not converged); bounded to 10 % and
-    growing, the update ends on the floor with lexan and cables within 0.5 %."""
-    import dataclasses
-    import math
-
+    off). Unbounded (before the FMU declared its validated range), the first linearised step threw cable 3 to
+    +44 % and the fit into another minimum, 190 standard deviations above the noise floor; bounded to 10 %
+    and growing, the update ends on the floor with lexan and cables within 0.5 %."""
     from mace_fmu.updating.convergence import convergence_report, noise_floor
     from mace_fmu.updating.fmu_model import fmu_family
     from mace_fmu.updating.fmu_problem import fmu_problem
@@ -146,17 +144,11 @@ def test_from_the_pre_update_moduli_bounded_first_steps_reach_the_floor_where_an
     pre = pre_update_parameters()
     problem = fmu_problem(fmu=fmu, data=files, names=THESIS_KEPT, cost="time", start={n: pre[n] for n in THESIS_KEPT},
                           held_inputs=family.interface.inputs)
-    verdicts = {}
-    for radius in (math.inf, FMU_SETTINGS.initial_radius):
-        result = update_fmu(family=problem.family, cost=problem.cost, start=problem.start, stages=[problem.names],
-                            settings=dataclasses.replace(FMU_SETTINGS, initial_radius=radius))
-        report = convergence_report(result, noise_floor=noise_floor(problem.cost))
-        verdicts[radius] = (report, {n: result.values[n] / truth[n] - 1 for n in THESIS_KEPT})
-    unbounded, errors_unbounded = verdicts[math.inf]
-    assert not unbounded.converged and unbounded.noise_floor.sigmas_above(unbounded.final_cost) > 3.0
-    bounded, errors = verdicts[FMU_SETTINGS.initial_radius]
     assert FMU_SETTINGS.initial_radius == 0.1
-    assert bounded.converged and abs(bounded.noise_floor.sigmas_above(bounded.final_cost)) < 3.0, bounded.reasons
+    result = update_fmu(family=problem.family, cost=problem.cost, start=problem.start, stages=[problem.names])
+    report = convergence_report(result, noise_floor=noise_floor(problem.cost))
+    errors = {n: result.values[n] / truth[n] - 1 for n in THESIS_KEPT}
+    assert report.converged and abs(report.noise_floor.sigmas_above(report.final_cost)) < 3.0, report.reasons
     assert all(abs(errors[n]) < 0.005 for n in THESIS_KEPT if "lexan" in n or "cable" in n), errors
 
 

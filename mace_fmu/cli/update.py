@@ -117,7 +117,7 @@ def cmd_fmu_update(args: argparse.Namespace) -> int:
     from mace_fmu.updating.convergence import convergence_report, noise_floor
 
     floor = noise_floor(problem.cost, noise_rms_fraction=noise_fraction)
-    report = convergence_report(result, noise_floor=floor)
+    report = convergence_report(result, noise_floor=floor, strict=args.strict)
     params = fmu_parameters(result, family=problem.family, data=", ".join(problem.data_files), cost=problem.cost,
                             convergence=report)
     out.mkdir(parents=True, exist_ok=True)
@@ -207,7 +207,7 @@ def cmd_mace_update(args: argparse.Namespace) -> int:
     from mace_fmu.updating.convergence import convergence_report
     from mace_fmu.updating.uncertainty import format_uncertainty, stage_uncertainty, uncertainty_toml
 
-    report = convergence_report(res)
+    report = convergence_report(res, strict=args.strict)
     uncertainty = stage_uncertainty(res)
     print(format_uncertainty(uncertainty))
     paths += [write_text_atomic(out / "convergence.toml", report.to_toml()),
@@ -218,15 +218,18 @@ def cmd_mace_update(args: argparse.Namespace) -> int:
     return 0 if report.converged else NOT_CONVERGED
 
 
-_EXIT_STATUS = (f"exit status: 0 converged; 2 bad input (nothing written); {NOT_CONVERGED} the update stopped "
-                "without converging (at its iteration cap, at a parameter bound, or with the time cost more than "
-                "3 standard deviations above the noise floor): the results are written all the same, with "
-                "converged = false and the reasons in convergence.toml")
+_EXIT_STATUS = (f"exit status: 0 converged (a parameter that ends at a bound is named on the terminal and in "
+                f"convergence.toml; --strict makes it {NOT_CONVERGED}); 2 bad input (nothing written); {NOT_CONVERGED} the "
+                "update stopped without converging (at its iteration cap, a stalled step, or with the time cost "
+                "more than 3 standard deviations above the noise floor): the results are written all the same, "
+                "with converged = false and the reasons in convergence.toml")
 
 
 def _out_option(p: argparse.ArgumentParser, *, help_text: str | None = None) -> None:
     p.add_argument("-o", "--out", help=help_text or "directory for parameters.toml, convergence.toml, "
                    "uncertainty.toml, report.txt, summary.json and figures")
+    p.add_argument("--strict", action="store_true", help=f"a parameter that ends at a bound counts as not converged "
+                   f"(exit {NOT_CONVERGED}); by default it is named and the update may converge")
 
 
 def _sample_options(p: argparse.ArgumentParser, *, hidden: bool = False) -> None:

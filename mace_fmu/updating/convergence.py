@@ -2,8 +2,10 @@
 
 Two questions a test engineer asks before signing an updated parameter set:
 
-1. Did the update stop on a convergence test, or on its iteration cap or at a bound? Each stage
-   says so (:class:`~mace_fmu.updating.solve.StageOutcome`).
+1. Did the update stop on a convergence test, or on its iteration cap? Each stage says so
+   (:class:`~mace_fmu.updating.solve.StageOutcome`). A fit that meets its test with a parameter at a
+   bound has converged, and says which: the data ask for a value outside the allowed range, so that
+   parameter has no two-sided interval (``strict`` counts it as not converged).
 2. For the time-domain cost, is the fit as good as the noise allows? At the true parameters the
    cost j^T j is a sum of squared noise samples: with each output's noise variance sigma_o^2
    (normalised by the output's RMS, as the cost is), its mean is sum_o N_o sigma_o^2 and its
@@ -121,15 +123,26 @@ def noise_floor(cost, *, noise_rms_fraction: float | None = None) -> NoiseFloor 
 class ConvergenceReport:
     """Whether an update may be trusted as an optimum, and why."""
 
-    converged: bool  #: every stage ended on a convergence test, no parameter at a bound
+    converged: bool  #: every stage ended on a convergence test (and, ``strict``, no parameter at a bound)
     reasons: tuple[str, ...]  #: the stages' stopping tests, and the noise-floor verdict when there is one
     final_cost: float  #: j^T j at the end
     noise_floor: NoiseFloor | None  #: the time cost's expected value from the data's noise (None: not a time cost)
+    at_bounds: tuple[tuple[str, str], ...] = ()  #: (parameter, "lower" or "upper") the fit ended at
+
+    def bound_note(self) -> str:
+        """What ending at a bound means, naming the parameters ("" without any)."""
+        if not self.at_bounds:
+            return ""
+        which = ", ".join(f"{n} at its {side} bound" for n, side in self.at_bounds)
+        return (f"{which}: the data ask for a value outside the allowed range, so the value is the bound and its "
+                "interval is one-sided (no two-sided confidence interval); widen the bound or fix the parameter if "
+                "that value is not plausible")
 
     def summary(self) -> str:
         """One line for the terminal."""
         head = "converged" if self.converged else "NOT CONVERGED"
-        return f"{head}: " + "; ".join(self.reasons)
+        note = f" (with {self.bound_note()})" if self.at_bounds else ""
+        return f"{head}{note}: " + "; ".join(self.reasons)
 
     def to_toml(self) -> str:
         """The report as TOML (``convergence.toml`` beside the parameters)."""
@@ -139,6 +152,9 @@ class ConvergenceReport:
         lines = ["# mace-fmu: did the update converge, and how far above the noise did it end?", "",
                  f"converged = {'true' if self.converged else 'false'}",
                  "reasons = [" + ", ".join(q(r) for r in self.reasons) + "]", f"final_cost = {self.final_cost!r}"]
+        if self.at_bounds:
+            lines += ["", "[at_bounds]", *(f"{q(n)} = {q(side)}" for n, side in self.at_bounds),
+                      "", "[at_bounds_note]", f"text = {q(self.bound_note())}"]
         if self.noise_floor is not None:
             nf = self.noise_floor
             lines += ["", "[noise_floor]", f"expected_cost = {nf.expected_cost!r}",
@@ -150,7 +166,7 @@ class ConvergenceReport:
 
 
 def convergence_report(result: UpdateResult, *, noise_floor: NoiseFloor | None = None,
-                       sigma_limit: float = SIGMA_LIMIT) -> ConvergenceReport:
+                       sigma_limit: float = SIGMA_LIMIT, strict: bool = False) -> ConvergenceReport:
     """The verdict on ``result``: its stages' tests, and (with a noise floor) the final cost against it.
 
     Parameters
@@ -162,6 +178,8 @@ def convergence_report(result: UpdateResult, *, noise_floor: NoiseFloor | None =
         tests and bounds decide.
     sigma_limit : float
         A final cost more than this many standard deviations above the floor has not converged.
+    strict : bool
+        Count a parameter ending at a bound as not converged (by default it is named, not failed).
 
     Returns
     -------
@@ -169,7 +187,9 @@ def convergence_report(result: UpdateResult, *, noise_floor: NoiseFloor | None =
         ``converged`` and the reasons, for the terminal line and ``convergence.toml``.
     """
     reasons = list(result.reasons)
-    converged = result.converged
+    converged = result.converged and not (strict and result.at_bounds)
+    if strict and result.at_bounds:
+        reasons.append("--strict: a parameter at a bound counts as not converged")
     if noise_floor is not None:
         k = noise_floor.sigmas_above(result.final_cost)
         verdict = (f"final cost {result.final_cost:.6g} is {k:+.1f} standard deviations from the noise floor "
@@ -179,4 +199,4 @@ def convergence_report(result: UpdateResult, *, noise_floor: NoiseFloor | None =
             verdict += f" (more than {sigma_limit:g} above: the fit stopped short of the optimum)"
         reasons.append(verdict)
     return ConvergenceReport(converged=converged, reasons=tuple(reasons), final_cost=result.final_cost,
-                             noise_floor=noise_floor)
+                             noise_floor=noise_floor, at_bounds=result.at_bounds)

@@ -32,29 +32,47 @@ class CostSensitivities:
 def cost_sensitivities(cost: Cost, *, base_model: LinearModel, perturbed: Evaluator, base: Mapping[str, float],
                        names: Sequence[str], relative_step: float = 1e-2, perturbation: str = "",
                        runner: Callable = map, progress: ProgressCallback | None = None,
-                       difference: str = "forward") -> CostSensitivities:
+                       difference: str = "forward",
+                       limits: Mapping[str, tuple[float, float]] | None = None) -> CostSensitivities:
     """j0 of ``base_model`` and the perturbed models of each name: ``difference="forward"`` one per name
     (``base`` with that value times 1 + ``relative_step``; the N + 1 evaluations of the cost-sensitivity
     method), ``"central"`` two (times 1 +- ``relative_step``; 2N + 1 evaluations, error O(step^2) instead of
-    O(step))."""
+    O(step)). ``limits``: name -> [low, high] no model may be asked for (an FMU's declared range); a step that
+    would leave it is taken on the other side of the base value (one-sided there)."""
     if difference not in ("forward", "central"):
         raise ValueError(f"difference must be 'forward' or 'central', got {difference!r}")
     j0 = cost.residual(base_model)
-    signs = (1.0,) if difference == "forward" else (1.0, -1.0)
-    points = [{**base, n: base[n] * (1.0 + sign * relative_step)} for n in names for sign in signs]
+    wanted = (1.0,) if difference == "forward" else (1.0, -1.0)
+
+    def inside(n: str, sign: float) -> bool:
+        low, high = (limits or {}).get(n, (-np.inf, np.inf))
+        return low <= base[n] * (1.0 + sign * relative_step) <= high
+
+    # per name: the signs of its steps; 0 stands for the base point itself (j0, no run)
+    signs = []
+    for n in names:
+        steps = tuple(s if inside(n, s) else (0.0 if difference == "central" and inside(n, -s) else -s)
+                      for s in wanted)
+        signs.append(steps)
+    points = [({**base, n: base[n] * (1.0 + sign * relative_step)}, k) for k, n in enumerate(names)
+              for sign in signs[k] if sign != 0.0]
 
     def residual(values: Mapping[str, float]) -> np.ndarray:
         return cost.residual(perturbed(values))
 
-    results = []
-    for k, j in enumerate(runner(residual, points)):
-        results.append(j)
+    results: list[list[np.ndarray]] = [[] for _ in names]
+    for k, (j, (_, owner)) in enumerate(zip(runner(residual, [p for p, _ in points]), points)):
+        results[owner].append(j)
         if progress is not None:
-            progress(Step("cost sensitivities", k + 1, len(points), detail=names[k // len(signs)]))
-    if difference == "forward":
-        columns = [(j - j0) / relative_step for j in results]
-    else:
-        columns = [(results[2 * i] - results[2 * i + 1]) / (2.0 * relative_step) for i in range(len(names))]
+            progress(Step("cost sensitivities", k + 1, len(points), detail=names[owner]))
+    columns = []
+    for steps, runs in zip(signs, results):
+        at = iter(runs)
+        values = [j0 if sign == 0.0 else next(at) for sign in steps]
+        if len(steps) == 1:
+            columns.append(steps[0] * (values[0] - j0) / relative_step)
+        else:
+            columns.append((values[0] - values[1]) / ((steps[0] - steps[1]) * relative_step))
     matrix = np.column_stack(columns) if columns else np.zeros((len(j0), 0))
     return CostSensitivities(names=tuple(names), base=dict(base), j0=j0, matrix=matrix, relative_step=relative_step,
                              perturbation=perturbation if difference == "forward" else

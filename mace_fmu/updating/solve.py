@@ -25,7 +25,9 @@ largest parameter step below ``tolerance``, the relative fall of the cost below
 ``cost_tolerance``, first-order optimality (the cost's gradient with respect to relative changes
 below ``gradient_tolerance`` times the cost), or no better point within ``tolerance`` of the base
 (the trust region shrank to nothing). Reaching ``max_outer`` is only a safety net, and it is
-reported as not converged, as is ending with a parameter at a bound.
+reported as not converged. A stage that meets its test with a parameter at a bound has converged:
+the data ask for a value outside the allowed range, which the outcome names (``at_bounds``); that
+parameter's interval is then one-sided.
 """
 
 from __future__ import annotations
@@ -118,6 +120,7 @@ class StageOutcome:
     outer_iterations: int
     converged: bool
     reason: str  #: the test that ended it, e.g. "largest step 2.1e-04 < tolerance 1e-03"
+    at_bounds: tuple[tuple[str, str], ...] = ()  #: (parameter, "lower" or "upper") it ended at
 
 
 @dataclass(frozen=True)
@@ -138,9 +141,15 @@ class UpdateResult:
 
     @property
     def converged(self) -> bool:
-        """Whether the last round's stages all ended on a convergence test (not on the cap or at a bound)."""
+        """Whether the last round's stages all ended on a convergence test (not on the iteration cap)."""
         last = max((o.round for o in self.outcomes), default=0)
         return all(o.converged for o in self.outcomes if o.round == last)
+
+    @property
+    def at_bounds(self) -> tuple[tuple[str, str], ...]:
+        """(parameter, "lower" or "upper") of each parameter the last round ended at a bound of."""
+        last = max((o.round for o in self.outcomes), default=0)
+        return tuple(b for o in self.outcomes if o.round == last for b in o.at_bounds)
 
     @property
     def reasons(self) -> tuple[str, ...]:
@@ -342,12 +351,12 @@ def _run_stage(problem: _StageProblem, values: dict[str, float], model, history:
     x_end = problem.relative(best[1])
     # least_squares keeps its answer strictly inside the box, and may stop short of it: within the update's
     # own precision (tolerance, as a relative change) is at the bound
-    at_bound = [f"{n} at its {'lower' if abs(x - a) <= abs(x - b) else 'upper'} bound"
-                for n, x, a, b in zip(names, x_end, lo, hi) if min(abs(x - a), abs(x - b)) <= settings.tolerance]
-    if at_bound:
-        reason, converged = f"{reason}; but {', '.join(at_bound)}", False
+    at_bounds = tuple((n, "lower" if abs(x - a) <= abs(x - b) else "upper")
+                      for n, x, a, b in zip(names, x_end, lo, hi) if min(abs(x - a), abs(x - b)) <= settings.tolerance)
+    if at_bounds:
+        reason = f"{reason}; {', '.join(f'{n} at its {side} bound' for n, side in at_bounds)}"
     return best[1], best[2], StageOutcome(stage=stage.name, round=rnd, outer_iterations=outer + 1,
-                                          converged=converged, reason=reason)
+                                          converged=converged, reason=reason, at_bounds=at_bounds)
 
 
 def _next_radius(radius: float, *, step: float, before: float, predicted: float, after: float) -> float:
@@ -382,9 +391,11 @@ def _linearise(problem: _StageProblem, values: dict[str, float], model, x_base: 
     names, runner, progress = list(problem.names), problem.runner, problem.progress
     if settings.method == "cost-sensitivity":
         perturbed = family.full if settings.perturbation == "full" else family.basis(values).model
+        limits = {n: (float(s * (1.0 + a)), float(s * (1.0 + b)))
+                  for n, s, a, b in zip(names, problem.start_values, problem.lower, problem.upper)}
         sens = cost_sensitivities(cost, base_model=model, perturbed=perturbed, base=values, names=names,
                                   relative_step=settings.relative_step, perturbation=settings.perturbation,
-                                  runner=runner, progress=progress, difference=settings.difference)
+                                  runner=runner, progress=progress, difference=settings.difference, limits=limits)
         scale = 1.0 / (1.0 + x_base)  # the sensitivities are per unit relative change of the base value
         jac = np.vstack([sens.matrix * scale[None, :], np.diag(w)])
 

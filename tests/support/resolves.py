@@ -10,6 +10,8 @@ alone.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 from scipy.linalg import expm
 from scipy.optimize import linear_sum_assignment
@@ -36,11 +38,11 @@ def band_limited_inputs(names: list[str], driven: tuple[str, ...], *, seed: int 
     return u
 
 
-def zoh_response(system: tuple[np.ndarray, ...], u: np.ndarray) -> np.ndarray:
-    """(SAMPLES, n_outputs) exact zero-order-hold response of (A, B, C, D) from rest."""
+def zoh_response(system: tuple[np.ndarray, ...], u: np.ndarray, step_s: float = STEP_S) -> np.ndarray:
+    """(len(u), n_outputs) exact zero-order-hold response of (A, B, C, D) from rest, inputs u[k] held for step_s."""
     a, b, c, d = system
     n, m = b.shape
-    block = expm(np.block([[a, b], [np.zeros((m, n + m))]]) * STEP_S)
+    block = expm(np.block([[a, b], [np.zeros((m, n + m))]]) * step_s)
     ad, bd = block[:n, :n], block[:n, n:]
     x = np.zeros(n)
     y = np.empty((len(u), c.shape[0]))
@@ -68,3 +70,65 @@ def resolved_system(configuration: str, values: dict[str, float], nominal) -> tu
     for name, value in held_damping(nominal, model).items():
         params[system.index(name)] = value
     return system.build(params)
+
+
+@functools.lru_cache(maxsize=4)
+def _nominal(configuration: str):
+    model = volts_model(configuration)
+    return model, ParametricSystem(parametric_arrays(model, physical=False))
+
+
+@functools.lru_cache(maxsize=64)
+def _resolved(configuration: str, name: str, factor: float) -> tuple[np.ndarray, ...]:
+    """The re-solve with the deck's ``name`` times ``factor`` (cached: several plans share their re-solves)."""
+    from mace_fmu.deck.reader import read_deck
+    from mace_fmu.parameters.sets import deck_values
+    from mace_fmu.structure.file import bundled_deck_path
+
+    values = deck_values(read_deck(bundled_deck_path()))
+    return resolved_system(configuration, {**values, name: values[name] * factor}, _nominal(configuration)[0])
+
+
+def fisher_standard_deviations(configuration: str, names: list[str], tests, *, relative_step: float = 0.01,
+                               seed: int = 0) -> dict[str, float]:
+    """The standard deviations [%] of ``names`` (and of the recorded outputs' gains a test knows only to a
+    percentage, as ``gain:<output>``) that an update on ``tests`` (planning.TestDesign) would report, from the
+    Fisher information of full re-solves: d y / d ln p by central differences of re-solved models, each
+    output in units of its noise (``noise_rms_percent`` of its RMS), the tests' excitations as plan-test
+    draws them (``seed + 1000 k + j``), a gain's prior as one more row. Nothing of the reanalysis enters."""
+    from mace_fmu.updating.truth import band_limited_noise
+
+    _, base = _nominal(configuration)
+    systems = {(name, sign): _resolved(configuration, name, 1 + sign * relative_step)
+               for name in names for sign in (1, -1)}
+    gains = [(k, o) for k, t in enumerate(tests) for o in t.gain_uncertainty_percent]
+    rows, priors = [], []
+    for k, test in enumerate(tests):
+        n = int(round(test.seconds / test.sample_time_s)) + 1
+        u = np.zeros((n, len(base.inputs)))
+        for j, name in enumerate(test.inputs):
+            u[:, base.inputs.index(name)] = band_limited_noise(samples=n, step_s=test.sample_time_s,
+                                                               band_hz=test.band_hz, seed=seed + 1000 * k + j)
+        picked = [base.outputs.index(o) for o in test.outputs]
+
+        def response(built, u=u, picked=picked, step=test.sample_time_s):
+            return zoh_response(built, u, step)[:, picked]
+
+        y0 = response(base.build(base.nominal))
+        noise = test.noise_rms_percent / 100 * np.sqrt(np.mean(y0**2, axis=0))
+        columns = [((response(systems[nm, 1]) - response(systems[nm, -1])) / (2 * relative_step) / noise).T.ravel()
+                   for nm in names]
+        for kk, o in gains:  # d y / d ln g = y for the gain of output o, zero elsewhere
+            column = np.zeros_like(y0)
+            if kk == k:
+                column[:, test.outputs.index(o)] = y0[:, test.outputs.index(o)]
+            columns.append((column / noise).T.ravel())
+        rows.append(np.column_stack(columns))
+    for g, (k, o) in enumerate(gains):
+        prior = np.zeros(len(names) + len(gains))
+        prior[len(names) + g] = 1.0 / (tests[k].gain_uncertainty_percent[o] / 100)
+        priors.append(prior)
+    jacobian = np.vstack(rows + ([np.array(priors)] if priors else []))
+    sd = 100 * np.sqrt(np.diag(np.linalg.inv(jacobian.T @ jacobian)))
+    return dict(zip(list(names) + [f"gain:{o}" for _, o in gains], sd))
+
