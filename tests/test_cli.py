@@ -220,3 +220,48 @@ def test_each_input_is_collocated_with_its_own_sensor():
                      "active_strut_y": "strain_strut2_y", "active_strut_z": "strain_strut2_z"}
     for axis in "yz":  # the data file's own words: strut 2 is the active strut
         assert "active strut" in instruments.sensor(found[f"active_strut_{axis}"]).description
+
+
+def test_the_parser_loads_no_numerics(tmp_path):
+    """``mace-fmu --help`` and a refused argument answer before numpy's companions load: building the parser
+    imports neither scipy, python-control, fmpy nor the deck reader (they took 2-3 s at every start)."""
+    import subprocess
+    import sys
+
+    code = ("import sys\nfrom mace_fmu.cli import build_parser\nbuild_parser()\n"
+            "print(sorted(m for m in ('scipy', 'control', 'fmpy', 'pythonfmu', 'mace_fmu.deck.reader', "
+            "'mace_fmu.fe.modes', 'modelica_like') if m in sys.modules))")
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert run.stdout.strip() == "[]"
+    from mace_fmu.cli.common import BUNDLED_DECK
+    from mace_fmu.structure.file import bundled_deck_path
+
+    assert BUNDLED_DECK == str(bundled_deck_path())
+
+
+def test_an_output_folder_that_is_a_file_is_refused_before_any_work(capsys, tmp_path):
+    (tmp_path / "taken").write_text("a file\n")
+    for argv in (["export", "0g", "-o", str(tmp_path / "taken")], ["export", "0g", "-o", str(tmp_path / "taken" / "x")],
+                 ["build", "-o", str(tmp_path / "taken")]):
+        with pytest.raises(SystemExit) as stopped:
+            main(argv)
+        err = capsys.readouterr().err
+        assert stopped.value.code == 2 and "taken exists and is not a folder" in err and "Traceback" not in err, err
+
+
+def test_a_pade_order_beyond_the_runtimes_is_one_line(capsys):
+    code, _, err = _run(capsys, ["model", "0g", "--pade-order", "99"])
+    assert code == 2 and err.strip() == "mace-fmu: error: pade_order must be an integer from 1 to 10, got 99"
+
+
+@pytest.mark.parametrize("command", [["modes", "1g"], ["model", "0g"], ["modes", "0g"]])
+def test_an_instrument_on_a_missing_grid_names_the_file_and_the_instrument(capsys, tmp_path, command):
+    from mace_fmu.structure.file import bundled_structure_path
+
+    text = bundled_structure_path().read_text()
+    assert "dofs = [[37, 4, -1.0], [38, 4, 1.0]]" in text
+    spec = tmp_path / "mace.toml"
+    spec.write_text(text.replace("dofs = [[37, 4, -1.0], [38, 4, 1.0]]", "dofs = [[9937, 4, -1.0], [38, 4, 1.0]]"))
+    code, _, err = _run(capsys, [*command, "--structure", str(spec)])
+    assert code == 2
+    assert f"{spec}: actuator 'gimbal_primary_x' names grid 9937, which" in err and "does not have" in err, err

@@ -4,17 +4,16 @@ from __future__ import annotations
 
 import argparse
 
-from mace_fmu.cli.common import deck_option, parameters, parameters_option, progress, progress_bar
-from mace_fmu.deck.reader import read_deck
-from mace_fmu.fe.modes import compute_modes
-from mace_fmu.fmu.naming import fmu_name
+from mace_fmu.cli.common import deck_option, folder_argument, parameters, parameters_option, progress, progress_bar
 from mace_fmu.util.frequency import hz_text
 
 
 def cmd_build(args: argparse.Namespace) -> int:
     # imported here, as in the other commands, so that `mace-fmu modes` starts without control/pythonfmu
-    from mace_fmu.fe.modes import DEFAULT_MAX_HZ
+    from mace_fmu.deck.reader import read_deck
+    from mace_fmu.fe.modes import DEFAULT_MAX_HZ, compute_modes
     from mace_fmu.fmu.export import export_fmu
+    from mace_fmu.fmu.naming import fmu_name
     from mace_fmu.iomodel.parametric_data import parametric_arrays
     from mace_fmu.iomodel.volts import volts_model
 
@@ -52,7 +51,7 @@ def cmd_build(args: argparse.Namespace) -> int:
 def main_job_text() -> str:
     """The tables ``mace-fmu build`` prints for the bundled deck (the same functions; no FMUs written):
     what the documentation shows and its test compares."""
-    from mace_fmu.fe.modes import DEFAULT_MAX_HZ
+    from mace_fmu.fe.modes import DEFAULT_MAX_HZ, compute_modes
 
     m0 = compute_modes(configuration="0g", max_hz=DEFAULT_MAX_HZ)
     results = {kind: compute_modes(configuration="1g", preload=kind, max_hz=DEFAULT_MAX_HZ)
@@ -92,6 +91,6 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("build", help="the main job: modes next to the thesis tables, and the FMUs of both models")
     deck_option(p)
     parameters_option(p)
-    p.add_argument("-o", "--out", default="fmus", help="where to write the FMUs: MACE_<1g|0g>_native.fmu (FMI 2.0), "
+    p.add_argument("-o", "--out", type=folder_argument, default="fmus", help="where to write the FMUs: MACE_<1g|0g>_native.fmu (FMI 2.0), "
                    "MACE_<1g|0g>_native_fmi3.fmu, MACE_<1g|0g>_pythonfmu.fmu (default ./fmus)")
     p.set_defaults(func=cmd_build)

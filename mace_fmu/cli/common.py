@@ -6,13 +6,28 @@ import argparse
 import contextlib
 import math
 import sys
+from pathlib import Path
 from typing import Iterator
 
-from mace_fmu.deck.reader import read_deck
 from mace_fmu.errors import MaceError
-from mace_fmu.fe.modes import DEFAULT_MAX_HZ
-from mace_fmu.structure.file import bundled_deck_path
+from mace_fmu.util.frequency import DEFAULT_MAX_HZ
 from mace_fmu.util.progress import ProgressCallback, Step
+
+#: the bundled deck (mace_fmu/data/mace_em.bdf): the --deck default, named without importing the reader, so
+#: that ``mace-fmu --help`` and a refused argument answer at once
+BUNDLED_DECK = str(Path(__file__).resolve().parents[1] / "data" / "mace_em.bdf")
+
+
+def folder_argument(text: str) -> str:
+    """argparse ``type`` of an output folder: refused at once (one line, exit 2) when a file stands where the
+    folder must go, before any work; created only when something is written into it."""
+    from mace_fmu.util.atomic import output_folder
+
+    try:
+        output_folder(text, create=False)
+    except MaceError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+    return text
 
 
 def progress(message: str) -> None:
@@ -55,7 +70,7 @@ def positive_hz(text: str) -> float:
 
 
 def deck_option(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--deck", default=str(bundled_deck_path()), help="NASTRAN bulk deck (default: bundled MACE deck)")
+    p.add_argument("--deck", default=BUNDLED_DECK, help="NASTRAN bulk deck (default: bundled MACE deck)")
     p.add_argument("--structure", metavar="FILE", default=None, dest="structure_file",
                    help="structure file of the deck (TOML: suspension removed for 0-g, components, mechanisms, "
                         "instruments; schema in mace_fmu/data/README.md). Default: the bundled mace_em.toml for the "
@@ -121,6 +136,7 @@ def volts(args: argparse.Namespace, *, parameter_set=_FROM_ARGS, every_grid_move
     ``parameter_set`` replaces the set ``--parameters`` names (SSP: only its built-in part);
     ``every_grid_moves`` adds every grid's motion as outputs whatever ``--motion-grids`` says.
     """
+    from mace_fmu.deck.reader import read_deck
     from mace_fmu.iomodel.model_options import ModelledElectronics, SignalSelection
     from mace_fmu.iomodel.volts import volts_model
 

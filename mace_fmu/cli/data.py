@@ -3,13 +3,16 @@
 from __future__ import annotations
 
 import argparse
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from mace_fmu.updating.data import FrequencyResponseData, TimeHistory
+if TYPE_CHECKING:
+    from mace_fmu.updating.data import FrequencyResponseData, TimeHistory
 
 
 def _summary(data: TimeHistory | FrequencyResponseData) -> list[str]:
+    from mace_fmu.updating.data import TimeHistory
     signals = lambda names: ", ".join(f"{n} [{data.unit(n)}]" for n in names) or "none"  # noqa: E731
     if isinstance(data, TimeHistory):
         t = data.times_s

@@ -5,9 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from mace_fmu.cli.common import deck_option, model_options, progress, volts
+from mace_fmu.cli.common import deck_option, folder_argument, model_options, progress, volts
 from mace_fmu.errors import MaceError
-from mace_fmu.fmu.naming import fmu_name, model_prefix
 
 
 def model_variant(args: argparse.Namespace) -> str:
@@ -20,6 +19,7 @@ def model_variant(args: argparse.Namespace) -> str:
 
 
 def cmd_export(args: argparse.Namespace) -> int:
+    from mace_fmu.fmu.naming import fmu_name, model_prefix
     if args.kind == "pythonfmu" and args.fmi_version != 2:
         raise MaceError("--fmi-version 3 needs --kind native (pythonfmu FMUs are FMI 2.0)")
     if args.frequency_bounds and not Path(args.frequency_bounds).is_file():
@@ -53,7 +53,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("export", help="FMU of the 1-g or 0-g volts-volts model (native C runtime or pythonfmu)")
     p.add_argument("configuration", choices=["1g", "0g"])
     deck_option(p)
-    p.add_argument("-o", "--out", default=".", help="output directory (writes e.g. MACE_1g_native.fmu; with "
+    p.add_argument("-o", "--out", type=folder_argument, default=".", help="output directory (writes e.g. MACE_1g_native.fmu; with "
                    "--motion-grids MACE_1g_native_motion.fmu; with --parameters P.toml MACE_1g_native_P.fmu, with "
                    "--frequency-bounds too MACE_0g_native_P_bounded.fmu: never the plain model's name)")
     p.add_argument("--kind", choices=["native", "pythonfmu"], default="native",

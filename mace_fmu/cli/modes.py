@@ -5,13 +5,15 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from mace_fmu.cli.common import deck_option, positive_hz, progress_bar
-from mace_fmu.deck.reader import read_deck
-from mace_fmu.fe.modes import DEFAULT_MAX_HZ, StructureModes, compute_modes
-from mace_fmu.util.frequency import ZERO_HZ, hz_text
+from mace_fmu.util.frequency import DEFAULT_MAX_HZ, ZERO_HZ, hz_text
+
+if TYPE_CHECKING:
+    from mace_fmu.fe.modes import StructureModes
 
 
 def _modes_json(result: StructureModes) -> dict:
@@ -60,6 +62,8 @@ def _print_modes(result: StructureModes) -> None:
 
 
 def cmd_modes(args: argparse.Namespace) -> int:
+    from mace_fmu.deck.reader import read_deck
+    from mace_fmu.fe.modes import compute_modes
     deck = read_deck(args.deck)
     with progress_bar() as bar:
         result = compute_modes(deck, configuration=args.configuration, preload=args.preload, mass=args.mass,

@@ -7,12 +7,12 @@ import json
 import sys
 from pathlib import Path
 
-from mace_fmu.cli.common import deck_option, parameters, parameters_option, progress
-from mace_fmu.deck.reader import read_deck
+from mace_fmu.cli.common import deck_option, folder_argument, parameters, parameters_option, progress
 from mace_fmu.errors import MaceError
 
 
 def cmd_predict(args: argparse.Namespace) -> int:
+    from mace_fmu.deck.reader import read_deck
     from mace_fmu.zero_g.nominal import BoundRule, predict_zero_g, read_zero_g_measured
     from mace_fmu.zero_g.table import format_table, rows_as_data, write_prediction
 
@@ -69,7 +69,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--measured", metavar="FILE",
                    help="1-g measurement model (CSV: label, pattern, frequency_hz, damping, pattern_0g; pattern_0g "
                         "empty for modes the 0-g structure lacks); default: Table 4.7's measured column")
-    p.add_argument("-o", "--out", default=None, metavar="DIR",
+    p.add_argument("-o", "--out", type=folder_argument, default=None, metavar="DIR",
                    help="write table_5_3.csv/.toml/.txt and zero_g_nominal.toml (the parameter set of the nominal "
                         "model, for export/build --parameters) into DIR")
     p.add_argument("--fmu", action="store_true", help="also export the nominal 0-g FMU with the bounds as the "

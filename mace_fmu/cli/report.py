@@ -5,10 +5,10 @@ from __future__ import annotations
 import argparse
 
 from mace_fmu.cli.common import deck_option, progress
-from mace_fmu.deck.reader import read_deck
 
 
 def cmd_report(args: argparse.Namespace) -> int:
+    from mace_fmu.deck.reader import read_deck
     from mace_fmu.iomodel.bode import bode_report
 
     for path in bode_report(read_deck(args.deck), structure_file=args.structure_file, out_dir=args.out,

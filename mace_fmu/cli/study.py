@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from mace_fmu.cli.common import progress
+from mace_fmu.cli.common import folder_argument, progress
 from mace_fmu.errors import MaceError
 
 FIGURE_OF_AUTHORITY = {"low": "A2", "moderate": "A3", "high": "A4"}
@@ -196,7 +196,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     r.set_defaults(func=cmd_reduced_order)
     o = studies.add_parser("robust-0g", help="LQG on the nominal 0-g model closed around the 0-g FMU over its frequency "
                            "bounds: corners and a Monte Carlo sample on Dask (PNG, CSV and a summary)")
-    o.add_argument("-o", "--out", default="study", help="output directory (default ./study)")
+    o.add_argument("-o", "--out", type=folder_argument, default="study", help="output directory (default ./study)")
     o.add_argument("--samples", type=int, default=100, help="Monte Carlo samples, uniform in the bounds (default 100)")
     o.add_argument("--seed", type=int, default=1, help="seed of the sample (default 1)")
     o.add_argument("--critical", type=int, default=4, help="parameters whose 2^N corners are run: the N that move the "

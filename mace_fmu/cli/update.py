@@ -7,8 +7,7 @@ import json
 import sys
 from pathlib import Path
 
-from mace_fmu.cli.common import deck_option, progress_bar
-from mace_fmu.deck.reader import read_deck
+from mace_fmu.cli.common import deck_option, folder_argument, progress_bar
 from mace_fmu.errors import MaceError
 from mace_fmu.util.atomic import write_text_atomic
 from mace_fmu.util.textfile import read_toml
@@ -167,6 +166,7 @@ def cmd_fmu_subcommand(args: argparse.Namespace) -> int:
 
 def cmd_mace_update(args: argparse.Namespace) -> int:
     """``update mace``: the thesis's modal update of the bundled MACE deck's moduli."""
+    from mace_fmu.deck.reader import read_deck
     if args.structure_file is not None:
         raise MaceError(f"--structure {args.structure_file}: the modal update is the thesis's MACE update (its "
                         "candidate moduli, Table 4.4 "
@@ -226,7 +226,7 @@ _EXIT_STATUS = (f"exit status: 0 converged (a parameter that ends at a bound is 
 
 
 def _out_option(p: argparse.ArgumentParser, *, help_text: str | None = None) -> None:
-    p.add_argument("-o", "--out", help=help_text or "directory for parameters.toml, convergence.toml, "
+    p.add_argument("-o", "--out", type=folder_argument, help=help_text or "directory for parameters.toml, convergence.toml, "
                    "uncertainty.toml, report.txt, summary.json and figures")
     p.add_argument("--strict", action="store_true", help=f"a parameter that ends at a bound counts as not converged "
                    f"(exit {NOT_CONVERGED}); by default it is named and the update may converge")

@@ -6,9 +6,7 @@ import argparse
 from pathlib import Path
 
 from mace_fmu.cli.common import deck_option, model_options, progress, progress_bar, volts
-from mace_fmu.deck.reader import read_deck
 from mace_fmu.errors import MaceError
-from mace_fmu.fe.modes import compute_modes
 
 #: viewer.camera.CAMERA_VIEWS, spelled out so that `mace-fmu --help` does not import meshcat
 CAMERA_CHOICES = ("iso", "x", "y", "z")
@@ -116,6 +114,8 @@ def _checked_fmu(path: str, configuration: str) -> Path:
 
 
 def cmd_view_response(args: argparse.Namespace) -> int:
+    from mace_fmu.deck.reader import read_deck
+    from mace_fmu.fe.modes import compute_modes
     from mace_fmu.fmu.export import export_fmu
     from mace_fmu.fmu.simulate import simulate_input_response
     from viewer import animate_response, plot_response
@@ -157,6 +157,8 @@ def signals_plot_path(html: str | Path) -> Path:
 
 
 def cmd_view(args: argparse.Namespace) -> int:
+    from mace_fmu.deck.reader import read_deck
+    from mace_fmu.fe.modes import compute_modes
     from viewer import animate_modes
 
     _need_target(args)
@@ -175,6 +177,8 @@ def cmd_view(args: argparse.Namespace) -> int:
 
 
 def cmd_view_pairs(args: argparse.Namespace) -> int:
+    from mace_fmu.deck.reader import read_deck
+    from mace_fmu.fe.modes import compute_modes
     from viewer import animate_pairs
 
     _need_target(args)
@@ -206,7 +210,13 @@ def _output_options(p: argparse.ArgumentParser, *, html: str) -> None:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    from mace_fmu.iomodel.instruments import load_instruments  # the signal names for --help (a small TOML file)
+    # the signal names for --help, from the bundled structure file's tables (not the instruments module, which
+    # brings python-control: `mace-fmu --help` answers at once)
+    from mace_fmu.structure.file import bundled_structure_path, load_structure_file
+
+    tables = load_structure_file(bundled_structure_path()).tables
+    actuator_names = [a["name"] for a in tables.get("actuators", [])]
+    sensor_names = [s["name"] for s in tables.get("sensors", [])]
 
     p = sub.add_parser("view", help="meshcat animation of mode shapes or FMU time responses (standalone HTML)")
     view = p.add_subparsers(dest="what", required=True)
@@ -239,10 +249,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = view.add_parser("response", help="an FMU's time response to one input, played on the mesh (fmpy)")
     p.add_argument("configuration", choices=["1g", "0g"])
     deck_option(p)
-    instruments = load_instruments()
     p.add_argument("--input", required=True, metavar="INPUT",
                    help="the driven input, an actuator of the structure file (MACE: "
-                        + ", ".join(a.name for a in instruments.actuators) + ")")
+                        + ", ".join(actuator_names) + ")")
     p.add_argument("--signal", choices=["step", "chirp", "impulse"], default="step",
                    help="step from t = 0, chirp (see --chirp-hz), or a pulse over the first step (default step)")
     p.add_argument("--duration", type=float, default=2.0, help="simulated time [s] (default 2)")
@@ -254,8 +263,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--fps", type=float, default=50.0, help="key frames per second of playback (default 50)")
     p.add_argument("--scale", type=float, default=None,
                    help="magnification of the motion (default: largest motion 8%% of the size)")
-    p.add_argument("--output", help="output plotted next to the input: a sensor (" + ", ".join(
-        s.name for s in instruments.sensors) + ") or grid_<id>_<tx|ty|tz|rx|ry|rz> (default: the sensor "
+    p.add_argument("--output", help="output plotted next to the input: a sensor (" + ", ".join(sensor_names)
+                   + ") or grid_<id>_<tx|ty|tz|rx|ry|rz> (default: the sensor "
                    "collocated with the input: its encoder or tachometer, the active strut's strain gauge)")
     p.add_argument("--fmu", help="an FMU with motion outputs to run (default: export one next to the HTML)")
     _output_options(p, html="write a standalone HTML file and, next to it, <name>_signals.png: input and output "

@@ -26,10 +26,8 @@ from mace_fmu.structure.file import Configuration, StructureFile, StructureSpec,
 from mace_fmu.util.progress import ProgressCallback
 from mace_fmu.util.threads import single_blas_thread
 from mace_fmu.util.deprecation import renamed_keyword
+from mace_fmu.util.frequency import DEFAULT_MAX_HZ
 
-#: highest mode [Hz] found when the deck has no EIGRL/EIGR range (thesis 3.4: the MACE models keep modes to
-#: 250 Hz)
-DEFAULT_MAX_HZ = 250.0
 
 
 @dataclass(frozen=True)

@@ -31,7 +31,7 @@ from mace_fmu.iomodel import modal_core, parametric, reanalysis
 from mace_fmu.iomodel.parametric_data import parametric_arrays, with_frequency_bounds
 from mace_fmu.iomodel.volts import VoltsModel
 from mace_fmu.util import frequency
-from mace_fmu.util.atomic import atomic_zip
+from mace_fmu.util.atomic import atomic_zip, output_folder
 from modelica_like import algebra
 
 SLAVE_SOURCE = Path(__file__).with_name("slave.py")
@@ -203,7 +203,7 @@ def export_pythonfmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str 
     if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", name):
         raise MaceError(f"FMU name must be a Python/C identifier (it names the model class), got {name!r}")
     out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
+    output_folder(out)
     description = model_summary(model)
     arrays = parametric_arrays(model) if arrays is None else arrays
     if frequency_bounds:

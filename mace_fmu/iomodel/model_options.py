@@ -18,6 +18,12 @@ BesselKind = Literal["full", "delay", "none"]
 BESSEL_KINDS: tuple[str, ...] = ("full", "delay", "none")
 
 
+#: highest Pade order: the native runtime's coefficients are exact integer ratios up to it, and higher orders
+#: gain nothing at millisecond delays (3 reproduces Tables 4.7 and 5.2) while their realisation's conditioning
+#: grows with factorials (order 99 overflowed)
+MAX_PADE_ORDER = 10
+
+
 @dataclass(frozen=True)
 class ModelledElectronics:
     """Which parts of the control electronics the model contains, and how.
@@ -31,7 +37,7 @@ class ModelledElectronics:
     delays : bool
         The actuator and sensor time delays [s] of the structure file (or the parameter set).
     pade_order : int
-        Order of the Pade approximation of every delay (>= 1).
+        Order of the Pade approximation of every delay, 1 to :data:`MAX_PADE_ORDER`.
 
     Raises
     ------
@@ -47,8 +53,9 @@ class ModelledElectronics:
     def __post_init__(self) -> None:
         if self.bessel not in BESSEL_KINDS:
             raise MaceError(f"bessel must be 'full', 'delay' or 'none', got {self.bessel!r}")
-        if isinstance(self.pade_order, bool) or not isinstance(self.pade_order, int) or self.pade_order < 1:
-            raise MaceError(f"pade_order must be an integer >= 1, got {self.pade_order!r}")
+        if isinstance(self.pade_order, bool) or not isinstance(self.pade_order, int) \
+                or not 1 <= self.pade_order <= MAX_PADE_ORDER:
+            raise MaceError(f"pade_order must be an integer from 1 to {MAX_PADE_ORDER}, got {self.pade_order!r}")
 
     def describe(self) -> str:
         """One line for reports and FMU descriptions, e.g. "servos closed, Bessel filters full, delays on"."""

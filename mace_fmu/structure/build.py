@@ -18,7 +18,7 @@ from mace_fmu.deck.cards import ELEMENT_TABLES, Deck, Subcase
 from mace_fmu.deck.reader import check_deck
 from mace_fmu.errors import DeckError, MaceError
 from mace_fmu.structure.file import (_CARD_TABLES, Configuration, StructureFile, StructureSpec, _ids_text,
-                                     check_spec_against_deck, structure_file_for)
+                                     check_instruments_against_deck, check_spec_against_deck, structure_file_for)
 from mace_fmu.util.deprecation import renamed_keyword
 
 
@@ -210,6 +210,10 @@ def build_structure(deck: Deck, *, configuration: Configuration, spec: Structure
                             "selects one (expected LOAD = set ID in the preload subcase; for the deck's plain modes "
                             "ask for the 0-g structure)", file=deck.path,
                             line=modal.source.line, card=f"SUBCASE {modal.id}" if modal.id else "global case control")
+        if file is not None:
+            check_instruments_against_deck(file, deck, configuration=configuration)
         return Structure(configuration=configuration, deck=deck, preload=preload, modal=modal, spec=spec, file=file)
-    return Structure(configuration=configuration, deck=remove_suspension(deck, spec), preload=None, modal=modal,
-                     spec=spec, file=file)
+    free = remove_suspension(deck, spec)
+    if file is not None:
+        check_instruments_against_deck(file, free, configuration=configuration)
+    return Structure(configuration=configuration, deck=free, preload=None, modal=modal, spec=spec, file=file)

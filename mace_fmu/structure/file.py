@@ -282,6 +282,28 @@ def _ids_text(ids: list[int]) -> str:
     return ", ".join(parts)
 
 
+def check_instruments_against_deck(file: StructureFile, deck: Deck, *, configuration: str = "") -> None:
+    """A MaceError naming the structure file, the actuator or sensor and the grids when an instrument's DOFs
+    name a grid ``deck`` (the configuration's: 0-g lacks the suspension's grids) does not have.
+
+    Only the grids are checked here, before any solve; the rest of each entry is checked where the
+    instruments are read (:func:`mace_fmu.iomodel.instruments.load_instruments`)."""
+    problems = []
+    for table in ("actuators", "sensors"):
+        for entry in file.tables.get(table, []) if isinstance(file.tables.get(table), list) else []:
+            if not isinstance(entry, dict):
+                continue
+            grids = [row[0] for row in entry.get("dofs", []) if isinstance(row, list) and row]
+            grids += [g for row in entry.get("wheels", []) if isinstance(row, list) for g in row[:2]]
+            missing = sorted({g for g in grids if isinstance(g, int) and not isinstance(g, bool)
+                              and g not in deck.grids})
+            if missing:
+                problems.append(f"{table[:-1]} {entry.get('name', '?')!r} names grid {_ids_text(missing)}")
+    if problems:
+        where = " (the 0-g structure: its suspension's grids removed)" if configuration == "0g" else ""
+        raise MaceError(f"{file.path}: " + "; ".join(problems) + f", which {deck.path}{where} does not have")
+
+
 def check_spec_against_deck(spec: StructureSpec, deck: Deck) -> None:
     """A MaceError naming the structure file and the IDs when it names grids or elements the deck lacks."""
     elements = set().union(*(getattr(deck, table) for table in ELEMENT_TABLES))

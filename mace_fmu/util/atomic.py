@@ -9,8 +9,27 @@ import zipfile
 from pathlib import Path
 from typing import TYPE_CHECKING, Iterator
 
+from mace_fmu.errors import MaceError
+
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
+
+
+def output_folder(folder: str | os.PathLike, *, create: bool = True) -> Path:
+    """``folder``, created with its parents when missing (``create=False``: only checked, before any work); a
+    MaceError naming it when a file stands where a folder must go (``-o`` naming an existing file) or it
+    cannot be created."""
+    folder = Path(folder)
+    for part in (folder, *folder.parents):
+        if part.exists() and not part.is_dir():
+            where = "" if part == folder else f"{folder}: "
+            raise MaceError(f"{where}{part} exists and is not a folder (outputs go into a folder)")
+    if create:
+        try:
+            folder.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise MaceError(f"{folder}: cannot create the folder ({exc.strerror or exc})") from None
+    return folder
 
 
 @contextlib.contextmanager
@@ -22,7 +41,7 @@ def atomic_path(final: str | os.PathLike) -> Iterator[Path]:
     or a full disk leaves the previous file untouched and removes the temporary one.
     """
     final = Path(final)
-    final.parent.mkdir(parents=True, exist_ok=True)
+    output_folder(final.parent)
     # The name is chosen before the file exists, so that an interrupt arriving the moment it is
     # created still finds it in the cleanup below (mkstemp would return it only afterwards).
     tmp_path = final.parent / f".{final.name}.{secrets.token_hex(6)}.part"

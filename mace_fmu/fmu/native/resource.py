@@ -21,13 +21,14 @@ import numpy as np
 
 from mace_fmu.errors import MaceError
 from mace_fmu.iomodel.modal_core import reduce_zero_cluster
+from mace_fmu.iomodel.model_options import MAX_PADE_ORDER as MAX_ORDER
 from mace_fmu.parameters.kinds import kind_of_fmu_name, mode_number
 from mace_fmu.util.frequency import ZERO_HZ
 
 MAGIC = b"MACEFMU1"
 FORMAT_VERSION = 1  #: the file layout (shared with the controller FMU's data)
 MODEL_FORMAT = 2  #: the plant's arrays (``format_version``): 2 added the static corrections of the reanalysis
-MAX_PADE_ORDER = 10  #: the runtime's Pade coefficients are exact integer ratios up to this order
+MAX_PADE_ORDER = MAX_ORDER  #: the runtime's Pade coefficients are exact integer ratios up to this order
 BLOCK_KINDS = {"structure": 0, "const": 1, "delay": 2, "gain": 3, "pd": 4}
 PARAMETER_KINDS = {"damping": 0, "delay": 1, "gain": 2, "physical": 3, "frequency_scale": 4}
 _FLOAT, _INT, _TEXT = 1, 2, 3
