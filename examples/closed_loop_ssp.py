@@ -88,8 +88,22 @@ def run_in_fmpy(ssp: Path, *, steps: int, step_s: float, disturbance_v: float) -
     return np.asarray(rows["plant.gyro_payload_z"])[:steps]  # its clock adds steps: one row too many at times
 
 
+def ecos_available() -> str:
+    """"" when ecospy loads, else one line saying what to install (checked before any work: its library
+    links against Intel TBB, a system package, and failed after 27 s of building without it)."""
+    try:
+        import ecospy  # noqa: F401
+    except (ImportError, OSError) as exc:
+        return (f"ecospy cannot load ({exc}): install the libtbb12 system library (Debian/Ubuntu: sudo apt-get "
+                "install libtbb12) and pip install ecospy")
+    return ""
+
+
 def main(out: Path, *, quick: bool) -> dict[str, float]:
     """Build the package in ``out`` and return the largest differences [fraction of the response's range]."""
+    missing = ecos_available()
+    if missing:
+        raise SystemExit(f"closed_loop_ssp.py: {missing}")
     out.mkdir(parents=True, exist_ok=True)
     step_s, steps, w = 0.002, 1500, 0.5
     parameters, export_options = None, []

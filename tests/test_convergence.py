@@ -126,3 +126,21 @@ def test_the_trust_radius_grows_while_the_linearisation_holds_and_shrinks_when_i
     # unbounded stays unbounded (the engine's default: the thesis's MACE update is unchanged)
     assert _next_radius(math.inf, step=0.3, before=200.0, predicted=100.0, after=190.0) == math.inf
 
+
+
+def test_a_noise_floor_that_cannot_be_found_is_said_with_the_remedy_and_is_no_convergence():
+    """White inputs fill the band to Nyquist: no quiet band to measure the noise in. The verdict says the
+    noise-floor test was not made and how to supply the noise; the update does not count as converged (a fit
+    to another structure's data passed silently this way); with the noise given the test is made."""
+    from mace_fmu.updating.convergence import convergence_report, missing_noise_floor, noise_floor
+
+    cost = TimeResponseCost(_record(band_limited=False))
+    result = _update(cost, off=0.02)
+    why = missing_noise_floor(cost)
+    assert "noise-floor test not made: the inputs fill the band up to" in why and "--noise-rms-percent" in why
+    report = convergence_report(result, noise_floor=noise_floor(cost), missing_floor=why)
+    assert result.converged and not report.converged and report.reasons[-1] == why
+    assert missing_noise_floor(cost, noise_rms_fraction=NOISE) == ""
+    given = convergence_report(result, noise_floor=noise_floor(cost, noise_rms_fraction=NOISE))
+    assert given.noise_floor is not None and "standard deviations from the noise floor" in given.reasons[-1]
+    assert missing_noise_floor(TimeResponseCost(_record(band_limited=True))) == ""

@@ -154,7 +154,22 @@ def test_a_grid_attached_to_nothing_is_constrained_automatically_and_reported(tm
     assert "AUTOSPC: constrained 6 DOFs with neither stiffness nor mass: grid 99 (1-6)" in capsys.readouterr().out
     strict = _write(tmp_path / "strict.bdf", text.replace("ENDDATA", "PARAM,AUTOSPC,NO\nENDDATA"))
     assert main(["modes", "0g", "--deck", str(strict)]) == 2
-    assert "99-1" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "99-1" in err and "Warning" not in err, err
+
+
+def test_a_grid_attached_to_nothing_is_named_by_the_preload(tmp_path, capsys):
+    """MACE's deck (no AUTOSPC) with grid 999 attached to nothing: the 1-g preload's static solution names it
+    and what to do (it said "check its SPC and MPC sets" without a grid)."""
+    from mace_fmu.structure.file import bundled_deck_path, bundled_structure_path
+
+    text = bundled_deck_path().read_text()
+    first = text.index("\nGRID")
+    deck = _write(tmp_path / "mace_plus.bdf", text[:first] + "\nGRID    999             0.1     0.2     0.3" + text[first:])
+    assert main(["modes", "1g", "--deck", str(deck), "--structure", str(bundled_structure_path())]) == 2
+    err = capsys.readouterr().err
+    assert "the preload stiffness is singular: grid 999 component(s) 123456 have no stiffness at all" in err, err
+    assert "constrain them with an SPC (or PARAM,AUTOSPC,YES)" in err
 
 
 BEAM_STRUCTURE = """

@@ -209,7 +209,7 @@ def test_cli_robust_0g_writes_the_figure_runs_and_summary(tmp_path, capsys):
     assert main(["study", "robust-0g", "--bound", "15=1.1", "--bound", "17=2.5", "--samples", "3", "--critical", "1",
                  "--serial", "--duration", "3", "-o", str(tmp_path)]) == 0
     printed = capsys.readouterr().out
-    for name in ("MACE_0g_native.fmu", "robust_0g.png", "robust_0g_runs.csv", "robust_0g.txt"):
+    for name in ("MACE_0g_native_bounded.fmu", "robust_0g.png", "robust_0g_runs.csv", "robust_0g.txt"):
         assert f"wrote {tmp_path / name}" in printed
     rows = (tmp_path / "robust_0g_runs.csv").read_text().splitlines()
     assert rows[0] == "kind,note,frequency_scale_mode_15,frequency_scale_mode_17,cost_rms_v,growth_ratio,stable"

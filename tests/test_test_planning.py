@@ -220,3 +220,32 @@ def test_example_plan_then_update_quick(tmp_path):
     assert summary["best"] == "gimbal + strut" and summary["converged"]
     for name, (error, sd, _) in summary["rows"].items():
         assert abs(error) <= 1.96 * sd, (name, error, sd)
+
+
+def test_a_parameter_set_of_the_engine_passes_to_the_fmu_flows_and_params_list_shows_them(family, tmp_path, capsys):
+    """``update mace`` writes damping ratios by mode label (``damping:1st Z bending``); ``plan-test --at`` and
+    ``update fmu --start`` take them as the FMU's ``damping_mode_<k>`` (the FMU's parameter descriptions say
+    each mode's label); a label no mode has is one line naming the file, the closest labels and the command
+    that lists the FMU's parameters."""
+    from mace_fmu.errors import MaceError
+
+    interface = family.interface
+    k = next(n for n, d in interface.descriptions.items() if d.endswith("mode 14: 1st Z bending"))
+    assert k == "damping_mode_14"
+    values = interface.values_by_fmu_name({"damping:1st Z bending": 0.03, "E_lexan_center": 2.4e9}, source="p.toml")
+    assert values == {"damping_mode_14": 0.03, "E_lexan_center": 2.4e9}
+    assert interface.values_by_fmu_name({"frequency_scale:1st Z bending": 1.01}, source="p.toml") == \
+        {"frequency_scale_mode_14": 1.01}
+    with pytest.raises(MaceError, match=r"p.toml: 'damping:1st Q bending': .* has no mode with that label; closest: "
+                                        r"damping:1st Z bending.*mace-fmu params list"):
+        interface.values_by_fmu_name({"damping:1st Q bending": 0.03}, source="p.toml")
+    (tmp_path / "at.toml").write_text("[values]\nE_cable_1 = 1.9e11\n\"damping:1st Z bending\" = 0.03\n")
+    (tmp_path / "plan.toml").write_text(PLAN)
+    code = main(["plan-test", interface.path, "--tests", str(tmp_path / "plan.toml"), "--update", "E_cable_1",
+                 "--at", str(tmp_path / "at.toml"), "--workers", "1"])
+    assert code == 0, capsys.readouterr().err
+    capsys.readouterr()
+    assert main(["params", "list", interface.path]) == 0
+    out = capsys.readouterr().out
+    row = next(line for line in out.splitlines() if line.startswith("E_lexan_center "))
+    assert row.split()[1:4] == ["2.335e+09", "1.6345e+09", "3.5025e+09"] and "MAT1 2" in row

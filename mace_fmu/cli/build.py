@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import argparse
 
-from mace_fmu.cli.common import deck_option, folder_argument, parameters, parameters_option, progress, progress_bar
+from mace_fmu.cli.common import (deck_option, folder_argument, model_variant, parameters, parameters_option, progress,
+                                 progress_bar)
 from mace_fmu.util.frequency import hz_text
 
 
@@ -38,10 +39,11 @@ def cmd_build(args: argparse.Namespace) -> int:
         model = volts_model(kind, modes=modes, parameters=params)
         arrays = parametric_arrays(model)  # what every kind of FMU carries: computed once
         for fmi_version in (2, 3):
-            name = fmu_name(kind, kind="native", fmi_version=fmi_version)
+            name = fmu_name(kind, kind="native", fmi_version=fmi_version, variant=model_variant(args))
             path = export_fmu(model, kind="native", fmi_version=fmi_version, out_dir=args.out, name=name, arrays=arrays)
             print(f"wrote {path}")
-        path = export_fmu(model, kind="pythonfmu", out_dir=args.out, name=fmu_name(kind, kind="pythonfmu"), arrays=arrays)
+        name = fmu_name(kind, kind="pythonfmu", variant=model_variant(args))
+        path = export_fmu(model, kind="pythonfmu", out_dir=args.out, name=name, arrays=arrays)
         print(f"wrote {path}")
     print()
     print(low_modes(results))
@@ -91,6 +93,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("build", help="the main job: modes next to the thesis tables, and the FMUs of both models")
     deck_option(p)
     parameters_option(p)
-    p.add_argument("-o", "--out", type=folder_argument, default="fmus", help="where to write the FMUs: MACE_<1g|0g>_native.fmu (FMI 2.0), "
-                   "MACE_<1g|0g>_native_fmi3.fmu, MACE_<1g|0g>_pythonfmu.fmu (default ./fmus)")
+    p.add_argument("-o", "--out", type=folder_argument, default="fmus",
+                   help="where to write the FMUs: MACE_<1g|0g>_native.fmu (FMI 2.0), MACE_<1g|0g>_native_fmi3.fmu, "
+                   "MACE_<1g|0g>_pythonfmu.fmu (default ./fmus); with --parameters P.toml MACE_1g_native_P.fmu "
+                   "and so on, never the plain model's names")
     p.set_defaults(func=cmd_build)

@@ -30,6 +30,15 @@ def folder_argument(text: str) -> str:
     return text
 
 
+def model_variant(args: argparse.Namespace) -> str:
+    """What sets this FMU's model apart from the plain one, for its name: the parameter set's file stem
+    and "bounded" with frequency bounds ("" for the plain model, which keeps the plain name)."""
+    parts = [Path(args.parameters).stem] if getattr(args, "parameters", None) else []
+    if getattr(args, "frequency_bounds", None):
+        parts.append("bounded")
+    return "_".join(parts)
+
+
 def progress(message: str) -> None:
     """One progress line on stderr (stdout stays the command's result)."""
     print(f"  {message}", file=sys.stderr, flush=True)

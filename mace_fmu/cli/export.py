@@ -5,17 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from mace_fmu.cli.common import deck_option, folder_argument, model_options, progress, volts
+from mace_fmu.cli.common import deck_option, folder_argument, model_options, model_variant, progress, volts
 from mace_fmu.errors import MaceError
-
-
-def model_variant(args: argparse.Namespace) -> str:
-    """What sets this FMU's model apart from the plain one, for its name: the parameter set's file stem
-    and "bounded" with frequency bounds ("" for the plain model, which keeps the plain name)."""
-    parts = [Path(args.parameters).stem] if getattr(args, "parameters", None) else []
-    if getattr(args, "frequency_bounds", None):
-        parts.append("bounded")
-    return "_".join(parts)
 
 
 def cmd_export(args: argparse.Namespace) -> int:
@@ -53,8 +44,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("export", help="FMU of the 1-g or 0-g volts-volts model (native C runtime or pythonfmu)")
     p.add_argument("configuration", choices=["1g", "0g"])
     deck_option(p)
-    p.add_argument("-o", "--out", type=folder_argument, default=".", help="output directory (writes e.g. MACE_1g_native.fmu; with "
-                   "--motion-grids MACE_1g_native_motion.fmu; with --parameters P.toml MACE_1g_native_P.fmu, with "
+    p.add_argument("-o", "--out", type=folder_argument, default=".",
+                   help="output directory (writes e.g. MACE_1g_native.fmu; with --motion-grids "
+                   "MACE_1g_native_motion.fmu; with --parameters P.toml MACE_1g_native_P.fmu, with "
                    "--frequency-bounds too MACE_0g_native_P_bounded.fmu: never the plain model's name)")
     p.add_argument("--kind", choices=["native", "pythonfmu"], default="native",
                    help="native: C runtime, no Python needed in the host, FMI 2.0 co-simulation and model exchange "

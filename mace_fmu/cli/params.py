@@ -69,9 +69,31 @@ def cmd_from_ssv(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_list(args: argparse.Namespace) -> int:
+    """Every Real parameter of an FMU: name, start value, declared range, unit and description."""
+    from mace_fmu.updating.fmu_model import read_fmu_interface
+
+    interface = read_fmu_interface(args.fmu)
+    names = sorted(interface.parameters) if args.sort else list(interface.parameters)
+    width = max([9, *(len(n) for n in names)])
+    print(f"{len(names)} parameters of {args.fmu} (set through FMI before initialisation; a parameter set names "
+          "per-mode ones by label: damping:<label>)")
+    print(f"{'parameter':<{width}} {'start':>14} {'min':>12} {'max':>12}  unit  description")
+    for n in names:
+        low, high = interface.ranges.get(n, (float("-inf"), float("inf")))
+        print(f"{n:<{width}} {interface.parameters[n]:>14.7g} {low:>12.5g} {high:>12.5g}  "
+              f"{interface.units.get(n, '') or '-':<4}  {interface.descriptions.get(n, '')}")
+    return 0
+
+
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("params", help="parameter sets as SSP 1.0 parameter value files (SSV) and back")
+    p = sub.add_parser("params", help="an FMU's parameters; parameter sets as SSP 1.0 parameter value files (SSV) "
+                       "and back")
     psub = p.add_subparsers(dest="params_command", required=True)
+    ls = psub.add_parser("list", help="every parameter of an FMU: start value, declared range, unit, description")
+    ls.add_argument("fmu", metavar="FILE", help="an FMI 2.0 co-simulation FMU")
+    ls.add_argument("--sort", action="store_true", help="by name (default: the FMU's order)")
+    ls.set_defaults(func=cmd_list)
     to = psub.add_parser("to-ssv", help="a parameter set (TOML) as an SSV file, losslessly")
     to.add_argument("parameters", help="parameter set TOML (mace-fmu update mace, update fmu or predict-0g)")
     to.add_argument("--frequency-bounds", metavar="FILE",

@@ -52,7 +52,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
     if args.at is not None:
         from mace_fmu.cli.update import _read_start
 
-        values = _read_start(args.at)
+        values = _read_start(args.at, args.fmu)
         interface.check_parameters(list(values))
     for c in candidates:  # every signal checked before the first simulation
         for t in c.tests:

@@ -34,14 +34,17 @@ def cmd_sample(args: argparse.Namespace) -> int:
     return 0
 
 
-def _read_start(path: str) -> dict[str, float]:
-    """Start values from a parameter TOML file ([values] table), names as the FMU's."""
+def _read_start(path: str, fmu: str) -> dict[str, float]:
+    """Start values from a parameter TOML file ([values] table) by the FMU's names: a set of ``update mace``
+    names its damping ratios and frequency scales by mode label, which the FMU's parameters say."""
+    from mace_fmu.updating.fmu_model import read_fmu_interface
+
     table = read_toml(path, what="start-value")
     values = table.get("values")
     if not isinstance(values, dict) or not all(isinstance(v, (int, float)) and not isinstance(v, bool)
                                                for v in values.values()):
         raise MaceError(f"{path}: expected a [values] table of numbers (name = value)")
-    return {k: float(v) for k, v in values.items()}
+    return read_fmu_interface(fmu).values_by_fmu_name({k: float(v) for k, v in values.items()}, source=path)
 
 
 def _gain_uncertainty(items: list[str]) -> dict[str, float]:
@@ -101,7 +104,7 @@ def cmd_fmu_update(args: argparse.Namespace) -> int:
         raise MaceError(f"--noise-rms-percent must be > 0, got {args.noise_rms_percent}")
     noise_fraction = None if args.noise_rms_percent is None else args.noise_rms_percent / 100.0
     problem = fmu_problem(fmu=args.fmu, data=args.data, names=names, cost=args.cost,
-                          start=_read_start(args.start) if args.start else None, channel_map=args.map,
+                          start=_read_start(args.start, args.fmu) if args.start else None, channel_map=args.map,
                           segment_s=args.segment_s, weighting=args.weighting, held_inputs=held,
                           noise_rms_fraction=noise_fraction, gain_uncertainty=_gain_uncertainty(args.gain_uncertainty))
     where = f"the Dask cluster at {args.scheduler}" if args.scheduler else \
@@ -113,10 +116,11 @@ def cmd_fmu_update(args: argparse.Namespace) -> int:
         with DaskRunner(scheduler=args.scheduler, workers=args.workers, progress=bar, task="FMU runs") as runner:
             result = update_fmu(family=problem.family, cost=problem.cost, start=problem.start, stages=[problem.names],
                                 runner=runner, progress=bar)
-    from mace_fmu.updating.convergence import convergence_report, noise_floor
+    from mace_fmu.updating.convergence import convergence_report, missing_noise_floor, noise_floor
 
     floor = noise_floor(problem.cost, noise_rms_fraction=noise_fraction)
-    report = convergence_report(result, noise_floor=floor, strict=args.strict)
+    report = convergence_report(result, noise_floor=floor, strict=args.strict,
+                                missing_floor=missing_noise_floor(problem.cost, noise_rms_fraction=noise_fraction))
     params = fmu_parameters(result, family=problem.family, data=", ".join(problem.data_files), cost=problem.cost,
                             convergence=report)
     out.mkdir(parents=True, exist_ok=True)
@@ -219,15 +223,16 @@ def cmd_mace_update(args: argparse.Namespace) -> int:
 
 
 _EXIT_STATUS = (f"exit status: 0 converged (a parameter that ends at a bound is named on the terminal and in "
-                f"convergence.toml; --strict makes it {NOT_CONVERGED}); 2 bad input (nothing written); {NOT_CONVERGED} the "
-                "update stopped without converging (at its iteration cap, a stalled step, or with the time cost "
-                "more than 3 standard deviations above the noise floor): the results are written all the same, "
-                "with converged = false and the reasons in convergence.toml")
+                f"convergence.toml; --strict makes it {NOT_CONVERGED}); 2 bad input (nothing written); "
+                f"{NOT_CONVERGED} the update stopped without converging (at its iteration cap, a stalled step, with "
+                "the time cost more than 3 standard deviations above the noise floor, or without a noise floor to "
+                "hold the time cost to): the results are written all the same, with converged = false and the "
+                "reasons in convergence.toml")
 
 
 def _out_option(p: argparse.ArgumentParser, *, help_text: str | None = None) -> None:
-    p.add_argument("-o", "--out", type=folder_argument, help=help_text or "directory for parameters.toml, convergence.toml, "
-                   "uncertainty.toml, report.txt, summary.json and figures")
+    p.add_argument("-o", "--out", type=folder_argument, help=help_text or "directory for parameters.toml, "
+                   "convergence.toml, uncertainty.toml, report.txt, summary.json and figures")
     p.add_argument("--strict", action="store_true", help=f"a parameter that ends at a bound counts as not converged "
                    f"(exit {NOT_CONVERGED}); by default it is named and the update may converge")
 

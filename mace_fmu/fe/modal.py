@@ -12,6 +12,7 @@ structure leaves after reordering) where the dense one grows with the cube of th
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 from typing import Callable
 
@@ -144,7 +145,9 @@ def _condensed_eigh(k: np.ndarray, m: np.ndarray, unrestrained: Callable[[np.nda
     if len(o) == 0:
         k_oo = np.eye(0)
     try:
-        lu = sla.lu_factor(k_oo, check_finite=True)
+        with warnings.catch_warnings():  # a singular K_oo is reported below, naming its DOFs
+            warnings.simplefilter("ignore", sla.LinAlgWarning)
+            lu = sla.lu_factor(k_oo, check_finite=True)
         if len(o) and np.min(np.abs(np.diag(lu[0]))) <= 1e-12 * np.max(np.abs(np.diag(k_oo))):
             raise np.linalg.LinAlgError
     except (np.linalg.LinAlgError, ValueError):

@@ -48,16 +48,39 @@ class Preload:
     full_tangents: int = 1  #: tangents with second derivatives built (the costly part; the product's included)
 
 
-def _solve(k: sparse.sparray, r: np.ndarray) -> np.ndarray:
+def _solve(k: sparse.sparray, r: np.ndarray, constraints: Constraints) -> np.ndarray:
     """Solve the reduced static system (positive definite about a stable state), or explain: dense
     Cholesky for a small system, sparse LU for a large one."""
     if k.shape[0] > DENSE_MAX_DOF:
-        return _factor(k)(r)
+        return _factor(k, constraints)(r)
     try:
         return sla.cho_solve(sla.cho_factor(k.toarray()), r)
     except (sla.LinAlgError, np.linalg.LinAlgError):
-        raise MaceError("the preload stiffness is singular: the static subcase leaves a mechanism or rigid-body "
-                        "motion free (check its SPC and MPC sets)") from None
+        raise MaceError(singular_message(k, constraints)) from None
+
+
+def singular_message(k: sparse.sparray | np.ndarray, constraints: Constraints) -> str:
+    """Why the reduced static stiffness ``k`` is singular, naming the grids and components that move freely:
+    those without any stiffness on the diagonal (a grid attached to nothing), else, for a system small enough
+    to decompose, the DOFs of its null space (a mechanism or a rigid-body motion the SPC and MPC sets leave)."""
+    k = sparse.csr_array(k)
+    diag = np.abs(k.diagonal())
+    free = np.flatnonzero(diag <= 1e-12 * max(float(diag.max(initial=0.0)), 1e-300))
+    what = "have no stiffness at all (attached to no element)"
+    if not free.size and k.shape[0] <= DENSE_MAX_DOF:
+        w, v = np.linalg.eigh(0.5 * (k + k.T).toarray())
+        null = v[:, np.abs(w) <= 1e-10 * max(float(np.abs(w).max()), 1e-300)]
+        free = np.flatnonzero(np.abs(null).max(axis=1) > 1e-3) if null.size else free
+        what = "move without stiffness together (a mechanism or a rigid-body motion)"
+    by_grid: dict[int, list[int]] = {}
+    for i in free:
+        grid, component = constraints.independent[i]
+        by_grid.setdefault(grid, []).append(component)
+    named = "; ".join(f"grid {g} component(s) {''.join(str(c) for c in sorted(cs))}"
+                      for g, cs in list(by_grid.items())[:8]) + ("; ..." if len(by_grid) > 8 else "")
+    return ("the preload stiffness is singular: " + (f"{named} {what}; " if by_grid else "")
+            + "connect them, constrain them with an SPC (or PARAM,AUTOSPC,YES), or check the static subcase's SPC "
+            "and MPC sets")
 
 
 def _state(model: FEModel, u: np.ndarray) -> BarState:
@@ -84,7 +107,7 @@ def linear_preload(model: FEModel, constraints: Constraints, load: np.ndarray) -
         The linear displacements and the prestressed stiffness K + K_sigma.
     """
     t = constraints.transform
-    u = t @ _solve(constraints.reduce_sparse(model.stiffness), t.T @ load)
+    u = t @ _solve(constraints.reduce_sparse(model.stiffness), t.T @ load, constraints)
     n = model.dofs.size
     undeformed = _state(model, np.zeros(n))
     _, b = deformation_jacobian(model.bars, undeformed)
@@ -98,13 +121,12 @@ def linear_preload(model: FEModel, constraints: Constraints, load: np.ndarray) -
                    state=undeformed, constraints=constraints)
 
 
-def _factor(k: np.ndarray | sparse.sparray) -> Callable[[np.ndarray], np.ndarray]:
-    """Sparse LU of the reduced stiffness as a solve function, or a clear error for a mechanism."""
+def _factor(k: np.ndarray | sparse.sparray, constraints: Constraints) -> Callable[[np.ndarray], np.ndarray]:
+    """Sparse LU of the reduced stiffness as a solve function, or a clear error naming a mechanism's DOFs."""
     try:
         return factorize(k)
     except RuntimeError:
-        raise MaceError("the preload stiffness is singular: the static subcase leaves a mechanism or rigid-body "
-                        "motion free (check its SPC and MPC sets)") from None
+        raise MaceError(singular_message(k, constraints)) from None
 
 
 def large_displacement_preload(model: FEModel, constraints: Constraints, load: np.ndarray, *, increments: int = 10,
@@ -183,7 +205,7 @@ def large_displacement_preload(model: FEModel, constraints: Constraints, load: n
             else:
                 f_int, k_material = material_tangent(model.bars, state, n)
                 k_bars = k_material + (step / reference_step) * geometric
-            solve = _factor(t.T @ (k_bars + k_springs) @ t)
+            solve = _factor(t.T @ (k_bars + k_springs) @ t, constraints)
             residual = t.T @ (target - f_int - model.spring_stiffness @ u)
             delta = t @ solve(residual)
             total_iterations += 1
@@ -260,7 +282,7 @@ def tangent_sensitivity(model: FEModel, preload: Preload, *, bar_mask: np.ndarra
 def preload_solver(preload: Preload) -> Callable[[np.ndarray], np.ndarray]:
     """Solve with the preload's reduced tangent T^T K_T T (factored once): for :func:`tangent_sensitivity`."""
     t = preload.constraints.transform
-    return _factor(t.T @ preload.tangent_stiffness @ t)
+    return _factor(t.T @ preload.tangent_stiffness @ t, preload.constraints)
 
 
 def geometric_stiffness(model: FEModel, constraints: Constraints, load: np.ndarray) -> sparse.csr_array:

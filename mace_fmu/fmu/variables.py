@@ -33,4 +33,5 @@ def model_summary(model: VoltsModel) -> str:
     from mace_fmu.structure.file import is_bundled_deck
 
     who = "MACE" if is_bundled_deck(structure.deck) else Path(structure.deck.path).stem
-    return f"{who} {kind} volts-volts model: {sys_.nstates} states; {model.electronics.describe()}"
+    built = f"; parameter set {model.parameters.describe()}" if model.parameters is not None else ""
+    return f"{who} {kind} volts-volts model: {sys_.nstates} states; {model.electronics.describe()}{built}"

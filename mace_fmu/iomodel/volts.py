@@ -53,6 +53,7 @@ class VoltsModel:
     structure_modes: StructureModes  #: the modes the model was built from
     instruments: Instruments  #: actuators, sensors, electronics, loops and damping it was built with
     electronics: ModelledElectronics  #: which electronics the model contains, and how
+    parameters: ParameterSet | None = None  #: the parameter set it was built with (None: the deck's and file's)
 
     def frequency_response(self, frequencies_hz: np.ndarray) -> np.ndarray:
         """H[k, output, input] [V/V] at ``frequencies_hz`` [Hz], all channels at once.
@@ -334,7 +335,8 @@ def volts_model(configuration: Configuration = "1g", *, modes: StructureModes | 
     diagram = build_diagram(plant, instruments, electronics=electronics)
     system = diagram.compile()
     return VoltsModel(system=select_signals(system, inputs=inputs, outputs=outputs), diagram=diagram, plant=plant,
-                      structure_modes=modes, instruments=instruments, electronics=electronics)
+                      structure_modes=modes, instruments=instruments, electronics=electronics,
+                      parameters=parameters if parameters is not None and len(parameters) else None)
 
 
 _MOVED = {"servos": "electronics", "bessel": "electronics", "delays": "electronics", "pade_order": "electronics",

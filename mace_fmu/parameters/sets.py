@@ -102,6 +102,7 @@ class ParameterSet:
     #: parameter name -> value (SI: Pa, N/m, s; ratios and scales dimensionless)
     values: Mapping[str, float] = field(default_factory=dict)
     provenance: Provenance | None = None  #: what the set was made from and fitted to (None: written by hand)
+    source: str = field(default="", compare=False)  #: the file it was read from ("" when made in memory)
 
     def __post_init__(self) -> None:
         checked = {}
@@ -121,13 +122,26 @@ class ParameterSet:
     def __len__(self) -> int:
         return len(self.values)
 
+    def describe(self) -> str:
+        """One line on where the set comes from (its file, what it was fitted to, on which data, when), for
+        the description of a model or FMU built from it."""
+        parts = [Path(self.source).name if self.source else f"{len(self.values)} values given"]
+        p = self.provenance
+        if p is not None:
+            parts += [f"fitted to {p.fitted_to}"] if p.fitted_to else []
+            parts += [f"data {p.data}"] if p.data else []
+            parts += [f"{p.cost} cost"] if p.cost else []
+            parts.append(f"created {p.created} by {p.tool}")
+        return ", ".join(parts)
+
     def of_kind(self, *kinds: ParameterKind) -> dict[str, float]:
         """The values whose names are of the given kinds."""
         return {n: v for n, v in self.values.items() if parameter_kind(n) in kinds}
 
     def updated(self, values: Mapping[str, float], *, provenance: Provenance | None = None) -> ParameterSet:
         """A new set with ``values`` replacing or adding entries (provenance replaced when given)."""
-        return ParameterSet({**self.values, **values}, provenance if provenance is not None else self.provenance)
+        return ParameterSet({**self.values, **values}, provenance if provenance is not None else self.provenance,
+                            source=self.source)
 
     # --- TOML ---------------------------------------------------------------------------------
     def to_toml(self) -> str:
@@ -170,7 +184,7 @@ class ParameterSet:
                 raise MaceError(f"{source}: [provenance] needs 'created' and 'tool'")
             prov = Provenance(**data["provenance"])
         try:
-            return cls(data["values"], prov)
+            return cls(data["values"], prov, source=source if source != "<string>" else "")
         except MaceError as exc:
             raise MaceError(f"{source}: {exc}") from None
 

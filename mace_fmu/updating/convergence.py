@@ -63,15 +63,11 @@ def time_noise_floor(cost: TimeResponseCost, *, noise_rms_fraction: float | None
         ratio = {o: noise_rms_fraction**2 for o in outputs}
         source = f"given: {100 * noise_rms_fraction:g} % of each output's RMS"
     else:
-        dt = float(np.median(np.diff(data.times_s)))
-        fs = 1.0 / dt
-        segment = min(n, 1024)
-        f, p_in = scipy.signal.welch(np.array(list(data.inputs.values())), fs=fs, nperseg=segment, axis=-1)
-        total = p_in.sum(axis=0)
-        edge = f[np.flatnonzero(total > BAND_EDGE * total.max())].max()
-        quiet = (f > 1.25 * edge) & (f < 0.95 * fs / 2)
-        if edge > 0.7 * fs / 2 or quiet.sum() < 5:
+        f, edge, fs = _input_band(cost)
+        if _no_quiet_band(f, edge, fs):
             return None
+        segment = min(n, 1024)
+        quiet = (f > 1.25 * edge) & (f < 0.95 * fs / 2)
         ratio = {}
         for o in outputs:
             y = np.asarray(data.outputs[o], dtype=float)
@@ -86,6 +82,43 @@ def time_noise_floor(cost: TimeResponseCost, *, noise_rms_fraction: float | None
     std = math.sqrt(sum(2 * n * r**2 for r in ratio.values()))
     return NoiseFloor(expected_cost=expected, standard_deviation=std,
                       noise_rms_percent={o: 100 * math.sqrt(r) for o, r in ratio.items()}, source=source)
+
+
+def _no_quiet_band(f: np.ndarray, edge: float, fs: float) -> bool:
+    quiet = (f > 1.25 * edge) & (f < 0.95 * fs / 2)
+    return bool(edge > 0.7 * fs / 2 or quiet.sum() < 5)
+
+
+def _input_band(cost: TimeResponseCost) -> tuple[np.ndarray, float, float]:
+    """(Welch frequencies [Hz], the inputs' band edge [Hz], the sample rate [Hz]) of a time cost's data."""
+    data = cost.data
+    fs = 1.0 / float(np.median(np.diff(data.times_s)))
+    f, p_in = scipy.signal.welch(np.array(list(data.inputs.values())), fs=fs, nperseg=min(len(data.times_s), 1024),
+                                 axis=-1)
+    total = p_in.sum(axis=0)
+    return f, float(f[np.flatnonzero(total > BAND_EDGE * total.max())].max()), fs
+
+
+def missing_noise_floor(cost, *, noise_rms_fraction: float | None = None) -> str:
+    """Why a time cost has no noise floor, with what to give instead ("" when it has one or is no time cost):
+    the test that a fit ended at the noise is then not made, and a verdict without it is not a convergence."""
+    from mace_fmu.updating.costs import SeveralTests, WithPriors
+
+    if noise_rms_fraction is not None:
+        return ""
+    inner = cost.cost if isinstance(cost, WithPriors) else cost
+    tests = inner.tests if isinstance(inner, SeveralTests) else (inner,)
+    if not all(isinstance(c, TimeResponseCost) for c in tests):
+        return ""
+    for c in tests:
+        if time_noise_floor(c) is None:
+            _, edge, fs = _input_band(c)
+            nyquist = fs / 2
+            return (f"noise-floor test not made: the inputs fill the band up to {edge:.4g} Hz (Nyquist "
+                    f"{nyquist:.4g} Hz), which leaves the outputs no quiet band to measure their noise in; give "
+                    "the noise (--noise-rms-percent P: its RMS as P % of each output's RMS) so that the fit can be "
+                    "held to it")
+    return ""
 
 
 def noise_floor(cost, *, noise_rms_fraction: float | None = None) -> NoiseFloor | None:
@@ -166,7 +199,8 @@ class ConvergenceReport:
 
 
 def convergence_report(result: UpdateResult, *, noise_floor: NoiseFloor | None = None,
-                       sigma_limit: float = SIGMA_LIMIT, strict: bool = False) -> ConvergenceReport:
+                       sigma_limit: float = SIGMA_LIMIT, strict: bool = False,
+                       missing_floor: str = "") -> ConvergenceReport:
     """The verdict on ``result``: its stages' tests, and (with a noise floor) the final cost against it.
 
     Parameters
@@ -180,6 +214,9 @@ def convergence_report(result: UpdateResult, *, noise_floor: NoiseFloor | None =
         A final cost more than this many standard deviations above the floor has not converged.
     strict : bool
         Count a parameter ending at a bound as not converged (by default it is named, not failed).
+    missing_floor : str
+        Why a time cost's noise floor could not be found (:func:`missing_noise_floor`): the fit is then not
+        held to the noise, which is said, and the update does not count as converged.
 
     Returns
     -------
@@ -198,5 +235,8 @@ def convergence_report(result: UpdateResult, *, noise_floor: NoiseFloor | None =
             converged = False
             verdict += f" (more than {sigma_limit:g} above: the fit stopped short of the optimum)"
         reasons.append(verdict)
+    elif missing_floor:
+        converged = False
+        reasons.append(missing_floor)
     return ConvergenceReport(converged=converged, reasons=tuple(reasons), final_cost=result.final_cost,
                              noise_floor=noise_floor, at_bounds=result.at_bounds)

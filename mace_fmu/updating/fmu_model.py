@@ -55,6 +55,7 @@ class FmuInterface:
     description: str = ""  #: the model description's description attribute ("MACE 1g volts-volts model: ...")
     #: the declared [min, max] of each parameter (-inf, inf where the FMU declares none) [FMU units]
     ranges: Mapping[str, tuple[float, float]] = field(default_factory=dict)
+    descriptions: Mapping[str, str] = field(default_factory=dict)  #: of each parameter, as the FMU gives them
 
     @property
     def configuration(self) -> str:
@@ -75,7 +76,47 @@ class FmuInterface:
             close = sorted({c for n in unknown for c in difflib.get_close_matches(n, list(self.parameters), n=4)})
             hint = f"; closest: {', '.join(close)}" if close else ""
             raise MaceError(f"{self.path}: no parameter(s) {', '.join(unknown)}{hint} (all {len(self.parameters)} "
-                            f"parameters: fmpy info {self.path})")
+                            f"parameters: mace-fmu params list {self.path})")
+
+    def mode_parameters(self) -> dict[str, list[str]]:
+        """A parameter set's per-mode names (``damping:<label>``, ``frequency_scale:<label>``) -> this FMU's
+        parameters of the modes with that label (``damping_mode_<k>``), read from the parameters'
+        descriptions (a MACE FMU's say each mode's label); empty for an FMU without such parameters."""
+        from mace_fmu.parameters.kinds import DAMPING, FREQUENCY_SCALE, kind_of_fmu_name
+
+        out: dict[str, list[str]] = {}
+        for name, text in self.descriptions.items():
+            kind = kind_of_fmu_name(name)
+            if kind is DAMPING and ": " in text:  # "open-loop damping ratio of mode 14: 1st Z bending"
+                label = text.split(": ", 1)[1].strip()
+            elif kind is FREQUENCY_SCALE and "(" in text:  # "... frequency of mode 14 (1st Z bending) relative ..."
+                label = text.split("(", 1)[1].split(")", 1)[0].strip()
+            else:
+                continue
+            out.setdefault(kind.set_name(label), []).append(name)
+        return out
+
+    def values_by_fmu_name(self, values: Mapping[str, float], *, source: str) -> dict[str, float]:
+        """``values`` with a parameter set's per-mode names translated to this FMU's (every mode with the
+        label gets the value), other names kept; a MaceError naming ``source`` for a label no mode has."""
+        from mace_fmu.parameters.kinds import kind_of_set_name
+
+        modes = self.mode_parameters()
+        out: dict[str, float] = {}
+        for name, value in values.items():
+            kind = kind_of_set_name(name)
+            if kind is None or not kind.per_mode or name in self.parameters:
+                out[name] = value
+                continue
+            if name not in modes:
+                import difflib
+
+                close = difflib.get_close_matches(name, list(modes), n=3)
+                raise MaceError(f"{source}: {name!r}: {self.path} has no mode with that label"
+                                + (f"; closest: {', '.join(close)}" if close else "")
+                                + f" (its parameters: mace-fmu params list {self.path})")
+            out.update({fmu_name: value for fmu_name in modes[name]})
+        return out
 
     def check_signals(self, *, inputs: Sequence[str], outputs: Sequence[str], where: str) -> None:
         """MaceError naming every input and output channel of ``where`` the FMU does not have."""
@@ -104,7 +145,8 @@ def read_fmu_interface(path: str | os.PathLike) -> FmuInterface:
                         units={v.name: v.unit or "" for v in used}, description=md.description or "",
                         ranges={v.name: (float(v.min) if v.min is not None else -np.inf,
                                          float(v.max) if v.max is not None else np.inf)
-                                for v in real if v.name in parameters})
+                                for v in real if v.name in parameters},
+                        descriptions={v.name: v.description or "" for v in real if v.name in parameters})
 
 
 def _in_worker_process() -> bool:

@@ -81,8 +81,8 @@ def predict_uncertainty(*, family: FmuFamily, parameters: Sequence[str], candida
                         progress: ProgressCallback | None = None) -> StageUncertainty:
     """The linearised uncertainty an update of ``parameters`` on ``candidate``'s data would report.
 
-    ``values``: the parameters' values [FMU units] about which to linearise (default: the FMU's start
-    values); ``seed``: of the excitation's noise (test k, input j: ``seed + 1000 k + j``).
+    ``values``: the values [FMU units] about which to linearise (default: the FMU's start values); those of
+    parameters not updated are held there; ``seed``: of the excitation's noise (test k, input j: ``seed + 1000 k + j``).
     """
     interface = family.interface
     names = tuple(parameters)
@@ -99,7 +99,10 @@ def predict_uncertainty(*, family: FmuFamily, parameters: Sequence[str], candida
                 raise MaceError(f"candidate {candidate.name!r}: the gain of {o!r} is known to {100 * gains[o]:g} % in "
                                 f"one test and {percent:g} % in another (one sensor, one calibration)")
             gains[o] = percent / 100
-    family = dataclasses.replace(family, gain_outputs=tuple(gains), fixed=dict(family.fixed))
+    # the point: the updated parameters at ``values``, any other value given held there too
+    held = {n: float(v) for n, v in (values or {}).items() if n not in names}
+    interface.check_parameters(list(held))
+    family = dataclasses.replace(family, gain_outputs=tuple(gains), fixed={**family.fixed, **held})
     if interface.written_by_pythonfmu:
         family = dataclasses.replace(family, runner=runner)
     base = {n: float((values or {}).get(n, interface.parameters[n])) for n in names}

@@ -22,7 +22,9 @@ from mace_fmu.zero_g.robust.design import DEFAULT_REDUCED_STATES, DEFAULT_WEIGHT
 from mace_fmu.zero_g.robust.loop import LoopSpec
 from mace_fmu.zero_g.robust.sweep import SweepResult, robust_sweep
 
-FMU_NAME = "MACE_0g_native"
+#: named after what made it: the 0-g model with the frequency bounds of the robustness study (never the plain
+#: model's name, which mace-fmu build writes)
+FMU_NAME = "MACE_0g_native_bounded"
 
 
 @dataclass(frozen=True)
