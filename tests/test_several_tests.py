@@ -93,7 +93,6 @@ def test_two_tests_converge_to_the_noise_floor_with_the_truth_inside_the_reporte
         assert abs(e) <= 1.96 * sd[n], (n, e, sd[n])
     # the strut test's gauges sit on the sections: each is fixed on its own (plan-test predicts the same
     # from full re-solves, tests/test_test_planning.py), no combination is weak
-    print("SD", sd, errors)
     assert max(sd[n] for n in STRUT) < 0.2 and not uncertainty["weak_directions"]
 
 
