@@ -101,11 +101,35 @@ def test_a_step_of_several_samples_runs_them_with_the_inputs_held(exported, tmp_
     slave.freeInstance()
 
 
-def test_a_step_that_is_not_whole_samples_is_refused(exported, tmp_path):
+def test_any_step_size_runs_the_samples_whose_instants_it_passes(exported, tmp_path):
+    """The model description says it handles variable steps: a step runs the samples at t0 + k T that lie in
+    (t, t + h] with the inputs held, so steps of 1.5 T, 1.5 T, 0.25 T, 0.75 T end where 4 samples end (it
+    refused them before, and left the instance in its error state)."""
     system, fmu, version = exported
-    slave, _ = _slave(fmu, version, tmp_path)
+    u = np.repeat(np.random.default_rng(6).normal(size=(2, 1)), 4, axis=1)
+    ref = ct.forced_response(system, T=np.arange(5) * STEP, U=np.hstack([u, u[:, :1]])).outputs
+    slave, vr = _slave(fmu, version, tmp_path)
+    set_, get = (slave.setReal, slave.getReal) if version == 2 else (slave.setFloat64, slave.getFloat64)
+    ins, outs = [vr[n] for n in system.input_labels], [vr[n] for n in system.output_labels]
+    set_(ins, list(u[:, 0]))
+    t, seen = 0.0, []
+    for h, samples_done in ((1.5 * STEP, 1), (1.5 * STEP, 3), (0.25 * STEP, 3), (0.75 * STEP, 4)):
+        slave.doStep(currentCommunicationPoint=t, communicationStepSize=h)
+        t += h
+        seen.append((samples_done, np.array(get(outs))))
+    for samples_done, y in seen:
+        assert np.allclose(y, ref[:, samples_done], rtol=0, atol=1e-12 * np.max(np.abs(ref))), samples_done
+    slave.freeInstance()
+
+
+@pytest.mark.parametrize("step_s", [1e20, 1e6, 2.1e3])
+def test_a_step_beyond_a_calls_bounded_work_is_refused_at_once(exported, tmp_path, step_s):
+    """One call runs at most a million samples (2000 s at 2 ms): doStep(h = 1e20) returned OK without stepping
+    (the sample count overflowed) and h = 1e6 ran 250 s; both are refused before any work."""
+    system, fmu, version = exported
+    slave, vr = _slave(fmu, version, tmp_path)
     with pytest.raises(FMICallException):
-        slave.doStep(currentCommunicationPoint=0.0, communicationStepSize=1.5 * STEP)
+        slave.doStep(currentCommunicationPoint=0.0, communicationStepSize=step_s)
     slave.freeInstance()
 
 

@@ -3,7 +3,6 @@ FMUs declare follow from it (mace_fmu.parameters.kinds)."""
 
 from __future__ import annotations
 
-import math
 
 import pytest
 
@@ -41,7 +40,8 @@ def test_declared_ranges_follow_the_kinds():
     assert declared_range("k_suspension_device_1", 16.9878) == pytest.approx((11.89146, 25.4817), rel=1e-15)
     assert declared_range("delay_rwa_x", 0.00674) == (0.0, 1.0)
     assert declared_range("damping_mode_3", 0.02) == (0.0, 1.0)
-    assert declared_range("K_f", 4.3) == (-math.inf, math.inf)
+    assert declared_range("K_f", 4.3) == (-4300.0, 4300.0) and declared_range("K_a", -2.0) == (-2000.0, 2000.0)
+    assert declared_range("K_r_gimbal_z", 0.0) == (-1000.0, 1000.0)
     assert declared_range("frequency_scale_mode_9", 1.0, frequency_hz=2.0) == (0.1, 10.0)
     # a slow mode: the lowest scale keeps it just above the zero-frequency cluster
     low, high = declared_range("frequency_scale_mode_9", 1.0, frequency_hz=0.05)

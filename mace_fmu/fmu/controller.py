@@ -26,7 +26,8 @@ import numpy as np
 from mace_fmu.errors import MaceError
 from mace_fmu.fmu.native import compile as runtime
 from mace_fmu.fmu.native.export import runtime_token, write_native_fmu
-from mace_fmu.fmu.native.model_description import FmuVariable, fmi2_model_description, fmi3_model_description
+from mace_fmu.fmu.native.model_description import (INPUT_LIMIT_V, FmuVariable, fmi2_model_description,
+                                                   fmi3_model_description)
 from mace_fmu.util.atomic import atomic_path
 
 FORMAT_VERSION = 1
@@ -120,7 +121,8 @@ def _variables(controller: DiscreteController) -> list[FmuVariable]:
     """Inputs, outputs and (FMI 3) time in the runtime's value-reference order."""
     out = [FmuVariable(name=n, value_reference=k, causality="input", variability="discrete",
                        description=f"controller input {n} [V], sampled every {controller.sample_time_s} s", start=0.0,
-                       unit="V") for k, n in enumerate(controller.inputs)]
+                       unit="V", minimum=-INPUT_LIMIT_V, maximum=INPUT_LIMIT_V)
+           for k, n in enumerate(controller.inputs)]
     m = len(out)
     out += [FmuVariable(name=n, value_reference=m + k, causality="output", variability="discrete",
                         description=f"controller output {n} [V], held between samples", unit="V")

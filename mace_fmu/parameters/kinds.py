@@ -22,8 +22,10 @@ physical limits plus the reach of the models behind them:
 - frequency scales: [0.1, 10], or the bounds given at export (Table 5.3's for the 0-g model).
   The lower end is raised for a mode below 0.1 Hz so that no scale moves a flexible mode into the
   zero-frequency cluster, which a native FMU reduces once at export.
-- servo gains: any finite value (a gain can make a loop unstable; a run of it then ends with an
-  overflow the FMU reports, as a real loop would saturate).
+- servo gains: +-1000 x |nominal| (+-1000 for a nominal 0): a gain may make a loop unstable (a run
+  of it then ends with an overflow the FMU reports, as a real loop would saturate), but a thousand
+  times the design gain is no loop anyone builds, and 1e308 overflowed the system's matrices before
+  the first step (model exchange returned NaN derivatives).
 """
 
 from __future__ import annotations
@@ -62,7 +64,8 @@ class ParameterKind:
     def range_for(self, nominal: float) -> tuple[float, float]:
         """[min, max] of a parameter of this kind with nominal value ``nominal`` (SI)."""
         if self.relative_to_nominal:
-            return self.minimum * abs(nominal), self.maximum * abs(nominal)
+            scale = abs(nominal) if nominal != 0.0 or self.minimum >= 0.0 else 1.0  # a signed kind about 0
+            return self.minimum * scale, self.maximum * scale
         return self.minimum, self.maximum
 
     def fmu_name(self, mode: int) -> str:
@@ -83,7 +86,7 @@ MODULUS = ParameterKind("modulus", "E_", "E_", "Pa", 0.7, 1.5, relative_to_nomin
 SPRING = ParameterKind("spring", "k_", "k_", "N/m", 0.7, 1.5, relative_to_nominal=True,
                        description="stiffness of a CELAS2 card")
 DELAY = ParameterKind("delay", "delay_", "delay_", "s", 0.0, 1.0, description="time delay of a channel")
-GAIN = ParameterKind("gain", "", "", "1", -math.inf, math.inf,
+GAIN = ParameterKind("gain", "", "", "1", -1000.0, 1000.0, relative_to_nominal=True,
                      exact_names=MappingProxyType({"K_a": "V/deg", "K_r": "V/(deg/s)", "K_f": "1", "K_b": "1"}),
                      description="servo loop gain", per_actuator=True)
 DAMPING = ParameterKind("damping", "damping:", "damping_mode_", "1", 0.0, 1.0, per_mode=True,

@@ -37,6 +37,7 @@ from fmpy.fmi2 import FMU2Model, FMU2Slave
 from fmpy.fmi3 import FMU3Slave
 
 OK, ERROR = 0, 3
+INPUT_LIMIT_V = 1e6  # mace_instance.c MACE_INPUT_LIMIT_V, each input's declared min and max
 TIME_TOLERANCE = 1e-9  # mace_instance.c: relative to max(1, |t|)
 
 INST, INIT, STEP, EVENT, CONT, TERM, ERR = "instantiated", "init", "step", "event", "continuous", "terminated", "error"
@@ -171,8 +172,8 @@ class Reference:
                 return ERROR
             for vr, value in zip(args["vr"], args["values"]):
                 g = self.group(vr)
-                if g == "input" and math.isfinite(value):
-                    continue
+                if g == "input" and math.isfinite(value) and abs(value) <= INPUT_LIMIT_V:
+                    continue  # beyond the declared +-1e6 V: refused where it is set
                 if g == "param" and p in (INST, INIT) and math.isfinite(value):
                     continue  # a value outside the declared range is taken; the build refuses it
                 return ERROR
@@ -331,6 +332,8 @@ class Driver:
             return math.nan
         if r < 0.85:
             return self.rng.uniform(-1, 1)
+        if r < 0.9:  # finite, beyond the declared range (1e308 made model exchange's derivatives NaN with OK)
+            return self.rng.choice([1e308, -1e308, 2e6])
         return self.rng.choice([math.nan, math.inf, -math.inf])
 
     def random_vrs(self, settable: bool) -> list[int]:

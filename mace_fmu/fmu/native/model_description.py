@@ -17,6 +17,10 @@ from mace_fmu.fmu.variables import DEFAULT_EXPERIMENT, variable_unit
 
 LOG_CATEGORIES = (("logStatusError", "errors (always logged)"), ("logEvents", "debug information"))
 
+#: the largest input magnitude [V] the runtime takes (mace_instance.c, MACE_INPUT_LIMIT_V): a million volts is no
+#: signal, and 1e308 overflowed model exchange's derivatives to NaN
+INPUT_LIMIT_V = 1e6
+
 
 @dataclass(frozen=True)
 class FmuVariable:
@@ -58,7 +62,8 @@ def fmu_variables(arrays: Mapping[str, np.ndarray], state_names: Sequence[str]) 
         out.append(FmuVariable(value_reference=len(out), unit=variable_unit(name, causality), **kw))
 
     for name, desc in zip(arrays["inputs"], arrays["input_descriptions"]):
-        add(name=str(name), causality="input", variability="continuous", description=str(desc), start=0.0)
+        add(name=str(name), causality="input", variability="continuous", description=str(desc), start=0.0,
+            minimum=-INPUT_LIMIT_V, maximum=INPUT_LIMIT_V)
     for name, desc in zip(arrays["outputs"], arrays["output_descriptions"]):
         add(name=str(name), causality="output", variability="continuous", description=str(desc))
     for name, desc, value, lo, hi in zip(arrays["param_names"], arrays["param_descriptions"], arrays["param_values"],

@@ -14,6 +14,9 @@ static const char *PHASE_NAMES[PH_COUNT] = {"instantiated", "initialization mode
 #define SETTABLE_INPUT (MI_IN(PH_INSTANTIATED) | MI_IN(PH_INITIALIZATION) | MI_IN(PH_STEP) | MI_IN(PH_EVENT) | \
                         MI_IN(PH_CONTINUOUS))
 #define SETTABLE_PARAMETER (MI_IN(PH_INSTANTIATED) | MI_IN(PH_INITIALIZATION))
+/* the largest input magnitude [V] taken (mace_fmu.fmu.native.model_description.INPUT_LIMIT_V, declared as the
+   inputs' min and max): 1e308 overflowed model exchange's derivatives */
+#define MACE_INPUT_LIMIT_V 1e6
 #define GETTABLE (MI_IN(PH_INITIALIZATION) | MI_IN(PH_STEP) | MI_IN(PH_EVENT) | MI_IN(PH_CONTINUOUS) | \
                   MI_IN(PH_TERMINATED) | MI_IN(PH_ERROR))
 
@@ -163,6 +166,10 @@ MiStatus mi_set_reals(MiInstance *inst, const unsigned int *vr, size_t n, const 
                 return mi_error(inst, "%s%s: non-finite value %g for %s %s (expected a finite number); not set",
                                 inst->api, fn, values[i], g == MACE_VAR_INPUT ? "input" : "parameter",
                                 mace_name(inst->model, g, k));
+            if (g == MACE_VAR_INPUT && fabs(values[i]) > MACE_INPUT_LIMIT_V)
+                return mi_error(inst, "%s%s: input %s = %g V is outside its declared range [-%g, %g] V; not set",
+                                inst->api, fn, mace_name(inst->model, g, k), values[i], MACE_INPUT_LIMIT_V,
+                                MACE_INPUT_LIMIT_V);
         } else {
             return mi_error(inst, "%s%s: value reference %u is %s and cannot be set", inst->api, fn, vr[i],
                             group_name(g));

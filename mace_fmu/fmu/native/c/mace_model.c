@@ -1066,9 +1066,17 @@ void mace_get_nominals(MaceModel *m, double *nominal) {
 }
 
 int mace_get_derivatives(MaceModel *m, double *dx, char *err) {
+    size_t i;
     if (mace_build(m, err) != 0) return -1;
     if (inputs_finite(m, m->time, err) != 0) return -1;
     rhs(m, m->s, m->u, dx);
+    for (i = 0; i < m->n; i++) { /* finite inputs and states can still overflow (inputs of 1e308) */
+        if (!isfinite(dx[i])) {
+            snprintf(err, MACE_ERR_LEN, "the derivative of state %lu is %g at t = %g s: the inputs or states are "
+                     "beyond what the model can represent", (unsigned long)i, dx[i], m->time);
+            return -1;
+        }
+    }
     return 0;
 }
 

@@ -4,10 +4,12 @@
  *     x[k+1] = A x[k] + B u[k],   y[k] = C x[k] + D u[k],
  * its sample time T and its signal names. The FMI layers (fmi2_api.c, fmi3_api.c) and the FMI
  * state machine (mace_instance.c) are the plant FMUs' own; this file replaces mace_model.c and
- * mace_zoh.c in the controller's binary. A communication step of h seconds runs round(h / T)
- * samples with the inputs held; a step that is not a whole number of samples is refused (a
- * sampled controller has no meaning between its samples). There are no tunable parameters and
- * no continuous states: co-simulation only.
+ * mace_zoh.c in the controller's binary. The controller samples at the instants t0 + k T (t0: the
+ * experiment's start time); a communication step from t to t + h runs the samples whose instants lie
+ * in (t, t + h] with the inputs held, so any step size works: a step that is a whole number of samples
+ * runs that many, a shorter one between two instants none (the outputs hold). One call runs at most
+ * MAX_SAMPLES_PER_CALL samples: a longer step is refused before any work, so that the work of a call
+ * is bounded. There are no tunable parameters and no continuous states: co-simulation only.
  */
 #include "mace_model.h"
 
@@ -18,9 +20,10 @@
 
 #include "mace_data.h"
 
-static const char STATE_MAGIC[8] = {'M', 'A', 'C', 'E', 'D', 'S', 'C', '1'};
-#define STATE_HEADER 5 /* magic, phase, n_in, n_x, time */
-#define STEP_TOLERANCE 1e-9 /* relative: hosts compute step sizes as differences of times */
+static const char STATE_MAGIC[8] = {'M', 'A', 'C', 'E', 'D', 'S', 'C', '2'};
+#define STATE_HEADER 6 /* magic, phase, n_in, n_x, time, origin */
+#define STEP_TOLERANCE 1e-9 /* in samples, relative: hosts compute times as sums of steps */
+#define MAX_SAMPLES_PER_CALL 1000000.0 /* 2000 s at 2 ms, about a second of work for a 20-state controller */
 
 struct MaceModel {
     MaceAlloc al;
@@ -33,6 +36,7 @@ struct MaceModel {
     double *u, *x, *x_next, *y;
     int y_valid;
     double time;
+    double origin; /* t0: the sample instants are t0 + k T */
 };
 
 static const void *matrix(MaceModel *m, const char *name, size_t r, size_t c, char *err) {
@@ -133,7 +137,7 @@ void mace_destroy(MaceModel *m) {
 void mace_reset(MaceModel *m) {
     memset(m->u, 0, m->n_in * sizeof(double));
     memset(m->x, 0, m->n_x * sizeof(double));
-    m->time = 0.0;
+    m->time = m->origin = 0.0;
     m->y_valid = 0;
 }
 
@@ -203,6 +207,12 @@ int mace_get(MaceModel *m, MaceGroup group, size_t k, double *value, char *err) 
     }
 }
 
+/* Sample instants t0 + k T passed by time t (k counted with a relative tolerance: hosts sum their steps). */
+static double samples_by(const MaceModel *m, double t) {
+    const double k = (t - m->origin) / m->sample_time;
+    return floor(k + STEP_TOLERANCE * (fabs(k) > 1.0 ? fabs(k) : 1.0));
+}
+
 int mace_do_step(MaceModel *m, double t, double h, char *err) {
     double samples;
     size_t n, s, i, k;
@@ -210,10 +220,11 @@ int mace_do_step(MaceModel *m, double t, double h, char *err) {
         snprintf(err, MACE_ERR_LEN, "step from t = %g s over %g s: need a finite time and a step >= 0", t, h);
         return -1;
     }
-    samples = floor(h / m->sample_time + 0.5);
-    if (fabs(h - samples * m->sample_time) > STEP_TOLERANCE * (h > m->sample_time ? h : m->sample_time)) {
-        snprintf(err, MACE_ERR_LEN, "step of %.17g s is not a whole number of the controller's samples of %.17g s",
-                 h, m->sample_time);
+    samples = samples_by(m, t + h) - samples_by(m, t);
+    if (!(samples <= MAX_SAMPLES_PER_CALL)) {
+        snprintf(err, MACE_ERR_LEN, "a step of %.17g s holds %.17g samples of %.17g s, more than the %.0f one call "
+                 "runs (the work of a call is bounded): take shorter steps", h, samples, m->sample_time,
+                 MAX_SAMPLES_PER_CALL);
         return -1;
     }
     for (k = 0; k < m->n_in; k++) {
@@ -222,7 +233,7 @@ int mace_do_step(MaceModel *m, double t, double h, char *err) {
             return -1;
         }
     }
-    n = (size_t)samples;
+    n = samples > 0.0 ? (size_t)samples : 0;
     for (s = 0; s < n; s++) {
         for (i = 0; i < m->n_x; i++) {
             double acc = 0.0;
@@ -239,7 +250,7 @@ int mace_do_step(MaceModel *m, double t, double h, char *err) {
 
 /* No continuous states: the model-exchange entry points have nothing to do (never reached, since
  * mace_create refuses model exchange). */
-void mace_set_time(MaceModel *m, double t) { m->time = t; }
+void mace_set_time(MaceModel *m, double t) { m->time = m->origin = t; } /* the experiment's start */
 void mace_set_states(MaceModel *m, const double *x) { (void)m; (void)x; }
 void mace_get_states(MaceModel *m, double *x) { (void)m; (void)x; }
 void mace_get_nominals(MaceModel *m, double *nominal) { (void)m; (void)nominal; }
@@ -274,8 +285,9 @@ void mace_state_save(MaceModel *m, int phase, unsigned char *buffer) {
     memcpy(buffer, STATE_MAGIC, 8);
     memcpy(buffer + 8, header, sizeof(header));
     memcpy(buffer + 32, &m->time, 8);
-    memcpy(buffer + 40, m->u, 8 * m->n_in);
-    memcpy(buffer + 40 + 8 * m->n_in, m->x, 8 * m->n_x);
+    memcpy(buffer + 40, &m->origin, 8);
+    memcpy(buffer + 48, m->u, 8 * m->n_in);
+    memcpy(buffer + 48 + 8 * m->n_in, m->x, 8 * m->n_x);
 }
 
 int mace_state_check(MaceModel *m, const unsigned char *buffer, size_t size, int *phase, int *usable, char *err) {
@@ -291,7 +303,7 @@ int mace_state_check(MaceModel *m, const unsigned char *buffer, size_t size, int
         snprintf(err, MACE_ERR_LEN, "not an FMU state of this controller (other dimensions or a damaged header)");
         return -1;
     }
-    for (k = 0; k < 1 + m->n_in + m->n_x; k++) { /* time, inputs, states: the setters refuse non-finite values */
+    for (k = 0; k < 2 + m->n_in + m->n_x; k++) { /* time, origin, inputs, states: all finite */
         memcpy(&v, buffer + 32 + 8 * k, 8);
         if (!isfinite(v)) {
             snprintf(err, MACE_ERR_LEN, "a damaged FMU state (a non-finite time, input or state)");
@@ -307,8 +319,9 @@ int mace_state_load(MaceModel *m, const unsigned char *buffer, size_t size, int 
     int usable;
     if (mace_state_check(m, buffer, size, phase, &usable, err) != 0) return -1;
     memcpy(&m->time, buffer + 32, 8);
-    memcpy(m->u, buffer + 40, 8 * m->n_in);
-    memcpy(m->x, buffer + 40 + 8 * m->n_in, 8 * m->n_x);
+    memcpy(&m->origin, buffer + 40, 8);
+    memcpy(m->u, buffer + 48, 8 * m->n_in);
+    memcpy(m->x, buffer + 48 + 8 * m->n_in, 8 * m->n_x);
     m->y_valid = 0;
     return 0;
 }
