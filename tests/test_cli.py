@@ -288,3 +288,25 @@ def test_an_instrument_on_a_missing_grid_names_the_file_and_the_instrument(capsy
     code, _, err = _run(capsys, [*command, "--structure", str(spec)])
     assert code == 2
     assert f"{spec}: actuator 'gimbal_primary_x' names grid 9937, which" in err and "does not have" in err, err
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["view", "modes", "0g", "--scale", "-1"], "argument --scale: expected a finite number > 0, got '-1'"),
+    (["view", "modes", "0g", "--png", "still.jpg"], "argument --png: the still is a PNG image"),
+])
+def test_view_options_that_cannot_work_are_refused_at_once(capsys, argv, message):
+    with pytest.raises(SystemExit) as stopped:
+        main(argv)
+    assert stopped.value.code == 2 and message in capsys.readouterr().err
+
+
+def test_report_takes_o_like_every_other_command():
+    from mace_fmu.cli import build_parser
+
+    assert build_parser().parse_args(["report", "-o", "somewhere"]).out == "somewhere"
+
+
+def test_a_parameter_set_with_a_name_the_deck_lacks_names_its_file(capsys, tmp_path):
+    (tmp_path / "bad.toml").write_text("[values]\nE_foo = 2e9\n")
+    code, _, err = _run(capsys, ["model", "0g", "--parameters", str(tmp_path / "bad.toml")])
+    assert code == 2 and err.startswith(f"mace-fmu: error: {tmp_path / 'bad.toml'}: parameter 'E_foo': no such material")

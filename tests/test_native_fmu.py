@@ -604,7 +604,7 @@ def test_every_parameter_runs_over_exactly_its_declared_range(fmus):
     outs = [v.valueReference for v in md.modelVariables if v.causality == "output"]
     system = ParametricSystem(fmus.arrays)
     bounded = [v for v in params if v.min is not None and v.max is not None]
-    assert {v.name for v in params} - {v.name for v in bounded} == {"K_a", "K_r", "K_f", "K_b"}  # gains: any value
+    assert bounded == params  # every parameter declares its range (the gains +-1000 x nominal since 1e308 overflowed)
     fmu = _slave(fmus.dir2)
     refused, failed = [], []
     for v in bounded:

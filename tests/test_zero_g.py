@@ -119,6 +119,11 @@ def test_files_hold_the_rows_and_the_parameter_set_rebuilds_the_nominal_poles(ru
         assert float(csv_row["bound_percent"]) == row["bound_percent"] == toml_row["bound_percent"]
     assert toml["rule"] == {"heavy_damping": 0.1, "minimum_bound": 0.01, "error_fraction": 0.5, "heavy_bound": 0.025,
                             "correct_heavy": False}
+    # the set's zero damping of 2nd Y bending says why, where it is read
+    written = tomllib.loads((out / "zero_g_nominal.toml").read_text())
+    assert written["values"]["damping:2nd Y bending"] == 0.0
+    assert "open-loop damping 0 for 2nd Y bending: the servos alone give more closed-loop damping" in \
+        written["provenance"]["notes"]
     poles = closed_loop_poles(nominal)
     patterns = [p for p in _zero_g_patterns() if p]
     index = pair_poles([(p, r["nominal_hz"]) for p, r in zip(patterns, data["rows"])], poles)

@@ -201,12 +201,31 @@ def cmd_view_pairs(args: argparse.Namespace) -> int:
 def _output_options(p: argparse.ArgumentParser, *, html: str) -> None:
     """Where the animation goes and from where it is seen (both view commands)."""
     p.add_argument("--html", help=html)
-    p.add_argument("--png", help="write a still of the page through headless Chromium, if installed")
+    p.add_argument("--png", type=_png_path, help="write a still of the page (a .png file) through headless Chromium, "
+                   "if installed")
     p.add_argument("--png-size", type=int, nargs=2, default=[1200, 800], metavar=("WIDTH", "HEIGHT"),
                    help="size of the still [px] (default 1200 800)")
     p.add_argument("--camera", choices=CAMERA_CHOICES, default="iso",
                    help="initial view: iso (3/4 view, default), or along the x, y (from above) or z axis")
     p.add_argument("--live", action="store_true", help="also serve it on a live meshcat server until Ctrl-C")
+
+
+def _positive(text: str) -> float:
+    """argparse type: a finite number > 0."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not (value > 0 and value < float("inf")):
+        raise argparse.ArgumentTypeError(f"expected a finite number > 0, got {text!r}")
+    return value
+
+
+def _png_path(text: str) -> str:
+    """argparse type: a .png file to write (Chromium's still is a PNG whatever the name says)."""
+    if not text.lower().endswith(".png"):
+        raise argparse.ArgumentTypeError(f"the still is a PNG image: give a file ending in .png, got {text!r}")
+    return text
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -226,7 +245,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--mode", action="append", help="1-based index or label (prefix); repeat for several "
                    "(default: every mode up to --max-hz)")
     p.add_argument("--max-hz", type=float, default=None, help="highest mode computed [Hz] (default 60 without --mode)")
-    p.add_argument("--scale", type=float, default=None,
+    p.add_argument("--scale", type=_positive, default=None,
                    help="metres drawn per unit mass-normalised shape (default: largest motion 8%% of the size)")
     p.add_argument("--cycles", type=int, default=1, help="vibration cycles per mode (default 1)")
     p.add_argument("--seconds-per-cycle", type=float, default=1.0, help="playback time of one cycle [s]")
@@ -261,7 +280,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--step", type=float, default=0.002, help="FMU communication step [s] (default 0.002)")
     p.add_argument("--speed", type=float, default=1.0, help="playback speed: simulated s per s (default 1, real time)")
     p.add_argument("--fps", type=float, default=50.0, help="key frames per second of playback (default 50)")
-    p.add_argument("--scale", type=float, default=None,
+    p.add_argument("--scale", type=_positive, default=None,
                    help="magnification of the motion (default: largest motion 8%% of the size)")
     p.add_argument("--output", help="output plotted next to the input: a sensor (" + ", ".join(sensor_names)
                    + ") or grid_<id>_<tx|ty|tz|rx|ry|rz> (default: the sensor "

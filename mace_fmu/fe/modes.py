@@ -20,7 +20,7 @@ from mace_fmu.fe.constraints import Constraints, build_constraints
 from mace_fmu.fe.labels import label_modes, rigid_body_vectors
 from mace_fmu.fe.modal import Modes, solve_modes
 from mace_fmu.fe.preload import Preload, PreloadKind, large_displacement_preload, linear_preload
-from mace_fmu.parameters.sets import ParameterSet, deck_fingerprint, fe_overrides, parameter_names
+from mace_fmu.parameters.sets import ParameterSet, deck_fingerprint, fe_overrides, naming_the_file, parameter_names
 from mace_fmu.structure.build import Structure, build_structure
 from mace_fmu.structure.file import Configuration, StructureFile, StructureSpec, bundled_deck_path, structure_file_for
 from mace_fmu.util.progress import ProgressCallback
@@ -257,8 +257,9 @@ def compute_modes(deck: Deck | str | os.PathLike | None = None, *, configuration
         deck = read_deck(deck if deck is not None else bundled_deck_path())
     file = structure_file_for(deck, structure_file)
     if parameters is not None:
-        check_parameters_deck(parameters, deck)
-        overrides = {**fe_overrides(parameters, parameter_names(deck, file)), **(overrides or {})}
+        with naming_the_file(parameters):
+            check_parameters_deck(parameters, deck)
+            overrides = {**fe_overrides(parameters, parameter_names(deck, file)), **(overrides or {})}
     struct = build_structure(deck, configuration=configuration, spec=spec, overrides=overrides, structure_file=file)
     model = assemble(struct.deck, mass=mass)
     props = mass_properties(model, struct.deck)

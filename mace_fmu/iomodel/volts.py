@@ -33,7 +33,7 @@ from mace_fmu.iomodel.model_options import ModelledElectronics, SignalSelection
 from mace_fmu.iomodel.motion import parse_motion_output
 from mace_fmu.parameters.kinds import (DAMPING, DELAY, FREQUENCY_SCALE, SERVO_GAINS, ParameterKind, mode_label,
                                        split_loop_name)
-from mace_fmu.parameters.sets import ParameterSet, fe_overrides, parameter_names
+from mace_fmu.parameters.sets import ParameterSet, fe_overrides, naming_the_file, parameter_names
 from mace_fmu.structure.file import Configuration, StructureFile
 from mace_fmu.util.frequency import ZERO_HZ
 from mace_fmu.util.threads import single_blas_thread
@@ -313,9 +313,10 @@ def volts_model(configuration: Configuration = "1g", *, modes: StructureModes | 
         instruments = load_instruments(file)
     instruments = resolve_bar_gauges(instruments, modes.model, modes.structure.deck)
     # the moduli and springs must name cards, whether or not modes were given
-    fe_overrides(parameters, parameter_names(modes.structure.deck, file))
-    instruments = apply_parameters(instruments, parameters, modes.labels, configuration=configuration)
-    modes = scale_frequencies(modes, parameters, configuration=configuration)
+    with naming_the_file(parameters):
+        fe_overrides(parameters, parameter_names(modes.structure.deck, file))
+        instruments = apply_parameters(instruments, parameters, modes.labels, configuration=configuration)
+        modes = scale_frequencies(modes, parameters, configuration=configuration)
     flexible = modes.frequencies_hz[np.abs(modes.frequencies_hz) >= ZERO_HZ]
     if max_hz is None:
         max_hz = float(np.max(modes.frequencies_hz))

@@ -20,6 +20,7 @@ Names not given keep the deck's and the data file's values.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import datetime
 import hashlib
@@ -28,7 +29,7 @@ import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import MappingProxyType
-from typing import Any, Mapping
+from typing import Any, Iterator, Mapping
 
 from mace_fmu.errors import MaceError
 from mace_fmu.parameters.kinds import (DAMPING, FREQUENCY_SCALE, MODULUS, SERVO_GAINS, KindName, kind_of_set_name,
@@ -286,6 +287,18 @@ def deck_values(deck, names: ParameterNames | None = None) -> dict[str, float]:
     out = {f"E_{n}": deck.mat1s[mid].youngs_modulus for n, mid in names.materials.items() if mid in deck.mat1s}
     out.update({f"k_{n}": deck.celas2s[sid].k for n, sid in names.springs.items() if sid in deck.celas2s})
     return out
+
+
+@contextlib.contextmanager
+def naming_the_file(parameters: ParameterSet | None) -> Iterator[None]:
+    """Errors raised while a parameter set is applied name the file it was read from (when it was)."""
+    try:
+        yield
+    except MaceError as exc:
+        source = parameters.source if parameters is not None else ""
+        if source and not str(exc).startswith(source):
+            raise MaceError(f"{source}: {exc}") from None
+        raise
 
 
 def fe_overrides(parameters: ParameterSet | None, names: ParameterNames | None = None

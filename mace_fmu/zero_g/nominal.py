@@ -16,6 +16,7 @@ residual 1-g frequency error; heavily damped modes +-2.5 %.
 
 from __future__ import annotations
 
+import dataclasses
 import csv
 import math
 import os
@@ -387,7 +388,13 @@ def predict_zero_g(*, parameters: ParameterSet | None = None, measured: Sequence
     base = {name: value for name, value in (parameters.values if parameters is not None else {}).items()
             if not getattr(kind_of_set_name(name), "per_mode", False)
             or mode_label(name) in set(labels)}  # 1-g only modes (suspension, violins) do not exist in 0-g
-    nominal_set = ParameterSet({**base, **updates}, _deck_provenance(parameters, deck, source=source))
+    provenance = _deck_provenance(parameters, deck, source=source)
+    held = [measured[kept[adjusted[j]]].label for j in range(len(adjusted)) if pinned[j]]
+    if held:  # a damping ratio of 0 in the set is a result, not a slip: say why where it is read
+        provenance = dataclasses.replace(provenance, notes="; ".join(filter(None, [provenance.notes, (
+            f"open-loop damping 0 for {', '.join(held)}: the servos alone give more closed-loop damping in 0-g than "
+            "the target, which is out of reach (docs/guide/zero_g.md)")])))
+    nominal_set = ParameterSet({**base, **updates}, provenance)
 
     say("updated nominal 0-g model")
     nominal = volts_model("0g", parameters=nominal_set, modes=v0.structure_modes)
