@@ -203,7 +203,7 @@ class System:
         Inputs and outputs are labelled with the exposed names; states are
         ``"<block>.<state>"``, blocks in ``add`` order and each block's states in its own order.
         The matrices come from the wiring algebra (``modelica_like.algebra.interconnect``);
-        ``control.interconnect`` gives the same system (tests/test_build_equivalence.py) but
+        ``control.interconnect`` gives the same system (tests/iomodel/test_build_equivalence.py) but
         linearises it numerically, which was 42 % of building both MACE models (profiled).
         """
         ic = self.connection_matrices()

@@ -40,7 +40,7 @@ def pytest_unconfigure(config: pytest.Config) -> None:
 def motion_fmu_0g(tmp_path_factory):
     """(model, fmu, extracted folder) of the 0-g model with the motion of every grid as outputs.
 
-    Extracted once into a session folder that outlives every simulation (see tests/test_fmu.py).
+    Extracted once into a session folder that outlives every simulation (see tests/fmu/test_fmu.py).
     """
     import fmpy
 

@@ -13,10 +13,9 @@ import shlex
 from pathlib import Path
 
 import pytest
-
+from support.paths import ROOT
 from support.printed import NUMBER, printed_in, unit_of_last_digit
 
-ROOT = Path(__file__).resolve().parents[1]
 #: pages the docs build writes from the code (listed in docs/.gitignore): left out, so that the tests are the
 #: same before and after a build (CI runs the suite before the docs build; they added 5 tests after it)
 GENERATED = {ROOT / "docs" / line.strip().rstrip("/")
@@ -124,6 +123,7 @@ def test_readme_headline_numbers_are_on_the_pages_it_links():
     assert checked >= 12
 
 
+@pytest.mark.slow
 def test_the_first_model_notebook_runs_and_its_jupytext_pair_agrees(tmp_path):
     """docs/getting_started/first_model.py (a script in cells) runs, its FMU equals the exact zero-order hold,
     and first_model.ipynb holds the same cells (jupytext pairing: people who work in notebooks start there)."""

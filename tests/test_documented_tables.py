@@ -12,13 +12,9 @@ another, and both say what the page says.
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import pytest
-
+from support.paths import DOCS
 from support.printed import line_agrees, printed_in
-
-DOCS = Path(__file__).resolve().parents[1] / "docs"
 
 
 def _section(page: str) -> str:

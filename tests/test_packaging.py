@@ -16,7 +16,11 @@ import sys
 import zipfile
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
+import pytest
+from support.paths import ROOT
+
+pytestmark = pytest.mark.slow  # installs the package into fresh virtual environments
+
 #: a Python warning class in a build log (setuptools' deprecations come as e.g. "SetuptoolsDeprecationWarning")
 _PY_WARNING = re.compile(r"\b\w*Warning\b")
 

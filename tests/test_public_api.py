@@ -86,35 +86,23 @@ def test_no_public_name_is_shadowed_by_a_module_of_its_package():
         assert not modules & set(package.__all__), name
 
 
-def test_the_renamed_configuration_keyword_still_works_with_a_warning_that_names_both():
-    """``structure="0g"`` was the earlier name of ``configuration="0g"``: the same modes, and a
-    DeprecationWarning at the caller's line; both names at once are refused."""
-    import warnings
-
-    import numpy as np
+def test_the_spellings_removed_before_the_first_release_are_refused_by_name():
+    """0.1 is unreleased: the earlier spellings are gone (CHANGELOG.md), and each is refused in one line that names
+    it, never read silently as something else."""
     import pytest
 
-    from mace_fmu import compute_modes
-
-    new = compute_modes(configuration="0g", max_hz=3.5)
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
-        old = compute_modes(structure="0g", max_hz=3.5)
-    assert old.structure.configuration == "0g"
-    np.testing.assert_array_equal(old.frequencies_hz, new.frequencies_hz)
-    assert old.labels == new.labels and old.labels == new.modes.labels
-    [warning] = [w for w in caught if issubclass(w.category, DeprecationWarning)]
-    assert warning.filename == __file__
-    assert "compute_modes(structure=...) is now compute_modes(configuration=...)" in str(warning.message)
-    with pytest.raises(TypeError, match="give configuration= only"):
-        compute_modes(structure="0g", configuration="0g")
-
-
-def test_a_parameter_set_written_with_the_earlier_provenance_key_reads_as_configuration():
+    from mace_fmu import compute_modes, volts_model
+    from mace_fmu.cli import main
+    from mace_fmu.errors import MaceError
     from mace_fmu.parameters import ParameterSet
 
+    with pytest.raises(TypeError, match="structure"):
+        compute_modes(structure="0g", max_hz=3.5)
+    with pytest.raises(TypeError, match="servos"):
+        volts_model("0g", servos=False)
     head = '[provenance]\ncreated = "2026-11-24T00:00:00+00:00"\ntool = "mace-fmu"\n'
-    earlier = ParameterSet.from_toml(head + 'structure = "0g"\n\n[values]\nE_lexan_center = 2.4e9\n')
-    now = ParameterSet.from_toml(earlier.to_toml())
-    assert earlier.provenance.configuration == now.provenance.configuration == "0g"
-    assert 'configuration = "0g"' in earlier.to_toml() and "structure" not in earlier.to_toml()
+    with pytest.raises(MaceError, match=r"\[provenance\] has unknown key\(s\) \['structure'\]"):
+        ParameterSet.from_toml(head + 'structure = "0g"\n\n[values]\nE_lexan_center = 2.4e9\n')
+    with pytest.raises(SystemExit) as stopped:
+        main(["update", "--sample-problem"])
+    assert stopped.value.code == 2

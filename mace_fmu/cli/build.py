@@ -14,7 +14,7 @@ def cmd_build(args: argparse.Namespace) -> int:
     from mace_fmu.deck.reader import read_deck
     from mace_fmu.fe.modes import DEFAULT_MAX_HZ, compute_modes
     from mace_fmu.fmu.export import export_fmu
-    from mace_fmu.fmu.naming import fmu_name
+    from mace_fmu.fmu.naming import fmu_model_name
     from mace_fmu.iomodel.parametric_data import parametric_arrays
     from mace_fmu.iomodel.volts import volts_model
 
@@ -27,24 +27,22 @@ def cmd_build(args: argparse.Namespace) -> int:
     m0 = compute_modes(deck, configuration="0g", max_hz=DEFAULT_MAX_HZ, parameters=params,
                        structure_file=args.structure_file)
     results = {}
-    for kind in ("large", "linear"):
-        progress(f"1-g modes ({kind} gravity preload)")
+    for preload in ("large", "linear"):
+        progress(f"1-g modes ({preload} gravity preload)")
         with progress_bar() as bar:
-            results[kind] = compute_modes(deck, configuration="1g", preload=kind, max_hz=DEFAULT_MAX_HZ, progress=bar,
-                                          parameters=params, structure_file=args.structure_file)
+            results[preload] = compute_modes(deck, configuration="1g", preload=preload, max_hz=DEFAULT_MAX_HZ,
+                                             progress=bar, parameters=params, structure_file=args.structure_file)
     print(thesis_tables(m0, results))
     print()
-    for kind, modes in (("1g", results["large"]), ("0g", m0)):
-        progress(f"{kind} volts-volts model and FMUs")
-        model = volts_model(kind, modes=modes, parameters=params)
+    for configuration, modes in (("1g", results["large"]), ("0g", m0)):
+        progress(f"{configuration} volts-volts model and FMUs")
+        model = volts_model(configuration, modes=modes, parameters=params)
         arrays = parametric_arrays(model)  # what every kind of FMU carries: computed once
-        for fmi_version in (2, 3):
-            name = fmu_name(kind, kind="native", fmi_version=fmi_version, variant=model_variant(args))
-            path = export_fmu(model, kind="native", fmi_version=fmi_version, out_dir=args.out, name=name, arrays=arrays)
+        for fmu_kind, fmi_version in (("native", 2), ("native", 3), ("pythonfmu", 2)):
+            name = fmu_model_name(configuration, kind=fmu_kind, fmi_version=fmi_version, variant=model_variant(args))
+            path = export_fmu(model, kind=fmu_kind, fmi_version=fmi_version, out_dir=args.out, name=name,
+                              arrays=arrays)
             print(f"wrote {path}")
-        name = fmu_name(kind, kind="pythonfmu", variant=model_variant(args))
-        path = export_fmu(model, kind="pythonfmu", out_dir=args.out, name=name, arrays=arrays)
-        print(f"wrote {path}")
     print()
     print(low_modes(results))
     return 0
@@ -56,8 +54,8 @@ def main_job_text() -> str:
     from mace_fmu.fe.modes import DEFAULT_MAX_HZ, compute_modes
 
     m0 = compute_modes(configuration="0g", max_hz=DEFAULT_MAX_HZ)
-    results = {kind: compute_modes(configuration="1g", preload=kind, max_hz=DEFAULT_MAX_HZ)
-               for kind in ("large", "linear")}
+    results = {preload: compute_modes(configuration="1g", preload=preload, max_hz=DEFAULT_MAX_HZ)
+               for preload in ("large", "linear")}
     return thesis_tables(m0, results) + "\n\n" + low_modes(results)
 
 

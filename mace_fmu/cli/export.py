@@ -10,7 +10,7 @@ from mace_fmu.errors import MaceError
 
 
 def cmd_export(args: argparse.Namespace) -> int:
-    from mace_fmu.fmu.naming import fmu_name, model_prefix
+    from mace_fmu.fmu.naming import fmu_model_name, model_prefix
     if args.kind == "pythonfmu" and args.fmi_version != 2:
         raise MaceError("--fmi-version 3 needs --kind native (pythonfmu FMUs are FMI 2.0)")
     if args.frequency_bounds and not Path(args.frequency_bounds).is_file():
@@ -28,7 +28,7 @@ def cmd_export(args: argparse.Namespace) -> int:
         from mace_fmu.zero_g.table import read_frequency_bounds
 
         bounds = read_frequency_bounds(args.frequency_bounds, mode_labels=model.plant.labels)
-    name = fmu_name(args.configuration, kind=args.kind, fmi_version=args.fmi_version,
+    name = fmu_model_name(args.configuration, kind=args.kind, fmi_version=args.fmi_version,
                     motion_grids=model.plant.motion_grids, all_grids=model.structure_modes.modes.dofs.grid_ids,
                     variant=model_variant(args), prefix=model_prefix(model))
     progress(f"{args.kind} FMU {name}.fmu")

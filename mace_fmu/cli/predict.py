@@ -37,9 +37,9 @@ def cmd_predict(args: argparse.Namespace) -> int:
                                 structure_file=args.structure_file, source=source, message=say)
     paths = {}
     if args.fmu:  # first: an export that fails leaves no tables behind
-        from mace_fmu.fmu.naming import fmu_name, model_prefix
+        from mace_fmu.fmu.naming import fmu_model_name, model_prefix
 
-        name = fmu_name("0g", kind=args.kind, prefix=model_prefix(prediction.model)) + "_nominal"
+        name = fmu_model_name("0g", kind=args.kind, prefix=model_prefix(prediction.model)) + "_nominal"
         say(f"{args.kind} FMU {name}.fmu with the frequency bounds")
         from mace_fmu.fmu.export import export_fmu
 

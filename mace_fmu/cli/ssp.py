@@ -12,7 +12,7 @@ from mace_fmu.errors import MaceError
 
 def export_ssp(args: argparse.Namespace) -> int:
     """Build the plant FMU (FE part of --parameters built in) and write it with the rest of the set as an SSV."""
-    from mace_fmu.fmu.naming import fmu_name
+    from mace_fmu.fmu.naming import fmu_model_name
     from mace_fmu.ssp import SspComponent, write_ssp
     from mace_fmu.ssp.binding import fmu_start_values, split_parameters
     from mace_fmu.ssp.package import wiring_by_name
@@ -34,7 +34,7 @@ def export_ssp(args: argparse.Namespace) -> int:
     from mace_fmu.cli.export import model_variant
     from mace_fmu.fmu.naming import model_prefix
 
-    name = fmu_name(args.configuration, kind=args.kind, fmi_version=2, motion_grids=model.plant.motion_grids,
+    name = fmu_model_name(args.configuration, kind=args.kind, fmi_version=2, motion_grids=model.plant.motion_grids,
                     all_grids=model.structure_modes.modes.dofs.grid_ids, variant=model_variant(args),
                     prefix=model_prefix(model))
     with tempfile.TemporaryDirectory(prefix="mace_ssp_") as tmp:

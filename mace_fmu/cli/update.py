@@ -146,23 +146,6 @@ def cmd_fmu_update(args: argparse.Namespace) -> int:
     return 0 if report.converged else NOT_CONVERGED
 
 
-#: the old spelling (flags on ``update`` itself) -> the subcommand that replaces it
-_OLD_SPELLING = {"fmu": "update fmu FILE ...", "sample-problem": "update sample-problem", "mace": "update mace -o DIR ..."}
-
-
-def cmd_update(args: argparse.Namespace) -> int:
-    """``update`` without a subcommand: the old spelling, still served, with one line saying the new one."""
-    mode = "fmu" if args.fmu is not None else "sample-problem" if args.sample_problem else "mace"
-    print(f"mace-fmu: this spelling of update is deprecated; use: mace-fmu {_OLD_SPELLING[mode]}", file=sys.stderr)
-    if mode == "fmu":
-        return cmd_fmu_update(args)
-    if args.data or args.update:
-        raise MaceError("--data and --update belong to an FMU update: mace-fmu update fmu FILE --data ...")
-    if mode == "sample-problem":
-        return cmd_sample(args)
-    return cmd_mace_update(args)
-
-
 def cmd_fmu_subcommand(args: argparse.Namespace) -> int:
     args.sample_problem, args.measured = False, None
     return cmd_fmu_update(args)
@@ -230,66 +213,60 @@ _EXIT_STATUS = (f"exit status: 0 converged (a parameter that ends at a bound is 
                 "reasons in convergence.toml")
 
 
-def _out_option(p: argparse.ArgumentParser, *, help_text: str | None = None) -> None:
-    p.add_argument("-o", "--out", type=folder_argument, help=help_text or "directory for parameters.toml, "
+def _out_option(p: argparse.ArgumentParser) -> None:
+    p.add_argument("-o", "--out", type=folder_argument, help="directory for parameters.toml, "
                    "convergence.toml, uncertainty.toml, report.txt, summary.json and figures")
     p.add_argument("--strict", action="store_true", help=f"a parameter that ends at a bound counts as not converged "
                    f"(exit {NOT_CONVERGED}); by default it is named and the update may converge")
 
 
-def _sample_options(p: argparse.ArgumentParser, *, hidden: bool = False) -> None:
+def _sample_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--json", action="store_true",
-                   help=argparse.SUPPRESS if hidden else "print the tables as JSON")
+                   help="print the tables as JSON")
 
 
-def _mace_options(p: argparse.ArgumentParser, *, hidden: bool = False) -> None:
-    def show(text: str) -> str:
-        return argparse.SUPPRESS if hidden else text
-
-    p.add_argument("--start", metavar="FILE", help=show("parameter set to start from (default: the pre-update moduli, "
+def _mace_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--start", metavar="FILE", help=("parameter set to start from (default: the pre-update moduli, "
                    "Table 4.4 back-computed; for an FMU update: the FMU's own start values)"))
-    p.add_argument("--measured", metavar="FILE", help=show("measured modes (CSV: label, pattern, frequency_hz, damping "
+    p.add_argument("--measured", metavar="FILE", help=("measured modes (CSV: label, pattern, frequency_hz, damping "
                    "[, weight]; pattern: which model pole labels a row can be, e.g. '* Y bending'); default: Table "
                    "4.7's measurement model"))
     p.add_argument("--method", choices=["cost-sensitivity", "full", "reanalysis", "modal-sensitivity"],
-                   default="cost-sensitivity", help=show("how the parameters enter the cost (default: "
+                   default="cost-sensitivity", help=("how the parameters enter the cost (default: "
                                                          "cost-sensitivity)"))
     p.add_argument("--perturbation", choices=["reanalysis", "full"], default="reanalysis",
-                   help=show("how the cost-sensitivity method makes its perturbed models (default: reanalysis)"))
-    p.add_argument("--rounds", type=int, default=2, help=show("repeats of physical, delays, damping (default 2)"))
-    p.add_argument("--preload", choices=["large", "linear"], default="large", help=show("1-g gravity preload"))
+                   help=("how the cost-sensitivity method makes its perturbed models (default: reanalysis)"))
+    p.add_argument("--rounds", type=int, default=2, help=("repeats of physical, delays, damping (default 2)"))
+    p.add_argument("--preload", choices=["large", "linear"], default="large", help=("1-g gravity preload"))
 
 
-def _fmu_options(p, *, hidden: bool = False) -> None:
-    def show(text: str) -> str:
-        return argparse.SUPPRESS if hidden else text
-
+def _fmu_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--data", metavar="FILE", action="append", default=[],
-                   help=show("measured data: a time history (CSV/npz; its inputs drive the FMU), one per test (repeat "
+                   help=("measured data: a time history (CSV/npz; its inputs drive the FMU), one per test (repeat "
                              "the option: several tests are summed, each in units of its own noise) and, with one "
                              "test and --cost log-frf, optionally a frequency response (UFF 58/CSV)"))
     p.add_argument("--update", metavar="NAME[,NAME...]", action="append", default=[],
-                   help=show("FMU parameters to update (repeatable)"))
+                   help=("FMU parameters to update (repeatable)"))
     p.add_argument("--cost", choices=["time", "log-frf"], default="time",
-                   help=show("time: output errors (eq. 4.3); log-frf: log ratio of H1 estimates (eq. 4.5/4.17)"))
-    p.add_argument("--scheduler", metavar="ADDRESS", help=show("run the FMU simulations on this Dask cluster "
+                   help=("time: output errors (eq. 4.3); log-frf: log ratio of H1 estimates (eq. 4.5/4.17)"))
+    p.add_argument("--scheduler", metavar="ADDRESS", help=("run the FMU simulations on this Dask cluster "
                    "(default: local worker processes)"))
-    p.add_argument("--workers", type=int, default=None, help=show("local worker processes (default: one per core)"))
-    p.add_argument("--map", metavar="FILE", help=show("channel map: data channel names and units to the FMU's signals"))
+    p.add_argument("--workers", type=int, default=None, help=("local worker processes (default: one per core)"))
+    p.add_argument("--map", metavar="FILE", help=("channel map: data channel names and units to the FMU's signals"))
     p.add_argument("--segment-s", type=float, default=2.0,
-                   help=show("H1 segment length [s] of the log-frf cost (default 2)"))
+                   help=("H1 segment length [s] of the log-frf cost (default 2)"))
     p.add_argument("--hold-input", metavar="NAME=0[,NAME=0...]", action="append", default=[],
-                   help=show("FMU inputs the data have no channel for, held at 0 V (repeatable); any other missing "
+                   help=("FMU inputs the data have no channel for, held at 0 V (repeatable); any other missing "
                              "input is an error"))
     p.add_argument("--noise-rms-percent", type=float, default=None, metavar="P",
-                   help=show("time cost: the measurement noise RMS as P %% of each output's RMS, for the noise-floor "
+                   help=("time cost: the measurement noise RMS as P %% of each output's RMS, for the noise-floor "
                              "test (default: estimated from the outputs' spectra above the inputs' band)"))
     p.add_argument("--gain-uncertainty", metavar="OUTPUT=P%[,...]", action="append", default=[],
-                   help=show("an output sensor whose gain is known only to P %% (standard deviation; repeatable, or "
+                   help=("an output sensor whose gain is known only to P %% (standard deviation; repeatable, or "
                              "the channel map's gain_uncertainty_percent column): its gain is estimated with the "
                              "parameters, with that prior, and the parameters' uncertainty includes it"))
     p.add_argument("--weighting", choices=["noise", "none"], default="noise",
-                   help=show("log-frf: each bin's log error over its noise standard deviation (default), or "
+                   help=("log-frf: each bin's log error over its noise standard deviation (default), or "
                              "unweighted"))
 
 
@@ -298,20 +275,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                        "the sample problem", formatter_class=argparse.RawDescriptionHelpFormatter,
                        description="Three updates, one subcommand each: 'mace' (the thesis's modal update of the "
                                    "bundled deck's moduli), 'fmu' (any FMI 2.0 FMU's parameters against measured "
-                                   "data files), 'sample-problem' (the two-mass problem of thesis 4.3). The old "
-                                   "spelling (update --fmu FILE, update --sample-problem, update -o DIR) still works "
-                                   "and says the new one.",
+                                   "data files), 'sample-problem' (the two-mass problem of thesis 4.3).",
                        epilog=_EXIT_STATUS)
-    # the old spelling: every option on update itself, hidden from --help
-    deck_option(p)
-    _out_option(p, help_text=argparse.SUPPRESS)
-    p.add_argument("--sample-problem", action="store_true", help=argparse.SUPPRESS)
-    p.add_argument("--fmu", metavar="FILE", help=argparse.SUPPRESS)
-    _sample_options(p, hidden=True)
-    _mace_options(p, hidden=True)
-    _fmu_options(p, hidden=True)
-    p.set_defaults(func=cmd_update)
-    modes = p.add_subparsers(dest="update_mode", metavar="{mace,fmu,sample-problem}")
+    modes = p.add_subparsers(dest="update_mode", metavar="{mace,fmu,sample-problem}", required=True)
 
     m = modes.add_parser("mace", help="the thesis's modal update of the bundled MACE deck's moduli (chapter 4)",
                          formatter_class=argparse.RawDescriptionHelpFormatter, epilog=_EXIT_STATUS)

@@ -3,7 +3,7 @@
 The same method as control.balred(method="truncate") (SLICOT AB09AD, JOB = 'B'), without slycot:
 installing slycot switches python-control's frequency response to SLICOT's Hessenberg (Laub)
 evaluation project-wide, which is 6.5e-7 off on the MACE volts model where the direct solve meets
-the 1e-9 check of tests/test_volts.py. tests/test_control_studies.py compares both where slycot
+the 1e-9 check of tests/iomodel/test_volts.py. tests/control_studies/test_control_studies.py compares both where slycot
 is installed.
 """
 

@@ -10,6 +10,9 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Mapping
 
+# still importable from here, where it used to be defined (it is derived from the one card-to-table map now)
+from mace_fmu.deck.card_tables import ELEMENT_TABLES as ELEMENT_TABLES
+
 Vec3 = tuple[float, float, float]
 
 
@@ -213,11 +216,6 @@ class Rigid:
     independent: int
     dependent: tuple[tuple[int, str], ...]  #: (grid, components "1".."123456")
     source: Source
-
-
-#: the Deck fields that hold elements and masses (what a structure file's [suspension] elements may name)
-ELEMENT_TABLES: tuple[str, ...] = ("bars", "conm2s", "celas2s", "beams", "rods", "scalar_masses", "conm1s", "rigids",
-                                   "interpolations")
 
 
 @dataclass(frozen=True)

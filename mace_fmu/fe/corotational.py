@@ -189,7 +189,7 @@ def undeformed_jacobian(bars: Bars) -> np.ndarray:
     turns by w = (phi_A + phi_B)/2 . e1 about e1 (its y axis follows the mean of the rotated ends' y axes),
     -dc . e3 / L about e2 and dc . e2 / L about e3 (its x axis follows the chord); the stretch is
     dc . e1 and each end's local rotation is its spin less w, in element axes (e1, e2, e3: the rows of
-    ``frames0``). ``tests/test_corotational.py`` checks it against the complex-step derivative.
+    ``frames0``). ``tests/fe/test_corotational.py`` checks it against the complex-step derivative.
     """
     e1, e2, e3 = bars.frames0[:, 0], bars.frames0[:, 1], bars.frames0[:, 2]
     per_length = 1.0 / bars.lengths0[:, None]

@@ -25,7 +25,6 @@ from mace_fmu.structure.build import Structure, build_structure
 from mace_fmu.structure.file import Configuration, StructureFile, StructureSpec, bundled_deck_path, structure_file_for
 from mace_fmu.util.progress import ProgressCallback
 from mace_fmu.util.threads import single_blas_thread
-from mace_fmu.util.deprecation import renamed_keyword
 from mace_fmu.util.frequency import DEFAULT_MAX_HZ
 
 
@@ -60,7 +59,7 @@ class StructureModes:
         """The stiffness the modes are of [N/m, N m/rad], basic DOFs: the preload's tangent (1-g) or K."""
         return self.preload.tangent_stiffness if self.preload is not None else self.model.stiffness
 
-    # What tables and plots read most, one attribute away: ``modes.labels``, not ``modes.labels``.
+    # What tables and plots read most, one attribute away: ``modes.labels``, not ``modes.modes.labels``.
     # Shapes stay on :class:`Modes`, which knows their DOFs (``modes.modes.shape(grid, component)``).
     @property
     def frequencies_hz(self) -> np.ndarray:
@@ -193,7 +192,6 @@ def _check_preload_elements(deck: Deck) -> None:
                         f"has {listed}; compute the 0-g modes (configuration='0g'), or model them as CBARs")
 
 
-@renamed_keyword(old="structure", new="configuration")
 @single_blas_thread
 def compute_modes(deck: Deck | str | os.PathLike | None = None, *, configuration: Configuration = "1g",
                   preload: PreloadKind = "large", mass: MassKind = "lumped", max_hz: float | None = None,
@@ -212,8 +210,9 @@ def compute_modes(deck: Deck | str | os.PathLike | None = None, *, configuration
         preloaded state; 0-g: the suspension the structure file names is removed, no preload.
     preload : {"large", "linear"}
         The 1-g preload: incremental Newton on the updated geometry, or linear prestress.
-    mass : {"lumped", "coupled"}
-        Bar mass matrices (NASTRAN's default is lumped; PARAM COUPMASS in the deck also selects coupled).
+    mass : {"lumped", "consistent"}
+        Bar mass matrices: lumped (NASTRAN's default) or consistent (NASTRAN's coupled mass, which a deck's
+        PARAM,COUPMASS > 0 also selects).
     max_hz : float or None
         Highest mode [Hz]; by default the deck's EIGRL/EIGR decides (V1, V2, ND), else 250 Hz.
     overrides : mapping, optional

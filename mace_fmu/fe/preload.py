@@ -141,7 +141,7 @@ def large_displacement_preload(model: FEModel, constraints: Constraints, load: n
     the load. Intermediate increments only have to stay on the load path, to NLPARM's work
     tolerance ``path_tolerance`` (EPSW); the last one converges to ``final_tolerance``, and the
     tangent of its end state is the product. The same equilibrium and tangent as plain Newton
-    (``tests/test_preload_iterations.py``) with a fifth of the full tangents. The work criterion
+    (``tests/fe/test_preload_iterations.py``) with a fifth of the full tangents. The work criterion
     is NASTRAN's (CONV=W): the force residual itself stalls at round-off because the short
     aluminium links are ~1e10 N/m stiff.
 

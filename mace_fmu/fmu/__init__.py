@@ -14,5 +14,5 @@ __all__, __getattr__, __dir__ = lazy_exports(__name__, {
     "check_fmu": "archive",
     "simulate_input_response": "simulate",
     "FmuRun": "simulate",
-    "fmu_name": "naming",
+    "fmu_model_name": "naming",
 })

@@ -25,7 +25,7 @@ import numpy as np
 from pythonfmu.builder import FmuBuilder
 
 from mace_fmu.errors import MaceError
-from mace_fmu.fmu.naming import fmu_name
+from mace_fmu.fmu.naming import fmu_model_name
 from mace_fmu.fmu.variables import DEFAULT_EXPERIMENT, model_summary, variable_unit
 from mace_fmu.iomodel import modal_core, parametric, reanalysis
 from mace_fmu.iomodel.parametric_data import parametric_arrays, with_frequency_bounds
@@ -180,7 +180,7 @@ def export_pythonfmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str 
     out_dir : path
         Folder the FMU is written to.
     name : str, optional
-        The model class's name, a Python/C identifier (default from :func:`fmu_name`: MACE_1g,
+        The model class's name, a Python/C identifier (default from :func:`fmu_model_name`: MACE_1g,
         MACE_1g_motion, ...).
     arrays : dict, optional
         The model's parametric arrays if already computed.
@@ -198,7 +198,7 @@ def export_pythonfmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str 
         A name that is not an identifier.
     """
     kind = model.structure_modes.structure.configuration
-    name = name or fmu_name(kind, motion_grids=model.plant.motion_grids,
+    name = name or fmu_model_name(kind, motion_grids=model.plant.motion_grids,
                             all_grids=model.structure_modes.model.dofs.grid_ids)
     if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", name):
         raise MaceError(f"FMU name must be a Python/C identifier (it names the model class), got {name!r}")

@@ -8,8 +8,9 @@ from collections.abc import Sequence
 LISTED_GRIDS = 6
 
 
-def fmu_name(configuration: str, *, kind: str | None = None, fmi_version: int = 2, motion_grids: Sequence[int] = (),
-             all_grids: Sequence[int] = (), variant: str = "", prefix: str = "MACE") -> str:
+def fmu_model_name(configuration: str, *, kind: str | None = None, fmi_version: int = 2,
+                   motion_grids: Sequence[int] = (), all_grids: Sequence[int] = (), variant: str = "",
+                   prefix: str = "MACE") -> str:
     """Model name (and .fmu file stem) of a MACE FMU, e.g. MACE_1g_native, MACE_1g_native_fmi3,
     MACE_1g_pythonfmu, MACE_0g_native_motion_1_7 (MACE_1g, MACE_1g_motion without ``kind``).
 

@@ -23,7 +23,7 @@ import numpy as np
 
 from mace_fmu.errors import MaceError
 from mace_fmu.fmu.archive import check_fmu
-from mace_fmu.fmu.host import status_name
+from mace_fmu.fmu.host import fmpy_logger_restored, status_name
 
 log = logging.getLogger(__name__)
 
@@ -159,8 +159,10 @@ def _simulate(fmu: str, table: np.ndarray, outputs: list[str], step_s: float) ->
             log.log(logging.WARNING if status == 1 else logging.ERROR, "%s: %s", fmu, text)
 
     try:
-        result = fmpy.simulate_fmu(fmu, start_time=0.0, stop_time=float(table["time"][-1]), output_interval=step_s,
-                                   input=table, output=outputs, debug_logging=True, logger=collect)
+        with fmpy_logger_restored():
+            result = fmpy.simulate_fmu(fmu, start_time=0.0, stop_time=float(table["time"][-1]),
+                                       output_interval=step_s, input=table, output=outputs, debug_logging=True,
+                                       logger=collect)
     except Exception as exc:  # fmpy raises a bare Exception naming the FMI call and its status
         raise MaceError(f"{fmu}: {exc}" + (f" FMU log: {' | '.join(messages)}" if messages else "")) from None
     if len(result) != len(table) and messages:  # fmpy stops quietly at a discarded step: say why

@@ -71,6 +71,7 @@ class MaceSlave(Fmi2Slave):
                                         start=float(self._nominal[k]), description=str(desc),
                                         getter=self._param_getter(k), setter=self._param_setter(k)))
         for k, label in enumerate(data["mode_labels"]):
+            # parameters.kinds.frequency_output_name(k + 1), spelled out: the FMU runs without mace_fmu installed
             self.register_variable(Real(f"frequency_mode_{k + 1}", causality=Fmi2Causality.calculatedParameter,
                                         variability=Fmi2Variability.fixed,
                                         description=f"natural frequency [Hz] of mode {k + 1} ({label}) after "

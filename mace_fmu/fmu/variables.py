@@ -6,7 +6,7 @@ from pathlib import Path
 
 from mace_fmu.iomodel.motion import motion_unit, parse_motion_output
 from mace_fmu.iomodel.volts import VoltsModel
-from mace_fmu.parameters.kinds import kind_of_fmu_name, unit_of
+from mace_fmu.parameters.kinds import is_frequency_output, kind_of_fmu_name, unit_of
 
 DEFAULT_EXPERIMENT = {"startTime": "0.0", "stopTime": "10.0", "stepSize": "0.002"}
 
@@ -21,7 +21,7 @@ def variable_unit(name: str, causality: str) -> str | None:
     kind = kind_of_fmu_name(name)
     if kind is not None:
         return unit_of(kind, name)
-    return "Hz" if name.startswith("frequency_mode_") else None
+    return "Hz" if is_frequency_output(name) else None
 
 
 def model_summary(model: VoltsModel) -> str:

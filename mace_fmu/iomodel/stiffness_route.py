@@ -19,7 +19,7 @@ Three pieces per physical parameter p, all about the configuration the modes are
    without the retained modes' components, carried as changes of the output rows and modal inputs
    per unit relative change.
 
-Measured on MACE (tests/test_parameter_route.py, benchmarks/RESULTS.md): the strain gauge on the
+Measured on MACE (tests/iomodel/test_parameter_route.py, benchmarks/RESULTS.md): the strain gauge on the
 active strut, whose modulus the nominal modes alone moved 31-85 % wrong, follows the re-solve to
 better than 0.1 %.
 """
@@ -42,6 +42,7 @@ from mace_fmu.fe.modal import Modes
 from mace_fmu.fe.preload import Preload, preload_solver, tangent_sensitivity
 from mace_fmu.iomodel.modal_ss import modal_data
 from mace_fmu.iomodel.volts import VoltsModel
+from mace_fmu.parameters.kinds import MODULUS, SPRING
 from mace_fmu.parameters.sets import parameter_names
 from mace_fmu.util.frequency import ZERO_HZ
 
@@ -126,7 +127,7 @@ def stiffness_sensitivities(model: VoltsModel, *, only: Sequence[str] | None = N
     solve = preload_solver(pre) if _redistributes(pre) else None
     out = []
     for mid in sorted({deck.pbars[b.pid].mid for b in deck.bars.values()}):
-        name = f"E_{material_name[mid]}"
+        name = MODULUS.named(material_name[mid])
         if only is not None and name not in only:
             continue
         held = material_sensitivity(fe, deck, pre, mid, forces_held=True)
@@ -135,7 +136,7 @@ def stiffness_sensitivities(model: VoltsModel, *, only: Sequence[str] | None = N
             name, deck.mat1s[mid].youngs_modulus, f"Young's modulus of {material_name[mid]} (MAT1 {mid}) [Pa]; "
             "takes effect by reanalysis on the retained modes and static corrections", total, held))
     for row, (sid, k) in enumerate(zip(fe.spring_ids, fe.spring_constants)):
-        name = f"k_{spring_name[sid]}"
+        name = SPRING.named(spring_name[sid])
         if only is not None and name not in only:
             continue
         e = sparse.csr_array(fe.spring_vectors[[row]])  # (1, n_dof)

@@ -37,7 +37,6 @@ from mace_fmu.parameters.sets import ParameterSet, fe_overrides, naming_the_file
 from mace_fmu.structure.file import Configuration, StructureFile
 from mace_fmu.util.frequency import ZERO_HZ
 from mace_fmu.util.threads import single_blas_thread
-from mace_fmu.util.deprecation import renamed_keyword
 from modelica_like import PD, Gain, LowPassFilter, PadeDelay, StateSpace, Sum, System
 
 DEG_PER_RAD = 180.0 / np.pi
@@ -224,14 +223,13 @@ def build_diagram(plant: ModalPlant, instruments: Instruments, *,
 
 
 
-@renamed_keyword(old="structure", new="configuration")
 @single_blas_thread
 def volts_model(configuration: Configuration = "1g", *, modes: StructureModes | None = None,
                 deck: Deck | str | None = None, preload: PreloadKind | None = None,
                 structure_file: StructureFile | str | os.PathLike | None = None, max_hz: float | None = None,
                 parameters: ParameterSet | None = None, instruments: Instruments | None = None,
-                electronics: ModelledElectronics = ModelledElectronics(), signals: SignalSelection = SignalSelection(),
-                **moved: Any) -> VoltsModel:
+                electronics: ModelledElectronics = ModelledElectronics(), signals: SignalSelection = SignalSelection()
+                ) -> VoltsModel:
     """Volts-volts model of the 1-g or 0-g structure: actuator volts in, sensor volts out.
 
     Inputs: gimbal commands (relative angle, 1 V = 1 deg, with servos; motor volts without), wheel speed
@@ -268,9 +266,6 @@ def volts_model(configuration: Configuration = "1g", *, modes: StructureModes | 
     signals : SignalSelection
         The inputs and outputs kept (default: all) and the grids whose motion [m, rad] is added as
         outputs (default: none).
-    **moved
-        Not accepted: the earlier flat keywords (``servos``, ``bessel``, ``delays``, ``pade_order``,
-        ``inputs``, ``outputs``, ``motion_grids``) get a message naming the record that holds them now.
 
     Returns
     -------
@@ -291,7 +286,6 @@ def volts_model(configuration: Configuration = "1g", *, modes: StructureModes | 
     >>> model.system.ninputs, model.system.noutputs
     (1, 1)
     """
-    _refuse_moved_keywords(moved)
     _check(isinstance(electronics, ModelledElectronics),
            f"electronics must be a ModelledElectronics record, got {type(electronics).__name__}")
     _check(isinstance(signals, SignalSelection),
@@ -338,23 +332,6 @@ def volts_model(configuration: Configuration = "1g", *, modes: StructureModes | 
     return VoltsModel(system=select_signals(system, inputs=inputs, outputs=outputs), diagram=diagram, plant=plant,
                       structure_modes=modes, instruments=instruments, electronics=electronics,
                       parameters=parameters if parameters is not None and len(parameters) else None)
-
-
-_MOVED = {"servos": "electronics", "bessel": "electronics", "delays": "electronics", "pade_order": "electronics",
-          "inputs": "signals", "outputs": "signals", "motion_grids": "signals"}
-
-
-def _refuse_moved_keywords(moved: Mapping[str, Any]) -> None:
-    """The flat keywords of before are refused with where they live now; any other unknown one is a TypeError."""
-    unknown = sorted(set(moved) - set(_MOVED))
-    if unknown:
-        raise TypeError(f"volts_model() got unexpected keyword argument(s) {', '.join(map(repr, unknown))}")
-    if moved:
-        record = {"electronics": "ModelledElectronics", "signals": "SignalSelection"}
-        hints = [f"{_MOVED[k]}={record[_MOVED[k]]}({k}={v!r})" for k, v in moved.items()]
-        records = ", ".join(sorted({record[_MOVED[k]] for k in moved}))
-        raise MaceError(f"volts_model: {', '.join(f'{k}=' for k in moved)} now belong(s) to a record: pass "
-                        f"{'; '.join(hints)} (from mace_fmu import {records})")
 
 
 def _check_modes_agree(modes: StructureModes, *, configuration: str, parameters: ParameterSet | None,

@@ -13,7 +13,7 @@ physical limits plus the reach of the models behind them:
 - Young's moduli and spring stiffnesses: [0.7, 1.5] x nominal, the range over which the FMUs'
   parameter route (reanalysis with static corrections, mace_fmu.iomodel.stiffness_route) was
   validated against full re-solves: every output of both MACE models within 0.4 % of its range at
-  either end, one parameter at a time (tests/test_parameter_route.py). Beyond it the 1-g preload's
+  either end, one parameter at a time (tests/iomodel/test_parameter_route.py). Beyond it the 1-g preload's
   first-order redistribution limits it (the Lexan center's modulus at 0.5 x: 1.8 %); zero, which would
   remove an element, is far outside. A full re-solve (``mace-fmu export --parameters``) takes any
   positive value.
@@ -80,6 +80,13 @@ class ParameterKind:
             raise ValueError(f"{self.name} parameters are not per mode")
         return f"{self.set_prefix}{label}"
 
+    def named(self, element: str) -> str:
+        """The name (set's and FMU's alike) of this kind's parameter of a named element: ``MODULUS.named("lexan_end")``
+        -> ``E_lexan_end``, ``DELAY.named("gyro_bus_y")`` -> ``delay_gyro_bus_y``."""
+        if self.per_mode or not self.set_prefix or self.set_prefix != self.fmu_prefix:
+            raise ValueError(f"{self.name} parameters are not named after an element")
+        return f"{self.set_prefix}{element}"
+
 
 MODULUS = ParameterKind("modulus", "E_", "E_", "Pa", 0.7, 1.5, relative_to_nominal=True,
                         description="Young's modulus of a MAT1 card")
@@ -98,6 +105,22 @@ KINDS: tuple[ParameterKind, ...] = (MODULUS, SPRING, DELAY, GAIN, DAMPING, FREQU
 #: the servo gains' names and what they are
 SERVO_GAINS = MappingProxyType({"K_a": "gimbal_angle_gain", "K_r": "gimbal_rate_gain", "K_f": "wheel_forward_gain",
                                 "K_b": "wheel_backward_gain"})
+
+
+#: prefix of the calculated parameters an FMU reports each mode's natural frequency [Hz] in, after reanalysis
+#: and frequency scale (not a parameter anyone sets: a calculated one)
+FREQUENCY_OUTPUT_PREFIX = "frequency_mode_"
+
+
+def frequency_output_name(mode: int) -> str:
+    """The FMU's calculated parameter of 1-based mode ``mode``'s natural frequency [Hz], ``frequency_mode_<k>``."""
+    return f"{FREQUENCY_OUTPUT_PREFIX}{mode}"
+
+
+def is_frequency_output(name: str) -> bool:
+    """Whether ``name`` is an FMU's calculated natural frequency (:func:`frequency_output_name`)."""
+    rest = name.removeprefix(FREQUENCY_OUTPUT_PREFIX)
+    return rest != name and rest.isdigit()
 
 
 def _match(name: str, *, in_fmu: bool) -> ParameterKind | None:

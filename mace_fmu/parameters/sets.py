@@ -32,15 +32,12 @@ from types import MappingProxyType
 from typing import Any, Iterator, Mapping
 
 from mace_fmu.errors import MaceError
-from mace_fmu.parameters.kinds import (DAMPING, FREQUENCY_SCALE, MODULUS, SERVO_GAINS, KindName, kind_of_set_name,
-                                       unit_of)
+from mace_fmu.parameters.kinds import (DAMPING, FREQUENCY_SCALE, MODULUS, SERVO_GAINS, SPRING, KindName,
+                                       kind_of_set_name, unit_of)
 from mace_fmu.util.atomic import write_text_atomic
 from mace_fmu.util.textfile import read_text
 
-ParameterKind = KindName
-
-
-def parameter_kind(name: str) -> ParameterKind:
+def parameter_kind(name: str) -> KindName:
     """What a parameter-set name refers to (:mod:`mace_fmu.parameters.kinds`); a MaceError for a name of no
     known kind."""
     kind = kind_of_set_name(name)
@@ -135,7 +132,7 @@ class ParameterSet:
             parts.append(f"created {p.created} by {p.tool}")
         return ", ".join(parts)
 
-    def of_kind(self, *kinds: ParameterKind) -> dict[str, float]:
+    def of_kind(self, *kinds: KindName) -> dict[str, float]:
         """The values whose names are of the given kinds."""
         return {n: v for n, v in self.values.items() if parameter_kind(n) in kinds}
 
@@ -176,7 +173,6 @@ class ParameterSet:
             raise MaceError(f"{source}: no [values] table")
         prov = None
         if "provenance" in data:
-            data["provenance"] = _renamed_provenance_keys(dict(data["provenance"]))
             allowed = {f.name for f in dataclasses.fields(Provenance)}
             extra = set(data["provenance"]) - allowed
             if extra:
@@ -197,18 +193,6 @@ class ParameterSet:
     def read(cls, path: str | Path) -> ParameterSet:
         """Read a parameter set written by :meth:`write` (or by hand)."""
         return cls.from_toml(read_text(path, what="parameter"), source=str(path))
-
-
-#: [provenance] keys of sets written by earlier versions, and their names now
-_EARLIER_PROVENANCE_KEYS = {"structure": "configuration"}
-
-
-def _renamed_provenance_keys(provenance: dict[str, Any]) -> dict[str, Any]:
-    """A [provenance] table with earlier key names read as today's (sets on disk stay readable)."""
-    for old, new in _EARLIER_PROVENANCE_KEYS.items():
-        if old in provenance and new not in provenance:
-            provenance[new] = provenance.pop(old)
-    return provenance
 
 
 def toml_key(name: str) -> str:
@@ -284,8 +268,8 @@ def parameter_names(deck, structure_file=None) -> ParameterNames:
 def deck_values(deck, names: ParameterNames | None = None) -> dict[str, float]:
     """The ``E_`` and ``k_`` values [Pa, N/m] a deck has for every named material and spring it contains."""
     names = names if names is not None else load_parameter_names()
-    out = {f"E_{n}": deck.mat1s[mid].youngs_modulus for n, mid in names.materials.items() if mid in deck.mat1s}
-    out.update({f"k_{n}": deck.celas2s[sid].k for n, sid in names.springs.items() if sid in deck.celas2s})
+    out = {MODULUS.named(n): deck.mat1s[mid].youngs_modulus for n, mid in names.materials.items() if mid in deck.mat1s}
+    out.update({SPRING.named(n): deck.celas2s[sid].k for n, sid in names.springs.items() if sid in deck.celas2s})
     return out
 
 

@@ -14,12 +14,12 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from mace_fmu.deck.cards import ELEMENT_TABLES, Deck, Subcase
-from mace_fmu.deck.reader import check_deck
+from mace_fmu.deck.card_tables import CARD_TABLES, ELEMENT_TABLES
+from mace_fmu.deck.cards import Deck, Subcase
+from mace_fmu.deck.checks import check_deck
 from mace_fmu.errors import DeckError, MaceError
-from mace_fmu.structure.file import (_CARD_TABLES, Configuration, StructureFile, StructureSpec, _ids_text,
+from mace_fmu.structure.file import (Configuration, StructureFile, StructureSpec, _ids_text,
                                      check_instruments_against_deck, check_spec_against_deck, structure_file_for)
-from mace_fmu.util.deprecation import renamed_keyword
 
 
 @dataclass(frozen=True)
@@ -33,6 +33,10 @@ class Structure:
     spec: StructureSpec  #: empty when the deck has no structure file
     file: StructureFile | None = None  #: the structure file, None for a deck on its own
 
+
+#: card -> Deck table of the cards an override may change (a subset of the deck's one card-to-table map)
+_OVERRIDE_TABLES = {card: CARD_TABLES[card]
+                    for card in ("GRID", "CBAR", "PBAR", "MAT1", "CONM2", "CELAS2", "CORD2R", "GRAV")}
 
 
 def _checked_value(card: str, cid: int, name: str, old: Any, new: Any) -> Any:
@@ -83,7 +87,7 @@ def apply_overrides(deck: Deck, overrides: Mapping[tuple[str, int], Mapping[str,
     """
     if not overrides:
         return deck
-    tables = {name: dict(getattr(deck, attr)) for name, attr in _CARD_TABLES.items()}
+    tables = {name: dict(getattr(deck, attr)) for name, attr in _OVERRIDE_TABLES.items()}
     for (card, cid), fields in overrides.items():
         if card not in tables:
             raise MaceError(f"override of unknown card type {card!r}; allowed: {sorted(tables)}")
@@ -97,7 +101,7 @@ def apply_overrides(deck: Deck, overrides: Mapping[tuple[str, int], Mapping[str,
             raise MaceError(f"override of {card} {cid}: unknown field(s) {sorted(unknown)}; allowed: {sorted(allowed)}")
         values = {k: _checked_value(card, cid, k, getattr(old, k), v) for k, v in fields.items()}
         tables[card][cid] = dataclasses.replace(old, **values)
-    changed = dataclasses.replace(deck, **{attr: tables[name] for name, attr in _CARD_TABLES.items()})
+    changed = dataclasses.replace(deck, **{attr: tables[name] for name, attr in _OVERRIDE_TABLES.items()})
     try:
         check_deck(changed)
     except DeckError as exc:
@@ -165,7 +169,6 @@ def _subcases(deck: Deck) -> tuple[Subcase | None, Subcase]:
     return preload, cases[-1]
 
 
-@renamed_keyword(old="kind", new="configuration")
 def build_structure(deck: Deck, *, configuration: Configuration, spec: StructureSpec | None = None,
                     overrides: Mapping[tuple[str, int], Mapping[str, Any]] | None = None,
                     structure_file: StructureFile | str | os.PathLike | None = None) -> Structure:

@@ -21,14 +21,12 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Any, Literal, Mapping
 
-from mace_fmu.deck.cards import ELEMENT_TABLES, Deck
+from mace_fmu.deck.card_tables import ELEMENT_TABLES
+from mace_fmu.deck.cards import Deck
 from mace_fmu.errors import MaceError
 from mace_fmu.util.textfile import read_text
 
 Configuration = Literal["1g", "0g"]
-
-_CARD_TABLES = {"GRID": "grids", "CBAR": "bars", "PBAR": "pbars", "MAT1": "mat1s", "CONM2": "conm2s",
-                "CELAS2": "celas2s", "CORD2R": "coords", "GRAV": "gravs"}
 
 #: the tables a structure file may hold, and what each is for (the schema, checked on loading)
 STRUCTURE_FILE_TABLES = {

@@ -30,7 +30,6 @@ from mace_fmu.parameters.kinds import DAMPING, kind_of_set_name, mode_label
 from mace_fmu.parameters.sets import ParameterSet, deck_values, parameter_kind
 from mace_fmu.structure.file import Configuration, bundled_deck_path
 from mace_fmu.updating.model import LinearModel
-from mace_fmu.util.deprecation import renamed_keyword
 
 Values = Mapping[str, float]
 _CACHE_SIZE = 4  # base point, perturbed points of a modal-sensitivity step come and go
@@ -73,7 +72,6 @@ def linear_model(system: ParametricSystem, vector: np.ndarray, **modes) -> Linea
 class MaceFamily:
     """The 1-g or 0-g volts-volts model (servos closed) at any parameter values."""
 
-    @renamed_keyword(old="structure", new="configuration")
     def __init__(self, *, configuration: Configuration = "1g", base: ParameterSet | None = None,
                  deck: Deck | str | None = None, preload: PreloadKind = "large", max_hz: float = DEFAULT_MAX_HZ):
         self.configuration = configuration

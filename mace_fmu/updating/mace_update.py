@@ -52,12 +52,13 @@ STRUCTURAL_WEIGHT = 2.0
 def pre_update_parameters() -> ParameterSet:
     """Table 4.4 back-computed: E_before = E_updated / (1 + change)."""
     rows = thesis_data()["table_4_4"]
-    return ParameterSet({f"E_{name}": row["e"] / (1.0 + row["change_percent"] / 100.0) for name, row in rows.items()})
+    return ParameterSet({MODULUS.named(name): row["e"] / (1.0 + row["change_percent"] / 100.0)
+                         for name, row in rows.items()})
 
 
 def table_4_4_moduli() -> dict[str, float]:
     """The updated moduli [Pa] of Table 4.4 by parameter name."""
-    return {f"E_{name}": row["e"] for name, row in thesis_data()["table_4_4"].items()}
+    return {MODULUS.named(name): row["e"] for name, row in thesis_data()["table_4_4"].items()}
 
 
 #: the thesis's update band (4.5): above the low-frequency scatter, below the roll-off of gyros and filters

@@ -1,6 +1,6 @@
 """Seeded random FMI call sequences against a reference model of the standard's state machines.
 
-Run as a program (tests/test_fmi_fuzz.py and benchmarks/bench_fmi_fuzz.py start it in a subprocess,
+Run as a program (tests/fmu/test_fmi_fuzz.py and benchmarks/bench_fmi_fuzz.py start it in a subprocess,
 so that a crash of the FMU fails the run instead of killing the caller):
 
     python tests/support/fmi_fuzz.py FMI2_DIR FMI3_DIR FIRST_SEED N_SEEDS [--length L] [--interfaces cs2,me2,cs3]

@@ -2,7 +2,7 @@
 
 ``python tests/support/fuzz_pipeline.py FIRST_SEED COUNT`` prints the outcome classes (a model whose 0-g
 frequencies equal the bundled deck's, another valid model, a MaceError, or an exception class,
-which would be a defect) and every non-model outcome. Seeds are those of tests/test_deck_fuzz.py.
+which would be a defect) and every non-model outcome. Seeds are those of tests/deck/test_deck_fuzz.py.
 """
 
 from __future__ import annotations
@@ -34,7 +34,7 @@ def main(first: int, count: int) -> None:
             try:
                 parsed = read_deck(path)
             except MaceError:
-                continue  # the reader's outcome; tests/test_deck_fuzz.py checks those
+                continue  # the reader's outcome; tests/deck/test_deck_fuzz.py checks those
             try:
                 f = compute_modes(parsed, configuration="0g").modes.frequencies_hz
                 compute_modes(parsed, configuration="1g", preload="linear")

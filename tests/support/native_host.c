@@ -1,7 +1,7 @@
 /* A minimal FMI 2.0 co-simulation host without Python: loads a native FMU's binary (dlopen, or
  * LoadLibrary when built for Windows, where the tests run it under wine),
  * instantiates it, sets parameters, steps it with inputs read from a file and writes the
- * outputs to a file. Used by tests/test_native_fmu.py (results, valgrind) and
+ * outputs to a file. Used by tests/fmu/test_native_fmu.py (results, valgrind) and
  * benchmarks/bench_fmu.py (the time per step).
  *
  * native_host DIR MODEL_ID GUID STEP N_STEPS INPUTS.bin OUTPUTS.bin IN_VRS OUT_VRS [CYCLES [vr=value ...]]

@@ -2,7 +2,7 @@
  * takes its directional derivatives in initialisation and continuous-time mode (all derivatives and
  * outputs with respect to all states and inputs, and none) and checks that the calls the standard
  * leaves to the FMU to refuse are refused (a parameter as a known, a state as an unknown, an undeclared
- * value reference, NULL arrays, a non-finite seed). Used by tests/test_native_fmu.py.
+ * value reference, NULL arrays, a non-finite seed). Used by tests/fmu/test_native_fmu.py.
  *
  * native_me_host DIR MODEL_ID GUID N_IN N_OUT FIRST_STATE N_STATES PARAMETER_VR
  *   states' value references FIRST_STATE .. FIRST_STATE + N_STATES - 1, their derivatives' the next

@@ -24,7 +24,7 @@ from mace_fmu.errors import MaceError
 from mace_fmu.fmu.native import compile as runtime
 from mace_fmu.fmu.native.model_description import (JacobianPattern, fmi2_model_description, fmi3_build_description,
                                                    fmi3_model_description, fmu_variables)
-from mace_fmu.fmu.native.resource import resource_bytes, runtime_arrays
+from mace_fmu.fmu.native.resource import count_of, resource_bytes, runtime_arrays
 from mace_fmu.fmu.variables import model_summary
 from mace_fmu.iomodel.parametric import ParametricSystem
 from mace_fmu.iomodel.parametric_data import parametric_arrays, with_frequency_bounds
@@ -153,7 +153,7 @@ def export_native_fmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str
     reference = ParametricSystem(arrays)
     reference.build(reference.nominal)
     data = runtime_arrays(arrays)
-    if int(data["counts"][7]) != len(reference.state_names):
+    if count_of(data, "states") != len(reference.state_names):
         raise MaceError(f"native FMU: the runtime data describe {int(data['counts'][7])} states, the model has "
                         f"{len(reference.state_names)}")
     token = runtime_token(data, salt=f"fmi{fmi_version}", sources=runtime.source_files())

@@ -14,6 +14,7 @@ from xml.etree import ElementTree as ET
 import numpy as np
 
 from mace_fmu.fmu.variables import DEFAULT_EXPERIMENT, variable_unit
+from mace_fmu.parameters.kinds import frequency_output_name
 
 LOG_CATEGORIES = (("logStatusError", "errors (always logged)"), ("logEvents", "debug information"))
 
@@ -72,8 +73,8 @@ def fmu_variables(arrays: Mapping[str, np.ndarray], state_names: Sequence[str]) 
             start=float(value), minimum=float(lo) if np.isfinite(lo) else None,
             maximum=float(hi) if np.isfinite(hi) else None)
     for k, label in enumerate(arrays["mode_labels"]):
-        add(name=f"frequency_mode_{k + 1}", causality="calculatedParameter", variability="fixed", initial="calculated",
-            description=f"natural frequency [Hz] of mode {k + 1} ({label}) after reanalysis and frequency scale (the "
+        add(name=frequency_output_name(k + 1), causality="calculatedParameter", variability="fixed",
+            initial="calculated", description=f"natural frequency [Hz] of mode {k + 1} ({label}) after reanalysis and frequency scale (the "
                         "mode it continues into, not the k-th lowest)")
     first_state = len(out)
     for name in state_names:

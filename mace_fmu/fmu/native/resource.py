@@ -29,8 +29,13 @@ MAGIC = b"MACEFMU1"
 FORMAT_VERSION = 1  #: the file layout (shared with the controller FMU's data)
 MODEL_FORMAT = 2  #: the plant's arrays (``format_version``): 2 added the static corrections of the reanalysis
 MAX_PADE_ORDER = MAX_ORDER  #: the runtime's Pade coefficients are exact integer ratios up to this order
+# The codes below are the runtime's enums in mace_model.c, in their order (tests/fmu/test_native_layers.py holds
+# them to the C source): BLOCK_*, PARAM_*, COUNT_* and ROW_*.
 BLOCK_KINDS = {"structure": 0, "const": 1, "delay": 2, "gain": 3, "pd": 4}
 PARAMETER_KINDS = {"damping": 0, "delay": 1, "gain": 2, "physical": 3, "frequency_scale": 4}
+#: the entries of the ``counts`` array, in order (mace_model.c COUNT_IN, COUNT_OUT, ...)
+COUNTS = ("in", "out", "par", "modes", "flex", "blocks", "pade", "states", "so", "ms", "phys", "ub", "yb", "corr",
+          "massive")
 _FLOAT, _INT, _TEXT = 1, 2, 3
 ROW_DISPLACEMENT, ROW_RATE, ROW_ACCELERATION = 0, 1, 2  #: struct_row_kind: what a structure output reads
 
@@ -164,10 +169,11 @@ def runtime_arrays(arrays: Mapping[str, np.ndarray]) -> dict[str, np.ndarray | l
     dk = np.asarray(arrays["physical_dk"], dtype=float)[:, flexible][:, :, flexible]
     corrections = _corrections(arrays, flexible)
     massive = int(arrays["correction_massive"]) if "correction_massive" in arrays else 0
-    counts = [n_in, n_out, len(names), n_modes, len(flexible), len(kinds), pade_order, n_states,
-              len(arrays["structure_outputs"]), cluster["modal_b"].shape[1], len(physical),
-              arrays["wiring"].shape[0], arrays["wiring"].shape[1], corrections["correction_stiffness"].shape[0],
-              massive]
+    counts = dict(in_=n_in, out=n_out, par=len(names), modes=n_modes, flex=len(flexible), blocks=len(kinds),
+                  pade=pade_order, states=n_states, so=len(arrays["structure_outputs"]), ms=cluster["modal_b"].shape[1],
+                  phys=len(physical), ub=arrays["wiring"].shape[0], yb=arrays["wiring"].shape[1],
+                  corr=corrections["correction_stiffness"].shape[0], massive=massive)
+    counts = [counts["in_" if name == "in" else name] for name in COUNTS]
     out: dict[str, np.ndarray | list[str]] = {
         "format_version": np.array([MODEL_FORMAT], dtype=np.int64),
         "counts": np.array(counts, dtype=np.int64),
@@ -187,6 +193,11 @@ def runtime_arrays(arrays: Mapping[str, np.ndarray]) -> dict[str, np.ndarray | l
     out.update(corrections)
     out.update(blocks)
     return out
+
+
+def count_of(data: Mapping[str, np.ndarray], name: str) -> int:
+    """One entry of a runtime data file's ``counts`` by its name (:data:`COUNTS`), e.g. ``count_of(data, "states")``."""
+    return int(np.asarray(data["counts"])[COUNTS.index(name)])
 
 
 def model_exchange_order(info: np.ndarray) -> np.ndarray:

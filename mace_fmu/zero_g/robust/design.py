@@ -25,7 +25,7 @@ from mace_fmu.zero_g.robust.loop import LoopSpec
 
 #: Default weights, chosen here (the thesis designs no 0-g compensator): theta = 10 rho, and rho ten
 #: times the value (1e-3) at which the loop on the 0-g FMU before the update is unstable (spectral
-#: radius 1.0013, tests/test_robust.py); 2e-3 is stable there but settles slowly (0.975 per second).
+#: radius 1.0013, tests/zero_g/test_robust.py); 2e-3 is stable there but settles slowly (0.975 per second).
 DEFAULT_WEIGHTS = LqgWeights(rho=0.01, theta=0.1)
 DEFAULT_REDUCED_STATES = 30
 

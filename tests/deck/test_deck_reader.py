@@ -1,0 +1,347 @@
+"""Decks that must read: the three field formats, continuations, numbers, case control, geometry."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from support.paths import ROOT
+
+from mace_fmu.deck import Deck, DeckError, read_deck, read_deck_text
+from mace_fmu.deck.fields import parse_real
+from mace_fmu.deck.geometry import bar_orientation, coordinate_frames, grid_positions
+
+
+def sf(name: str, *fields: object) -> str:
+    """One small-field line: field 1 and data fields, 8 columns each."""
+    return "".join(f"{str(x):<8}" for x in (name, *fields)).rstrip()
+
+
+def lf(name: str, *fields: object) -> str:
+    """One large-field line: field 1 (8 columns) and data fields of 16 columns."""
+    return f"{name:<8}" + "".join(f"{str(x):<16}" for x in fields).rstrip()
+
+
+def deck(*lines: str) -> Deck:
+    return read_deck_text("\n".join(lines) + "\n")
+
+
+MAT = sf("MAT1", 1, "7.0E10", "", "0.3")
+
+# A minimal valid model: two grids, one bar, its property and material.
+BAR = [
+    sf("GRID", 1, "", "0.0", "0.0", "0.0"),
+    sf("GRID", 2, "", "1.0", "0.0", "0.0"),
+    sf("MAT1", 1, "7.0E10", "", "0.3", "2700.0"),
+    sf("PBAR", 1, 1, "1.0E-4", "1.0E-9", "2.0E-9", "3.0E-9"),
+    sf("CBAR", 10, 1, 1, 2, "0.0", "0.0", "1.0"),
+]
+
+
+def test_small_field_model() -> None:
+    d = deck(*BAR)
+    assert d.path == "<string>"
+    assert d.grids[2].xyz == (1.0, 0.0, 0.0) and d.grids[2].cp == 0 and d.grids[2].cd == 0 and d.grids[2].ps == ""
+    assert d.grids[2].source.line == 2 and str(d.grids[2].source) == "<string>:2"
+    assert d.mat1s[1].e == 7.0e10 and d.mat1s[1].g is None and d.mat1s[1].nu == 0.3 and d.mat1s[1].rho == 2700.0
+    p = d.pbars[1]
+    assert (p.mid, p.area, p.i1, p.i2, p.j, p.nsm, p.i12) == (1, 1.0e-4, 1.0e-9, 2.0e-9, 3.0e-9, 0.0, 0.0)
+    assert p.stress_points == (None,) * 8 and p.k1 is None and p.k2 is None
+    b = d.bars[10]
+    assert (b.pid, b.ga, b.gb, b.v, b.g0) == (1, 1, 2, (0.0, 0.0, 1.0), None)
+    assert d.subcases == {} and d.global_case is None
+
+
+def test_defaults_and_case_insensitive_names() -> None:
+    d = deck(sf("grid", 7), sf("Grid", 8, "", "1.0", "", "", "", "2131"), sf("cbar", 3, "", 7, 8, "0.0", "1.0"),
+             sf("pbar", 3, 1), sf("MAT1", 1, "", "1.0E9"))
+    assert d.grids[7].xyz == (0.0, 0.0, 0.0)
+    assert d.grids[8].ps == "123"  # sorted, unique
+    assert d.bars[3].pid == 3  # PID defaults to EID
+    assert d.bars[3].v == (0.0, 1.0, 0.0)  # blank X3 = 0.0
+    assert d.pbars[3].area == 0.0 and d.mat1s[1].e is None and d.mat1s[1].g == 1.0e9
+
+
+def test_large_field_grid_with_star_continuation() -> None:
+    d = deck(lf("GRID*", 5, 0, "1.25", "-2.5"), lf("*", "3.75", 0, 246), lf("GRID*", 6, "", "1.0D-3", ""),
+             lf("*", "4.99-12"))
+    assert d.grids[5].xyz == (1.25, -2.5, 3.75) and d.grids[5].ps == "246"
+    assert d.grids[6].xyz == (1.0e-3, 0.0, 4.99e-12)
+    assert d.grids[6].source.line == 3
+
+
+def test_free_field_with_continuations() -> None:
+    d = deck("GRID,1,,0.0,0.0,0.0", "GRID,2,,1.0,0.0,0.0", "grid,3,,0.0,1.0,0.0",
+             "CONM2,20,1,,2.5,0.1,,,,+C1",
+             "+C1,1.0,,2.0,,,3.0",
+             "MPC,5,1,1,1.0,2,1,-1.0",
+             ",,3,1,0.5",
+             "PARAM,POST,0")
+    m = d.conm2s[20]
+    assert (m.grid, m.cid, m.mass, m.offset) == (1, 0, 2.5, (0.1, 0.0, 0.0))
+    assert m.inertia == (1.0, 0.0, 2.0, 0.0, 0.0, 3.0)
+    terms = d.mpcs[5][0].terms
+    assert [(t.grid, t.component, t.coefficient) for t in terms] == [(1, 1, 1.0), (2, 1, -1.0), (3, 1, 0.5)]
+    assert d.params["POST"].values == (0,)
+
+
+def test_free_field_large_card() -> None:
+    d = deck("GRID*,4,,1.0,2.0,*G4", "*G4,3.0,,5")
+    assert d.grids[4].xyz == (1.0, 2.0, 3.0) and d.grids[4].ps == "5"
+
+
+def test_tab_separated_small_field() -> None:
+    d = deck("GRID\t9\t\t1.0\t2.0\t3.0", "GRID\t10\t0\t1.5\t\t-2.0E-1\t0")
+    assert d.grids[9].xyz == (1.0, 2.0, 3.0)
+    assert d.grids[10].xyz == (1.5, 0.0, -0.2)
+
+
+@pytest.mark.parametrize("text, value", [
+    ("1.0", 1.0), ("1.", 1.0), (".5", 0.5), ("-1.0E-5", -1.0e-5), ("1.0e5", 1.0e5), ("1.0D-3", 1.0e-3),
+    ("4.99-12", 4.99e-12), ("1.5+3", 1.5e3), ("+.5E+2", 50.0), ("-7.d2", -700.0),
+    ("7", None), ("1.2.3", None), ("1.0E", None), ("E5", None), ("", None), ("nan", None)])
+def test_real_numbers(text: str, value: float | None) -> None:
+    assert parse_real(text) == value
+
+
+def test_implicit_exponent_in_cards() -> None:
+    d = deck(sf("PBAR", 5, 5, "7.92E-6", "4.99-12", "4.99-12", "9.98-12"), sf("MAT1", 5, "198.2E9", "", "1.0D-1"))
+    assert d.pbars[5].i1 == 4.99e-12 and d.pbars[5].j == pytest.approx(9.98e-12, rel=1e-15)
+    assert d.mat1s[5].nu == pytest.approx(0.1)
+
+
+def test_pbar_first_continuation_is_stress_points_not_shear_factors() -> None:
+    d = deck(sf("PBAR", 1, 1, "2.56E-4", "2.14E-8", "2.14E-8", "4.27E-8"), sf("", "0.54921", "0.54921"), MAT)
+    p = d.pbars[1]
+    assert p.stress_points == (0.54921, 0.54921, None, None, None, None, None, None)
+    assert p.k1 is None and p.k2 is None and p.i12 == 0.0
+
+
+def test_pbar_second_continuation_gives_shear_factors() -> None:
+    d = deck(sf("PBAR", 1, 1, "2.56E-4", "2.14E-8", "2.14E-8", "4.27E-8", "0.1", "", "+P1"),
+             sf("+P1", "0.01", "0.02", "", "", "", "", "", "-0.01", "+P2"),
+             sf("+P2", "0.85", "0.9", "1.0E-9"), MAT)
+    p = d.pbars[1]
+    assert p.nsm == 0.1
+    assert p.stress_points == (0.01, 0.02, None, None, None, None, None, -0.01)
+    assert (p.k1, p.k2, p.i12) == (0.85, 0.9, 1.0e-9)
+
+
+def test_short_parent_line_is_padded_before_continuation() -> None:
+    # The parent stops after NSM; the continuation still starts at data field 9 (C1).
+    d = deck(sf("PBAR", 1, 1, "1.0"), "+", sf("+", "0.5", "0.6"), MAT)
+    assert d.pbars[1].stress_points == (None,) * 8
+    assert (d.pbars[1].k1, d.pbars[1].k2) == (0.5, 0.6)
+
+
+def test_mpc_with_continuations_and_sets() -> None:
+    grids = [sf("GRID", g, "", f"{g}.0") for g in range(1, 6)]
+    d = deck(*grids,
+             sf("MPC", 5, 1, 1, "1.0", 2, 1, "-0.5"),
+             sf("", "", 3, 1, "-0.25", 4, 1, "-0.25"),
+             sf("", "", 5, 2, "1.0E-3"),
+             sf("MPC", 5, 2, 3, "1.0", 3, 3, "-1.0"),
+             sf("MPC", 6, 1, 1, "1.0", 2, 1, "-1.0"))
+    first, second = d.mpcs[5]
+    assert [(t.grid, t.component, t.coefficient) for t in first.terms] == [
+        (1, 1, 1.0), (2, 1, -0.5), (3, 1, -0.25), (4, 1, -0.25), (5, 2, 1.0e-3)]
+    assert first.sid == 5 and first.source.line == 6 and second.source.line == 9
+    assert [t.grid for t in second.terms] == [2, 3]
+    assert len(d.mpcs[6]) == 1
+
+
+def test_spc1_lists_thru_and_continuations() -> None:
+    grids = [sf("GRID", g) for g in (1, 2, 3, 5, 8, 9)]
+    d = deck(*grids,
+             sf("SPC1", 1, 321, 1, 2, 3, 5, 8, 9),
+             sf("", 1),
+             sf("SPC1", 1, 456, 2, "THRU", 7),
+             sf("SPC1", 2, 1123456, 9))
+    listed, thru = d.spc1s[1]
+    assert listed.components == "123" and listed.grids == (1, 2, 3, 5, 8, 9, 1)
+    assert thru.components == "456" and thru.grids == (2, 3, 5)  # grids 4, 6, 7 do not exist: skipped (MSC)
+    assert d.spc1s[2][0].components == "123456"
+
+
+def test_conm2_inertia_on_continuation() -> None:
+    d = deck(sf("GRID", 3), sf("CONM2", 1, 3, "", "0.17033", "0.0", "0.01", "0.0"),
+             sf("", "4.21E-5", "", "4.60E-5", "", "", "4.60E-5"),
+             sf("CONM2", 2, 3, 0, "1.0"), sf("", "1.0", "0.1", "2.0", "0.2", "0.3", "3.0"))
+    assert d.conm2s[1].inertia == (4.21e-5, 0.0, 4.60e-5, 0.0, 0.0, 4.60e-5)
+    assert d.conm2s[1].offset == (0.0, 0.01, 0.0)
+    assert d.conm2s[2].inertia == (1.0, 0.1, 2.0, 0.2, 0.3, 3.0)
+
+
+def test_loads_springs_eigrl_nlparm_params() -> None:
+    d = deck(sf("GRID", 1), sf("GRID", 2),
+             sf("CELAS2", 11, "16.9878", 1, 2), sf("CELAS2", 12, "1.0E3", 1, 6, 2, 6),
+             sf("GRAV", 9999, "", "9.807", "0.0", "-1.0"),
+             sf("GRAV", 9998, 0, "1.0", "1.0"),
+             sf("LOAD", 100, "1.0", "1.0", 9999, "0.5", 9998),
+             sf("EIGRL", 1, "-1.0", "250.", 200, 3),
+             sf("EIGRL", 2, "", "", 10),
+             sf("NLPARM", 1, 1),
+             sf("NLPARM", 10, 20, "", "iter", 1, 25, "w"),
+             sf("", "", "", "1.5E-4"),
+             sf("PARAM", "GRDPNT", 2), sf("PARAM", "autospc", "no"), sf("PARAM", "WTMASS", "1.0"),
+             "PARAM,DBCCONV,XL")
+    assert d.celas2s[11].g2 is None and d.celas2s[11].c2 is None and d.celas2s[11].c1 == 2
+    assert (d.celas2s[12].g2, d.celas2s[12].c2, d.celas2s[12].k) == (2, 6, 1.0e3)
+    assert d.gravs[9999].direction == (0.0, -1.0, 0.0) and d.gravs[9999].scale == 9.807 and d.gravs[9999].cid == 0
+    assert d.loads[100].scale == 1.0 and d.loads[100].terms == ((1.0, 9999), (0.5, 9998))
+    assert (d.eigrls[1].v1, d.eigrls[1].v2, d.eigrls[1].nd, d.eigrls[1].msglvl) == (-1.0, 250.0, 200, 3)
+    assert (d.eigrls[2].v1, d.eigrls[2].v2, d.eigrls[2].nd, d.eigrls[2].msglvl) == (None, None, 10, 0)
+    n1, n10 = d.nlparms[1], d.nlparms[10]
+    assert (n1.ninc, n1.kmethod, n1.kstep, n1.max_iter, n1.conv, n1.eps_u, n1.eps_p, n1.eps_w) == (
+        1, "AUTO", None, 25, "PW", 0.01, 0.01, 0.01)
+    assert (n10.ninc, n10.kmethod, n10.kstep, n10.max_iter, n10.conv, n10.eps_u, n10.eps_w) == (
+        20, "ITER", 1, 25, "W", 0.01, 1.5e-4)
+    assert d.params["GRDPNT"].values == (2,) and d.params["AUTOSPC"].values == ("NO",)
+    assert d.params["WTMASS"].values == (1.0,) and d.params["DBCCONV"].values == ("XL",)
+    assert isinstance(d.params["WTMASS"].values[0], float) and d.params["GRDPNT"].name == "GRDPNT"
+
+
+CASE_DECK = """\
+SOL 106
+TIME 2000
+CEND
+TITLE = test $ comment
+METHOD = 1
+LABEL = global label
+spc=51
+SUBCASE 1
+  LABEL = Gravity preload, mechanisms locked
+  SPC = 52
+  MPC=5
+  LOAD = 100
+  NLPARM = 10
+  DISP = ALL
+SUBCASE 2
+$ PARAM,EIGEN,1
+  mpc = 5
+  NLPARM = 1
+BEGIN BULK
+{bulk}
+ENDDATA
+this text after ENDDATA is ignored: FOO BAR 1.2.3
+"""
+
+
+def test_case_control_subcases_inherit_global_values() -> None:
+    bulk = "\n".join([sf("GRID", 1), sf("GRID", 2), sf("SPC1", 51, 123456, 1), sf("SPC1", 52, 123, 1),
+                      sf("MPC", 5, 1, 1, "1.0", 2, 1, "-1.0"), sf("GRAV", 100, "", "9.81", "0.0", "-1.0"),
+                      sf("NLPARM", 10), sf("NLPARM", 1), sf("EIGRL", 1, "", "", 5)])
+    d = read_deck_text(CASE_DECK.format(bulk=bulk), name="mace.bdf")
+    g = d.global_case
+    assert g is not None and (g.id, g.spc, g.mpc, g.load, g.nlparm, g.method, g.label) == (
+        0, 51, None, None, None, 1, "global label")
+    s1, s2 = d.subcases[1], d.subcases[2]
+    assert (s1.spc, s1.mpc, s1.load, s1.nlparm, s1.method) == (52, 5, 100, 10, 1)
+    assert s1.label == "Gravity preload, mechanisms locked" and s1.source == d.subcases[1].source
+    assert s1.source.line == 8 and s1.source.file == "mace.bdf"
+    assert (s2.spc, s2.mpc, s2.load, s2.nlparm, s2.method, s2.label) == (51, 5, None, 1, 1, "global label")
+    assert list(d.subcases) == [1, 2]
+
+
+def test_case_control_without_subcase_goes_to_global_case() -> None:
+    d = read_deck_text("CEND\nSPC = 1\nBEGIN BULK\n" + sf("GRID", 1) + "\n" + sf("SPC1", 1, 1, 1) + "\nENDDATA")
+    assert d.subcases == {} and d.global_case is not None and d.global_case.spc == 1
+
+
+def test_begin_bulk_without_executive_control_and_spacing() -> None:
+    d = read_deck_text("  begin   bulk  \n" + sf("GRID", 1) + "\nenddata\n")
+    assert list(d.grids) == [1] and d.global_case is not None and d.subcases == {}
+
+
+def test_comments_mid_line_and_blank_lines() -> None:
+    d = deck("$ full-line comment", "", sf("GRID", 1, "", "1.0") + "  $ X2 X3 blank",
+             "GRID    2               2.0$3.0 is inside the comment", "   ", "GRID,3,,4.0 $,5.0",
+             sf("PBAR", 1, 1, "1.0") + " $ no continuation", "$ a comment between parent and continuation",
+             sf("", "0.5"), MAT)
+    assert d.grids[1].xyz == (1.0, 0.0, 0.0) and d.grids[2].xyz == (2.0, 0.0, 0.0)
+    assert d.grids[3].xyz == (4.0, 0.0, 0.0)
+    assert d.pbars[1].stress_points[0] == 0.5
+
+
+def test_bulk_only_file_with_and_without_enddata() -> None:
+    d = deck(*BAR)
+    assert len(d.grids) == 2
+    d = deck(*BAR, "ENDDATA", "GARBAGE after the end")
+    assert len(d.bars) == 1
+
+
+def test_element_ids_of_different_types_may_differ() -> None:
+    d = deck(*BAR, sf("CONM2", 11, 1, "", "1.0"), sf("CELAS2", 12, "1.0", 2, 3))
+    assert set(d.bars) | set(d.conm2s) | set(d.celas2s) == {10, 11, 12}
+
+
+def test_cord2r_chain_positions() -> None:
+    # System 1: origin (1, 0, 0), x = basic Y, z = basic Z (so y = -basic X).
+    # System 2, given in system 1: origin (0, 0, 2)_1 = (1, 0, 2), z along x_1 = basic Y,
+    # C - A along z_1 so x_2 = basic Z, y_2 = z_2 x x_2 = basic X.
+    d = deck(sf("CORD2R", 2, 1, "0.0", "0.0", "2.0", "1.0", "0.0", "2.0"), sf("", "0.0", "0.0", "3.0"),
+             sf("CORD2R", 1, "", "1.0", "0.0", "0.0", "1.0", "0.0", "1.0"), sf("", "1.0", "1.0", "0.0"),
+             sf("GRID", 10, 2, "1.0", "2.0", "3.0"),
+             sf("GRID", 11, 1, "1.0", "2.0", "3.0"),
+             sf("GRID", 12, 0, "1.0", "2.0", "3.0"))
+    frames = coordinate_frames(d)
+    np.testing.assert_allclose(frames[1][0], [1.0, 0.0, 0.0])
+    np.testing.assert_allclose(frames[1][1], [[0, -1, 0], [1, 0, 0], [0, 0, 1]], atol=1e-15)
+    np.testing.assert_allclose(frames[2][0], [1.0, 0.0, 2.0])
+    np.testing.assert_allclose(frames[2][1], [[0, 1, 0], [0, 0, 1], [1, 0, 0]], atol=1e-15)
+    pos = grid_positions(d)
+    np.testing.assert_allclose(pos[10], [3.0, 3.0, 3.0], atol=1e-15)  # (1,0,2) + 1 Z + 2 X + 3 Y
+    np.testing.assert_allclose(pos[11], [-1.0, 1.0, 3.0], atol=1e-15)  # (1,0,0) + 1 Y - 2 X + 3 Z
+    np.testing.assert_allclose(pos[12], [1.0, 2.0, 3.0])
+
+
+def test_cord2r_skew_axes_are_orthonormal() -> None:
+    d = deck(sf("CORD2R", 3, 0, "0.0", "0.0", "0.0", "-0.70715", "0.57729", "-0.40827"), sf("", "0.0", "1.0", "0.0"))
+    rot = coordinate_frames(d)[3][1]
+    np.testing.assert_allclose(rot.T @ rot, np.eye(3), atol=1e-12)
+    assert np.linalg.det(rot) == pytest.approx(1.0)
+    np.testing.assert_allclose(rot[:, 2], np.array([-0.70715, 0.57729, -0.40827]) / np.linalg.norm([-0.70715, 0.57729,
+                                                                                                   -0.40827]))
+
+
+def test_orientation_vector_in_cd_system_and_by_g0() -> None:
+    # Grid 1 measures displacements in system 1 (x = basic Y). The bar lies along basic X, so
+    # v = (1, 0, 0) would be parallel to it in basic, but in system 1 it is basic Y: valid.
+    d = deck(sf("CORD2R", 1, "", "0.0", "0.0", "0.0", "0.0", "0.0", "1.0"), sf("", "0.0", "1.0", "0.0"),
+             sf("GRID", 1, "", "0.0", "0.0", "0.0", 1), sf("GRID", 2, "", "2.0", "0.0", "0.0"),
+             sf("GRID", 3, "", "0.0", "0.0", "5.0"),
+             sf("MAT1", 1, "7.0E10"), sf("PBAR", 1, 1, "1.0"),
+             sf("CBAR", 1, 1, 1, 2, "1.0", "0.0", "0.0"),
+             sf("CBAR", 2, 1, 2, 1, 3))
+    frames = coordinate_frames(d)
+    pos = grid_positions(d, frames)
+    np.testing.assert_allclose(bar_orientation(d, d.bars[1], pos, frames), [0.0, 1.0, 0.0], atol=1e-15)
+    assert d.bars[2].g0 == 3 and d.bars[2].v is None
+    np.testing.assert_allclose(bar_orientation(d, d.bars[2], pos, frames), [-2.0, 0.0, 5.0])
+
+
+def test_read_deck_from_file(tmp_path: Path) -> None:
+    path = tmp_path / "model.bdf"
+    path.write_text("SOL 103\nCEND\nSUBCASE 4\nBEGIN BULK\n" + "\n".join(BAR) + "\nENDDATA\n")
+    d = read_deck(path)
+    assert d.path == str(path) and len(d.bars) == 1 and d.grids[1].source.file == str(path)
+    assert list(d.subcases) == [4]
+
+
+def test_error_message_format() -> None:
+    err = DeckError("grid 999 is not defined (expected a GRID ID)", file="deck.bdf", line=123, card="CBAR 41",
+                    field="field 5 (GB)")
+    assert str(err) == "deck.bdf:123: CBAR 41, field 5 (GB): grid 999 is not defined (expected a GRID ID)"
+    assert (err.file, err.line, err.card, err.field) == ("deck.bdf", 123, "CBAR 41", "field 5 (GB)")
+    assert str(DeckError("no card", file="x", line=1)) == "x:1: no card"
+    assert isinstance(err, ValueError)
+
+
+def test_bundled_mace_deck_reads() -> None:
+    path = ROOT / "mace_fmu" / "data" / "mace_em.bdf"
+    if not path.exists():
+        pytest.skip("bundled deck not present")
+    d = read_deck(path)
+    assert d.grids and d.bars and d.pbars and d.mpcs and set(d.subcases) == {1, 2}
+    assert all(p.k1 is None and p.k2 is None for p in d.pbars.values())  # only C1/C2 are printed

@@ -1,0 +1,65 @@
+"""The native runtime's layers (mace_fmu/fmu/native/c/README.md): each prefix is one layer, a file
+calls only its own layer and the layers below it, and the sources compile without a warning."""
+
+from __future__ import annotations
+
+import re
+import shutil
+import subprocess
+from pathlib import Path
+
+import pytest
+
+from mace_fmu.fmu.native.compile import SOURCE_DIR
+
+#: layer of each call prefix, from the bottom (numerics) up
+LAYER_OF_PREFIX = {"ml": 0, "zoh": 0, "mace": 1, "mi": 2}
+#: layer of each source file
+LAYER_OF_FILE = {"mace_linalg.c": 0, "mace_zoh.c": 0, "mace_data.c": 1, "mace_model.c": 1,
+                 "controller/mace_discrete.c": 1, "mace_instance.c": 2, "fmi2_api.c": 3, "fmi3_api.c": 3}
+CALL = re.compile(r"\b(ml|zoh|mi|mace)_[a-z0-9_]+\s*\(")
+
+
+def _calls(path: Path) -> set[str]:
+    text = re.sub(r"/\*.*?\*/|//[^\n]*|\"(?:\\.|[^\"\\])*\"", "", path.read_text(), flags=re.S)
+    return set(CALL.findall(text))
+
+
+def test_every_source_file_has_a_layer_and_calls_no_layer_above_it():
+    sources = {p.relative_to(SOURCE_DIR).as_posix() for p in SOURCE_DIR.rglob("*.c")}
+    assert sources == set(LAYER_OF_FILE)
+    upward = [(name, prefix) for name, layer in LAYER_OF_FILE.items()
+              for prefix in _calls(SOURCE_DIR / name) if LAYER_OF_PREFIX[prefix] > layer]
+    assert upward == []
+    # and the layers are used: the instance calls the model, the model the numerics
+    assert "mace" in _calls(SOURCE_DIR / "mace_instance.c") and "zoh" in _calls(SOURCE_DIR / "mace_model.c")
+
+
+@pytest.mark.skipif(shutil.which("gcc") is None, reason="needs gcc")
+def test_the_runtime_compiles_without_a_warning_under_wall_wextra():
+    files = [str(SOURCE_DIR / name) for name in LAYER_OF_FILE]
+    done = subprocess.run(["gcc", "-std=c99", "-O2", "-Wall", "-Wextra", "-Werror", "-fsyntax-only",
+                           f"-I{SOURCE_DIR}", *files], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+
+
+def test_the_data_files_codes_are_the_runtimes_enums():
+    """The block kinds, parameter kinds, counts and row kinds the data file carries as numbers (resource.py) are
+    the C runtime's enums, in their order: one meaning per code on both sides."""
+    from mace_fmu.fmu.native import resource
+
+    source = (Path(SOURCE_DIR) / "mace_model.c").read_text()
+
+    def enum(prefix: str) -> list[str]:
+        body = next(m.group(1) for m in re.finditer(r"enum\s*\{([^}]*)\}", source) if f"{prefix}_" in m.group(1))
+        return [name.split("=")[0].strip().removeprefix(f"{prefix}_").lower() for name in body.split(",")
+                if name.strip() and not name.strip().startswith("N_")]
+
+    assert enum("BLOCK") == list(resource.BLOCK_KINDS)
+    assert list(resource.BLOCK_KINDS.values()) == list(range(len(resource.BLOCK_KINDS)))
+    assert enum("PARAM") == list(resource.PARAMETER_KINDS)
+    assert list(resource.PARAMETER_KINDS.values()) == list(range(len(resource.PARAMETER_KINDS)))
+    assert enum("COUNT") == list(resource.COUNTS)
+    rows = {name: int(value) for name, value in re.findall(r"#define ROW_(\w+) (\d+)", source)}
+    assert rows == {"DISPLACEMENT": resource.ROW_DISPLACEMENT, "RATE": resource.ROW_RATE,
+                    "ACCELERATION": resource.ROW_ACCELERATION}
