@@ -81,10 +81,11 @@ def run_one(size: str, kind: str, volts: bool) -> dict:
     out["modes"] = len(modes.modes)
     out["f1_hz"] = float(modes.frequencies_hz[0])
     if volts:
+        from mace_fmu.fe.modes import compute_modes
         from mace_fmu.iomodel.volts import volts_model
 
         t0 = time.perf_counter()
-        model = volts_model(kind, deck=deck, structure_file=folder / "tower.toml")
+        model = volts_model(compute_modes(deck, configuration=kind, structure_file=folder / "tower.toml"))
         out["volts_s"] = time.perf_counter() - t0
         out["states"] = model.system.nstates
     out["peak_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024

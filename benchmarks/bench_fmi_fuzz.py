@@ -22,7 +22,8 @@ from pathlib import Path
 import fmpy
 
 from common import machine_line
-from mace_fmu.fmu.native.export import export_native_fmu
+from mace_fmu.fe.modes import compute_modes
+from mace_fmu.fmu.export import export_fmu
 from mace_fmu.iomodel.volts import volts_model
 
 WORKER = Path(__file__).resolve().parents[1] / "tests" / "support" / "fmi_fuzz.py"
@@ -38,9 +39,9 @@ def main() -> int:
     a = parser.parse_args()
     seeds = a.sequences // 3
     with tempfile.TemporaryDirectory() as tmp:
-        model = volts_model(a.model)
-        fmi2 = export_native_fmu(model, out_dir=tmp, name=f"MACE_{a.model}_fuzz")
-        fmi3 = export_native_fmu(model, out_dir=tmp, name=f"MACE_{a.model}_fuzz3", fmi_version=3)
+        model = volts_model(compute_modes(configuration=a.model))
+        fmi2 = export_fmu(model, out_dir=tmp, name=f"MACE_{a.model}_fuzz")
+        fmi3 = export_fmu(model, out_dir=tmp, name=f"MACE_{a.model}_fuzz3", fmi_version=3)
         folders = [fmpy.extract(str(fmi2), unzipdir=f"{tmp}/fmi2"), fmpy.extract(str(fmi3), unzipdir=f"{tmp}/fmi3")]
         totals = Counter()
         states, mismatches, failures = Counter(), [], []

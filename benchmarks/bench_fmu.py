@@ -25,6 +25,7 @@ import numpy as np
 from fmpy.fmi2 import FMU2Slave
 
 from common import machine_line
+from mace_fmu.fe.modes import compute_modes
 from mace_fmu.fmu.export import export_fmu
 from mace_fmu.fmu.native.compile import SOURCE_DIR
 from mace_fmu.iomodel.volts import volts_model
@@ -36,9 +37,9 @@ def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--runs", type=int, default=9)
     args = parser.parse_args()
-    model = volts_model("1g")
+    model = volts_model(compute_modes(configuration="1g"))
     tmp = Path(tempfile.mkdtemp(prefix="bench_fmu_"))  # kept until exit (pythonfmu pitfall)
-    folders = {kind: fmpy.extract(str(export_fmu(model, kind=kind, out_dir=tmp, name=f"MACE_1g_{kind}")),
+    folders = {kind: fmpy.extract(str(export_fmu(model, runtime=kind, out_dir=tmp, name=f"MACE_1g_{kind}")),
                                   unzipdir=str(tmp / kind)) for kind in ("native", "pythonfmu")}
     step, stop = 2e-3, 10.0
     t = np.arange(0.0, stop + step / 2, step)

@@ -48,7 +48,8 @@ def main() -> None:
     import dask
     import fmpy
 
-    from mace_fmu.fmu.native.export import export_native_fmu
+    from mace_fmu.fe.modes import compute_modes
+    from mace_fmu.fmu.export import export_fmu
     from mace_fmu.iomodel.volts import volts_model
     from mace_fmu.updating.fmu_model import fmu_family
     from mace_fmu.updating.fmu_update import fmu_cost
@@ -58,7 +59,7 @@ def main() -> None:
     from mace_fmu.util.threads import single_blas_thread
 
     out = Path(args.out or tempfile.mkdtemp(prefix="bench_fmu_update_"))
-    fmu = export_native_fmu(volts_model("1g"), out_dir=out, name="MACE_1g_native")
+    fmu = export_fmu(volts_model(compute_modes(configuration="1g")), out_dir=out, name="MACE_1g_native")
     family = fmu_family(fmu)
     article = measure_test_article(family, out_dir=out / "data", seconds=20.0)
     cost = fmu_cost("time", history=article.history)
@@ -117,7 +118,8 @@ def main() -> None:
 
 
 def identifiability(out: Path) -> None:
-    from mace_fmu.fmu.native.export import export_native_fmu
+    from mace_fmu.fe.modes import compute_modes
+    from mace_fmu.fmu.export import export_fmu
     from mace_fmu.iomodel.volts import volts_model
     from mace_fmu.updating.fmu_model import fmu_family
     from mace_fmu.updating.fmu_update import fmu_cost
@@ -125,7 +127,8 @@ def identifiability(out: Path) -> None:
     from mace_fmu.updating.sensitivity import cost_sensitivities
     from mace_fmu.updating.truth import measure_test_article
 
-    family = fmu_family(export_native_fmu(volts_model("1g"), out_dir=out, name="MACE_1g_native"))
+    family = fmu_family(export_fmu(volts_model(compute_modes(configuration="1g")), out_dir=out,
+                                          name="MACE_1g_native"))
     article = measure_test_article(family, out_dir=out / "noise_free", seconds=20.0, noise_fraction=0.0)
     cost = fmu_cost("time", history=article.history)
     truth = {n: table_4_4_moduli()[n] for n in THESIS_KEPT}

@@ -35,6 +35,7 @@ import fmpy.sundials as sundials
 from fmpy import read_model_description, simulate_fmu
 from fmpy.sundials.libraries import sundials_cvode, sundials_sunmatrixdense
 
+from mace_fmu.fe.modes import compute_modes
 from mace_fmu.fmu.export import export_fmu
 from mace_fmu.iomodel.volts import volts_model
 
@@ -162,11 +163,11 @@ def main() -> None:
                         "FMUs without directional derivatives)")
     args = parser.parse_args()
     probe = Probe()
-    model = volts_model("1g")
+    model = volts_model(compute_modes(configuration="1g"))
     names, outputs = list(model.system.input_labels), list(model.system.output_labels)
     zoh = ct.sample_system(model.system, DT, "zoh")
     with tempfile.TemporaryDirectory() as tmp:
-        fmu = str(export_fmu(model, kind="native", out_dir=Path(tmp), name="MACE_1g_native"))
+        fmu = str(export_fmu(model, runtime="native", out_dir=Path(tmp), name="MACE_1g_native"))
         probe.md = read_model_description(fmu)
         print(f"{len(probe.md.derivatives)} states; load {os.getloadavg()}")
         print("| case | simulated | rtol | wall [s] | x CS | error / range | CVode steps | RHS (+ DQ Jacobian) | "

@@ -36,13 +36,14 @@ DRIVEN = (("gimbal",), ("active_strut",))
 def accuracy(configuration: str) -> list[str]:
     """One table row per physical parameter of ``configuration``'s model."""
     from mace_fmu.deck.reader import read_deck
+    from mace_fmu.fe.modes import compute_modes
     from mace_fmu.iomodel.parametric import ParametricSystem
     from mace_fmu.iomodel.parametric_data import parametric_arrays
     from mace_fmu.iomodel.volts import volts_model
     from mace_fmu.parameters.sets import deck_values
     from mace_fmu.structure.file import bundled_deck_path
 
-    model = volts_model(configuration)
+    model = volts_model(compute_modes(configuration=configuration))
     system = ParametricSystem(parametric_arrays(model))
     values = deck_values(read_deck(bundled_deck_path()))
     u_sets = [band_limited_inputs(system.inputs, d) for d in DRIVEN]
@@ -86,15 +87,16 @@ def costs(configuration: str, runs: int, folder: Path) -> str:
     import fmpy
     from fmpy.fmi2 import FMU2Slave
 
-    from mace_fmu.fmu.native.export import export_native_fmu
+    from mace_fmu.fe.modes import compute_modes
+    from mace_fmu.fmu.export import export_fmu
     from mace_fmu.iomodel.parametric_data import parametric_arrays
     from mace_fmu.iomodel.volts import volts_model
 
-    model = volts_model(configuration)
+    model = volts_model(compute_modes(configuration=configuration))
     t0 = time.perf_counter()
     arrays = parametric_arrays(model)
     arrays_s = time.perf_counter() - t0
-    fmu = export_native_fmu(model, out_dir=folder, name=f"MACE_{configuration}_native")
+    fmu = export_fmu(model, out_dir=folder, name=f"MACE_{configuration}_native")
     unzipped = fmpy.extract(str(fmu), unzipdir=str(folder / configuration))
     md = fmpy.read_model_description(unzipped)
     vr = {v.name: v.valueReference for v in md.modelVariables}

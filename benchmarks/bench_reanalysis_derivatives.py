@@ -20,10 +20,11 @@ import time
 import control as ct
 import numpy as np
 
+from mace_fmu.fe.modes import compute_modes
 from mace_fmu.iomodel.frf import frequency_response
+from mace_fmu.iomodel.model_options import ModelledElectronics
 from mace_fmu.iomodel.parametric import ParametricSystem
 from mace_fmu.iomodel.parametric_data import parametric_arrays
-from mace_fmu.iomodel.model_options import ModelledElectronics
 from mace_fmu.iomodel.volts import volts_model
 from mace_fmu.parameters.kinds import MODULUS, kind_of_fmu_name
 from mace_fmu.parameters.sets import ParameterSet
@@ -34,13 +35,13 @@ OPTIONS = dict(electronics=ModelledElectronics(servos=False, bessel="none", dela
 
 
 def response_full(name: str, value: float) -> np.ndarray:
-    model = volts_model("1g", parameters=ParameterSet({name: value}), **OPTIONS)
+    model = volts_model(compute_modes(configuration="1g", parameters=ParameterSet({name: value})), **OPTIONS)
     return frequency_response(model.system, FREQUENCIES_HZ)
 
 
 def main() -> None:
     t0 = time.perf_counter()
-    nominal = volts_model("1g", **OPTIONS)
+    nominal = volts_model(compute_modes(configuration="1g"), **OPTIONS)
     system = ParametricSystem(parametric_arrays(nominal))
     names = [n for n in system.parameter_names if kind_of_fmu_name(n) is MODULUS]
     print(f"1-g model, {len(names)} moduli, {nominal.system.ninputs} inputs x {nominal.system.noutputs} outputs, "

@@ -12,7 +12,7 @@ import time
 
 from common import machine_line
 
-from mace_fmu.fmu.native.export import export_native_fmu
+from mace_fmu.fmu.export import export_fmu
 from mace_fmu.util.runner import DaskRunner
 from mace_fmu.zero_g.nominal import predict_zero_g
 from mace_fmu.zero_g.robust.design import design_compensator
@@ -26,7 +26,7 @@ def main(samples: int = 100) -> None:
     t1 = time.perf_counter()
     bounds = prediction_bounds(prediction)
     with tempfile.TemporaryDirectory() as tmp:
-        fmu = export_native_fmu(prediction.model, out_dir=tmp, name="MACE_0g_native", frequency_bounds=bounds)
+        fmu = export_fmu(prediction.model, out_dir=tmp, name="MACE_0g_native", frequency_bounds=bounds)
         t2 = time.perf_counter()
         design = design_compensator(prediction.model.system)
         t3 = time.perf_counter()

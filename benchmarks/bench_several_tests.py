@@ -91,14 +91,15 @@ def main() -> None:
     import dask
     import fmpy
 
-    from mace_fmu.fmu.native.export import export_native_fmu
+    from mace_fmu.fe.modes import compute_modes
+    from mace_fmu.fmu.export import export_fmu
     from mace_fmu.iomodel.volts import volts_model
     from mace_fmu.updating.fmu_model import _LoadedFmu, fmu_family
     from mace_fmu.updating.mace_update import pre_update_parameters
 
     out = Path(args.out or tempfile.mkdtemp(prefix="bench_several_tests_"))
     out.mkdir(parents=True, exist_ok=True)
-    fmu = export_native_fmu(volts_model("1g"), out_dir=out, name="MACE_1g_native")
+    fmu = export_fmu(volts_model(compute_modes(configuration="1g")), out_dir=out, name="MACE_1g_native")
     family = fmu_family(fmu)
     truth = {n: family.interface.parameters[n] * (1 + d) for n, d in OFFSETS.items()}
     pre = pre_update_parameters()

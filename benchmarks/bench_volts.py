@@ -13,6 +13,7 @@ import numpy as np
 from common import machine_line, timed
 
 from mace_fmu.deck.reader import read_deck
+from mace_fmu.fe.modes import compute_modes
 from mace_fmu.iomodel.volts import volts_model
 from mace_fmu.structure.file import bundled_deck_path
 
@@ -26,10 +27,11 @@ def main() -> None:
     print("| case | median [s] | min [s] | notes |")
     print("|---|---|---|---|")
     for kind in ("1g", "0g"):
-        med, mn, model = timed(lambda: volts_model(kind, deck=read_deck(bundled_deck_path())), args.runs)
+        med, mn, model = timed(lambda: volts_model(compute_modes(read_deck(bundled_deck_path()), configuration=kind)),
+                               args.runs)
         print(f"| deck -> {kind} volts-volts model (servos, full Bessel, delays) | {med:.3f} | {mn:.3f} | "
               f"{model.system.nstates} states |")
-    model = volts_model("1g")
+    model = volts_model(compute_modes(configuration="1g"))
     f = np.logspace(np.log10(0.5), np.log10(250.0), 1000)
     t0 = time.perf_counter()
     model.frequency_response(f)

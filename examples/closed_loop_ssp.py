@@ -33,10 +33,12 @@ def state_space_loop(*, parameters: Path | None, steps: int, step_s: float, dist
     """gyro_payload_z [V] at t_0..t_steps of the sampled loop (``closed=False``: the controller's output
     left out), from the state-space models alone."""
     from mace_fmu.cli.controller import lqg_controller
+    from mace_fmu.fe.modes import compute_modes
     from mace_fmu.iomodel.volts import volts_model
     from mace_fmu.parameters.sets import ParameterSet
 
-    plant = volts_model("0g", parameters=ParameterSet.read(parameters) if parameters else None).system
+    plant = volts_model(compute_modes(configuration="0g",
+                                      parameters=ParameterSet.read(parameters) if parameters else None)).system
     sampled = ct.sample_system(plant, step_s, "zoh")
     k = lqg_controller(step_s=step_s)
     ins, outs = list(plant.input_labels), list(plant.output_labels)

@@ -35,7 +35,8 @@ def main(argv: list[str] | None = None) -> dict:
     p.add_argument("--workers", type=int, default=2, help="Dask workers for the FMU runs")
     args = p.parse_args(argv)
 
-    from mace_fmu.fmu.native.export import export_native_fmu
+    from mace_fmu.fe.modes import compute_modes
+    from mace_fmu.fmu.export import export_fmu
     from mace_fmu.iomodel.volts import volts_model
     from mace_fmu.updating.convergence import convergence_report, noise_floor
     from mace_fmu.updating.data import TimeHistory
@@ -50,7 +51,7 @@ def main(argv: list[str] | None = None) -> dict:
 
     out = Path(args.out or tempfile.mkdtemp(prefix="plan_then_update_"))
     out.mkdir(parents=True, exist_ok=True)
-    fmu = export_native_fmu(volts_model("1g"), out_dir=out, name="MACE_1g_native")
+    fmu = export_fmu(volts_model(compute_modes(configuration="1g")), out_dir=out, name="MACE_1g_native")
 
     # 1. the plan: three candidates, before any test
     gimbal = TestDesign(name="gimbal", inputs=GIMBALS, outputs=GYROS, seconds=args.seconds)

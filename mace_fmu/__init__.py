@@ -1,14 +1,25 @@
 """mace-fmu: a NASTRAN deck of a flexible, actively controlled structure to modes, volts-volts models and FMUs.
 
-The names a user starts with, in the order of the data flow (imported on first use, so that
-``import mace_fmu`` stays cheap)::
+Each stage takes the object of the stage before it (the names are imported on first use, so that
+``import mace_fmu`` stays cheap). On the bundled MACE deck:
 
-    deck = mace_fmu.read_deck("my.bdf")                           # the deck as NASTRAN reads it
-    modes = mace_fmu.compute_modes(deck, configuration="0g")      # modes.frequencies_hz, modes.labels
-    model = mace_fmu.volts_model("0g", structure_file="my.toml",  # volts in, volts out
-                                 electronics=mace_fmu.ModelledElectronics(servos=False),
-                                 signals=mace_fmu.SignalSelection(outputs=["tip_z"]))
-    mace_fmu.export_fmu(model, out_dir="fmus")                    # an FMU (native: FMI 2 or 3; or kind="pythonfmu")
+>>> import tempfile
+>>> import mace_fmu
+>>> deck = mace_fmu.read_deck(mace_fmu.bundled_deck_path())           # the deck as NASTRAN reads it
+>>> modes = mace_fmu.compute_modes(deck, configuration="0g", max_hz=5.0)  # labelled modes [Hz]
+>>> [f"{hz:.2f} Hz {label}" for hz, label in zip(modes.frequencies_hz, modes.labels) if hz > 1]
+['2.10 Hz 1st Z bending', '3.07 Hz 1st Y bending']
+>>> model = mace_fmu.volts_model(modes, signals=mace_fmu.SignalSelection(  # volts in, volts out
+...     inputs=["gimbal_secondary_z"], outputs=["gyro_payload_z"]))
+>>> list(model.system.input_labels), list(model.system.output_labels)
+(['gimbal_secondary_z'], ['gyro_payload_z'])
+>>> with tempfile.TemporaryDirectory() as folder:                     # an FMU: native C, FMI 2.0
+...     print(mace_fmu.export_fmu(model, out_dir=folder).name)
+MACE_0g.fmu
+
+Another structure's deck needs a structure file that names its actuators and sensors:
+``compute_modes(read_deck("my.bdf"), configuration="0g", structure_file="my.toml")`` (see
+:mod:`mace_fmu.structure.file`); the stages after it are the same.
 
 The packages follow the same flow, each with its own ``__all__``: :mod:`mace_fmu.deck` (the deck),
 :mod:`mace_fmu.structure` (the structure file; 1-g and 0-g structures), :mod:`mace_fmu.parameters`
@@ -21,10 +32,27 @@ The packages follow the same flow, each with its own ``__all__``: :mod:`mace_fmu
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from mace_fmu.util.lazy import lazy_exports
+
+if TYPE_CHECKING:  # what editors and type checkers follow; at run time a name is imported on first use
+    from mace_fmu.deck.reader import read_deck
+    from mace_fmu.errors import MaceError
+    from mace_fmu.fe.modes import compute_modes
+    from mace_fmu.fmu.controller import DiscreteController, export_controller_fmu
+    from mace_fmu.fmu.export import export_fmu
+    from mace_fmu.iomodel.model_options import ModelledElectronics, SignalSelection
+    from mace_fmu.iomodel.volts import volts_model
+    from mace_fmu.parameters.sets import ParameterSet
+    from mace_fmu.ssp.package import write_ssp
+    from mace_fmu.structure.file import bundled_deck_path, load_structure_file
+    from mace_fmu.updating.fmu_problem import fmu_problem
+    from mace_fmu.updating.fmu_update import update_fmu
 
 __all__, __getattr__, __dir__ = lazy_exports(__name__, {
     "read_deck": "mace_fmu.deck.reader",
+    "bundled_deck_path": "mace_fmu.structure.file",
     "load_structure_file": "mace_fmu.structure.file",
     "compute_modes": "mace_fmu.fe.modes",
     "volts_model": "mace_fmu.iomodel.volts",

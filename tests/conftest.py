@@ -44,10 +44,11 @@ def motion_fmu_0g(tmp_path_factory):
     """
     import fmpy
 
+    from mace_fmu.fe.modes import compute_modes
     from mace_fmu.fmu.export import export_fmu
     from mace_fmu.iomodel.model_options import SignalSelection
     from mace_fmu.iomodel.volts import volts_model
 
-    model = volts_model("0g", signals=SignalSelection(motion_grids="all"))
-    fmu = export_fmu(model, out_dir=tmp_path_factory.mktemp("motion_fmu"), name="MACE_0g_motion", kind="pythonfmu")
+    model = volts_model(compute_modes(configuration="0g"), signals=SignalSelection(motion_grids="all"))
+    fmu = export_fmu(model, out_dir=tmp_path_factory.mktemp("motion_fmu"), name="MACE_0g_motion", runtime="pythonfmu")
     return model, fmu, fmpy.extract(str(fmu), unzipdir=str(tmp_path_factory.mktemp("motion_unzipped")))

@@ -17,6 +17,15 @@ def test_the_api_shows_examples():
     assert {"mace_fmu.compute_modes", "mace_fmu.volts_model"} <= set(EXAMPLES)
 
 
+def test_the_package_docstring_walks_the_stages_on_the_bundled_deck():
+    """The example ``help(mace_fmu)`` shows runs: deck, 0-g modes (Table 5.1's 2.10 and 3.07 Hz), a
+    one-channel volts-volts model and its native FMU."""
+    finder, runner = doctest.DocTestFinder(), doctest.DocTestRunner(optionflags=doctest.ELLIPSIS)
+    (test,) = [t for t in finder.find(mace_fmu, "mace_fmu", globs={}) if t.name == "mace_fmu"]
+    assert len(test.examples) >= 6
+    assert runner.run(test).failed == 0
+
+
 def test_every_docstring_example_runs():
     failures = []
     for dotted in EXAMPLES:

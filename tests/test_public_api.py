@@ -99,10 +99,38 @@ def test_the_spellings_removed_before_the_first_release_are_refused_by_name():
     with pytest.raises(TypeError, match="structure"):
         compute_modes(structure="0g", max_hz=3.5)
     with pytest.raises(TypeError, match="servos"):
-        volts_model("0g", servos=False)
+        volts_model(compute_modes(configuration="0g"), servos=False)
     head = '[provenance]\ncreated = "2026-11-24T00:00:00+00:00"\ntool = "mace-fmu"\n'
     with pytest.raises(MaceError, match=r"\[provenance\] has unknown key\(s\) \['structure'\]"):
         ParameterSet.from_toml(head + 'structure = "0g"\n\n[values]\nE_lexan_center = 2.4e9\n')
     with pytest.raises(SystemExit) as stopped:
         main(["update", "--sample-problem"])
     assert stopped.value.code == 2
+
+
+def test_every_lazy_package_shows_its_names_to_type_checkers():
+    """A package's ``if TYPE_CHECKING:`` imports (what editors and type checkers follow) are exactly its lazy
+    table: every public name, from the module that defines it at run time."""
+    import ast
+    import importlib
+    import inspect
+    import pkgutil
+
+    import mace_fmu
+
+    packages = ["mace_fmu"] + [m.name for m in pkgutil.walk_packages(mace_fmu.__path__, "mace_fmu.") if m.ispkg]
+    checked = 0
+    for name in packages:
+        package = importlib.import_module(name)
+        table = getattr(getattr(package, "__getattr__", None), "modules", None)
+        if table is None:  # a package that imports its names eagerly
+            continue
+        tree = ast.parse(inspect.getsource(package))
+        guarded = [node for node in tree.body
+                   if isinstance(node, ast.If) and getattr(node.test, "id", "") == "TYPE_CHECKING"]
+        assert len(guarded) == 1, f"{name}: no `if TYPE_CHECKING:` block"
+        shown = {alias.name: node.module for node in guarded[0].body if isinstance(node, ast.ImportFrom)
+                 for alias in node.names}
+        assert shown == dict(table), name
+        checked += 1
+    assert checked >= 12

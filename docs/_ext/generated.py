@@ -70,6 +70,7 @@ def api_pages() -> None:
              "models, FMUs and SSP packages, updating, Appendix A studies, the 0-g prediction; ``util`` holds what "
              "they share.", "", ".. toctree::", "   :maxdepth: 1", ""]
     home = {}  # public name -> the package whose page documents it
+    stubs = set()  # the autosummary stubs the pages ask for: "package.Name"
     for name in PACKAGES[1:]:
         for public in importlib.import_module(name).__all__:
             home.setdefault(public, name)
@@ -91,7 +92,12 @@ def api_pages() -> None:
                     lines += [f".. autodata:: {defined_in.get(public, name)}.{public}", "   :no-index:", ""]
         _write(DOCS / "reference" / "api" / f"{name}.rst", "\n".join(lines) + "\n")
         index.append(f"   {name}")
+        stubs |= {f"{name}.{public}" for public, obj in objects.items() if not _is_data(obj)}
     _write(DOCS / "reference" / "api" / "index.rst", "\n".join(index) + "\n")
+    # autosummary writes a stub per name and never removes one: a name that left an __all__ would stay, unlisted
+    for stub in (DOCS / "reference" / "api" / "generated").glob("*.rst"):
+        if stub.stem not in stubs:
+            stub.unlink()
 
 
 def _commands(parser: argparse.ArgumentParser, prefix: str = "mace-fmu"):
@@ -206,6 +212,7 @@ def _cell(value) -> str:
 
 def fmu_variables_page() -> None:
     """The variables of the MACE FMUs (both kinds carry the same), from ``fmu_variables`` itself."""
+    from mace_fmu.fe.modes import compute_modes
     from mace_fmu.fmu.native.model_description import fmu_variables
     from mace_fmu.iomodel.parametric import ParametricSystem
     from mace_fmu.iomodel.parametric_data import parametric_arrays
@@ -218,7 +225,7 @@ def fmu_variables_page() -> None:
              "same names, units, descriptions and start values. How the parameters act is in the "
              "[FMU guide](../guide/fmus.md).", ""]
     for kind in ("1g", "0g"):
-        arrays = parametric_arrays(volts_model(kind))
+        arrays = parametric_arrays(volts_model(compute_modes(configuration=kind)))
         variables = fmu_variables(arrays, ParametricSystem(arrays).state_names)
         count = {c: sum(v.causality == c for v in variables) for c in
                  ("input", "output", "parameter", "calculatedParameter", "local")}

@@ -46,8 +46,7 @@ for f, label in zip(modes.frequencies_hz, modes.labels):
 # the payload Z rate gyro [V], modes up to 10 Hz, the Bessel filters as their equivalent delay.
 
 # %%
-model = volts_model("0g", modes=modes,
-                    electronics=ModelledElectronics(bessel="delay"),
+model = volts_model(modes, electronics=ModelledElectronics(bessel="delay"),
                     signals=SignalSelection(inputs=["gimbal_secondary_z"], outputs=["gyro_payload_z"]))
 print(model.system.nstates, "states;", model.electronics.describe())
 

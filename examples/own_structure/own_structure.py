@@ -65,7 +65,7 @@ def exact_zoh_error(model, fmu: Path, *, seconds: float = 2.0, step_s: float = 2
 def main(out: Path) -> dict:
     from mace_fmu.deck.reader import read_deck
     from mace_fmu.fe.modes import compute_modes
-    from mace_fmu.fmu.native.export import export_native_fmu
+    from mace_fmu.fmu.export import export_fmu
     from mace_fmu.iomodel.volts import volts_model
     from viewer import animate_modes, write_animation_html
 
@@ -84,12 +84,12 @@ def main(out: Path) -> dict:
             page = out / "spacecraft_0g_modes.html"
             write_animation_html(animation, page, title="spacecraft in orbit: flexible modes")
             print(f"wrote {page}")
-    model = volts_model("0g", deck=deck, structure_file=STRUCTURE)
+    model = volts_model(compute_modes(deck, configuration="0g", structure_file=STRUCTURE))
     print(f"0g volts-volts model: {model.system.nstates} states, inputs {', '.join(model.system.input_labels)}, "
           f"outputs {', '.join(model.system.output_labels)}")
     summary["zoh_error"] = {}
     for version in (2, 3):
-        fmu = export_native_fmu(model, out_dir=out, name=f"spacecraft_0g_native{'_fmi3' if version == 3 else ''}",
+        fmu = export_fmu(model, out_dir=out, name=f"spacecraft_0g_native{'_fmi3' if version == 3 else ''}",
                                 fmi_version=version)
         print(f"wrote {fmu}")
         error = exact_zoh_error(model, fmu)

@@ -146,6 +146,7 @@ def volts(args: argparse.Namespace, *, parameter_set=_FROM_ARGS, every_grid_move
     ``every_grid_moves`` adds every grid's motion as outputs whatever ``--motion-grids`` says.
     """
     from mace_fmu.deck.reader import read_deck
+    from mace_fmu.fe.modes import compute_modes
     from mace_fmu.iomodel.model_options import ModelledElectronics, SignalSelection
     from mace_fmu.iomodel.volts import volts_model
 
@@ -153,7 +154,7 @@ def volts(args: argparse.Namespace, *, parameter_set=_FROM_ARGS, every_grid_move
     electronics = ModelledElectronics(servos=not args.no_servos, bessel=args.bessel, delays=not args.no_delays,
                                       pade_order=args.pade_order)
     grids = "all" if every_grid_moves else motion_grids(getattr(args, "motion_grids", None))
-    return volts_model(args.configuration, max_hz=args.max_hz, preload=args.preload, deck=read_deck(args.deck),
-                       parameters=parameters(args) if parameter_set is _FROM_ARGS else parameter_set,
-                       structure_file=getattr(args, "structure_file", None),
-                       electronics=electronics, signals=SignalSelection(motion_grids=grids))
+    modes = compute_modes(read_deck(args.deck), configuration=args.configuration, preload=args.preload,
+                          max_hz=args.max_hz, structure_file=getattr(args, "structure_file", None),
+                          parameters=parameters(args) if parameter_set is _FROM_ARGS else parameter_set)
+    return volts_model(modes, electronics=electronics, signals=SignalSelection(motion_grids=grids))

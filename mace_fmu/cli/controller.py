@@ -17,13 +17,14 @@ def lqg_controller(*, step_s: float):
     """
     import control as ct
 
+    from mace_fmu.fe.modes import compute_modes
     from mace_fmu.fmu.controller import DiscreteController
     from mace_fmu.iomodel.volts import volts_model
     from mace_fmu.zero_g.robust.design import design_compensator
     from mace_fmu.zero_g.robust.loop import LoopSpec
 
     loop = LoopSpec(step_s=step_s)
-    design = design_compensator(volts_model("0g").system, loop=loop)
+    design = design_compensator(volts_model(compute_modes(configuration="0g")).system, loop=loop)
     sampled = ct.sample_system(design.lqg.compensator, step_s, method="zoh")
     return DiscreteController(a=sampled.A, b=sampled.B, c=sampled.C, d=sampled.D, sample_time_s=step_s,
                               inputs=(loop.measurement,), outputs=(loop.control_input,))

@@ -10,9 +10,9 @@ from mace_fmu.errors import MaceError
 
 
 def cmd_export(args: argparse.Namespace) -> int:
-    from mace_fmu.fmu.naming import fmu_model_name, model_prefix
-    if args.kind == "pythonfmu" and args.fmi_version != 2:
-        raise MaceError("--fmi-version 3 needs --kind native (pythonfmu FMUs are FMI 2.0)")
+    from mace_fmu.fmu.naming import model_fmu_name
+    if args.runtime == "pythonfmu" and args.fmi_version != 2:
+        raise MaceError("--fmi-version 3 needs --runtime native (pythonfmu FMUs are FMI 2.0)")
     if args.frequency_bounds and not Path(args.frequency_bounds).is_file():
         raise MaceError(f"--frequency-bounds {args.frequency_bounds}: no such file")
     if args.controller and not args.ssp:
@@ -28,13 +28,11 @@ def cmd_export(args: argparse.Namespace) -> int:
         from mace_fmu.zero_g.table import read_frequency_bounds
 
         bounds = read_frequency_bounds(args.frequency_bounds, mode_labels=model.plant.labels)
-    name = fmu_model_name(args.configuration, kind=args.kind, fmi_version=args.fmi_version,
-                    motion_grids=model.plant.motion_grids, all_grids=model.structure_modes.modes.dofs.grid_ids,
-                    variant=model_variant(args), prefix=model_prefix(model))
-    progress(f"{args.kind} FMU {name}.fmu")
+    name = model_fmu_name(model, runtime=args.runtime, fmi_version=args.fmi_version, variant=model_variant(args))
+    progress(f"{args.runtime} FMU {name}.fmu")
     from mace_fmu.fmu.export import export_fmu
 
-    path = export_fmu(model, kind=args.kind, fmi_version=args.fmi_version, out_dir=args.out, name=name,
+    path = export_fmu(model, runtime=args.runtime, fmi_version=args.fmi_version, out_dir=args.out, name=name,
                       frequency_bounds=bounds)
     print(f"wrote {path}")
     return 0
@@ -48,7 +46,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="output directory (writes e.g. MACE_1g_native.fmu; with --motion-grids "
                    "MACE_1g_native_motion.fmu; with --parameters P.toml MACE_1g_native_P.fmu, with "
                    "--frequency-bounds too MACE_0g_native_P_bounded.fmu: never the plain model's name)")
-    p.add_argument("--kind", choices=["native", "pythonfmu"], default="native",
+    p.add_argument("--runtime", choices=["native", "pythonfmu"], default="native",
                    help="native: C runtime, no Python needed in the host, FMI 2.0 co-simulation and model exchange "
                         "(default); pythonfmu: FMI 2.0 co-simulation through Python")
     p.add_argument("--fmi-version", type=int, choices=[2, 3], default=2,

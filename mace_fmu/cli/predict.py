@@ -39,11 +39,11 @@ def cmd_predict(args: argparse.Namespace) -> int:
     if args.fmu:  # first: an export that fails leaves no tables behind
         from mace_fmu.fmu.naming import fmu_model_name, model_prefix
 
-        name = fmu_model_name("0g", kind=args.kind, prefix=model_prefix(prediction.model)) + "_nominal"
-        say(f"{args.kind} FMU {name}.fmu with the frequency bounds")
+        name = fmu_model_name("0g", runtime=args.runtime, prefix=model_prefix(prediction.model)) + "_nominal"
+        say(f"{args.runtime} FMU {name}.fmu with the frequency bounds")
         from mace_fmu.fmu.export import export_fmu
 
-        paths["fmu"] = export_fmu(prediction.model, kind=args.kind, out_dir=out, name=name,
+        paths["fmu"] = export_fmu(prediction.model, runtime=args.runtime, out_dir=out, name=name,
                                   frequency_bounds=prediction.frequency_bounds)
     if out is not None:
         paths.update(write_prediction(prediction, out))
@@ -73,9 +73,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="write table_5_3.csv/.toml/.txt and zero_g_nominal.toml (the parameter set of the nominal "
                         "model, for export/build --parameters) into DIR")
     p.add_argument("--fmu", action="store_true", help="also export the nominal 0-g FMU with the bounds as the "
-                   "min/max of its frequency_scale_mode_<k> (MACE_0g_<kind>_nominal.fmu in DIR; another deck's FMU is "
-                   "named after its file)")
-    p.add_argument("--kind", choices=["native", "pythonfmu"], default="native", help="FMU kind (default native)")
+                   "min/max of its frequency_scale_mode_<k> (MACE_0g_<runtime>_nominal.fmu in DIR; another deck's "
+                   "FMU is named after its file)")
+    p.add_argument("--runtime", choices=["native", "pythonfmu"], default="native",
+                   help="what runs inside the FMU: native (C, default) or pythonfmu")
     p.add_argument("--json", action="store_true", help="print the rows as JSON (label, nominal_hz, damping, "
                    "bound_percent, ...) instead of the table")
     p.add_argument("--heavy-damping", type=float, default=0.10,

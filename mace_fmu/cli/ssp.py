@@ -12,7 +12,7 @@ from mace_fmu.errors import MaceError
 
 def export_ssp(args: argparse.Namespace) -> int:
     """Build the plant FMU (FE part of --parameters built in) and write it with the rest of the set as an SSV."""
-    from mace_fmu.fmu.naming import fmu_model_name
+    from mace_fmu.fmu.naming import model_fmu_name
     from mace_fmu.ssp import SspComponent, write_ssp
     from mace_fmu.ssp.binding import fmu_start_values, split_parameters
     from mace_fmu.ssp.package import wiring_by_name
@@ -32,16 +32,13 @@ def export_ssp(args: argparse.Namespace) -> int:
 
         bounds = read_frequency_bounds(args.frequency_bounds, mode_labels=model.plant.labels)
     from mace_fmu.cli.export import model_variant
-    from mace_fmu.fmu.naming import model_prefix
 
-    name = fmu_model_name(args.configuration, kind=args.kind, fmi_version=2, motion_grids=model.plant.motion_grids,
-                    all_grids=model.structure_modes.modes.dofs.grid_ids, variant=model_variant(args),
-                    prefix=model_prefix(model))
+    name = model_fmu_name(model, runtime=args.runtime, variant=model_variant(args))
     with tempfile.TemporaryDirectory(prefix="mace_ssp_") as tmp:
-        progress(f"{args.kind} FMU {name}.fmu")
+        progress(f"{args.runtime} FMU {name}.fmu")
         from mace_fmu.fmu.export import export_fmu
 
-        fmu = export_fmu(model, kind=args.kind, fmi_version=2, out_dir=tmp, name=name, frequency_bounds=bounds)
+        fmu = export_fmu(model, runtime=args.runtime, fmi_version=2, out_dir=tmp, name=name, frequency_bounds=bounds)
         import fmpy
 
         tunable = [v.name for v in fmpy.read_model_description(str(fmu)).modelVariables

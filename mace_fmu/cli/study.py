@@ -101,6 +101,7 @@ def cmd_reduced_order(args: argparse.Namespace) -> int:
 def _bounds(args: argparse.Namespace) -> tuple[object, dict[int, float], str]:
     """(nominal 0-g volts model, 1-based mode -> relative bound, where the bounds come from)."""
     from mace_fmu.cli.common import parameters
+    from mace_fmu.fe.modes import compute_modes
     from mace_fmu.iomodel.volts import volts_model
 
     if args.bound and args.frequency_bounds:
@@ -110,7 +111,7 @@ def _bounds(args: argparse.Namespace) -> tuple[object, dict[int, float], str]:
     if args.bound or args.frequency_bounds:
         params = parameters(args)
         progress("0-g volts model" + (f" with {args.parameters}" if params is not None else " (nominal, not updated)"))
-        model = volts_model("0g", parameters=params)
+        model = volts_model(compute_modes(configuration="0g", parameters=params))
     if args.frequency_bounds:
         from mace_fmu.zero_g.table import read_frequency_bounds
 

@@ -134,7 +134,8 @@ def cmd_view_response(args: argparse.Namespace) -> int:
         progress(f"{args.configuration} volts-volts model with the motion of every grid")
         model = volts(args, every_grid_moves=True)
         modes = model.structure_modes
-        fmu = export_fmu(model, out_dir=out_dir, kind="pythonfmu")  # the name `mace-fmu export --motion-grids all` gives it
+        # the name `mace-fmu export --motion-grids all` gives it
+        fmu = export_fmu(model, out_dir=out_dir, runtime="pythonfmu")
         print(f"wrote {fmu} (reuse it with --fmu)")
     progress(f"simulating {args.duration} s of {args.signal} on {args.input} through fmpy")
     run = simulate_input_response(fmu, input_name=args.input, signal=args.signal, duration_s=args.duration,

@@ -9,7 +9,15 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from mace_fmu.util.lazy import lazy_exports
+
+if TYPE_CHECKING:  # what editors and type checkers follow; at run time a name is imported on first use
+    from mace_fmu.control_studies.cantilever import cantilever_model
+    from mace_fmu.control_studies.lqg import LqgDesign, LqgWeights, design_lqg
+    from mace_fmu.control_studies.reduced_order import reduced_order_study
+    from mace_fmu.control_studies.stiffness_sensitivity import sensitivity_map
 
 __all__, __getattr__, __dir__ = lazy_exports(__name__, {
     "design_lqg": "lqg",

@@ -5,7 +5,6 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any, Mapping
 
 import numpy as np
 
@@ -22,10 +21,10 @@ from mace_fmu.fe.modal import Modes, solve_modes
 from mace_fmu.fe.preload import Preload, PreloadKind, large_displacement_preload, linear_preload
 from mace_fmu.parameters.sets import ParameterSet, deck_fingerprint, fe_overrides, naming_the_file, parameter_names
 from mace_fmu.structure.build import Structure, build_structure
-from mace_fmu.structure.file import Configuration, StructureFile, StructureSpec, bundled_deck_path, structure_file_for
+from mace_fmu.structure.file import Configuration, StructureFile, bundled_deck_path, structure_file_for
+from mace_fmu.util.frequency import DEFAULT_MAX_HZ
 from mace_fmu.util.progress import ProgressCallback
 from mace_fmu.util.threads import single_blas_thread
-from mace_fmu.util.frequency import DEFAULT_MAX_HZ
 
 
 
@@ -53,6 +52,18 @@ class StructureModes:
     auto_constrained: tuple[tuple[int, int], ...] = ()
     #: the modal subcase's constraints (SPC, MPC, rigid elements, AUTOSPC): the shapes are T @ phi_independent
     constraints: Constraints | None = None
+    #: the parameter set the modes were computed with (its moduli and springs are in ``structure.deck``)
+    parameters: ParameterSet | None = None
+
+    @property
+    def configuration(self) -> Configuration:
+        """"1g" or "0g": the structure the modes are of."""
+        return self.structure.configuration
+
+    @property
+    def deck(self) -> Deck:
+        """The deck the modes are of (0-g: without the suspension; with the parameter set's moduli)."""
+        return self.structure.deck
 
     @property
     def stiffness(self):
@@ -195,10 +206,9 @@ def _check_preload_elements(deck: Deck) -> None:
 @single_blas_thread
 def compute_modes(deck: Deck | str | os.PathLike | None = None, *, configuration: Configuration = "1g",
                   preload: PreloadKind = "large", mass: MassKind = "lumped", max_hz: float | None = None,
-                  overrides: Mapping[tuple[str, int], Mapping[str, Any]] | None = None,
-                  spec: StructureSpec | None = None, progress: ProgressCallback | None = None,
                   parameters: ParameterSet | None = None,
-                  structure_file: StructureFile | str | os.PathLike | None = None) -> StructureModes:
+                  structure_file: StructureFile | str | os.PathLike | None = None,
+                  progress: ProgressCallback | None = None) -> StructureModes:
     """Modes of the 1-g or 0-g structure of a deck, labelled, with the structure's mass properties.
 
     Parameters
@@ -215,20 +225,16 @@ def compute_modes(deck: Deck | str | os.PathLike | None = None, *, configuration
         PARAM,COUPMASS > 0 also selects).
     max_hz : float or None
         Highest mode [Hz]; by default the deck's EIGRL/EIGR decides (V1, V2, ND), else 250 Hz.
-    overrides : mapping, optional
-        Card fields replaced, ``{("MAT1", 2): {"e": 2.3e9}}`` (see :func:`mace_fmu.structure.build.apply_overrides`).
-    spec : StructureSpec, optional
-        The structure file's content, when already read.
-    progress : callable, optional
-        Called with a :class:`~mace_fmu.util.progress.Step` after each preload increment; nothing is
-        printed (the increments are also logged at DEBUG level).
     parameters : ParameterSet, optional
-        Moduli [Pa] and spring stiffnesses [N/m] by name (``E_<material>``, ``k_<spring>``); its other
-        entries act in the later stages.
+        Moduli [Pa] and spring stiffnesses [N/m] by name (``E_<material>``, ``k_<spring>``); the modes keep
+        the set, whose other entries (delays, gains, damping) :func:`~mace_fmu.iomodel.volts.volts_model` takes.
     structure_file : StructureFile, path or None
         What the deck does not say (see :mod:`mace_fmu.structure.file`): by default the bundled one for
         the bundled deck and none for any other deck, which then keeps NASTRAN's meaning (nothing
         removed; modes labelled by their motion, not by MACE's names).
+    progress : callable, optional
+        Called with a :class:`~mace_fmu.util.progress.Step` after each preload increment; nothing is
+        printed (the increments are also logged at DEBUG level).
 
     Returns
     -------
@@ -255,11 +261,12 @@ def compute_modes(deck: Deck | str | os.PathLike | None = None, *, configuration
     if not isinstance(deck, Deck):
         deck = read_deck(deck if deck is not None else bundled_deck_path())
     file = structure_file_for(deck, structure_file)
+    overrides = None
     if parameters is not None:
         with naming_the_file(parameters):
             check_parameters_deck(parameters, deck)
-            overrides = {**fe_overrides(parameters, parameter_names(deck, file)), **(overrides or {})}
-    struct = build_structure(deck, configuration=configuration, spec=spec, overrides=overrides, structure_file=file)
+            overrides = fe_overrides(parameters, parameter_names(deck, file))
+    struct = build_structure(deck, configuration=configuration, overrides=overrides, structure_file=file)
     model = assemble(struct.deck, mass=mass)
     props = mass_properties(model, struct.deck)
     stiffness, pre = model.stiffness, None
@@ -293,4 +300,5 @@ def compute_modes(deck: Deck | str | os.PathLike | None = None, *, configuration
                         state=pre.state if pre is not None else None,
                         bar_forces=pre.bar_forces if pre is not None else None)
     return StructureModes(structure=struct, model=model, modes=modes, mass_properties=props, preload=pre,
-                          auto_constrained=removed, constraints=modal)
+                          auto_constrained=removed, constraints=modal,
+                          parameters=parameters if parameters is not None and len(parameters) else None)

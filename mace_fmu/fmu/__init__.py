@@ -3,12 +3,19 @@ discrete controller as an FMU, checks of written FMUs, and FMU simulation."""
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from mace_fmu.util.lazy import lazy_exports
+
+if TYPE_CHECKING:  # what editors and type checkers follow; at run time a name is imported on first use
+    from mace_fmu.fmu.archive import check_fmu
+    from mace_fmu.fmu.controller import DiscreteController, export_controller_fmu
+    from mace_fmu.fmu.export import export_fmu
+    from mace_fmu.fmu.naming import fmu_model_name
+    from mace_fmu.fmu.simulate import FmuRun, simulate_input_response
 
 __all__, __getattr__, __dir__ = lazy_exports(__name__, {
     "export_fmu": "export",
-    "export_pythonfmu": "export",
-    "export_native_fmu": "mace_fmu.fmu.native.export",
     "DiscreteController": "controller",
     "export_controller_fmu": "controller",
     "check_fmu": "archive",

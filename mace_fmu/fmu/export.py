@@ -25,7 +25,7 @@ import numpy as np
 from pythonfmu.builder import FmuBuilder
 
 from mace_fmu.errors import MaceError
-from mace_fmu.fmu.naming import fmu_model_name
+from mace_fmu.fmu.naming import model_fmu_name
 from mace_fmu.fmu.variables import DEFAULT_EXPERIMENT, model_summary, variable_unit
 from mace_fmu.iomodel import modal_core, parametric, reanalysis
 from mace_fmu.iomodel.parametric_data import parametric_arrays, with_frequency_bounds
@@ -122,10 +122,10 @@ def _entry_script(name: str, description: str) -> str:
                                   prefix=_CACHE_PREFIX)
 
 
-FmuKind = Literal["native", "pythonfmu"]
+FmuRuntime = Literal["native", "pythonfmu"]
 
 
-def export_fmu(model: VoltsModel, *, kind: FmuKind = "native", fmi_version: int = 2, out_dir: str | Path = ".",
+def export_fmu(model: VoltsModel, *, runtime: FmuRuntime = "native", fmi_version: int = 2, out_dir: str | Path = ".",
                name: str | None = None, arrays: dict[str, np.ndarray] | None = None,
                frequency_bounds: Mapping[int, float] | None = None) -> Path:
     """Write ``model`` as an FMU ``out_dir/<name>.fmu`` and return its path: the one export call.
@@ -134,13 +134,14 @@ def export_fmu(model: VoltsModel, *, kind: FmuKind = "native", fmi_version: int 
     ----------
     model : VoltsModel
         The volts-volts model (inputs and outputs in V).
-    kind : {"native", "pythonfmu"}
-        "native": the C runtime, FMI 2.0 CS + ME or FMI 3.0 CS (:func:`mace_fmu.fmu.native.export.export_native_fmu`);
-        "pythonfmu": a Python slave (numpy and scipy), FMI 2.0 CS only (:func:`export_pythonfmu`).
+    runtime : {"native", "pythonfmu"}
+        What runs inside the FMU. "native": our C runtime, compiled here, FMI 2.0 CS + ME or FMI 3.0 CS
+        (no Python needed by the importer); "pythonfmu": a Python slave (numpy and scipy), FMI 2.0 CS only.
     fmi_version : {2, 3}
-        FMI version; 3 for the native kind only.
+        FMI version; 3 for the native runtime only.
     out_dir, name
-        Where, and the model identifier (default: each kind's own, e.g. ``MACE_1g``).
+        Where (created if needed), and the model identifier (default from :func:`fmu_model_name`: ``MACE_1g``,
+        ``MACE_1g_motion``, ...).
     arrays
         The model's parametric arrays if already computed.
     frequency_bounds
@@ -149,28 +150,29 @@ def export_fmu(model: VoltsModel, *, kind: FmuKind = "native", fmi_version: int 
     Raises
     ------
     MaceError
-        An unknown kind, or FMI 3 asked of the pythonfmu kind.
+        An unknown runtime, FMI 3 asked of pythonfmu, or a name that is not a C identifier.
 
     Returns
     -------
     Path
         ``out_dir/<name>.fmu``.
     """
-    if kind == "native":
+    name = name or model_fmu_name(model)
+    if runtime == "native":
         from mace_fmu.fmu.native.export import export_native_fmu
 
         return export_native_fmu(model, out_dir=out_dir, name=name, fmi_version=fmi_version, arrays=arrays,
                                  frequency_bounds=frequency_bounds)
-    if kind != "pythonfmu":
-        raise MaceError(f"FMU kind must be 'native' or 'pythonfmu', got {kind!r}")
+    if runtime != "pythonfmu":
+        raise MaceError(f"runtime must be 'native' or 'pythonfmu', got {runtime!r}")
     if fmi_version != 2:
-        raise MaceError(f"pythonfmu writes FMI 2.0 FMUs only, not FMI {fmi_version}: export the native kind")
-    return export_pythonfmu(model, out_dir=out_dir, name=name, arrays=arrays, frequency_bounds=frequency_bounds)
+        raise MaceError(f"pythonfmu writes FMI 2.0 FMUs only, not FMI {fmi_version}: export with runtime='native'")
+    return _export_pythonfmu(model, out_dir=out_dir, name=name, arrays=arrays, frequency_bounds=frequency_bounds)
 
 
-def export_pythonfmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str | None = None,
-                     arrays: dict[str, np.ndarray] | None = None,
-                     frequency_bounds: Mapping[int, float] | None = None) -> Path:
+def _export_pythonfmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str | None = None,
+                      arrays: dict[str, np.ndarray] | None = None,
+                      frequency_bounds: Mapping[int, float] | None = None) -> Path:
     """Write an FMI 2.0 co-simulation FMU of ``model`` with pythonfmu and return its path.
 
     Parameters
@@ -197,9 +199,6 @@ def export_pythonfmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str 
     MaceError
         A name that is not an identifier.
     """
-    kind = model.structure_modes.structure.configuration
-    name = name or fmu_model_name(kind, motion_grids=model.plant.motion_grids,
-                            all_grids=model.structure_modes.model.dofs.grid_ids)
     if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", name):
         raise MaceError(f"FMU name must be a Python/C identifier (it names the model class), got {name!r}")
     out = Path(out_dir)

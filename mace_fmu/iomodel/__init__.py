@@ -3,7 +3,19 @@ delays), its parameters, poles and frequency responses."""
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from mace_fmu.util.lazy import lazy_exports
+
+if TYPE_CHECKING:  # what editors and type checkers follow; at run time a name is imported on first use
+    from mace_fmu.iomodel.bode import bode_report
+    from mace_fmu.iomodel.frf import frequency_response
+    from mace_fmu.iomodel.instruments import Actuator, Instruments, Sensor, load_instruments
+    from mace_fmu.iomodel.modal_ss import ModalPlant, modal_plant
+    from mace_fmu.iomodel.model_options import ModelledElectronics, SignalSelection
+    from mace_fmu.iomodel.parametric import ParametricSystem
+    from mace_fmu.iomodel.poles import ClosedLoopPole, closed_loop_poles
+    from mace_fmu.iomodel.volts import VoltsModel, apply_parameters, scale_frequencies, select_signals, volts_model
 
 __all__, __getattr__, __dir__ = lazy_exports(__name__, {
     "VoltsModel": "volts",

@@ -10,6 +10,7 @@ import numpy as np
 from matplotlib.figure import Figure  # no pyplot: the caller's backend and figures stay untouched
 
 from mace_fmu.deck.cards import Deck
+from mace_fmu.fe.modes import compute_modes
 from mace_fmu.iomodel.volts import VoltsModel, volts_model
 from mace_fmu.structure.file import StructureFile
 from mace_fmu.util.atomic import save_figure_atomic
@@ -58,7 +59,7 @@ def bode_report(deck: Deck | None = None, *, structure_file: StructureFile | str
     for kind in ("1g", "0g"):
         if progress:
             progress(f"{kind} volts-volts model")
-        models[kind] = volts_model(kind, deck=deck, structure_file=structure_file)
+        models[kind] = volts_model(compute_modes(deck, configuration=kind, structure_file=structure_file))
         responses[kind] = models[kind].frequency_response(f)  # all channels at once, then indexed
     paths = []
     for u, y, title in CHANNELS:

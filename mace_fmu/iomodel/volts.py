@@ -13,18 +13,15 @@ is a commanded relative angle (1 V = 1 deg) and the computational delay sits ins
 
 from __future__ import annotations
 
-import os
 from dataclasses import dataclass, replace
 from functools import cached_property
-from typing import Any, Mapping, Sequence
+from typing import Sequence
 
 import control as ct
 import numpy as np
 
-from mace_fmu.deck.cards import Deck
 from mace_fmu.errors import MaceError
-from mace_fmu.fe.modes import StructureModes, compute_modes
-from mace_fmu.fe.preload import PreloadKind
+from mace_fmu.fe.modes import StructureModes
 from mace_fmu.iomodel.damping import modal_damping
 from mace_fmu.iomodel.frf import frequency_response
 from mace_fmu.iomodel.instruments import SPEED_LOOP_GAINS, Instruments, load_instruments, resolve_bar_gauges
@@ -34,7 +31,6 @@ from mace_fmu.iomodel.motion import parse_motion_output
 from mace_fmu.parameters.kinds import (DAMPING, DELAY, FREQUENCY_SCALE, SERVO_GAINS, ParameterKind, mode_label,
                                        split_loop_name)
 from mace_fmu.parameters.sets import ParameterSet, fe_overrides, naming_the_file, parameter_names
-from mace_fmu.structure.file import Configuration, StructureFile
 from mace_fmu.util.frequency import ZERO_HZ
 from mace_fmu.util.threads import single_blas_thread
 from modelica_like import PD, Gain, LowPassFilter, PadeDelay, StateSpace, Sum, System
@@ -53,6 +49,16 @@ class VoltsModel:
     instruments: Instruments  #: actuators, sensors, electronics, loops and damping it was built with
     electronics: ModelledElectronics  #: which electronics the model contains, and how
     parameters: ParameterSet | None = None  #: the parameter set it was built with (None: the deck's and file's)
+
+    @property
+    def configuration(self) -> str:
+        """"1g" or "0g": the structure the model is of."""
+        return self.structure_modes.configuration
+
+    @property
+    def grid_ids(self) -> tuple[int, ...]:
+        """Every grid of the model's structure (the ones whose motion can be an output)."""
+        return tuple(self.structure_modes.modes.dofs.grid_ids)
 
     def frequency_response(self, frequencies_hz: np.ndarray) -> np.ndarray:
         """H[k, output, input] [V/V] at ``frequencies_hz`` [Hz], all channels at once.
@@ -224,40 +230,25 @@ def build_diagram(plant: ModalPlant, instruments: Instruments, *,
 
 
 @single_blas_thread
-def volts_model(configuration: Configuration = "1g", *, modes: StructureModes | None = None,
-                deck: Deck | str | None = None, preload: PreloadKind | None = None,
-                structure_file: StructureFile | str | os.PathLike | None = None, max_hz: float | None = None,
-                parameters: ParameterSet | None = None, instruments: Instruments | None = None,
-                electronics: ModelledElectronics = ModelledElectronics(), signals: SignalSelection = SignalSelection()
-                ) -> VoltsModel:
-    """Volts-volts model of the 1-g or 0-g structure: actuator volts in, sensor volts out.
+def volts_model(modes: StructureModes, *, parameters: ParameterSet | None = None,
+                instruments: Instruments | None = None, electronics: ModelledElectronics = ModelledElectronics(),
+                signals: SignalSelection = SignalSelection(), max_hz: float | None = None) -> VoltsModel:
+    """Volts-volts model of the structure whose modes are given: actuator volts in, sensor volts out.
 
     Inputs: gimbal commands (relative angle, 1 V = 1 deg, with servos; motor volts without), wheel speed
     commands and active strut volts. Outputs: the sensors in volts (MACE: 20), then any grid motion.
-    Three groups of arguments, one stage each: where the modes come from, the modelled electronics
-    (one record), the signals kept (one record).
+    The modes fix the structure (deck, structure file, 1-g or 0-g, preload, moduli); the records say
+    which electronics are modelled and which signals are kept.
 
     Parameters
     ----------
-    configuration : {"1g", "0g"}
-        The suspended, gravity-preloaded structure or the free one.
-    modes : StructureModes, optional
-        Modes computed before (:func:`~mace_fmu.fe.modes.compute_modes`); they fix the deck, the
-        structure file, the preload and the moduli, so giving any of those too is an error.
-    deck : Deck or path, optional
-        The NASTRAN deck (default: the bundled MACE deck).
-    preload : {"large", "linear"}, optional
-        The 1-g gravity preload (default "large").
-    structure_file : StructureFile or path, optional
-        Declares the actuators and sensors (default: the bundled one for the bundled deck; see
-        :mod:`mace_fmu.structure.file`).
-    max_hz : float, optional
-        Highest retained mode [Hz] (default: the modes the deck's EIGRL asks for, else those up to 250 Hz).
+    modes : StructureModes
+        The modes of the 1-g or 0-g structure (:func:`~mace_fmu.fe.modes.compute_modes`).
     parameters : ParameterSet, optional
-        Moduli [Pa] and spring stiffnesses [N/m] (in the FE model; with ``modes``, the ones they were
-        computed with), delays [s] (defaults: Tables 4.5 and 4.6 from the structure file), servo gains,
-        and open-loop damping ratios and frequency scales by mode label (as in
-        ``compute_modes(...).modes.labels``, e.g. "1st Z bending").
+        Delays [s] (defaults: Tables 4.5 and 4.6 from the structure file), servo gains, and open-loop
+        damping ratios and frequency scales by mode label (as in ``modes.labels``, e.g. "1st Z bending").
+        By default the set the modes were computed with; a set given here replaces it, and its moduli
+        [Pa] and spring stiffnesses [N/m], if any, must be those the modes were computed with.
     instruments : Instruments, optional
         Replaces the structure file's actuators, sensors, electronics, servos and damping.
     electronics : ModelledElectronics
@@ -266,6 +257,8 @@ def volts_model(configuration: Configuration = "1g", *, modes: StructureModes | 
     signals : SignalSelection
         The inputs and outputs kept (default: all) and the grids whose motion [m, rad] is added as
         outputs (default: none).
+    max_hz : float, optional
+        Highest retained mode [Hz] (default: every mode given).
 
     Returns
     -------
@@ -280,41 +273,43 @@ def volts_model(configuration: Configuration = "1g", *, modes: StructureModes | 
 
     Examples
     --------
-    >>> from mace_fmu import SignalSelection, volts_model
-    >>> model = volts_model("0g", max_hz=5.0, signals=SignalSelection(inputs=["gimbal_secondary_z"],
-    ...                                                               outputs=["gyro_payload_z"]))
+    >>> from mace_fmu import SignalSelection, compute_modes, volts_model
+    >>> modes = compute_modes(configuration="0g", max_hz=5.0)
+    >>> model = volts_model(modes, signals=SignalSelection(inputs=["gimbal_secondary_z"], outputs=["gyro_payload_z"]))
     >>> model.system.ninputs, model.system.noutputs
     (1, 1)
     """
+    _check(isinstance(modes, StructureModes),
+           f"modes must be the StructureModes of compute_modes(...), got {type(modes).__name__}")
     _check(isinstance(electronics, ModelledElectronics),
            f"electronics must be a ModelledElectronics record, got {type(electronics).__name__}")
     _check(isinstance(signals, SignalSelection),
            f"signals must be a SignalSelection record, got {type(signals).__name__}")
-    _check(configuration in ("1g", "0g"), f"configuration must be '1g' or '0g', got {configuration!r}")
-    if modes is not None:
-        _check_modes_agree(modes, configuration=configuration, parameters=parameters,
-                           given={"deck": deck, "preload": preload, "structure_file": structure_file})
+    if parameters is None:
+        parameters = modes.parameters
     else:
-        modes = compute_modes(deck, configuration=configuration, preload=preload or "large",
-                              max_hz=max(max_hz, 1.0) if max_hz is not None else None,
-                              parameters=parameters, structure_file=structure_file)
+        _check_moduli_agree(modes, parameters)
+    configuration = modes.structure.configuration
     file = modes.structure.file
     if instruments is None:
         if file is None or not file.has("actuators") or not file.has("sensors"):
             raise MaceError(f"{modes.structure.deck.path}: a volts-volts model needs actuators and sensors, and this "
-                            "deck has no structure file declaring them (give one: structure_file=..., CLI --structure "
-                            "FILE; the bundled mace_em.toml belongs to the bundled MACE deck only)")
+                            "deck has no structure file declaring them (give one: "
+                            "compute_modes(..., structure_file=...), CLI --structure FILE; the bundled mace_em.toml "
+                            "belongs to the bundled MACE deck only)")
         instruments = load_instruments(file)
     instruments = resolve_bar_gauges(instruments, modes.model, modes.structure.deck)
-    # the moduli and springs must name cards, whether or not modes were given
+    # the moduli and springs must name cards
     with naming_the_file(parameters):
         fe_overrides(parameters, parameter_names(modes.structure.deck, file))
         instruments = apply_parameters(instruments, parameters, modes.labels, configuration=configuration)
         modes = scale_frequencies(modes, parameters, configuration=configuration)
     flexible = modes.frequencies_hz[np.abs(modes.frequencies_hz) >= ZERO_HZ]
+    _check(len(flexible) > 0, f"the {configuration} modes have no flexible mode (the highest is at "
+                              f"{np.max(modes.frequencies_hz):.3g} Hz); compute more: compute_modes(..., max_hz=...)")
     if max_hz is None:
         max_hz = float(np.max(modes.frequencies_hz))
-    _check(len(flexible) > 0 and max_hz >= flexible.min(),
+    _check(max_hz >= flexible.min(),
            f"max_hz = {max_hz} Hz is below the first flexible mode ({flexible.min():.3f} Hz); allowed: >= that")
     zeta = modal_damping(modes.labels, modes.frequencies_hz, instruments.damping)
     grids = modes.modes.dofs.grid_ids
@@ -334,23 +329,17 @@ def volts_model(configuration: Configuration = "1g", *, modes: StructureModes | 
                       parameters=parameters if parameters is not None and len(parameters) else None)
 
 
-def _check_modes_agree(modes: StructureModes, *, configuration: str, parameters: ParameterSet | None,
-                       given: Mapping[str, Any]) -> None:
-    """Refuse a model whose given ``modes`` contradict the other arguments (they would be ignored)."""
-    doubled = [name for name, value in given.items() if value is not None]
-    _check(not doubled, f"modes= already fix the deck, preload and structure file they were computed with; drop "
-                        f"{', '.join(f'{name}=' for name in doubled)} (or drop modes= to compute them)")
-    _check(modes.structure.configuration == configuration,
-           f"modes= are of the {modes.structure.configuration} structure, the model asked for is {configuration}")
+def _check_moduli_agree(modes: StructureModes, parameters: ParameterSet) -> None:
+    """Refuse a set whose moduli or springs differ from those the modes were computed with (they would be ignored)."""
     deck = modes.structure.deck
     for (card, cid), fields in fe_overrides(parameters, parameter_names(deck, modes.structure.file)).items():
         entry = (deck.mat1s if card == "MAT1" else deck.celas2s)[cid]
         for key, value in fields.items():
             computed = float(getattr(entry, key))
             _check(abs(computed - value) <= 1e-12 * abs(value),
-                   f"parameters set {card} {cid} {key} = {value:.6g} but modes= were computed with {computed:.6g}; "
-                   "compute the modes with the same parameters (compute_modes(..., parameters=...)) or leave "
-                   "modes= out")
+                   f"parameters set {card} {cid} {key} = {value:.6g} but the modes were computed with "
+                   f"{computed:.6g}; compute the modes with the same parameters (compute_modes(..., parameters=...)), "
+                   "whose set the model then takes by default")
 
 
 def apply_parameters(instruments: Instruments, parameters: ParameterSet | None, mode_labels: Sequence[str], *,

@@ -3,7 +3,13 @@ frozen, provenance-carrying parameter set every stage takes (SI units, TOML in a
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from mace_fmu.util.lazy import lazy_exports
+
+if TYPE_CHECKING:  # what editors and type checkers follow; at run time a name is imported on first use
+    from mace_fmu.parameters.kinds import KINDS, ParameterKind, declared_range, kind_of_fmu_name, kind_of_set_name
+    from mace_fmu.parameters.sets import ParameterNames, ParameterSet, Provenance, load_parameter_names, parameter_names
 
 __all__, __getattr__, __dir__ = lazy_exports(__name__, {
     "ParameterSet": "sets",

@@ -7,7 +7,7 @@ re-solve (as ``mace-fmu export --parameters`` does). Frequency scales are built 
 (its min/max) are relative to the nominal model, so the FMU is built at the nominal scales and its
 own scales stay 1 within 1 -+ bound. Damping ratios, delays and servo gains are exact as FMU
 parameters: they become the SSV's start values, so the package's model equals
-``volts_model(parameters=set)`` and a colleague can change them without rebuilding.
+``volts_model(compute_modes(..., parameters=set))`` and a colleague can change them without rebuilding.
 """
 
 from __future__ import annotations

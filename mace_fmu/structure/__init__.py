@@ -3,7 +3,15 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from mace_fmu.util.lazy import lazy_exports
+
+if TYPE_CHECKING:  # what editors and type checkers follow; at run time a name is imported on first use
+    from mace_fmu.structure.build import Structure, apply_overrides, build_structure, remove_suspension
+    from mace_fmu.structure.file import (STRUCTURE_FILE_TABLES, Configuration, StructureFile, StructureSpec,
+                                         bundled_deck_path, bundled_structure_path, load_structure_file,
+                                         structure_file_for)
 
 __all__, __getattr__, __dir__ = lazy_exports(__name__, {
     "StructureFile": "file",

@@ -106,7 +106,7 @@ class MaceFamily:
         if self._reference is not None:  # labels (and the damping ratios keyed by them) follow the mode
             ref = self._reference.volts.structure_modes
             modes = dataclasses.replace(modes, modes=carry_labels(ref.modes, ref.model, modes.modes))
-        volts = volts_model(self.configuration, modes=modes, parameters=self._non_modal(params), max_hz=self.max_hz)
+        volts = volts_model(modes, parameters=self._non_modal(params), max_hz=self.max_hz)
         solution = MaceSolution(volts, physical)
         self.solves += 1
         self._cache[key] = solution
@@ -184,8 +184,8 @@ class MaceFamily:
         carried = np.array([vector[system.index(DAMPING.fmu_name(k + 1))] for k in range(len(system.mode_labels))])
         out = dict(values)
         for _ in range(3):
-            fresh = volts_model(self.configuration, deck=self.deck, preload=self.preload, max_hz=self.max_hz,
-                                parameters=self.parameter_set(out)).plant
+            fresh = volts_model(compute_modes(self.deck, configuration=self.configuration, preload=self.preload,
+                                              max_hz=self.max_hz, parameters=self.parameter_set(out))).plant
             differ = np.flatnonzero(fresh.damping != carried)
             if not differ.size:
                 return out
@@ -196,8 +196,7 @@ class MaceFamily:
     def volts_model(self, values: Values) -> VoltsModel:
         """The full volts-volts model (python-control, exact FRF) at ``values``."""
         params = self.parameter_set(values)
-        return volts_model(self.configuration, modes=self.solution(values).volts.structure_modes, parameters=params,
-                           max_hz=self.max_hz)
+        return volts_model(self.solution(values).volts.structure_modes, parameters=params, max_hz=self.max_hz)
 
 
 class MaceBasis:

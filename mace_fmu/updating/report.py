@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from mace_fmu.fe.modes import compute_modes
 from mace_fmu.iomodel.bode import plot_bode
 from mace_fmu.iomodel.volts import volts_model
 from mace_fmu.updating.mace_update import (MaceUpdate, cost_history, format_mode_rows, format_moduli, format_table_4_1,
@@ -96,7 +97,8 @@ def _bode_overlays(outcome: MaceUpdate, out: Path) -> list[Path]:
     f = np.logspace(np.log10(0.5), np.log10(60.0), 1200)  # the update band
     fam = outcome.family
     models = {"pre-update": fam.volts_model(outcome.result.start), "updated (ours)": fam.volts_model(outcome.result.values),
-              "thesis final (bundled deck)": volts_model("1g", deck=fam.deck, preload=fam.preload)}
+              "thesis final (bundled deck)": volts_model(compute_modes(fam.deck, configuration="1g",
+                                                                       preload=fam.preload))}
     responses = {k: m.frequency_response(f) for k, m in models.items()}
     paths = []
     for u, y, title in BODE_CHANNELS:

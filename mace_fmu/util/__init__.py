@@ -3,7 +3,15 @@ reports, the Dask runner for many model runs, one BLAS thread for small matrices
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from mace_fmu.util.lazy import lazy_exports
+
+if TYPE_CHECKING:  # what editors and type checkers follow; at run time a name is imported on first use
+    from mace_fmu.util.atomic import write_text_atomic
+    from mace_fmu.util.progress import ProgressCallback, Step
+    from mace_fmu.util.runner import DaskRunner
+    from mace_fmu.util.textfile import read_toml
 
 __all__, __getattr__, __dir__ = lazy_exports(__name__, {
     "DaskRunner": "runner",

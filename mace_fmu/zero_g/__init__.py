@@ -4,7 +4,13 @@ those bounds (:mod:`mace_fmu.zero_g.robust`)."""
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from mace_fmu.util.lazy import lazy_exports
+
+if TYPE_CHECKING:  # what editors and type checkers follow; at run time a name is imported on first use
+    from mace_fmu.zero_g.nominal import BoundRule, ZeroGPrediction, ZeroGRow, predict_zero_g
+    from mace_fmu.zero_g.table import format_table, read_frequency_bounds, table_5_3, write_prediction
 
 __all__, __getattr__, __dir__ = lazy_exports(__name__, {
     "predict_zero_g": "nominal",

@@ -8,7 +8,8 @@ mode behind it are adjusted until its closed-loop 0-g pole is the unaltered one 
 ratio measured / model (frequency and damping alike). Heavily damped modes (servo-dominated,
 zeta >= 10 %) are left as they are, as in the thesis: Table 5.3 keeps them at their Table 5.2
 values. The adjustments are ordinary parameters (``frequency_scale:<label>``,
-``damping:<label>``), so the nominal model is ``volts_model("0g", parameters=...)`` like any other.
+``damping:<label>``), so the nominal model is
+``volts_model(compute_modes(configuration="0g", parameters=...))`` like any other.
 
 Bounds (:class:`BoundRule`): lightly damped modes the larger of 1 % and half the absolute
 residual 1-g frequency error; heavily damped modes +-2.5 %.
@@ -29,6 +30,7 @@ from scipy.optimize import least_squares
 
 from mace_fmu.deck.cards import Deck
 from mace_fmu.errors import MaceError
+from mace_fmu.fe.modes import compute_modes
 from mace_fmu.iomodel.model_options import ModelledElectronics
 from mace_fmu.iomodel.parametric import ParametricSystem
 from mace_fmu.iomodel.parametric_data import parametric_arrays
@@ -115,7 +117,7 @@ class ZeroGPrediction:
     """The updated nominal 0-g model with its bounds, and the parameter set that builds it."""
 
     rows: tuple[ZeroGRow, ...]  #: one row per mode of Table 5.3
-    parameters: ParameterSet  #: volts_model("0g", parameters=this) is the nominal model
+    parameters: ParameterSet  #: volts_model(compute_modes(configuration="0g", parameters=this)): the nominal model
     model: VoltsModel  #: the updated nominal 0-g model
     rule: BoundRule  #: the rule that set the frequency bounds
     source: str  #: which measurement model the residual errors come from
@@ -353,11 +355,11 @@ def predict_zero_g(*, parameters: ParameterSet | None = None, measured: Sequence
     if not any(zero_g_patterns):
         raise MaceError("no measured mode has a 0-g counterpart (every pattern_0g is empty)")
     say("1-g closed-loop model and the residual errors")
-    v1 = volts_model("1g", parameters=parameters, deck=deck, structure_file=structure_file)
+    v1 = volts_model(compute_modes(deck, configuration="1g", structure_file=structure_file, parameters=parameters))
     p1 = closed_loop_poles(v1)
     i1 = _pair([(m.label, m.pattern, m.frequency_hz) for m in measured], p1, what="the 1-g model")
     say("0-g closed-loop model")
-    v0 = volts_model("0g", parameters=parameters, deck=deck, structure_file=structure_file)
+    v0 = volts_model(compute_modes(deck, configuration="0g", structure_file=structure_file, parameters=parameters))
     p0 = closed_loop_poles(v0)
     kept = [k for k, pattern in enumerate(zero_g_patterns) if pattern]
     i0 = _pair([(measured[k].label, zero_g_patterns[k], p1[i1[k]].frequency_hz) for k in kept], p0,
@@ -373,8 +375,7 @@ def predict_zero_g(*, parameters: ParameterSet | None = None, measured: Sequence
     target_zeta = np.array([p0[i0[j]].damping * measured[kept[j]].damping / p1[i1[kept[j]]].damping
                             for j in adjusted])
     # the output filters sit outside every loop: the closed-loop structural poles are those of the model without them
-    core = volts_model("0g", parameters=parameters, modes=v0.structure_modes,
-                       electronics=ModelledElectronics(bessel="none"))
+    core = volts_model(v0.structure_modes, parameters=parameters, electronics=ModelledElectronics(bessel="none"))
     adjuster = _Adjuster(core, modes)
     x, pinned = _solve_adjustment(adjuster, target_hz, target_zeta)
     for j in np.flatnonzero(pinned):
@@ -397,7 +398,7 @@ def predict_zero_g(*, parameters: ParameterSet | None = None, measured: Sequence
     nominal_set = ParameterSet({**base, **updates}, provenance)
 
     say("updated nominal 0-g model")
-    nominal = volts_model("0g", parameters=nominal_set, modes=v0.structure_modes)
+    nominal = volts_model(v0.structure_modes, parameters=nominal_set)
     pn = closed_loop_poles(nominal)
     near = [p0[i].frequency_hz for i in i0]
     for j, hz in zip(adjusted, target_hz):
@@ -420,8 +421,7 @@ def predict_zero_g(*, parameters: ParameterSet | None = None, measured: Sequence
             if mode is not None else 1.0,
             open_loop_damping=float(nominal.plant.damping[mode]) if mode is not None else math.nan,
             adjusted=j in adjusted, damping_reached=j not in adjusted or not pinned[adjusted.index(j)]))
-    core = volts_model("0g", parameters=nominal_set, modes=v0.structure_modes,
-                       electronics=ModelledElectronics(bessel="none"))
+    core = volts_model(v0.structure_modes, parameters=nominal_set, electronics=ModelledElectronics(bessel="none"))
     rows = _with_closed_loop_shifts(rows, core)
     return ZeroGPrediction(rows=tuple(rows), parameters=nominal_set, model=nominal, rule=rule, source=source,
                            dropped=tuple(measured[k].label for k, p in enumerate(zero_g_patterns) if not p))

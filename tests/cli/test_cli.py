@@ -144,7 +144,7 @@ def test_bad_motion_grids_give_one_line_errors(capsys, tmp_path, value, message)
 @pytest.mark.slow
 @pytest.mark.parametrize("options, stem, fmi_version", [([], "MACE_0g_native", "2.0"),
                                                         (["--fmi-version", "3"], "MACE_0g_native_fmi3", "3.0"),
-                                                        (["--kind", "pythonfmu"], "MACE_0g_pythonfmu", "2.0")])
+                                                        (["--runtime", "pythonfmu"], "MACE_0g_pythonfmu", "2.0")])
 def test_export_writes_the_kind_it_is_asked_for_under_a_name_that_says_so(capsys, tmp_path, options, stem,
                                                                           fmi_version):
     import fmpy
@@ -181,8 +181,8 @@ def test_an_fmu_of_a_parameter_set_is_named_after_it_and_says_where_it_comes_fro
 
 
 def test_export_refuses_fmi3_for_pythonfmu(capsys, tmp_path):
-    code, _, err = _run(capsys, ["export", "0g", "-o", str(tmp_path), "--kind", "pythonfmu", "--fmi-version", "3"])
-    assert code == 2 and "--fmi-version 3 needs --kind native" in err.strip().splitlines()[-1]
+    code, _, err = _run(capsys, ["export", "0g", "-o", str(tmp_path), "--runtime", "pythonfmu", "--fmi-version", "3"])
+    assert code == 2 and "--fmi-version 3 needs --runtime native" in err.strip().splitlines()[-1]
     assert not list(tmp_path.iterdir())
 
 
@@ -194,8 +194,8 @@ def test_fmu_names_say_which_outputs_an_fmu_has():
     assert fmu_model_name("0g", motion_grids=grids, all_grids=grids) == "MACE_0g_motion"
     assert fmu_model_name("0g", motion_grids=[7, 1, 7], all_grids=grids) == "MACE_0g_motion_1_7"
     assert fmu_model_name("0g", motion_grids=grids[:10], all_grids=grids) == "MACE_0g_motion_10_grids"
-    assert fmu_model_name("1g", kind="native", fmi_version=3) == "MACE_1g_native_fmi3"
-    assert fmu_model_name("0g", kind="pythonfmu", motion_grids=[1], all_grids=grids) == "MACE_0g_pythonfmu_motion_1"
+    assert fmu_model_name("1g", runtime="native", fmi_version=3) == "MACE_1g_native_fmi3"
+    assert fmu_model_name("0g", runtime="pythonfmu", motion_grids=[1], all_grids=grids) == "MACE_0g_pythonfmu_motion_1"
 
 
 def test_hz_text_shows_the_zero_frequency_cluster_as_zero():

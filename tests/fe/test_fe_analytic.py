@@ -15,15 +15,11 @@ from mace_fmu.fe.constraints import build_constraints
 from mace_fmu.fe.modal import solve_modes
 from mace_fmu.fe.modes import compute_modes, gravity_load
 from mace_fmu.fe.preload import geometric_stiffness
-from mace_fmu.structure.file import StructureSpec
 
 # Steel-like solid round bar, 1 m
 E, NU, RHO, L = 2.0e11, 0.3, 7800.0, 1.0
 D = 0.02
 AREA, INERTIA = math.pi * D**2 / 4, math.pi * D**4 / 64
-
-EMPTY_SPEC = StructureSpec(suspension_grids=frozenset(), suspension_elements=frozenset(), components={},
-                           mechanisms=(), source="test")
 
 
 def modes_of(text: str, *, spc: int | None = None, max_hz: float | None = None, mass: str = "lumped"):
@@ -86,7 +82,7 @@ def test_taut_string_violin_frequencies_from_geometric_stiffness(preload):
                         direction=(0.0, -1.0, 0.0), ps="345")
     bulk += [f"CONM2,900,41,,{r(mass_end)}", "SPC1,1,123456,1", "SPC1,1,1,41"]
     result = compute_modes(read_deck_text(_hanging_spec_deck(bulk, static_spc=1, modal_spc=1)), configuration="1g",
-                           preload=preload, spec=EMPTY_SPEC, max_hz=400.0)
+                           preload=preload, max_hz=400.0)
     mu = rho * area
     tension = mass_end * 9.81 + 0.5 * mu * length * 9.81  # mean tension along the string
     exact = np.arange(1, 4) / (2 * length) * math.sqrt(tension / mu)
@@ -104,7 +100,7 @@ def test_pendulum_frequency_from_gravity_preload(preload):
     # the pin is locked for the static preload (as MACE's gimbals are) and released for the modes
     bulk += ["CONM2,900,5,,2.0", "SPC1,1,123456,1", "SPC1,2,123,1"]
     result = compute_modes(read_deck_text(_hanging_spec_deck(bulk, static_spc=1, modal_spc=2)), configuration="1g",
-                           preload=preload, spec=EMPTY_SPEC, max_hz=50.0)
+                           preload=preload, max_hz=50.0)
     assert result.frequencies_hz[0] == pytest.approx(math.sqrt(9.81 / length) / (2 * math.pi), rel=1e-2)
 
 

@@ -22,7 +22,8 @@ from fmpy.fmi2 import FMU2Model, FMU2Slave
 from fmpy.fmi3 import FMU3Slave
 from test_native_fmu import Messages, _slave, _vr
 
-from mace_fmu.fmu.native.export import export_native_fmu
+from mace_fmu.fe.modes import compute_modes
+from mace_fmu.fmu.export import export_fmu
 from mace_fmu.iomodel.volts import volts_model
 
 pytestmark = pytest.mark.slow  # the module builds native FMUs of both models first
@@ -34,10 +35,10 @@ PHASE_OFFSET = HDR + 8  # the model's phase field, after its magic (mace_model.c
 
 @pytest.fixture(scope="module")
 def fmus(tmp_path_factory):
-    model = volts_model("0g")
+    model = volts_model(compute_modes(configuration="0g"))
     out = tmp_path_factory.mktemp("conform")
-    fmi2 = export_native_fmu(model, out_dir=out, name="MACE_0g_conform")
-    fmi3 = export_native_fmu(model, out_dir=out, name="MACE_0g_conform3", fmi_version=3)
+    fmi2 = export_fmu(model, out_dir=out, name="MACE_0g_conform")
+    fmi3 = export_fmu(model, out_dir=out, name="MACE_0g_conform3", fmi_version=3)
     extract = lambda f: fmpy.extract(str(f), unzipdir=str(tmp_path_factory.mktemp(f.stem)))  # noqa: E731
     return type("F", (), {"model": model, "dir2": extract(fmi2), "dir3": extract(fmi3)})
 

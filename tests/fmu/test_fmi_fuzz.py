@@ -17,7 +17,8 @@ import fmpy
 import pytest
 from support.paths import ROOT, SUPPORT
 
-from mace_fmu.fmu.native.export import export_native_fmu
+from mace_fmu.fe.modes import compute_modes
+from mace_fmu.fmu.export import export_fmu
 from mace_fmu.iomodel.volts import volts_model
 
 pytestmark = pytest.mark.slow  # random call sequences, some under valgrind
@@ -30,10 +31,10 @@ SEEDS, LENGTH = 30, 40  # 90 sequences, 3,600 calls
 
 @pytest.fixture(scope="module")
 def folders(tmp_path_factory) -> dict[str, str]:
-    model = volts_model("0g")
+    model = volts_model(compute_modes(configuration="0g"))
     out = tmp_path_factory.mktemp("fuzz")
-    fmi2 = export_native_fmu(model, out_dir=out, name="MACE_0g_fuzz")
-    fmi3 = export_native_fmu(model, out_dir=out, name="MACE_0g_fuzz3", fmi_version=3)
+    fmi2 = export_fmu(model, out_dir=out, name="MACE_0g_fuzz")
+    fmi3 = export_fmu(model, out_dir=out, name="MACE_0g_fuzz3", fmi_version=3)
     return {"fmi2": fmpy.extract(str(fmi2), unzipdir=str(out / "fmi2")),
             "fmi3": fmpy.extract(str(fmi3), unzipdir=str(out / "fmi3"))}
 

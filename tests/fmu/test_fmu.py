@@ -19,16 +19,20 @@ from support.fmu_checks import (DURATION, check_close, initialised_slave, make_i
                                 run_in_libcosim, run_steps, value_references, zoh_reference)
 from support.paths import EXAMPLES
 
+from mace_fmu.deck.reader import read_deck
+from mace_fmu.fe.modes import compute_modes
 from mace_fmu.fmu.export import export_fmu
 from mace_fmu.iomodel.model_options import ModelledElectronics, SignalSelection
 from mace_fmu.iomodel.motion import MOTION_COMPONENTS
 from mace_fmu.iomodel.volts import volts_model
+from mace_fmu.structure.build import apply_overrides
+from mace_fmu.structure.file import bundled_deck_path
 
 
 @pytest.fixture(scope="module", params=["1g", "0g"])
 def built(request, tmp_path_factory):
-    model = volts_model(request.param)
-    fmu = export_fmu(model, out_dir=tmp_path_factory.mktemp("fmu"), kind="pythonfmu")
+    model = volts_model(compute_modes(configuration=request.param))
+    fmu = export_fmu(model, out_dir=tmp_path_factory.mktemp("fmu"), runtime="pythonfmu")
     unzipped = fmpy.extract(str(fmu), unzipdir=str(tmp_path_factory.mktemp("unzipped")))
     return model, fmu, unzipped
 
@@ -131,7 +135,8 @@ def test_libcosim_gives_the_same_outputs_as_fmpy(built):
 
 @pytest.fixture(scope="module")
 def fmu_1g(tmp_path_factory):
-    return export_fmu(volts_model("1g"), out_dir=tmp_path_factory.mktemp("fmu_1g"), kind="pythonfmu")
+    return export_fmu(volts_model(compute_modes(configuration="1g")), out_dir=tmp_path_factory.mktemp("fmu_1g"),
+                      runtime="pythonfmu")
 
 
 @pytest.mark.slow
@@ -190,7 +195,7 @@ def test_fmu_runs_in_a_fresh_venv_without_mace_fmu(fmu_1g, tmp_path):
     out = subprocess.run([str(python), str(script), str(fmu_1g)], check=True, capture_output=True, text=True,
                          cwd=tmp_path)
     fresh = np.array(json.loads(out.stdout.strip().splitlines()[-1]))
-    model = volts_model("1g")
+    model = volts_model(compute_modes(configuration="1g"))
     t = np.arange(0, 0.2001, 0.002)
     u = np.zeros((model.system.ninputs, len(t)))
     u[list(model.system.input_labels).index("gimbal_secondary_z")] = 1.0
@@ -210,9 +215,10 @@ def test_instantiate_simulate_free_cycles_do_not_grow_memory(tmp_path):
     small model (15 states: 10 ms a cycle against 87 ms for the 1-g model) stands in. After 300
     warm-up cycles (the allocator's pools settle: about 5 MB) 500 cycles grew the resident set by
     2.2-2.5 MB in four runs; at most 8 MB is allowed (16 kB per cycle): the leak would give 26 MB."""
-    model = volts_model("0g", max_hz=5.0, electronics=ModelledElectronics(servos=False, bessel="none", delays=False),
+    model = volts_model(compute_modes(configuration="0g", max_hz=5.0),
+                        electronics=ModelledElectronics(servos=False, bessel="none", delays=False),
                         signals=SignalSelection(inputs=["gimbal_secondary_z"], outputs=["gyro_payload_z"]))
-    fmu_small = export_fmu(model, out_dir=tmp_path, kind="pythonfmu", name="small")
+    fmu_small = export_fmu(model, out_dir=tmp_path, runtime="pythonfmu", name="small")
     unzipped = fmpy.extract(str(fmu_small), unzipdir=str(tmp_path / "unzipped"))
     ins, outs = value_references(unzipped)
     in_vr, out_vr = [ins["gimbal_secondary_z"]], [outs["gyro_payload_z"]]
@@ -265,7 +271,6 @@ def test_physical_parameter_reanalysis_matches_the_fe_rebuild(built):
     """E of Lexan center +5 % set in the FMU (Ritz reanalysis on the retained modes, eq. 4.6-4.9)
     against the FE core rebuilt with that modulus: every flexible mode within 1e-3 (measured 2.8e-4
     in 0-g, 7.8e-4 in 1-g, where the stiffness change is taken about the sagged configuration)."""
-    from mace_fmu.fe.modes import compute_modes
 
     model, _, unzipped = built
     kind = model.structure_modes.structure.configuration
@@ -273,7 +278,8 @@ def test_physical_parameter_reanalysis_matches_the_fe_rebuild(built):
     fmu = initialised_slave(model, unzipped, {"E_lexan_center": 1.05 * e})
     ours = _frequencies(fmu, unzipped)
     fmu.freeInstance()
-    rebuilt = compute_modes(configuration=kind, overrides={("MAT1", 2): {"e": 1.05 * e}}).modes
+    rebuilt = compute_modes(apply_overrides(read_deck(bundled_deck_path()), {("MAT1", 2): {"e": 1.05 * e}}),
+                            configuration=kind).modes
     ref, labels = rebuilt.frequencies_hz[:len(ours)], rebuilt.labels[:len(ours)]
     nominal = model.plant.frequencies_hz
     flexible = np.abs(ref) > 0.01
@@ -286,7 +292,6 @@ def test_reanalysed_modes_keep_their_index_through_a_frequency_crossing(motion_f
     """The piezo stack modulus x 1.5 (the top of its declared range) lifts 2nd Y bending (8.638 Hz) above
     2nd Z bending (8.667 Hz). frequency_mode_k (and damping_mode_k) must follow the physical mode: checked
     against the FE rebuild, whose modes are labelled from their energy distributions."""
-    from mace_fmu.fe.modes import compute_modes
 
     model, _, unzipped = motion_fmu_0g
     md = fmpy.read_model_description(unzipped)
@@ -295,7 +300,9 @@ def test_reanalysed_modes_keep_their_index_through_a_frequency_crossing(motion_f
     fmu = initialised_slave(model, unzipped, {param.name: 1.5 * float(param.start)})
     ours = _frequencies(fmu, unzipped)
     fmu.freeInstance()
-    rebuilt = compute_modes(configuration="0g", overrides={("MAT1", mid): {"e": 1.5 * float(param.start)}}).modes
+    deck = read_deck(bundled_deck_path())
+    rebuilt = compute_modes(apply_overrides(deck, {("MAT1", mid): {"e": 1.5 * float(param.start)}}),
+                            configuration="0g").modes
     labels = list(model.plant.labels)
     y, z = labels.index("2nd Y bending"), labels.index("2nd Z bending")
     want = {k: rebuilt.frequencies_hz[list(rebuilt.labels).index(labels[k])] for k in (y, z)}
@@ -321,8 +328,7 @@ def test_parameters_rebuild_the_same_model_as_volts_model(built, change):
     else:
         k = list(model.plant.labels).index("1st Z bending")
         start, values = {f"damping_mode_{k + 1}": 0.05}, {"damping:1st Z bending": 0.05}
-    rebuilt = volts_model(model.structure_modes.structure.configuration, modes=model.structure_modes,
-                          parameters=ParameterSet(values))
+    rebuilt = volts_model(model.structure_modes, parameters=ParameterSet(values))
     t = np.arange(0.0, 0.4, 2e-3)
     u = make_inputs("multisine", t, model.system.ninputs)
     fmu = initialised_slave(model, unzipped, start)
@@ -393,5 +399,6 @@ def test_export_leaves_no_cached_implementation_behind(tmp_path):
     from mace_fmu.fmu.export import _CACHE_PREFIX
 
     before = {k for k in sys.modules if k.startswith(_CACHE_PREFIX)}
-    export_fmu(volts_model("0g", max_hz=20.0), out_dir=tmp_path, name="MACE_0g_small", kind="pythonfmu")
+    export_fmu(volts_model(compute_modes(configuration="0g", max_hz=20.0)), out_dir=tmp_path, name="MACE_0g_small",
+               runtime="pythonfmu")
     assert {k for k in sys.modules if k.startswith(_CACHE_PREFIX)} == before

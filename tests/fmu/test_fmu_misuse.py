@@ -29,6 +29,7 @@ from support.paths import SUPPORT
 
 from mace_fmu.cli import main
 from mace_fmu.errors import MaceError
+from mace_fmu.fe.modes import compute_modes
 from mace_fmu.fmu.archive import check_fmu
 from mace_fmu.fmu.export import export_fmu
 from mace_fmu.fmu.simulate import simulate_input_response
@@ -44,8 +45,8 @@ OK, DISCARD, ERROR = 0, 2, 3
 @pytest.fixture(scope="module")
 def fmu_0g(tmp_path_factory):
     """(model, FMU file, extracted folder) of the 0-g model; the folder outlives every worker."""
-    model = volts_model("0g")
-    fmu = export_fmu(model, out_dir=tmp_path_factory.mktemp("misuse_fmu"), kind="pythonfmu")
+    model = volts_model(compute_modes(configuration="0g"))
+    fmu = export_fmu(model, out_dir=tmp_path_factory.mktemp("misuse_fmu"), runtime="pythonfmu")
     return model, fmu, fmpy.extract(str(fmu), unzipdir=str(tmp_path_factory.mktemp("misuse_unzipped")))
 
 
@@ -181,8 +182,8 @@ def test_simulate_and_the_cli_raise_with_the_fmus_logged_reason(fmu_0g, tmp_path
                                         r"refused: non-finite input value\(s\): rwa_z"):
         simulate_input_response(fmu, input_name="rwa_z", amplitude_v=float("nan"), duration_s=0.01)
     # view response --fmu takes only an FMU with grid motion outputs (one grid is enough)
-    motion = export_fmu(volts_model("0g", modes=model.structure_modes, signals=SignalSelection(motion_grids=[16])),
-                        out_dir=tmp_path, kind="pythonfmu")
+    motion = export_fmu(volts_model(model.structure_modes, signals=SignalSelection(motion_grids=[16])),
+                        out_dir=tmp_path, runtime="pythonfmu")
     code = main(["view", "response", "0g", "--input", "rwa_z", "--amplitude", "nan", "--duration", "0.01",
                  "--fmu", str(motion), "--html", str(tmp_path / "r.html")])
     last = capsys.readouterr().err.splitlines()[-1]  # the lines before are progress
@@ -193,7 +194,8 @@ def test_an_in_process_simulation_leaves_fmpys_logger_alive_for_the_next_fmu(tmp
     """simulate_input_response(in_subprocess=False) gives fmpy a logger that is collected on return, and fmpy's
     C proxy keeps a pointer to it: the next FMU that logged through fmpy's default callbacks died of SIGSEGV
     (measured before the repair: exit -11). Now the refusal is reported and the process ends normally."""
-    model = volts_model("0g", max_hz=5.0, signals=SignalSelection(inputs=["gimbal_secondary_z"],
+    model = volts_model(compute_modes(configuration="0g", max_hz=5.0),
+                        signals=SignalSelection(inputs=["gimbal_secondary_z"],
                                                                   outputs=["gyro_payload_z"]))
     fmu = export_fmu(model, out_dir=tmp_path)
     done = subprocess.run([sys.executable, str(SUPPORT / "fmpy_logger_host.py"), str(fmu)], capture_output=True,

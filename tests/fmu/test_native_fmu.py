@@ -32,9 +32,9 @@ from support.fmu_checks import (check_close, initialised_slave, make_inputs, nom
 from support.paths import SUPPORT
 
 from mace_fmu.errors import MaceError
+from mace_fmu.fe.modes import compute_modes
 from mace_fmu.fmu.export import export_fmu
 from mace_fmu.fmu.native import compile as runtime
-from mace_fmu.fmu.native.export import export_native_fmu
 from mace_fmu.iomodel.model_options import ModelledElectronics
 from mace_fmu.iomodel.parametric import ParametricSystem
 from mace_fmu.iomodel.parametric_data import parametric_arrays
@@ -50,11 +50,11 @@ HOST_SOURCE = SUPPORT / "native_host.c"
 def fmus(request, tmp_path_factory):
     """The model, its native FMI 2 and FMI 3 FMUs and its pythonfmu FMU, each extracted once."""
     kind = request.param
-    model = volts_model(kind)
+    model = volts_model(compute_modes(configuration=kind))
     out = tmp_path_factory.mktemp(f"native_{kind}")
-    fmi2 = export_native_fmu(model, out_dir=out, name=f"MACE_{kind}_native")
-    fmi3 = export_native_fmu(model, out_dir=out, name=f"MACE_{kind}_native_fmi3", fmi_version=3)
-    python = export_fmu(model, out_dir=out, name=f"MACE_{kind}_pythonfmu", kind="pythonfmu")
+    fmi2 = export_fmu(model, out_dir=out, name=f"MACE_{kind}_native")
+    fmi3 = export_fmu(model, out_dir=out, name=f"MACE_{kind}_native_fmi3", fmi_version=3)
+    python = export_fmu(model, out_dir=out, name=f"MACE_{kind}_pythonfmu", runtime="pythonfmu")
     extract = lambda f: fmpy.extract(str(f), unzipdir=str(tmp_path_factory.mktemp(f.stem)))  # noqa: E731
     return SimpleNamespace(model=model, arrays=parametric_arrays(model), fmi2=fmi2, fmi3=fmi3, python=python,
                            dir2=extract(fmi2), dir3=extract(fmi3), dir_python=extract(python))
@@ -168,7 +168,7 @@ def test_fmu_manipulation_toolbox_checker_finds_no_error(fmus):
 
 def test_export_refuses_a_name_that_is_not_a_c_identifier(fmus, tmp_path):
     with pytest.raises(MaceError, match="C identifier"):
-        export_native_fmu(fmus.model, out_dir=tmp_path, name="MACE-1g")
+        export_fmu(fmus.model, out_dir=tmp_path, name="MACE-1g")
     assert not list(tmp_path.iterdir())
 
 
@@ -862,8 +862,8 @@ def test_windows_binary_exports_the_fmi_functions(fmus, tmp_path):
 def test_models_without_a_modal_form_step_exactly_in_the_dense_form(tmp_path):
     """With the servos open, the 0-g gimbals are free double integrators (a Jordan block): no
     diagonal form exists and the runtime steps with the dense matrix exponential, as exactly."""
-    model = volts_model("0g", electronics=ModelledElectronics(servos=False), max_hz=30.0)
-    folder = fmpy.extract(str(export_native_fmu(model, out_dir=tmp_path, name="MACE_0g_open")),
+    model = volts_model(compute_modes(configuration="0g", max_hz=30.0), electronics=ModelledElectronics(servos=False))
+    folder = fmpy.extract(str(export_fmu(model, out_dir=tmp_path, name="MACE_0g_open")),
                           unzipdir=str(tmp_path / "open"))
     messages = Messages()
     fmu = _slave(folder, messages=messages)

@@ -23,6 +23,7 @@ import pytest
 from support.cantilever import AREA, RHO, L, N, beam_deck
 
 from mace_fmu.deck.reader import read_deck
+from mace_fmu.fe.modes import compute_modes
 from mace_fmu.iomodel.frf import frequency_response
 from mace_fmu.iomodel.model_options import ModelledElectronics
 from mace_fmu.iomodel.volts import volts_model
@@ -50,7 +51,8 @@ def _model(tmp_path: Path, *, free: bool, max_hz: float = 2000.0):
     deck, spec = tmp_path / "beam.bdf", tmp_path / "beam.toml"
     deck.write_text(text)
     spec.write_text(STRUCTURE)
-    return volts_model("0g", deck=read_deck(deck), structure_file=spec, max_hz=max_hz, electronics=BARE)
+    return volts_model(compute_modes(read_deck(deck), configuration="0g", structure_file=spec, max_hz=max_hz),
+                       electronics=BARE)
 
 
 @pytest.mark.parametrize("free", [False, True], ids=["cantilever", "free-free"])
@@ -101,7 +103,7 @@ def test_free_free_beam_accelerates_as_a_rigid_body_below_its_first_mode(tmp_pat
 def test_native_fmu_steps_as_the_exact_zoh_and_rebuilds_changed_damping_and_modulus_as_python_does(tmp_path):
     from support.fmu_checks import zoh_reference
 
-    from mace_fmu.fmu.native.export import export_native_fmu
+    from mace_fmu.fmu.export import export_fmu
     from mace_fmu.iomodel.parametric import ParametricSystem
     from mace_fmu.iomodel.parametric_data import parametric_arrays
 
@@ -120,7 +122,7 @@ def test_native_fmu_steps_as_the_exact_zoh_and_rebuilds_changed_damping_and_modu
     for name, value in starts.items():
         changed[names.index(name)] = value
     rebuilt = ct.ss(*system.build(changed))
-    fmu = export_native_fmu(model, out_dir=tmp_path, name="beam_acc", arrays=arrays)
+    fmu = export_fmu(model, out_dir=tmp_path, name="beam_acc", arrays=arrays)
     t = np.arange(0.0, 0.4 + 1e-12, 1e-3)
     outputs = list(model.system.output_labels)
     inputs = np.zeros(len(t), dtype=[("time", float), ("tip_force_y", float)])
@@ -151,7 +153,7 @@ def test_pythonfmu_fmu_gives_the_acceleration_with_its_feedthrough(tmp_path):
     from mace_fmu.fmu.export import export_fmu
 
     model = _model(tmp_path, free=False, max_hz=200.0)
-    fmu = export_fmu(model, kind="pythonfmu", out_dir=tmp_path, name="beam_acc_py")
+    fmu = export_fmu(model, runtime="pythonfmu", out_dir=tmp_path, name="beam_acc_py")
     t = np.arange(0.0, 0.2 + 1e-12, 1e-3)
     outputs = list(model.system.output_labels)
     host = tmp_path / "host.py"
@@ -180,12 +182,13 @@ def test_a_structure_row_of_unknown_kind_in_the_model_data_is_refused_at_instant
     loads the data, rather than building a wrong model from a corrupted or foreign file."""
     import zipfile
 
-    from mace_fmu.fmu.native.export import RESOURCE_NAME, export_native_fmu
+    from mace_fmu.fmu.export import export_fmu
+    from mace_fmu.fmu.native.export import RESOURCE_NAME
     from mace_fmu.fmu.native.resource import resource_bytes, runtime_arrays
     from mace_fmu.iomodel.parametric_data import parametric_arrays
 
     model = _model(tmp_path, free=False, max_hz=200.0)
-    good = export_native_fmu(model, out_dir=tmp_path, name="beam_good")
+    good = export_fmu(model, out_dir=tmp_path, name="beam_good")
     data = runtime_arrays(parametric_arrays(model))
     data["struct_row_kind"] = np.array([0, 7, 2], dtype=np.int64)
     bad = tmp_path / "beam_bad.fmu"

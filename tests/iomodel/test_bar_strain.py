@@ -17,6 +17,7 @@ from support.decks import line_of_bars
 
 from mace_fmu.deck.reader import read_deck
 from mace_fmu.errors import MaceError
+from mace_fmu.fe.modes import compute_modes
 from mace_fmu.iomodel.volts import volts_model
 
 E, NU, RHO, L, N = 7.0e10, 0.33, 2700.0, 2.0, 8
@@ -74,7 +75,7 @@ def _model(tmp_path, *, shear_factor: float | None):
         bulk + ["SPC1,7,123456,1", "EIGRL,1,,,100"]) + "\nENDDATA\n")
     spec = tmp_path / "cantilever.toml"
     spec.write_text(STRUCTURE.format(tip=N + 1, c=C))
-    return volts_model("0g", deck=read_deck(deck), structure_file=spec)
+    return volts_model(compute_modes(read_deck(deck), configuration="0g", structure_file=spec))
 
 
 @pytest.mark.parametrize("shear_factor", [None, 0.9], ids=["euler_bernoulli", "timoshenko"])
@@ -114,4 +115,4 @@ def test_a_bad_gauge_names_the_file_the_sensor_and_what_was_expected(tmp_path, e
     assert edit[0] in text
     spec.write_text(text.replace(edit[0], edit[1]))
     with pytest.raises(MaceError, match=f"cantilever.toml.*{message}"):
-        volts_model("0g", deck=read_deck(tmp_path / "cantilever.bdf"), structure_file=spec)
+        volts_model(compute_modes(read_deck(tmp_path / "cantilever.bdf"), configuration="0g", structure_file=spec))

@@ -21,6 +21,7 @@ import scipy.linalg as sla
 from scipy.optimize import linear_sum_assignment
 from threadpoolctl import threadpool_limits
 
+from mace_fmu.fe.modes import compute_modes
 from mace_fmu.iomodel.frf import frequency_response
 from mace_fmu.iomodel.volts import volts_model
 from modelica_like import System
@@ -48,7 +49,7 @@ def interconnect_as_before(system: System) -> ct.StateSpace:
 
 @pytest.fixture(scope="module", params=["1g", "0g"])
 def both(request):
-    model = volts_model(request.param)
+    model = volts_model(compute_modes(configuration=request.param))
     with threadpool_limits(limits=1, user_api="blas"):
         before = interconnect_as_before(model.diagram)
     return model, before

@@ -21,6 +21,7 @@ import pytest
 from support.resolves import band_limited_inputs, resolved_system, zoh_response
 
 from mace_fmu.deck.reader import read_deck
+from mace_fmu.fe.modes import compute_modes
 from mace_fmu.iomodel.parametric import ParametricSystem
 from mace_fmu.iomodel.parametric_data import parametric_arrays
 from mace_fmu.iomodel.volts import volts_model
@@ -49,7 +50,7 @@ def nominal():
     values = deck_values(read_deck(bundled_deck_path()))
     out = {}
     for configuration in ("1g", "0g"):
-        model = volts_model(configuration)
+        model = volts_model(compute_modes(configuration=configuration))
         out[configuration] = (model, ParametricSystem(parametric_arrays(model)), values)
     return out
 
@@ -109,11 +110,12 @@ def reexported(nominal, tmp_path_factory):
     from mace_fmu.parameters.sets import ParameterSet
 
     model, _, values = nominal["1g"]
-    resolved = volts_model("1g", parameters=ParameterSet({n: values[n] * f for n, f in BUILT_IN.items()}))
+    resolved = volts_model(compute_modes(configuration="1g", parameters=ParameterSet({n: values[n] * f for n,
+                                                                                      f in BUILT_IN.items()})))
     folder = tmp_path_factory.mktemp("route_fmus")
-    fmus = {"resolved": export_fmu(resolved, out_dir=folder, name="MACE_1g_resolved", kind="native"),
-            "native": export_fmu(model, out_dir=folder, name="MACE_1g_native", kind="native"),
-            "pythonfmu": export_fmu(model, out_dir=folder, name="MACE_1g_python", kind="pythonfmu")}
+    fmus = {"resolved": export_fmu(resolved, out_dir=folder, name="MACE_1g_resolved", runtime="native"),
+            "native": export_fmu(model, out_dir=folder, name="MACE_1g_native", runtime="native"),
+            "pythonfmu": export_fmu(model, out_dir=folder, name="MACE_1g_python", runtime="pythonfmu")}
     return model, resolved, {k: fmpy.extract(str(v), unzipdir=str(folder / k)) for k, v in fmus.items()}
 
 
@@ -178,8 +180,8 @@ def test_an_update_on_data_of_the_fmu_exported_with_the_truth_finds_every_modulu
     values = deck_values(read_deck(bundled_deck_path()))
     offsets = (0.04, -0.03, 0.06, -0.02, 0.05, -0.04, 0.03, 0.02)
     truth = {n: values[n] * (1 + d) for n, d in zip(THESIS_KEPT, offsets)}
-    resolved = volts_model("1g", parameters=ParameterSet(truth))
-    truth_fmu = fmu_family(export_fmu(resolved, out_dir=tmp_path, name="MACE_1g_truth", kind="native"),
+    resolved = volts_model(compute_modes(configuration="1g", parameters=ParameterSet(truth)))
+    truth_fmu = fmu_family(export_fmu(resolved, out_dir=tmp_path, name="MACE_1g_truth", runtime="native"),
                            fixed=held_damping(model, resolved))
     nominal_fmu = fmu_family(Path(folders["native"]).parent / "MACE_1g_native.fmu")
     gimbals = [i for i in model.system.input_labels if i.startswith("gimbal")]

@@ -8,6 +8,7 @@ import control as ct
 import numpy as np
 import pytest
 
+from mace_fmu.fe.modes import compute_modes
 from mace_fmu.iomodel.frf import frequency_response
 from mace_fmu.iomodel.model_options import ModelledElectronics
 from mace_fmu.iomodel.parametric import ParametricSystem
@@ -26,7 +27,7 @@ def test_a_modulus_moves_the_responses_as_a_full_resolve_does(name, step):
     (measured: the piezo 2.3 %; cable 3 2.1 %, 51 % while the preload's forces were held: a stiffer cable takes
     more of the weight, which the sensitivities now include to first order). Central differences; +-1 % for the
     cable, whose full re-solves at +-0.1 % leave the suspension modes' derivatives in round-off."""
-    nominal = volts_model("1g", **OPTIONS)
+    nominal = volts_model(compute_modes(configuration="1g"), **OPTIONS)
     system = ParametricSystem(parametric_arrays(nominal, physical=[name]))
     k = system.index(name)
     q0 = float(system.nominal[k])
@@ -37,7 +38,8 @@ def test_a_modulus_moves_the_responses_as_a_full_resolve_does(name, step):
         return frequency_response(ct.ss(*system.build(p)), FREQUENCIES_HZ)
 
     def resolved(value: float) -> np.ndarray:
-        return frequency_response(volts_model("1g", parameters=ParameterSet({name: value}), **OPTIONS).system,
+        return frequency_response(volts_model(compute_modes(configuration="1g",
+                                                            parameters=ParameterSet({name: value})), **OPTIONS).system,
                                   FREQUENCIES_HZ)
 
     d_re = (reanalysed(q0 * (1 + step)) - reanalysed(q0 * (1 - step))) / (2 * step)

@@ -10,7 +10,7 @@ import pytest
 
 from mace_fmu.cli import main
 from mace_fmu.errors import MaceError
-from mace_fmu.fe.modes import DEFAULT_MAX_HZ
+from mace_fmu.fe.modes import DEFAULT_MAX_HZ, compute_modes
 from mace_fmu.iomodel.frf import frequency_response
 from mace_fmu.iomodel.modal_ss import modal_data
 from mace_fmu.iomodel.model_options import ModelledElectronics, SignalSelection
@@ -22,12 +22,12 @@ from mace_fmu.thesis import table_4_7_comparison, table_5_2_comparison
 
 @pytest.fixture(scope="module")
 def v1():
-    return volts_model("1g")
+    return volts_model(compute_modes(configuration="1g"))
 
 
 @pytest.fixture(scope="module")
 def v0():
-    return volts_model("0g")
+    return volts_model(compute_modes(configuration="0g"))
 
 
 def test_state_count_of_the_full_1g_model(v1):
@@ -118,10 +118,11 @@ def test_fast_frequency_response_equals_python_control(v1, route):
 
 
 def test_bessel_delay_variant_and_open_loop_variant():
-    delay = volts_model("0g", electronics=ModelledElectronics(bessel="delay"))
+    delay = volts_model(compute_modes(configuration="0g"), electronics=ModelledElectronics(bessel="delay"))
     # 13 analog channels x 3 Pade states (gyro extra delays merged) + 7 actuator delays x 3
     assert delay.system.nstates == 55 + 13 * 3 + 7 * 3
-    bare = volts_model("0g", electronics=ModelledElectronics(bessel="none", delays=False, servos=False))
+    bare = volts_model(compute_modes(configuration="0g"), electronics=ModelledElectronics(bessel="none", delays=False,
+                                                                                          servos=False))
     assert bare.system.nstates == 55
     # open loop: the gimbal mechanisms are free, so A has zero eigenvalues (rigid gimbal rotation)
     assert np.min(np.abs(np.linalg.eigvals(bare.system.A))) < 1e-6
@@ -146,27 +147,25 @@ def test_bessel_delay_variant_and_open_loop_variant():
     (lambda: dict(signals=SignalSelection(motion_grids="some")), "motion_grids must be grid IDs or 'all'"),
     (lambda: dict(signals=SignalSelection(motion_grids=1)), "motion_grids must be a list of grid IDs or 'all', got 1"),
     (lambda: dict(electronics=dict(servos=False)), "electronics must be a ModelledElectronics record, got dict"),
-    # where the modes come from is said once
-    (dict(deck="any.bdf"), "modes= already fix the deck, preload and structure file they were computed with; drop deck="),
-    (dict(preload="linear", structure_file="x.toml"), "drop preload=, structure_file="),
-    (dict(parameters=ParameterSet({"E_lexan_end": 1.0e9})), "parameters set MAT1 .* e = 1e\\+09 but modes= were "
+    # the modes fix the structure: a set that says otherwise is refused
+    (dict(parameters=ParameterSet({"E_lexan_end": 1.0e9})), "parameters set MAT1 .* e = 1e\\+09 but the modes were "
                                                              "computed with"),
 ])
 def test_bad_requests_are_value_errors_that_say_what_is_allowed(v0, kwargs, message):
     """Records refuse bad values when they are made (a callable here), volts_model what contradicts the modes."""
     pattern = message if "\\(" in message else message.replace("(", r"\(").replace(")", r"\)")
     with pytest.raises(ValueError, match=pattern):
-        volts_model("0g", modes=v0.structure_modes, **(kwargs() if callable(kwargs) else kwargs))
+        volts_model(v0.structure_modes, **(kwargs() if callable(kwargs) else kwargs))
 
 
 def test_an_unknown_keyword_is_a_type_error(v0):
     with pytest.raises(TypeError, match="unexpected keyword argument 'servo'"):
-        volts_model("0g", modes=v0.structure_modes, servo=False)
+        volts_model(v0.structure_modes, servo=False)
 
 
 def test_signal_selection_keeps_names(v0):
-    sub = volts_model("0g", modes=v0.structure_modes,
-                      signals=SignalSelection(inputs=["gimbal_secondary_z"], outputs=["gyro_payload_z"]))
+    sub = volts_model(v0.structure_modes, signals=SignalSelection(inputs=["gimbal_secondary_z"],
+                                                                  outputs=["gyro_payload_z"]))
     assert list(sub.system.input_labels) == ["gimbal_secondary_z"]
     assert list(sub.system.output_labels) == ["gyro_payload_z"]
     f = np.array([1.0, 10.0])
@@ -179,21 +178,19 @@ def test_motion_outputs_add_grid_motion_and_leave_the_sensors_alone(v0):
     """Asking for grid motion keeps the states no sensor reads (the 3 wheel angles, in 0-g) and
     leaves the sensors' response as it was."""
     grids = v0.structure_modes.modes.dofs.grid_ids
-    moving = volts_model("0g", modes=v0.structure_modes,
-                         signals=SignalSelection(motion_grids=[grids[0], grids[-1]]))
+    moving = volts_model(v0.structure_modes, signals=SignalSelection(motion_grids=[grids[0], grids[-1]]))
     assert list(moving.system.output_labels) == list(v0.system.output_labels) + [
         f"grid_{g}_{c}" for g in (grids[0], grids[-1]) for c in ("tx", "ty", "tz", "rx", "ry", "rz")]
     assert moving.system.nstates == v0.system.nstates + 3
     # asking only for sensors keeps the sensor model: no unread wheel-angle states
-    quiet = volts_model("0g", modes=v0.structure_modes,
-                        signals=SignalSelection(motion_grids=[grids[0]], outputs=["gyro_bus_x"]))
+    quiet = volts_model(v0.structure_modes, signals=SignalSelection(motion_grids=[grids[0]], outputs=["gyro_bus_x"]))
     assert quiet.system.nstates == v0.system.nstates
     f = np.array([0.5, 2.0, 10.0, 40.0])
     h, hm = v0.frequency_response(f), moving.frequency_response(f)
     assert np.max(np.abs(hm[:, :20] - h) / np.abs(h).max(axis=0)) <= 1e-8  # of each channel's peak
     # open loop, no filters or delays: the motion is the plain modal sum over every retained mode,
     # zero-frequency ones included unreduced (1 / -w^2)
-    bare = volts_model("0g", modes=v0.structure_modes, signals=SignalSelection(motion_grids=[grids[-1]]),
+    bare = volts_model(v0.structure_modes, signals=SignalSelection(motion_grids=[grids[-1]]),
                        electronics=ModelledElectronics(servos=False, bessel="none", delays=False))
     data = modal_data(v0.structure_modes.modes, bare.instruments, max_hz=DEFAULT_MAX_HZ, motion_grids=[grids[-1]])
     w = 2 * np.pi * f
@@ -239,21 +236,30 @@ def test_damping_override_moves_only_that_pole(v0):
     """Open-loop damping of the 0-g 5th Y bending mode from 1.6 % to 5 %: its closed-loop pole
     follows (the servos hardly touch it), the others stay."""
     base = {p.label: p for p in closed_loop_poles(v0) if "bending" in p.label}
-    damped = volts_model("0g", modes=v0.structure_modes, parameters=ParameterSet({"damping:5th Y bending": 0.05}))
+    damped = volts_model(v0.structure_modes, parameters=ParameterSet({"damping:5th Y bending": 0.05}))
     new = {p.label: p for p in closed_loop_poles(damped) if "bending" in p.label}
     assert base["5th Y bending"].damping == pytest.approx(0.017, abs=0.002)
     assert new["5th Y bending"].damping == pytest.approx(0.05, abs=0.003)
     assert new["4th Z bending"].damping == pytest.approx(base["4th Z bending"].damping, rel=1e-6)
 
 
-def test_modes_of_one_structure_do_not_make_the_other(v0):
-    with pytest.raises(MaceError, match="modes= are of the 0g structure, the model asked for is 1g"):
-        volts_model("1g", modes=v0.structure_modes)
+def test_the_model_takes_its_structure_from_the_modes_and_nothing_else():
+    """The first argument is the modes (a configuration string is refused by name), whose configuration and
+    parameter set the model takes: the 5th Y bending damping of the set given to compute_modes is the
+    closed-loop pole's (the servos hardly touch it)."""
+    with pytest.raises(MaceError, match="modes must be the StructureModes of compute_modes\\(...\\), got str"):
+        volts_model("0g")
+    modes = compute_modes(configuration="0g", parameters=ParameterSet({"damping:5th Y bending": 0.05}))
+    model = volts_model(modes)
+    assert model.parameters["damping:5th Y bending"] == 0.05
+    assert model.structure_modes.structure.configuration == "0g"
+    poles = {p.label: p for p in closed_loop_poles(model)}
+    assert poles["5th Y bending"].damping == pytest.approx(0.05, abs=0.003)
 
 
 def test_modes_agree_with_parameters_that_repeat_their_moduli(v0):
     """A set whose moduli are those the modes were computed with is no contradiction: same model."""
     deck = v0.structure_modes.structure.deck
     same = ParameterSet(deck_values(deck, parameter_names(deck, v0.structure_modes.structure.file)))
-    again = volts_model("0g", modes=v0.structure_modes, parameters=same)
+    again = volts_model(v0.structure_modes, parameters=same)
     assert np.array_equal(again.system.A, v0.system.A)

@@ -112,9 +112,10 @@ def test_ecos_runs_the_package_as_our_state_space_model(plant_ssp):
     ecospy = _ecospy()
     from support.fmu_checks import make_inputs, zoh_reference
 
+    from mace_fmu.fe.modes import compute_modes
     from mace_fmu.iomodel.volts import volts_model
 
-    model = volts_model("0g", parameters=ParameterSet(SET))
+    model = volts_model(compute_modes(configuration="0g", parameters=ParameterSet(SET)))
     h, n = 2e-3, 300
     t = np.arange(n + 1) * h
     inputs = list(model.system.input_labels)

@@ -183,12 +183,12 @@ def test_your_own_deck_with_a_structure_file_gives_a_volts_model_and_an_fmu(tmp_
     import fmpy
     from support.fmu_checks import make_inputs, zoh_reference
 
-    from mace_fmu.fmu.native.export import export_native_fmu
+    from mace_fmu.fmu.export import export_fmu
     from mace_fmu.iomodel.volts import volts_model
 
     deck = _write(tmp_path / "beam.bdf", beam_deck())
     spec = _write(tmp_path / "beam.toml", BEAM_STRUCTURE)
-    model = volts_model("0g", deck=read_deck(deck), structure_file=spec, max_hz=200.0)
+    model = volts_model(compute_modes(read_deck(deck), configuration="0g", structure_file=spec, max_hz=200.0))
     assert list(model.system.input_labels) == ["tip_force_y"]
     assert list(model.system.output_labels) == ["tip_y", "tip_rate_z"]
     assert model.structure_modes.structure.file.path.name == "beam.toml"
@@ -197,7 +197,7 @@ def test_your_own_deck_with_a_structure_file_gives_a_volts_model_and_an_fmu(tmp_
     dc = ct.dcgain(model.system)[0, 0] / (2.0 * 100.0)
     np.testing.assert_allclose(dc, L**3 / (3 * E * INERTIA), rtol=0.02)
     for version in (2, 3):
-        fmu = export_native_fmu(model, out_dir=tmp_path, name=f"beam_fmi{version}", fmi_version=version)
+        fmu = export_fmu(model, out_dir=tmp_path, name=f"beam_fmi{version}", fmi_version=version)
         md = fmpy.read_model_description(str(fmu))
         outputs = {v.name: v.description for v in md.modelVariables if v.causality == "output"}
         assert set(outputs) == {"tip_y", "tip_rate_z"}
@@ -324,8 +324,8 @@ def test_a_butterworth_filter_from_the_structure_file_filters_exactly_its_sensor
     filtered.write_text(plain.read_text() + '\n[electronics]\nfilter_kind = "butterworth"\nfilter_order = 4\n'
                         'filter_cutoff_hz = 30.0\nanalog_sensors = ["gyro_*"]\n')
     f = np.geomspace(0.5, 80.0, 60)
-    g0 = volts_model("0g", deck=str(deck), structure_file=plain).frequency_response(f)
-    model = volts_model("0g", deck=str(deck), structure_file=filtered)
+    g0 = volts_model(compute_modes(str(deck), configuration="0g", structure_file=plain)).frequency_response(f)
+    model = volts_model(compute_modes(str(deck), configuration="0g", structure_file=filtered))
     g1 = model.frequency_response(f)
     b, a = scipy.signal.butter(4, 2 * np.pi * 30.0, analog=True)
     h = scipy.signal.freqs(b, a, worN=2 * np.pi * f)[1]
@@ -384,6 +384,7 @@ def test_predict_0g_takes_your_own_structure_with_its_measurement_model(tmp_path
     (the nominal 0-g frequency = 0-g pole x measured 1-g / model 1-g), and its FMU is named after the deck."""
     import fmpy
 
+    from mace_fmu.fe.modes import compute_modes
     from mace_fmu.iomodel.poles import closed_loop_poles
     from mace_fmu.iomodel.volts import volts_model
 
@@ -400,9 +401,9 @@ def test_predict_0g_takes_your_own_structure_with_its_measurement_model(tmp_path
     result = json.loads(capsys.readouterr().out)
     rows = {row["label"]: row for row in result["rows"]}
     assert set(rows) == {"boom bending Y", "boom bending Z"}
-    poles = {kind: {p.label: p.frequency_hz for p in closed_loop_poles(volts_model(kind, deck=read_deck(deck),
-                                                                                     structure_file=spec))}
-             for kind in ("1g", "0g")}
+    models = {kind: volts_model(compute_modes(read_deck(deck), configuration=kind, structure_file=spec))
+              for kind in ("1g", "0g")}
+    poles = {kind: {p.label: p.frequency_hz for p in closed_loop_poles(model)} for kind, model in models.items()}
     for label, pattern, hz in (("boom bending Y", "1st bending about Y", 3.50),
                                ("boom bending Z", "1st bending about Z", 29.0)):
         expected = poles["0g"][pattern] * hz / poles["1g"][pattern]

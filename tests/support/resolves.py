@@ -17,6 +17,7 @@ from scipy.linalg import expm
 from scipy.optimize import linear_sum_assignment
 from scipy.signal import butter, lfilter
 
+from mace_fmu.fe.modes import compute_modes
 from mace_fmu.iomodel.parametric import ParametricSystem
 from mace_fmu.iomodel.parametric_data import parametric_arrays
 from mace_fmu.iomodel.volts import volts_model
@@ -64,7 +65,7 @@ def held_damping(nominal, resolved) -> dict[str, float]:
 
 def resolved_system(configuration: str, values: dict[str, float], nominal) -> tuple[np.ndarray, ...]:
     """(A, B, C, D) of a full re-solve with moduli and springs ``values`` [Pa, N/m], damping held per mode."""
-    model = volts_model(configuration, parameters=ParameterSet(values))
+    model = volts_model(compute_modes(configuration=configuration, parameters=ParameterSet(values)))
     system = ParametricSystem(parametric_arrays(model, physical=False))
     params = system.nominal.copy()
     for name, value in held_damping(nominal, model).items():
@@ -74,7 +75,7 @@ def resolved_system(configuration: str, values: dict[str, float], nominal) -> tu
 
 @functools.lru_cache(maxsize=4)
 def _nominal(configuration: str):
-    model = volts_model(configuration)
+    model = volts_model(compute_modes(configuration=configuration))
     return model, ParametricSystem(parametric_arrays(model, physical=False))
 
 

@@ -26,10 +26,12 @@ STEP = 0.002
 @pytest.fixture(scope="module")
 def fmu(tmp_path_factory):
     """The 1-g native FMU of the bundled deck (the truth and, with other start values, the model)."""
-    from mace_fmu.fmu.native.export import export_native_fmu
+    from mace_fmu.fe.modes import compute_modes
+    from mace_fmu.fmu.export import export_fmu
     from mace_fmu.iomodel.volts import volts_model
 
-    return export_native_fmu(volts_model("1g"), out_dir=tmp_path_factory.mktemp("fmu_update"), name="MACE_1g_native")
+    return export_fmu(volts_model(compute_modes(configuration="1g")),
+                             out_dir=tmp_path_factory.mktemp("fmu_update"), name="MACE_1g_native")
 
 
 def _noise_inputs(seconds: float, seed: int = 1) -> tuple[np.ndarray, dict[str, np.ndarray]]:
@@ -338,10 +340,12 @@ def test_a_pythonfmu_fmu_is_updated_with_every_run_in_the_workers(capsys, data_c
     point's runs go to the Dask workers too, and the update gives the native FMU's answer."""
     import tomllib
 
+    from mace_fmu.fe.modes import compute_modes
     from mace_fmu.fmu.export import export_fmu
     from mace_fmu.iomodel.volts import volts_model
 
-    fmu = export_fmu(volts_model("1g"), out_dir=tmp_path, name="MACE_1g_pythonfmu", kind="pythonfmu")
+    fmu = export_fmu(volts_model(compute_modes(configuration="1g")), out_dir=tmp_path, name="MACE_1g_pythonfmu",
+                     runtime="pythonfmu")
     start = tmp_path / "start.toml"
     start.write_text(f"[values]\nE_lexan_center = {pre_update_parameters()['E_lexan_center']!r}\n")
     code, out, err = _cli(capsys, ["update", "fmu", str(fmu), "--data", str(data_csv), "--update", "E_lexan_center",

@@ -41,12 +41,13 @@ def _band_limited(rng, n: int) -> np.ndarray:
 @pytest.fixture(scope="module")
 def lab(tmp_path_factory):
     """(folder, FMU, family, truth moduli, the strut test's file)."""
-    from mace_fmu.fmu.native.export import export_native_fmu
+    from mace_fmu.fe.modes import compute_modes
+    from mace_fmu.fmu.export import export_fmu
     from mace_fmu.iomodel.volts import volts_model
     from mace_fmu.updating.fmu_model import fmu_family
 
     folder = tmp_path_factory.mktemp("gains")
-    fmu = export_native_fmu(volts_model("1g"), out_dir=folder, name="MACE_1g_native")
+    fmu = export_fmu(volts_model(compute_modes(configuration="1g")), out_dir=folder, name="MACE_1g_native")
     family = fmu_family(fmu)
     rng = np.random.default_rng(3)
     t = np.arange(int(round(SECONDS / STEP)) + 1) * STEP

@@ -47,11 +47,13 @@ gain_uncertainty_percent = { strain_strut2_y = 1, strain_strut2_z = 1 }
 
 @pytest.fixture(scope="module")
 def family(tmp_path_factory):
-    from mace_fmu.fmu.native.export import export_native_fmu
+    from mace_fmu.fe.modes import compute_modes
+    from mace_fmu.fmu.export import export_fmu
     from mace_fmu.iomodel.volts import volts_model
     from mace_fmu.updating.fmu_model import fmu_family
 
-    return fmu_family(export_native_fmu(volts_model("1g"), out_dir=tmp_path_factory.mktemp("plan"),
+    return fmu_family(export_fmu(volts_model(compute_modes(configuration="1g")),
+                                        out_dir=tmp_path_factory.mktemp("plan"),
                                         name="MACE_1g_native"))
 
 

@@ -585,11 +585,11 @@ def test_cli_view_response_takes_a_native_motion_fmu(motion_fmu_0g, tmp_path, ca
     """The default kind of `mace-fmu export` (native) is accepted by --fmu, and its page's frames come
     from the same motion outputs as the pythonfmu FMU's (same model, 1e-9 of the largest motion)."""
     from mace_fmu.cli import main
-    from mace_fmu.fmu.native.export import export_native_fmu
+    from mace_fmu.fmu.export import export_fmu
     from mace_fmu.fmu.simulate import simulate_input_response
 
     model, python_fmu, _ = motion_fmu_0g
-    native = export_native_fmu(model, out_dir=tmp_path, name="MACE_0g_native_motion")
+    native = export_fmu(model, out_dir=tmp_path, name="MACE_0g_native_motion")
     out = tmp_path / "native.html"
     assert main(["view", "response", "0g", "--input", "rwa_z", "--duration", "0.1", "--fmu", str(native),
                  "--html", str(out)]) == 0

@@ -20,16 +20,17 @@ SCALES = tuple(f"frequency_scale_mode_{k}" for k in BOUNDS)
 
 @pytest.fixture(scope="module")
 def model_0g():
+    from mace_fmu.fe.modes import compute_modes
     from mace_fmu.iomodel.volts import volts_model
 
-    return volts_model("0g")
+    return volts_model(compute_modes(configuration="0g"))
 
 
 @pytest.fixture(scope="module")
 def bounded_fmu(model_0g, tmp_path_factory):
-    from mace_fmu.fmu.native.export import export_native_fmu
+    from mace_fmu.fmu.export import export_fmu
 
-    return export_native_fmu(model_0g, out_dir=tmp_path_factory.mktemp("robust"), name="MACE_0g_native",
+    return export_fmu(model_0g, out_dir=tmp_path_factory.mktemp("robust"), name="MACE_0g_native",
                              frequency_bounds=BOUNDS)
 
 

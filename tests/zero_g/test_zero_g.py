@@ -21,6 +21,7 @@ from fmpy.validation import validate_fmu
 from support.fmu_checks import initialised_slave, make_inputs, run_steps, zoh_reference
 
 from mace_fmu.cli import main
+from mace_fmu.fe.modes import compute_modes
 from mace_fmu.fmu.export import export_fmu
 from mace_fmu.iomodel.parametric import ParametricSystem
 from mace_fmu.iomodel.parametric_data import parametric_arrays
@@ -50,7 +51,7 @@ def run(tmp_path_factory):
 @pytest.fixture(scope="module")
 def nominal(run):
     """The nominal 0-g model rebuilt from the parameter set predict-0g wrote (modes from the FE model again)."""
-    return volts_model("0g", parameters=ParameterSet.read(run[1] / "zero_g_nominal.toml"))
+    return volts_model(compute_modes(configuration="0g", parameters=ParameterSet.read(run[1] / "zero_g_nominal.toml")))
 
 
 def _rows(run):
@@ -149,7 +150,7 @@ def fmus(run, nominal, tmp_path_factory):
     bounds = {int(k): v for k, v in data["frequency_bounds"].items()}
     native = Path(data["files"]["fmu"])
     python = export_fmu(nominal, out_dir=tmp_path_factory.mktemp("zero_g_python"), name="MACE_0g_nominal_py",
-                        arrays=parametric_arrays(nominal, physical=False), frequency_bounds=bounds, kind="pythonfmu")
+                        arrays=parametric_arrays(nominal, physical=False), frequency_bounds=bounds, runtime="pythonfmu")
     return {kind: (path, fmpy.extract(str(path), unzipdir=str(tmp_path_factory.mktemp(f"unzipped_{kind}"))))
             for kind, path in (("native", native), ("pythonfmu", python))}
 
@@ -216,8 +217,8 @@ def test_a_scale_at_its_bound_moves_the_mode_by_the_bound_and_matches_the_state_
     fmu.freeInstance()
     base = ParameterSet.read(out / "zero_g_nominal.toml")
     name = f"frequency_scale:{row['mode_label']}"
-    moved = volts_model("0g", parameters=base.updated({name: base[name] * scale},
-                                                      provenance=base.provenance))
+    moved = volts_model(compute_modes(configuration="0g", parameters=base.updated({name: base[name] * scale},
+                                                      provenance=base.provenance)))
     reference = zoh_reference(moved, t, u)
     span = np.ptp(reference, axis=1, keepdims=True)
     assert np.max(np.abs(y - reference) / span) <= 1e-8

@@ -3,11 +3,15 @@ model arrays, and its compilation (gcc; mingw-w64 for Windows where installed)."
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from mace_fmu.util.lazy import lazy_exports
 
+if TYPE_CHECKING:  # what editors and type checkers follow; at run time a name is imported on first use
+    from mace_fmu.fmu.native.compile import compile_runtime
+    from mace_fmu.fmu.native.model_description import FmuVariable, fmu_variables
+
 __all__, __getattr__, __dir__ = lazy_exports(__name__, {
-    "export_native_fmu": "export",
-    "write_native_fmu": "export",
     "compile_runtime": "compile",
     "fmu_variables": "model_description",
     "FmuVariable": "model_description",

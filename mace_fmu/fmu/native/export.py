@@ -21,6 +21,7 @@ from typing import Literal
 import numpy as np
 
 from mace_fmu.errors import MaceError
+from mace_fmu.fmu.naming import model_fmu_name
 from mace_fmu.fmu.native import compile as runtime
 from mace_fmu.fmu.native.model_description import (JacobianPattern, fmi2_model_description, fmi3_build_description,
                                                    fmi3_model_description, fmu_variables)
@@ -36,7 +37,7 @@ RESOURCE_NAME = "mace_model.bin"
 
 
 def runtime_token(data: dict, *, salt: str, sources: list[Path]) -> str:
-    """A GUID / instantiation token that changes with the model data, ``salt`` (FMI version, kind) and the runtime."""
+    """A GUID / instantiation token that changes with the model data, ``salt`` (FMI version, FMU kind), the runtime."""
     h = hashlib.sha256(salt.encode())
     for path in sources:
         h.update(path.read_bytes())
@@ -141,8 +142,7 @@ def export_native_fmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str
     MaceError
         A name that is not a C identifier, an FMI version other than 2 or 3, a compiler failure.
     """
-    kind = model.structure_modes.structure.configuration
-    name = name or f"MACE_{kind}"
+    name = name or model_fmu_name(model)
     if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", name):
         raise MaceError(f"FMU name must be a C identifier (it names the model and its binary), got {name!r}")
     if fmi_version not in (2, 3):
@@ -154,7 +154,7 @@ def export_native_fmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str
     reference.build(reference.nominal)
     data = runtime_arrays(arrays)
     if count_of(data, "states") != len(reference.state_names):
-        raise MaceError(f"native FMU: the runtime data describe {int(data['counts'][7])} states, the model has "
+        raise MaceError(f"native FMU: the runtime data describe {count_of(data, 'states')} states, the model has "
                         f"{len(reference.state_names)}")
     token = runtime_token(data, salt=f"fmi{fmi_version}", sources=runtime.source_files())
     data["guid"] = [token]
