@@ -48,13 +48,12 @@ def main() -> None:
     import dask
     import fmpy
 
-    from mace_fmu.fe.modes import compute_modes
     from mace_fmu.fmu.export import export_fmu
     from mace_fmu.iomodel.volts import volts_model
-    from mace_fmu.updating.fmu_model import fmu_family
-    from mace_fmu.updating.fmu_update import fmu_cost
-    from mace_fmu.updating.mace_update import THESIS_KEPT, pre_update_parameters
-    from mace_fmu.updating.truth import measure_test_article
+    from mace_fmu.updating.fmu.model import fmu_family
+    from mace_fmu.updating.fmu.truth import measure_test_article
+    from mace_fmu.updating.fmu.update import fmu_cost
+    from mace_fmu.updating.mace.update import THESIS_KEPT, pre_update_parameters
     from mace_fmu.util.runner import DaskRunner
     from mace_fmu.util.threads import single_blas_thread
 
@@ -121,11 +120,11 @@ def identifiability(out: Path) -> None:
     from mace_fmu.fe.modes import compute_modes
     from mace_fmu.fmu.export import export_fmu
     from mace_fmu.iomodel.volts import volts_model
-    from mace_fmu.updating.fmu_model import fmu_family
-    from mace_fmu.updating.fmu_update import fmu_cost
-    from mace_fmu.updating.mace_update import THESIS_KEPT, table_4_4_moduli
-    from mace_fmu.updating.sensitivity import cost_sensitivities
-    from mace_fmu.updating.truth import measure_test_article
+    from mace_fmu.updating.engine.sensitivity import cost_sensitivities
+    from mace_fmu.updating.fmu.model import fmu_family
+    from mace_fmu.updating.fmu.truth import measure_test_article
+    from mace_fmu.updating.fmu.update import fmu_cost
+    from mace_fmu.updating.mace.update import THESIS_KEPT, table_4_4_moduli
 
     family = fmu_family(export_fmu(volts_model(compute_modes(configuration="1g")), out_dir=out,
                                           name="MACE_1g_native"))

@@ -40,9 +40,9 @@ GAIN_ERRORS = {"strain_strut2_y": 1.009, "strain_strut2_z": 0.993}
 
 def measure(family, truth, name, *, seconds, out, seed, gains=None):
     """Write test ``name`` of the truth as CSV (labels in:/out:) and return its path."""
-    from mace_fmu.updating.data import TimeHistory
+    from mace_fmu.updating.engine.measured import TimeHistory
     from mace_fmu.updating.files import write_time_history
-    from mace_fmu.updating.truth import band_limited_noise
+    from mace_fmu.updating.fmu.truth import band_limited_noise
 
     inputs, outputs = TESTS[name]
     n = int(round(seconds / 0.002)) + 1
@@ -58,11 +58,11 @@ def measure(family, truth, name, *, seconds, out, seed, gains=None):
 
 def run_case(fmu, files, *, cost, start, workers, gains=None):
     """One update as ``mace-fmu update fmu`` makes it; (result, uncertainty, report, seconds, uncertainty seconds)."""
-    from mace_fmu.updating.convergence import convergence_report, noise_floor
-    from mace_fmu.updating.fmu_model import read_fmu_interface
-    from mace_fmu.updating.fmu_problem import fmu_problem
-    from mace_fmu.updating.fmu_update import update_fmu
-    from mace_fmu.updating.uncertainty import stage_uncertainty
+    from mace_fmu.updating.engine.convergence import convergence_report, noise_floor
+    from mace_fmu.updating.engine.uncertainty import stage_uncertainty
+    from mace_fmu.updating.fmu.model import read_fmu_interface
+    from mace_fmu.updating.fmu.problem import fmu_problem
+    from mace_fmu.updating.fmu.update import update_fmu
     from mace_fmu.util.runner import DaskRunner
 
     t0 = time.perf_counter()
@@ -94,8 +94,8 @@ def main() -> None:
     from mace_fmu.fe.modes import compute_modes
     from mace_fmu.fmu.export import export_fmu
     from mace_fmu.iomodel.volts import volts_model
-    from mace_fmu.updating.fmu_model import _LoadedFmu, fmu_family
-    from mace_fmu.updating.mace_update import pre_update_parameters
+    from mace_fmu.updating.fmu.model import _LoadedFmu, fmu_family
+    from mace_fmu.updating.mace.update import pre_update_parameters
 
     out = Path(args.out or tempfile.mkdtemp(prefix="bench_several_tests_"))
     out.mkdir(parents=True, exist_ok=True)

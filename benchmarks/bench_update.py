@@ -19,12 +19,13 @@ import time
 import numpy as np
 
 from common import machine_line
-from mace_fmu.updating.costs import ModalCost
-from mace_fmu.updating.inclusion import modal_sensitivity
-from mace_fmu.updating.mace_family import MaceFamily
-from mace_fmu.updating.mace_update import (default_bounds, measured_modes, pre_update_parameters, run_mace_update,
-                                           format_mode_rows, mode_rows, scores)
-from mace_fmu.updating.solve import Stage, UpdateSettings, update
+from mace_fmu.updating.engine.bounds import default_bounds
+from mace_fmu.updating.engine.costs import ModalCost
+from mace_fmu.updating.engine.inclusion import modal_sensitivity
+from mace_fmu.updating.mace.family import MaceFamily
+from mace_fmu.updating.mace.update import (format_mode_rows, measured_modes, mode_rows, pre_update_parameters,
+                                           run_mace_update, scores)
+from mace_fmu.updating.engine.solve import Stage, UpdateSettings, update
 
 
 def _time(fn):

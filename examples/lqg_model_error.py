@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from mace_fmu.control_studies.lqg import closed_loop_cost, design_lqg
 from mace_fmu.control_studies.stiffness_sensitivity import AUTHORITIES
-from mace_fmu.updating.two_mass import TwoMassSystem
+from mace_fmu.updating.sample.two_mass import TwoMassSystem
 
 
 def model_error_costs(*, k2_factors: tuple[float, ...] = (0.8, 0.9, 1.0, 1.1, 1.2),

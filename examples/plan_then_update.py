@@ -38,15 +38,15 @@ def main(argv: list[str] | None = None) -> dict:
     from mace_fmu.fe.modes import compute_modes
     from mace_fmu.fmu.export import export_fmu
     from mace_fmu.iomodel.volts import volts_model
-    from mace_fmu.updating.convergence import convergence_report, noise_floor
-    from mace_fmu.updating.data import TimeHistory
+    from mace_fmu.updating.engine.convergence import convergence_report, noise_floor
+    from mace_fmu.updating.engine.measured import TimeHistory
+    from mace_fmu.updating.engine.uncertainty import format_uncertainty, stage_uncertainty
     from mace_fmu.updating.files import write_time_history
-    from mace_fmu.updating.fmu_model import fmu_family
-    from mace_fmu.updating.fmu_problem import fmu_problem
-    from mace_fmu.updating.fmu_update import update_fmu
-    from mace_fmu.updating.planning import Candidate, TestDesign, format_plan, plan_tests
-    from mace_fmu.updating.truth import band_limited_noise
-    from mace_fmu.updating.uncertainty import format_uncertainty, stage_uncertainty
+    from mace_fmu.updating.fmu.model import fmu_family
+    from mace_fmu.updating.fmu.planning import Candidate, TestDesign, format_plan, plan_tests
+    from mace_fmu.updating.fmu.problem import fmu_problem
+    from mace_fmu.updating.fmu.truth import band_limited_noise
+    from mace_fmu.updating.fmu.update import update_fmu
     from mace_fmu.util.runner import DaskRunner
 
     out = Path(args.out or tempfile.mkdtemp(prefix="plan_then_update_"))

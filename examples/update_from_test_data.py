@@ -44,11 +44,11 @@ def main(argv: list[str] | None = None) -> dict:
     from mace_fmu.fmu.export import export_fmu
     from mace_fmu.iomodel.volts import volts_model
     from mace_fmu.parameters.sets import ParameterSet
-    from mace_fmu.updating.fmu_model import fmu_family
-    from mace_fmu.updating.fmu_problem import fmu_problem
-    from mace_fmu.updating.fmu_update import fmu_parameters, update_fmu
-    from mace_fmu.updating.mace_update import THESIS_KEPT, pre_update_parameters, table_4_4_moduli
-    from mace_fmu.updating.truth import GYRO_DELAYS, SERVO_DELAYS, compare_frfs, default_estimator, measure_test_article
+    from mace_fmu.updating.fmu.model import fmu_family
+    from mace_fmu.updating.fmu.problem import fmu_problem
+    from mace_fmu.updating.fmu.truth import GYRO_DELAYS, SERVO_DELAYS, compare_frfs, default_estimator, measure_test_article
+    from mace_fmu.updating.fmu.update import fmu_parameters, update_fmu
+    from mace_fmu.updating.mace.update import THESIS_KEPT, pre_update_parameters, table_4_4_moduli
     from mace_fmu.util.runner import DaskRunner
 
     out = Path(args.out)
@@ -150,8 +150,8 @@ def main(argv: list[str] | None = None) -> dict:
 
 def _verdict(result, cost) -> dict:
     """Converged or not, and why (the noise-floor test for the time cost): what a user signs off on."""
-    from mace_fmu.updating.convergence import convergence_report, time_noise_floor
-    from mace_fmu.updating.costs import TimeResponseCost
+    from mace_fmu.updating.engine.convergence import convergence_report, time_noise_floor
+    from mace_fmu.updating.engine.costs import TimeResponseCost
 
     floor = time_noise_floor(cost) if isinstance(cost, TimeResponseCost) else None
     report = convergence_report(result, noise_floor=floor)
@@ -165,9 +165,9 @@ def overlay_plot(*, truth_fmu: Path, updated_fmu: Path, start: dict, history, es
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from mace_fmu.updating.data import TimeHistory
-    from mace_fmu.updating.fmu_model import fmu_family
-    from mace_fmu.updating.truth import CHECKED_FRFS
+    from mace_fmu.updating.engine.measured import TimeHistory
+    from mace_fmu.updating.fmu.model import fmu_family
+    from mace_fmu.updating.fmu.truth import CHECKED_FRFS
     from mace_fmu.util.atomic import save_figure_atomic
 
     outs = sorted({o for _, o in CHECKED_FRFS})

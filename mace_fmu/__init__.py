@@ -47,8 +47,8 @@ if TYPE_CHECKING:  # what editors and type checkers follow; at run time a name i
     from mace_fmu.parameters.sets import ParameterSet
     from mace_fmu.ssp.package import write_ssp
     from mace_fmu.structure.file import bundled_deck_path, load_structure_file
-    from mace_fmu.updating.fmu_problem import fmu_problem
-    from mace_fmu.updating.fmu_update import update_fmu
+    from mace_fmu.updating.fmu.problem import fmu_problem
+    from mace_fmu.updating.fmu.update import update_fmu
 
 __all__, __getattr__, __dir__ = lazy_exports(__name__, {
     "read_deck": "mace_fmu.deck.reader",
@@ -63,7 +63,7 @@ __all__, __getattr__, __dir__ = lazy_exports(__name__, {
     "export_controller_fmu": "mace_fmu.fmu.controller",
     "DiscreteController": "mace_fmu.fmu.controller",
     "write_ssp": "mace_fmu.ssp.package",
-    "fmu_problem": "mace_fmu.updating.fmu_problem",
-    "update_fmu": "mace_fmu.updating.fmu_update",
+    "fmu_problem": "mace_fmu.updating.fmu.problem",
+    "update_fmu": "mace_fmu.updating.fmu.update",
     "MaceError": "mace_fmu.errors",
 })

@@ -134,3 +134,28 @@ def test_every_lazy_package_shows_its_names_to_type_checkers():
         assert shown == dict(table), name
         checked += 1
     assert checked >= 12
+
+
+#: updating's sub-packages by use, and which of them each may import (besides itself): the engine knows
+#: nothing of the MACE update, the FMU update or the sample problem
+UPDATING_LAYERS = {"engine": set(), "files": {"engine"}, "mace": {"engine"}, "fmu": {"engine", "files"},
+                   "sample": {"engine", "files"}}
+
+
+def test_updating_is_layered_by_use():
+    import ast
+    from pathlib import Path
+
+    import mace_fmu.updating
+
+    root = Path(mace_fmu.updating.__file__).parent
+    assert {p.name for p in root.iterdir() if (p / "__init__.py").exists()} == set(UPDATING_LAYERS)
+    offenders = []
+    for sub, allowed in UPDATING_LAYERS.items():
+        for path in (root / sub).glob("*.py"):
+            for node in ast.walk(ast.parse(path.read_text())):
+                if isinstance(node, ast.ImportFrom) and (node.module or "").startswith("mace_fmu.updating."):
+                    other = node.module.split(".")[2]
+                    if other != sub and other not in allowed:
+                        offenders.append(f"{sub}/{path.name} imports {node.module}")
+    assert offenders == []

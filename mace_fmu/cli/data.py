@@ -8,11 +8,11 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 if TYPE_CHECKING:
-    from mace_fmu.updating.data import FrequencyResponseData, TimeHistory
+    from mace_fmu.updating.engine.measured import FrequencyResponseData, TimeHistory
 
 
 def _summary(data: TimeHistory | FrequencyResponseData) -> list[str]:
-    from mace_fmu.updating.data import TimeHistory
+    from mace_fmu.updating.engine.measured import TimeHistory
     signals = lambda names: ", ".join(f"{n} [{data.unit(n)}]" for n in names) or "none"  # noqa: E731
     if isinstance(data, TimeHistory):
         t = data.times_s

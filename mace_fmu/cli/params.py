@@ -71,7 +71,7 @@ def cmd_from_ssv(args: argparse.Namespace) -> int:
 
 def cmd_list(args: argparse.Namespace) -> int:
     """Every Real parameter of an FMU: name, start value, declared range, unit and description."""
-    from mace_fmu.updating.fmu_model import read_fmu_interface
+    from mace_fmu.updating.fmu.model import read_fmu_interface
 
     interface = read_fmu_interface(args.fmu)
     names = sorted(interface.parameters) if args.sort else list(interface.parameters)

@@ -29,8 +29,8 @@ a test plan (TOML):
 
 
 def cmd_plan(args: argparse.Namespace) -> int:
-    from mace_fmu.updating.planning import format_plan, plan_tests, read_test_plan
-    from mace_fmu.updating.uncertainty import uncertainty_toml
+    from mace_fmu.updating.engine.uncertainty import uncertainty_toml
+    from mace_fmu.updating.fmu.planning import format_plan, plan_tests, read_test_plan
     from mace_fmu.util.runner import DaskRunner
 
     names = [n.strip() for part in args.update for n in part.split(",") if n.strip()]
@@ -44,7 +44,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
     if args.out is not None and Path(args.out).is_dir():
         raise MaceError(f"-o {args.out}: is a directory; give the file to write (e.g. plan.toml)")
     candidates = read_test_plan(args.tests)
-    from mace_fmu.updating.fmu_model import read_fmu_interface
+    from mace_fmu.updating.fmu.model import read_fmu_interface
 
     interface = read_fmu_interface(args.fmu)
     interface.check_parameters(names)

@@ -28,7 +28,7 @@ def cmd_lqg_sensitivity(args: argparse.Namespace) -> int:
     from mace_fmu.control_studies.figures import sensitivity_contour
     from mace_fmu.control_studies.lqg import LqgWeights
     from mace_fmu.control_studies.stiffness_sensitivity import AUTHORITIES, format_studies, study_authority
-    from mace_fmu.updating.two_mass import TwoMassSystem
+    from mace_fmu.updating.sample.two_mass import TwoMassSystem
     from mace_fmu.util.atomic import write_text_atomic
 
     k1, k2 = _grid(args.k1, "--k1"), _grid(args.k2, "--k2")

@@ -21,7 +21,7 @@ def _say(message: str) -> None:
 
 
 def cmd_sample(args: argparse.Namespace) -> int:
-    from mace_fmu.updating.sample import as_json, format_tables, run_sample_problem
+    from mace_fmu.updating.sample.problem import as_json, format_tables, run_sample_problem
 
     if not args.json:
         _say("sample problem: 'experiment', measurement model, 7 updates")
@@ -37,7 +37,7 @@ def cmd_sample(args: argparse.Namespace) -> int:
 def _read_start(path: str, fmu: str) -> dict[str, float]:
     """Start values from a parameter TOML file ([values] table) by the FMU's names: a set of ``update mace``
     names its damping ratios and frequency scales by mode label, which the FMU's parameters say."""
-    from mace_fmu.updating.fmu_model import read_fmu_interface
+    from mace_fmu.updating.fmu.model import read_fmu_interface
 
     table = read_toml(path, what="start-value")
     values = table.get("values")
@@ -68,8 +68,8 @@ def _gain_uncertainty(items: list[str]) -> dict[str, float]:
 def cmd_fmu_update(args: argparse.Namespace) -> int:
     """``update fmu FILE``: update FMU parameters against measured-data files, every argument checked before any
     run."""
-    from mace_fmu.updating.fmu_problem import fmu_problem
-    from mace_fmu.updating.fmu_update import fmu_parameters, update_fmu
+    from mace_fmu.updating.fmu.problem import fmu_problem
+    from mace_fmu.updating.fmu.update import fmu_parameters, update_fmu
     from mace_fmu.util.runner import DaskRunner
 
     if args.sample_problem or args.measured:
@@ -116,7 +116,7 @@ def cmd_fmu_update(args: argparse.Namespace) -> int:
         with DaskRunner(scheduler=args.scheduler, workers=args.workers, progress=bar, task="FMU runs") as runner:
             result = update_fmu(family=problem.family, cost=problem.cost, start=problem.start, stages=[problem.names],
                                 runner=runner, progress=bar)
-    from mace_fmu.updating.convergence import convergence_report, missing_noise_floor, noise_floor
+    from mace_fmu.updating.engine.convergence import convergence_report, missing_noise_floor, noise_floor
 
     floor = noise_floor(problem.cost, noise_rms_fraction=noise_fraction)
     report = convergence_report(result, noise_floor=floor, strict=args.strict,
@@ -125,7 +125,7 @@ def cmd_fmu_update(args: argparse.Namespace) -> int:
                             convergence=report)
     out.mkdir(parents=True, exist_ok=True)
     path = params.write(out / "parameters.toml")
-    from mace_fmu.updating.uncertainty import format_uncertainty, stage_uncertainty, uncertainty_toml
+    from mace_fmu.updating.engine.uncertainty import format_uncertainty, stage_uncertainty, uncertainty_toml
 
     # with a noise floor, the noise is the data's, not what the fit left over (which includes any misfit)
     sigma2 = floor.expected_cost / result.final_residual.size if floor is not None else None
@@ -163,10 +163,10 @@ def cmd_mace_update(args: argparse.Namespace) -> int:
         raise MaceError("say where to write the updated parameter set and the report: -o DIR "
                         "(or run: mace-fmu update sample-problem)")
     from mace_fmu.parameters.sets import ParameterSet
-    from mace_fmu.updating.data import read_measured_modes
-    from mace_fmu.updating.mace_update import format_mode_rows, mode_rows, run_mace_update, scores
-    from mace_fmu.updating.report import write_report
-    from mace_fmu.updating.solve import UpdateSettings
+    from mace_fmu.updating.engine.measured import read_measured_modes
+    from mace_fmu.updating.engine.solve import UpdateSettings
+    from mace_fmu.updating.mace.report import write_report
+    from mace_fmu.updating.mace.update import format_mode_rows, mode_rows, run_mace_update, scores
 
     out = Path(args.out)
     if args.rounds < 1:
@@ -191,8 +191,8 @@ def cmd_mace_update(args: argparse.Namespace) -> int:
     print(f"cost {res.initial_cost:.5g} -> {res.final_cost:.5g} ({100 * res.reduction:.1f} % lower) in "
           f"{res.seconds:.1f} s; RMS frequency error (zeta < 10 %) {s.rms_light_before:.2f} -> {s.rms_light_after:.2f} % "
           f"(thesis {s.rms_light_thesis:.2f} %)")
-    from mace_fmu.updating.convergence import convergence_report
-    from mace_fmu.updating.uncertainty import format_uncertainty, stage_uncertainty, uncertainty_toml
+    from mace_fmu.updating.engine.convergence import convergence_report
+    from mace_fmu.updating.engine.uncertainty import format_uncertainty, stage_uncertainty, uncertainty_toml
 
     report = convergence_report(res, strict=args.strict)
     uncertainty = stage_uncertainty(res)

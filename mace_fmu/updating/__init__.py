@@ -1,6 +1,13 @@
-"""Models updated from test data (thesis chapter 4): the engine (stages, bounds, convergence tests),
-cost functions (modal, frequency response, time response), uncertainty and identifiability, the MACE
-update, the two-mass sample problem, and the update of any FMU against measured data files."""
+"""Models updated from test data (thesis chapter 4), by use:
+
+- :mod:`mace_fmu.updating.engine`: measured data, costs (modal, frequency response, time response),
+  sensitivities, selection, the staged update, convergence tests, uncertainty and identifiability;
+- :mod:`mace_fmu.updating.mace`: the MACE update of thesis 4.5;
+- :mod:`mace_fmu.updating.fmu`: the update of any FMU against measured data files, and test planning;
+- :mod:`mace_fmu.updating.sample`: the two-mass sample problem of thesis 4.3;
+- :mod:`mace_fmu.updating.files`: measured-data files (time histories, FRFs, channel maps).
+
+The engine knows nothing of the other four; the public names of all of them are here."""
 
 from __future__ import annotations
 
@@ -9,41 +16,41 @@ from typing import TYPE_CHECKING
 from mace_fmu.util.lazy import lazy_exports
 
 if TYPE_CHECKING:  # what editors and type checkers follow; at run time a name is imported on first use
-    from mace_fmu.updating.convergence import ConvergenceReport, convergence_report
-    from mace_fmu.updating.data import FrequencyResponseData, TimeHistory, read_measured_modes
-    from mace_fmu.updating.fmu_problem import FmuProblem
-    from mace_fmu.updating.fmu_update import fmu_parameters, update_fmu
-    from mace_fmu.updating.inclusion import ModelFamily
-    from mace_fmu.updating.mace_update import MaceUpdate, run_mace_update
-    from mace_fmu.updating.planning import Candidate, TestDesign, plan_tests, read_test_plan
-    from mace_fmu.updating.sample import run_sample_problem
-    from mace_fmu.updating.solve import Bounds, Stage, UpdateResult, UpdateSettings, update
-    from mace_fmu.updating.two_mass import TwoMassSystem
-    from mace_fmu.updating.uncertainty import StageUncertainty, stage_uncertainty
+    from mace_fmu.updating.engine.convergence import ConvergenceReport, convergence_report
+    from mace_fmu.updating.engine.inclusion import ModelFamily
+    from mace_fmu.updating.engine.measured import FrequencyResponseData, TimeHistory, read_measured_modes
+    from mace_fmu.updating.engine.solve import Bounds, Stage, UpdateResult, UpdateSettings, update
+    from mace_fmu.updating.engine.uncertainty import StageUncertainty, stage_uncertainty
+    from mace_fmu.updating.fmu.planning import Candidate, TestDesign, plan_tests, read_test_plan
+    from mace_fmu.updating.fmu.problem import FmuProblem
+    from mace_fmu.updating.fmu.update import fmu_parameters, update_fmu
+    from mace_fmu.updating.mace.update import MaceUpdate, run_mace_update
+    from mace_fmu.updating.sample.problem import run_sample_problem
+    from mace_fmu.updating.sample.two_mass import TwoMassSystem
 
 __all__, __getattr__, __dir__ = lazy_exports(__name__, {
-    "update": "solve",
-    "UpdateSettings": "solve",
-    "UpdateResult": "solve",
-    "Stage": "solve",
-    "Bounds": "solve",
-    "ModelFamily": "inclusion",
-    "update_fmu": "fmu_update",
-    "fmu_parameters": "fmu_update",
-    "FmuProblem": "fmu_problem",
-    "run_mace_update": "mace_update",
-    "MaceUpdate": "mace_update",
-    "run_sample_problem": "sample",
-    "convergence_report": "convergence",
-    "ConvergenceReport": "convergence",
-    "stage_uncertainty": "uncertainty",
-    "plan_tests": "planning",
-    "read_test_plan": "planning",
-    "TestDesign": "planning",
-    "Candidate": "planning",
-    "StageUncertainty": "uncertainty",
-    "read_measured_modes": "data",
-    "TimeHistory": "data",
-    "FrequencyResponseData": "data",
-    "TwoMassSystem": "two_mass",
+    "update": "engine.solve",
+    "UpdateSettings": "engine.solve",
+    "UpdateResult": "engine.solve",
+    "Stage": "engine.solve",
+    "Bounds": "engine.solve",
+    "ModelFamily": "engine.inclusion",
+    "update_fmu": "fmu.update",
+    "fmu_parameters": "fmu.update",
+    "FmuProblem": "fmu.problem",
+    "run_mace_update": "mace.update",
+    "MaceUpdate": "mace.update",
+    "run_sample_problem": "sample.problem",
+    "convergence_report": "engine.convergence",
+    "ConvergenceReport": "engine.convergence",
+    "stage_uncertainty": "engine.uncertainty",
+    "plan_tests": "fmu.planning",
+    "read_test_plan": "fmu.planning",
+    "TestDesign": "fmu.planning",
+    "Candidate": "fmu.planning",
+    "StageUncertainty": "engine.uncertainty",
+    "read_measured_modes": "engine.measured",
+    "TimeHistory": "engine.measured",
+    "FrequencyResponseData": "engine.measured",
+    "TwoMassSystem": "sample.two_mass",
 })

@@ -41,8 +41,8 @@ from mace_fmu.parameters.kinds import DAMPING, FREQUENCY_SCALE, kind_of_set_name
 from mace_fmu.parameters.sets import ParameterSet, Provenance, deck_fingerprint, now_utc, tool_version
 from mace_fmu.structure.file import StructureFile, is_bundled_deck
 from mace_fmu.thesis import thesis_data
-from mace_fmu.updating.data import MeasuredMode, read_measured_modes
-from mace_fmu.updating.mace_update import measured_modes
+from mace_fmu.updating.engine.measured import MeasuredMode, read_measured_modes
+from mace_fmu.updating.mace.update import measured_modes
 from mace_fmu.util.frequency import ZERO_HZ
 from mace_fmu.util.threads import single_blas_thread
 

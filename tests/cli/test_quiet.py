@@ -112,7 +112,7 @@ def test_examples_are_quiet_and_leave_no_unpacked_fmu(motion_fmu_0g, private_tmp
 def test_the_measurement_model_fit_draws_no_dependency_bar(capfd):
     """sdypy-EMA's pole selection draws a tqdm bar of its own; the sample problem's fit must not let it out
     (it reached redirected stderr as `0%| | 0/30 ... 100%| 30/30`)."""
-    from mace_fmu.updating.sample import generate_data
+    from mace_fmu.updating.sample.problem import generate_data
 
     data = generate_data()
     out, err = capfd.readouterr()

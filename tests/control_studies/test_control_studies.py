@@ -19,7 +19,7 @@ from mace_fmu.control_studies.reduced_order import (THESIS_COSTS, balanced_model
                                                     weights_for_full_cost)
 from mace_fmu.control_studies.stiffness_sensitivity import AUTHORITIES, study_authority
 from mace_fmu.errors import MaceError
-from mace_fmu.updating.two_mass import TwoMassSystem
+from mace_fmu.updating.sample.two_mass import TwoMassSystem
 
 # Coarse grid (the CLI's default is 0.05 N/m); 600 designs per authority
 K1_GRID = np.round(np.arange(0.1, 3.0 + 1e-9, 0.1), 10)

@@ -167,14 +167,14 @@ def test_an_update_on_data_of_the_fmu_exported_with_the_truth_finds_every_modulu
 
     from mace_fmu.fmu.export import export_fmu
     from mace_fmu.parameters.sets import ParameterSet
-    from mace_fmu.updating.convergence import convergence_report, noise_floor
-    from mace_fmu.updating.costs import TimeResponseCost
-    from mace_fmu.updating.data import TimeHistory
-    from mace_fmu.updating.fmu_model import fmu_family
-    from mace_fmu.updating.fmu_update import update_fmu
-    from mace_fmu.updating.mace_update import THESIS_KEPT
-    from mace_fmu.updating.truth import band_limited_noise
-    from mace_fmu.updating.uncertainty import stage_uncertainty
+    from mace_fmu.updating.engine.convergence import convergence_report, noise_floor
+    from mace_fmu.updating.engine.costs import TimeResponseCost
+    from mace_fmu.updating.engine.measured import TimeHistory
+    from mace_fmu.updating.engine.uncertainty import stage_uncertainty
+    from mace_fmu.updating.fmu.model import fmu_family
+    from mace_fmu.updating.fmu.truth import band_limited_noise
+    from mace_fmu.updating.fmu.update import update_fmu
+    from mace_fmu.updating.mace.update import THESIS_KEPT
 
     model, _, folders = reexported
     values = deck_values(read_deck(bundled_deck_path()))

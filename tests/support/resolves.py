@@ -97,7 +97,7 @@ def fisher_standard_deviations(configuration: str, names: list[str], tests, *, r
     Fisher information of full re-solves: d y / d ln p by central differences of re-solved models, each
     output in units of its noise (``noise_rms_percent`` of its RMS), the tests' excitations as plan-test
     draws them (``seed + 1000 k + j``), a gain's prior as one more row. Nothing of the reanalysis enters."""
-    from mace_fmu.updating.truth import band_limited_noise
+    from mace_fmu.updating.fmu.truth import band_limited_noise
 
     _, base = _nominal(configuration)
     systems = {(name, sign): _resolved(configuration, name, 1 + sign * relative_step)

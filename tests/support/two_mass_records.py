@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from mace_fmu.updating.data import TimeHistory
-from mace_fmu.updating.model import simulate_discrete, zoh_transition
-from mace_fmu.updating.two_mass import TwoMassSystem
+from mace_fmu.updating.engine.linear_model import simulate_discrete, zoh_transition
+from mace_fmu.updating.engine.measured import TimeHistory
+from mace_fmu.updating.sample.two_mass import TwoMassSystem
 
 STEP_S = 0.5
 

@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 
 from mace_fmu.errors import MaceError
-from mace_fmu.updating.costs import TimeResponseCost
-from mace_fmu.updating.data import TimeHistory
-from mace_fmu.updating.sample_family import TwoMassFamily
-from mace_fmu.updating.sensitivity import cost_sensitivities
+from mace_fmu.updating.engine.costs import TimeResponseCost
+from mace_fmu.updating.engine.measured import TimeHistory
+from mace_fmu.updating.engine.sensitivity import cost_sensitivities
+from mace_fmu.updating.sample.family import TwoMassFamily
 from mace_fmu.util.runner import DaskRunner
 
 START = {"k_1": 1.0, "k_2": 1.0, "damping:mode 1": 0.01, "damping:mode 2": 0.01}

@@ -10,10 +10,10 @@ from __future__ import annotations
 from pathlib import Path
 
 from mace_fmu.errors import MaceError
-from mace_fmu.updating.data import FrequencyResponseData, TimeHistory
+from mace_fmu.updating.engine.h1 import h1_estimate
+from mace_fmu.updating.engine.measured import FrequencyResponseData, TimeHistory
 from mace_fmu.updating.files.channels import Channel, ChannelMap, read_channel_map
 from mace_fmu.updating.files.frequency import FRF_SUFFIXES, read_frequency_response, write_frequency_response
-from mace_fmu.updating.files.h1 import h1_estimate
 from mace_fmu.updating.files.signals import check_model_signals
 from mace_fmu.updating.files.timehistory import TIME_SUFFIXES, read_time_history, write_time_history
 

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from mace_fmu.errors import MaceError
-from mace_fmu.updating.data import DataError, FrequencyResponseData
+from mace_fmu.updating.engine.measured import DataError, FrequencyResponseData
 from mace_fmu.updating.files.channels import ChannelMap, Label, check_present, format_label, parse_label, resolve
 from mace_fmu.updating.files.timehistory import read_csv_columns
 from mace_fmu.util.atomic import atomic_path

@@ -6,7 +6,7 @@ import difflib
 from typing import Sequence
 
 from mace_fmu.errors import MaceError
-from mace_fmu.updating.data import FrequencyResponseData, TimeHistory
+from mace_fmu.updating.engine.measured import FrequencyResponseData, TimeHistory
 
 
 def check_model_signals(data: TimeHistory | FrequencyResponseData, *, model_inputs: Sequence[str],

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from mace_fmu.errors import MaceError
-from mace_fmu.updating.data import DataError, TimeHistory
+from mace_fmu.updating.engine.measured import DataError, TimeHistory
 from mace_fmu.updating.files.channels import ChannelMap, check_present, format_label, parse_label, resolve
 from mace_fmu.util.atomic import atomic_path
 from mace_fmu.util.textfile import read_text

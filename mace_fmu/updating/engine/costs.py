@@ -1,0 +1,214 @@
+"""Costs as residual vectors j (thesis eq. 4.11): the scalar cost is j^T j.
+
+Each cost maps a :class:`~mace_fmu.updating.engine.linear_model.LinearModel` to one real vector, stacked over
+modes, or over actuator/sensor pairs and frequencies or times, so the cost-sensitivity method
+(eq. 4.12-4.13) and least squares see the same thing. A user adds a cost by writing a class with
+``name``, ``residual(model)`` and ``entry_labels()``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+
+from mace_fmu.errors import MaceError
+from mace_fmu.iomodel.pole_pairing import pair_poles
+from mace_fmu.updating.engine.linear_model import LinearModel
+from mace_fmu.updating.engine.measured import FrequencyResponseData, MeasuredMode, TimeHistory
+
+
+class Cost(Protocol):
+    """What the updating engine needs of a cost."""
+
+    name: str
+
+    def residual(self, model: LinearModel) -> np.ndarray:
+        """The residual vector j of ``model`` (real, fixed length)."""
+        ...
+
+    def entry_labels(self) -> list[str]:
+        """What each entry of j is, for tables and cost spectra."""
+        ...
+
+
+class UnpairedModeError(MaceError):
+    """A measured mode no model pole can be paired with."""
+
+
+@dataclass(frozen=True)
+class ModalCost:
+    """Relative frequency errors (eq. 4.2) and damping errors of measured modes against the model's poles.
+
+    j = [w_i (f_meas,i - f_model,i) / f_meas,i ; w_i c_zeta ln(max(zeta_meas,i, z0) / max(zeta_model,i, z0))]
+    with poles paired to measured modes by label pattern and then the nearest frequency
+    (:func:`~mace_fmu.iomodel.pole_pairing.pair_poles`), never by sort order. The damping term is a log
+    ratio: for small errors the relative error, but bounded for the servo-dominated modes whose
+    damping is off by factors (Table 4.7: 2nd Z bending 0.445 against 0.105). ``damping_weight``
+    (c_zeta) makes a 10 % damping error count like a 1 % frequency error at its default 0.1.
+    """
+
+    measured: tuple[MeasuredMode, ...]
+    damping_weight: float = 0.1
+    damping_floor: float = 0.001  #: z0: damping errors of nearly undamped modes stay bounded
+    name: str = "modal"
+
+    def pairs(self, model: LinearModel) -> list[int]:
+        """Index into ``model.poles()`` of each measured mode's pole; UnpairedModeError names the first
+        that has none."""
+        poles = model.poles()
+        found = pair_poles([(m.pattern, m.frequency_hz) for m in self.measured], poles)
+        for m, i in zip(self.measured, found):
+            if i is None:
+                near = sorted(poles, key=lambda p: abs(p.frequency_hz - m.frequency_hz))[:3]
+                raise UnpairedModeError(
+                    f"measured mode {m.label!r} at {m.frequency_hz} Hz: no model pole matches its pattern "
+                    f"{m.pattern!r} (nearest poles: " + ", ".join(f"{p.label} {p.frequency_hz:.2f} Hz" for p in near)
+                    + ")")
+        return [int(i) for i in found]
+
+    def residual(self, model: LinearModel) -> np.ndarray:
+        poles = model.poles()
+        idx = self.pairs(model)
+        w = np.array([m.weight for m in self.measured])
+        f_meas = np.array([m.frequency_hz for m in self.measured])
+        z_meas = np.array([m.damping for m in self.measured])
+        f = np.array([poles[i].frequency_hz for i in idx])
+        z = np.array([poles[i].damping for i in idx])
+        freq = w * (f_meas - f) / f_meas
+        floor = self.damping_floor
+        damp = w * self.damping_weight * np.log(np.maximum(z_meas, floor) / np.maximum(z, floor))
+        return np.concatenate([freq, damp])
+
+    def entry_labels(self) -> list[str]:
+        return [f"f {m.label} {m.frequency_hz:g} Hz" for m in self.measured] + \
+            [f"zeta {m.label} {m.frequency_hz:g} Hz" for m in self.measured]
+
+
+@dataclass(frozen=True)
+class FrequencyResponseCost:
+    """Frequency-response errors over every measured channel and frequency.
+
+    ``kind="magnitude"`` (eq. 4.4): j = [Re, Im] of G_data - G_model, which weights the poles;
+    ``kind="log"`` (eq. 4.5, 4.17): j = [Re, Im] of log(G_data / G_model) = [log magnitude ratio,
+    phase difference in rad], which weights poles and zeros alike and includes the phase. The phase
+    difference is the principal value (within +-180 deg), as the complex logarithm gives it.
+    """
+
+    data: FrequencyResponseData
+    kind: str = "log"
+    name: str = "log-frf"
+
+    def __post_init__(self) -> None:
+        if self.kind not in ("log", "magnitude"):
+            raise MaceError(f"frequency-response cost: kind must be 'log' or 'magnitude', got {self.kind!r}")
+        object.__setattr__(self, "name", "log-frf" if self.kind == "log" else "frf-magnitude")
+
+    def residual(self, model: LinearModel) -> np.ndarray:
+        h = model.frequency_response(self.data.frequencies_hz, inputs=self.data.inputs, outputs=self.data.outputs)
+        g = self.data.response
+        if self.kind == "log":
+            with np.errstate(divide="ignore", invalid="ignore"):
+                e = np.log(g / h)
+            if not np.all(np.isfinite(e)):
+                raise MaceError(f"{self.data.source}: the model's response is zero or infinite where data exist; "
+                                "the log cost needs both nonzero")
+        else:
+            e = g - h
+        e = e.transpose(2, 1, 0).reshape(-1)  # (input, output, frequency): one spectrum per channel pair
+        return np.concatenate([e.real, e.imag])
+
+    def entry_labels(self) -> list[str]:
+        one = [f"{i} -> {o} {f:.4g} Hz" for i in self.data.inputs for o in self.data.outputs
+               for f in self.data.frequencies_hz]
+        return [f"{'log|G| ' if self.kind == 'log' else 'Re '}{x}" for x in one] + \
+            [f"{'phase ' if self.kind == 'log' else 'Im '}{x}" for x in one]
+
+
+@dataclass(frozen=True)
+class TimeResponseCost:
+    """Output errors of a simulation driven by the measured inputs (eq. 4.3), zero-order hold.
+
+    j = [(y_data - y_model)(t_i) / s_o] stacked over the outputs, with s_o each output's RMS in the
+    data when ``normalise`` (so that channels in different units weigh alike), else 1.
+    """
+
+    data: TimeHistory
+    normalise: bool = True
+    name: str = "time"
+
+    def residual(self, model: LinearModel) -> np.ndarray:
+        outs = list(self.data.outputs)
+        y = model.time_response(self.data.times_s, self.data.inputs, outputs=outs)
+        err = []
+        for k, name in enumerate(outs):
+            measured = self.data.outputs[name]
+            scale = float(np.sqrt(np.mean(measured**2))) if self.normalise else 1.0
+            err.append((measured - y[:, k]) / (scale if scale > 0 else 1.0))
+        return np.concatenate(err)
+
+    def entry_labels(self) -> list[str]:
+        return [f"{o} t={t:.4g} s" for o in self.data.outputs for t in self.data.times_s]
+
+
+@dataclass(frozen=True)
+class SeveralTests:
+    """The costs of several tests of one structure (a gimbal test, an active-strut test, ...) as one cost.
+
+    j = [w_1 j_1; w_2 j_2; ...]: each test's residual times its weight, 1 / (its noise standard
+    deviation per residual) when known, so that every test counts in units of its own noise.
+    """
+
+    tests: tuple  #: the tests' costs
+    weights: tuple[float, ...]  #: one per test
+    labels: tuple[str, ...]  #: one per test (its data file)
+    name: str = "several tests"
+
+    def residual(self, model: LinearModel) -> np.ndarray:
+        return np.concatenate([w * c.residual(model) for c, w in zip(self.tests, self.weights)])
+
+    def entry_labels(self) -> list[str]:
+        return [f"{label}: {e}" for c, label in zip(self.tests, self.labels) for e in c.entry_labels()]
+
+
+@dataclass(frozen=True)
+class WithPriors:
+    """A cost with Gaussian prior knowledge of some parameters (a sensor gain calibrated to 1 %).
+
+    j = [j_data; s (p_k - mean_k) / sd_k]: ``s``, the noise standard deviation per residual of
+    j_data, puts each prior in the data's units, so that the least-squares answer is the posterior
+    mode and sigma^2 (J^T J)^-1 its covariance, the priors' information included. The model must say
+    its parameter values (``model.parameter_values``, as an FMU model does).
+    """
+
+    cost: object  #: the data's cost
+    priors: dict  #: parameter -> (mean, standard deviation) [the parameter's units]
+    noise_sd: float  #: s: noise standard deviation per residual of ``cost``
+    name: str = ""
+
+    def __post_init__(self) -> None:
+        bad = [n for n, (_, sd) in self.priors.items() if not (np.isfinite(sd) and sd > 0)]
+        if bad:
+            raise MaceError(f"prior standard deviation must be positive: {', '.join(bad)}")
+        if not (np.isfinite(self.noise_sd) and self.noise_sd > 0):
+            raise MaceError(f"noise standard deviation per residual must be positive, got {self.noise_sd!r}")
+        object.__setattr__(self, "name", self.name or f"{self.cost.name} with priors")
+
+    def residual(self, model) -> np.ndarray:
+        values = getattr(model, "parameter_values", None)
+        if values is None:
+            raise MaceError(f"priors on {', '.join(self.priors)} need a model that says its parameter values")
+        missing = [n for n in self.priors if n not in values]
+        if missing:
+            raise MaceError(f"prior on {', '.join(missing)}, which the model has no parameter of")
+        prior = [self.noise_sd * (values[n] - mean) / sd for n, (mean, sd) in self.priors.items()]
+        return np.concatenate([self.cost.residual(model), np.array(prior, dtype=float)])
+
+    def entry_labels(self) -> list[str]:
+        return self.cost.entry_labels() + [f"prior {n}" for n in self.priors]
+
+
+def scalar_cost(residual: np.ndarray) -> float:
+    """j^T j."""
+    return float(residual @ residual)

@@ -1,0 +1,178 @@
+"""How sure an update is of each parameter, and which combinations its data cannot see.
+
+From the final linearisation of each stage (the cost sensitivities the update already has: no
+extra model runs), J = d j / d delta with delta the parameters' changes relative to the point of
+that linearisation (the end point, or its last base within the stopping tolerance), and the residual noise
+variance sigma^2 (j^T j / (m - n) at the end, m residuals, n parameters), the linearised
+covariance of x is sigma^2 (J^T J)^-1 = sigma^2 V S^-2 V^T (SVD J = U S V^T). Standard
+deviations, correlations and 95 % intervals (value x (1 +- 1.96 sd), normal approximation)
+follow; each right singular vector v_k whose standard deviation sigma / s_k exceeds the
+tolerance is a combination the data do not fix, written in parameter names
+("0.08 E_active_strut_end + 0.32 E_active_strut_piezo - 0.95 E_active_strut_center").
+The penalty of eq. 4.18, when on, is a regularisation and is left out: the uncertainty is the data's.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from mace_fmu.updating.engine.solve import UpdateResult
+
+Z95 = 1.959963984540054  #: two-sided 95 % quantile of the normal distribution
+#: a parameter (or a combination) whose standard deviation exceeds this [%] is "not fixed by these data"
+DEFAULT_TOLERANCE_PERCENT = 5.0
+
+
+@dataclass(frozen=True)
+class WeakDirection:
+    """A combination of relative parameter changes the data fix poorly."""
+
+    standard_deviation_percent: float  #: of the combination (unit-norm coefficients)
+    coefficients: dict  #: parameter -> coefficient of its relative change; the largest is positive
+
+    def text(self) -> str:
+        """'0.08 E_a + 0.32 E_b - 0.95 E_c' (terms below 0.05 left out)."""
+        terms = [(c, n) for n, c in self.coefficients.items() if abs(c) >= 0.05]
+        out = ""
+        for k, (c, n) in enumerate(terms):
+            sign = "-" if c < 0 else ("+" if k else "")
+            out += f"{' ' if k else ''}{sign}{' ' if k else ''}{abs(c):.2f} {n}"
+        return out
+
+
+@dataclass(frozen=True)
+class StageUncertainty:
+    """The linearised uncertainty of one stage's parameters at the end of the update."""
+
+    stage: str  #: stage name
+    names: tuple[str, ...]  #: parameters of the stage
+    values: dict  #: final values [SI]
+    residuals: int  #: m
+    noise_variance: float  #: sigma^2 per (normalised) residual
+    standard_deviation_percent: dict  #: of each parameter, relative to its value
+    correlation: np.ndarray  #: (n, n)
+    interval_95: dict  #: name -> (low, high) [SI]
+    singular_values: np.ndarray  #: of J (per unit relative change), largest first
+    weak_directions: tuple[WeakDirection, ...]  #: combinations with sd above the tolerance, weakest first
+    tolerance_percent: float  #: standard deviation below which a parameter counts as determined [%]
+
+    @property
+    def not_fixed(self) -> tuple[str, ...]:
+        """Parameters whose standard deviation exceeds the tolerance."""
+        return tuple(n for n in self.names if self.standard_deviation_percent[n] > self.tolerance_percent)
+
+
+def _stage_jacobians(result: UpdateResult) -> dict[str, tuple]:
+    """stage -> (names, J per unit relative change) of the stage's last linearisation."""
+    return {it.stage: (it.sensitivities.names, it.sensitivities.matrix) for it in result.history
+            if it.sensitivities is not None}
+
+
+def stage_uncertainty(result: UpdateResult, *, tolerance_percent: float = DEFAULT_TOLERANCE_PERCENT,
+                      noise_variance: float | None = None) -> tuple[StageUncertainty, ...]:
+    """The uncertainty of every stage that has cost sensitivities (the cost-sensitivity method).
+
+    Parameters
+    ----------
+    result : UpdateResult
+        An update whose stages kept their final linearisation (no extra model runs are made).
+    tolerance_percent : float
+        A parameter or combination whose standard deviation exceeds this [%] is reported as not
+        fixed by the data.
+    noise_variance : float, optional
+        sigma^2 per residual when known (e.g. the noise floor's expected cost / m); default: the
+        final cost / (m - n).
+
+    Returns
+    -------
+    tuple of StageUncertainty
+        Per stage: standard deviations [% of the value], correlations, 95 % intervals [SI], singular
+        values and the weak directions in parameter names.
+    """
+    out = []
+    for stage, (names, jac) in _stage_jacobians(result).items():
+        m, n = jac.shape
+        sigma2 = noise_variance if noise_variance is not None else result.final_cost / max(m - n, 1)
+        out.append(linearised_uncertainty(stage=stage, names=names, values={k: float(result.values[k]) for k in names},
+                                          jacobian=jac, noise_variance=sigma2, tolerance_percent=tolerance_percent))
+    return tuple(out)
+
+
+def linearised_uncertainty(*, stage: str, names, values: dict, jacobian: np.ndarray, noise_variance: float,
+                           tolerance_percent: float = DEFAULT_TOLERANCE_PERCENT) -> StageUncertainty:
+    """The uncertainty of parameters ``names`` at ``values`` [SI] from J = d j / d delta (per unit relative
+    change, one column per name, m rows) and the noise variance per residual: sigma^2 (J^T J)^-1."""
+    jac = np.asarray(jacobian, dtype=float)
+    m, n = jac.shape
+    sigma2 = float(noise_variance)
+    u, s, vt = np.linalg.svd(jac, full_matrices=False)
+    tiny = s <= s[0] * 1e-12 if len(s) else np.zeros(0, dtype=bool)
+    inv = np.where(tiny, np.inf, 1.0 / np.where(tiny, 1.0, s))
+    cov = (vt.T * (sigma2 * inv**2)) @ vt if not tiny.any() else np.full((n, n), np.inf)
+    sd = np.sqrt(np.abs(np.diag(cov)))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        corr = cov / np.outer(sd, sd)
+    sd_percent = {k: float(100 * d) for k, d in zip(names, sd)}
+    interval = {k: (values[k] * (1 - Z95 * sd_percent[k] / 100), values[k] * (1 + Z95 * sd_percent[k] / 100))
+                for k in names}
+    weak = []
+    for k in range(len(s)):
+        sd_dir = 100 * math.sqrt(sigma2) * inv[k]
+        if sd_dir > tolerance_percent:
+            v = vt[k] * np.sign(vt[k][np.argmax(np.abs(vt[k]))])
+            weak.append(WeakDirection(standard_deviation_percent=float(sd_dir),
+                                      coefficients={nm: float(c) for nm, c in zip(names, v)}))
+    weak.sort(key=lambda w: -w.standard_deviation_percent)
+    return StageUncertainty(stage=stage, names=tuple(names), values=dict(values), residuals=m, noise_variance=sigma2,
+                            standard_deviation_percent=sd_percent, correlation=corr, interval_95=interval,
+                            singular_values=s, weak_directions=tuple(weak), tolerance_percent=tolerance_percent)
+
+
+def format_uncertainty(stages: tuple[StageUncertainty, ...]) -> str:
+    """The terminal table: value, standard deviation, 95 % interval, and what the data do not fix."""
+    lines = []
+    for st in stages:
+        lines.append(f"{st.stage}: uncertainty from {st.residuals} residuals, noise sd {math.sqrt(st.noise_variance):.3g} "
+                     f"per residual (tolerance {st.tolerance_percent:g} %)")
+        width = max([28, *(len(n) for n in st.names)])
+        lines.append(f"  {'parameter':<{width}} {'value':>13} {'sd %':>8}  95 % interval")
+        for n in st.names:
+            flag = "  not fixed by these data" if n in st.not_fixed else ""
+            lo, hi = st.interval_95[n]
+            lines.append(f"  {n:<{width}} {st.values[n]:>13.6g} {st.standard_deviation_percent[n]:>8.3g}  "
+                         f"[{lo:.6g}, {hi:.6g}]{flag}")
+        for w in st.weak_directions:
+            lines.append(f"  not identifiable from these data (sd {w.standard_deviation_percent:.3g} %): {w.text()}")
+    return "\n".join(lines)
+
+
+def uncertainty_toml(stages: tuple[StageUncertainty, ...]) -> str:
+    """``uncertainty.toml``: per stage, standard deviations, 95 % intervals, correlations, singular values, weak
+    directions in parameter names."""
+    def q(text: str) -> str:
+        return '"' + text.replace("\\", "\\\\").replace('"', '\\"') + '"'
+
+    def num(x: float) -> str:
+        return repr(float(x)) if math.isfinite(x) else ("inf" if x > 0 else "nan" if x != x else "-inf")
+
+    lines = ["# mace-fmu: linearised uncertainty of an update (from its final cost sensitivities)", ""]
+    for st in stages:
+        lines += ["[[stage]]", f"name = {q(st.stage)}", f"residuals = {st.residuals}",
+                  f"noise_variance = {num(st.noise_variance)}", f"tolerance_percent = {num(st.tolerance_percent)}",
+                  "parameters = [" + ", ".join(q(n) for n in st.names) + "]",
+                  "values = [" + ", ".join(num(st.values[n]) for n in st.names) + "]",
+                  "standard_deviation_percent = [" + ", ".join(num(st.standard_deviation_percent[n]) for n in st.names)
+                  + "]",
+                  "interval_95_low = [" + ", ".join(num(st.interval_95[n][0]) for n in st.names) + "]",
+                  "interval_95_high = [" + ", ".join(num(st.interval_95[n][1]) for n in st.names) + "]",
+                  "singular_values = [" + ", ".join(num(x) for x in st.singular_values) + "]",
+                  "correlation = [" + ", ".join("[" + ", ".join(num(x) for x in row) + "]" for row in st.correlation)
+                  + "]",
+                  "not_fixed = [" + ", ".join(q(n) for n in st.not_fixed) + "]",
+                  "weak_directions = [" + ", ".join(q(w.text()) for w in st.weak_directions) + "]",
+                  "weak_direction_sd_percent = [" + ", ".join(num(w.standard_deviation_percent)
+                                                             for w in st.weak_directions) + "]", ""]
+    return "\n".join(lines)

@@ -1,0 +1,247 @@
+"""An FMU update as a user states it: an FMU file, measured-data files, parameter names, a cost; checked before any run.
+
+Everything that can be wrong with the request (files, parameter names, channels the FMU lacks,
+a frequency response without the time history it needs) is found here, before the first FMU
+simulation, and reported as one :class:`~mace_fmu.errors.MaceError`.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Mapping, Sequence
+
+from mace_fmu.errors import MaceError
+from mace_fmu.updating.engine.costs import Cost, WithPriors
+from mace_fmu.updating.engine.measured import FrequencyResponseData, TimeHistory
+from mace_fmu.updating.engine.simulated_frf import H1Estimator
+from mace_fmu.updating.fmu.model import FmuFamily, gain_parameter, read_fmu_interface
+from mace_fmu.updating.fmu.update import COST_KINDS, CostKind, Weighting, fmu_cost
+
+
+@dataclass(frozen=True)
+class FmuProblem:
+    """A checked FMU update: the FMU, what it starts from, the measured data and the cost."""
+
+    family: FmuFamily  #: the FMU with every start value from the start file set on each run
+    names: tuple[str, ...]  #: parameters to update
+    start: Mapping[str, float]  #: their start values [FMU units]
+    history: TimeHistory  #: the measured time histories (the first test)
+    frequency_data: FrequencyResponseData | None  #: measured frequency responses (None: a time cost)
+    cost: Cost  #: the cost the update minimises
+    data_files: tuple[str, ...]  #: the measured data files read
+    histories: tuple[TimeHistory, ...] = ()  #: every test's time history (``history`` is the first)
+
+
+def fmu_problem(*, fmu: str | os.PathLike, data: Sequence[str | os.PathLike], names: Sequence[str],
+                cost: CostKind, start: Mapping[str, float] | None = None, channel_map: str | os.PathLike | None = None,
+                segment_s: float = 2.0, weighting: Weighting = "noise",
+                held_inputs: Sequence[str] = (), noise_rms_fraction: float | None = None,
+                gain_uncertainty: Mapping[str, float] | None = None) -> FmuProblem:
+    """Read and check everything an FMU update needs; no simulation runs.
+
+    Parameters
+    ----------
+    fmu : path
+        An FMI 2.0 co-simulation FMU (any tool's; a native FMU of this package runs fastest).
+    data : sequence of paths
+        One or more time histories (CSV/npz: the measured inputs and outputs of one test each; several
+        tests are summed, each in units of its own noise) and, with a single one and the log-FRF cost,
+        optionally one frequency response (UFF 58/CSV) to compare with instead of the H1 of the time
+        history.
+    names : sequence of str
+        The FMU parameters to update, each named once.
+    cost : {"time", "log-frf"}
+        Output errors over their RMS (eq. 4.3), or log ratios of H1 estimates (eq. 4.5/4.17).
+    start : mapping of str to float, optional
+        Values [FMU units] set on every run (default: the FMU's own start values).
+    channel_map : path, optional
+        CSV mapping the data's channels to the FMU's signals (with units and, optionally, a
+        ``gain_uncertainty_percent`` column).
+    segment_s : float
+        H1 segment length [s] of the log-FRF cost.
+    weighting : {"noise", "none"}
+        Log-FRF: each bin over its noise standard deviation, or eq. 4.17 as printed.
+    held_inputs : sequence of str
+        FMU inputs the data lack that are to be held at 0 V (any other input the data lack is an
+        error: a silently grounded input biases every parameter).
+    noise_rms_fraction : float, optional
+        The tests' noise RMS over their outputs' RMS, when it cannot be estimated from the data.
+    gain_uncertainty : mapping of str to float, optional
+        Output -> standard deviation of its sensor's gain as a fraction (0.01: known to 1 %). Each such
+        gain is estimated with the update as a nuisance parameter "gain:<output>" with a Gaussian prior
+        of mean 1, so the stated uncertainty of the parameters includes the gains'.
+
+    Returns
+    -------
+    FmuProblem
+        The FMU as a model family, the parameters (gains appended) and their start values, the data
+        and the cost, ready for :func:`~mace_fmu.updating.fmu.update.update_fmu`.
+
+    Raises
+    ------
+    MaceError
+        A missing or malformed file, an unknown parameter or channel, a parameter named twice, tests
+        with different sample times, an FMU input the data lack and that is not held, a gain prior on
+        an output no test records or not positive: the message names the file, channel or parameter.
+    """
+    from mace_fmu.updating.files import read_channel_map, read_measured_data
+
+    if cost not in COST_KINDS:
+        raise MaceError(f"cost must be one of {', '.join(COST_KINDS)}, got {cost!r}")
+    interface = read_fmu_interface(fmu)
+    twice = sorted({n for n in names if list(names).count(n) > 1})
+    if twice:
+        raise MaceError(f"parameter {twice[0]!r} named twice in --update (name each once)")
+    names = tuple(names)
+    if not names:
+        raise MaceError("name at least one FMU parameter to update")
+    interface.check_parameters(names)
+    start = dict(start or {})
+    interface.check_parameters(list(start))
+    mapping = read_channel_map(channel_map) if channel_map is not None else None
+    repeated = sorted({os.fspath(p) for p in data if [os.fspath(q) for q in data].count(os.fspath(p)) > 1})
+    if repeated:
+        raise MaceError(f"{repeated[0]}: given twice as --data (each test once)")
+    histories, responses = [], []
+    for path in data:
+        if not Path(path).is_file():
+            raise MaceError(f"{path}: no such measured-data file")
+        item = read_measured_data(path, channel_map=mapping)
+        interface.check_signals(inputs=list(item.inputs), outputs=list(item.outputs), where=os.fspath(path))
+        (histories if isinstance(item, TimeHistory) else responses).append(item)
+    if not histories or len(responses) > 1 or (responses and len(histories) > 1):
+        raise MaceError(f"give one or more time histories (each a test whose measured inputs drive the FMU) and, with "
+                        f"a single one, at most one frequency response; got {len(histories)} time histories and "
+                        f"{len(responses)} frequency responses")
+    if responses and cost != "log-frf":
+        raise MaceError(f"{responses[0].source}: a frequency response is compared by the log-frf cost only "
+                        f"(--cost log-frf), not by {cost!r}")
+    history, frd = histories[0], (responses[0] if responses else None)
+    for other in histories[1:]:
+        if abs(other.sample_time_s - history.sample_time_s) > 1e-9 * history.sample_time_s:
+            raise MaceError(f"{other.source}: sample time {other.sample_time_s:g} s, but {history.source} has "
+                            f"{history.sample_time_s:g} s: the tests of one update share one sample time")
+    missing = [i for i in (frd.inputs if frd is not None else ()) if i not in history.inputs]
+    if missing:
+        raise MaceError(f"{frd.source}: input(s) {', '.join(missing)} are not in the time history "
+                        f"{history.source}, which drives the FMU")
+    unknown_held = [i for i in held_inputs if i not in interface.inputs]
+    if unknown_held:
+        raise MaceError(f"--hold-input: {', '.join(unknown_held)} is not an input of {interface.path} "
+                        f"(its inputs: {', '.join(interface.inputs)})")
+    for test in histories:
+        if not test.inputs:
+            raise MaceError(f"{test.source}: no input channels: the FMU must be driven by the measured inputs")
+        absent = [i for i in interface.inputs if i not in test.inputs and i not in held_inputs]
+        if absent:
+            raise MaceError(f"{test.source}: no channel for the FMU input(s) {', '.join(absent)}; record them, or "
+                            "hold each at 0 explicitly (--hold-input NAME=0)")
+    gains = _gain_priors(gain_uncertainty or {}, mapping, histories)
+    costs = [_test_cost(cost, test, frd, segment_s=segment_s, weighting=weighting) for test in histories]
+    the_cost = costs[0] if len(costs) == 1 else _several_tests(costs, histories, noise_rms_fraction)
+    family = FmuFamily(interface=interface, fixed=start, gain_outputs=tuple(gains))
+    values = {n: start.get(n, interface.parameters[n]) for n in names}
+    if gains:
+        the_cost = WithPriors(the_cost, priors={gain_parameter(o): (1.0, sd) for o, sd in gains.items()},
+                              noise_sd=_noise_per_residual(the_cost, histories[0], noise_rms_fraction))
+        names += family.gain_parameters
+        values.update({g: 1.0 for g in family.gain_parameters})
+    return FmuProblem(family=family, names=names, start=values, history=history,
+                      frequency_data=frd, cost=the_cost, data_files=tuple(os.fspath(p) for p in data),
+                      histories=tuple(histories))
+
+
+def _gain_priors(given: Mapping[str, float], mapping, histories: Sequence[TimeHistory]) -> dict[str, float]:
+    """output -> gain standard deviation [fraction] from ``given`` (--gain-uncertainty) and the channel map's
+    column; each must be an output some test records, positive, and stated once."""
+    gains: dict[str, float] = {}
+    recorded = {o for h in histories for o in h.outputs}
+    from_map = {ch.signal: ch.gain_uncertainty_percent / 100.0 for ch in (mapping.channels if mapping else ())
+                if ch.gain_uncertainty_percent is not None and ch.signal in recorded}
+    for where, table in (("--gain-uncertainty", given), (mapping.source if mapping else "", from_map)):
+        for output, sd in table.items():
+            if output in gains:
+                raise MaceError(f"{where}: the gain uncertainty of {output!r} is given twice (on the command line "
+                                "and in the channel map): state it once")
+            if not (math.isfinite(sd) and sd > 0):
+                raise MaceError(f"{where}: gain uncertainty of {output!r} must be a positive percentage, got "
+                                f"{100 * sd:g} %")
+            gains[output] = float(sd)
+    absent = [o for o in gains if o not in recorded]
+    if absent:
+        raise MaceError(f"--gain-uncertainty: no test records the output(s) {', '.join(absent)} (recorded: "
+                        f"{', '.join(sorted(recorded))})")
+    return gains
+
+
+def _noise_per_residual(cost: Cost, history: TimeHistory, noise_rms_fraction: float | None) -> float:
+    """The noise standard deviation per residual of ``cost``: 1 for costs already in units of their noise
+    (several tests, the noise-weighted log-FRF cost), from the noise floor for one test's time cost."""
+    from mace_fmu.updating.engine.convergence import time_noise_floor
+    from mace_fmu.updating.engine.costs import SeveralTests, TimeResponseCost
+    from mace_fmu.updating.engine.simulated_frf import SimulatedFrequencyResponseCost
+
+    def weighted_frf(c) -> bool:
+        return isinstance(c, SimulatedFrequencyResponseCost) and c.weights is not None
+
+    if weighted_frf(cost) or (isinstance(cost, SeveralTests) and all(isinstance(c, TimeResponseCost) or weighted_frf(c)
+                                                                      for c in cost.tests)):
+        return 1.0
+    if isinstance(cost, TimeResponseCost):
+        floor = time_noise_floor(cost, noise_rms_fraction=noise_rms_fraction)
+        if floor is None:
+            raise MaceError(f"{history.source}: a gain prior weighs against the measurement noise, which cannot be "
+                            "estimated from this test (its inputs fill the band): give --noise-rms-percent")
+        return math.sqrt(floor.expected_cost / sum(len(v) for v in history.outputs.values()))
+    raise MaceError("a gain prior weighs against the measurement noise: use the time cost or the noise-weighted "
+                    "log-frf cost (--weighting noise)")
+
+
+def _test_cost(cost: CostKind, history: TimeHistory, frd: FrequencyResponseData | None, *, segment_s: float,
+               weighting: Weighting) -> Cost:
+    """The cost of one test (its time history, and a measured frequency response if given)."""
+    estimator = H1Estimator(segment_length=int(round(segment_s / history.sample_time_s)),
+                            band_hz=(float(frd.frequencies_hz[0]), float(frd.frequencies_hz[-1])) if frd is not None
+                            else None)
+    if cost == "log-frf" and frd is None:
+        estimator = H1Estimator(segment_length=estimator.segment_length, band_hz=_default_band(history))
+    return fmu_cost(cost, history=history, frequency_data=frd, estimator=estimator,
+                    weighting=weighting if frd is None or _same_bins(frd, history, estimator) else "none")
+
+
+def _several_tests(costs: list[Cost], histories: list[TimeHistory], noise_rms_fraction: float | None) -> Cost:
+    """The tests' costs summed, each in units of its own noise: a time cost is divided by its noise's
+    standard deviation per residual (its noise floor, estimated above the inputs' band or given); a
+    noise-weighted log-FRF cost already is in those units."""
+    from mace_fmu.updating.engine.convergence import time_noise_floor
+    from mace_fmu.updating.engine.costs import SeveralTests, TimeResponseCost
+
+    weights = []
+    for c, test in zip(costs, histories):
+        if isinstance(c, TimeResponseCost):
+            floor = time_noise_floor(c, noise_rms_fraction=noise_rms_fraction)
+            if floor is None:
+                raise MaceError(f"{test.source}: the noise of this test cannot be estimated (its inputs fill the "
+                                "band); several tests are weighed by their noise: give --noise-rms-percent")
+            n = sum(len(v) for v in test.outputs.values())
+            weights.append(1.0 / (floor.expected_cost / n) ** 0.5)
+        else:
+            weights.append(1.0)
+    return SeveralTests(tests=tuple(costs), weights=tuple(weights), labels=tuple(h.source for h in histories))
+
+
+def _default_band(history: TimeHistory) -> tuple[float, float]:
+    """0.5 Hz to 60 Hz (thesis 4.5), cut to what the sampling allows."""
+    return 0.5, min(60.0, 0.4 / history.sample_time_s)
+
+
+def _same_bins(frd: FrequencyResponseData, history: TimeHistory, estimator: H1Estimator) -> bool:
+    """Whether ``frd`` sits on the estimator's bins (the noise weights are computed there)."""
+    import numpy as np
+
+    spacing = 1.0 / (estimator.segment_length * history.sample_time_s)
+    k = frd.frequencies_hz / spacing
+    return bool(np.allclose(k, np.round(k), atol=1e-6))
