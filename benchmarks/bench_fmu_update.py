@@ -48,6 +48,7 @@ def main() -> None:
     import dask
     import fmpy
 
+    from mace_fmu.fe.modes import compute_modes
     from mace_fmu.fmu.export import export_fmu
     from mace_fmu.iomodel.volts import volts_model
     from mace_fmu.updating.fmu.model import fmu_family

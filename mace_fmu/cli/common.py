@@ -67,6 +67,28 @@ def progress_bar() -> Iterator[ProgressCallback]:
             bar.close()
 
 
+def positive_number(text: str) -> float:
+    """argparse type of an option that is a finite number > 0 (a segment length, a noise level)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number > 0, got {text!r}") from None
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"expected a finite number > 0, got {text!r}")
+    return value
+
+
+def positive_integer(text: str) -> int:
+    """argparse type of a count option (workers, rounds): an integer >= 1."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 1, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 1, got {text!r}")
+    return value
+
+
 def positive_hz(text: str) -> float:
     """argparse type of a frequency option: a finite number > 0 [Hz] (-5 or nan would give an empty table)."""
     try:

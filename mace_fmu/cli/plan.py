@@ -6,7 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from mace_fmu.cli.common import progress_bar
+from mace_fmu.cli.common import positive_integer, progress_bar
 from mace_fmu.errors import MaceError
 from mace_fmu.util.atomic import write_text_atomic
 
@@ -39,8 +39,6 @@ def cmd_plan(args: argparse.Namespace) -> int:
     twice = sorted({n for n in names if names.count(n) > 1})
     if twice:
         raise MaceError(f"parameter {twice[0]!r} named twice in --update (name each once)")
-    if args.workers is not None and args.workers < 1:
-        raise MaceError(f"--workers must be >= 1, got {args.workers}")
     if args.out is not None and Path(args.out).is_dir():
         raise MaceError(f"-o {args.out}: is a directory; give the file to write (e.g. plan.toml)")
     candidates = read_test_plan(args.tests)
@@ -88,7 +86,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "away")
     p.add_argument("--seed", type=int, default=0, help="seed of the excitation's white noise (default 0)")
     p.add_argument("--scheduler", metavar="ADDRESS", help="run the FMU simulations on this Dask cluster")
-    p.add_argument("--workers", type=int, default=None, help="local worker processes (default: one per core)")
+    p.add_argument("--workers", type=positive_integer, default=None, help="local worker processes (default: one per core)")
     p.add_argument("-o", "--out", metavar="FILE", help="also write each candidate's predicted uncertainty (TOML, "
                    "as uncertainty.toml)")
     p.set_defaults(func=cmd_plan)

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from mace_fmu.cli.common import folder_argument, progress
+from mace_fmu.cli.common import folder_argument, positive_integer, progress
 from mace_fmu.errors import MaceError
 
 FIGURE_OF_AUTHORITY = {"low": "A2", "moderate": "A3", "high": "A4"}
@@ -213,6 +213,6 @@ def register(sub: argparse._SubParsersAction) -> None:
     o.add_argument("--duration", type=float, default=4.0, help="simulated time of each run [s]: 1 s of disturbance, "
                    "then settling (default 4)")
     o.add_argument("--scheduler", help="address of a Dask scheduler, e.g. tcp://host:8786 (default: a local cluster)")
-    o.add_argument("--workers", type=int, default=None, help="local cluster workers (default: the machine's cores)")
+    o.add_argument("--workers", type=positive_integer, default=None, help="local cluster workers (default: the machine's cores)")
     o.add_argument("--serial", action="store_true", help="run in this process, no Dask")
     o.set_defaults(func=cmd_robust_0g)

@@ -7,7 +7,7 @@ import json
 import sys
 from pathlib import Path
 
-from mace_fmu.cli.common import deck_option, folder_argument, progress_bar
+from mace_fmu.cli.common import deck_option, folder_argument, positive_integer, positive_number, progress_bar
 from mace_fmu.errors import MaceError
 from mace_fmu.util.atomic import write_text_atomic
 from mace_fmu.util.textfile import read_toml
@@ -47,65 +47,59 @@ def _read_start(path: str, fmu: str) -> dict[str, float]:
     return read_fmu_interface(fmu).values_by_fmu_name({k: float(v) for k, v in values.items()}, source=path)
 
 
-def _gain_uncertainty(items: list[str]) -> dict[str, float]:
-    """``--gain-uncertainty OUTPUT=P%`` (repeatable, comma-separated) -> output: standard deviation [fraction]."""
-    out: dict[str, float] = {}
-    for item in (x.strip() for part in items for x in part.split(",") if x.strip()):
+def _gain_priors(text: str) -> list[tuple[str, float]]:
+    """argparse type of ``--gain-uncertainty OUTPUT=P%[,...]``: (output, standard deviation [fraction]) pairs."""
+    out = []
+    for item in (x.strip() for x in text.split(",") if x.strip()):
         name, _, value = item.partition("=")
-        name = name.strip()
         try:
             percent = float(value.strip().rstrip("%"))
         except ValueError:
             percent = float("nan")
-        if not name or not (percent > 0 and percent < float("inf")):
-            raise MaceError(f"--gain-uncertainty {item!r}: expected OUTPUT=P% with P > 0 (e.g. strain_strut2_y=1%)")
-        if name in out:
-            raise MaceError(f"--gain-uncertainty: {name!r} given twice")
-        out[name] = percent / 100.0
+        if not name.strip() or not (0 < percent < float("inf")):
+            raise argparse.ArgumentTypeError(f"{item!r}: expected OUTPUT=P% with P > 0 (e.g. strain_strut2_y=1%)")
+        out.append((name.strip(), percent / 100.0))
     return out
 
 
-def cmd_fmu_update(args: argparse.Namespace) -> int:
-    """``update fmu FILE``: update FMU parameters against measured-data files, every argument checked before any
-    run."""
-    from mace_fmu.updating.fmu.problem import fmu_problem
-    from mace_fmu.updating.fmu.update import fmu_parameters, update_fmu
-    from mace_fmu.util.runner import DaskRunner
-
-    if args.sample_problem or args.measured:
-        raise MaceError("an FMU update (update fmu FILE) fits --data files; it does not combine with --sample-problem "
-                        "or --measured")
-    if not args.data or not args.update:
-        raise MaceError("an FMU update needs --data FILE (measured time history [, frequency response]) and --update "
-                        "NAME[,NAME...]")
-    if args.out is None:
-        raise MaceError("say where to write parameters.toml: -o DIR")
-    out = Path(args.out)
-    if out.exists() and not out.is_dir():
-        raise MaceError(f"-o {out}: exists and is not a directory")
-    if args.workers is not None and args.workers < 1:
-        raise MaceError(f"--workers must be >= 1, got {args.workers}")
-    if args.scheduler and args.workers is not None:
-        raise MaceError("--workers sizes a local cluster; with --scheduler the cluster's own workers run")
-    if not args.segment_s > 0:
-        raise MaceError(f"--segment-s must be > 0 s, got {args.segment_s}")
-    names = [n.strip() for part in args.update for n in part.split(",") if n.strip()]
-    held = []
-    for item in (x for part in args.hold_input for x in part.split(",") if x.strip()):
+def _held_inputs(text: str) -> list[str]:
+    """argparse type of ``--hold-input NAME=0[,...]``: the names of inputs the data lack, held at 0 V."""
+    names = []
+    for item in (x.strip() for x in text.split(",") if x.strip()):
         name, _, value = item.partition("=")
         try:
             zero = float(value) == 0.0
         except ValueError:
             zero = False
         if not name.strip() or not zero:
-            raise MaceError(f"--hold-input {item!r}: expected NAME=0 (an input the data lack, held at 0 V)")
-        held.append(name.strip())
-    if args.noise_rms_percent is not None and not args.noise_rms_percent > 0:
-        raise MaceError(f"--noise-rms-percent must be > 0, got {args.noise_rms_percent}")
+            raise argparse.ArgumentTypeError(f"{item!r}: expected NAME=0 (an input the data lack, held at 0 V)")
+        names.append(name.strip())
+    return names
+
+
+def _gain_uncertainty(groups: list[list[tuple[str, float]]]) -> dict[str, float]:
+    """The ``--gain-uncertainty`` options together: output -> standard deviation [fraction], each output once."""
+    out: dict[str, float] = {}
+    for name, fraction in (pair for group in groups for pair in group):
+        if name in out:
+            raise MaceError(f"--gain-uncertainty: {name!r} given twice")
+        out[name] = fraction
+    return out
+
+
+def cmd_fmu_update(args: argparse.Namespace) -> int:
+    """``update fmu FILE``: update FMU parameters against measured-data files. argparse checks each option,
+    ``fmu_problem`` the files and names together: all before any run."""
+    from mace_fmu.updating.fmu.problem import fmu_problem
+    from mace_fmu.updating.fmu.update import update_fmu
+    from mace_fmu.util.runner import DaskRunner
+
     noise_fraction = None if args.noise_rms_percent is None else args.noise_rms_percent / 100.0
-    problem = fmu_problem(fmu=args.fmu, data=args.data, names=names, cost=args.cost,
-                          start=_read_start(args.start, args.fmu) if args.start else None, channel_map=args.map,
-                          segment_s=args.segment_s, weighting=args.weighting, held_inputs=held,
+    problem = fmu_problem(fmu=args.fmu, data=args.data,
+                          names=[n.strip() for part in args.update for n in part.split(",") if n.strip()],
+                          cost=args.cost, start=_read_start(args.start, args.fmu) if args.start else None,
+                          channel_map=args.map, segment_s=args.segment_s, weighting=args.weighting,
+                          held_inputs=[name for group in args.hold_input for name in group],
                           noise_rms_fraction=noise_fraction, gain_uncertainty=_gain_uncertainty(args.gain_uncertainty))
     where = f"the Dask cluster at {args.scheduler}" if args.scheduler else \
         f"{args.workers or 'one per core'} local worker processes"
@@ -116,21 +110,28 @@ def cmd_fmu_update(args: argparse.Namespace) -> int:
         with DaskRunner(scheduler=args.scheduler, workers=args.workers, progress=bar, task="FMU runs") as runner:
             result = update_fmu(family=problem.family, cost=problem.cost, start=problem.start, stages=[problem.names],
                                 runner=runner, progress=bar)
+    report = _write_fmu_update(problem, result, out=Path(args.out), noise_fraction=noise_fraction, strict=args.strict)
+    _say(report.summary())
+    return 0 if report.converged else NOT_CONVERGED
+
+
+def _write_fmu_update(problem, result, *, out: Path, noise_fraction: float | None, strict: bool):
+    """parameters.toml, convergence.toml and uncertainty.toml of an FMU update into ``out``, and its table on
+    stdout; returns the convergence report."""
     from mace_fmu.updating.engine.convergence import convergence_report, missing_noise_floor, noise_floor
+    from mace_fmu.updating.engine.uncertainty import format_uncertainty, stage_uncertainty, uncertainty_toml
+    from mace_fmu.updating.fmu.update import fmu_parameters
 
     floor = noise_floor(problem.cost, noise_rms_fraction=noise_fraction)
-    report = convergence_report(result, noise_floor=floor, strict=args.strict,
+    report = convergence_report(result, noise_floor=floor, strict=strict,
                                 missing_floor=missing_noise_floor(problem.cost, noise_rms_fraction=noise_fraction))
     params = fmu_parameters(result, family=problem.family, data=", ".join(problem.data_files), cost=problem.cost,
                             convergence=report)
     out.mkdir(parents=True, exist_ok=True)
-    path = params.write(out / "parameters.toml")
-    from mace_fmu.updating.engine.uncertainty import format_uncertainty, stage_uncertainty, uncertainty_toml
-
     # with a noise floor, the noise is the data's, not what the fit left over (which includes any misfit)
     sigma2 = floor.expected_cost / result.final_residual.size if floor is not None else None
     uncertainty = stage_uncertainty(result, noise_variance=sigma2)
-    written = [path, write_text_atomic(out / "convergence.toml", report.to_toml()),
+    written = [params.write(out / "parameters.toml"), write_text_atomic(out / "convergence.toml", report.to_toml()),
                write_text_atomic(out / "uncertainty.toml", uncertainty_toml(uncertainty))]
     units = problem.family.interface.units
     print(f"{'parameter':<28} {'start':>14} {'updated':>14}  change")
@@ -140,15 +141,9 @@ def cmd_fmu_update(args: argparse.Namespace) -> int:
     print(f"cost {result.initial_cost:.5g} -> {result.final_cost:.5g} ({100 * result.reduction:.1f} % lower) in "
           f"{result.seconds:.1f} s, {len(result.history)} outer iterations")
     print(format_uncertainty(uncertainty))
-    for written_path in written:
-        print(f"wrote {written_path}")
-    _say(report.summary())
-    return 0 if report.converged else NOT_CONVERGED
-
-
-def cmd_fmu_subcommand(args: argparse.Namespace) -> int:
-    args.sample_problem, args.measured = False, None
-    return cmd_fmu_update(args)
+    for path in written:
+        print(f"wrote {path}")
+    return report
 
 
 def cmd_mace_update(args: argparse.Namespace) -> int:
@@ -169,8 +164,6 @@ def cmd_mace_update(args: argparse.Namespace) -> int:
     from mace_fmu.updating.mace.update import format_mode_rows, mode_rows, run_mace_update, scores
 
     out = Path(args.out)
-    if args.rounds < 1:
-        raise MaceError(f"--rounds must be >= 1, got {args.rounds}")
     if out.exists() and not out.is_dir():
         raise MaceError(f"-o {out}: exists and is not a directory")
     deck = read_deck(args.deck)
@@ -213,8 +206,8 @@ _EXIT_STATUS = (f"exit status: 0 converged (a parameter that ends at a bound is 
                 "reasons in convergence.toml")
 
 
-def _out_option(p: argparse.ArgumentParser) -> None:
-    p.add_argument("-o", "--out", type=folder_argument, help="directory for parameters.toml, "
+def _out_option(p: argparse.ArgumentParser, *, required: bool = False) -> None:
+    p.add_argument("-o", "--out", type=folder_argument, required=required, help="directory for parameters.toml, "
                    "convergence.toml, uncertainty.toml, report.txt, summary.json and figures")
     p.add_argument("--strict", action="store_true", help=f"a parameter that ends at a bound counts as not converged "
                    f"(exit {NOT_CONVERGED}); by default it is named and the update may converge")
@@ -236,32 +229,34 @@ def _mace_options(p: argparse.ArgumentParser) -> None:
                                                          "cost-sensitivity)"))
     p.add_argument("--perturbation", choices=["reanalysis", "full"], default="reanalysis",
                    help=("how the cost-sensitivity method makes its perturbed models (default: reanalysis)"))
-    p.add_argument("--rounds", type=int, default=2, help=("repeats of physical, delays, damping (default 2)"))
+    p.add_argument("--rounds", type=positive_integer, default=2, help=("repeats of physical, delays, damping (default 2)"))
     p.add_argument("--preload", choices=["large", "linear"], default="large", help=("1-g gravity preload"))
 
 
 def _fmu_options(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--data", metavar="FILE", action="append", default=[],
+    p.add_argument("--data", metavar="FILE", action="append", required=True,
                    help=("measured data: a time history (CSV/npz; its inputs drive the FMU), one per test (repeat "
                              "the option: several tests are summed, each in units of its own noise) and, with one "
                              "test and --cost log-frf, optionally a frequency response (UFF 58/CSV)"))
-    p.add_argument("--update", metavar="NAME[,NAME...]", action="append", default=[],
+    p.add_argument("--update", metavar="NAME[,NAME...]", action="append", required=True,
                    help=("FMU parameters to update (repeatable)"))
     p.add_argument("--cost", choices=["time", "log-frf"], default="time",
                    help=("time: output errors (eq. 4.3); log-frf: log ratio of H1 estimates (eq. 4.5/4.17)"))
-    p.add_argument("--scheduler", metavar="ADDRESS", help=("run the FMU simulations on this Dask cluster "
-                   "(default: local worker processes)"))
-    p.add_argument("--workers", type=int, default=None, help=("local worker processes (default: one per core)"))
+    where = p.add_mutually_exclusive_group()  # --workers sizes a local cluster; a scheduler's cluster has its own
+    where.add_argument("--scheduler", metavar="ADDRESS", help=("run the FMU simulations on this Dask cluster "
+                       "(default: local worker processes)"))
+    where.add_argument("--workers", type=positive_integer, default=None,
+                       help=("local worker processes (default: one per core)"))
     p.add_argument("--map", metavar="FILE", help=("channel map: data channel names and units to the FMU's signals"))
-    p.add_argument("--segment-s", type=float, default=2.0,
+    p.add_argument("--segment-s", type=positive_number, default=2.0,
                    help=("H1 segment length [s] of the log-frf cost (default 2)"))
-    p.add_argument("--hold-input", metavar="NAME=0[,NAME=0...]", action="append", default=[],
+    p.add_argument("--hold-input", metavar="NAME=0[,NAME=0...]", type=_held_inputs, action="append", default=[],
                    help=("FMU inputs the data have no channel for, held at 0 V (repeatable); any other missing "
                              "input is an error"))
-    p.add_argument("--noise-rms-percent", type=float, default=None, metavar="P",
+    p.add_argument("--noise-rms-percent", type=positive_number, default=None, metavar="P",
                    help=("time cost: the measurement noise RMS as P %% of each output's RMS, for the noise-floor "
                              "test (default: estimated from the outputs' spectra above the inputs' band)"))
-    p.add_argument("--gain-uncertainty", metavar="OUTPUT=P%[,...]", action="append", default=[],
+    p.add_argument("--gain-uncertainty", metavar="OUTPUT=P%[,...]", type=_gain_priors, action="append", default=[],
                    help=("an output sensor whose gain is known only to P %% (standard deviation; repeatable, or "
                              "the channel map's gain_uncertainty_percent column): its gain is estimated with the "
                              "parameters, with that prior, and the parameters' uncertainty includes it"))
@@ -284,17 +279,17 @@ def register(sub: argparse._SubParsersAction) -> None:
     deck_option(m)
     _out_option(m)
     _mace_options(m)
-    m.set_defaults(func=cmd_mace_update, data=[], update=[])
+    m.set_defaults(func=cmd_mace_update)
 
     f = modes.add_parser("fmu", help="update an FMU's parameters against measured data files (any FMI 2.0 "
                          "co-simulation FMU)", formatter_class=argparse.RawDescriptionHelpFormatter,
                          epilog=_EXIT_STATUS)
     f.add_argument("fmu", metavar="FILE", help="the FMU whose parameters are updated (set through FMI)")
-    _out_option(f)
+    _out_option(f, required=True)
     f.add_argument("--start", metavar="FILE", help="parameter values to start from (TOML [values]; default: the "
                    "FMU's own start values)")
     _fmu_options(f)
-    f.set_defaults(func=cmd_fmu_subcommand)
+    f.set_defaults(func=cmd_fmu_update)
 
     s = modes.add_parser("sample-problem", help="the two-mass sample problem (thesis 4.3): Tables 4.2 and 4.3 "
                          "beside the thesis")

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from support.cli import run_cli
 from support.paths import EXAMPLES
 
 from mace_fmu.errors import MaceError
@@ -26,11 +27,12 @@ STEP = 0.002
 @pytest.fixture(scope="module")
 def fmu(tmp_path_factory):
     """The 1-g native FMU of the bundled deck (the truth and, with other start values, the model)."""
+    from mace_fmu.fe.modes import compute_modes
     from mace_fmu.fmu.export import export_fmu
     from mace_fmu.iomodel.volts import volts_model
 
     return export_fmu(volts_model(compute_modes(configuration="1g")),
-                             out_dir=tmp_path_factory.mktemp("fmu_update"), name="MACE_1g_native")
+                      out_dir=tmp_path_factory.mktemp("fmu_update"), name="MACE_1g_native")
 
 
 def _noise_inputs(seconds: float, seed: int = 1) -> tuple[np.ndarray, dict[str, np.ndarray]]:
@@ -163,14 +165,6 @@ def test_unknown_parameter_and_channel_are_refused_naming_them(fmu):
 
 # --- the CLI: mace-fmu update fmu ... (files from mace_fmu.updating.files) -----------------------------------
 
-def _cli(capsys, argv: list[str]) -> tuple[int, str, str]:
-    from mace_fmu.cli import main
-
-    code = main(argv)
-    out, err = capsys.readouterr()
-    return code, out, err
-
-
 @pytest.fixture(scope="module")
 def data_csv(fmu, tmp_path_factory):
     from mace_fmu.updating.files import write_time_history
@@ -182,14 +176,14 @@ def data_csv(fmu, tmp_path_factory):
     ({"--fmu": "nowhere.fmu"}, "nowhere.fmu: no such FMU file"),
     ({"--data": "nowhere.csv"}, "nowhere.csv: no such measured-data file"),
     ({"--update": "E_lexan_center,E_unobtainium"}, "no parameter(s) E_unobtainium"),
-    ({"--cost": "log-frf", "--segment-s": "-1"}, "--segment-s must be > 0"),
+    ({"--cost": "log-frf", "--segment-s": "-1"}, "argument --segment-s: expected a finite number > 0, got '-1'"),
 ])
 def test_cli_checks_arguments_before_any_simulation_exit_2(capsys, fmu, data_csv, tmp_path, change, expected):
     args = {"--fmu": str(fmu), "--data": str(data_csv), "--update": "E_lexan_center", "--cost": "time",
             "-o": str(tmp_path / "out"), "--hold-input": UNRECORDED}
     args.update(change)
     fmu_file = args.pop("--fmu")  # the FMU is update fmu's positional
-    code, out, err = _cli(capsys, ["update", "fmu", fmu_file] + [x for kv in args.items() for x in kv])
+    code, out, err = run_cli(capsys, ["update", "fmu", fmu_file] + [x for kv in args.items() for x in kv])
     assert code == 2 and expected in err and not (tmp_path / "out").exists()
 
 
@@ -199,7 +193,7 @@ def test_cli_refuses_data_channels_the_fmu_lacks(capsys, fmu, tmp_path):
     t = np.arange(200) * STEP
     bad = write_time_history(TimeHistory(t, {"gimbal_primary_x": np.sin(t)}, {"gyro_elsewhere": np.cos(t)}),
                              tmp_path / "bad.csv")
-    code, _, err = _cli(capsys, ["update", "fmu", str(fmu), "--data", str(bad), "--update", "E_lexan_center",
+    code, _, err = run_cli(capsys, ["update", "fmu", str(fmu), "--data", str(bad), "--update", "E_lexan_center",
                                  "-o", str(tmp_path / "out")])
     assert code == 2 and "output 'gyro_elsewhere'" in err
 
@@ -222,7 +216,7 @@ def test_cli_updates_an_fmu_parameter_and_writes_it_by_the_fmus_name(capsys, fmu
                                                                   for role, name in signals))
     start = tmp_path / "start.toml"
     start.write_text(f"[values]\nE_lexan_center = {pre_update_parameters()['E_lexan_center']!r}\n")
-    code, out, err = _cli(capsys, ["update", "fmu", str(fmu), "--data", str(logged), "--map", str(channel_map),
+    code, out, err = run_cli(capsys, ["update", "fmu", str(fmu), "--data", str(logged), "--map", str(channel_map),
                                    "--update", "E_lexan_center", "--cost", "time", "--start", str(start),
                                    "--workers", "1", "-o", str(tmp_path / "o"), "--hold-input", UNRECORDED])
     assert code in (0, 3), err  # 3: written, but the verdict is not converged (see convergence.toml)
@@ -235,12 +229,12 @@ def test_cli_updates_an_fmu_parameter_and_writes_it_by_the_fmus_name(capsys, fmu
 
 def test_an_input_the_data_lack_is_refused_unless_held_explicitly(capsys, fmu, data_csv, tmp_path):
     """The data drive the four gimbals only: the wheels and the active strut must be named as held at 0."""
-    code, _, err = _cli(capsys, ["update", "fmu", str(fmu), "--data", str(data_csv), "--update", "E_lexan_center",
+    code, _, err = run_cli(capsys, ["update", "fmu", str(fmu), "--data", str(data_csv), "--update", "E_lexan_center",
                                  "-o", str(tmp_path / "out")])
     assert code == 2 and "no channel for the FMU input(s) rwa_x, rwa_y, rwa_z, active_strut_y, active_strut_z" in err
     assert "--hold-input NAME=0" in err and not (tmp_path / "out").exists()
     for bad, message in (("rwa_x=1", "expected NAME=0"), ("wheel_9=0", "wheel_9 is not an input of")):
-        code, _, err = _cli(capsys, ["update", "fmu", str(fmu), "--data", str(data_csv), "--update",
+        code, _, err = run_cli(capsys, ["update", "fmu", str(fmu), "--data", str(data_csv), "--update",
                                      "E_lexan_center", "--hold-input", bad, "-o", str(tmp_path / "out")])
         assert code == 2 and message in err
 
@@ -272,7 +266,7 @@ def test_pythonfmu_fmus_are_not_loaded_in_the_main_process(fmu, monkeypatch):
     a Dask worker they are refused before any load."""
     import dataclasses
 
-    from mace_fmu.updating import fmu_model
+    from mace_fmu.updating.fmu import model as fmu_model
 
     real = fmu_model.read_fmu_interface(fmu)
     fake = dataclasses.replace(real, generation_tool="mace-fmu 0.1.0 (PythonFMU 0.7)")
@@ -347,7 +341,7 @@ def test_a_pythonfmu_fmu_is_updated_with_every_run_in_the_workers(capsys, data_c
                      runtime="pythonfmu")
     start = tmp_path / "start.toml"
     start.write_text(f"[values]\nE_lexan_center = {pre_update_parameters()['E_lexan_center']!r}\n")
-    code, out, err = _cli(capsys, ["update", "fmu", str(fmu), "--data", str(data_csv), "--update", "E_lexan_center",
+    code, out, err = run_cli(capsys, ["update", "fmu", str(fmu), "--data", str(data_csv), "--update", "E_lexan_center",
                                    "--start", str(start), "--workers", "2", "--hold-input", UNRECORDED,
                                    "-o", str(tmp_path / "o")])
     assert code in (0, 3), err
@@ -360,5 +354,5 @@ def test_a_set_fitted_to_one_structures_fmu_is_refused_for_the_other(capsys, tmp
     path = tmp_path / "fitted.toml"
     path.write_text('[provenance]\ncreated = "2026-11-24T00:00:00+00:00"\ntool = "mace-fmu"\nconfiguration = "0g"\n'
                     'fitted_to = "MACE_0g_native.fmu"\n\n[values]\nE_lexan_center = 2.4e9\n')
-    code, out, err = _cli(capsys, ["model", "1g", "--parameters", str(path)])
+    code, out, err = run_cli(capsys, ["model", "1g", "--parameters", str(path)])
     assert code == 2 and "fitted to the 0g FMU MACE_0g_native.fmu, not to the 1g model" in err

@@ -15,6 +15,7 @@ import tomllib
 
 import numpy as np
 import pytest
+from support.cli import run_cli
 
 from mace_fmu.cli import main
 from mace_fmu.updating.engine.measured import TimeHistory
@@ -168,9 +169,8 @@ def test_the_channel_maps_column_states_the_same_prior_as_the_option(lab, tmp_pa
 def test_bad_gain_priors_and_repeated_parameters_are_refused_and_nothing_written(lab, tmp_path, capsys, extra,
                                                                                 expected):
     folder, fmu, _, _, data, _ = lab
-    code = main(["update", "fmu", str(fmu), "--update", "E_active_strut_end", "--data", str(data), "--hold-input", HELD,
-                 "-o", str(tmp_path / "out"), *extra])
-    err = capsys.readouterr().err
+    code, _, err = run_cli(capsys, ["update", "fmu", str(fmu), "--update", "E_active_strut_end", "--data", str(data),
+                                    "--hold-input", HELD, "-o", str(tmp_path / "out"), *extra])
     assert code == 2 and expected in err, err
     assert not (tmp_path / "out").exists()
 
