@@ -70,20 +70,21 @@ def api_pages() -> None:
              "The packages follow the data flow: deck, structure, parameters, finite elements, input-output "
              "models, FMUs and SSP packages, updating, Appendix A studies, the 0-g prediction; ``util`` holds what "
              "they share.", "", ".. toctree::", "   :maxdepth: 1", ""]
-    home = {}  # public name -> the package whose page documents it
+    home = {}  # public name -> the package whose page documents it: the deepest that exports it
     stubs = set()  # the autosummary stubs the pages ask for: "package.Name"
-    for name in PACKAGES[1:]:
+    for name in sorted(PACKAGES, key=lambda package: package.count(".")):
         for public in importlib.import_module(name).__all__:
-            home.setdefault(public, name)
+            home[public] = name
     for name in PACKAGES:
         package = importlib.import_module(name)
         lines = [_title(f"``{name}``"), f".. automodule:: {name}", "", f".. currentmodule:: {name}", ""]
         defined_in = getattr(getattr(package, "__getattr__", None), "modules", {})  # deck and ssp import eagerly
         objects = {public: getattr(package, public) for public in package.__all__}
-        if name == "mace_fmu":  # the names a user starts with: documented on their package's page
-            lines += [f"- :py:obj:`{public} <{home[public]}.{public}>`" for public in package.__all__ if public in home]
+        elsewhere = [public for public in package.__all__ if home[public] != name]
+        if elsewhere:  # the names a package re-exports from a subpackage: documented on the subpackage's page
+            lines += [f"- :py:obj:`{public} <{home[public]}.{public}>`" for public in elsewhere]
             lines.append("")
-            objects = {public: obj for public, obj in objects.items() if public not in home}
+            objects = {public: obj for public, obj in objects.items() if public not in elsewhere}
         if objects:
             lines += [".. autosummary::", "   :toctree: generated", "   :nosignatures:", ""]
             lines += [f"   {public}" for public, obj in objects.items() if not _is_data(obj)]  # current module's

@@ -45,13 +45,22 @@ def progress(message: str) -> None:
 
 
 @contextlib.contextmanager
-def progress_bar() -> Iterator[ProgressCallback]:
-    """A progress callback that draws one tqdm bar on stderr (none when stderr is not a terminal)."""
+def progress_bar(*, task_lines: bool = False) -> Iterator[ProgressCallback]:
+    """A progress callback that draws one tqdm bar on stderr (none when stderr is not a terminal).
+
+    With ``task_lines``, each new task (a stage of a multi-stage computation, see
+    :func:`mace_fmu.util.progress.begin_stage`) is also written as one line, terminal or not, so that a log
+    shows where a long run is.
+    """
     from tqdm import tqdm
 
     bars: list[tqdm] = []
+    tasks: list[str] = []
 
     def update(step: Step) -> None:
+        if task_lines and (not tasks or tasks[-1] != step.task):
+            tqdm.write(f"  {step.task}", file=sys.stderr)
+        tasks[:] = [step.task]
         if not bars:  # created at the first step: a computation without steps draws nothing
             bars.append(tqdm(total=step.total, desc=step.task, unit="step", leave=False, file=sys.stderr,
                              disable=None))

@@ -7,7 +7,7 @@ import json
 import sys
 from pathlib import Path
 
-from mace_fmu.cli.common import deck_option, folder_argument, parameters, parameters_option, progress
+from mace_fmu.cli.common import deck_option, folder_argument, parameters, parameters_option, progress, progress_bar
 from mace_fmu.errors import MaceError
 
 
@@ -33,8 +33,9 @@ def cmd_predict(args: argparse.Namespace) -> int:
         measured, patterns = read_zero_g_measured(args.measured)
         source = f"measurement model {args.measured}"
     say = (lambda _: None) if args.json else progress
-    prediction = predict_zero_g(parameters=params, measured=measured, zero_g_patterns=patterns, rule=rule, deck=deck,
-                                structure_file=args.structure_file, source=source, message=say)
+    with progress_bar(task_lines=not args.json) as bar:
+        prediction = predict_zero_g(parameters=params, measured=measured, zero_g_patterns=patterns, rule=rule,
+                                    deck=deck, structure_file=args.structure_file, source=source, progress=bar)
     paths = {}
     if args.fmu:  # first: an export that fails leaves no tables behind
         from mace_fmu.fmu.naming import fmu_model_name, model_prefix

@@ -170,9 +170,9 @@ def cmd_mace_update(args: argparse.Namespace) -> int:
     start = ParameterSet.read(args.start) if args.start else None
     measured = read_measured_modes(args.measured) if args.measured else None
     settings = UpdateSettings(method=args.method, perturbation=args.perturbation, rounds=args.rounds)
-    with progress_bar() as bar:
+    with progress_bar(task_lines=True) as bar:
         outcome = run_mace_update(start=start, measured=measured, preload=args.preload, settings=settings, deck=deck,
-                                  progress=bar, message=_say)
+                                  progress=bar)
     _say(f"writing the report to {out}/")
     paths = write_report(outcome, out)
     s = scores(mode_rows(outcome))

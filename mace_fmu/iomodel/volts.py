@@ -126,11 +126,9 @@ def build_diagram(plant: ModalPlant, instruments: Instruments, *,
     System
         The block diagram; ``compile()`` gives its ``control.StateSpace``.
     """
-    servos, bessel, delays, pade_order = (electronics.servos, electronics.bessel, electronics.delays,
-                                          electronics.pade_order)
     el, sv = instruments.electronics, instruments.servos
     act_names = [a.name for a in instruments.actuators]
-    sen_names = [s.name for s in instruments.sensors]
+    sen_names = [x.name for x in instruments.sensors]
     for name, value in list(el.actuator_delays_s.items()) + list(el.sensor_delays_s.items()):
         _check(value >= 0.0, f"delay of {name} must be >= 0 s, got {value}")
 
@@ -143,90 +141,108 @@ def build_diagram(plant: ModalPlant, instruments: Instruments, *,
     s.add(Gain("sensor_gain", np.diag([x.gain for x in instruments.sensors]), inputs=sen_names, outputs=sen_names))
     for name in sen_names:
         s.connect(f"structure.y[{name}]", f"sensor_gain.u[{name}]")
+    _sensor_channels(s, instruments, electronics=electronics)
+    for n in plant.motion_outputs:  # grid motion for animation [m, rad]: straight from the structure
+        s.expose_output(n, f"structure.y[{n}]")
 
-    # Analog channels: Bessel filter (or its equivalent delay) and the extra gyro delays.
+    drives = _actuator_delays(s, instruments, electronics=electronics)
+    for n in act_names:  # in actuator order, which is the order of the model's inputs
+        if electronics.servos and n in sv.wheels:
+            _wheel_loop(s, drives, instruments, wheel=n, tach=sv.wheels[n])
+        elif electronics.servos and n in sv.gimbals:
+            _gimbal_servo(s, drives, instruments, gimbal=n, encoder=sv.gimbals[n])
+        else:
+            _feed(s, drives, name=n, signal_in=None)
+    return s
+
+
+def _sensor_channels(s: System, instruments: Instruments, *, electronics: ModelledElectronics) -> None:
+    """The sensor outputs [V]: the analog channels through the Bessel filter (or its equivalent delay) and the
+    extra gyro delays, the digital ones straight from their gains."""
+    el = instruments.electronics
     analog = list(instruments.analog_sensor_names)
-    extra = {n: (el.sensor_delays_s.get(n, 0.0) if delays else 0.0) for n in analog}
-    source = {n: f"sensor_gain.y[{n}]" for n in sen_names}
-    if bessel == "full" and analog:  # a structure whose file names no analog sensors has no filter
+    extra = {n: (el.sensor_delays_s.get(n, 0.0) if electronics.delays else 0.0) for n in analog}
+    source = {x.name: f"sensor_gain.y[{x.name}]" for x in instruments.sensors}
+    if electronics.bessel == "full" and analog:  # a structure whose file names no analog sensors has no filter
         block = el.filter_kind  # "bessel" (MACE's) or "butterworth"
         s.add(LowPassFilter(block, el.filter_order, el.filter_cutoff_hz, size=len(analog), signals=analog,
                             family=el.filter_kind))
         for n in analog:
             s.connect(source[n], f"{block}.u[{n}]")
             source[n] = f"{block}.y[{n}]"
-    net = {n: extra[n] + (el.filter_equivalent_delay_s if bessel == "delay" else 0.0) for n in analog}
+    net = {n: extra[n] + (el.filter_equivalent_delay_s if electronics.bessel == "delay" else 0.0) for n in analog}
     for n in analog:
         if net[n] > 0.0:
-            s.add(PadeDelay(f"delay_{n}", net[n], pade_order))
+            s.add(PadeDelay(f"delay_{n}", net[n], electronics.pade_order))
             s.connect(source[n], f"delay_{n}.u")
             source[n] = f"delay_{n}.y"
-    for n in sen_names:
-        s.expose_output(n, source[n])
-    for n in plant.motion_outputs:  # grid motion for animation [m, rad]: straight from the structure
-        s.expose_output(n, f"structure.y[{n}]")
+    for n, signal in source.items():
+        s.expose_output(n, signal)
 
-    # Actuator channels: computational delay, then the local servo, then the actuator gain.
-    drive = {}
-    for n in act_names:
-        d = el.actuator_delays_s.get(n, 0.0) if delays else 0.0
+
+#: an actuator's computational delay block as (its input, its output), (None, None) without one
+_Drive = tuple[str | None, str | None]
+
+
+def _actuator_delays(s: System, instruments: Instruments, *, electronics: ModelledElectronics) -> dict[str, _Drive]:
+    """Each actuator's computational delay block (Table 4.5), added to ``s``."""
+    drives = {}
+    for a in instruments.actuators:
+        d = instruments.electronics.actuator_delays_s.get(a.name, 0.0) if electronics.delays else 0.0
         if d > 0.0:
-            s.add(PadeDelay(f"delay_{n}", d, pade_order))
-            drive[n] = (f"delay_{n}.u", f"delay_{n}.y")
+            s.add(PadeDelay(f"delay_{a.name}", d, electronics.pade_order))
+            drives[a.name] = (f"delay_{a.name}.u", f"delay_{a.name}.y")
         else:
-            drive[n] = (None, None)
-
-    def feed(name: str, signal_in: str | None) -> None:
-        """Route ``signal_in`` (None: the system input) through the delay to the actuator gain."""
-        delay_in, delay_out = drive[name]
-        target = f"actuator_gain.u[{name}]" if delay_in is None else delay_in
-        if signal_in is None:
-            s.expose_input(name, target)
-        else:
-            s.connect(signal_in, target)
-        if delay_in is not None:
-            s.connect(delay_out, f"actuator_gain.u[{name}]")
-
-    def wheel_loop(wheel: str, tach: str) -> None:
-        """eq. 3.18: v = K_f (u - K_b tach); the command delay is outside the analog loop."""
-        s.add(Sum(f"speed_{wheel}", signs=(1, -1)))
-        s.add(Gain(f"kb_{wheel}", sv.gain(wheel, "K_b")))
-        s.add(Gain(f"kf_{wheel}", sv.gain(wheel, "K_f")))
-        s.connect(f"sensor_gain.y[{tach}]", f"kb_{wheel}.u")
-        s.connect(f"kb_{wheel}.y", f"speed_{wheel}.u2")
-        s.connect(f"speed_{wheel}.y", f"kf_{wheel}.u")
-        delay_in, delay_out = drive[wheel]
-        if delay_in is None:
-            s.expose_input(wheel, f"speed_{wheel}.u1")
-        else:
-            s.expose_input(wheel, delay_in)
-            s.connect(delay_out, f"speed_{wheel}.u1")
-        s.connect(f"kf_{wheel}.y", f"actuator_gain.u[{wheel}]")
-
-    def gimbal_servo(gimbal: str, encoder: str) -> None:
-        """eq. 3.20 with encoder angle and rate in degrees: v = K_a (r - theta) + K_r (-dtheta)."""
-        s.add(Gain(f"angle_deg_{gimbal}", DEG_PER_RAD))
-        s.add(Gain(f"rate_deg_{gimbal}", -DEG_PER_RAD))
-        s.add(Sum(f"error_{gimbal}", signs=(1, -1)))
-        s.add(PD(f"servo_{gimbal}", kp=sv.gain(gimbal, "K_a"), kd=sv.gain(gimbal, "K_r")))
-        s.connect(f"structure.y[{encoder}_angle]", f"angle_deg_{gimbal}.u")
-        s.connect(f"structure.y[{encoder}]", f"rate_deg_{gimbal}.u")
-        s.connect(f"angle_deg_{gimbal}.y", f"error_{gimbal}.u2")
-        s.connect(f"error_{gimbal}.y", f"servo_{gimbal}.x")
-        s.connect(f"rate_deg_{gimbal}.y", f"servo_{gimbal}.dx")
-        s.expose_input(gimbal, f"error_{gimbal}.u1")
-        feed(gimbal, f"servo_{gimbal}.y")
-
-    for n in act_names:  # in actuator order, which is the order of the model's inputs
-        if servos and n in sv.wheels:
-            wheel_loop(n, sv.wheels[n])
-        elif servos and n in sv.gimbals:
-            gimbal_servo(n, sv.gimbals[n])
-        else:
-            feed(n, None)
-    return s
+            drives[a.name] = (None, None)
+    return drives
 
 
+def _feed(s: System, drives: dict[str, _Drive], *, name: str, signal_in: str | None) -> None:
+    """Route ``signal_in`` (None: the system input ``name``) through the delay to the actuator gain."""
+    delay_in, delay_out = drives[name]
+    target = f"actuator_gain.u[{name}]" if delay_in is None else delay_in
+    if signal_in is None:
+        s.expose_input(name, target)
+    else:
+        s.connect(signal_in, target)
+    if delay_in is not None:
+        s.connect(delay_out, f"actuator_gain.u[{name}]")
+
+
+def _wheel_loop(s: System, drives: dict[str, _Drive], instruments: Instruments, *, wheel: str, tach: str) -> None:
+    """eq. 3.18: v = K_f (u - K_b tach); the command delay is outside the analog loop."""
+    sv = instruments.servos
+    s.add(Sum(f"speed_{wheel}", signs=(1, -1)))
+    s.add(Gain(f"kb_{wheel}", sv.gain(wheel, "K_b")))
+    s.add(Gain(f"kf_{wheel}", sv.gain(wheel, "K_f")))
+    s.connect(f"sensor_gain.y[{tach}]", f"kb_{wheel}.u")
+    s.connect(f"kb_{wheel}.y", f"speed_{wheel}.u2")
+    s.connect(f"speed_{wheel}.y", f"kf_{wheel}.u")
+    delay_in, delay_out = drives[wheel]
+    if delay_in is None:
+        s.expose_input(wheel, f"speed_{wheel}.u1")
+    else:
+        s.expose_input(wheel, delay_in)
+        s.connect(delay_out, f"speed_{wheel}.u1")
+    s.connect(f"kf_{wheel}.y", f"actuator_gain.u[{wheel}]")
+
+
+def _gimbal_servo(s: System, drives: dict[str, _Drive], instruments: Instruments, *, gimbal: str,
+                  encoder: str) -> None:
+    """eq. 3.20 with encoder angle and rate in degrees: v = K_a (r - theta) + K_r (-dtheta); the computational
+    delay sits inside the loop."""
+    sv = instruments.servos
+    s.add(Gain(f"angle_deg_{gimbal}", DEG_PER_RAD))
+    s.add(Gain(f"rate_deg_{gimbal}", -DEG_PER_RAD))
+    s.add(Sum(f"error_{gimbal}", signs=(1, -1)))
+    s.add(PD(f"servo_{gimbal}", kp=sv.gain(gimbal, "K_a"), kd=sv.gain(gimbal, "K_r")))
+    s.connect(f"structure.y[{encoder}_angle]", f"angle_deg_{gimbal}.u")
+    s.connect(f"structure.y[{encoder}]", f"rate_deg_{gimbal}.u")
+    s.connect(f"angle_deg_{gimbal}.y", f"error_{gimbal}.u2")
+    s.connect(f"error_{gimbal}.y", f"servo_{gimbal}.x")
+    s.connect(f"rate_deg_{gimbal}.y", f"servo_{gimbal}.dx")
+    s.expose_input(gimbal, f"error_{gimbal}.u1")
+    _feed(s, drives, name=gimbal, signal_in=f"servo_{gimbal}.y")
 
 
 @single_blas_thread

@@ -18,3 +18,11 @@ class Step:
 
 #: What long computations call after each step (``compute_modes(..., progress=...)``).
 ProgressCallback = Callable[[Step], None]
+
+
+def begin_stage(progress: ProgressCallback | None, task: str, *, number: int, stages: int) -> None:
+    """Report that stage ``number`` (1-based) of ``stages`` begins: one Step whose task names the stage, e.g.
+    ``begin_stage(progress, "0-g closed-loop model", number=2, stages=4)``. Long stages report their own steps
+    under their own task after it."""
+    if progress is not None:
+        progress(Step(task=task, done=number - 1, total=stages))

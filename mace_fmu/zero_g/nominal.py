@@ -21,7 +21,7 @@ import dataclasses
 import csv
 import math
 import os
-from collections.abc import Callable, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -44,6 +44,7 @@ from mace_fmu.thesis import thesis_data
 from mace_fmu.updating.engine.measured import MeasuredMode, read_measured_modes
 from mace_fmu.updating.mace.update import measured_modes
 from mace_fmu.util.frequency import ZERO_HZ
+from mace_fmu.util.progress import ProgressCallback, begin_stage
 from mace_fmu.util.threads import single_blas_thread
 
 _TOLERANCE = 1e-7  #: largest relative miss of an adjusted closed-loop frequency or damping ratio
@@ -299,12 +300,63 @@ def _deck_provenance(parameters: ParameterSet | None, deck: Deck | None, *, sour
                             f"({base.method})".strip())
 
 
+@dataclass(frozen=True)
+class _Adjustment:
+    """The solved 0-g adjustment: which open-loop modes moved, and every parameter of the rebuilt system."""
+
+    adjuster: _Adjuster
+    params: np.ndarray  #: the rebuilt system's parameters (adjuster.system's order) after the adjustment
+    pinned: np.ndarray  #: per adjusted mode: its closed-loop damping target was out of reach
+
+    def updates(self, labels: Sequence[str]) -> dict[str, float]:
+        """``frequency_scale:<label>`` and ``damping:<label>`` of each adjusted mode (``labels``: the plant's)."""
+        out = {}
+        for k, m in enumerate(self.adjuster.modes):
+            out[FREQUENCY_SCALE.set_name(labels[m])] = float(self.params[self.adjuster.scale[k]])
+            out[DAMPING.set_name(labels[m])] = float(self.params[self.adjuster.damping[k]])
+        return out
+
+    def frequency_scale(self, mode: int) -> float:
+        """The frequency scale of open-loop mode ``mode`` (0-based) after the adjustment."""
+        return float(self.params[self.adjuster.system.index(FREQUENCY_SCALE.fmu_name(mode + 1))])
+
+
+def _measurement_model(measured: Sequence[MeasuredMode] | None, zero_g_patterns: Sequence[str | None] | None, *,
+                       deck: Deck | None) -> tuple[Sequence[MeasuredMode], Sequence[str | None]]:
+    """The measured 1-g modes and their 0-g patterns: the given ones, checked, or Table 4.7's for the bundled deck."""
+    if measured is None:
+        if deck is not None and not is_bundled_deck(deck):
+            raise MaceError(f"{deck.path} is not the bundled MACE deck: its 1-g measurement model is not Table 4.7's; "
+                            "give it (CLI --measured FILE: label, pattern, frequency_hz, damping, pattern_0g)")
+        measured, zero_g_patterns = measured_modes(band_hz=None), table_4_7_zero_g_patterns()
+    if zero_g_patterns is None or len(zero_g_patterns) != len(measured):
+        raise MaceError(f"the measurement model has {len(measured)} modes but "
+                        f"{0 if zero_g_patterns is None else len(zero_g_patterns)} 0-g patterns; give one per mode")
+    if not any(zero_g_patterns):
+        raise MaceError("no measured mode has a 0-g counterpart (every pattern_0g is empty)")
+    return measured, zero_g_patterns
+
+
+def _nominal_set(parameters: ParameterSet | None, updates: Mapping[str, float], *, labels: Sequence[str],
+                 held: Sequence[str], deck: Deck | None, source: str) -> ParameterSet:
+    """The parameter set of the nominal 0-g model: the input's values that exist in 0-g, and the adjustments."""
+    base = {name: value for name, value in (parameters.values if parameters is not None else {}).items()
+            if not getattr(kind_of_set_name(name), "per_mode", False)
+            or mode_label(name) in set(labels)}  # 1-g only modes (suspension, violins) do not exist in 0-g
+    provenance = _deck_provenance(parameters, deck, source=source)
+    if held:  # a damping ratio of 0 in the set is a result, not a slip: say why where it is read
+        provenance = dataclasses.replace(provenance, notes="; ".join(filter(None, [provenance.notes, (
+            f"open-loop damping 0 for {', '.join(held)}: the servos alone give more closed-loop damping in 0-g than "
+            "the target, which is out of reach (docs/guide/zero_g.md)")])))
+    return ParameterSet({**base, **updates}, provenance)
+
+
 @single_blas_thread
 def predict_zero_g(*, parameters: ParameterSet | None = None, measured: Sequence[MeasuredMode] | None = None,
                    zero_g_patterns: Sequence[str | None] | None = None, rule: BoundRule = BoundRule(),
                    deck: Deck | None = None, structure_file: StructureFile | str | os.PathLike | None = None,
                    source: str = "Table 4.7 measurement model",
-                   message: Callable[[str], None] | None = None) -> ZeroGPrediction:
+                   progress: ProgressCallback | None = None) -> ZeroGPrediction:
     """The updated nominal 0-g model and its bounds (thesis 5.3) from ``parameters`` and a 1-g measurement model.
 
     Parameters
@@ -324,105 +376,82 @@ def predict_zero_g(*, parameters: ParameterSet | None = None, measured: Sequence
         As :func:`~mace_fmu.iomodel.volts.volts_model`'s.
     source : str
         Which measurement model the residual errors come from (written into the files).
-    message : callable, optional
-        Receives one line per stage.
+    progress : callable, optional
+        Receives a :class:`~mace_fmu.util.progress.Step` as each of the four stages begins.
 
     Returns
     -------
     ZeroGPrediction
         The rows (1-g error, 0-g nominal frequency [Hz] and bound), the parameter set that builds the
-        nominal 0-g model (frequency scales included) and the model itself.
+        nominal 0-g model (frequency scales included) and the model itself. A row whose closed-loop
+        damping target was out of reach says so (``damping_reached``).
 
     Raises
     ------
     MaceError
         A parameter set with frequency scales, or measured modes and patterns of different lengths.
     """
-    say = message or (lambda _: None)
     if parameters is not None and parameters.of_kind("frequency_scale"):
         # frequency scales act on whichever structure the set is used with: a 1-g model must not get them
         raise MaceError(f"the parameter set has frequency scales ({', '.join(parameters.of_kind('frequency_scale'))}):"
                         " predict-0g starts from physical parameters (e.g. from mace-fmu update), not from an "
                         "updated nominal 0-g set")
-    if measured is None:
-        if deck is not None and not is_bundled_deck(deck):
-            raise MaceError(f"{deck.path} is not the bundled MACE deck: its 1-g measurement model is not Table 4.7's; "
-                            "give it (CLI --measured FILE: label, pattern, frequency_hz, damping, pattern_0g)")
-        measured, zero_g_patterns = measured_modes(band_hz=None), table_4_7_zero_g_patterns()
-    if zero_g_patterns is None or len(zero_g_patterns) != len(measured):
-        raise MaceError(f"the measurement model has {len(measured)} modes but "
-                        f"{0 if zero_g_patterns is None else len(zero_g_patterns)} 0-g patterns; give one per mode")
-    if not any(zero_g_patterns):
-        raise MaceError("no measured mode has a 0-g counterpart (every pattern_0g is empty)")
-    say("1-g closed-loop model and the residual errors")
+    measured, zero_g_patterns = _measurement_model(measured, zero_g_patterns, deck=deck)
+    kept = [k for k, pattern in enumerate(zero_g_patterns) if pattern]
+
+    begin_stage(progress, "1-g closed-loop model and the residual errors", number=1, stages=4)
     v1 = volts_model(compute_modes(deck, configuration="1g", structure_file=structure_file, parameters=parameters))
     p1 = closed_loop_poles(v1)
-    i1 = _pair([(m.label, m.pattern, m.frequency_hz) for m in measured], p1, what="the 1-g model")
-    say("0-g closed-loop model")
+    one_g = [p1[i] for i in _pair([(m.label, m.pattern, m.frequency_hz) for m in measured], p1, what="the 1-g model")]
+
+    begin_stage(progress, "0-g closed-loop model", number=2, stages=4)
     v0 = volts_model(compute_modes(deck, configuration="0g", structure_file=structure_file, parameters=parameters))
     p0 = closed_loop_poles(v0)
-    kept = [k for k, pattern in enumerate(zero_g_patterns) if pattern]
-    i0 = _pair([(measured[k].label, zero_g_patterns[k], p1[i1[k]].frequency_hz) for k in kept], p0,
-               what="the 0-g model")
+    unaltered = [p0[i] for i in _pair([(measured[k].label, zero_g_patterns[k], one_g[k].frequency_hz) for k in kept],
+                                      p0, what="the 0-g model")]
     heavy = [measured[k].damping >= rule.heavy_damping for k in kept]
     adjusted = [j for j, h in enumerate(heavy) if rule.correct_heavy or not h]
-    modes = _adjustable_modes(v0, [(measured[kept[j]].label, p0[i0[j]]) for j in adjusted])
-    labels = v0.structure_modes.labels
 
-    say(f"adjusting {len(adjusted)} open-loop 0-g modes")
-    target_hz = np.array([p0[i0[j]].frequency_hz * measured[kept[j]].frequency_hz / p1[i1[kept[j]]].frequency_hz
+    begin_stage(progress, f"adjusting {len(adjusted)} open-loop 0-g modes", number=3, stages=4)
+    # each adjusted 0-g pole moves by its 1-g pole's ratio measured / model, in frequency and damping alike
+    target_hz = np.array([unaltered[j].frequency_hz * measured[kept[j]].frequency_hz / one_g[kept[j]].frequency_hz
                           for j in adjusted])
-    target_zeta = np.array([p0[i0[j]].damping * measured[kept[j]].damping / p1[i1[kept[j]]].damping
+    target_zeta = np.array([unaltered[j].damping * measured[kept[j]].damping / one_g[kept[j]].damping
                             for j in adjusted])
+    modes = _adjustable_modes(v0, [(measured[kept[j]].label, unaltered[j]) for j in adjusted])
     # the output filters sit outside every loop: the closed-loop structural poles are those of the model without them
-    core = volts_model(v0.structure_modes, parameters=parameters, electronics=ModelledElectronics(bessel="none"))
-    adjuster = _Adjuster(core, modes)
+    adjuster = _Adjuster(volts_model(v0.structure_modes, parameters=parameters,
+                                     electronics=ModelledElectronics(bessel="none")), modes)
     x, pinned = _solve_adjustment(adjuster, target_hz, target_zeta)
-    for j in np.flatnonzero(pinned):
-        say(f"  {measured[kept[adjusted[j]]].label}: closed-loop damping target {target_zeta[j]:.4f} out of reach "
-            f"(open-loop damping ratio held at {adjuster.params(x)[adjuster.damping[j]]:.4f})")
-    params = adjuster.params(x)
-    updates = {}
-    for k, m in enumerate(modes):
-        updates[FREQUENCY_SCALE.set_name(v0.plant.labels[m])] = float(params[adjuster.scale[k]])
-        updates[DAMPING.set_name(v0.plant.labels[m])] = float(params[adjuster.damping[k]])
-    base = {name: value for name, value in (parameters.values if parameters is not None else {}).items()
-            if not getattr(kind_of_set_name(name), "per_mode", False)
-            or mode_label(name) in set(labels)}  # 1-g only modes (suspension, violins) do not exist in 0-g
-    provenance = _deck_provenance(parameters, deck, source=source)
-    held = [measured[kept[adjusted[j]]].label for j in range(len(adjusted)) if pinned[j]]
-    if held:  # a damping ratio of 0 in the set is a result, not a slip: say why where it is read
-        provenance = dataclasses.replace(provenance, notes="; ".join(filter(None, [provenance.notes, (
-            f"open-loop damping 0 for {', '.join(held)}: the servos alone give more closed-loop damping in 0-g than "
-            "the target, which is out of reach (docs/guide/zero_g.md)")])))
-    nominal_set = ParameterSet({**base, **updates}, provenance)
+    adjustment = _Adjustment(adjuster=adjuster, params=adjuster.params(x), pinned=pinned)
+    nominal_set = _nominal_set(parameters, adjustment.updates(v0.plant.labels), labels=v0.structure_modes.labels,
+                               held=[measured[kept[j]].label for j, p in zip(adjusted, pinned) if p], deck=deck,
+                               source=source)
 
-    say("updated nominal 0-g model")
+    begin_stage(progress, "updated nominal 0-g model", number=4, stages=4)
     nominal = volts_model(v0.structure_modes, parameters=nominal_set)
     pn = closed_loop_poles(nominal)
-    near = [p0[i].frequency_hz for i in i0]
+    near = [p.frequency_hz for p in unaltered]
     for j, hz in zip(adjusted, target_hz):
         near[j] = hz
     index = _pair([(measured[k].label, zero_g_patterns[k], hz) for k, hz in zip(kept, near)], pn,
                   what="the nominal 0-g model")
     rows = []
     for j, k in enumerate(kept):
-        m = measured[k]
-        pole, before, one_g = pn[index[j]], p0[i0[j]], p1[i1[k]]
+        m, pole = measured[k], pn[index[j]]
         mode = pole.mode if pole.mode is not None and abs(nominal.plant.frequencies_hz[pole.mode]) >= ZERO_HZ else None
-        error = one_g.frequency_hz / m.frequency_hz - 1.0
         rows.append(ZeroGRow(
             label=m.label, heavy=heavy[j], measured_1g_hz=m.frequency_hz, measured_1g_damping=m.damping,
-            model_1g_hz=one_g.frequency_hz, model_1g_damping=one_g.damping, unaltered_hz=before.frequency_hz,
-            unaltered_damping=before.damping, nominal_hz=pole.frequency_hz, nominal_damping=pole.damping,
-            bound=rule.bound(heavy=heavy[j], frequency_error=error), pole_label=pole.label,
-            mode=None if mode is None else mode + 1, mode_label=nominal.plant.labels[mode] if mode is not None else "",
-            frequency_scale=float(params[adjuster.system.index(FREQUENCY_SCALE.fmu_name(mode + 1))])
-            if mode is not None else 1.0,
+            model_1g_hz=one_g[k].frequency_hz, model_1g_damping=one_g[k].damping,
+            unaltered_hz=unaltered[j].frequency_hz, unaltered_damping=unaltered[j].damping,
+            nominal_hz=pole.frequency_hz, nominal_damping=pole.damping,
+            bound=rule.bound(heavy=heavy[j], frequency_error=one_g[k].frequency_hz / m.frequency_hz - 1.0),
+            pole_label=pole.label, mode=None if mode is None else mode + 1,
+            mode_label=nominal.plant.labels[mode] if mode is not None else "",
+            frequency_scale=adjustment.frequency_scale(mode) if mode is not None else 1.0,
             open_loop_damping=float(nominal.plant.damping[mode]) if mode is not None else math.nan,
             adjusted=j in adjusted, damping_reached=j not in adjusted or not pinned[adjusted.index(j)]))
     core = volts_model(v0.structure_modes, parameters=nominal_set, electronics=ModelledElectronics(bessel="none"))
-    rows = _with_closed_loop_shifts(rows, core)
-    return ZeroGPrediction(rows=tuple(rows), parameters=nominal_set, model=nominal, rule=rule, source=source,
+    return ZeroGPrediction(rows=tuple(_with_closed_loop_shifts(rows, core)), parameters=nominal_set, model=nominal,
+                           rule=rule, source=source,
                            dropped=tuple(measured[k].label for k, p in enumerate(zero_g_patterns) if not p))
-

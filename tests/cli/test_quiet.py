@@ -88,6 +88,21 @@ def test_cli_shows_one_progress_bar_on_a_terminal_and_nothing_in_a_pipe(monkeypa
     assert "20/20" in frames[-1] and "\n" not in drawn  # and cleared when done (leave=False)
 
 
+def test_stage_lines_are_written_once_per_stage_in_a_pipe_too(capsys):
+    """progress_bar(task_lines=True), as predict-0g and update mace use it: a log shows which stage a long run is
+    in (one line as each stage begins, none per step), and no bar where stderr is no terminal."""
+    from mace_fmu.cli.common import progress_bar
+    from mace_fmu.util.progress import Step, begin_stage
+
+    with progress_bar(task_lines=True) as bar:
+        begin_stage(bar, "first stage", number=1, stages=2)
+        for k in range(5):
+            bar(Step("cost sensitivities", k + 1, 5, detail=f"E_{k}"))
+        begin_stage(bar, "second stage", number=2, stages=2)
+    out, err = capsys.readouterr()
+    assert out == "" and err == "  first stage\n  cost sensitivities\n  second stage\n"
+
+
 @pytest.mark.slow
 def test_examples_are_quiet_and_leave_no_unpacked_fmu(motion_fmu_0g, private_tmp):
     """libcosim's FMI Library debug lines only with --verbose; cosimulate removes its unpacked FMU."""

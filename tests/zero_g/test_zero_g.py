@@ -346,7 +346,12 @@ def test_a_1g_parameter_set_from_an_update_is_carried_to_0g(run):
                           "damping:1st Z bending": 0.02},
                          Provenance(created="2026-01-01T00:00:00+00:00", tool="test", deck=deck.name,
                                     deck_sha256=deck_fingerprint(deck), configuration="1g"))
-    prediction = predict_zero_g(parameters=start)
+    steps = []
+    prediction = predict_zero_g(parameters=start, progress=steps.append)
+    assert [(s.task, s.done, s.total) for s in steps] == [
+        ("1-g closed-loop model and the residual errors", 0, 4), ("0-g closed-loop model", 1, 4),
+        (f"adjusting {sum(r.adjusted for r in prediction.rows)} open-loop 0-g modes", 2, 4),
+        ("updated nominal 0-g model", 3, 4)]
     values = prediction.parameters.values
     assert values["E_lexan_center"] == 2.3e9 and "damping:Y suspension twist (Y rotation)" not in values
     assert {parameter_kind(n) for n in values} == {"modulus", "damping", "frequency_scale"}

@@ -113,23 +113,14 @@ def _corrections(arrays: Mapping[str, np.ndarray], flexible: np.ndarray) -> dict
     }
 
 
-def runtime_arrays(arrays: Mapping[str, np.ndarray]) -> dict[str, np.ndarray | list[str]]:
-    """The C runtime's arrays (see the module docstring) from a ParametricSystem's ``arrays``."""
-    names = [str(x) for x in arrays["param_names"]]
-    index = {name: k for k, name in enumerate(names)}
-    physical = [str(x) for x in arrays["physical_names"]]
-    pade_order = int(arrays["pade_order"])
-    if not 1 <= pade_order <= MAX_PADE_ORDER:
-        raise MaceError(f"native FMU: Pade order must be 1..{MAX_PADE_ORDER}, got {pade_order}")
-    n_modes = len(arrays["frequencies_hz"])
-    cluster = _zero_cluster_reduced(arrays)
-    flexible = cluster["flexible"]
+def _blocks(arrays: Mapping[str, np.ndarray], *, index: Mapping[str, int], cluster: Mapping[str, np.ndarray],
+            pade_order: int) -> tuple[np.ndarray, dict[str, np.ndarray], set[str]]:
+    """Each block's row of ``block_info`` (kind code, states, inputs, outputs, its parameters' indices), the
+    constant blocks' matrices, and the names of the parameters that are delays."""
     n_states_structure = int(cluster["keep_disp"].sum() + cluster["keep_rate"].sum())
-
-    kinds = [str(k) for k in arrays["block_kinds"]]
-    info, blocks = [], {}
-    delay_params = set()
-    for i, (kind, param) in enumerate(zip(kinds, (str(p) for p in arrays["block_params"]))):
+    info, blocks, delay_params = [], {}, set()
+    for i, (kind, param) in enumerate(zip((str(k) for k in arrays["block_kinds"]),
+                                          (str(p) for p in arrays["block_params"]))):
         p0 = p1 = -1
         if kind == "structure":
             n_x, n_u, n_y = n_states_structure, cluster["modal_b"].shape[1], len(arrays["structure_outputs"])
@@ -149,38 +140,55 @@ def runtime_arrays(arrays: Mapping[str, np.ndarray]) -> dict[str, np.ndarray | l
         else:
             raise MaceError(f"native FMU: block {i} has the unknown kind {kind!r}")
         info.append([BLOCK_KINDS[kind], n_x, n_u, n_y, p0, p1])
-    info = np.array(info, dtype=np.int64)
+    info = np.array(info, dtype=np.int64).reshape(-1, 6)
     if info[:, 2].sum() != arrays["wiring"].shape[0] or info[:, 3].sum() != arrays["wiring"].shape[1]:
         raise MaceError("native FMU: block inputs/outputs do not match the wiring matrix")
+    return info, blocks, delay_params
 
-    par_kind, par_index = [], []
+
+def _parameter_codes(names: list[str], *, physical: list[str], delays: set[str]) -> tuple[np.ndarray, np.ndarray]:
+    """Each parameter's runtime kind code (:data:`PARAMETER_KINDS`) and index (its mode, its physical parameter,
+    or -1)."""
+    codes = []
     for name in names:
         kind = kind_of_fmu_name(name)
         if kind is not None and kind.per_mode:
-            par_kind.append(PARAMETER_KINDS[kind.name]), par_index.append(mode_number(name) - 1)
+            codes.append((PARAMETER_KINDS[kind.name], mode_number(name) - 1))
         elif name in physical:
-            par_kind.append(PARAMETER_KINDS["physical"]), par_index.append(physical.index(name))
-        elif name in delay_params:
-            par_kind.append(PARAMETER_KINDS["delay"]), par_index.append(-1)
+            codes.append((PARAMETER_KINDS["physical"], physical.index(name)))
         else:
-            par_kind.append(PARAMETER_KINDS["gain"]), par_index.append(-1)
-    n_in, n_out = len(arrays["inputs"]), len(arrays["outputs"])
-    n_states = int(info[:, 1].sum())
-    dk = np.asarray(arrays["physical_dk"], dtype=float)[:, flexible][:, :, flexible]
+            codes.append((PARAMETER_KINDS["delay" if name in delays else "gain"], -1))
+    table = np.array(codes, dtype=np.int64).reshape(-1, 2)
+    return table[:, 0].copy(), table[:, 1].copy()
+
+
+def runtime_arrays(arrays: Mapping[str, np.ndarray]) -> dict[str, np.ndarray | list[str]]:
+    """The C runtime's arrays (see the module docstring) from a ParametricSystem's ``arrays``."""
+    names = [str(x) for x in arrays["param_names"]]
+    physical = [str(x) for x in arrays["physical_names"]]
+    pade_order = int(arrays["pade_order"])
+    if not 1 <= pade_order <= MAX_PADE_ORDER:
+        raise MaceError(f"native FMU: Pade order must be 1..{MAX_PADE_ORDER}, got {pade_order}")
+    cluster = _zero_cluster_reduced(arrays)
+    flexible = cluster["flexible"]
+    info, blocks, delays = _blocks(arrays, index={name: k for k, name in enumerate(names)}, cluster=cluster,
+                                   pade_order=pade_order)
+    par_kind, par_index = _parameter_codes(names, physical=physical, delays=delays)
     corrections = _corrections(arrays, flexible)
-    massive = int(arrays["correction_massive"]) if "correction_massive" in arrays else 0
-    counts = dict(in_=n_in, out=n_out, par=len(names), modes=n_modes, flex=len(flexible), blocks=len(kinds),
-                  pade=pade_order, states=n_states, so=len(arrays["structure_outputs"]), ms=cluster["modal_b"].shape[1],
-                  phys=len(physical), ub=arrays["wiring"].shape[0], yb=arrays["wiring"].shape[1],
-                  corr=corrections["correction_stiffness"].shape[0], massive=massive)
-    counts = [counts["in_" if name == "in" else name] for name in COUNTS]
+    counts = {"in": len(arrays["inputs"]), "out": len(arrays["outputs"]), "par": len(names),
+              "modes": len(arrays["frequencies_hz"]), "flex": len(flexible), "blocks": len(info), "pade": pade_order,
+              "states": int(info[:, 1].sum()), "so": len(arrays["structure_outputs"]),
+              "ms": cluster["modal_b"].shape[1], "phys": len(physical), "ub": arrays["wiring"].shape[0],
+              "yb": arrays["wiring"].shape[1], "corr": corrections["correction_stiffness"].shape[0],
+              "massive": int(arrays["correction_massive"]) if "correction_massive" in arrays else 0}
+    dk = np.asarray(arrays["physical_dk"], dtype=float)[:, flexible][:, :, flexible]
     out: dict[str, np.ndarray | list[str]] = {
         "format_version": np.array([MODEL_FORMAT], dtype=np.int64),
-        "counts": np.array(counts, dtype=np.int64),
+        "counts": np.array([counts[name] for name in COUNTS], dtype=np.int64),
         "param_nominal": np.asarray(arrays["param_values"], dtype=float),
         "param_min": np.asarray(arrays["param_min"], dtype=float),
         "param_max": np.asarray(arrays["param_max"], dtype=float),
-        "param_kind": np.array(par_kind, dtype=np.int64), "param_index": np.array(par_index, dtype=np.int64),
+        "param_kind": par_kind, "param_index": par_index,
         "frequencies_hz": np.asarray(arrays["frequencies_hz"], dtype=float),
         "physical_dk": dk.reshape(len(physical), len(flexible), len(flexible)),
         "block_info": info, "wiring": np.asarray(arrays["wiring"], dtype=float),

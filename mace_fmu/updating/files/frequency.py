@@ -152,7 +152,8 @@ def _uff_unit(dataset: dict, key: str) -> str:
     return "" if unit.upper() == "NONE" else unit
 
 
-def _read_uff(path: Path, channel_map: ChannelMap | None) -> FrequencyResponseData:
+def _uff_frf_datasets(path: Path) -> list[tuple[int, dict, np.ndarray, np.ndarray]]:
+    """(dataset number, dataset, frequencies [Hz], complex response) of every FRF dataset 58 of a UFF file."""
     import pyuff
 
     if not path.is_file():
@@ -186,71 +187,92 @@ def _read_uff(path: Path, channel_map: ChannelMap | None) -> FrequencyResponseDa
     if not records:
         raise MaceError(f"{path}: no frequency response (dataset 58 with function type {UFF_FRF}) in "
                         f"{len(types)} dataset(s) of types {sorted(set(int(t) for t in types))}")
-    outputs: list[str] = []
-    inputs: list[str] = []
-    units: dict[str, str] = {}
-    channel_of: dict[str, str] = {}
-    found: set[str] = set()
+    return records
+
+
+class _UffSignals:
+    """The model signals met so far in a UFF file's datasets, in order, with their units and channel names."""
+
+    def __init__(self, channel_map: ChannelMap | None):
+        self.channel_map = channel_map
+        self.outputs: list[str] = []
+        self.inputs: list[str] = []
+        self.units: dict[str, str] = {}
+        self.channel_of: dict[str, str] = {}
+        self.found: set[str] = set()
+
+    def end(self, dataset: dict, role: str, *, at: str) -> str | None:
+        """The signal of one end (``role`` "output" or "input") of a dataset, None for an ignored channel."""
+        unit_key, table = (("ordinate_axis_units_lab", self.outputs) if role == "output"
+                           else ("orddenom_axis_units_lab", self.inputs))
+        channel = _uff_channel(dataset, role)
+        self.found.add(channel)
+        row = self.channel_map.find(channel) if self.channel_map is not None else None
+        if row is not None and row.role == "ignore":
+            return None
+        unit = _uff_unit(dataset, unit_key)
+        if not unit:
+            record = "9 (ordinate)" if role == "output" else "10 (ordinate denominator)"
+            raise MaceError(f"{at}: channel {channel!r}: no units label in record {record}, expected e.g. 'V'")
+        signal = _signal(Label(channel, unit, role), self.channel_map, at, role)
+        if signal not in table:
+            table.append(signal)
+        elif self.units[signal] != unit:
+            raise MaceError(f"{at}: channel {channel!r}: unit {unit!r}, an earlier dataset says {self.units[signal]!r}")
+        self.units[signal] = unit
+        self.channel_of[signal] = channel
+        return signal
+
+    def pair(self, out: str, inp: str) -> str:
+        """``'<output channel>'/'<input channel>'`` as messages name a response."""
+        return f"{self.channel_of[out]!r}/{self.channel_of[inp]!r}"
+
+
+def _check_uff_response(f: np.ndarray, h: np.ndarray, *, first: tuple[int, np.ndarray], at: str) -> None:
+    """A dataset's frequencies equal the first kept dataset's, and its response is finite."""
+    k0, f0 = first
+    if f.shape != f0.shape:
+        raise MaceError(f"{at}: {f.size} frequencies, dataset {k0} has {f0.size}")
+    if not np.array_equal(f, f0):
+        row = int(np.flatnonzero(f != f0)[0])
+        raise MaceError(f"{at}: frequency {f[row]:.6g} Hz at row {row}, dataset {k0} has {f0[row]:.6g} Hz "
+                        "(every FRF needs the same frequencies)")
+    bad = np.flatnonzero(~np.isfinite(h))
+    if bad.size:
+        raise MaceError(f"{at}: the response is NaN or inf at row {int(bad[0])} ({bad.size} of {h.size} rows)")
+
+
+def _read_uff(path: Path, channel_map: ChannelMap | None) -> FrequencyResponseData:
+    signals = _UffSignals(channel_map)
     pairs: dict[tuple[str, str], tuple[int, np.ndarray]] = {}
-    k0, f0 = 0, np.empty(0)  # the first kept dataset: its frequencies are everyone's
-    for k, dataset, f, h in records:
+    first: tuple[int, np.ndarray] | None = None  # the first kept dataset: its frequencies are everyone's
+    for k, dataset, f, h in _uff_frf_datasets(path):
         at = f"{path}: dataset {k}"
-        ends: list[str | None] = []
-        for role, unit_key, table in (("output", "ordinate_axis_units_lab", outputs),
-                                      ("input", "orddenom_axis_units_lab", inputs)):
-            channel = _uff_channel(dataset, role)
-            found.add(channel)
-            row = channel_map.find(channel) if channel_map is not None else None
-            if row is not None and row.role == "ignore":
-                ends.append(None)
-                continue
-            unit = _uff_unit(dataset, unit_key)
-            if not unit:
-                record = "9 (ordinate)" if role == "output" else "10 (ordinate denominator)"
-                raise MaceError(f"{at}: channel {channel!r}: no units label in record {record}, expected e.g. 'V'")
-            signal = _signal(Label(channel, unit, role), channel_map, at, role)
-            ends.append(signal)
-            if signal not in table:
-                table.append(signal)
-            elif units[signal] != unit:
-                raise MaceError(f"{at}: channel {channel!r}: unit {unit!r}, an earlier dataset says {units[signal]!r}")
-            units[signal] = unit
-            channel_of[signal] = channel
-        if None in ends:
+        out, inp = (signals.end(dataset, role, at=at) for role in ("output", "input"))
+        if out is None or inp is None:
             continue  # a pair with an ignored channel
+        where = f"{at}: channel {signals.pair(out, inp)}"
         abscissa = _uff_unit(dataset, "abscissa_axis_units_lab")
         if abscissa and abscissa.lower() != "hz":
-            raise MaceError(f"{at}: channel {channel_of[ends[0]]!r}/{channel_of[ends[1]]!r}: abscissa unit "
-                            f"{abscissa!r}, expected 'Hz'")
-        if not k0:
-            k0, f0 = k, f
-        if f.shape != f0.shape or not np.array_equal(f, f0):
-            pair = f"{at}: channel {channel_of[ends[0]]!r}/{channel_of[ends[1]]!r}"
-            if f.shape != f0.shape:
-                raise MaceError(f"{pair}: {f.size} frequencies, dataset {k0} has {f0.size}")
-            row = int(np.flatnonzero(f != f0)[0])
-            raise MaceError(f"{pair}: frequency {f[row]:.6g} Hz at row {row}, dataset {k0} has {f0[row]:.6g} Hz "
-                            "(every FRF needs the same frequencies)")
-        bad = np.flatnonzero(~np.isfinite(h))
-        if bad.size:
-            raise MaceError(f"{at}: channel {channel_of[ends[0]]!r}/{channel_of[ends[1]]!r}: the response is "
-                            f"NaN or inf at row {int(bad[0])} ({bad.size} of {h.size} rows)")
-        if tuple(ends) in pairs:
-            raise MaceError(f"{at}: channel {channel_of[ends[0]]!r}/{channel_of[ends[1]]!r}: same pair as dataset "
-                            f"{pairs[tuple(ends)][0]}")
-        pairs[(ends[0], ends[1])] = (k, h)
-    check_present(found, channel_map=channel_map, where=str(path))
-    if not pairs:
+            raise MaceError(f"{where}: abscissa unit {abscissa!r}, expected 'Hz'")
+        first = first or (k, f)
+        _check_uff_response(f, h, first=first, at=where)
+        if (out, inp) in pairs:
+            raise MaceError(f"{where}: same pair as dataset {pairs[(out, inp)][0]}")
+        pairs[(out, inp)] = (k, h)
+    check_present(signals.found, channel_map=channel_map, where=str(path))
+    if first is None:
         raise MaceError(f"{path}: every FRF dataset has a channel the channel map ignores")
-    response = np.empty((f0.size, len(outputs), len(inputs)), dtype=complex)
-    for i, out in enumerate(outputs):
-        for j, inp in enumerate(inputs):
+    k0, f0 = first
+    response = np.empty((f0.size, len(signals.outputs), len(signals.inputs)), dtype=complex)
+    for i, out in enumerate(signals.outputs):
+        for j, inp in enumerate(signals.inputs):
             if (out, inp) not in pairs:
-                raise MaceError(f"{path}: channel {channel_of[out]!r}/{channel_of[inp]!r}: no FRF dataset for this "
+                raise MaceError(f"{path}: channel {signals.pair(out, inp)}: no FRF dataset for this "
                                 "output/input pair (every output needs one per input)")
             response[:, i, j] = pairs[(out, inp)][1]
-    return _frd(f0, inputs, outputs, response, units, source=str(path),
-                row_at=lambda row: f"{path}: dataset {k0} row {row}", channel_of=channel_of)
+    return _frd(f0, signals.inputs, signals.outputs, response, signals.units, source=str(path),
+                row_at=lambda row: f"{path}: dataset {k0} row {row}", channel_of=signals.channel_of)
 
 
 def _uff_abscissa(f: np.ndarray) -> np.ndarray:

@@ -28,7 +28,7 @@ from mace_fmu.updating.engine.selection import Selection, SelectionRule, select_
 from mace_fmu.updating.engine.sensitivity import CostSensitivities, cost_sensitivities
 from mace_fmu.updating.engine.solve import Stage, UpdateResult, UpdateSettings, update
 from mace_fmu.updating.mace.family import MaceFamily
-from mace_fmu.util.progress import ProgressCallback
+from mace_fmu.util.progress import ProgressCallback, begin_stage
 from mace_fmu.util.threads import single_blas_thread
 
 #: the 13 candidates of section 4.5, numbered as in Figures 4.11 and 4.12
@@ -110,8 +110,7 @@ class MaceUpdate:
 def run_mace_update(*, start: ParameterSet | None = None, measured: Sequence[MeasuredMode] | None = None,
                     preload: PreloadKind = "large", settings: UpdateSettings = UpdateSettings(rounds=2),
                     rule: SelectionRule | None = None, candidates: Sequence[str] = CANDIDATES, deck=None,
-                    runner: Callable = map, progress: ProgressCallback | None = None,
-                    message: Callable[[str], None] | None = None) -> MaceUpdate:
+                    runner: Callable = map, progress: ProgressCallback | None = None) -> MaceUpdate:
     """The thesis's MACE update: selection of the candidates about ``start``, then the staged update.
 
     Parameters
@@ -132,8 +131,9 @@ def run_mace_update(*, start: ParameterSet | None = None, measured: Sequence[Mea
         The deck (default: the bundled MACE deck).
     runner : callable
         ``map``-like function the perturbed models go to.
-    progress, message : callable, optional
-        Progress steps, and one line per stage.
+    progress : callable, optional
+        Receives a :class:`~mace_fmu.util.progress.Step` as each of the three stages begins, and the steps of the
+        long ones (cost sensitivities, the update's iterations).
 
     Returns
     -------
@@ -142,10 +142,9 @@ def run_mace_update(*, start: ParameterSet | None = None, measured: Sequence[Mea
         stage [s].
     """
     seconds: dict[str, float] = {}
-    say = message or (lambda text: None)
     start = start if start is not None else pre_update_parameters()
     t0 = time.perf_counter()
-    say("1-g model at the start point")
+    begin_stage(progress, "1-g model at the start point", number=1, stages=3)
     family = MaceFamily(configuration="1g", base=start, deck=deck, preload=preload)
     data = "thesis Table 4.7, measurement model column (frequencies and damping ratios)"
     if measured is None:
@@ -158,7 +157,8 @@ def run_mace_update(*, start: ParameterSet | None = None, measured: Sequence[Mea
     seconds["start model"] = time.perf_counter() - t0
 
     t0 = time.perf_counter()
-    say(f"parameter selection: cost sensitivities of {len(candidates)} candidates")
+    begin_stage(progress, f"parameter selection: cost sensitivities of {len(candidates)} candidates", number=2,
+                stages=3)
     values = family.current_values(candidates)
     base = family.base.updated(values).values
     perturbed = family.full if settings.perturbation == "full" else family.basis(base).model
@@ -178,7 +178,8 @@ def run_mace_update(*, start: ParameterSet | None = None, measured: Sequence[Mea
               Stage("damping", damp)]
     names = [n for s in stages for n in s.parameters]
     values = {**base, **family.current_values(names)}
-    say(f"update: {', '.join(f'{s.name} ({len(s.parameters)})' for s in stages)}, {settings.rounds} rounds")
+    begin_stage(progress, f"update: {', '.join(f'{s.name} ({len(s.parameters)})' for s in stages)}, "
+                          f"{settings.rounds} rounds", number=3, stages=3)
     result = update(family, cost, start=values, stages=stages, bounds=default_bounds(names, values), settings=settings,
                     runner=runner, progress=progress)
     seconds["update"] = time.perf_counter() - t0

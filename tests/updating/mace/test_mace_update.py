@@ -15,6 +15,7 @@ from xml.etree import ElementTree as ET
 
 import numpy as np
 import pytest
+from support.cli import run_cli
 
 from mace_fmu.cli import main
 from mace_fmu.parameters.sets import ParameterSet
@@ -149,7 +150,8 @@ def test_bad_start_files_stop_before_any_work(tmp_path, capsys):
     assert main(["update", "mace", "-o", str(out), "--start", str(bad)]) == 2
     assert "E_unobtainium" in capsys.readouterr().err
     assert not out.exists()  # nothing written half-way
-    assert main(["update", "mace", "-o", str(out), "--rounds", "0"]) == 2
+    code, _, err = run_cli(capsys, ["update", "mace", "-o", str(out), "--rounds", "0"])
+    assert code == 2 and "argument --rounds: expected an integer >= 1, got '0'" in err
     assert not out.exists()
 
 
