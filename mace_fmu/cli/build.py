@@ -37,10 +37,10 @@ def cmd_build(args: argparse.Namespace) -> int:
     for configuration, modes in (("1g", results["large"]), ("0g", m0)):
         progress(f"{configuration} volts-volts model and FMUs")
         model = volts_model(modes, parameters=params)
-        arrays = parametric_arrays(model)  # what every kind of FMU carries: computed once
-        for fmu_kind, fmi_version in (("native", 2), ("native", 3), ("pythonfmu", 2)):
-            name = fmu_model_name(configuration, runtime=fmu_kind, fmi_version=fmi_version, variant=model_variant(args))
-            path = export_fmu(model, runtime=fmu_kind, fmi_version=fmi_version, out_dir=args.out, name=name,
+        arrays = parametric_arrays(model)  # what every runtime's FMU carries: computed once
+        for runtime, fmi_version in (("native", 2), ("native", 3), ("pythonfmu", 2)):
+            name = fmu_model_name(configuration, runtime=runtime, fmi_version=fmi_version, variant=model_variant(args))
+            path = export_fmu(model, runtime=runtime, fmi_version=fmi_version, out_dir=args.out, name=name,
                               arrays=arrays)
             print(f"wrote {path}")
     print()

@@ -100,7 +100,8 @@ def cmd_fmu_update(args: argparse.Namespace) -> int:
                           cost=args.cost, start=_read_start(args.start, args.fmu) if args.start else None,
                           channel_map=args.map, segment_s=args.segment_s, weighting=args.weighting,
                           held_inputs=[name for group in args.hold_input for name in group],
-                          noise_rms_fraction=noise_fraction, gain_uncertainty=_gain_uncertainty(args.gain_uncertainty))
+                          noise_rms_fraction=noise_fraction, gain_uncertainty=_gain_uncertainty(args.gain_uncertainty),
+                          band_hz=tuple(args.band_hz) if args.band_hz else None)
     where = f"the Dask cluster at {args.scheduler}" if args.scheduler else \
         f"{args.workers or 'one per core'} local worker processes"
     gains = len(problem.family.gain_outputs)
@@ -237,7 +238,8 @@ def _fmu_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--data", metavar="FILE", action="append", required=True,
                    help=("measured data: a time history (CSV/npz; its inputs drive the FMU), one per test (repeat "
                              "the option: several tests are summed, each in units of its own noise) and, with one "
-                             "test and --cost log-frf, optionally a frequency response (UFF 58/CSV)"))
+                             "test and --cost log-frf, optionally a frequency response (UFF 58/CSV); or, with "
+                             "--cost log-frf, measured frequency responses alone, one file per test"))
     p.add_argument("--update", metavar="NAME[,NAME...]", action="append", required=True,
                    help=("FMU parameters to update (repeatable)"))
     p.add_argument("--cost", choices=["time", "log-frf"], default="time",
@@ -248,6 +250,9 @@ def _fmu_options(p: argparse.ArgumentParser) -> None:
     where.add_argument("--workers", type=positive_integer, default=None,
                        help=("local worker processes (default: one per core)"))
     p.add_argument("--map", metavar="FILE", help=("channel map: data channel names and units to the FMU's signals"))
+    p.add_argument("--band-hz", type=float, nargs=2, metavar=("LOW", "HIGH"),
+                   help=("measured frequency responses given alone (an analyser's UFF 58 or CSV files, --cost "
+                         "log-frf): the band they are compared over [Hz] (default: all their frequencies)"))
     p.add_argument("--segment-s", type=positive_number, default=2.0,
                    help=("H1 segment length [s] of the log-frf cost (default 2)"))
     p.add_argument("--hold-input", metavar="NAME=0[,NAME=0...]", type=_held_inputs, action="append", default=[],

@@ -26,7 +26,7 @@ from pythonfmu.builder import FmuBuilder
 
 from mace_fmu.errors import MaceError
 from mace_fmu.fmu.naming import model_fmu_name
-from mace_fmu.fmu.variables import DEFAULT_EXPERIMENT, model_summary, variable_unit
+from mace_fmu.fmu.variables import DEFAULT_EXPERIMENT, model_summary, signal_units, variable_unit
 from mace_fmu.iomodel import modal_core, parametric, reanalysis
 from mace_fmu.iomodel.parametric_data import parametric_arrays, with_frequency_bounds
 from mace_fmu.iomodel.volts import VoltsModel
@@ -37,8 +37,8 @@ from modelica_like import algebra
 SLAVE_SOURCE = Path(__file__).with_name("slave.py")
 
 
-def _patch_model_description(fmu: Path, *, description: str, version: str,
-                              ranges: dict[str, tuple[float, float]]) -> dict[str, bytes]:
+def _patch_model_description(fmu: Path, *, description: str, version: str, ranges: dict[str, tuple[float, float]],
+                              units: Mapping[str, str]) -> dict[str, bytes]:
     """The entries of pythonfmu's ``fmu`` with units, parameter ranges (min/max where finite), a default
     experiment, initial unknowns, description and version added to its model description."""
     with zipfile.ZipFile(fmu) as z:
@@ -51,7 +51,7 @@ def _patch_model_description(fmu: Path, *, description: str, version: str,
     used = set()
     for var in root.iter("ScalarVariable"):
         name = var.get("name")
-        unit = variable_unit(name, var.get("causality"))
+        unit = variable_unit(name, var.get("causality"), signal_units=units)
         if unit is not None:
             var.find("Real").set("unit", unit)
             used.add(unit)
@@ -221,7 +221,8 @@ def _export_pythonfmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str
         ranges = {str(n): (float(lo), float(hi)) for n, lo, hi in zip(arrays["param_names"], arrays["param_min"],
                                                                        arrays["param_max"])}
         entries = _patch_model_description(Path(path), description=description,
-                                           version=metadata.version("mace-fmu"), ranges=ranges)
+                                           version=metadata.version("mace-fmu"), ranges=ranges,
+                                           units=signal_units(arrays))
     with atomic_zip(final) as z:
         for entry, data in entries.items():
             z.writestr(entry, data)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
 
 from mace_fmu.iomodel.motion import motion_unit, parse_motion_output
@@ -11,17 +12,25 @@ from mace_fmu.parameters.kinds import is_frequency_output, kind_of_fmu_name, uni
 DEFAULT_EXPERIMENT = {"startTime": "0.0", "stopTime": "10.0", "stepSize": "0.002"}
 
 
-def variable_unit(name: str, causality: str) -> str | None:
-    """Unit of an FMU variable: V for inputs and outputs, m/rad for motion outputs, SI for parameters."""
+def variable_unit(name: str, causality: str, *, signal_units: Mapping[str, str] | None = None) -> str | None:
+    """Unit of an FMU variable: an input's or output's from ``signal_units`` (the model's
+    :attr:`~mace_fmu.iomodel.volts.VoltsModel.signal_units`; V where it does not say), m/rad for motion
+    outputs, SI for parameters."""
     motion = parse_motion_output(name)
     if motion is not None:
         return motion_unit(motion[1])
     if causality in ("input", "output"):
-        return "V"
+        return (signal_units or {}).get(name, "V")
     kind = kind_of_fmu_name(name)
     if kind is not None:
         return unit_of(kind, name)
     return "Hz" if is_frequency_output(name) else None
+
+
+def signal_units(arrays: Mapping[str, object]) -> dict[str, str]:
+    """Input and output name -> unit at the model boundary, from a ParametricSystem's arrays
+    (:func:`~mace_fmu.iomodel.parametric_data.parametric_arrays`)."""
+    return {str(n): str(u) for key in ("input", "output") for n, u in zip(arrays[f"{key}s"], arrays[f"{key}_units"])}
 
 
 def model_summary(model: VoltsModel) -> str:

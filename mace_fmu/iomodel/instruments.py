@@ -43,12 +43,17 @@ class BarGauge:
 
 @dataclass(frozen=True)
 class Actuator:
-    """An input: generalised force of 1 N m (physical) per unit, times ``gain`` N m per volt."""
+    """An input: the generalised force ``gain`` x input on its DOFs [N, N m].
+
+    The input is in volts where the structure file gives a ``gain`` [N or N m per V] or a ``sensitivity``
+    [V per N] (gain = 1 / sensitivity), else the force itself (``input_unit`` "N" or "N m", gain 1).
+    """
 
     name: str  #: input name
     description: str  #: what it does, for reports and FMU descriptions
     dofs: tuple[Dof, ...]  #: (grid, component in CD, weight): the generalised force of one physical unit
-    gain: float  #: [N m / V] (Table 3.11)
+    gain: float  #: [N m / V] (Table 3.11); 1 for an input in N or N m
+    input_unit: str = "V"  #: the input's unit at the model boundary: "V", or "N" / "N m" for a force input
 
 
 @dataclass(frozen=True)
@@ -63,6 +68,8 @@ class Sensor:
     unit: str = ""  #: the physical quantity's unit: rad, m, rad/s, m/s, or "strain" (given in the structure file)
     #: a bar strain gauge: its ``dofs`` come from the deck's bar (:func:`resolve_bar_gauges`); None otherwise
     gauge: BarGauge | None = None
+    #: the output's unit at the model boundary: "V" (a ``gain`` or ``sensitivity`` given), else ``unit`` (gain 1)
+    output_unit: str = "V"
 
 
 @dataclass(frozen=True)
@@ -196,6 +203,36 @@ def _bar_gauge(entry: Mapping[str, Any], where: str) -> BarGauge:
     return BarGauge(bar=bar, position=position, fiber_y_m=float(fiber[0]), fiber_z_m=float(fiber[1]))
 
 
+def _boundary(entry: Mapping[str, Any], where: str, *, physical_unit: str, is_input: bool) -> tuple[float, str]:
+    """(gain, unit at the model boundary) of an instrument: volts with a ``gain`` or a ``sensitivity`` [V per
+    physical unit], else the physical quantity itself with gain 1."""
+    if "gain" in entry and "sensitivity" in entry:
+        raise MaceError(f"{where}: give gain or sensitivity, not both")
+    if "sensitivity" in entry:
+        sensitivity = _number(entry, "sensitivity", where)
+        if not (math.isfinite(sensitivity) and sensitivity > 0):
+            raise MaceError(f"{where}: sensitivity must be > 0 V per {physical_unit}, got {sensitivity:g}")
+        return (1.0 / sensitivity if is_input else sensitivity), "V"
+    if "gain" in entry:
+        gain = _number(entry, "gain", where)
+        if not (math.isfinite(gain) and gain != 0):
+            raise MaceError(f"{where}: gain must be a finite number other than 0, got {gain:g}")
+        return gain, "V"
+    if physical_unit == "physical unit":
+        raise MaceError(f"{where}: its DOFs mix translations and rotations, so its {'input' if is_input else 'output'}"
+                        " has no single unit: give a gain (volts at the model boundary)")
+    return 1.0, physical_unit
+
+
+def _actuator(entry: Mapping[str, Any], path: Path) -> Actuator:
+    where = f"{path} actuator {entry['name']}"
+    dofs = _dofs(entry, where)
+    rotational, translational = all(c >= 4 for _, c, _ in dofs), all(c <= 3 for _, c, _ in dofs)
+    gain, unit = _boundary(entry, where, is_input=True,
+                           physical_unit="N m" if rotational else "N" if translational else "physical unit")
+    return Actuator(name=entry["name"], description=entry["description"], dofs=dofs, gain=gain, input_unit=unit)
+
+
 def _sensor(entry: Mapping[str, Any], path: Path) -> Sensor:
     where = f"{path} sensor {entry['name']}"
     kind = entry["kind"]
@@ -203,12 +240,15 @@ def _sensor(entry: Mapping[str, Any], path: Path) -> Sensor:
         raise MaceError(f"{path}: sensor {entry['name']}: kind must be one of {', '.join(map(repr, SENSOR_KINDS))}, "
                         f"got {kind!r}")
     if kind == "bar_strain":
+        unit = str(entry.get("unit") or "strain")
+        gain, output_unit = _boundary(entry, where, physical_unit=unit, is_input=False)
         return Sensor(name=entry["name"], description=entry["description"], kind="displacement", dofs=(),
-                      gain=float(entry["gain"]), unit=str(entry.get("unit") or "strain"),
-                      gauge=_bar_gauge(entry, where))
+                      gain=gain, unit=unit, gauge=_bar_gauge(entry, where), output_unit=output_unit)
     dofs = _dofs(entry, where)
-    return Sensor(name=entry["name"], description=entry["description"], kind=kind, dofs=dofs,
-                  gain=float(entry["gain"]), unit=str(entry.get("unit") or _sensor_unit(kind, dofs)))
+    unit = str(entry.get("unit") or _sensor_unit(kind, dofs))
+    gain, output_unit = _boundary(entry, where, physical_unit=unit, is_input=False)
+    return Sensor(name=entry["name"], description=entry["description"], kind=kind, dofs=dofs, gain=gain, unit=unit,
+                  output_unit=output_unit)
 
 
 def resolve_bar_gauges(instruments: Instruments, model: FEModel, deck: Deck) -> Instruments:
@@ -342,8 +382,7 @@ def load_instruments(structure_file: StructureFile | str | Path | None = None) -
         structure_file = load_structure_file(structure_file if structure_file is not None else bundled_structure_path())
     path, data = structure_file.path, structure_file.tables
     try:
-        actuators = tuple(Actuator(name=a["name"], description=a["description"], dofs=_dofs(a, f"{path} actuator "
-                                   f"{a['name']}"), gain=float(a["gain"])) for a in data["actuators"])
+        actuators = tuple(_actuator(a, path) for a in data["actuators"])
         sensors = tuple(_sensor(s, path) for s in data["sensors"])
         # electronics, servos and damping are optional: a structure without them has no filters, no
         # delays, no local loops, and every mode DEFAULT_DAMPING (rigid-body and mechanism modes none)

@@ -37,14 +37,19 @@ def signal_descriptions(model: VoltsModel) -> tuple[list[str], list[str]]:
             ins.append(f"{a.description}: commanded relative angle through the gimbal servo, 1 V = 1 deg")
         elif name in wheels:
             ins.append(f"{a.description}: speed-loop command [V]")
+        elif a.input_unit != "V":
+            ins.append(f"{a.description} [{a.input_unit}]")
         else:
-            ins.append(f"{a.description} [V], {a.gain} N m/V")
+            force = "N m" if all(c >= 4 for _, c, _ in a.dofs) else "N" if all(c <= 3 for _, c, _ in a.dofs) else \
+                "N or N m"
+            ins.append(f"{a.description} [V], {a.gain} {force}/V")
     outs = []
     for name in model.system.output_labels:
         motion = parse_motion_output(name)
         if motion is None:
             sensor = inst.sensor(name)
-            outs.append(f"{sensor.description} [V], {sensor.gain} V per {sensor.unit}")
+            outs.append(f"{sensor.description} [{sensor.unit}]" if sensor.output_unit != "V" else
+                        f"{sensor.description} [V], {sensor.gain} V per {sensor.unit}")
         else:
             grid, comp = motion
             what = "translation along" if comp.startswith("t") else "rotation about"
@@ -137,7 +142,8 @@ def parametric_arrays(model: VoltsModel, *, physical: bool | Sequence[str] = Tru
     n = len(data.labels)
     arrays.update(
         inputs=np.array(sys_.input_labels), outputs=np.array(sys_.output_labels), input_descriptions=np.array(ins),
-        output_descriptions=np.array(outs), physical_names=np.array([], dtype=str), physical_dk=np.zeros((0, n, n)),
+        output_descriptions=np.array(outs), input_units=np.array([model.signal_units[n] for n in sys_.input_labels]),
+        output_units=np.array([model.signal_units[n] for n in sys_.output_labels]), physical_names=np.array([], dtype=str), physical_dk=np.zeros((0, n, n)),
         frequencies_hz=data.frequencies_hz, mode_labels=np.array(data.labels), modal_b=data.modal_b,
         disp_names=np.array(list(data.disp_out)), disp_rows=np.array(list(data.disp_out.values())),
         rate_names=np.array(list(data.rate_out)), rate_rows=np.array(list(data.rate_out.values())),

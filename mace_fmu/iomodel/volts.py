@@ -27,7 +27,7 @@ from mace_fmu.iomodel.frf import frequency_response
 from mace_fmu.iomodel.instruments import SPEED_LOOP_GAINS, Instruments, load_instruments, resolve_bar_gauges
 from mace_fmu.iomodel.modal_ss import ModalPlant, modal_plant
 from mace_fmu.iomodel.model_options import ModelledElectronics, SignalSelection
-from mace_fmu.iomodel.motion import parse_motion_output
+from mace_fmu.iomodel.motion import motion_unit, parse_motion_output
 from mace_fmu.parameters.kinds import (DAMPING, DELAY, FREQUENCY_SCALE, SERVO_GAINS, ParameterKind, mode_label,
                                        split_loop_name)
 from mace_fmu.parameters.sets import ParameterSet, fe_overrides, naming_the_file, parameter_names
@@ -54,6 +54,19 @@ class VoltsModel:
     def configuration(self) -> str:
         """"1g" or "0g": the structure the model is of."""
         return self.structure_modes.configuration
+
+    @property
+    def signal_units(self) -> dict[str, str]:
+        """Every input's and output's unit at the model boundary: "V", or a force input's "N" / "N m" and a
+        physical output's unit ("m/s^2", "m", "rad", ...) where the structure file gives no gain; grid motion
+        outputs in m or rad."""
+        units = {a.name: a.input_unit for a in self.instruments.actuators}
+        units |= {x.name: x.output_unit for x in self.instruments.sensors}
+        for name in self.system.output_labels:
+            motion = parse_motion_output(name)
+            if motion is not None:
+                units[name] = motion_unit(motion[1])
+        return {name: units[name] for name in (*self.system.input_labels, *self.system.output_labels)}
 
     @property
     def grid_ids(self) -> tuple[int, ...]:

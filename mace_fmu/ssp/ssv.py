@@ -31,7 +31,8 @@ SSC = "http://ssp-standard.org/SSP1/SystemStructureCommon"
 MACE = "https://mace-fmu.invalid/ssp-annotation/1"  #: namespace of our annotation's content
 ANNOTATION_TYPE = "org.mace-fmu.parameter-set"
 
-#: SI base-unit exponents (and factor) of every unit a parameter can have, as SSP's ssc:Unit wants them.
+#: SI base-unit exponents (and factor) of every unit a parameter, input or output can have, as SSP's ssc:Unit
+#: wants them.
 #: V = kg m^2 s^-3 A^-1; a degree is pi/180 rad.
 BASE_UNITS: dict[str, dict[str, str]] = {
     "1": {},
@@ -40,6 +41,16 @@ BASE_UNITS: dict[str, dict[str, str]] = {
     "s": {"s": "1"},
     "Hz": {"s": "-1"},
     "V": {"kg": "1", "m": "2", "s": "-3", "A": "-1"},
+    # the physical inputs and outputs of a modal test's instruments (structure files without gains)
+    "N": {"kg": "1", "m": "1", "s": "-2"},
+    "N m": {"kg": "1", "m": "2", "s": "-2"},
+    "m": {"m": "1"},
+    "m/s": {"m": "1", "s": "-1"},
+    "m/s^2": {"m": "1", "s": "-2"},
+    "rad": {"rad": "1"},
+    "rad/s": {"rad": "1", "s": "-1"},
+    "rad/s^2": {"rad": "1", "s": "-2"},
+    "strain": {},
     "V/deg": {"kg": "1", "m": "2", "s": "-3", "A": "-1", "rad": "-1", "factor": repr(180.0 / math.pi)},
     "V/(deg/s)": {"kg": "1", "m": "2", "s": "-2", "A": "-1", "rad": "-1", "factor": repr(180.0 / math.pi)},
 }

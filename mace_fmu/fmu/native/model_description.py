@@ -13,7 +13,7 @@ from xml.etree import ElementTree as ET
 
 import numpy as np
 
-from mace_fmu.fmu.variables import DEFAULT_EXPERIMENT, variable_unit
+from mace_fmu.fmu.variables import DEFAULT_EXPERIMENT, signal_units, variable_unit
 from mace_fmu.parameters.kinds import frequency_output_name
 
 LOG_CATEGORIES = (("logStatusError", "errors (always logged)"), ("logEvents", "debug information"))
@@ -57,10 +57,12 @@ def fmu_variables(arrays: Mapping[str, np.ndarray], state_names: Sequence[str]) 
         time, in value-reference order.
     """
     out: list[FmuVariable] = []
+    units = signal_units(arrays)
 
     def add(**kw) -> None:
         name, causality = kw["name"], kw["causality"]
-        out.append(FmuVariable(value_reference=len(out), unit=variable_unit(name, causality), **kw))
+        out.append(FmuVariable(value_reference=len(out), unit=variable_unit(name, causality, signal_units=units),
+                               **kw))
 
     for name, desc in zip(arrays["inputs"], arrays["input_descriptions"]):
         add(name=str(name), causality="input", variability="continuous", description=str(desc), start=0.0,

@@ -90,7 +90,7 @@ def _corrections(arrays: Mapping[str, np.ndarray], flexible: np.ndarray) -> dict
     n_w = np.shape(arrays["correction_stiffness"])[0] if "correction_stiffness" in arrays else 0
 
     def table(suffix: str, width: int) -> np.ndarray:
-        if f"disp_{suffix}" not in arrays:
+        if f"disp_{suffix}" not in arrays or width == 0:  # (-1, 0) is no shape numpy can infer
             return np.zeros((len(outputs), width))
         return np.array([np.asarray(arrays[f"{kind}_{suffix}"], dtype=float).reshape(-1, width)[k]
                          for kind, k in outputs]).reshape(len(outputs), width)

@@ -86,11 +86,7 @@ class SimulatedFrequencyResponseCost:
     name: str = "log-frf"
 
     def __post_init__(self) -> None:
-        pairs = self.pairs or tuple((i, o) for i in self.data.inputs for o in self.data.outputs)
-        bad = [p for p in pairs if p[0] not in self.data.inputs or p[1] not in self.data.outputs]
-        if bad:
-            raise MaceError(f"{self.data.source}: no measured response for {bad} (inputs {self.data.inputs}, "
-                            f"outputs {self.data.outputs})")
+        pairs = measured_pairs(self.data, self.pairs)
         missing = [i for i in self.data.inputs if i not in self.excitation.inputs]
         if missing:
             raise MaceError(f"{self.excitation.source}: the excitation lacks the measured input(s) {missing}")
@@ -111,25 +107,53 @@ class SimulatedFrequencyResponseCost:
         if not same and (f[0] < est.frequencies_hz[0] or f[-1] > est.frequencies_hz[-1]):
             raise MaceError(f"{self.data.source}: data from {f[0]:g} to {f[-1]:g} Hz, but the estimate of the model's "
                             f"response covers {est.frequencies_hz[0]:g} to {est.frequencies_hz[-1]:g} Hz only")
-        e = []
-        for i, o in self.pairs:
-            h = est.response[:, est.outputs.index(o), est.inputs.index(i)]
-            if not same:
-                h = np.interp(f, est.frequencies_hz, h.real) + 1j * np.interp(f, est.frequencies_hz, h.imag)
-            g = self.data.response[:, self.data.outputs.index(o), self.data.inputs.index(i)]
-            w = 1.0 if self.weights is None else \
-                self.weights[:, self.data.outputs.index(o), self.data.inputs.index(i)]
-            with np.errstate(divide="ignore", invalid="ignore"):
-                e.append(w * np.log(g / h))
-        e = np.concatenate(e)
-        if not np.all(np.isfinite(e)):
-            raise MaceError(f"{self.data.source}: the model's response is zero or infinite where data exist; the log "
-                            "cost needs both nonzero")
-        return np.concatenate([e.real, e.imag])
+        h = np.empty_like(self.data.response)
+        for k, o in enumerate(self.data.outputs):
+            for j, i in enumerate(self.data.inputs):
+                if (i, o) not in self.pairs:
+                    continue
+                g = est.response[:, est.outputs.index(o), est.inputs.index(i)]
+                h[:, k, j] = g if same else np.interp(f, est.frequencies_hz, g.real) + 1j * np.interp(
+                    f, est.frequencies_hz, g.imag)
+        return log_ratio_residual(self.data, h, pairs=self.pairs, weights=self.weights)
 
     def entry_labels(self) -> list[str]:
-        one = [f"{i} -> {o} {f:.4g} Hz" for i, o in self.pairs for f in self.data.frequencies_hz]
-        return [f"log|G| {x}" for x in one] + [f"phase {x}" for x in one]
+        return log_ratio_labels(self.data, self.pairs)
+
+
+def measured_pairs(data: FrequencyResponseData, pairs: Sequence[tuple[str, str]]) -> tuple[tuple[str, str], ...]:
+    """``pairs`` (input, output), every pair of the data where empty; a MaceError for a pair without a
+    measured response."""
+    chosen = tuple(pairs) or tuple((i, o) for i in data.inputs for o in data.outputs)
+    bad = [p for p in chosen if p[0] not in data.inputs or p[1] not in data.outputs]
+    if bad:
+        raise MaceError(f"{data.source}: no measured response for {bad} (inputs {data.inputs}, outputs "
+                        f"{data.outputs})")
+    return chosen
+
+
+def log_ratio_residual(data: FrequencyResponseData, model_response: np.ndarray, *,
+                       pairs: Sequence[tuple[str, str]], weights: np.ndarray | None) -> np.ndarray:
+    """j = w [Re log(G_data / G_model), Im log(G_data / G_model)] over ``pairs`` (input, output) and the data's
+    frequencies (thesis eq. 4.17): log magnitude ratios, then phase differences [rad]. ``model_response``:
+    H[k, output, input] at the data's frequencies, outputs and inputs; ``weights`` likewise (None: 1)."""
+    e = []
+    for i, o in pairs:
+        k, j = data.outputs.index(o), data.inputs.index(i)
+        w = 1.0 if weights is None else weights[:, k, j]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            e.append(w * np.log(data.response[:, k, j] / model_response[:, k, j]))
+    e = np.concatenate(e)
+    if not np.all(np.isfinite(e)):
+        raise MaceError(f"{data.source}: the model's response is zero or infinite where data exist; the log "
+                        "cost needs both nonzero")
+    return np.concatenate([e.real, e.imag])
+
+
+def log_ratio_labels(data: FrequencyResponseData, pairs: Sequence[tuple[str, str]]) -> list[str]:
+    """What each entry of :func:`log_ratio_residual` is."""
+    one = [f"{i} -> {o} {f:.4g} Hz" for i, o in pairs for f in data.frequencies_hz]
+    return [f"log|G| {x}" for x in one] + [f"phase {x}" for x in one]
 
 
 def principal_pairs(inputs: Sequence[str], outputs: Sequence[str]) -> tuple[tuple[str, str], ...]:

@@ -177,15 +177,14 @@ def format_label(name: str, unit: str, role: str | None = None) -> str:
 
 
 def resolve(label: Label, *, channel_map: ChannelMap | None, where: str) -> tuple[str, Role, str]:
-    """(model signal, role, unit) of a data column, its unit checked against the map or against volts."""
+    """(model signal, role, unit) of a data column, its unit checked against the map where there is one (the
+    model's units are checked where the data meet it, e.g. :meth:`FmuInterface.check_signals
+    <mace_fmu.updating.fmu.model.FmuInterface.check_signals>`)."""
     if channel_map is None:
         if label.role is None:
             raise MaceError(f"{where}: channel {label.name!r}: no role; prefix it 'in:' or 'out:' "
                             f"(e.g. 'out:{label.name} [{label.unit}]') or give a channel map")
-        if label.unit != "V":
-            raise MaceError(f"{where}: channel {label.name!r}: unit {label.unit!r}, expected 'V' (the model boundary "
-                            "is in volts; a channel map declares other units)")
-        return label.name, label.role, label.unit
+        return label.name, label.role, label.unit  # the unit travels with the data, checked against the model's
     row = channel_map.find(label.name)
     if row is None:
         raise MaceError(f"{where}: channel {label.name!r} is not in the channel map {channel_map.source} "

@@ -15,7 +15,10 @@ from mace_fmu.util.atomic import atomic_path
 
 FRF_SUFFIXES = (".csv", ".uff", ".unv")
 _COHERENCE = re.compile(r"^coherence:(.+?) \[1\]$")
-_PAIR = re.compile(r"^(re|im):(.+)/(.+?) \[([^/\[\]]*)/([^/\[\]]*)\]$")
+#: a response column: "re:<output>/<input> [<unit>/<unit>]", "im:..." or, complex literals, "<output>/<input> [...]"
+_PAIR = re.compile(r"^(?:(re|im):)?([^/\[\]]+)/([^/\[\]]+?) \[(.*)\]$")
+#: the units of a response column: "V/V" or, where a unit has a slash itself, "(m/s^2)/(N)"
+_UNITS = re.compile(r"^\(([^()]*)\)/\(([^()]*)\)$|^([^/()]*)/([^/()]*)$")
 #: UFF dataset 58 function type of a frequency response function (FRF)
 UFF_FRF = 4
 #: UFF direction codes (record 6, fields 7 and 10) and the axis names used for channels named by node
@@ -26,8 +29,18 @@ UFF_OUTPUT_ID, UFF_INPUT_ID = "output: ", "input: "
 
 # --- CSV ----------------------------------------------------------------------------------------
 
+def _pair_units(text: str, *, at: str, label: str) -> tuple[str, str]:
+    """(output unit, input unit) of a response column's ``[...]``: "V/V" or "(m/s^2)/(N)"."""
+    m = _UNITS.match(text.strip())
+    if not m:
+        raise MaceError(f"{at}: column label {label!r}: units {text!r}, expected '<output unit>/<input unit>' or, "
+                        "where a unit has a slash, '(m/s^2)/(N)'")
+    out_unit, in_unit = (m.group(1), m.group(2)) if m.group(1) is not None else (m.group(3), m.group(4))
+    return out_unit.strip(), in_unit.strip()
+
+
 def _read_csv(path: Path, channel_map: ChannelMap | None) -> FrequencyResponseData:
-    labels, columns, lines, header_line = read_csv_columns(path)
+    labels, columns, lines, header_line = read_csv_columns(path, dtype=complex)
     at = f"{path}:{header_line}"
     first = parse_label(labels[0], where=at)
     if first.name != "frequency" or first.role is not None or first.unit != "Hz":
@@ -39,16 +52,22 @@ def _read_csv(path: Path, channel_map: ChannelMap | None) -> FrequencyResponseDa
     channel_of: dict[str, str] = {}
     found: set[str] = set()
     coherence: dict[str, np.ndarray] = {}
+    for j, (text, values) in enumerate(zip(labels, columns)):
+        m = _PAIR.match(text)
+        if (j == 0 or _COHERENCE.match(text) or (m and m.group(1))) and np.any(values.imag != 0.0):
+            k = int(np.flatnonzero(values.imag != 0.0)[0])
+            raise MaceError(f"{path}:{lines[k]}: column {text!r}: {values[k]} is complex, expected a real number")
     for text, values in zip(labels[1:], columns[1:]):
         c = _COHERENCE.match(text)
         if c:
-            coherence[c.group(1).strip()] = values  # by channel; matched to the outputs below
+            coherence[c.group(1).strip()] = values.real  # by channel; matched to the outputs below
             continue
         m = _PAIR.match(text)
         if not m:
-            raise MaceError(f"{at}: column label {text!r} is not 're:<output>/<input> [<unit>/<unit>]', 'im:...' "
-                            "or 'coherence:<output> [1]'")
-        part, out_channel, in_channel, out_unit, in_unit = (g.strip() for g in m.groups())
+            raise MaceError(f"{at}: column label {text!r} is not '<output>/<input> [<unit>/<unit>]' (complex values), "
+                            "'re:<output>/<input> [...]' and 'im:...', or 'coherence:<output> [1]'")
+        part, out_channel, in_channel = m.group(1) or "complex", m.group(2).strip(), m.group(3).strip()
+        out_unit, in_unit = _pair_units(m.group(4), at=at, label=text)
         found |= {out_channel, in_channel}
         out = _signal(Label(out_channel, out_unit, "output"), channel_map, at, "output")
         inp = _signal(Label(in_channel, in_unit, "input"), channel_map, at, "input")
@@ -59,21 +78,26 @@ def _read_csv(path: Path, channel_map: ChannelMap | None) -> FrequencyResponseDa
                 table.append(signal)
             units[signal] = units.get(signal, unit)
             channel_of[signal] = channel
-        if part in parts.setdefault((out, inp), {}):
-            raise MaceError(f"{at}: column {text!r} appears twice")
-        parts[(out, inp)][part] = values
+        pair = parts.setdefault((out, inp), {})
+        if part in pair or (part == "complex" and pair) or (part != "complex" and "complex" in pair):
+            raise MaceError(f"{at}: column {text!r}: the response {out_channel}/{in_channel} is given twice")
+        pair[part] = values if part == "complex" else values.real
     check_present(found, channel_map=channel_map, where=at)
     if not outputs:
-        raise MaceError(f"{at}: no response columns (expected 're:<output>/<input> [<unit>/<unit>]' and 'im:...')")
+        raise MaceError(f"{at}: no response columns (expected '<output>/<input> [<unit>/<unit>]' with complex values, "
+                        "or 're:<output>/<input> [...]' and 'im:...')")
     response = np.empty((len(columns[0]), len(outputs), len(inputs)), dtype=complex)
     for i, out in enumerate(outputs):
         for j, inp in enumerate(inputs):
             pair = parts.get((out, inp), {})
+            if "complex" in pair:
+                response[:, i, j] = pair["complex"]
+                continue
             missing = [p for p in ("re", "im") if p not in pair]
             if missing:
                 raise MaceError(f"{at}: channel {channel_of[out]!r}/{channel_of[inp]!r}: no column "
                                 f"{' or '.join(f'{p}:{channel_of[out]}/{channel_of[inp]}' for p in missing)} "
-                                "(every output/input pair needs re: and im: columns)")
+                                "(every output/input pair needs a complex column, or re: and im: columns)")
             response[:, i, j] = pair["re"] + 1j * pair["im"]
     by_channel = {channel_of[out]: out for out in outputs}
     unknown = sorted(set(coherence) - set(by_channel))
@@ -82,7 +106,7 @@ def _read_csv(path: Path, channel_map: ChannelMap | None) -> FrequencyResponseDa
     if coherence and len(coherence) != len(outputs):
         raise MaceError(f"{at}: coherence columns for {len(coherence)} of {len(outputs)} outputs (all or none)")
     gamma2 = np.column_stack([coherence[channel_of[out]] for out in outputs]) if coherence else None
-    return _frd(columns[0], inputs, outputs, response, units, source=str(path),
+    return _frd(columns[0].real, inputs, outputs, response, units, source=str(path),
                 row_at=lambda k: f"{path}:{lines[k]}", channel_of=channel_of, coherence=gamma2)
 
 
@@ -120,8 +144,10 @@ def _write_csv(frd: FrequencyResponseData, path: Path) -> None:
             format_label(out, "V"), format_label(inp, "V")  # the names must fit the label grammar
             if "/" in out or "/" in inp:
                 raise MaceError(f"signal names {out!r}, {inp!r} cannot be written as a CSV pair label (no '/')")
+            units = (f"({frd.unit(out)})/({frd.unit(inp)})" if "/" in frd.unit(out) + frd.unit(inp)
+                     else f"{frd.unit(out)}/{frd.unit(inp)}")
             for part, values in (("re", frd.response[:, i, j].real), ("im", frd.response[:, i, j].imag)):
-                labels.append(f"{part}:{out}/{inp} [{frd.unit(out)}/{frd.unit(inp)}]")
+                labels.append(f"{part}:{out}/{inp} [{units}]")
                 columns.append(values)
     if frd.coherence is not None:
         for i, out in enumerate(frd.outputs):

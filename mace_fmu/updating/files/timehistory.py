@@ -106,29 +106,35 @@ def _check_step(times_s: np.ndarray, sample_time_s: float, row_at) -> None:
                         f"expected the sample time {sample_time_s:.9g} s ({1 / sample_time_s:.6g} Hz)")
 
 
-def read_csv_columns(path: Path) -> tuple[list[str], list[np.ndarray], list[int], int]:
-    """Column labels, columns, each sample's line number and the header's; '#' lines and blank lines skipped."""
+def read_csv_columns(path: Path, *, dtype: type = float) -> tuple[list[str], list[np.ndarray], list[int], int]:
+    """Column labels, columns, each sample's line number and the header's; '#' lines and blank lines skipped.
+
+    The delimiter is the header's: ``;`` where the header has one (as European spreadsheets and some
+    acquisition software write), ``,`` otherwise. With ``dtype=complex`` a cell may also be a complex
+    literal as Python and NumPy write it (``-0.05+0.05j``, ``(1-2j)``).
+    """
     text = read_text(path)
     lines = text.splitlines()
     numbers = [k for k, line in enumerate(lines, start=1)
-               if line.strip(" \t,") and not line.lstrip().startswith("#")]
+               if line.strip(" \t,;") and not line.lstrip().startswith("#")]
     if not numbers:
         raise MaceError(f"{path}: empty (expected a header of 'name [unit]' labels and a row per sample)")
     header_line, data_lines = numbers[0], numbers[1:]
-    labels = [c.strip() for c in next(csv.reader([lines[header_line - 1]]))]
+    delimiter = ";" if ";" in lines[header_line - 1] else ","
+    labels = [c.strip() for c in next(csv.reader([lines[header_line - 1]], delimiter=delimiter))]
     for k in data_lines:
-        if lines[k - 1].count(",") != len(labels) - 1:
-            raise MaceError(f"{path}:{k}: {lines[k - 1].count(',') + 1} fields, the header has {len(labels)}")
+        if lines[k - 1].count(delimiter) != len(labels) - 1:
+            raise MaceError(f"{path}:{k}: {lines[k - 1].count(delimiter) + 1} fields, the header has {len(labels)}")
     try:  # numpy's parser reads the whole table at once; quoted cells or a bad one need the slow route
-        data = np.loadtxt([lines[k - 1] for k in data_lines], delimiter=",", dtype=float, ndmin=2,
+        data = np.loadtxt([lines[k - 1] for k in data_lines], delimiter=delimiter, dtype=dtype, ndmin=2,
                           comments=None).reshape(len(data_lines), len(labels)) if data_lines else \
-            np.empty((0, len(labels)))
+            np.empty((0, len(labels)), dtype=dtype)
     except ValueError:
-        data = np.empty((len(data_lines), len(labels)))
+        data = np.empty((len(data_lines), len(labels)), dtype=dtype)
         for n, k in enumerate(data_lines):
-            for j, (label, cell) in enumerate(zip(labels, next(csv.reader([lines[k - 1]])))):
+            for j, (label, cell) in enumerate(zip(labels, next(csv.reader([lines[k - 1]], delimiter=delimiter)))):
                 try:
-                    data[n, j] = float(cell)
+                    data[n, j] = dtype(cell.strip().replace(" ", ""))
                 except ValueError:
                     raise MaceError(f"{path}:{k}: channel {label!r}: {cell!r} is not a number") from None
     return labels, [data[:, j] for j in range(len(labels))], data_lines, header_line

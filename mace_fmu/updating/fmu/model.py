@@ -118,13 +118,21 @@ class FmuInterface:
             out.update({fmu_name: value for fmu_name in modes[name]})
         return out
 
-    def check_signals(self, *, inputs: Sequence[str], outputs: Sequence[str], where: str) -> None:
-        """MaceError naming every input and output channel of ``where`` the FMU does not have."""
+    def check_signals(self, *, inputs: Sequence[str], outputs: Sequence[str], where: str,
+                      units: Mapping[str, str] | None = None) -> None:
+        """MaceError naming every input and output channel of ``where`` the FMU does not have and, with the
+        data's ``units``, every one whose unit is not the one the FMU declares for it."""
         bad = [f"input {n!r}" for n in inputs if n not in self.inputs] + \
             [f"output {n!r}" for n in outputs if n not in self.outputs]
         if bad:
             raise MaceError(f"{where}: channel(s) {', '.join(bad)} not in {self.path} (inputs: "
                             f"{', '.join(self.inputs)}; outputs: {', '.join(self.outputs)})")
+        for name in (*inputs, *outputs):
+            given, declared = (units or {}).get(name), self.units.get(name, "")
+            if given is not None and declared and given != declared:
+                role = "input" if name in self.inputs else "output"
+                raise MaceError(f"{where}: channel {name!r}: unit {given!r}, but the FMU's {role} {name} is in "
+                                f"{declared!r}: the data must be in the FMU's units")
 
 
 def read_fmu_interface(path: str | os.PathLike) -> FmuInterface:

@@ -28,18 +28,20 @@ class FmuProblem:
     family: FmuFamily  #: the FMU with every start value from the start file set on each run
     names: tuple[str, ...]  #: parameters to update
     start: Mapping[str, float]  #: their start values [FMU units]
-    history: TimeHistory  #: the measured time histories (the first test)
+    history: TimeHistory | None  #: the measured time history of the first test (None: frequency responses only)
     frequency_data: FrequencyResponseData | None  #: measured frequency responses (None: a time cost)
     cost: Cost  #: the cost the update minimises
     data_files: tuple[str, ...]  #: the measured data files read
     histories: tuple[TimeHistory, ...] = ()  #: every test's time history (``history`` is the first)
+    responses: tuple[FrequencyResponseData, ...] = ()  #: every measured frequency response, in the band
 
 
 def fmu_problem(*, fmu: str | os.PathLike, data: Sequence[str | os.PathLike], names: Sequence[str],
                 cost: CostKind, start: Mapping[str, float] | None = None, channel_map: str | os.PathLike | None = None,
                 segment_s: float = 2.0, weighting: Weighting = "noise",
                 held_inputs: Sequence[str] = (), noise_rms_fraction: float | None = None,
-                gain_uncertainty: Mapping[str, float] | None = None) -> FmuProblem:
+                gain_uncertainty: Mapping[str, float] | None = None,
+                band_hz: tuple[float, float] | None = None) -> FmuProblem:
     """Read and check everything an FMU update needs; no simulation runs.
 
     Parameters
@@ -50,7 +52,9 @@ def fmu_problem(*, fmu: str | os.PathLike, data: Sequence[str | os.PathLike], na
         One or more time histories (CSV/npz: the measured inputs and outputs of one test each; several
         tests are summed, each in units of its own noise) and, with a single one and the log-FRF cost,
         optionally one frequency response (UFF 58/CSV) to compare with instead of the H1 of the time
-        history.
+        history. Or, with the log-FRF cost, one or more measured frequency responses alone (an
+        analyser's FRFs, one file per test): the FMU's response at their frequencies comes from
+        periodic runs (:mod:`mace_fmu.updating.engine.multisine`), and several files are summed.
     names : sequence of str
         The FMU parameters to update, each named once.
     cost : {"time", "log-frf"}
@@ -73,6 +77,9 @@ def fmu_problem(*, fmu: str | os.PathLike, data: Sequence[str | os.PathLike], na
         Output -> standard deviation of its sensor's gain as a fraction (0.01: known to 1 %). Each such
         gain is estimated with the update as a nuisance parameter "gain:<output>" with a Gaussian prior
         of mean 1, so the stated uncertainty of the parameters includes the gains'.
+    band_hz : (float, float), optional
+        Measured frequency responses alone: the band [Hz] the cost compares (default: every frequency of
+        the files).
 
     Returns
     -------
@@ -110,12 +117,19 @@ def fmu_problem(*, fmu: str | os.PathLike, data: Sequence[str | os.PathLike], na
         if not Path(path).is_file():
             raise MaceError(f"{path}: no such measured-data file")
         item = read_measured_data(path, channel_map=mapping)
-        interface.check_signals(inputs=list(item.inputs), outputs=list(item.outputs), where=os.fspath(path))
+        interface.check_signals(inputs=list(item.inputs), outputs=list(item.outputs), where=os.fspath(path),
+                                units={n: item.unit(n) for n in (*item.inputs, *item.outputs)})
         (histories if isinstance(item, TimeHistory) else responses).append(item)
-    if not histories or len(responses) > 1 or (responses and len(histories) > 1):
+    if not histories:
+        return _frequency_response_problem(interface, responses, names=names, start=start, cost=cost,
+                                           band_hz=band_hz, gain_uncertainty=gain_uncertainty, data=data)
+    if band_hz is not None:
+        raise MaceError("a band (--band-hz) selects the frequencies of measured frequency responses given alone; "
+                        "with time histories the H1 estimate's band is the inputs'")
+    if len(responses) > 1 or (responses and len(histories) > 1):
         raise MaceError(f"give one or more time histories (each a test whose measured inputs drive the FMU) and, with "
-                        f"a single one, at most one frequency response; got {len(histories)} time histories and "
-                        f"{len(responses)} frequency responses")
+                        f"a single one, at most one frequency response, or frequency responses alone; got "
+                        f"{len(histories)} time histories and {len(responses)} frequency responses")
     if responses and cost != "log-frf":
         raise MaceError(f"{responses[0].source}: a frequency response is compared by the log-frf cost only "
                         f"(--cost log-frf), not by {cost!r}")
@@ -152,6 +166,48 @@ def fmu_problem(*, fmu: str | os.PathLike, data: Sequence[str | os.PathLike], na
     return FmuProblem(family=family, names=names, start=values, history=history,
                       frequency_data=frd, cost=the_cost, data_files=tuple(os.fspath(p) for p in data),
                       histories=tuple(histories))
+
+
+def _frequency_response_problem(interface, responses: list[FrequencyResponseData], *, names: tuple[str, ...],
+                                start: dict[str, float], cost: CostKind, band_hz: tuple[float, float] | None,
+                                gain_uncertainty: Mapping[str, float] | None,
+                                data: Sequence[str | os.PathLike]) -> FmuProblem:
+    """An update on measured frequency responses alone: each file's FRFs in the band against the FMU's, from
+    periodic runs at exactly the files' frequencies, weighted by the coherence where a file gives it."""
+    from mace_fmu.updating.engine.costs import SeveralTests
+    from mace_fmu.updating.engine.multisine import ProbedFrequencyResponseCost, coherence_weights, multisine_probe
+
+    if cost != "log-frf":
+        raise MaceError(f"{responses[0].source}: measured frequency responses are compared by the log-frf cost "
+                        f"(--cost log-frf), not by {cost!r}; a time cost needs the time histories")
+    if gain_uncertainty:
+        raise MaceError("--gain-uncertainty weighs a gain against the noise of time histories; measured frequency "
+                        "responses alone do not give it")
+    in_band = [_in_band(frd, band_hz) for frd in responses]
+    costs = [ProbedFrequencyResponseCost(data=frd, probe=multisine_probe(frd.frequencies_hz),
+                                         weights=coherence_weights(frd)) for frd in in_band]
+    the_cost = costs[0] if len(costs) == 1 else SeveralTests(tests=tuple(costs), weights=(1.0,) * len(costs),
+                                                               labels=tuple(frd.source for frd in in_band))
+    family = FmuFamily(interface=interface, fixed=start)
+    return FmuProblem(family=family, names=names, start={n: start.get(n, interface.parameters[n]) for n in names},
+                      history=None, frequency_data=in_band[0], cost=the_cost,
+                      data_files=tuple(os.fspath(p) for p in data), responses=tuple(in_band))
+
+
+def _in_band(frd: FrequencyResponseData, band_hz: tuple[float, float] | None) -> FrequencyResponseData:
+    """The lines of ``frd`` in ``band_hz`` (all of them without a band)."""
+    if band_hz is None:
+        return frd
+    low, high = band_hz
+    if not (0 <= low < high):
+        raise MaceError(f"--band-hz {low:g} {high:g}: expected 0 <= LOW < HIGH")
+    keep = (frd.frequencies_hz >= low) & (frd.frequencies_hz <= high)
+    if keep.sum() < 2:
+        raise MaceError(f"{frd.source}: {int(keep.sum())} frequencies in {low:g}-{high:g} Hz (the file has "
+                        f"{frd.frequencies_hz[0]:g} to {frd.frequencies_hz[-1]:g} Hz)")
+    return FrequencyResponseData(frd.frequencies_hz[keep], frd.inputs, frd.outputs, frd.response[keep],
+                                 source=frd.source, units=frd.units,
+                                 coherence=None if frd.coherence is None else frd.coherence[keep])
 
 
 def _gain_priors(given: Mapping[str, float], mapping, histories: Sequence[TimeHistory]) -> dict[str, float]:

@@ -1,0 +1,178 @@
+"""A simulated model's frequency response at given frequency lines, from one periodic multisine run per input.
+
+The model is known only by simulation (an FMU): its inputs are held over each sample (zero-order hold)
+and its outputs read at the samples. A multisine whose lines are the wanted frequencies, all multiples of
+1 / period, drives each input in turn; once the free response has died out, one period of the output's DFT
+holds the response at every line at once (Pintelon and Schoukens, System Identification, ch. 2). Two
+details make it the continuous-time response a measured FRF is compared with:
+
+- each held value is the multisine at the middle of its sample, so the held staircase has no half-sample
+  delay, and each line's amplitude is divided by sinc(w T / 2), the hold's gain, so that the staircase's
+  component at the line is exactly the intended one;
+- the sample time is short against the highest line (``samples_per_cycle``), which leaves only the images
+  of the staircase at 1/T -+ f, folded back by the sampling: a relative error of about f T times the
+  ratio of the high-frequency response (an accelerometer's mass line) to the response at f, small where a
+  resonance is.
+
+How long the free response takes to die out depends on the model's damping: the run is repeated with
+twice the periods until the last two periods agree (:attr:`MultisineProbe.tolerance`), and the model
+family's later runs use that length.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Sequence
+
+import numpy as np
+
+from mace_fmu.errors import MaceError
+from mace_fmu.updating.engine.measured import FrequencyResponseData
+from mace_fmu.updating.engine.simulated_frf import log_ratio_labels, log_ratio_residual, measured_pairs
+
+
+@dataclass(frozen=True)
+class MultisineProbe:
+    """The periodic runs that give a simulated model's response at ``frequencies_hz`` (multiples of
+    1 / ``period_s``)."""
+
+    frequencies_hz: np.ndarray  #: the lines [Hz], each a whole multiple of 1 / period_s
+    period_s: float  #: the multisine's period [s]
+    samples_per_period: int  #: the period in samples; the sample time is period_s / samples_per_period
+    tolerance: float = 1e-7  #: largest change between the last two periods, relative to the largest response
+    max_periods: int = 256  #: a model that settles in no fewer periods is reported, not run for ever
+    _periods: list = field(default_factory=lambda: [2], repr=False, compare=False)  #: learnt run length
+    _cache: dict = field(default_factory=dict, repr=False, compare=False)  #: one period of the input
+
+    @property
+    def sample_time_s(self) -> float:
+        return self.period_s / self.samples_per_period
+
+    @property
+    def bins(self) -> np.ndarray:
+        """Each line's DFT bin in one period."""
+        return np.rint(self.frequencies_hz * self.period_s).astype(int)
+
+    def excitation(self, periods: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(times [s], held input values, complex amplitude of each line): ``periods`` periods of the
+        multisine, Schroeder phases (a low crest factor), unit amplitude per line before the hold's
+        correction."""
+        if "period" not in self._cache:
+            k = np.arange(len(self.frequencies_hz))
+            lines = np.exp(-1j * np.pi * k * (k + 1) / max(len(k), 1))
+            w = 2 * np.pi * self.frequencies_hz
+            amplitude = lines / self._hold_gain  # the staircase's component at each line is then ``lines``
+            middle = (np.arange(self.samples_per_period) + 0.5) * self.sample_time_s
+            values = np.zeros(self.samples_per_period)
+            for start in range(0, len(w), 64):  # a block of lines at a time: the (n x lines) table stays small
+                block = slice(start, start + 64)
+                values += np.real(np.exp(1j * np.outer(middle, w[block])) @ amplitude[block])
+            self._cache["period"] = (values, lines)
+        values, lines = self._cache["period"]
+        return np.arange(periods * self.samples_per_period) * self.sample_time_s, np.tile(values, periods), lines
+
+    @property
+    def _hold_gain(self) -> np.ndarray:
+        """The zero-order hold's gain at each line, sinc(w T / 2) (numpy's sinc is sin(pi x) / (pi x))."""
+        return np.sinc(self.frequencies_hz * self.sample_time_s)
+
+    def response(self, model, *, inputs: Sequence[str], outputs: Sequence[str]) -> np.ndarray:
+        """H[line, output, input] of ``model`` (anything with ``time_response(times, {input: values},
+        outputs=...)`` that starts at rest, as an FMU does), in its outputs' units per its inputs' units."""
+        h = np.empty((len(self.frequencies_hz), len(outputs), len(inputs)), dtype=complex)
+        for j, name in enumerate(inputs):
+            h[:, :, j] = self._one_input(model, name, list(outputs))
+        return h
+
+    def _feedthrough(self, model, name: str, outputs: list[str]) -> np.ndarray:
+        """D[output] of ``name``: the first sample of a unit input less that of none (the state is the same)."""
+        times = np.array([0.0, self.sample_time_s])
+        pulse = np.asarray(model.time_response(times, {name: np.array([1.0, 0.0])}, outputs=outputs), dtype=float)
+        rest = np.asarray(model.time_response(times, {name: np.zeros(2)}, outputs=outputs), dtype=float)
+        return pulse[0] - rest[0]
+
+    def _one_input(self, model, name: str, outputs: list[str]) -> np.ndarray:
+        n = self.samples_per_period
+        # the feedthrough sees the held value at the sample, half a sample after the multisine's middle: its
+        # share of the DFT is D e^(j w T / 2) / sinc(w T / 2), not D
+        shift = np.exp(1j * np.pi * self.frequencies_hz * self.sample_time_s) / self._hold_gain - 1.0
+        d = self._feedthrough(model, name, outputs)
+        while True:
+            periods = self._periods[0]
+            times, values, lines = self.excitation(periods)
+            y = np.asarray(model.time_response(times, {name: values}, outputs=outputs), dtype=float)
+            last, before = (np.fft.rfft(y[len(y) - (m + 1) * n:len(y) - m * n], axis=0)[self.bins] for m in (0, 1))
+            scale = 2.0 / (n * lines[:, None])
+            h, h_before = last * scale - shift[:, None] * d, before * scale - shift[:, None] * d
+            change = np.max(np.abs(h - h_before)) / max(np.max(np.abs(h)), np.finfo(float).tiny)
+            if change <= self.tolerance:
+                return h
+            if 2 * periods > self.max_periods:
+                raise MaceError(f"the model's response to a periodic input on {name} still changes by {change:.1e} "
+                                f"after {periods} periods of {self.period_s:g} s: it is unstable or so lightly "
+                                "damped that its free response outlasts the run")
+            self._periods[0] = 2 * periods
+
+
+def multisine_probe(frequencies_hz: np.ndarray, *, samples_per_cycle: int = 20) -> MultisineProbe:
+    """The probe for measured frequencies on a uniform grid (as an FFT analyser gives them): the period is one
+    over the grid's spacing, the sample time at least ``samples_per_cycle`` per cycle of the highest line.
+
+    Raises
+    ------
+    MaceError
+        Frequencies that are not whole multiples of one spacing (no periodic signal has all of them).
+    """
+    f = np.asarray(frequencies_hz, dtype=float)
+    if f.ndim != 1 or f.size == 0 or not np.all(f > 0):
+        raise MaceError("a periodic probe needs one or more positive frequencies")
+    spacing = float(np.min(np.diff(f))) if f.size > 1 else float(f[0])
+    multiples = f / spacing
+    if not np.allclose(multiples, np.rint(multiples), rtol=0, atol=1e-6):
+        raise MaceError(f"frequencies from {f[0]:g} to {f[-1]:g} Hz are not whole multiples of {spacing:g} Hz: no "
+                        "periodic signal has all of them (give the data on a uniform grid)")
+    period = 1.0 / spacing
+    samples = int(np.ceil(samples_per_cycle * f[-1] * period))
+    samples += samples % 2  # an even period: the lines sit below the Nyquist bin
+    return MultisineProbe(frequencies_hz=f, period_s=period, samples_per_period=samples)
+
+
+def coherence_weights(data: FrequencyResponseData) -> np.ndarray | None:
+    """w[k, output, input] = sqrt(gamma^2 / (1 - gamma^2)), proportional to one over the standard deviation of
+    log H at each bin (Bendat and Piersol: sd(log |H|) ~ sqrt((1 - gamma^2) / (2 n gamma^2)) for n averages,
+    which a file does not say); None when the data carry no coherence."""
+    if data.coherence is None:
+        return None
+    gamma2 = np.clip(np.asarray(data.coherence, dtype=float), 0.0, 1.0 - 1e-12)
+    w = np.sqrt(gamma2 / (1.0 - gamma2))
+    return np.repeat(w[:, :, None], len(data.inputs), axis=2)
+
+
+@dataclass(frozen=True)
+class ProbedFrequencyResponseCost:
+    """j = w [log |G_data / G_model|, phase difference] over ``pairs`` (input, output) and the data's
+    frequencies, G_model the model's response from :class:`MultisineProbe` runs at exactly those frequencies:
+    measured frequency responses (a UFF 58 or CSV file of an analyser) compared with a model known only by
+    simulation. ``weights``: w[k, output, input] (None: 1, eq. 4.17), e.g. :func:`coherence_weights`."""
+
+    data: FrequencyResponseData
+    probe: MultisineProbe
+    pairs: tuple[tuple[str, str], ...] = ()  #: (input, output) channels compared; () means every pair
+    weights: np.ndarray | None = None
+    name: str = "log-frf"
+
+    def __post_init__(self) -> None:
+        pairs = measured_pairs(self.data, self.pairs)
+        if not np.allclose(self.probe.frequencies_hz, self.data.frequencies_hz, rtol=1e-12, atol=0.0):
+            raise MaceError(f"{self.data.source}: the probe's lines are not the data's frequencies")
+        object.__setattr__(self, "pairs", tuple(pairs))
+
+    def model_response(self, model) -> np.ndarray:
+        """H[k, output, input] of ``model`` at the data's frequencies, over the data's inputs and outputs."""
+        return self.probe.response(model, inputs=self.data.inputs, outputs=self.data.outputs)
+
+    def residual(self, model) -> np.ndarray:
+        return log_ratio_residual(self.data, self.model_response(model), pairs=self.pairs, weights=self.weights)
+
+    def entry_labels(self) -> list[str]:
+        return log_ratio_labels(self.data, self.pairs)
