@@ -54,7 +54,12 @@ def _example_commands(path: Path) -> list[tuple[str, str]]:
     """(where, command) for each whole ``mace-fmu`` command of an example: an indented command line of its
     docstring or comments, or an inline literal (````mace-fmu ...````); fragments with ``...`` are left out."""
     found = []
-    for number, line in enumerate(path.read_text().splitlines(), start=1):
+    lines = path.read_text().splitlines()
+    for number, line in enumerate(lines, start=1):
+        while line.rstrip().endswith("\\") and number < len(lines):  # a shell continuation ("\\" in a docstring)
+            line = line.rstrip().rstrip("\\").rstrip() + " " + lines[number].strip()
+            lines[number] = ""
+            number += 1
         shown = re.findall(r"``(mace-fmu [^`]*)``", line)
         bare = line.strip().lstrip("# ")
         if not shown and bare.startswith("mace-fmu ") and line.startswith(" "):

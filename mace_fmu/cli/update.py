@@ -101,7 +101,7 @@ def cmd_fmu_update(args: argparse.Namespace) -> int:
                           channel_map=args.map, segment_s=args.segment_s, weighting=args.weighting,
                           held_inputs=[name for group in args.hold_input for name in group],
                           noise_rms_fraction=noise_fraction, gain_uncertainty=_gain_uncertainty(args.gain_uncertainty),
-                          band_hz=tuple(args.band_hz) if args.band_hz else None)
+                          bands_hz=[tuple(band) for band in args.band_hz])
     where = f"the Dask cluster at {args.scheduler}" if args.scheduler else \
         f"{args.workers or 'one per core'} local worker processes"
     gains = len(problem.family.gain_outputs)
@@ -250,9 +250,10 @@ def _fmu_options(p: argparse.ArgumentParser) -> None:
     where.add_argument("--workers", type=positive_integer, default=None,
                        help=("local worker processes (default: one per core)"))
     p.add_argument("--map", metavar="FILE", help=("channel map: data channel names and units to the FMU's signals"))
-    p.add_argument("--band-hz", type=float, nargs=2, metavar=("LOW", "HIGH"),
+    p.add_argument("--band-hz", type=float, nargs=2, metavar=("LOW", "HIGH"), action="append", default=[],
                    help=("measured frequency responses given alone (an analyser's UFF 58 or CSV files, --cost "
-                         "log-frf): the band they are compared over [Hz] (default: all their frequencies)"))
+                         "log-frf): a band they are compared over [Hz] (repeatable, e.g. one about each "
+                         "resonance; default: all their frequencies)"))
     p.add_argument("--segment-s", type=positive_number, default=2.0,
                    help=("H1 segment length [s] of the log-frf cost (default 2)"))
     p.add_argument("--hold-input", metavar="NAME=0[,NAME=0...]", type=_held_inputs, action="append", default=[],

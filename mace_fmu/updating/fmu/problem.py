@@ -41,7 +41,7 @@ def fmu_problem(*, fmu: str | os.PathLike, data: Sequence[str | os.PathLike], na
                 segment_s: float = 2.0, weighting: Weighting = "noise",
                 held_inputs: Sequence[str] = (), noise_rms_fraction: float | None = None,
                 gain_uncertainty: Mapping[str, float] | None = None,
-                band_hz: tuple[float, float] | None = None) -> FmuProblem:
+                bands_hz: Sequence[tuple[float, float]] = ()) -> FmuProblem:
     """Read and check everything an FMU update needs; no simulation runs.
 
     Parameters
@@ -77,9 +77,9 @@ def fmu_problem(*, fmu: str | os.PathLike, data: Sequence[str | os.PathLike], na
         Output -> standard deviation of its sensor's gain as a fraction (0.01: known to 1 %). Each such
         gain is estimated with the update as a nuisance parameter "gain:<output>" with a Gaussian prior
         of mean 1, so the stated uncertainty of the parameters includes the gains'.
-    band_hz : (float, float), optional
-        Measured frequency responses alone: the band [Hz] the cost compares (default: every frequency of
-        the files).
+    bands_hz : sequence of (float, float)
+        Measured frequency responses alone: the bands [Hz] the cost compares, e.g. one about each
+        resonance (default: every frequency of the files).
 
     Returns
     -------
@@ -122,8 +122,8 @@ def fmu_problem(*, fmu: str | os.PathLike, data: Sequence[str | os.PathLike], na
         (histories if isinstance(item, TimeHistory) else responses).append(item)
     if not histories:
         return _frequency_response_problem(interface, responses, names=names, start=start, cost=cost,
-                                           band_hz=band_hz, gain_uncertainty=gain_uncertainty, data=data)
-    if band_hz is not None:
+                                           bands_hz=bands_hz, gain_uncertainty=gain_uncertainty, data=data)
+    if bands_hz:
         raise MaceError("a band (--band-hz) selects the frequencies of measured frequency responses given alone; "
                         "with time histories the H1 estimate's band is the inputs'")
     if len(responses) > 1 or (responses and len(histories) > 1):
@@ -169,7 +169,7 @@ def fmu_problem(*, fmu: str | os.PathLike, data: Sequence[str | os.PathLike], na
 
 
 def _frequency_response_problem(interface, responses: list[FrequencyResponseData], *, names: tuple[str, ...],
-                                start: dict[str, float], cost: CostKind, band_hz: tuple[float, float] | None,
+                                start: dict[str, float], cost: CostKind, bands_hz: Sequence[tuple[float, float]],
                                 gain_uncertainty: Mapping[str, float] | None,
                                 data: Sequence[str | os.PathLike]) -> FmuProblem:
     """An update on measured frequency responses alone: each file's FRFs in the band against the FMU's, from
@@ -183,7 +183,7 @@ def _frequency_response_problem(interface, responses: list[FrequencyResponseData
     if gain_uncertainty:
         raise MaceError("--gain-uncertainty weighs a gain against the noise of time histories; measured frequency "
                         "responses alone do not give it")
-    in_band = [_in_band(frd, band_hz) for frd in responses]
+    in_band = [_in_bands(frd, bands_hz) for frd in responses]
     costs = [ProbedFrequencyResponseCost(data=frd, probe=multisine_probe(frd.frequencies_hz),
                                          weights=coherence_weights(frd)) for frd in in_band]
     the_cost = costs[0] if len(costs) == 1 else SeveralTests(tests=tuple(costs), weights=(1.0,) * len(costs),
@@ -194,16 +194,20 @@ def _frequency_response_problem(interface, responses: list[FrequencyResponseData
                       data_files=tuple(os.fspath(p) for p in data), responses=tuple(in_band))
 
 
-def _in_band(frd: FrequencyResponseData, band_hz: tuple[float, float] | None) -> FrequencyResponseData:
-    """The lines of ``frd`` in ``band_hz`` (all of them without a band)."""
-    if band_hz is None:
+def _in_bands(frd: FrequencyResponseData, bands_hz: Sequence[tuple[float, float]]) -> FrequencyResponseData:
+    """The lines of ``frd`` in any of ``bands_hz`` (all of them without a band)."""
+    import numpy as np
+
+    if not bands_hz:
         return frd
-    low, high = band_hz
-    if not (0 <= low < high):
-        raise MaceError(f"--band-hz {low:g} {high:g}: expected 0 <= LOW < HIGH")
-    keep = (frd.frequencies_hz >= low) & (frd.frequencies_hz <= high)
+    keep = np.zeros(frd.frequencies_hz.shape, dtype=bool)
+    for low, high in bands_hz:
+        if not (0 <= low < high):
+            raise MaceError(f"--band-hz {low:g} {high:g}: expected 0 <= LOW < HIGH")
+        keep |= (frd.frequencies_hz >= low) & (frd.frequencies_hz <= high)
     if keep.sum() < 2:
-        raise MaceError(f"{frd.source}: {int(keep.sum())} frequencies in {low:g}-{high:g} Hz (the file has "
+        bands = ", ".join(f"{low:g}-{high:g}" for low, high in bands_hz)
+        raise MaceError(f"{frd.source}: {int(keep.sum())} frequencies in {bands} Hz (the file has "
                         f"{frd.frequencies_hz[0]:g} to {frd.frequencies_hz[-1]:g} Hz)")
     return FrequencyResponseData(frd.frequencies_hz[keep], frd.inputs, frd.outputs, frd.response[keep],
                                  source=frd.source, units=frd.units,

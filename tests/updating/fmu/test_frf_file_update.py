@@ -73,3 +73,79 @@ def test_bad_frf_requests_stop_before_any_run(frame, capsys, extra, message):
                                     "-o", str(folder / "refused"), *extra])
     assert code == 2 and message in err, err
     assert not (folder / "refused").exists()
+
+
+@pytest.fixture(scope="module")
+def shaker_record(frame):
+    """A shaker test of the re-solved frame as a data logger writes it: the load cell's force on floor 1 [N]
+    and three accelerations [m/s^2] with 2 % noise, 1 kHz for 20 s (the re-solve's FMU made it)."""
+    from mace_fmu.deck.reader import read_deck
+    from mace_fmu.fe.modes import compute_modes
+    from mace_fmu.fmu.export import export_fmu
+    from mace_fmu.iomodel.volts import volts_model
+    from mace_fmu.parameters.sets import ParameterSet
+    from mace_fmu.updating.engine.measured import TimeHistory
+    from mace_fmu.updating.files import write_time_history
+    from mace_fmu.updating.fmu.model import fmu_family
+    from mace_fmu.updating.fmu.truth import band_limited_noise
+
+    folder = frame[0]
+    resolved = volts_model(compute_modes(read_deck(FRAME / "frame.bdf"), configuration="1g",
+                                         structure_file=FRAME / "frame.toml", parameters=ParameterSet(TRUTH)))
+    truth = fmu_family(export_fmu(resolved, out_dir=folder / "truth", name="frame_truth")).full({})
+    t = np.arange(20000) * 1e-3
+    force = 5.0 * band_limited_noise(samples=t.size, step_s=1e-3, band_hz=(1.0, 60.0), seed=34)
+    outputs = ("acc_floor_1", "acc_floor_2", "acc_floor_3")
+    y = truth.time_response(t, {"force_floor_1": force}, outputs=list(outputs))
+    rng = np.random.default_rng(3434)
+    noisy = {o: y[:, k] + 0.02 * np.sqrt(np.mean(y[:, k] ** 2)) * rng.standard_normal(t.size)
+             for k, o in enumerate(outputs)}
+    history = TimeHistory(t, {"force_floor_1": force}, noisy,
+                          units={"force_floor_1": "N", **{o: "m/s^2" for o in outputs}}, source="shaker test")
+    return write_time_history(history, folder / "shaker.csv")
+
+
+def test_a_shaker_record_drives_the_fmu_s_force_input_and_the_truth_is_within_the_intervals(frame, shaker_record,
+                                                                                           capsys):
+    """The measured force drives the FMU's force input (the floors not driven held at 0 N). A time cost alone,
+    from the nominal moduli 5-15 % off, stops in a local minimum of the lightly damped response and says so
+    (exit 3, the noise-floor test failed); the H1 log-FRF cost of the same record first, then the time cost from
+    there (--start), brings the re-solve's moduli back within the 95 % intervals."""
+    folder, fmu, _ = frame
+    common = ["update", "fmu", str(fmu), "--data", str(shaker_record), "--update", "E_storey_1,E_storey_2,E_storey_3",
+              "--hold-input", "force_floor_2=0,force_floor_3=0", "--workers", "1"]
+    code, _, err = run_cli(capsys, [*common, "--cost", "time", "--noise-rms-percent", "2", "-o", str(folder / "cold")])
+    assert code == 3 and "standard deviations from the noise floor" in err, err
+    code, _, err = run_cli(capsys, [*common, "--cost", "log-frf", "-o", str(folder / "frf")])
+    assert code == 0, err
+    code, _, err = run_cli(capsys, [*common, "--cost", "time", "--noise-rms-percent", "2", "--start",
+                                    str(folder / "frf" / "parameters.toml"), "-o", str(folder / "time")])
+    assert code == 0, err
+    stage = tomllib.loads((folder / "time" / "uncertainty.toml").read_text())["stage"][0]
+    for name, low, high, sd in zip(stage["parameters"], stage["interval_95_low"], stage["interval_95_high"],
+                                   stage["standard_deviation_percent"]):
+        assert low <= TRUTH[name] <= high, (name, low, high)
+        assert sd < 0.01, (name, sd)  # 20 s of 2 % noise pin each storey's modulus to better than 0.01 %
+
+
+def test_the_frame_example_updated_on_real_data_meets_the_resonances_of_every_driving_point(tmp_path):
+    """examples/three_storey_frame on the rig's measured FRFs: fitted on the floor-1 file, the updated FMU's
+    resonances within 0.3 % of those all three files show (the phase's 90 deg crossing of each driving point),
+    the floor-2 and floor-3 files unseen by the fit. The magnitudes' goal (1 dB over the half-power bands) is
+    not met with the floors' stated masses (the example's text says why); the figure and the animation are
+    written."""
+    import importlib.util
+
+    path = FRAME / "update_three_storey_frame.py"
+    spec = importlib.util.spec_from_file_location("frame_example", path)
+    example = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(example)
+    summary = example.main(tmp_path)
+    for name, result in summary["files"].items():
+        assert max(abs(e) for e in result["frequency_error_percent"]) < 0.3, (name, result)
+    resonances = np.array([r["resonances_hz"] for r in summary["files"].values()])
+    assert np.ptp(resonances, axis=0).max() < 0.005  # the three files' resonances agree to a fifth of a bin
+    for k in (1, 2, 3):  # the owners' 0.2 % within a factor of 1.5
+        assert 0.0013 < summary["values"][f"damping_mode_{k}"] < 0.003
+    assert (tmp_path / "frame_frfs.png").stat().st_size > 50_000
+    assert (tmp_path / "frame_modes.html").stat().st_size > 10_000
