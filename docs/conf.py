@@ -64,5 +64,7 @@ sphinx_gallery_conf = {
     "remove_config_comments": True,
     "plot_gallery": "True",
     "abort_on_example_error": True,
+    # the examples not run at build time show the project's own figure, not sphinx-gallery's placeholder
+    "default_thumb_file": str(HERE / "_static" / "mode_and_bode.png"),
     "only_warn_on_example_error": False,
 }

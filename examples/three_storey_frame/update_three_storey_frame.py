@@ -28,6 +28,8 @@ several dB off between the resonances and at them. A mass is not yet a parameter
 missing piece of this update.
 """
 
+# sphinx_gallery_thumbnail_path = '_static/frame_frfs.png'
+
 from __future__ import annotations
 
 import sys

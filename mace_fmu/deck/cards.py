@@ -425,7 +425,7 @@ class Deck:
     params: Mapping[str, Param]  #: PARAM by name
     subcases: Mapping[int, Subcase]  #: empty when the file has no case control
     global_case: Subcase | None = field(default=None)  #: selections above the first SUBCASE
-    #: cards read but not modelled because they change neither mass nor stiffness: (name, count, file:line of the first)
+    #: cards read but not modelled because they change neither mass nor stiffness: (name, count, ``file:line`` of the first)
     skipped: tuple[tuple[str, int, str], ...] = field(default=())
     beams: Mapping[int, CBeam] = field(default_factory=dict)  #: CBEAM
     pbeams: Mapping[int, PBeam] = field(default_factory=dict)  #: PBEAM and PBEAML (as the PBEAM NASTRAN makes)

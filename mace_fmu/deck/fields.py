@@ -196,7 +196,7 @@ def _bound(minimum: float | None, above: float | None) -> str:
 
 
 class Fields:
-    """Typed, checked access to the data fields of one card; errors carry file:line and field."""
+    """Typed, checked access to the data fields of one card; errors carry ``file:line`` and field."""
 
     def __init__(self, raw: RawCard, file: str) -> None:
         self.raw = raw

@@ -60,7 +60,7 @@ def bulk_tables(raw_cards: list[RawCard], file: str) -> tuple[dict[str, dict], t
     tables : dict
         Deck attribute -> its cards by ID (set tables: set ID -> tuple of cards), as keyword arguments of Deck.
     skipped : tuple
-        (name, count, first file:line) of each card read past, as ``Deck.skipped``.
+        (name, count, first ``file:line``) of each card read past, as ``Deck.skipped``.
 
     Raises
     ------

@@ -39,10 +39,11 @@ def folders(tmp_path_factory) -> dict[str, str]:
             "fmi3": fmpy.extract(str(fmi3), unzipdir=str(out / "fmi3"))}
 
 
-def run_fuzz(folders: dict[str, str], first_seed: int, n_seeds: int, length: int, timeout: float) -> dict:
+def run_fuzz(folders: dict[str, str], first_seed: int, n_seeds: int, length: int, timeout: float,
+             extra: tuple[str, ...] = ()) -> dict:
     """The worker's summary; fails with the last seed it reached if it crashed or hung."""
     command = [sys.executable, str(WORKER), folders["fmi2"], folders["fmi3"], str(first_seed), str(n_seeds),
-               "--length", str(length)]
+               "--length", str(length), *extra]
     try:
         done = subprocess.run(command, capture_output=True, text=True, timeout=timeout)
     except subprocess.TimeoutExpired as e:
@@ -61,6 +62,33 @@ def test_random_call_sequences_follow_the_standards_state_machines(folders):
     assert summary["sequences"] == 3 * SEEDS
     # both sides of the state machine are exercised
     assert summary["ok"] > 0.3 * summary["calls"] and summary["error"] > 0.1 * summary["calls"]
+
+
+def test_the_controller_fmu_s_random_call_sequences_follow_the_state_machine_with_any_step(folders, tmp_path):
+    """The controller FMU (FMI 2 and 3 co-simulation) under the same fuzz, with the steps that once went wrong:
+    a step that is no whole number of samples (it was refused and left the instance in its error state), a
+    step of 1e20 s (its sample count overflowed and it returned OK without stepping) and of 1e6 s (it ran 250 s):
+    a step beyond the million samples one call runs is refused, at once, as a failed step. Foreign states
+    come from the plant FMU (a controller has no model exchange)."""
+    import control as ct
+    import numpy as np
+
+    from mace_fmu.fmu.controller import DiscreteController, export_controller_fmu
+
+    rng = np.random.default_rng(3)
+    a = rng.normal(size=(5, 5))
+    a *= 0.97 / np.max(np.abs(np.linalg.eigvals(a)))
+    system = ct.ss(a, rng.normal(size=(5, 2)), rng.normal(size=(3, 5)), rng.normal(size=(3, 2)), 0.002,
+                   inputs=["gyro_a", "gyro_b"], outputs=["cmd_x", "cmd_y", "cmd_z"])
+    controller = DiscreteController.from_statespace(system)
+    ctl = {f"fmi{v}": fmpy.extract(str(export_controller_fmu(controller, out_dir=tmp_path, name=f"ctl{v}",
+                                                              fmi_version=v)), unzipdir=str(tmp_path / f"ctl{v}"))
+           for v in (2, 3)}
+    summary = run_fuzz(ctl, 1, SEEDS, LENGTH, timeout=600,
+                       extra=("--interfaces", "cs2,cs3", "--peer", folders["fmi2"], "--sample-s", "0.002"))
+    assert summary["mismatches"] == [], json.dumps(summary["mismatches"][:5], indent=1)
+    assert summary["sequences"] == 2 * SEEDS and summary["ok"] > 0.3 * summary["calls"]
+    assert any(state.endswith(" error") for state in summary["by_state"])  # sequences reached the error state
 
 
 def test_random_call_sequences_from_c_are_clean_under_valgrind(folders, tmp_path):

@@ -39,6 +39,7 @@ from fmpy.fmi3 import FMU3Slave
 OK, ERROR = 0, 3
 INPUT_LIMIT_V = 1e6  # mace_instance.c MACE_INPUT_LIMIT_V, each input's declared min and max
 TIME_TOLERANCE = 1e-9  # mace_instance.c: relative to max(1, |t|)
+MAX_SAMPLES_PER_CALL = 1e6  # controller/mace_discrete.c: the samples one doStep of a controller FMU runs at most
 
 INST, INIT, STEP, EVENT, CONT, TERM, ERR = "instantiated", "init", "step", "event", "continuous", "terminated", "error"
 GETTABLE = {INIT, STEP, EVENT, CONT, TERM, ERR}
@@ -87,8 +88,9 @@ class Model:
 class Reference:
     """The standard's state machine for one interface ("cs2", "me2", "cs3")."""
 
-    def __init__(self, interface: str, variables: Variables):
+    def __init__(self, interface: str, variables: Variables, sample_s: float | None = None):
         self.interface, self.v = interface, variables
+        self.sample_s = sample_s  # a controller FMU's sample time: one call runs at most MAX_SAMPLES_PER_CALL
         self.cs = interface != "me2"
         self.fmi = 3 if interface == "cs3" else 2
         self.m = Model(params={vr: p[0] for vr, p in variables.params.items()})
@@ -192,6 +194,9 @@ class Reference:
                 return ERROR
             if abs(t - m.time) > TIME_TOLERANCE * max(1.0, abs(m.time)) or self.past_stop(t + h):
                 return ERROR
+            if self.sample_s is not None and h / self.sample_s > MAX_SAMPLES_PER_CALL + 1:
+                m.phase = ERR  # refused before any work, as a failed step: the instance is in its error state
+                return ERROR
             m.time = t + h
             return OK
         if call in ("getRealStatus", "getBooleanStatus"):
@@ -271,9 +276,9 @@ class Driver:
     """One instance of one interface, its fmpy wrappers and the reference; runs random calls."""
 
     def __init__(self, interface: str, folders: dict[str, str], variables: Variables, rng: random.Random,
-                 foreign: bytes, peer_state=None):
+                 foreign: bytes, peer_state=None, sample_s: float | None = None):
         self.interface, self.rng, self.v = interface, rng, variables
-        self.ref = Reference(interface, variables)
+        self.ref = Reference(interface, variables, sample_s)
         folder = folders["fmi3" if interface == "cs3" else "fmi2"]
         md = fmpy.read_model_description(folder)
         self.errors_logged = 0
@@ -352,6 +357,8 @@ class Driver:
         r2 = self.rng.random()
         if r2 < 0.06:
             h = self.rng.choice([0.0, -1e-3, math.nan, math.inf])
+        elif r2 < 0.07:  # finite and huge: a controller's sample count overflowed (1e20) or ran 250 s (1e6)
+            h = self.rng.choice([1e20, 1e6, 2.5e3])
         elif r2 < 0.09:
             t = t - 1e-3  # backwards
         elif r2 < 0.12:
@@ -640,12 +647,13 @@ def _quiet_callbacks(on_message):
     return callbacks
 
 
-def _foreign_blob(interface: str, folders: dict[str, str]) -> tuple[bytes, object, object]:
+def _foreign_blob(interface: str, folders: dict[str, str], peer: str | None = None) -> tuple[bytes, object, object]:
     """A serialised state of another interface (FMI 2 CS for ME and FMI 3, FMI 2 ME for CS), and for
-    FMI 2 an FMU state pointer of the other interface (the same binary) with its instance."""
-    folder = folders["fmi2"]
+    FMI 2 an FMU state pointer of the other interface (the same binary) with its instance; with ``peer`` (an
+    extracted FMI 2 FMU: for a controller FMU, which has no model exchange) that FMU's co-simulation state."""
+    folder = peer or folders["fmi2"]
     md = fmpy.read_model_description(folder)
-    cls = FMU2Model if interface == "cs2" else FMU2Slave
+    cls = FMU2Model if interface == "cs2" and peer is None else FMU2Slave
     peer = cls(guid=md.guid, unzipDirectory=folder, modelIdentifier=md.coSimulation.modelIdentifier,
                instanceName="peer")
     peer.instantiate(callbacks=_quiet_callbacks(lambda: None))
@@ -656,11 +664,14 @@ def _foreign_blob(interface: str, folders: dict[str, str]) -> tuple[bytes, objec
     return bytes(peer.serializeFMUstate(state)), state, peer
 
 
-def run(folders: dict[str, str], first_seed: int, n_seeds: int, length: int, interfaces: list[str]) -> dict:
+def run(folders: dict[str, str], first_seed: int, n_seeds: int, length: int, interfaces: list[str], *,
+        peer: str | None = None, sample_s: float | None = None) -> dict:
+    """Random sequences on the FMUs in ``folders`` ("fmi2", "fmi3"): the plant's, or a controller's with its
+    ``sample_s`` and a ``peer`` FMU for foreign states."""
     variables = {"cs2": Variables.read(folders["fmi2"], folders["fmi3"]),
                  "me2": Variables.read(folders["fmi2"], folders["fmi3"]),
                  "cs3": Variables.read(folders["fmi3"], folders["fmi2"])}
-    peers = {i: _foreign_blob(i, folders) for i in interfaces}
+    peers = {i: _foreign_blob(i, folders, peer) for i in interfaces}
     summary = {"sequences": 0, "calls": 0, "ok": 0, "error": 0, "mismatches": [],
                "seeds": [first_seed, first_seed + n_seeds - 1], "interfaces": interfaces, "length": length,
                "by_interface": {}, "by_state": {}}
@@ -671,7 +682,7 @@ def run(folders: dict[str, str], first_seed: int, n_seeds: int, length: int, int
             rng = random.Random(f"{seed}-{interface}")
             blob, peer_state, _ = peers[interface]
             driver = Driver(interface, folders, variables[interface], rng, blob,
-                            peer_state if interface != "cs3" else None)
+                            peer_state if interface != "cs3" else None, sample_s)
             history = []
             for k in range(length):
                 call, args, expected, got = driver.one()
@@ -710,8 +721,11 @@ def main(argv: list[str]) -> int:
     parser.add_argument("n_seeds", type=int)
     parser.add_argument("--length", type=int, default=40)
     parser.add_argument("--interfaces", default="cs2,me2,cs3")
+    parser.add_argument("--peer", help="an extracted FMI 2 FMU whose states are the foreign ones (a controller's)")
+    parser.add_argument("--sample-s", type=float, help="a controller FMU's sample time [s]")
     a = parser.parse_args(argv)
-    summary = run({"fmi2": a.fmi2, "fmi3": a.fmi3}, a.first_seed, a.n_seeds, a.length, a.interfaces.split(","))
+    summary = run({"fmi2": a.fmi2, "fmi3": a.fmi3}, a.first_seed, a.n_seeds, a.length, a.interfaces.split(","),
+                  peer=a.peer, sample_s=a.sample_s)
     print(json.dumps(summary))
     return 0
 
