@@ -57,8 +57,9 @@ def _print_modes(result: StructureModes) -> None:
         print(f"{i + 1:4d} {hz_text(f, decimals=4):>13s}  {lab}")
     p = result.mass_properties
     j = np.diag(p.inertia_about_reference_kgm2)
+    about = f"grid {p.reference_grid}" if p.reference_grid is not None else "the basic origin"
     print(f"mass {p.mass_kg:.4f} kg, centre of mass {np.round(p.center_of_mass_m, 5).tolist()} m, inertia about "
-          f"grid {p.reference_grid}: Jxx {j[0]:.4f}, Jyy {j[1]:.4f}, Jzz {j[2]:.4f} kg m^2")
+          f"{about}: Jxx {j[0]:.4f}, Jyy {j[1]:.4f}, Jzz {j[2]:.4f} kg m^2")
 
 
 def cmd_modes(args: argparse.Namespace) -> int:

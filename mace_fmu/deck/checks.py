@@ -38,7 +38,7 @@ def check_deck(deck: Deck) -> None:
         The first problem found, at the card that has it.
     """
     frames = coordinate_frames(deck)
-    grid, coord = ("grid", "a GRID ID"), ("coordinate system", "0 or a CORD2R ID")
+    grid, coord = ("grid", "a GRID ID"), ("coordinate system", "0 or a CORD2R or CORD1R ID")
     for g in deck.grids.values():
         _need(g.cp, frames, g, f"GRID {g.id}", "field 3 (CP)", *coord)
         _need(g.cd, frames, g, f"GRID {g.id}", "field 7 (CD)", *coord)
@@ -107,7 +107,7 @@ def _check_new_elements(deck: Deck, grid: tuple[str, str]) -> None:
     for m in deck.conm1s.values():
         _need(m.grid, deck.grids, m, f"CONM1 {m.id}", "field 3 (G)", *grid)
         _need(m.cid if m.cid > 0 else None, coordinate_frames(deck), m, f"CONM1 {m.id}", "field 4 (CID)",
-              "coordinate system", "0 or a CORD2R ID")
+              "coordinate system", "0 or a CORD2R or CORD1R ID")
     for r in deck.rigids.values():
         _need(r.independent, deck.grids, r, f"{r.card} {r.id}", "independent grid", *grid)
         for k, (g, _) in enumerate(r.dependent, start=1):

@@ -97,7 +97,7 @@ def case_control(lines: Lines, file: str) -> tuple[Subcase, dict[int, Subcase], 
     for number, text in lines:
         code = _code(text)
         label = f"SUBCASE {current}" if current else "global case control"
-        if m := re.match(r"SUBCASE\b\s*(.*)", code, re.I):
+        if m := re.match(r"SUBCASE\b\s*=?\s*(.*)", code, re.I):  # "SUBCASE = 1": MSC.NASTRAN 2006 took it
             sid = parse_int(m.group(1))
             if sid is None or sid < 1:
                 raise DeckError(f"expected a positive subcase ID, got {m.group(1)!r}", file=file, line=number,
@@ -169,7 +169,8 @@ def split_cards(lines: Iterable[tuple[int, str]], file: str) -> list[RawCard]:
             raise DeckError(f"continuation line {head or '(blank field 1)'!r} has no card before it "
                             "(expected a card name in field 1)", file=file, line=number)
         large = head.startswith("*") if continuation else head.endswith("*")
-        card = cards[-1] if continuation else RawCard(head.rstrip("*").upper(), number)
+        # "GRID   *": NASTRAN's own punch files put the large-field '*' at the end of field 1
+        card = cards[-1] if continuation else RawCard(head.rstrip("*").strip().upper(), number)
         capacity = 4 if large else 8
         if not large and len(card.fields) % 8:
             raise DeckError("small-field continuation after an odd number of large-field lines (expected a '*' "

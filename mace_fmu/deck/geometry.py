@@ -48,7 +48,7 @@ def _cord1r_frame(card: Cord1R, frames: dict[int, Frame], deck: Deck) -> Frame |
                             field=f"field {card.field + k} ({name})")
         if grid.cp not in frames:
             if grid.cp not in deck.coords:
-                raise DeckError(f"coordinate system {grid.cp} is not defined (expected 0 or a CORD2R ID)",
+                raise DeckError(f"coordinate system {grid.cp} is not defined (expected 0 or a CORD2R or CORD1R ID)",
                                 file=grid.source.file, line=grid.source.line, card=f"GRID {grid.id}",
                                 field="field 3 (CP)")
             return None
@@ -106,7 +106,7 @@ def _unresolved(deck: Deck, waiting: list[int]) -> None:
             cid = deck.coords[cid].rid  # type: ignore[union-attr]
         if cid not in deck.coords and cid != 0:
             src = deck.coords[chain[-1]].source
-            raise DeckError(f"coordinate system {cid} is not defined (expected 0 or a CORD2R ID)",
+            raise DeckError(f"coordinate system {cid} is not defined (expected 0 or a CORD2R or CORD1R ID)",
                             file=src.file, line=src.line, card=f"CORD2R {chain[-1]}", field="field 3 (RID)")
     card = next(deck.coords[c] for c in waiting if isinstance(deck.coords[c], Cord1R))
     raise DeckError("the grids G1, G2, G3 are given in coordinate systems that depend on this one (expected grids "

@@ -312,3 +312,14 @@ def test_a_parameter_set_with_a_name_the_deck_lacks_names_its_file(capsys, tmp_p
     (tmp_path / "bad.toml").write_text("[values]\nE_foo = 2e9\n")
     code, _, err = _run(capsys, ["model", "0g", "--parameters", str(tmp_path / "bad.toml")])
     assert code == 2 and err.startswith(f"mace-fmu: error: {tmp_path / 'bad.toml'}: parameter 'E_foo': no such material")
+
+
+def test_mass_properties_of_a_deck_without_grdpnt_are_about_the_basic_origin(capsys, tmp_path):
+    """No PARAM,GRDPNT: the inertia is about the basic origin, and the line says so (it said "grid None")."""
+    from support.decks import deck_text, line_of_bars
+
+    deck = tmp_path / "beam.bdf"
+    deck.write_text(deck_text(line_of_bars(n=4, length=1.0, e=7e10, nu=0.3, rho=2700.0, area=1e-4, i=1e-8)
+                              + ["SPC1,1,123456,1", "EIGRL,1,,,3"], case="SPC = 1\nMETHOD = 1\n"))
+    code, out, _ = _run(capsys, ["modes", "0g", "--deck", str(deck)])
+    assert code == 0 and "inertia about the basic origin: Jxx" in out and "grid None" not in out

@@ -92,7 +92,7 @@ BROKEN = [
                  "property 7 is not defined (expected a PBAR ID)", id="missing-pbar"),
     pytest.param(base(sf("PBAR", 2, 9, "1.0")), 6, "PBAR 2", "material 9 is not defined (expected a MAT1 ID)",
                  id="missing-mat1"),
-    pytest.param(base(sf("GRID", 3, 5, "1.0")), 6, "GRID 3", "field 3 (CP): coordinate system 5 is not defined",
+    pytest.param(base(sf("GRID", 3, 5, "1.0")), 6, "GRID 3", "field 3 (CP): coordinate system 5 is not defined (expected 0 or a CORD2R or CORD1R ID)",
                  id="missing-cp"),
     pytest.param(base(sf("GRID", 3, "", "1.0", "", "", 6)), 6, "GRID 3",
                  "field 7 (CD): coordinate system 6 is not defined", id="missing-cd"),

@@ -71,6 +71,21 @@ def test_large_field_grid_with_star_continuation() -> None:
     assert d.grids[6].source.line == 3
 
 
+def test_large_field_name_with_blanks_before_the_star_as_nastran_punches_it() -> None:
+    """``GRID   *`` (models/aero/cpmopt.pch of pyNastran, written by NASTRAN): the same card as ``GRID*``."""
+    d = deck("GRID   *               5               0            1.25            -2.5",
+             "*                   3.75               0")
+    assert d.grids[5].xyz == (1.25, -2.5, 3.75)
+
+
+def test_case_control_subcase_with_an_equals_sign() -> None:
+    """``SUBCASE=1`` (MSC.NASTRAN 2006 accepted it; modele_petite_zone.dat of pyNastran's models)."""
+    text = "SOL 103\nCEND\nMETHOD = 1\nSUBCASE=1\n  SPC = 7\nSUBCASE = 2\n  SPC = 7\nBEGIN BULK\n" + "\n".join(
+        [sf("GRID", 1), sf("SPC1", 7, 123456, 1), sf("EIGRL", 1, "", "", 5)]) + "\nENDDATA\n"
+    d = read_deck_text(text, name="petite.dat")
+    assert sorted(d.subcases) == [1, 2] and d.subcases[1].spc == 7
+
+
 def test_free_field_with_continuations() -> None:
     d = deck("GRID,1,,0.0,0.0,0.0", "GRID,2,,1.0,0.0,0.0", "grid,3,,0.0,1.0,0.0",
              "CONM2,20,1,,2.5,0.1,,,,+C1",
