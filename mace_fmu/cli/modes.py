@@ -39,6 +39,8 @@ def _modes_json(result: StructureModes) -> dict:
 
 
 def _print_modes(result: StructureModes) -> None:
+    from mace_fmu.structure.file import deck_units
+
     pre = f", {result.preload.kind} preload" if result.preload else ""
     print(f"{result.structure.configuration} modes of {result.structure.deck.path}{pre}")
     file = result.structure.file
@@ -58,8 +60,10 @@ def _print_modes(result: StructureModes) -> None:
     p = result.mass_properties
     j = np.diag(p.inertia_about_reference_kgm2)
     about = f"grid {p.reference_grid}" if p.reference_grid is not None else "the basic origin"
-    print(f"mass {p.mass_kg:.4f} kg, centre of mass {np.round(p.center_of_mass_m, 5).tolist()} m, inertia about "
-          f"{about}: Jxx {j[0]:.4f}, Jyy {j[1]:.4f}, Jzz {j[2]:.4f} kg m^2")
+    mass, length = deck_units(result.structure.deck, result.structure.file)
+    inertia = f"{mass} {length}^2" if not mass.startswith("(") else "(mass x length^2 in the deck's units)"
+    print(f"mass {p.mass_kg:.4f} {mass}, centre of mass {np.round(p.center_of_mass_m, 5).tolist()} {length}, inertia "
+          f"about {about}: Jxx {j[0]:.4f}, Jyy {j[1]:.4f}, Jzz {j[2]:.4f} {inertia}")
 
 
 def cmd_modes(args: argparse.Namespace) -> int:

@@ -437,3 +437,6 @@ class Deck:
     interpolations: Mapping[int, Interpolation] = field(default_factory=dict)  #: RBE3 (always in force)
     eigrs: Mapping[int, Eigr] = field(default_factory=dict)  #: EIGR by set ID
     conm1s: Mapping[int, Conm1] = field(default_factory=dict)  #: CONM1 by element ID
+    #: the set IDs of the static loads the deck defines (FORCE, MOMENT, PLOAD...; read past, as they change neither
+    #: mass nor stiffness) -> their card names: a LOAD selection may name one, and a 1-g preload refuses it
+    static_loads: Mapping[int, tuple[str, ...]] = field(default_factory=dict)

@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 
 from mace_fmu.deck.cards import CBeam, Deck, Mpc
-from mace_fmu.deck.fields import Selections
+from mace_fmu.deck.fields import TEMPERATURE, Selections
 from mace_fmu.deck.geometry import bar_orientation, coordinate_frames, grid_positions
 from mace_fmu.errors import DeckError
 
@@ -68,7 +68,8 @@ def check_deck(deck: Deck) -> None:
         _need(gr.cid, frames, gr, f"GRAV {gr.sid}", "field 3 (CID)", *coord)
     for ld in deck.loads.values():
         for k, (_, lset) in enumerate(ld.terms, start=1):
-            _need(lset, deck.gravs, ld, f"LOAD {ld.sid}", f"L{k}", "load set", "a GRAV SID")
+            _need(lset, {**deck.static_loads, **deck.gravs}, ld, f"LOAD {ld.sid}", f"L{k}", "load set",
+                  "a GRAV, FORCE, MOMENT or PLOAD SID")
     if (grdpnt := deck.params.get("GRDPNT")) is not None:
         value = grdpnt.values[0]
         if not isinstance(value, int) or value < -1:
@@ -169,7 +170,8 @@ def _check_bars(deck: Deck, frames: dict) -> None:
 
 
 _TARGETS = {"SPC": (("spc1s",), "an SPC1 set ID"), "MPC": (("mpcs",), "an MPC set ID"),
-            "LOAD": (("loads", "gravs"), "a LOAD or GRAV set ID"), "NLPARM": (("nlparms",), "an NLPARM ID"),
+            "LOAD": (("loads", "gravs", "static_loads"), "a LOAD, GRAV, FORCE, MOMENT or PLOAD set ID"),
+            "NLPARM": (("nlparms",), "an NLPARM ID"),
             "METHOD": (("eigrls", "eigrs"), "an EIGRL or EIGR set ID")}
 
 
@@ -189,7 +191,14 @@ def check_selections(deck: Deck, selections: Selections) -> None:
         A selected SPC, MPC, LOAD, NLPARM or METHOD set that the bulk data does not define.
     """
     cases = list(deck.subcases) or ([0] if deck.global_case is not None else [])
+    dependent = [(n, where) for n, _, where in deck.skipped if n == "MATT1"]
     for cid in cases:
+        if TEMPERATURE in selections[cid] and dependent:
+            value, line = selections[cid][TEMPERATURE]
+            raise DeckError(f"material temperatures {value} are selected, and MATT1 (first at {dependent[0][1]}) makes "
+                            "a material depend on them: mace-fmu models temperature-independent materials (expected "
+                            "no TEMP(MATERIAL) or TEMP(BOTH) selection, or no MATT1)", file=deck.path, line=line,
+                            card=f"SUBCASE {cid}" if cid else "global case control", field="TEMP")
         for key, (value, line) in selections[cid].items():
             if key in _TARGETS and not any(value in getattr(deck, t) for t in _TARGETS[key][0]):
                 raise DeckError(f"{key} set {value} is not defined (expected {_TARGETS[key][1]})", file=deck.path,

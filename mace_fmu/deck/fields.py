@@ -86,6 +86,8 @@ def split_sections(lines: Lines, file: str) -> tuple[Lines | None, Lines]:
 
 
 SELECTIONS = ("SPC", "MPC", "LOAD", "NLPARM", "METHOD")
+#: the selections key of a case control's material temperature set (TEMP(MATERIAL) or TEMP(BOTH))
+TEMPERATURE = "TEMP(MATERIAL)"
 Selections = dict[int, dict[str, tuple[Any, int]]]  #: case ID -> key -> (value, line written)
 
 
@@ -110,6 +112,11 @@ def case_control(lines: Lines, file: str) -> tuple[Subcase, dict[int, Subcase], 
         elif m := re.match(r"(SUBCOM|SUBSEQ|SYMCOM|SYMSEQ|SYM|REPCASE)\b", code, re.I):
             raise DeckError(f"{m.group(1).upper()} is not supported by mace-fmu (expected SUBCASE)",
                             file=file, line=number, card=label)
+        elif m := re.fullmatch(r"TEMP(?:ERATURE)?\s*(?:\(\s*([A-Za-z]+)\s*\))?\s*=\s*(.*)", code, re.I):
+            # which temperatures set the materials (MATERIAL or BOTH, the default): the deck's check refuses
+            # them where a MATT1 would make its material depend on them
+            if (m.group(1) or "BOTH").upper() in ("MATERIAL", "BOTH"):
+                blocks[current][1][TEMPERATURE] = (m.group(2).strip(), number)
         elif (m := re.fullmatch(r"([A-Za-z]+)\s*=\s*(.*)", code)) and m.group(1).upper() in (*SELECTIONS, "LABEL"):
             key, raw = m.group(1).upper(), m.group(2).strip()
             value: Any = raw if key == "LABEL" else parse_int(raw)

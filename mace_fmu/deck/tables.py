@@ -24,6 +24,9 @@ __all__ = ["CARD_TABLES", "NON_STRUCTURAL", "bulk_tables"]
 
 #: cards that change neither mass nor stiffness (loads, frequencies, output sets, aerodynamics, ...): read
 #: past and reported, never an error; any other card we cannot model is one
+#: static loads, whose set a case control's LOAD (or a LOAD card) may select: read past, named in messages
+STATIC_LOADS = frozenset({"FORCE", "FORCE1", "FORCE2", "MOMENT", "MOMENT1", "MOMENT2", "PLOAD", "PLOAD1", "PLOAD2",
+                          "PLOAD4"})
 NON_STRUCTURAL = frozenset({
     "USET", "USET1", "FORCE", "FORCE1", "FORCE2", "MOMENT", "MOMENT1", "MOMENT2", "PLOAD", "PLOAD1", "PLOAD2",
     "PLOAD4", "TEMP", "TEMPD", "DAREA", "DLOAD", "RLOAD1", "RLOAD2", "TLOAD1", "TLOAD2", "TABLED1", "TABLED2",
@@ -37,6 +40,9 @@ NON_STRUCTURAL = frozenset({
     "SUPORT", "SUPORT1",
     # gust, random-response and monitor-point data of the aeroelastic solutions
     "GUST", "TABRND1", "MONPNT1", "MONPNT3",
+    # a material's temperature dependence (MATT1 with its TABLEM1 tables) acts only where the case control
+    # selects material temperatures, which the deck's check refuses beside a MATT1; a DTI is a table
+    "MATT1", "TABLEM1", "DTI",
 })
 
 
@@ -78,16 +84,7 @@ def bulk_tables(raw_cards: list[RawCard], file: str) -> tuple[dict[str, dict], t
         if raw.name not in PARSERS:
             (skipped if raw.name in NON_STRUCTURAL else unknown).setdefault(raw.name, []).append(raw)
     if unknown:  # every card we cannot model, once each: card, count, first line
-        (name, first), *_ = sorted(((n, rs[0]) for n, rs in unknown.items()), key=lambda t: (t[1].file, t[1].line))
-        if len(unknown) == 1 and len(unknown[name]) == 1:
-            message = f"unknown card {name!r} (supported: {', '.join(sorted(PARSERS))})"
-        else:
-            listed = ", ".join(f"{n} ({len(rs)}x, first at {rs[0].file or file}:{rs[0].line})"
-                               for n, rs in sorted(unknown.items(), key=lambda t: (t[1][0].file, t[1][0].line)))
-            message = (f"cards this reader cannot model: {listed} (supported: {', '.join(sorted(PARSERS))}; "
-                       f"read past without a word, as changing neither mass nor stiffness: "
-                       f"{', '.join(sorted(NON_STRUCTURAL))})")
-        raise DeckError(message, file=first.file or file, line=first.line, card=name)
+        raise _unknown_cards(unknown, file)
     grdsets = [raw for raw in raw_cards if raw.name == "GRDSET"]
     if len(grdsets) > 1:
         raise DeckError(f"GRDSET defined twice: line {grdsets[0].line} and line {grdsets[1].line} (expected at most "
@@ -151,8 +148,46 @@ def bulk_tables(raw_cards: list[RawCard], file: str) -> tuple[dict[str, dict], t
         tables["celas2s"][eid] = Celas2(id=eid, k=pelas[pid][0], g1=g1, c1=c1, g2=g2, c2=c2, source=src)
     _union_sets(sets, unions)
     report = tuple((n, len(rs), f"{rs[0].file or file}:{rs[0].line}") for n, rs in sorted(skipped.items()))
-    return {**tables, **{name: {sid: tuple(cards) for sid, cards in group.items()} for name, group in sets.items()}}, \
-        report
+    return {**tables, **{name: {sid: tuple(cards) for sid, cards in group.items()} for name, group in sets.items()},
+            "static_loads": _static_load_sets(skipped)}, report
+
+
+#: unknown card names a refusal lists before "and N more" (a deck of foreign elements has dozens)
+_LISTED = 6
+
+
+def _unknown_cards(unknown: dict[str, list], file: str) -> DeckError:
+    """One refusal for every card the reader cannot model: each name once, with its count and first line, in a
+    few lines; NASTRAN's replication lines ('=', '==', '*...') named as what they are."""
+    ordered = sorted(unknown.items(), key=lambda t: (t[1][0].file or file, t[1][0].line))
+    name, first = ordered[0][0], ordered[0][1][0]
+    replication = [n for n, _ in ordered if n.startswith("=")]
+    if replication:
+        rs = unknown[replication[0]]
+        return DeckError(f"a replication line {replication[0]!r} ({sum(len(unknown[n]) for n in replication)} in all; "
+                         "NASTRAN's '=' and '==' shorthand for repeated cards): mace-fmu reads each card written out "
+                         "(expected the cards in full, as NASTRAN's bulk-data echo prints them)",
+                         file=rs[0].file or file, line=rs[0].line, card=replication[0])
+    supported = ", ".join(sorted(PARSERS))
+    if len(unknown) == 1 and len(unknown[name]) == 1:
+        return DeckError(f"unknown card {name!r} (supported: {supported})", file=first.file or file,
+                         line=first.line, card=name)
+    listed = ", ".join(f"{n} ({len(rs)}x, first at {rs[0].file or file}:{rs[0].line})" for n, rs in ordered[:_LISTED])
+    more = f" and {len(ordered) - _LISTED} more" if len(ordered) > _LISTED else ""
+    return DeckError(f"cards this reader cannot model: {listed}{more} (supported: {supported}; cards that change "
+                     "neither mass nor stiffness, such as loads and aerodynamic data, are read past)",
+                     file=first.file or file, line=first.line, card=name)
+
+
+def _static_load_sets(skipped: dict[str, list]) -> dict[int, tuple[str, ...]]:
+    """Set ID -> names of the static-load cards read past (their SID is field 2), for LOAD selections."""
+    out: dict[int, set[str]] = {}
+    for name in STATIC_LOADS & set(skipped):
+        for raw in skipped[name]:
+            sid = raw.fields[0].strip() if raw.fields else ""
+            if sid.isdigit():
+                out.setdefault(int(sid), set()).add(name)
+    return {sid: tuple(sorted(names)) for sid, names in sorted(out.items())}
 
 
 def _store(raw: Any, card: Any, tables: dict, elements: dict, file: str) -> None:

@@ -108,7 +108,9 @@ def gravity_load(deck: Deck, model: FEModel, load_id: int) -> np.ndarray:
     accel = np.zeros(3)
     for scale, sid in terms:
         if sid not in deck.gravs:
-            raise MaceError(f"load set {load_id}: set {sid} is not a GRAV card (only gravity loads are supported)")
+            what = f"a {' and '.join(deck.static_loads[sid])} set" if sid in deck.static_loads else "not a GRAV card"
+            raise MaceError(f"load set {load_id}: set {sid} is {what}; the 1-g preload takes gravity loads only (GRAV), "
+                            "and the 0-g modes take no load")
         grav = deck.gravs[sid]
         accel += scale * grav.scale * (frames[grav.cid][1] @ np.array(grav.direction))
     field = np.zeros((len(model.positions), 6))

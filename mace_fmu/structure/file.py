@@ -40,6 +40,8 @@ STRUCTURE_FILE_TABLES = {
     "damping": "modal damping table",
     "parameters": "names of the MAT1 and CELAS2 cards an update may change",
     "labels": "rules = \"generic\" (default: by strain-energy family) or \"mace\" (MACE's bus, cable and gimbal names)",
+    "units": "mass = \"kg\", length = \"m\": the units the deck is written in, for printed labels (nothing is "
+             "converted)",
 }
 
 
@@ -232,6 +234,17 @@ def _bundled_deck_sha256() -> str:
 def _file_sha256(path: str, mtime_ns: int, size: int) -> str:
     del mtime_ns, size
     return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+def deck_units(deck: Deck, file: "StructureFile | None") -> tuple[str, str]:
+    """(mass, length) unit labels of a deck: its structure file's ``[units]``, kg and m for the bundled deck, else
+    words that say they are the deck's own (a deck states no units: NASTRAN takes whatever it is written in)."""
+    units = dict(file.tables.get("units", {})) if file is not None else {}
+    unknown = sorted(set(units) - {"mass", "length"})
+    if unknown:
+        raise MaceError(f"{file.path}: [units] has unknown key(s) {unknown} (expected mass and length)")
+    default = ("kg", "m") if is_bundled_deck(deck) else ("(the deck's mass unit)", "(the deck's length unit)")
+    return str(units.get("mass", default[0])), str(units.get("length", default[1]))
 
 
 def is_bundled_deck(deck: Deck) -> bool:

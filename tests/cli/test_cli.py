@@ -323,3 +323,11 @@ def test_mass_properties_of_a_deck_without_grdpnt_are_about_the_basic_origin(cap
                               + ["SPC1,1,123456,1", "EIGRL,1,,,3"], case="SPC = 1\nMETHOD = 1\n"))
     code, out, _ = _run(capsys, ["modes", "0g", "--deck", str(deck)])
     assert code == 0 and "inertia about the basic origin: Jxx" in out and "grid None" not in out
+    # a deck states no units: its own words, not kg, unless its structure file says which
+    assert "mass 0.2700 (the deck's mass unit), centre of mass [0.5, 0.0, 0.0] (the deck's length unit)" in out
+    spec = tmp_path / "beam.toml"
+    spec.write_text('[units]\nmass = "lbf s^2/in"\nlength = "in"\n')
+    code, out, _ = _run(capsys, ["modes", "0g", "--deck", str(deck), "--structure", str(spec)])
+    assert code == 0 and "mass 0.2700 lbf s^2/in, centre of mass [0.5, 0.0, 0.0] in," in out and "lbf s^2/in in^2" in out
+    code, out, _ = _run(capsys, ["modes", "0g"])
+    assert "kg, centre of mass" in out and "kg m^2" in out  # the bundled MACE deck is SI

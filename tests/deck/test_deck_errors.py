@@ -109,7 +109,7 @@ BROKEN = [
     pytest.param(base(sf("GRAV", 1, 3, "9.81", "0.0", "0.0", "-1.0")), 6, "GRAV 1",
                  "coordinate system 3 is not defined", id="missing-grav-cid"),
     pytest.param(base(sf("GRAV", 1, "", "9.81", "0.0", "0.0", "-1.0"), sf("LOAD", 100, "1.0", "1.0", 1, "1.0", 5)),
-                 7, "LOAD 100", "load set 5 is not defined (expected a GRAV SID)", id="load-missing-grav"),
+                 7, "LOAD 100", "load set 5 is not defined (expected a GRAV, FORCE, MOMENT or PLOAD SID)", id="load-missing-grav"),
     # --- coordinate systems
     pytest.param(base(sf("CORD2R", 1, 2, "0.0", "0.0", "0.0", "0.0", "0.0", "1.0"), CORD_LINE2,
                       sf("CORD2R", 2, 1, "0.0", "0.0", "0.0", "0.0", "0.0", "1.0"), CORD_LINE2),

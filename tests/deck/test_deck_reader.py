@@ -86,6 +86,63 @@ def test_case_control_subcase_with_an_equals_sign() -> None:
     assert sorted(d.subcases) == [1, 2] and d.subcases[1].spc == 7
 
 
+def test_a_load_selection_of_a_static_load_set_is_read_and_the_1g_preload_refuses_it() -> None:
+    """``LOAD = 7`` naming a FORCE set directly, or a LOAD card combining one (NASTRAN runs both:
+    models/frame_three_bars/bar1.dat of pyNastran): the 0-g modes take no load; the 1-g preload, which takes
+    gravity only, says which set it met."""
+    from mace_fmu.errors import MaceError
+    from mace_fmu.fe.modes import compute_modes
+
+    bulk = [sf("GRID", 1), sf("GRID", 2, "", "1.0"), sf("MAT1", 1, "7.0+10", "", "0.3", "2700.0"),
+            sf("PBAR", 1, 1, "1.0-4", "1.0-8", "1.0-8", "2.0-8"), sf("CBAR", 1, 1, 1, 2, "0.0", "0.0", "1.0"),
+            sf("SPC1", 1, 123456, 1), sf("EIGRL", 1, "", "", 3), sf("FORCE", 7, 2, "", "10.0", "0.0", "0.0", "-1.0"),
+            sf("LOAD", 8, "1.0", "2.0", 7)]
+    for load in (7, 8):
+        d = read_deck_text(f"SOL 103\nCEND\nSPC = 1\nMETHOD = 1\nLOAD = {load}\nBEGIN BULK\n" + "\n".join(bulk)
+                           + "\nENDDATA\n", name="bar1.dat")
+        assert d.static_loads == {7: ("FORCE",)}
+        assert compute_modes(d, configuration="0g").frequencies_hz[0] > 0
+        with pytest.raises(MaceError, match=f"load set {load}: set 7 is a FORCE set; the 1-g preload takes gravity "
+                                            "loads only"):
+            compute_modes(d, configuration="1g")
+
+
+@pytest.mark.parametrize("selection, refused", [("", False), ("TEMP(LOAD) = 3", False),
+                                                ("TEMP(MATERIAL) = 3", True), ("TEMPERATURE = 3", True)])
+def test_matt1_tablem1_and_dti_are_read_past_unless_the_materials_temperatures_are_selected(selection, refused):
+    """MATT1, TABLEM1 and DTI (satk/pn_mwe_s-solution_1.dat of pyNastran's models): they change nothing unless the
+    case control selects material temperatures (TEMP(MATERIAL), or TEMP(BOTH) as a plain TEMP means)."""
+    bulk = [sf("GRID", 1), sf("GRID", 2, "", "1.0"), sf("MAT1", 1, "7.0+10", "", "0.3", "2700.0"),
+            sf("MATT1", 1, 5), sf("TABLEM1", 5), ",20.0,1.0,100.0,0.9,ENDT",
+            sf("DTI", "UNITS", 1, "KG", "N", "S", "M"),
+            sf("PBAR", 1, 1, "1.0-4", "1.0-8", "1.0-8", "2.0-8"), sf("CBAR", 1, 1, 1, 2, "0.0", "0.0", "1.0"),
+            sf("SPC1", 1, 123456, 1), sf("EIGRL", 1, "", "", 3)]
+    text = (f"SOL 103\nCEND\nSPC = 1\nMETHOD = 1\n{selection}\nBEGIN BULK\n" + "\n".join(bulk)
+            + "\nENDDATA\n")
+    if refused:
+        with pytest.raises(DeckError, match=r"pn_mwe.dat:5: global case control, TEMP: material temperatures 3 are "
+                                            r"selected, and MATT1 \(first at pn_mwe.dat:\d+\) makes a material"):
+            read_deck_text(text, name="pn_mwe.dat")
+    else:
+        d = read_deck_text(text, name="pn_mwe.dat")
+        assert {name for name, *_ in d.skipped} >= {"MATT1", "TABLEM1", "DTI"}
+
+
+def test_replication_lines_are_named_as_such_and_a_refusal_stays_short() -> None:
+    """NASTRAN's ``=`` / ``==`` shorthand was listed as an unknown card; a deck of many foreign elements gave a
+    refusal of 1.5 kB. Now: the shorthand by name, and at most six cards listed before "and N more"."""
+    head = "BEGIN BULK\nGRID,1,,0.,0.,0.\nGRID,2,,1.,0.,0.\n"
+    with pytest.raises(DeckError, match=r"x.bdf:4: =: a replication line '=' \(2 in all; NASTRAN's '=' and '==' "):
+        read_deck_text(head + "=,*1,,=,=\n=,*1,,=,=\nENDDATA\n", name="x.bdf")
+    foreign = "".join(f"{name},{k},1,1,2\n" for k, name in enumerate(
+        ("CQUAD4", "CTRIA3", "CHEXA", "CPENTA", "CTETRA", "CSHEAR", "CBUSH", "CGAP", "CVISC", "CDAMP1"), start=1))
+    with pytest.raises(DeckError) as refused:
+        read_deck_text(head + foreign + "ENDDATA\n", name="x.bdf")
+    text = str(refused.value)
+    assert "CSHEAR (1x, first at x.bdf:9) and 4 more (supported: CBAR" in text and "CBUSH" not in text
+    assert len(text) < 700
+
+
 def test_free_field_with_continuations() -> None:
     d = deck("GRID,1,,0.0,0.0,0.0", "GRID,2,,1.0,0.0,0.0", "grid,3,,0.0,1.0,0.0",
              "CONM2,20,1,,2.5,0.1,,,,+C1",
