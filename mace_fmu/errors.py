@@ -16,12 +16,14 @@ class DeckError(MaceError):
     """
 
     def __init__(self, message: str, *, file: str, line: int, card: str | None = None,
-                 field: str | None = None) -> None:
+                 field: str | None = None, details: tuple[str, ...] = ()) -> None:
         self.message = message
         self.file = str(file)
         self.line = line
         self.card = card  #: card name and ID when known, e.g. "CBAR 41"
         self.field = field  #: field position and name, e.g. "field 5 (GB)"
+        #: the whole story behind a message that had to be short, one line each (the CLI shows it with --verbose)
+        self.details = tuple(details)
         super().__init__(str(self))
 
     def __str__(self) -> str:
@@ -32,8 +34,9 @@ class DeckError(MaceError):
         return " ".join(text.splitlines())
 
     def __reduce__(self):  # keep keyword-only arguments picklable (multiprocessing, pytest-xdist)
-        return (_rebuild, (self.message, self.file, self.line, self.card, self.field))
+        return (_rebuild, (self.message, self.file, self.line, self.card, self.field, self.details))
 
 
-def _rebuild(message: str, file: str, line: int, card: str | None, field: str | None) -> DeckError:
-    return DeckError(message, file=file, line=line, card=card, field=field)
+def _rebuild(message: str, file: str, line: int, card: str | None, field: str | None,
+             details: tuple[str, ...] = ()) -> DeckError:
+    return DeckError(message, file=file, line=line, card=card, field=field, details=details)

@@ -28,6 +28,8 @@ def build_parser() -> argparse.ArgumentParser:
     """
     parser = argparse.ArgumentParser(prog="mace-fmu", description="Finite-element deck of the MACE structure to "
                                      "validated input-output models and FMUs.")
+    parser.add_argument("--verbose", action="store_true", help="with an error whose message had to be short (a "
+                        "deck's unknown cards), the whole list")
     sub = parser.add_subparsers(dest="command", required=True)
     for command in COMMANDS:
         command.register(sub)
@@ -59,6 +61,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         return args.func(args)
     except MaceError as exc:
         print(f"mace-fmu: error: {exc}", file=sys.stderr)
+        details = getattr(exc, "details", ())
+        if details and args.verbose:
+            print("\n".join(f"  {line}" for line in details), file=sys.stderr)
+        elif details:
+            print(f"  ({len(details)} lines more with mace-fmu --verbose ...)", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("mace-fmu: interrupted", file=sys.stderr)

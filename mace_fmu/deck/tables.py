@@ -172,11 +172,15 @@ def _unknown_cards(unknown: dict[str, list], file: str) -> DeckError:
     if len(unknown) == 1 and len(unknown[name]) == 1:
         return DeckError(f"unknown card {name!r} (supported: {supported})", file=first.file or file,
                          line=first.line, card=name)
-    listed = ", ".join(f"{n} ({len(rs)}x, first at {rs[0].file or file}:{rs[0].line})" for n, rs in ordered[:_LISTED])
+    def at(raw) -> str:  # the deck's own lines by number; an INCLUDE file's by file and line
+        return f"line {raw.line}" if (raw.file or file) == file else f"{raw.file}:{raw.line}"
+
+    listed = ", ".join(f"{n} ({len(rs)}x, first at {at(rs[0])})" for n, rs in ordered[:_LISTED])
     more = f" and {len(ordered) - _LISTED} more" if len(ordered) > _LISTED else ""
+    every = tuple(f"{n}: {len(rs)} card(s), first at {at(rs[0])}" for n, rs in ordered)
     return DeckError(f"cards this reader cannot model: {listed}{more} (supported: {supported}; cards that change "
                      "neither mass nor stiffness, such as loads and aerodynamic data, are read past)",
-                     file=first.file or file, line=first.line, card=name)
+                     file=first.file or file, line=first.line, card=name, details=every)
 
 
 def _static_load_sets(skipped: dict[str, list]) -> dict[int, tuple[str, ...]]:

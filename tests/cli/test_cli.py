@@ -331,3 +331,15 @@ def test_mass_properties_of_a_deck_without_grdpnt_are_about_the_basic_origin(cap
     assert code == 0 and "mass 0.2700 lbf s^2/in, centre of mass [0.5, 0.0, 0.0] in," in out and "lbf s^2/in in^2" in out
     code, out, _ = _run(capsys, ["modes", "0g"])
     assert "kg, centre of mass" in out and "kg m^2" in out  # the bundled MACE deck is SI
+
+
+def test_a_refusal_of_many_cards_is_short_and_verbose_gives_the_whole_list(capsys, tmp_path):
+    deck = tmp_path / "foreign.bdf"
+    names = ("CQUAD4", "CTRIA3", "CHEXA", "CPENTA", "CTETRA", "CSHEAR", "CBUSH", "CGAP")
+    deck.write_text("BEGIN BULK\nGRID,1,,0.,0.,0.\nGRID,2,,1.,0.,0.\n" + "".join(f"{n},1,1,1,2\n" for n in names)
+                    + "ENDDATA\n")
+    code, _, err = _run(capsys, ["modes", "0g", "--deck", str(deck)])
+    assert code == 2 and "and 2 more" in err and "(8 lines more with mace-fmu --verbose ...)" in err
+    assert len(err) < 800 + len(str(deck)) and "CGAP" not in err
+    code, _, err = _run(capsys, ["--verbose", "modes", "0g", "--deck", str(deck)])
+    assert code == 2 and all(f"  {n}: 1 card(s), first at " in err for n in names)
