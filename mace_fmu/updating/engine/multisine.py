@@ -9,10 +9,13 @@ details make it the continuous-time response a measured FRF is compared with:
 - each held value is the multisine at the middle of its sample, so the held staircase has no half-sample
   delay, and each line's amplitude is divided by sinc(w T / 2), the hold's gain, so that the staircase's
   component at the line is exactly the intended one;
-- the sample time is short against the highest line (``samples_per_cycle``), which leaves only the images
-  of the staircase at 1/T -+ f, folded back by the sampling: a relative error of about f T times the
-  ratio of the high-frequency response (an accelerometer's mass line) to the response at f, small where a
-  resonance is.
+- the direct feedthrough D (an accelerometer's mass line) reads the held value at the sample, half a
+  sample after the multisine's middle: its share of the DFT, D e^(j w T / 2) / sinc(w T / 2), is replaced
+  by D, with D measured by a two-sample pulse. Left are the images of the staircase at 1/T -+ f, folded
+  back by the sampling, second order in f T: against the frame's exact state-space response
+  (tests/updating/engine/test_multisine.py), at 20 samples per cycle of the highest line, 2e-7 at the
+  resonances, 3e-6 in the median and 3.5e-3 at an antiresonance; without the feedthrough's term the
+  error at the resonances was 1.7e-3.
 
 How long the free response takes to die out depends on the model's damping: the run is repeated with
 twice the periods until the last two periods agree (:attr:`MultisineProbe.tolerance`), and the model
