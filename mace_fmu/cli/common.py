@@ -76,37 +76,31 @@ def progress_bar(*, task_lines: bool = False) -> Iterator[ProgressCallback]:
             bar.close()
 
 
+def _checked(text: str, *, convert, valid, expected: str):
+    """``convert(text)`` when it is ``valid``, else the ArgumentTypeError argparse turns into one line, exit 2."""
+    try:
+        value = convert(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected {expected}, got {text!r}") from None
+    if not valid(value):
+        raise argparse.ArgumentTypeError(f"expected {expected}, got {text!r}")
+    return value
+
+
 def positive_number(text: str) -> float:
     """argparse type of an option that is a finite number > 0 (a segment length, a noise level)."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number > 0, got {text!r}") from None
-    if not (math.isfinite(value) and value > 0):
-        raise argparse.ArgumentTypeError(f"expected a finite number > 0, got {text!r}")
-    return value
+    return _checked(text, convert=float, valid=lambda v: math.isfinite(v) and v > 0, expected="a finite number > 0")
 
 
 def positive_integer(text: str) -> int:
     """argparse type of a count option (workers, rounds): an integer >= 1."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 1, got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 1, got {text!r}")
-    return value
+    return _checked(text, convert=int, valid=lambda v: v >= 1, expected="an integer >= 1")
 
 
 def positive_hz(text: str) -> float:
     """argparse type of a frequency option: a finite number > 0 [Hz] (-5 or nan would give an empty table)."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a frequency in Hz, got {text!r}") from None
-    if not (math.isfinite(value) and value > 0):
-        raise argparse.ArgumentTypeError(f"expected a finite frequency > 0 Hz, got {text!r}")
-    return value
+    return _checked(text, convert=float, valid=lambda v: math.isfinite(v) and v > 0,
+                    expected="a finite frequency > 0 Hz")
 
 
 def deck_option(p: argparse.ArgumentParser) -> None:

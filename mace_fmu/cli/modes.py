@@ -60,8 +60,9 @@ def _print_modes(result: StructureModes) -> None:
     p = result.mass_properties
     j = np.diag(p.inertia_about_reference_kgm2)
     about = f"grid {p.reference_grid}" if p.reference_grid is not None else "the basic origin"
-    mass, length = deck_units(result.structure.deck, result.structure.file)
-    inertia = f"{mass} {length}^2" if not mass.startswith("(") else "(mass x length^2 in the deck's units)"
+    units = deck_units(result.structure.deck, result.structure.file)
+    mass, length = units or ("(the deck's mass unit)", "(the deck's length unit)")
+    inertia = f"{mass} {length}^2" if units else "(mass x length^2 in the deck's units)"
     print(f"mass {p.mass_kg:.4f} {mass}, centre of mass {np.round(p.center_of_mass_m, 5).tolist()} {length}, inertia "
           f"about {about}: Jxx {j[0]:.4f}, Jyy {j[1]:.4f}, Jzz {j[2]:.4f} {inertia}")
 

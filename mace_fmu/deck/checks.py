@@ -42,11 +42,13 @@ def check_deck(deck: Deck) -> None:
     for g in deck.grids.values():
         _need(g.cp, frames, g, f"GRID {g.id}", "field 3 (CP)", *coord)
         _need(g.cd, frames, g, f"GRID {g.id}", "field 7 (CD)", *coord)
-    for b in deck.bars.values():
-        label = f"CBAR {b.id}"
-        _need(b.pid, deck.pbars, b, label, "field 3 (PID)", "property", "a PBAR ID")
-        for key, field in ((b.ga, "field 4 (GA)"), (b.gb, "field 5 (GB)"), (b.g0, "field 6 (G0)")):
-            _need(key, deck.grids, b, label, field, *grid)
+    for name, elements, properties, expected in (("CBAR", deck.bars, deck.pbars, "a PBAR ID"),
+                                                 ("CBEAM", deck.beams, deck.pbeams, "a PBEAM or PBEAML ID")):
+        for b in elements.values():
+            label = f"{name} {b.id}"
+            _need(b.pid, properties, b, label, "field 3 (PID)", "property", expected)
+            for key, field in ((b.ga, "field 4 (GA)"), (b.gb, "field 5 (GB)"), (b.g0, "field 6 (G0)")):
+                _need(key, deck.grids, b, label, field, *grid)
     for p in deck.pbars.values():
         _need(p.mid, deck.mat1s, p, f"PBAR {p.id}", "field 3 (MID)", "material", "a MAT1 ID")
     for m in deck.conm2s.values():
@@ -80,12 +82,7 @@ def check_deck(deck: Deck) -> None:
 
 
 def _check_new_elements(deck: Deck, grid: tuple[str, str]) -> None:
-    """Cross references of CBEAM, CROD/CONROD, CMASS1/2, RBAR/RBE2 and their properties."""
-    for b in deck.beams.values():
-        label = f"CBEAM {b.id}"
-        _need(b.pid, deck.pbeams, b, label, "field 3 (PID)", "property", "a PBEAM or PBEAML ID")
-        for key, field in ((b.ga, "field 4 (GA)"), (b.gb, "field 5 (GB)"), (b.g0, "field 6 (G0)")):
-            _need(key, deck.grids, b, label, field, *grid)
+    """Cross references of PBEAM, CROD/CONROD, CMASS1/2, RBAR/RBE2 and their properties."""
     for p in deck.pbeams.values():
         _need(p.mid, deck.mat1s, p, f"{'PBEAML' if p.section else 'PBEAM'} {p.id}", "field 3 (MID)", "material",
               "a MAT1 ID")

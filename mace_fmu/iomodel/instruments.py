@@ -224,12 +224,23 @@ def _boundary(entry: Mapping[str, Any], where: str, *, physical_unit: str, is_in
     return 1.0, physical_unit
 
 
+def _dof_units(dofs: tuple[Dof, ...], *, translation: str, rotation: str) -> str:
+    """``translation`` or ``rotation`` when every DOF is one kind (components 1-3 or 4-6), else "physical unit"
+    (a weighted sum of both has no single unit)."""
+    if all(c >= 4 for _, c, _ in dofs):
+        return rotation
+    return translation if all(c <= 3 for _, c, _ in dofs) else "physical unit"
+
+
+def force_unit(dofs: tuple[Dof, ...]) -> str:
+    """The unit of an actuator's generalised force on ``dofs``: N, N m, or "physical unit" for a mix."""
+    return _dof_units(dofs, translation="N", rotation="N m")
+
+
 def _actuator(entry: Mapping[str, Any], path: Path) -> Actuator:
     where = f"{path} actuator {entry['name']}"
     dofs = _dofs(entry, where)
-    rotational, translational = all(c >= 4 for _, c, _ in dofs), all(c <= 3 for _, c, _ in dofs)
-    gain, unit = _boundary(entry, where, is_input=True,
-                           physical_unit="N m" if rotational else "N" if translational else "physical unit")
+    gain, unit = _boundary(entry, where, is_input=True, physical_unit=force_unit(dofs))
     return Actuator(name=entry["name"], description=entry["description"], dofs=dofs, gain=gain, input_unit=unit)
 
 
@@ -293,9 +304,7 @@ DEFAULT_DAMPING = 0.01
 def _sensor_unit(kind: str, dofs: tuple[Dof, ...]) -> str:
     """The unit a sensor reads when its structure file gives none: rad or m (per s for a rate sensor, per
     s^2 for an acceleration sensor), from its DOFs' components (a weighted sum of rotations reads radians)."""
-    rotational = all(c >= 4 for _, c, _ in dofs)
-    translational = all(c <= 3 for _, c, _ in dofs)
-    base = "rad" if rotational else "m" if translational else "physical unit"
+    base = _dof_units(dofs, translation="m", rotation="rad")
     per = {"rate": "/s", "acceleration": "/s^2"}.get(kind, "")
     return f"{base}{per}" if base != "physical unit" else base
 

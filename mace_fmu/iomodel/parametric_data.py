@@ -14,7 +14,7 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from mace_fmu.errors import MaceError
-from mace_fmu.iomodel.instruments import Servos
+from mace_fmu.iomodel.instruments import Servos, force_unit
 from mace_fmu.iomodel.modal_ss import modal_data
 from mace_fmu.iomodel.motion import motion_unit, parse_motion_output
 from mace_fmu.iomodel.stiffness_route import PhysicalRoute, physical_route, stiffness_sensitivities
@@ -40,9 +40,8 @@ def signal_descriptions(model: VoltsModel) -> tuple[list[str], list[str]]:
         elif a.input_unit != "V":
             ins.append(f"{a.description} [{a.input_unit}]")
         else:
-            force = "N m" if all(c >= 4 for _, c, _ in a.dofs) else "N" if all(c <= 3 for _, c, _ in a.dofs) else \
-                "N or N m"
-            ins.append(f"{a.description} [V], {a.gain} {force}/V")
+            force = force_unit(a.dofs)
+            ins.append(f"{a.description} [V], {a.gain} {'N or N m' if force == 'physical unit' else force}/V")
     outs = []
     for name in model.system.output_labels:
         motion = parse_motion_output(name)

@@ -236,15 +236,16 @@ def _file_sha256(path: str, mtime_ns: int, size: int) -> str:
     return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
 
-def deck_units(deck: Deck, file: "StructureFile | None") -> tuple[str, str]:
+def deck_units(deck: Deck, file: "StructureFile | None") -> tuple[str, str] | None:
     """(mass, length) unit labels of a deck: its structure file's ``[units]``, kg and m for the bundled deck, else
-    words that say they are the deck's own (a deck states no units: NASTRAN takes whatever it is written in)."""
+    None: a deck states no units (NASTRAN takes whatever it is written in), so they are the deck's own."""
     units = dict(file.tables.get("units", {})) if file is not None else {}
     unknown = sorted(set(units) - {"mass", "length"})
     if unknown:
         raise MaceError(f"{file.path}: [units] has unknown key(s) {unknown} (expected mass and length)")
-    default = ("kg", "m") if is_bundled_deck(deck) else ("(the deck's mass unit)", "(the deck's length unit)")
-    return str(units.get("mass", default[0])), str(units.get("length", default[1]))
+    if not units:
+        return ("kg", "m") if is_bundled_deck(deck) else None
+    return str(units.get("mass", "(the deck's mass unit)")), str(units.get("length", "(the deck's length unit)"))
 
 
 def is_bundled_deck(deck: Deck) -> bool:

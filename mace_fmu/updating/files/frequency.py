@@ -52,15 +52,19 @@ def _read_csv(path: Path, channel_map: ChannelMap | None) -> FrequencyResponseDa
     channel_of: dict[str, str] = {}
     found: set[str] = set()
     coherence: dict[str, np.ndarray] = {}
-    for j, (text, values) in enumerate(zip(labels, columns)):
-        m = _PAIR.match(text)
-        if (j == 0 or _COHERENCE.match(text) or (m and m.group(1))) and np.any(values.imag != 0.0):
+
+    def real(text: str, values: np.ndarray) -> np.ndarray:
+        """A column that must hold real numbers (frequency, coherence, re:, im:)."""
+        if np.any(values.imag != 0.0):
             k = int(np.flatnonzero(values.imag != 0.0)[0])
             raise MaceError(f"{path}:{lines[k]}: column {text!r}: {values[k]} is complex, expected a real number")
+        return values.real
+
+    frequencies = real(labels[0], columns[0])
     for text, values in zip(labels[1:], columns[1:]):
         c = _COHERENCE.match(text)
         if c:
-            coherence[c.group(1).strip()] = values.real  # by channel; matched to the outputs below
+            coherence[c.group(1).strip()] = real(text, values)  # by channel; matched to the outputs below
             continue
         m = _PAIR.match(text)
         if not m:
@@ -81,7 +85,7 @@ def _read_csv(path: Path, channel_map: ChannelMap | None) -> FrequencyResponseDa
         pair = parts.setdefault((out, inp), {})
         if part in pair or (part == "complex" and pair) or (part != "complex" and "complex" in pair):
             raise MaceError(f"{at}: column {text!r}: the response {out_channel}/{in_channel} is given twice")
-        pair[part] = values if part == "complex" else values.real
+        pair[part] = values if part == "complex" else real(text, values)
     check_present(found, channel_map=channel_map, where=at)
     if not outputs:
         raise MaceError(f"{at}: no response columns (expected '<output>/<input> [<unit>/<unit>]' with complex values, "
@@ -106,7 +110,7 @@ def _read_csv(path: Path, channel_map: ChannelMap | None) -> FrequencyResponseDa
     if coherence and len(coherence) != len(outputs):
         raise MaceError(f"{at}: coherence columns for {len(coherence)} of {len(outputs)} outputs (all or none)")
     gamma2 = np.column_stack([coherence[channel_of[out]] for out in outputs]) if coherence else None
-    return _frd(columns[0].real, inputs, outputs, response, units, source=str(path),
+    return _frd(frequencies, inputs, outputs, response, units, source=str(path),
                 row_at=lambda k: f"{path}:{lines[k]}", channel_of=channel_of, coherence=gamma2)
 
 
