@@ -254,8 +254,8 @@ def _fmu_options(p: argparse.ArgumentParser) -> None:
                    help=("measured frequency responses given alone (an analyser's UFF 58 or CSV files, --cost "
                          "log-frf): a band they are compared over [Hz] (repeatable, e.g. one about each "
                          "resonance; default: all their frequencies)"))
-    p.add_argument("--segment-s", type=positive_number, default=2.0,
-                   help=("H1 segment length [s] of the log-frf cost (default 2)"))
+    p.add_argument("--segment-s", type=positive_number, default=None,
+                   help=("time histories: H1 segment length [s] of the log-frf cost (default 2)"))
     p.add_argument("--hold-input", metavar="NAME=0[,NAME=0...]", type=_held_inputs, action="append", default=[],
                    help=("FMU inputs the data have no channel for, held at 0 V (repeatable); any other missing "
                              "input is an error"))
@@ -266,8 +266,8 @@ def _fmu_options(p: argparse.ArgumentParser) -> None:
                    help=("an output sensor whose gain is known only to P %% (standard deviation; repeatable, or "
                              "the channel map's gain_uncertainty_percent column): its gain is estimated with the "
                              "parameters, with that prior, and the parameters' uncertainty includes it"))
-    p.add_argument("--weighting", choices=["noise", "none"], default="noise",
-                   help=("log-frf: each bin's log error over its noise standard deviation (default), or "
+    p.add_argument("--weighting", choices=["noise", "none"], default=None,
+                   help=("time histories, log-frf: each bin's log error over its noise standard deviation (default), or "
                              "unweighted"))
 
 

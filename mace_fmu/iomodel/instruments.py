@@ -170,6 +170,10 @@ def _by_name(items, name: str, what: str):
     raise MaceError(f"unknown {what} {name!r}; known: {', '.join(i.name for i in items)}")
 
 
+#: a DOF whose mass is below this fraction of the largest is massless (round-off of assembled lumped masses)
+MASSLESS_FRACTION = 1e-12
+
+
 def influence_vector(dofs: tuple[Dof, ...], dof_map: DofMap, cd_frames: np.ndarray) -> np.ndarray:
     """Row vector over the basic DOFs that forms sum(weight * u(grid, component in CD))."""
     vec = np.zeros(dof_map.size)
@@ -260,6 +264,54 @@ def _sensor(entry: Mapping[str, Any], path: Path) -> Sensor:
     gain, output_unit = _boundary(entry, where, physical_unit=unit, is_input=False)
     return Sensor(name=entry["name"], description=entry["description"], kind=kind, dofs=dofs, gain=gain, unit=unit,
                   output_unit=output_unit)
+
+
+def check_accelerometers_have_mass(instruments: Instruments, *, mass, transform, dof_map: DofMap,
+                                   cd_frames: np.ndarray) -> None:
+    """A MaceError naming the structure file, the sensor and the actuator when an acceleration sensor reads a
+    DOF without mass that a force input pushes on a DOF without mass.
+
+    Where it matters: a massless DOF's motion is the static response to the others and to the forces on it,
+    so its acceleration carries the second derivative of a force applied to massless DOFs. That part has no
+    modal form (each retained mode adds to the direct feedthrough without converging), so the model would
+    silently depend on how many modes it keeps. An accelerometer on a massless grid driven only through
+    massive DOFs reads a proper signal and is accepted.
+
+    Parameters
+    ----------
+    instruments : Instruments
+        The structure's actuators and sensors.
+    mass : sparse or dense matrix
+        The mass matrix on the basic DOFs [kg, kg m^2].
+    transform : sparse matrix or None
+        The constraints' T (basic = T @ independent); None: every DOF independent.
+    dof_map : DofMap
+        The basic DOFs' (grid, component) order.
+    cd_frames : numpy.ndarray
+        (n_grid, 3, 3) displacement-system axes (the instruments' components are in CD).
+    """
+    accelerometers = [s for s in instruments.sensors if s.kind == "acceleration"]
+    if not accelerometers or not instruments.actuators:
+        return
+
+    def independent(dofs: tuple[Dof, ...]) -> np.ndarray:
+        row = influence_vector(dofs, dof_map, cd_frames)
+        return np.asarray(transform.T @ row if transform is not None else row).ravel()
+
+    reduced = transform.T @ mass @ transform if transform is not None else mass
+    diagonal = np.asarray(reduced.diagonal()).ravel()
+    massless = diagonal <= MASSLESS_FRACTION * max(float(np.max(np.abs(diagonal), initial=0.0)), 1e-300)
+    pushing = [a for a in instruments.actuators if np.any(independent(a.dofs)[massless] != 0.0)]
+    for sensor in accelerometers:
+        read = np.flatnonzero((independent(sensor.dofs) != 0.0) & massless)
+        if read.size and pushing:
+            grids = sorted({g for g, _, _ in sensor.dofs})
+            raise MaceError(
+                f"{instruments.source}: sensor {sensor.name!r} (kind = \"acceleration\") reads grid "
+                f"{', '.join(map(str, grids))} where a DOF carries no mass, and actuator {pushing[0].name!r} pushes a "
+                "DOF without mass: that acceleration follows the force's second derivative, which no modal model "
+                "holds; give the grid the accelerometer's own mass (a CONM2) or read the acceleration where there "
+                "is mass")
 
 
 def resolve_bar_gauges(instruments: Instruments, model: FEModel, deck: Deck) -> Instruments:

@@ -24,7 +24,8 @@ from mace_fmu.errors import MaceError
 from mace_fmu.fe.modes import StructureModes
 from mace_fmu.iomodel.damping import modal_damping
 from mace_fmu.iomodel.frf import frequency_response
-from mace_fmu.iomodel.instruments import SPEED_LOOP_GAINS, Instruments, load_instruments, resolve_bar_gauges
+from mace_fmu.iomodel.instruments import (SPEED_LOOP_GAINS, Instruments, check_accelerometers_have_mass,
+                                          load_instruments, resolve_bar_gauges)
 from mace_fmu.iomodel.modal_ss import ModalPlant, modal_plant
 from mace_fmu.iomodel.model_options import ModelledElectronics, SignalSelection
 from mace_fmu.iomodel.motion import motion_unit, parse_motion_output
@@ -328,6 +329,9 @@ def volts_model(modes: StructureModes, *, parameters: ParameterSet | None = None
                             "belongs to the bundled MACE deck only)")
         instruments = load_instruments(file)
     instruments = resolve_bar_gauges(instruments, modes.model, modes.structure.deck)
+    check_accelerometers_have_mass(instruments, mass=modes.model.mass, dof_map=modes.modes.dofs,
+                                   cd_frames=modes.modes.cd_frames,
+                                   transform=None if modes.constraints is None else modes.constraints.transform)
     # the moduli and springs must name cards
     with naming_the_file(parameters):
         fe_overrides(parameters, parameter_names(modes.structure.deck, file))
@@ -359,11 +363,14 @@ def volts_model(modes: StructureModes, *, parameters: ParameterSet | None = None
 
 
 def _check_moduli_agree(modes: StructureModes, parameters: ParameterSet) -> None:
-    """Refuse a set whose moduli or springs differ from those the modes were computed with (they would be ignored)."""
+    """Refuse a set whose moduli, springs or masses differ from those the modes were computed with (they would be
+    ignored)."""
     deck = modes.structure.deck
     for (card, cid), fields in fe_overrides(parameters, parameter_names(deck, modes.structure.file)).items():
-        entry = (deck.mat1s if card == "MAT1" else deck.celas2s)[cid]
+        entry = {"MAT1": deck.mat1s, "CELAS2": deck.celas2s, "CONM2": deck.conm2s}[card][cid]
         for key, value in fields.items():
+            if key == "inertia":  # a mass's inertias follow its mass
+                continue
             computed = float(getattr(entry, key))
             _check(abs(computed - value) <= 1e-12 * abs(value),
                    f"parameters set {card} {cid} {key} = {value:.6g} but the modes were computed with "

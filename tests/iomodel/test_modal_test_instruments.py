@@ -164,3 +164,40 @@ def test_bad_instrument_entries_name_the_file_and_the_instrument(tmp_path, entry
         _spring_mass(tmp_path, FORCE_AND_ACCELEROMETER.replace("dofs = [[1, 1, 1.0]]\n\n[[sensors]]",
                                                                f"{entry}\n\n[[sensors]]"))
     assert message in str(raised.value)
+
+
+K_MASS_SIDE, K_GROUND_SIDE = 3.0e4, 1.0e4  # N/m: the massless grid's springs to the mass and to the ground
+
+
+def _mass_and_massless_grid(tmp_path, *, force_grid: int, accelerometer_grid: int):
+    """The mass (grid 1, on a spring to the ground) and a massless grid 2 hung between it and the ground."""
+    deck = tmp_path / "two_grids.bdf"
+    deck.write_text(deck_text(["GRID,1,,0.0,0.0,0.0", "GRID,2,,1.0,0.0,0.0", f"CONM2,2,1,,{r(MASS)}",
+                               f"CELAS2,3,{r(STIFFNESS)},1,1", f"CELAS2,4,{r(K_MASS_SIDE)},1,1,2,1",
+                               f"CELAS2,5,{r(K_GROUND_SIDE)},2,1", "SPC1,7,23456,1,2", "EIGRL,1,,,2"],
+                              case="SPC = 7\nMETHOD = 1\n"))
+    spec = tmp_path / "two_grids.toml"
+    spec.write_text(FORCE_AND_ACCELEROMETER.replace("dofs = [[1, 1, 1.0]]\n\n[[sensors]]",
+                                                    f"dofs = [[{force_grid}, 1, 1.0]]\n\n[[sensors]]")
+                    .replace("kind = \"acceleration\"\ndofs = [[1, 1, 1.0]]",
+                             f"kind = \"acceleration\"\ndofs = [[{accelerometer_grid}, 1, 1.0]]")
+                    + f"[damping]\ndefault = {ZETA}\n")
+    return volts_model(compute_modes(read_deck(deck), configuration="0g", structure_file=spec), electronics=BARE)
+
+
+def test_an_accelerometer_on_a_massless_grid_driven_through_the_mass_reads_the_static_share_of_its_motion(tmp_path):
+    """Grid 2 has no mass: it moves as k_m / (k_m + k_g) of the mass, whose spring is k + k_m k_g / (k_m + k_g)."""
+    model = _mass_and_massless_grid(tmp_path, force_grid=1, accelerometer_grid=2)
+    share = K_MASS_SIDE / (K_MASS_SIDE + K_GROUND_SIDE)
+    k = STIFFNESS + K_MASS_SIDE * K_GROUND_SIDE / (K_MASS_SIDE + K_GROUND_SIDE)
+    f = np.array([0.5, 10.0, math.sqrt(k / MASS) / (2 * np.pi), 30.0, 500.0])
+    w = 2 * np.pi * f
+    exact = share * -w**2 / (k - MASS * w**2 + 2j * ZETA * math.sqrt(k * MASS) * w)
+    np.testing.assert_allclose(frequency_response(model.system, f)[:, 0, 0], exact, rtol=1e-9)
+
+
+def test_an_accelerometer_where_a_force_meets_no_mass_is_refused_naming_both(tmp_path):
+    with pytest.raises(MaceError, match="two_grids.toml") as raised:
+        _mass_and_massless_grid(tmp_path, force_grid=2, accelerometer_grid=2)
+    assert "sensor 'acc' (kind = \"acceleration\") reads grid 2 where a DOF carries no mass, and actuator 'force'" \
+        in str(raised.value)

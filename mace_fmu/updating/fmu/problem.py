@@ -38,7 +38,7 @@ class FmuProblem:
 
 def fmu_problem(*, fmu: str | os.PathLike, data: Sequence[str | os.PathLike], names: Sequence[str],
                 cost: CostKind, start: Mapping[str, float] | None = None, channel_map: str | os.PathLike | None = None,
-                segment_s: float = 2.0, weighting: Weighting = "noise",
+                segment_s: float | None = None, weighting: Weighting | None = None,
                 held_inputs: Sequence[str] = (), noise_rms_fraction: float | None = None,
                 gain_uncertainty: Mapping[str, float] | None = None,
                 bands_hz: Sequence[tuple[float, float]] = ()) -> FmuProblem:
@@ -64,10 +64,11 @@ def fmu_problem(*, fmu: str | os.PathLike, data: Sequence[str | os.PathLike], na
     channel_map : path, optional
         CSV mapping the data's channels to the FMU's signals (with units and, optionally, a
         ``gain_uncertainty_percent`` column).
-    segment_s : float
-        H1 segment length [s] of the log-FRF cost.
-    weighting : {"noise", "none"}
-        Log-FRF: each bin over its noise standard deviation, or eq. 4.17 as printed.
+    segment_s : float, optional
+        Time histories: H1 segment length [s] of the log-FRF cost (default 2 s).
+    weighting : {"noise", "none"}, optional
+        Time histories, log-FRF: each bin over its noise standard deviation (the default), or eq. 4.17 as
+        printed.
     held_inputs : sequence of str
         FMU inputs the data lack that are to be held at 0 V (any other input the data lack is an
         error: a silently grounded input biases every parameter).
@@ -121,8 +122,19 @@ def fmu_problem(*, fmu: str | os.PathLike, data: Sequence[str | os.PathLike], na
                                 units={n: item.unit(n) for n in (*item.inputs, *item.outputs)})
         (histories if isinstance(item, TimeHistory) else responses).append(item)
     if not histories:
+        # what shapes an H1 estimate or a time record's noise has no meaning here: refused, never ignored
+        unused = {"segment_s (--segment-s)": segment_s, "weighting (--weighting)": weighting,
+                  "noise_rms_fraction (--noise-rms-percent)": noise_rms_fraction,
+                  "held_inputs (--hold-input)": tuple(held_inputs) or None}
+        given = [option for option, value in unused.items() if value is not None]
+        if given:
+            raise MaceError(f"{', '.join(given)}: for time histories; measured frequency responses given alone are "
+                            "compared line by line (weighted by their coherence where the files give it) and each "
+                            "input is driven alone, so this has no effect: leave it out")
         return _frequency_response_problem(interface, responses, names=names, start=start, cost=cost,
                                            bands_hz=bands_hz, gain_uncertainty=gain_uncertainty, data=data)
+    segment_s = 2.0 if segment_s is None else segment_s
+    weighting = "noise" if weighting is None else weighting
     if bands_hz:
         raise MaceError("a band (--band-hz) selects the frequencies of measured frequency responses given alone; "
                         "with time histories the H1 estimate's band is the inputs'")

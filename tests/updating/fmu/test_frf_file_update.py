@@ -66,6 +66,11 @@ def test_an_frf_file_alone_brings_the_fmu_s_moduli_to_the_full_re_solve_s(frame,
     (["--cost", "time"], "measured frequency responses are compared by the log-frf cost (--cost log-frf)"),
     (["--cost", "log-frf", "--band-hz", "40", "50"], "0 frequencies in 40-50 Hz (the file has 0.03125 to 32 Hz)"),
     (["--cost", "log-frf", "--band-hz", "9", "3"], "--band-hz 9 3: expected 0 <= LOW < HIGH"),
+    # options of time histories are refused, not ignored, on frequency responses given alone
+    (["--cost", "log-frf", "--segment-s", "4"], "segment_s (--segment-s): for time histories"),
+    (["--cost", "log-frf", "--weighting", "none", "--noise-rms-percent", "2"],
+     "weighting (--weighting), noise_rms_fraction (--noise-rms-percent): for time histories"),
+    (["--cost", "log-frf", "--hold-input", "force_floor_2=0"], "held_inputs (--hold-input): for time histories"),
 ])
 def test_bad_frf_requests_stop_before_any_run(frame, capsys, extra, message):
     folder, fmu, data = frame
