@@ -93,8 +93,9 @@ def _check_signals(args: argparse.Namespace, deck) -> str:
                     f"{len(grids)} grids")
 
 
-def _checked_fmu(path: str, configuration: str) -> Path:
-    """--fmu: an existing MACE FMU of this configuration with grid motion outputs."""
+def _checked_fmu(path: str, configuration: str, label: str) -> Path:
+    """--fmu: an existing FMU of this structure (``label``, :func:`~mace_fmu.structure.file.structure_label`) and
+    configuration, with grid motion outputs."""
     import fmpy
 
     from mace_fmu.fmu.archive import check_fmu
@@ -105,8 +106,8 @@ def _checked_fmu(path: str, configuration: str) -> Path:
         raise MaceError(f"--fmu {fmu}: no such file")
     check_fmu(fmu)  # a foreign, damaged or malicious archive is refused before fmpy opens it
     md = fmpy.read_model_description(str(fmu))
-    if not (md.description or "").startswith(f"MACE {configuration} "):
-        raise MaceError(f"--fmu {fmu} is not a MACE {configuration} model (its description: {md.description!r})")
+    if not (md.description or "").startswith(f"{label} {configuration} "):
+        raise MaceError(f"--fmu {fmu} is not a {label} {configuration} model (its description: {md.description!r})")
     if not any(parse_motion_output(v.name) for v in md.modelVariables if v.causality == "output"):
         raise MaceError(f"--fmu {fmu} has no grid motion outputs; export one with "
                         f"mace-fmu export {configuration} --motion-grids all")
@@ -118,17 +119,20 @@ def cmd_view_response(args: argparse.Namespace) -> int:
     from mace_fmu.fe.modes import compute_modes
     from mace_fmu.fmu.export import export_fmu
     from mace_fmu.fmu.simulate import simulate_input_response
+    from mace_fmu.structure.file import structure_label
     from viewer import animate_response, plot_response
 
     _need_target(args)
     deck = read_deck(args.deck)
+    label = structure_label(deck)
     output = _check_signals(args, deck)
     out_dir = Path(args.html or args.png).parent if (args.html or args.png) else Path(".")  # FMU next to the page
     if args.fmu:
-        fmu = _checked_fmu(args.fmu, args.configuration)
-        # only the scene is needed from the FE model: its lowest modes are enough
+        fmu = _checked_fmu(args.fmu, args.configuration, label)
+        # only the scene is needed from the FE model; the deck's own range of modes (a fixed low one would hold
+        # no mode of a stiffer structure)
         with progress_bar() as bar:
-            modes = compute_modes(deck, configuration=args.configuration, preload=args.preload, max_hz=1.0,
+            modes = compute_modes(deck, configuration=args.configuration, preload=args.preload,
                                   progress=bar, structure_file=args.structure_file)
     else:
         progress(f"{args.configuration} volts-volts model with the motion of every grid")
@@ -145,9 +149,9 @@ def cmd_view_response(args: argparse.Namespace) -> int:
           f"{args.speed:g} simulated s per s, motion drawn x {animation.scale:.4g}")
     if args.html:
         png = plot_response(run, output_name=output, path=signals_plot_path(args.html),
-                            title=f"MACE {args.configuration}: {args.signal} on {args.input}")
+                            title=f"{label} {args.configuration}: {args.signal} on {args.input}")
         print(f"wrote {png} ({args.input} and {output} over time)")
-    _show(animation, args, title=f"MACE {args.configuration}: {args.signal} response to {args.input}")
+    _show(animation, args, title=f"{label} {args.configuration}: {args.signal} response to {args.input}")
     return 0
 
 
@@ -160,6 +164,7 @@ def signals_plot_path(html: str | Path) -> Path:
 def cmd_view(args: argparse.Namespace) -> int:
     from mace_fmu.deck.reader import read_deck
     from mace_fmu.fe.modes import compute_modes
+    from mace_fmu.structure.file import structure_label
     from viewer import animate_modes
 
     _need_target(args)
@@ -173,7 +178,7 @@ def cmd_view(args: argparse.Namespace) -> int:
                               seconds_per_cycle=args.seconds_per_cycle)
     for clip in animation.frames.clips:
         print(f"  {clip.start_s:6.1f}-{clip.end_s:6.1f} s  {clip.title}")
-    _show(animation, args, title=f"MACE {args.configuration} modes")
+    _show(animation, args, title=f"{structure_label(deck)} {args.configuration} modes")
     return 0
 
 
@@ -275,7 +280,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--signal", choices=["step", "chirp", "impulse"], default="step",
                    help="step from t = 0, chirp (see --chirp-hz), or a pulse over the first step (default step)")
     p.add_argument("--duration", type=float, default=2.0, help="simulated time [s] (default 2)")
-    p.add_argument("--amplitude", type=float, default=1.0, help="signal amplitude [V] (default 1)")
+    p.add_argument("--amplitude", type=float, default=1.0,
+                   help="signal amplitude in the input's unit (V, or N for a force input in newtons; default 1)")
     p.add_argument("--chirp-hz", type=float, nargs=2, default=[0.1, 10.0], metavar=("F0", "F1"),
                    help="chirp start and end frequency [Hz] (default 0.1 10)")
     p.add_argument("--step", type=float, default=0.002, help="FMU communication step [s] (default 0.002)")

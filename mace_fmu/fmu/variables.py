@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 from collections.abc import Mapping
-from pathlib import Path
 
 from mace_fmu.iomodel.motion import motion_unit, parse_motion_output
 from mace_fmu.iomodel.volts import VoltsModel
@@ -37,10 +36,9 @@ def model_summary(model: VoltsModel) -> str:
     """One-line description of a volts-volts model for an FMU's model description."""
     structure, sys_ = model.structure_modes.structure, model.system
     kind = structure.configuration
-    # "MACE <kind>" names the bundled structure only (hosts and `view response` read it); another deck is
-    # named by its file
-    from mace_fmu.structure.file import is_bundled_deck
+    # "<label> <kind>": hosts and `view response --fmu` read which structure and configuration it is
+    from mace_fmu.structure.file import structure_label
 
-    who = "MACE" if is_bundled_deck(structure.deck) else Path(structure.deck.path).stem
+    who = structure_label(structure.deck)
     built = f"; parameter set {model.parameters.describe()}" if model.parameters is not None else ""
     return f"{who} {kind} volts-volts model: {sys_.nstates} states; {model.electronics.describe()}{built}"

@@ -259,6 +259,12 @@ def is_bundled_deck(deck: Deck) -> bool:
         _file_sha256(str(path.resolve()), st.st_mtime_ns, st.st_size) == _bundled_deck_sha256()
 
 
+def structure_label(deck: Deck) -> str:
+    """What a model of ``deck`` is called in titles and FMU descriptions: "MACE" for the bundled deck, else the
+    deck file's name without its extension (``frame`` for frame.bdf)."""
+    return "MACE" if is_bundled_deck(deck) else Path(deck.path).stem
+
+
 def structure_file_for(deck: Deck, structure_file: StructureFile | str | os.PathLike | None = None
                        ) -> StructureFile | None:
     """The structure file that goes with ``deck``: the one given, else the bundled one for the bundled
