@@ -22,8 +22,8 @@ def test_importing_the_package_loads_no_heavy_dependency():
 
 #: the packages in the order of the data flow: each may import only from packages before it (the
 #: command line, last, from all). util and errors are shared by every stage.
-STAGES = ("errors", "util", "deck", "structure", "parameters", "fe", "iomodel", "thesis", "fmu", "ssp", "updating",
-          "control_studies", "zero_g", "cli")
+STAGES = ("errors", "util", "deck", "structure", "parameters", "fe", "nastran_modes", "iomodel", "thesis", "fmu",
+          "ssp", "updating", "control_studies", "zero_g", "cli")
 
 
 def _imports_between_stages() -> list[tuple[str, str, str]]:

@@ -26,7 +26,8 @@ DOCS = Path(__file__).resolve().parents[1]
 
 #: the packages of the API reference, in the order of the data flow (tests/test_public_api.py's STAGES)
 PACKAGES = ("mace_fmu", "mace_fmu.deck", "mace_fmu.deck.parsers", "mace_fmu.structure", "mace_fmu.parameters",
-            "mace_fmu.fe", "mace_fmu.iomodel", "mace_fmu.fmu", "mace_fmu.fmu.native", "mace_fmu.ssp",
+            "mace_fmu.fe", "mace_fmu.nastran_modes", "mace_fmu.iomodel", "mace_fmu.fmu", "mace_fmu.fmu.native",
+            "mace_fmu.ssp",
             "mace_fmu.updating", "mace_fmu.updating.engine", "mace_fmu.updating.files", "mace_fmu.updating.mace",
             "mace_fmu.updating.fmu", "mace_fmu.updating.sample", "mace_fmu.control_studies", "mace_fmu.zero_g",
             "mace_fmu.zero_g.robust", "mace_fmu.util", "mace_fmu.cli")

@@ -1,0 +1,225 @@
+"""Real eigenvectors, the eigenvalue summary and the grid geometry from a NASTRAN OP2 file (SOL 103).
+
+Tables read (the layouts of MSC's DMAP Programmer's Guide, as pyNastran reads them):
+
+- ``OUGV1``/``OUG1``/``BOUGV1`` (and any other displacement-type table): pairs of records, an IDENT of
+  146 words (approach code 10 * 2 + device: real eigenvalues; table code 7: eigenvector; subcase in
+  word 4, mode in word 5, eigenvalue in word 6; format code, words per point in words 9 and 10) and
+  the data: 8 words per point (ID * 10 + device code, point type, T1 T2 T3 R1 R2 R3). ``BOUGV1`` holds
+  the vectors in the basic system, the others in each grid's displacement (CD) system. SORT1, real.
+- ``LAMA``/``BLAMA``: 7 words per mode (mode, extraction order, eigenvalue, radians, cycles,
+  generalized mass, generalized stiffness).
+- ``GEOM1*``: GRID (4501, 45, 1: ID, CP, X1-3, CD, PS, SEID) and CORD1R/C/S, CORD2R/C/S.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from mace_fmu.errors import MaceError
+from mace_fmu.nastran_modes.file_modes import CoordCard, FileGeometry, FileModes
+from mace_fmu.nastran_modes.fortran import Op2Records
+
+IDENT_WORDS = 146
+EIGENVECTOR_TABLE_CODE = 7
+REAL_EIGENVALUES_APPROACH = 2
+GRID_POINT = 1  #: word 2 of a point's entry: 1 a grid; scalar (2, 7) and extra points (3) are left out
+#: GEOM1 record keys (word 1 of the 3-word key) of the cards read
+GRID_KEY, CORD2_KEYS, CORD1_KEYS = 4501, {2101: "R", 2001: "C", 2201: "S"}, {1801: "R", 1701: "C", 1901: "S"}
+
+
+def _is_vector_table(name: str) -> bool:
+    return name.startswith(("OUG", "BOUG", "OPHIG", "BOPHIG"))
+
+
+def _wanted(name: str) -> bool:
+    return _is_vector_table(name) or name in ("LAMA", "BLAMA") or name.startswith("GEOM1")
+
+
+def read_op2_modes(path: Path, *, subcase: int | None) -> FileModes:
+    """The real eigenvectors of one subcase of the OP2 at ``path`` (the only one when ``subcase`` is None).
+
+    MaceError (one line: file, table, record) for a truncated or corrupted file, a file without real
+    eigenvectors, several subcases and none chosen, or SORT2 / complex eigenvectors.
+    """
+    records = Op2Records(path, path.read_bytes())
+    endian = records.endian
+    blocks: dict[int, list[tuple]] = {}  # subcase -> (table, record, mode, eigenvalue, IDs, types, values) per mode
+    summaries: list[np.ndarray] = []
+    grids: dict[int, tuple[int, tuple[float, float, float], int]] = {}
+    coords: dict[int, CoordCard] = {}
+    has_geometry = False
+    for table in records.tables(_wanted):
+        if _is_vector_table(table.name):
+            _read_vectors(records, table.name, table.records, endian, blocks)
+        elif table.name in ("LAMA", "BLAMA"):
+            records.table = table.name
+            summaries.append(_read_summary(records, table.records, endian))
+        elif table.name.startswith("GEOM1"):
+            has_geometry = True
+            records.table = table.name
+            _read_geometry(records, table.records, endian, grids, coords)
+    records.table, records.record = "OUGV1", "its IDENT records"
+    if not blocks:
+        records.fail("no real eigenvectors in the file (expected an OUGV1 table of a SOL 103 run: add "
+                     "DISPLACEMENT(PLOT)=ALL or VECTOR=ALL to the case control and PARAM,POST,-1 or -2)")
+    if subcase is None:
+        if len(blocks) > 1:
+            records.fail(f"eigenvectors of subcases {sorted(blocks)} (expected one: choose it with subcase=)")
+        subcase = next(iter(blocks))
+    if subcase not in blocks:
+        records.fail(f"no eigenvectors of subcase {subcase} (the file has subcases {sorted(blocks)})")
+    return _assemble(path, subcase, blocks[subcase], summaries,
+                     FileGeometry(grids=grids, coords=coords) if has_geometry else None)
+
+
+def _read_vectors(records: Op2Records, name: str, raw: tuple[bytes, ...], endian: str,
+                  blocks: dict[int, list]) -> None:
+    """Append (table, mode, eigenvalue, ids, types, values) of every real eigenvector of the table."""
+    records.table = name
+    for k in range(0, len(raw) - 1, 2):
+        records.record = f"record {k + 3} (the IDENT of a vector)"
+        ident = raw[k]
+        if len(ident) != 4 * IDENT_WORDS:
+            records.fail(f"the IDENT record has {len(ident) // 4} words (expected {IDENT_WORDS})")
+        words = np.frombuffer(ident, dtype=endian + "i4")
+        approach, table_code = int(words[0]) // 10, int(words[1])
+        if approach != REAL_EIGENVALUES_APPROACH or table_code % 1000 != EIGENVECTOR_TABLE_CODE:
+            continue  # static displacements, transient or frequency response: not modes
+        if table_code // 1000 != 0:
+            records.fail("the eigenvectors are in SORT2 (expected SORT1: the default, or SORT1 in the request)")
+        num_wide, fmt = int(words[9]), int(words[8])
+        if num_wide != 8 or fmt not in (0, 1):
+            records.fail(f"eigenvectors of {num_wide} words per point in format {fmt} (expected real ones: "
+                         "8 words, format 1)")
+        subcase, mode = int(words[3]), int(words[4])
+        eigenvalue = float(np.frombuffer(ident, dtype=endian + "f4")[5])
+        records.record = f"record {k + 4} (the data of mode {mode})"
+        data = raw[k + 1]
+        if len(data) % 32:
+            records.fail(f"the data record has {len(data) // 4} words (expected 8 per point)")
+        ints = np.frombuffer(data, dtype=endian + "i4").reshape(-1, 8)
+        floats = np.frombuffer(data, dtype=endian + "f4").reshape(-1, 8)
+        found = blocks.setdefault(subcase, [])
+        if found and found[0][0] != name:
+            continue  # the same modes again in another table (BOUGV1 beside OUGV1): the first table's are kept
+        found.append((name, records.record, mode, eigenvalue, ints[:, 0] // 10, ints[:, 1],
+                      floats[:, 2:].astype(float)))
+
+
+def _read_summary(records: Op2Records, raw: tuple[bytes, ...], endian: str) -> np.ndarray:
+    """(n_modes, 7) rows of the eigenvalue summary: mode, order, eigenvalue, radians, cycles, mass, stiffness."""
+    records.record = "record 4 (the eigenvalue summary)"
+    if len(raw) < 2 or len(raw[1]) % 28:
+        records.fail("the eigenvalue summary is missing or not 7 words per mode")
+    ints = np.frombuffer(raw[1], dtype=endian + "i4").reshape(-1, 7)
+    rows = np.frombuffer(raw[1], dtype=endian + "f4").reshape(-1, 7).astype(float)
+    rows[:, :2] = ints[:, :2]
+    return rows
+
+
+def _read_geometry(records: Op2Records, raw: tuple[bytes, ...], endian: str,
+                   grids: dict, coords: dict[int, CoordCard]) -> None:
+    """GRIDs and coordinate systems of one GEOM1 table, single precision or double (NX, MSC 2014 and later)."""
+    for k, record in enumerate(raw):
+        records.record = f"record {k + 3}"
+        if len(record) < 12 or len(record) % 4:
+            continue
+        key = int(np.frombuffer(record[:4], dtype=endian + "i4")[0])
+        body = record[12:]
+        if key == GRID_KEY:
+            for i, x in _entries(records, body, endian, "GRID", ints_before=2, reals=3, ints_after=3):
+                grids[int(i[0])] = (int(i[1]), (float(x[0]), float(x[1]), float(x[2])), int(i[2]))
+        elif key in CORD2_KEYS:
+            kind = CORD2_KEYS[key]
+            for i, x in _entries(records, body, endian, f"CORD2{kind}", ints_before=4, reals=9, ints_after=0):
+                points = tuple(tuple(float(v) for v in x[3 * j:3 * j + 3]) for j in range(3))
+                coords[int(i[0])] = CoordCard(id=int(i[0]), kind=kind, rid=int(i[3]),  # type: ignore[arg-type]
+                                              points=points, grids=None)
+        elif key in CORD1_KEYS:
+            if len(body) % 24:
+                records.fail(f"CORD1{CORD1_KEYS[key]} entries of {len(body) // 4} words in all (expected 6 each)")
+            for i in np.frombuffer(body, dtype=endian + "i4").reshape(-1, 6):
+                coords[int(i[0])] = CoordCard(id=int(i[0]), kind=CORD1_KEYS[key], rid=None,  # type: ignore[arg-type]
+                                              points=None, grids=(int(i[3]), int(i[4]), int(i[5])))
+
+
+def _entries(records: Op2Records, body: bytes, endian: str, card: str, *, ints_before: int, reals: int,
+             ints_after: int) -> list[tuple[np.ndarray, np.ndarray]]:
+    """(integers, reals) of each entry of a GEOM1 record whose entries are integers, reals, integers; the reals
+    single precision or double, whichever divides the record into entries with plausible IDs."""
+    layouts = []
+    for real in ("f4", "f8"):
+        fields = [(f"i{j}", endian + "i4") for j in range(ints_before)]
+        fields += [(f"x{j}", endian + real) for j in range(reals)]
+        fields += [(f"i{ints_before + j}", endian + "i4") for j in range(ints_after)]
+        dtype = np.dtype(fields)
+        if len(body) % dtype.itemsize == 0:
+            table = np.frombuffer(body, dtype=dtype)
+            ids = table["i0"]
+            if len(ids) and np.all(ids > 0) and np.all(np.isfinite([table[f"x{j}"] for j in range(reals)])):
+                layouts.append(table)
+    if not layouts:
+        records.fail(f"{card} entries of {len(body) // 4} words in all (expected {ints_before + reals + ints_after} "
+                     f"words each, or {ints_before + 2 * reals + ints_after} in double precision)")
+    table = layouts[-1] if len(layouts) == 1 else _plausible(layouts)
+    n_ints = ints_before + ints_after
+    return [(np.array([row[f"i{j}"] for j in range(n_ints)]), np.array([row[f"x{j}"] for j in range(reals)]))
+            for row in table]
+
+
+def _plausible(layouts: list[np.ndarray]) -> np.ndarray:
+    """Of two readings of the same bytes, the one whose IDs ascend (NASTRAN sorts GEOM1 entries by ID)."""
+    for table in layouts:
+        if np.all(np.diff(table["i0"]) > 0):
+            return table
+    return layouts[0]
+
+
+def _assemble(path: Path, subcase: int, vectors: list, summaries: list[np.ndarray],
+              geometry: FileGeometry | None) -> FileModes:
+    """One subcase's vectors on the grids of its first mode, with the summary that lists its modes."""
+    table, _, _, _, ids, types, _ = vectors[0]
+    keep = types == GRID_POINT
+    skipped = tuple(int(i) for i in ids[~keep])
+    grid_ids = ids[keep]
+    modes, eigenvalues, columns = [], [], []
+    for name, where, mode, eigenvalue, ids_m, types_m, values in vectors:
+        if not np.array_equal(ids_m, ids):
+            raise MaceError(f"{path}: table {name}, {where}: the points of mode {mode} differ from those of the "
+                            f"first mode (expected the same {len(ids)} points in every mode)")
+        modes.append(mode)
+        eigenvalues.append(eigenvalue)
+        columns.append(values[keep])
+    mode_numbers = np.array(modes)
+    summary = _matching_summary(summaries, mode_numbers, np.array(eigenvalues))
+    if summary is None and not np.any(eigenvalues):
+        raise MaceError(f"{path}: table {table}, its IDENT records: the eigenvalues of subcase {subcase} are not in "
+                        "the file (every IDENT holds 0 and no LAMA table lists its modes: expected the OP2 of the "
+                        "SOL 103 run, with its LAMA)")
+    return FileModes(
+        source=path, subcase=subcase, grid_ids=np.asarray(grid_ids, dtype=int),
+        vectors=np.stack(columns, axis=2), frame="basic" if table.startswith("B") else "cd",
+        mode_numbers=mode_numbers,
+        eigenvalues=summary[:, 2] if summary is not None else np.array(eigenvalues),
+        generalized_masses=summary[:, 5] if summary is not None else None,
+        skipped_points=skipped, geometry=geometry, where=f"table {table}")
+
+
+def _matching_summary(summaries: list[np.ndarray], modes: np.ndarray, eigenvalues: np.ndarray) -> np.ndarray | None:
+    """The summary rows of ``modes`` from the LAMA that lists them with the eigenvalues of the vectors' IDENTs; when
+    the IDENTs hold no eigenvalue (all 0, as some runs write them), the only LAMA that lists those modes."""
+    candidates = []
+    for rows in summaries:
+        by_mode = {int(r[0]): r for r in rows}
+        if all(int(m) in by_mode for m in modes):
+            candidates.append(np.array([by_mode[int(m)] for m in modes]))
+    if not np.any(eigenvalues):
+        return candidates[0] if len(candidates) == 1 else None
+    scale = np.abs(eigenvalues).max()
+    for picked in candidates:
+        if np.allclose(picked[:, 2], eigenvalues, rtol=1e-6, atol=1e-6 * scale):
+            return picked
+    return None
