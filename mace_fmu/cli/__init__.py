@@ -65,7 +65,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         if details and args.verbose:
             print("\n".join(f"  {line}" for line in details), file=sys.stderr)
         elif details:
-            print(f"  ({len(details)} lines more with mace-fmu --verbose ...)", file=sys.stderr)
+            lines = "1 line" if len(details) == 1 else f"{len(details)} lines"
+            print(f"  ({lines} more with mace-fmu --verbose ...)", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("mace-fmu: interrupted", file=sys.stderr)

@@ -16,8 +16,18 @@ Guide, PARAM COUPMASS and the CBEAM/CROD remarks):
   section is a ROD, whose J equals I1 + I2; MSC's fmondsp run (pyNastran models/aero, BOX beams, not in
   the tests because two of its beams are tapered) tells them apart: with rho J L its torsion modes come
   out 1 % off NASTRAN's, with rho (I1 + I2) L within 0.1 % (the rest being the tapered beams).
-* CBEAM coupled: the consistent (Hermitian) bending mass, linear axial and torsional mass
-  (mace_fmu.fe.beam.local_mass "consistent").
+* CBEAM coupled (PARAM,COUPMASS > 0): the consistent (Hermitian) bending mass, with the axial and the
+  torsional mass lumped as above. The QRG lists CBEAM among the elements COUPMASS applies to without
+  saying which terms are coupled; NASTRAN's own run of pyNastran's nlfltr/buckled deck (MSC/NASTRAN
+  4/28/98, 71 CBEAMs, tests/data/nastran/nlfltr_buckled) decides it: all 14 elastic modes within 3.4e-7
+  this way, against 1.0e-3 with the axial mass consistent, 16 % with the torsional mass consistent and
+  42 % without it (tests/fe/test_nastran_decks.py).
+* CBAR coupled: the consistent bending mass, the axial mass (rho A + NSM) L / 420 [[175, 35], [35, 175]]
+  and no torsional inertia, as COSMIC NASTRAN's BAR element writes it (subroutine BARD, nasa/NASTRAN-95
+  mis/bard.f, "CALCULATE THE CONSISTENT/CONVENTIONAL MASS MATRIX"). MSC's pt145 run confirms the missing
+  torsional inertia (see :func:`bar_mass`); no published run with results tells the axial terms apart.
+  A consistent mass asked for by the caller rather than by the deck is mace-fmu's own: linear axial and
+  torsional mass (mace_fmu.fe.beam.local_mass "consistent") for CBAR and CBEAM alike.
 * CROD lumped: half the rod's mass on the three translations of each end; coupled: m/6 [[2, 1], [1, 2]]
   on each translation.
 * CMASS1/CMASS2: a scalar mass m between DOFs u1 and u2 adds m (u1 - u2)^2 / 2 to the kinetic energy
@@ -51,12 +61,15 @@ def bar_mass(sec: BeamSection, length: float, kind: MassKind, deck: Deck) -> np.
     NASTRAN's coupled CBAR mass (PARAM,COUPMASS > 0) has no torsional inertia: MSC's pt145 run
     (tests/data/nastran/pt145, COUPMASS 1) gives its torsion modes 236.4137 and 703.4198 Hz only without
     it (with rho (I1 + I2) L / 6 [[2, 1], [1, 2]] on the axis rotation they come out 0.026 % low). So for a
-    deck that asks for the coupled mass the torsion term of mace-fmu's consistent matrix is removed; a
-    consistent mass asked for by the caller (``mass="consistent"``) keeps it.
+    deck that asks for the coupled mass the torsion term of mace-fmu's consistent matrix is removed, and the
+    axial terms are COSMIC NASTRAN's (BARD: (rho A + NSM) L / 420 [[175, 35], [35, 175]], the mean of the
+    lumped and the consistent rod); a consistent mass asked for by the caller (``mass="consistent"``) keeps
+    mace-fmu's own matrix.
     """
     m = local_mass(sec, length, kind)
     if kind == "consistent" and coupled_mass(deck, "lumped") == "consistent":
         m[np.ix_([3, 9], [3, 9])] = 0.0
+        m[np.ix_([0, 6], [0, 6])] = sec.mass_per_length * length / 420.0 * np.array([[175.0, 35.0], [35.0, 175.0]])
     return m
 
 
@@ -71,13 +84,21 @@ def beam_section(deck: Deck, pid: int) -> BeamSection:
                        nsm=p.nsm, k1=p.k1 or None, k2=p.k2 or None)
 
 
-def beam_mass(sec: BeamSection, length: float, kind: MassKind) -> np.ndarray:
-    """12x12 CBEAM mass in element axes [kg, kg m^2]: CBAR's plus the torsional inertia NASTRAN lumps."""
+def beam_mass(sec: BeamSection, length: float, kind: MassKind, deck: Deck) -> np.ndarray:
+    """12x12 CBEAM mass in element axes [kg, kg m^2].
+
+    Lumped: CBAR's plus the torsional inertia rho (I1 + I2) L / 2 on each end's axis rotation. Coupled, as a
+    deck's PARAM,COUPMASS > 0 asks: the consistent bending mass with that lumped axial and torsional mass
+    (NASTRAN's rule; see the module docstring for the run that decides it). A consistent mass asked for by
+    the caller keeps mace-fmu's own consistent matrix.
+    """
+    if kind == "consistent" and coupled_mass(deck, "lumped") != "consistent":
+        return local_mass(sec, length, kind)
     m = local_mass(sec, length, kind)
-    if kind == "lumped":
-        polar = sec.rho * (sec.i1 + sec.i2) * length
-        m[3, 3] += polar / 2.0
-        m[9, 9] += polar / 2.0
+    lumped = local_mass(sec, length, "lumped")
+    polar = sec.rho * (sec.i1 + sec.i2) * length
+    lumped[3, 3] = lumped[9, 9] = polar / 2.0
+    m[np.ix_([0, 3, 6, 9], [0, 3, 6, 9])] = lumped[np.ix_([0, 3, 6, 9], [0, 3, 6, 9])]
     return m
 
 
@@ -110,7 +131,7 @@ def add_elements(deck: Deck, dofs: DofMap, positions: dict[int, np.ndarray], fra
         sec = beam_section(deck, beam.pid)
         idx = np.concatenate([dofs.indices(beam.ga), dofs.indices(beam.gb)])
         stiffness.add(idx, to_basic(local_stiffness(sec, length), frame))
-        mass.add(idx, to_basic(beam_mass(sec, length, kind), frame))
+        mass.add(idx, to_basic(beam_mass(sec, length, kind, deck), frame))
 
     for rod in sorted(deck.rods.values(), key=lambda r: r.id):
         if rod.pid is not None:

@@ -109,7 +109,8 @@ def gravity_load(deck: Deck, model: FEModel, load_id: int) -> np.ndarray:
     for scale, sid in terms:
         if sid not in deck.gravs:
             what = f"a {' and '.join(deck.static_loads[sid])} set" if sid in deck.static_loads else "not a GRAV card"
-            raise MaceError(f"load set {load_id}: set {sid} is {what}; the 1-g preload takes gravity loads only (GRAV), "
+            raise MaceError(f"{deck.path}: load set {load_id}: set {sid} is {what}; the 1-g preload takes gravity "
+                            "loads only (GRAV), "
                             "and the 0-g modes take no load")
         grav = deck.gravs[sid]
         accel += scale * grav.scale * (frames[grav.cid][1] @ np.array(grav.direction))

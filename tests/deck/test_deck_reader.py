@@ -72,7 +72,8 @@ def test_large_field_grid_with_star_continuation() -> None:
 
 
 def test_large_field_name_with_blanks_before_the_star_as_nastran_punches_it() -> None:
-    """``GRID   *`` (models/aero/cpmopt.pch of pyNastran, written by NASTRAN): the same card as ``GRID*``."""
+    """``GRID   *``: the same card as ``GRID*``, as NASTRAN punches ``DESVAR *`` in models/aero/cpmopt.pch of pyNastran
+    (that file as published: tests/deck/test_published_decks.py)."""
     d = deck("GRID   *               5               0            1.25            -2.5",
              "*                   3.75               0")
     assert d.grids[5].xyz == (1.25, -2.5, 3.75)
