@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from mace_fmu.cli.common import folder_argument, progress
+from mace_fmu.cli.export import platforms_option, toolchain_warnings_as_lines
 from mace_fmu.errors import MaceError
 
 
@@ -42,7 +43,9 @@ def cmd_export_controller(args: argparse.Namespace) -> int:
             raise MaceError(f"--step must be a positive number of seconds, got {args.step}")
         progress("Appendix A LQG compensator of the 0-g loop")
         controller = lqg_controller(step_s=args.step)
-    path = export_controller_fmu(controller, out_dir=args.out, name=args.name, fmi_version=args.fmi_version)
+    with toolchain_warnings_as_lines():
+        path = export_controller_fmu(controller, out_dir=args.out, name=args.name, fmi_version=args.fmi_version,
+                                     platforms=args.platforms)
     print(f"wrote {path} ({controller.a.shape[0]} states, sample time {controller.sample_time_s} s, inputs "
           f"{', '.join(controller.inputs)}, outputs {', '.join(controller.outputs)})")
     return 0
@@ -57,4 +60,5 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--name", default="controller", help="model identifier and file name (default: controller)")
     p.add_argument("--fmi-version", type=int, choices=[2, 3], default=2, help="FMI version (default 2)")
     p.add_argument("-o", "--out", type=folder_argument, default=".", help="output directory")
+    platforms_option(p)
     p.set_defaults(func=cmd_export_controller)

@@ -3,10 +3,50 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
+import sys
+import warnings
+from collections.abc import Iterator
 from pathlib import Path
 
-from mace_fmu.cli.common import deck_option, folder_argument, model_options, model_variant, progress, volts
+from mace_fmu.cli.common import (CONFIGURATIONS, deck_option, folder_argument, model_options, model_variant, progress,
+                                  volts)
 from mace_fmu.errors import MaceError
+
+
+def platforms_argument(text: str) -> list[str]:
+    """argparse ``type`` of ``--platforms``: comma-separated FMI 3 platform tuples, or ``all``; an unknown name is
+    refused at once (one line, exit 2) with the known ones."""
+    from mace_fmu.fmu.native.platforms import BY_NAME, select_platforms
+
+    if text.strip() == "all":
+        return list(BY_NAME)
+    try:
+        return [p.name for p in select_platforms(text.split(","))]
+    except MaceError as exc:
+        raise argparse.ArgumentTypeError(str(exc).removeprefix("platforms: ")) from None
+
+
+def platforms_option(p: argparse.ArgumentParser) -> None:
+    """``--platforms``: which binaries a native FMU carries (shared by export and export-controller)."""
+    from mace_fmu.fmu.native.platforms import BY_NAME
+
+    p.add_argument("--platforms", type=platforms_argument, default=None, metavar="LIST",
+                   help=f"native FMU: the platforms to carry binaries for, comma-separated, from {', '.join(BY_NAME)} "
+                        "(default: all; every FMU also carries sources/); a named platform that cannot be built is "
+                        "an error")
+
+
+@contextlib.contextmanager
+def toolchain_warnings_as_lines() -> Iterator[None]:
+    """Print the export's warnings (a platform left out for want of a toolchain) as one line each on stderr."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            yield
+        finally:
+            for warning in caught:
+                print(f"mace-fmu: warning: {warning.message}", file=sys.stderr)
 
 
 def cmd_export(args: argparse.Namespace) -> int:
@@ -15,6 +55,8 @@ def cmd_export(args: argparse.Namespace) -> int:
         raise MaceError("--fmi-version 3 needs --runtime native (pythonfmu FMUs are FMI 2.0)")
     if args.frequency_bounds and not Path(args.frequency_bounds).is_file():
         raise MaceError(f"--frequency-bounds {args.frequency_bounds}: no such file")
+    if args.platforms is not None and args.runtime != "native":
+        raise MaceError("--platforms needs --runtime native (a pythonfmu FMU has no binaries of its own)")
     if args.controller and not args.ssp:
         raise MaceError("--controller needs --ssp FILE.ssp (the controller is wired to the plant inside a package)")
     if args.ssp:
@@ -32,15 +74,18 @@ def cmd_export(args: argparse.Namespace) -> int:
     progress(f"{args.runtime} FMU {name}.fmu")
     from mace_fmu.fmu.export import export_fmu
 
-    path = export_fmu(model, runtime=args.runtime, fmi_version=args.fmi_version, out_dir=args.out, name=name,
-                      frequency_bounds=bounds)
+    with toolchain_warnings_as_lines():
+        path = export_fmu(model, runtime=args.runtime, fmi_version=args.fmi_version, out_dir=args.out, name=name,
+                          frequency_bounds=bounds, platforms=args.platforms)
     print(f"wrote {path}")
     return 0
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("export", help="FMU of the 1-g or 0-g volts-volts model (native C runtime or pythonfmu)")
-    p.add_argument("configuration", choices=["1g", "0g"])
+    p.add_argument("configuration", choices=CONFIGURATIONS,
+                   help="the deck's 1-g or 0-g structure, or 'modes': NASTRAN's modes, named by --structure FILE's "
+                        "[modes] table")
     deck_option(p)
     p.add_argument("-o", "--out", type=folder_argument, default=".",
                    help="output directory (writes e.g. MACE_1g_native.fmu; with --motion-grids "
@@ -61,5 +106,6 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--controller", metavar="FILE.fmu",
                    help="with --ssp: a controller FMU (mace-fmu export-controller) wired to the plant by signal names "
                         "(its inputs read the plant outputs of those names, its outputs drive the plant inputs)")
+    platforms_option(p)
     model_options(p)
     p.set_defaults(func=cmd_export)

@@ -38,7 +38,8 @@ def export_ssp(args: argparse.Namespace) -> int:
         progress(f"{args.runtime} FMU {name}.fmu")
         from mace_fmu.fmu.export import export_fmu
 
-        fmu = export_fmu(model, runtime=args.runtime, fmi_version=2, out_dir=tmp, name=name, frequency_bounds=bounds)
+        fmu = export_fmu(model, runtime=args.runtime, fmi_version=2, out_dir=tmp, name=name, frequency_bounds=bounds,
+                         platforms=getattr(args, "platforms", None))
         import fmpy
 
         tunable = [v.name for v in fmpy.read_model_description(str(fmu)).modelVariables

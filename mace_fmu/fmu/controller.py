@@ -15,6 +15,7 @@ compensator of the 0-g loop (:func:`lqg_controller`).
 from __future__ import annotations
 
 import re
+from collections.abc import Sequence
 from dataclasses import dataclass
 from importlib import metadata
 from pathlib import Path
@@ -28,6 +29,7 @@ from mace_fmu.fmu.native import compile as runtime
 from mace_fmu.fmu.native.export import runtime_token, write_native_fmu
 from mace_fmu.fmu.native.model_description import (INPUT_LIMIT_V, FmuVariable, fmi2_model_description,
                                                    fmi3_model_description)
+from mace_fmu.fmu.native.platforms import select_platforms
 from mace_fmu.util.atomic import atomic_path
 
 FORMAT_VERSION = 1
@@ -133,7 +135,7 @@ def _variables(controller: DiscreteController) -> list[FmuVariable]:
 
 
 def export_controller_fmu(controller: DiscreteController, *, out_dir: str | Path = ".", name: str = "controller",
-                          fmi_version: Literal[2, 3] = 2) -> Path:
+                          fmi_version: Literal[2, 3] = 2, platforms: Sequence[str] | None = None) -> Path:
     """Write ``out_dir/<name>.fmu``, the controller as a native co-simulation FMU, and return its path.
 
     Parameters
@@ -146,6 +148,9 @@ def export_controller_fmu(controller: DiscreteController, *, out_dir: str | Path
         Model identifier (a C identifier; names the binary too).
     fmi_version
         2 or 3 (co-simulation either way).
+    platforms
+        The platforms to carry binaries for (FMI 3 tuples, see :mod:`mace_fmu.fmu.native.platforms`);
+        default all five.
 
     Returns
     -------
@@ -156,6 +161,7 @@ def export_controller_fmu(controller: DiscreteController, *, out_dir: str | Path
         raise MaceError(f"FMU name must be a C identifier (it names the model and its binary), got {name!r}")
     if fmi_version not in (2, 3):
         raise MaceError(f"controller FMUs are FMI 2 or FMI 3, got FMI version {fmi_version!r}")
+    targets = select_platforms(platforms)
     data = controller_data(controller)
     sources = runtime.source_files(runtime.CONTROLLER_C_FILES)
     token = runtime_token(data, salt=f"controller fmi{fmi_version}", sources=sources)
@@ -165,8 +171,7 @@ def export_controller_fmu(controller: DiscreteController, *, out_dir: str | Path
     summary = (f"sampled-data controller: {controller.a.shape[0]} states, {len(controller.inputs)} inputs, "
                f"{len(controller.outputs)} outputs, sample time {controller.sample_time_s} s")
     c_files = [p.name for p in sources if p.suffix == ".c"]
-    platforms = [p for p in (runtime.LINUX64, runtime.WIN64) if p is runtime.LINUX64 or runtime.available(p)]
-    binaries = runtime.compile_runtimes(platforms, c_files=runtime.CONTROLLER_C_FILES)
+    binaries = runtime.compile_runtimes(targets, c_files=runtime.CONTROLLER_C_FILES, requested=platforms is not None)
     if fmi_version == 2:
         description = fmi2_model_description(variables, model_identifier=name, guid=token, description=summary,
                                              version=version, source_files=c_files, model_exchange=False,
@@ -175,4 +180,5 @@ def export_controller_fmu(controller: DiscreteController, *, out_dir: str | Path
         description = fmi3_model_description(variables, model_identifier=name, token=token, description=summary,
                                              version=version, step_size_s=controller.sample_time_s)
     return write_native_fmu(Path(out_dir) / f"{name}.fmu", name=name, fmi_version=fmi_version,
-                            description=description, data=data, binaries=binaries, sources=sources)
+                            description=description, data=data, binaries=binaries, sources=sources,
+                            c_files=runtime.CONTROLLER_C_FILES)

@@ -15,7 +15,7 @@ import re
 import sys
 import tempfile
 import zipfile
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from importlib import metadata
 from pathlib import Path
 from typing import Literal
@@ -127,7 +127,7 @@ FmuRuntime = Literal["native", "pythonfmu"]
 
 def export_fmu(model: VoltsModel, *, runtime: FmuRuntime = "native", fmi_version: int = 2, out_dir: str | Path = ".",
                name: str | None = None, arrays: dict[str, np.ndarray] | None = None,
-               frequency_bounds: Mapping[int, float] | None = None) -> Path:
+               frequency_bounds: Mapping[int, float] | None = None, platforms: Sequence[str] | None = None) -> Path:
     """Write ``model`` as an FMU ``out_dir/<name>.fmu`` and return its path: the one export call.
 
     Parameters
@@ -146,6 +146,10 @@ def export_fmu(model: VoltsModel, *, runtime: FmuRuntime = "native", fmi_version
         The model's parametric arrays if already computed.
     frequency_bounds
         1-based mode -> relative bound: the declared min/max of ``frequency_scale_mode_<k>``, 1 -+ bound.
+    platforms
+        Native runtime: the platforms to carry binaries for, FMI 3 tuples (``"x86_64-linux"``,
+        ``"aarch64-linux"``, ``"x86_64-windows"``, ``"x86_64-darwin"``, ``"aarch64-darwin"``); default all five.
+        A pythonfmu FMU runs wherever its host's Python does and takes none.
 
     Raises
     ------
@@ -162,11 +166,13 @@ def export_fmu(model: VoltsModel, *, runtime: FmuRuntime = "native", fmi_version
         from mace_fmu.fmu.native.export import export_native_fmu
 
         return export_native_fmu(model, out_dir=out_dir, name=name, fmi_version=fmi_version, arrays=arrays,
-                                 frequency_bounds=frequency_bounds)
+                                 frequency_bounds=frequency_bounds, platforms=platforms)
     if runtime != "pythonfmu":
         raise MaceError(f"runtime must be 'native' or 'pythonfmu', got {runtime!r}")
     if fmi_version != 2:
         raise MaceError(f"pythonfmu writes FMI 2.0 FMUs only, not FMI {fmi_version}: export with runtime='native'")
+    if platforms is not None:
+        raise MaceError("platforms: a pythonfmu FMU has no binaries of its own to choose (export with runtime='native')")
     return _export_pythonfmu(model, out_dir=out_dir, name=name, arrays=arrays, frequency_bounds=frequency_bounds)
 
 

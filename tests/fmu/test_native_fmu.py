@@ -4,12 +4,15 @@ FMI 2.0 co-simulation against the exact zero-order hold of the state-space model
 output's range, the bound the FMUs are held to), FMI 2.0 model exchange (derivatives against A x + B u,
 fmpy's CVode and the free response against the exact solution), FMI 3.0 co-simulation; native
 against pythonfmu with the same parameters, physical ones included, to 1e-10; misuse; a C host
-without Python (also under valgrind); libcosim; the independent checker of fmu-manipulation-toolbox.
+without Python (also under valgrind); libcosim; the independent checker of fmu-manipulation-toolbox;
+every platform's binary (tests/support/platform_checks.py), the win64 DLL under wine, the aarch64 Linux
+binary under qemu-user and sources/ built with a plain cc, each against the x86-64 Linux binary to 1e-12.
 """
 
 from __future__ import annotations
 
 import ctypes
+import os
 import shutil
 import subprocess
 import sys
@@ -30,6 +33,7 @@ from fmpy.validation import validate_fmu
 from support.fmu_checks import (check_close, initialised_slave, make_inputs, nominal_slave, rss_bytes, run_in_libcosim,
                                 run_steps, value_references, zoh_reference)
 from support.paths import SUPPORT
+from support.platform_checks import check_binaries, require_tool
 
 from mace_fmu.errors import MaceError
 from mace_fmu.fe.modes import compute_modes
@@ -844,19 +848,69 @@ def test_sources_rebuild_an_equivalent_binary(fmus, tmp_path):
     check_close(model, y, zoh_reference(model, t, u))
 
 
-def test_windows_binary_exports_the_fmi_functions(fmus, tmp_path):
-    """Where mingw-w64 is installed, the FMUs carry a win64 DLL exporting every FMI 2 and FMI 3 function."""
-    if not runtime.available(runtime.WIN64):
-        pytest.skip("x86_64-w64-mingw32-gcc is not installed")
-    objdump = shutil.which("x86_64-w64-mingw32-objdump")
+def test_every_platform_binary_is_for_its_cpu_and_exports_the_fmi_functions(fmus):
+    """linux64 / x86_64-linux, aarch64-linux, win64 / x86_64-windows, darwin64 (universal) / x86_64-darwin and
+    aarch64-darwin: each binary's CPU, its exports against the FMI headers in sources/, its build record."""
+    for fmu in (fmus.fmi2, fmus.fmi3):
+        check_binaries(fmu)
+
+
+def _zig_host(tmp_path: Path, target: str, *, suffix: str = "") -> Path:
+    """tests/support/native_host.c cross-compiled with zig for ``target``."""
+    zig = runtime.zig_command() or require_tool(None, "zig (the ziglang package)")
+    exe = tmp_path / f"native_host_{target}{suffix}"
+    subprocess.run([*zig, "cc", "-target", target, "-std=c99", "-O2", "-Wall", "-Werror", f"-I{RUNTIME_DIR}", "-o",
+                    str(exe), str(HOST_SOURCE), *(["-ldl"] if "linux" in target else [])], check=True)
+    return exe
+
+
+def _with_linux64_binary(fmus, folder: Path, binary: bytes) -> SimpleNamespace:
+    """A copy of the extracted FMI 2 FMU whose binaries/linux64 holds ``binary`` (where the C host looks)."""
+    shutil.copytree(fmus.dir2, folder)
+    (folder / "binaries" / "linux64" / f"{fmus.fmi2.stem}.so").write_bytes(binary)
+    return SimpleNamespace(model=fmus.model, dir2=str(folder))
+
+
+def test_aarch64_linux_binary_runs_under_qemu_like_the_x86_64_one(fmus, host, tmp_path):
+    """The C host cross-compiled for aarch64 Linux runs the FMU's aarch64-linux binary under qemu-user (Debian's
+    qemu-user, the sysroot of libc6-arm64-cross) and gives the x86-64 binary's outputs to 1e-12."""
+    qemu = require_tool(shutil.which("qemu-aarch64"), "qemu-aarch64 (Debian package qemu-user)")
+    sysroot = require_tool("/usr/aarch64-linux-gnu/lib/ld-linux-aarch64.so.1",
+                           "the aarch64 glibc sysroot (Debian package libc6-arm64-cross)")
+    if fmus.model.structure_modes.structure.configuration != "0g":
+        pytest.skip("one model suffices")
     with zipfile.ZipFile(fmus.fmi2) as z:
-        dll = tmp_path / "runtime.dll"
-        dll.write_bytes(z.read(f"binaries/win64/{fmus.fmi2.stem}.dll"))
-    table = subprocess.run([objdump, "-p", str(dll)], capture_output=True, text=True, check=True).stdout
-    so = Path(fmus.dir2) / "binaries" / "linux64" / f"{fmus.fmi2.stem}.so"
-    linux = subprocess.run(["nm", "-D", "--defined-only", str(so)], capture_output=True, text=True, check=True).stdout
-    exported = {line.split()[-1] for line in linux.splitlines() if " T fmi" in line}
-    assert len(exported) > 100 and all(name in table for name in exported)
+        arm = z.read(f"binaries/aarch64-linux/{fmus.fmi2.stem}.so")
+    exe = _zig_host(tmp_path, "aarch64-linux-gnu.2.17")
+    u = make_inputs("multisine", np.arange(0.0, 0.2, 2e-3), fmus.model.system.ninputs)
+    y_x86, _ = _run_host(host, fmus, tmp_path, step=2e-3, u=u)
+    y_arm, _ = _run_host(exe, _with_linux64_binary(fmus, tmp_path / "arm", arm), tmp_path, step=2e-3, u=u,
+                         wrapper=[qemu, "-L", str(Path(sysroot).parents[1])])
+    assert np.ptp(y_x86) > 0
+    print(f"aarch64 under qemu against x86-64: {np.max(np.abs(y_arm - y_x86)) / np.max(np.abs(y_x86)):.1e}")
+    assert np.max(np.abs(y_arm - y_x86)) <= 1e-12 * np.max(np.abs(y_x86))
+
+
+def test_sources_built_with_a_plain_cc_give_the_shipped_binarys_outputs(fmus, host, tmp_path):
+    """What a host on a platform without a binary does: compile the FMU's own sources/ with the system's
+    cc (gcc here, not zig). Its outputs equal the shipped linux64 binary's to 1e-12 and the exact ZOH."""
+    cc = require_tool(shutil.which("cc"), "a C compiler (cc)")
+    if fmus.model.structure_modes.structure.configuration != "0g":
+        pytest.skip("one model suffices")
+    sources = Path(fmus.dir2) / "sources"
+    library = tmp_path / "plain.so"
+    subprocess.run([cc, "-std=c99", "-O2", "-shared", "-fPIC", f"-I{sources}", "-o", str(library),
+                    *map(str, sorted(sources.glob("*.c"))), "-lm"], check=True)
+    model, step = fmus.model, 2e-3
+    t = np.arange(0.0, 0.3 + step / 2, step)
+    u = make_inputs("multisine", t, model.system.ninputs)
+    y_shipped, _ = _run_host(host, fmus, tmp_path, step=step, u=u[:, :-1])
+    y_plain, _ = _run_host(host, _with_linux64_binary(fmus, tmp_path / "plain", library.read_bytes()), tmp_path,
+                           step=step, u=u[:, :-1])
+    difference = np.max(np.abs(y_plain - y_shipped)) / np.max(np.abs(y_shipped))
+    print(f"plain cc build against the shipped binary: {difference:.1e}")
+    assert difference <= 1e-12
+    check_close(model, y_plain, zoh_reference(model, t, u))
 
 
 def test_models_without_a_modal_form_step_exactly_in_the_dense_form(tmp_path):
@@ -891,22 +945,18 @@ def test_the_nominal_models_step_in_the_decoupled_modal_form(fmus):
 
 
 def test_windows_binary_runs_under_wine_like_the_linux_one(fmus, host, tmp_path):
-    """Where mingw-w64 and wine64 are installed: the C host cross-compiled for Windows runs the FMU's
-    win64 DLL under wine and gives the Linux binary's outputs."""
-    wine = shutil.which("wine64") or ("/usr/lib/wine/wine64" if Path("/usr/lib/wine/wine64").exists() else None)
-    if not (runtime.available(runtime.WIN64) and wine):
-        pytest.skip("needs x86_64-w64-mingw32-gcc and wine64")
+    """The C host cross-compiled for Windows with zig runs the FMU's win64 DLL under wine64 and gives the
+    Linux binary's outputs to 1e-12."""
+    wine = require_tool(shutil.which("wine64") or "/usr/lib/wine/wine64", "wine64 (Debian package wine64)")
     if fmus.model.structure_modes.structure.configuration != "0g":
         pytest.skip("one model suffices")
-    exe = tmp_path / "native_host.exe"
-    subprocess.run([runtime.WIN64.compiler, "-std=c99", "-O2", "-Wall", "-Werror", f"-I{RUNTIME_DIR}", "-o", str(exe),
-                    str(HOST_SOURCE)], check=True)
+    exe = _zig_host(tmp_path, "x86_64-windows-gnu", suffix=".exe")
     model = fmus.model
     u = make_inputs("multisine", np.arange(0.0, 0.2, 2e-3), model.system.ninputs)
     y_linux, _ = _run_host(host, fmus, tmp_path, step=2e-3, u=u)
     md = fmpy.read_model_description(fmus.dir2)
     vr = _vr(fmus.dir2)
-    env = {**__import__("os").environ, "WINEPREFIX": str(tmp_path / "wineprefix"), "WINEDEBUG": "-all"}
+    env = {**os.environ, "WINEPREFIX": str(tmp_path / "wineprefix"), "WINEDEBUG": "-all"}
     done = subprocess.run([wine, str(exe), f"Z:{fmus.dir2}", md.coSimulation.modelIdentifier, md.guid, repr(2e-3),
                            str(u.shape[1]), f"Z:{tmp_path / 'u.bin'}", f"Z:{tmp_path / 'y_windows.bin'}",
                            ",".join(str(vr[n]) for n in model.system.input_labels),
@@ -914,4 +964,6 @@ def test_windows_binary_runs_under_wine_like_the_linux_one(fmus, host, tmp_path)
                           capture_output=True, text=True, env=env, timeout=900)
     assert done.returncode == 0, done.stderr
     y_windows = np.fromfile(tmp_path / "y_windows.bin", dtype="<f8").reshape(u.shape[1] + 1, -1).T
+    assert np.ptp(y_linux) > 0
+    print(f"win64 under wine against x86-64 Linux: {np.max(np.abs(y_windows - y_linux)) / np.max(np.abs(y_linux)):.1e}")
     assert np.max(np.abs(y_windows - y_linux)) <= 1e-12 * np.max(np.abs(y_linux))

@@ -1,5 +1,6 @@
 """The native runtime's layers (mace_fmu/fmu/native/c/README.md): each prefix is one layer, a file
-calls only its own layer and the layers below it, and the sources compile without a warning."""
+calls only its own layer and the layers below it, and the sources compile without a warning (gcc, and zig's
+clang for every platform the FMUs carry)."""
 
 from __future__ import annotations
 
@@ -10,7 +11,9 @@ from pathlib import Path
 
 import pytest
 
+from mace_fmu.fmu.native import compile as runtime
 from mace_fmu.fmu.native.compile import SOURCE_DIR
+from mace_fmu.fmu.native.platforms import PLATFORMS
 
 #: layer of each call prefix, from the bottom (numerics) up
 LAYER_OF_PREFIX = {"ml": 0, "zoh": 0, "mace": 1, "mi": 2}
@@ -41,6 +44,24 @@ def test_the_runtime_compiles_without_a_warning_under_wall_wextra():
     done = subprocess.run(["gcc", "-std=c99", "-O2", "-Wall", "-Wextra", "-Werror", "-fsyntax-only",
                            f"-I{SOURCE_DIR}", *files], capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("platform", PLATFORMS, ids=lambda p: p.name)
+def test_the_runtime_compiles_without_a_warning_for_every_platform(platform, tmp_path):
+    """The same -Wall -Wextra -Werror check with zig's clang for each target: its headers (mingw-w64's, macOS's)
+    and its 32-bit `long` on Windows show what gcc on Linux does not."""
+    zig = runtime.zig_command()
+    if zig is None:
+        pytest.skip("zig (the ziglang package) is not installed")
+    assert set(runtime.C_FILES) | set(runtime.CONTROLLER_C_FILES) == set(LAYER_OF_FILE)
+    for kind, c_files in (("plant", runtime.C_FILES), ("controller", runtime.CONTROLLER_C_FILES)):
+        # clang's warnings come from its front end: an unoptimised build sees them all and compiles fastest
+        done = subprocess.run([*zig, "cc", "-target", platform.target, "-std=c99", "-O0", "-Wall", "-Wextra", "-Werror",
+                               "-shared", "-fPIC", f"-I{SOURCE_DIR}", "-o", str(tmp_path / f"{kind}{platform.suffix}"),
+                               *(str(SOURCE_DIR / f) for f in c_files), "-lm"], capture_output=True, text=True,
+                              cwd=tmp_path)
+        assert done.returncode == 0, done.stderr
 
 
 def test_the_data_files_codes_are_the_runtimes_enums():

@@ -1,5 +1,5 @@
 """The native FMUs: one C runtime for FMI 2 and FMI 3, its model descriptions, its resource file of
-model arrays, and its compilation (gcc; mingw-w64 for Windows where installed)."""
+model arrays, and its compilation for Linux, Windows and macOS on x86-64 and ARM (zig)."""
 
 from __future__ import annotations
 

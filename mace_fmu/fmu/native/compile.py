@@ -1,22 +1,37 @@
-"""Compile the C runtime of native FMUs into a shared library for a platform (gcc, mingw-w64).
+"""Compile the C runtime of native FMUs into a shared library for each platform with zig's C compiler.
 
-The runtime does not depend on the model (the model is data), so one compilation serves every
-FMU a process exports; it is cached per platform and source digest. The flags are portable:
-no -march=native and no -ffast-math (the exact zero-order hold relies on IEEE arithmetic).
+The ``ziglang`` package (a dependency, so ``pip install`` brings it) cross-compiles for every target of
+:mod:`mace_fmu.fmu.native.platforms` from any machine, with its own libc headers and import stubs: one
+compiler, one flag set, five targets. The runtime does not depend on the model (the model is data), so
+one compilation per platform and source version serves every FMU: it is cached on disk (``cache_dir``)
+under a key of the sources, flags, target and zig version, and the targets compile side by side. The
+flags are portable: no -march=native and no -ffast-math, and -ffp-contract=off so that no target fuses
+a*b+c into one rounding (ARM would by default), keeping the exact zero-order hold's IEEE arithmetic
+the same on every platform.
+
+Each platform is compiled in a folder laid out as the FMU's ``sources/`` (the C files flat), with relative
+paths, so the command recorded in the FMU's ``sources/build_info.json`` rebuilds the same binary there.
 """
 
 from __future__ import annotations
 
 import functools
-from concurrent.futures import ThreadPoolExecutor
 import hashlib
+import importlib.util
+import json
+import os
 import shutil
 import subprocess
+import sys
 import tempfile
-from dataclasses import dataclass
+import warnings
+from collections.abc import Sequence
+from concurrent.futures import ThreadPoolExecutor
+from importlib import metadata
 from pathlib import Path
 
 from mace_fmu.errors import MaceError
+from mace_fmu.fmu.native.platforms import PLATFORMS, Platform, entry_path
 
 SOURCE_DIR = Path(__file__).with_name("c")
 #: the plant runtime's C files, in link order; the FMI headers and their licence go into sources/ too
@@ -25,24 +40,11 @@ C_FILES = ("mace_linalg.c", "mace_data.c", "mace_zoh.c", "mace_model.c", "mace_i
 #: the sampled-data controller's: the same FMI layers over another implementation of mace_model.h
 CONTROLLER_C_FILES = ("mace_linalg.c", "mace_data.c", "controller/mace_discrete.c", "mace_instance.c", "fmi2_api.c",
                       "fmi3_api.c")
-CFLAGS = ("-std=c99", "-O3", "-fPIC", "-shared", "-fvisibility=hidden")
-
-
-@dataclass(frozen=True)
-class Platform:
-    """A target of the runtime: its compiler and where FMI 2 and FMI 3 put its binary."""
-
-    name: str
-    compiler: str
-    suffix: str
-    fmi2_folder: str
-    fmi3_folder: str
-    extra_flags: tuple[str, ...] = ()
-
-
-LINUX64 = Platform("linux64", "gcc", ".so", "linux64", "x86_64-linux", ("-lm",))
-WIN64 = Platform("win64", "x86_64-w64-mingw32-gcc", ".dll", "win64", "x86_64-windows",
-                 ("-static-libgcc", "-lm"))
+#: every target gets these (the C standard, optimisation, exports only what the FMI headers mark)
+CFLAGS = ("-std=c99", "-O3", "-fPIC", "-shared", "-fvisibility=hidden", "-ffp-contract=off", "-g0")
+#: the library file each platform's compilation writes (its name inside the FMU is the model identifier's)
+OUTPUT_STEM = "mace_runtime"
+BUILD_INFO = "build_info.json"
 
 
 def source_files(c_files: tuple[str, ...] = C_FILES) -> list[Path]:
@@ -55,56 +57,136 @@ def source_files(c_files: tuple[str, ...] = C_FILES) -> list[Path]:
     return sorted(shared + [SOURCE_DIR / f for f in c_files], key=lambda p: p.name)
 
 
-def _digest(c_files: tuple[str, ...]) -> str:
+def sources_digest(files: Sequence[Path]) -> str:
+    """SHA-256 over the names and contents of ``files`` in name order (the FMU's sources/, read back in tests)."""
     h = hashlib.sha256()
-    for path in source_files(c_files):
+    for path in sorted(files, key=lambda p: p.name):
         h.update(path.name.encode() + b"\0" + path.read_bytes())
     return h.hexdigest()
 
 
+def zig_command() -> list[str] | None:
+    """The command that runs zig: the ``ziglang`` package's, else a ``zig`` on PATH, else None."""
+    if importlib.util.find_spec("ziglang") is not None:
+        return [sys.executable, "-m", "ziglang"]
+    zig = shutil.which("zig")
+    return [zig] if zig else None
+
+
+@functools.lru_cache(maxsize=1)
+def zig_version() -> str:
+    """zig's version (the package's metadata when it is the ``ziglang`` package: no process started)."""
+    if importlib.util.find_spec("ziglang") is not None:
+        return metadata.version("ziglang")
+    command = zig_command()
+    if command is None:
+        raise MaceError("zig is not installed (pip install ziglang)")
+    return subprocess.run([*command, "version"], capture_output=True, text=True, check=True).stdout.strip()
+
+
 def available(platform: Platform) -> bool:
-    """Whether this machine has the platform's compiler."""
-    return shutil.which(platform.compiler) is not None
+    """Whether this machine can build ``platform``'s binary (zig targets every platform from any host)."""
+    return zig_command() is not None
 
 
-@functools.lru_cache(maxsize=8)
-def _compile_cached(platform: Platform, c_files: tuple[str, ...], digest: str) -> bytes:
+def cache_dir() -> Path:
+    """Where compiled runtimes are kept: $MACE_FMU_CACHE_DIR, else $XDG_CACHE_HOME/mace-fmu, else ~/.cache/mace-fmu."""
+    if os.environ.get("MACE_FMU_CACHE_DIR"):
+        return Path(os.environ["MACE_FMU_CACHE_DIR"])
+    base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
+    return Path(base) / "mace-fmu"
+
+
+def build_command(platform: Platform, c_files: tuple[str, ...]) -> list[str]:
+    """The compile command of ``platform``'s binary, run in the FMU's sources/ folder (``zig`` = zig's command)."""
+    return ["zig", "cc", "-target", platform.target, *CFLAGS, "-I.", "-o", f"{OUTPUT_STEM}{platform.suffix}",
+            *(Path(f).name for f in c_files), "-lm"]
+
+
+def _cache_key(platform: Platform, c_files: tuple[str, ...]) -> str:
+    h = hashlib.sha256(json.dumps([zig_version(), build_command(platform, c_files)]).encode())
+    h.update(sources_digest(source_files(c_files)).encode())
+    return h.hexdigest()[:24]
+
+
+def _compile(platform: Platform, c_files: tuple[str, ...]) -> bytes:
+    command = zig_command()
     with tempfile.TemporaryDirectory(prefix="mace_fmu_cc_") as tmp:
-        out = Path(tmp) / f"runtime{platform.suffix}"
-        command = [platform.compiler, *CFLAGS, f"-I{SOURCE_DIR}", "-o", str(out),
-                   *(str(SOURCE_DIR / f) for f in c_files), *platform.extra_flags]
-        done = subprocess.run(command, capture_output=True, text=True)
+        for path in source_files(c_files):
+            shutil.copyfile(path, Path(tmp) / path.name)
+        argv = [*command, *build_command(platform, c_files)[1:]]
+        done = subprocess.run(argv, capture_output=True, text=True, cwd=tmp, check=False)
         if done.returncode != 0:
             raise MaceError(f"compiling the native FMU runtime for {platform.name} failed:\n{done.stderr.strip()}")
-        return out.read_bytes()
+        return (Path(tmp) / f"{OUTPUT_STEM}{platform.suffix}").read_bytes()
 
 
-def compile_runtime(platform: Platform = LINUX64, *, c_files: tuple[str, ...] = C_FILES) -> bytes:
-    """A runtime's shared library for ``platform`` (compiled once per process and source version).
+@functools.lru_cache(maxsize=32)
+def _compile_cached(platform: Platform, c_files: tuple[str, ...], key: str) -> bytes:
+    cached = cache_dir() / f"{OUTPUT_STEM}-{key}-{platform.name}{platform.suffix}"
+    if cached.is_file():
+        return cached.read_bytes()
+    binary = _compile(platform, c_files)
+    try:  # an unwritable cache costs a compilation per process, nothing else
+        cached.parent.mkdir(parents=True, exist_ok=True)
+        with tempfile.NamedTemporaryFile(dir=cached.parent, delete=False, prefix=".tmp-") as f:
+            f.write(binary)
+        os.replace(f.name, cached)  # atomic: parallel exports (pytest-xdist) never read half a file
+    except OSError:
+        pass
+    return binary
+
+
+def compile_runtime(platform: Platform = PLATFORMS[0], *, c_files: tuple[str, ...] = C_FILES) -> bytes:
+    """A runtime's shared library for ``platform`` (compiled once per source version and platform, then cached).
 
     Parameters
     ----------
     platform : Platform
-        Compiler, flags and binary folder names (default: linux64 with gcc; win64 with mingw-w64).
+        Target and binary folder names (default: x86_64 Linux).
     c_files : tuple of str
         The runtime's C sources, in link order.
 
     Returns
     -------
     bytes
-        The shared library (.so or .dll).
+        The shared library (.so, .dll or .dylib).
 
     Raises
     ------
     MaceError
-        The compiler is missing or fails (its messages included).
+        zig is missing or fails (its messages included).
     """
     if not available(platform):
-        raise MaceError(f"no C compiler for {platform.name}: {platform.compiler} is not installed")
-    return _compile_cached(platform, c_files, _digest(c_files))
+        raise MaceError(f"no C toolchain for {platform.name}: zig is not installed (pip install ziglang)")
+    return _compile_cached(platform, c_files, _cache_key(platform, c_files))
 
 
-def compile_runtimes(platforms: list[Platform], *, c_files: tuple[str, ...] = C_FILES) -> dict[Platform, bytes]:
-    """The runtime (plant by default) for each of ``platforms``, the compilers running side by side."""
-    with ThreadPoolExecutor(max_workers=max(1, len(platforms))) as pool:
-        return dict(zip(platforms, pool.map(functools.partial(compile_runtime, c_files=c_files), platforms)))
+def compile_runtimes(platforms: Sequence[Platform], *, c_files: tuple[str, ...] = C_FILES,
+                     requested: bool = False) -> dict[Platform, bytes]:
+    """The runtime (plant by default) for each of ``platforms``, compiled side by side.
+
+    A platform without a toolchain is an error when the caller ``requested`` it by name, and one warning
+    line otherwise (the FMU then carries sources/ for it, which a host can compile).
+    """
+    missing = [p for p in platforms if not available(p)]
+    if missing:
+        line = f"no C toolchain for {', '.join(p.name for p in missing)}: zig is not installed (pip install ziglang)"
+        if requested:
+            raise MaceError(line)
+        warnings.warn(line + "; the FMU carries sources/ for them", stacklevel=3)
+    todo = [p for p in platforms if p not in missing]
+    with ThreadPoolExecutor(max_workers=max(1, len(todo))) as pool:
+        return dict(zip(todo, pool.map(functools.partial(compile_runtime, c_files=c_files), todo)))
+
+
+def build_info(binaries: dict[Platform, bytes], *, c_files: tuple[str, ...], fmi_version: int, name: str) -> bytes:
+    """sources/build_info.json: the toolchain, the sources' digest and, per platform, the command, the
+    SHA-256 of the binary it made and the archive entry holding it (in FMI 2 the macOS binaries are the
+    slices of the one universal ``darwin64`` file)."""
+    info = {"toolchain": f"zig {zig_version()} (PyPI package ziglang)" if binaries else None,
+            "sources_sha256": sources_digest(source_files(c_files)),
+            "binaries": [{"platform": p.name, "archive_entry": entry_path(p, fmi_version=fmi_version, name=name),
+                          "command": build_command(p, c_files), "output": f"{OUTPUT_STEM}{p.suffix}",
+                          "sha256": hashlib.sha256(b).hexdigest()} for p, b in binaries.items()]}
+    return (json.dumps(info, indent=1) + "\n").encode()

@@ -3,9 +3,10 @@
 No code is generated per model: the runtime (``mace_fmu/fmu/native/c``, compiled once per
 process) reads ``resources/mace_model.bin`` (see :mod:`mace_fmu.fmu.native.resource`) and rebuilds
 the model for its parameters at initialisation. FMI 2.0 FMUs offer co-simulation and model
-exchange; FMI 3.0 FMUs co-simulation. Each carries ``binaries/`` for Linux x86-64 (and Windows
-x86-64 where a mingw-w64 cross-compiler is installed) and ``sources/`` so that a host on another
-platform can build its own binary (e.g. ``fmpy.build.build_platform_binary``).
+exchange; FMI 3.0 FMUs co-simulation. Each carries ``binaries/`` for Linux, Windows and macOS on x86-64
+and ARM (:mod:`mace_fmu.fmu.native.platforms`, compiled with zig), ``sources/`` so that a host on another
+platform can build its own binary (e.g. ``fmpy.build.build_platform_binary`` or a plain ``cc``), and
+``sources/build_info.json``, the command that made each binary.
 """
 
 from __future__ import annotations
@@ -13,7 +14,7 @@ from __future__ import annotations
 import hashlib
 import re
 import uuid
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from importlib import metadata
 from pathlib import Path
 from typing import Literal
@@ -25,6 +26,7 @@ from mace_fmu.fmu.naming import model_fmu_name
 from mace_fmu.fmu.native import compile as runtime
 from mace_fmu.fmu.native.model_description import (JacobianPattern, fmi2_model_description, fmi3_build_description,
                                                    fmi3_model_description, fmu_variables)
+from mace_fmu.fmu.native.platforms import binary_entries, select_platforms
 from mace_fmu.fmu.native.resource import count_of, resource_bytes, runtime_arrays
 from mace_fmu.fmu.variables import model_summary
 from mace_fmu.iomodel.parametric import ParametricSystem
@@ -46,7 +48,7 @@ def runtime_token(data: dict, *, salt: str, sources: list[Path]) -> str:
 
 
 def write_native_fmu(final: Path, *, name: str, fmi_version: int, description: bytes, data: dict,
-                     binaries: dict, sources: list[Path]) -> Path:
+                     binaries: dict, sources: list[Path], c_files: tuple[str, ...]) -> Path:
     """Zip a native FMU atomically: its model description, runtime data, binaries and C sources.
 
     Parameters
@@ -62,27 +64,30 @@ def write_native_fmu(final: Path, *, name: str, fmi_version: int, description: b
     data : dict
         The runtime's arrays (resources/mace_model.bin).
     binaries : dict
-        Platform -> shared library bytes.
+        Platform -> shared library bytes (:func:`~mace_fmu.fmu.native.compile.compile_runtimes`).
     sources : list of Path
         The C sources shipped in ``sources/``.
+    c_files : tuple of str
+        The runtime's C files in the order they were compiled (recorded in ``sources/build_info.json``).
 
     Returns
     -------
     Path
         ``final``, written atomically.
     """
-    c_files = [p.name for p in sources if p.suffix == ".c"]
+    source_names = [p.name for p in sources if p.suffix == ".c"]
     with atomic_zip(final) as z:
         z.writestr("modelDescription.xml", description)
         z.writestr(f"resources/{RESOURCE_NAME}", resource_bytes(data))
-        for platform, binary in binaries.items():
-            folder = platform.fmi2_folder if fmi_version == 2 else platform.fmi3_folder
-            z.writestr(f"binaries/{folder}/{name}{platform.suffix}", binary)
+        for entry, binary in binary_entries(binaries, fmi_version=fmi_version, name=name).items():
+            z.writestr(entry, binary)
         for path in sources:
             z.write(path, f"sources/{path.name}")
+        z.writestr(f"sources/{runtime.BUILD_INFO}",
+                   runtime.build_info(binaries, c_files=c_files, fmi_version=fmi_version, name=name))
         if fmi_version == 3:
             z.writestr("sources/buildDescription.xml",
-                       fmi3_build_description(model_identifier=name, source_files=c_files))
+                       fmi3_build_description(model_identifier=name, source_files=source_names))
     return final
 
 
@@ -110,7 +115,8 @@ def jacobian_pattern(system: ParametricSystem, *, samples: int = 2, seed: int = 
 
 def export_native_fmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str | None = None,
                       fmi_version: FmiVersion = 2, arrays: dict[str, np.ndarray] | None = None,
-                      frequency_bounds: Mapping[int, float] | None = None) -> Path:
+                      frequency_bounds: Mapping[int, float] | None = None,
+                      platforms: Sequence[str] | None = None) -> Path:
     """Write a native FMU (the C runtime, compiled here) of ``model`` and return its path.
 
     Parameters
@@ -131,6 +137,10 @@ def export_native_fmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str
     frequency_bounds : mapping of int to float, optional
         1-based mode -> relative bound: the declared min/max of that mode's ``frequency_scale_mode_<k>``,
         1 -+ bound.
+    platforms : sequence of str, optional
+        The platforms to carry binaries for, FMI 3 tuples (``"x86_64-linux"``, ``"aarch64-linux"``,
+        ``"x86_64-windows"``, ``"x86_64-darwin"``, ``"aarch64-darwin"``); default all five. One named here
+        that cannot be built is an error; without zig the default set is one warning and sources/ only.
 
     Returns
     -------
@@ -140,13 +150,15 @@ def export_native_fmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str
     Raises
     ------
     MaceError
-        A name that is not a C identifier, an FMI version other than 2 or 3, a compiler failure.
+        A name that is not a C identifier, an FMI version other than 2 or 3, an unknown platform, a
+        compiler failure.
     """
     name = name or model_fmu_name(model)
     if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", name):
         raise MaceError(f"FMU name must be a C identifier (it names the model and its binary), got {name!r}")
     if fmi_version not in (2, 3):
         raise MaceError(f"native FMUs are FMI 2 or FMI 3, got FMI version {fmi_version!r}")
+    targets = select_platforms(platforms)
     arrays = parametric_arrays(model) if arrays is None else arrays
     if frequency_bounds:
         arrays = with_frequency_bounds(arrays, frequency_bounds)
@@ -162,8 +174,7 @@ def export_native_fmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str
     version = metadata.version("mace-fmu")
     sources = runtime.source_files()
     c_files = [p.name for p in sources if p.suffix == ".c"]
-    platforms = [p for p in (runtime.LINUX64, runtime.WIN64) if p is runtime.LINUX64 or runtime.available(p)]
-    binaries = runtime.compile_runtimes(platforms)
+    binaries = runtime.compile_runtimes(targets, requested=platforms is not None)
     if fmi_version == 2:
         description = fmi2_model_description(variables, model_identifier=name, guid=token,
                                              description=model_summary(model), version=version, source_files=c_files,
@@ -173,4 +184,5 @@ def export_native_fmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str
         description = fmi3_model_description(variables, model_identifier=name, token=token,
                                              description=model_summary(model), version=version)
     return write_native_fmu(Path(out_dir) / f"{name}.fmu", name=name, fmi_version=fmi_version,
-                            description=description, data=data, binaries=binaries, sources=sources)
+                            description=description, data=data, binaries=binaries, sources=sources,
+                            c_files=runtime.C_FILES)
