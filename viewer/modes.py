@@ -83,6 +83,7 @@ def animate_modes(structure_modes: StructureModes, modes: Sequence[int | str], *
         blocks.append(np.sin(phase)[:, None, None] * (sc * shape)[None])
         hz = structure_modes.frequencies_hz[index - 1]
         label = structure_modes.labels[index - 1] if structure_modes.labels else ""
+        label = "" if label == f"mode {index}" else label  # NASTRAN's modes: the label says nothing more
         clips.append(Clip(title=f"mode {index}: {hz_text(hz, decimals=3)} Hz {label}".rstrip(),
                           start_s=k * per_mode / fps, end_s=(k + 1) * per_mode / fps, motion_scale=sc))
     blocks.append(np.zeros((1,) + blocks[0].shape[1:]))  # close the loop at rest

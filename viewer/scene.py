@@ -7,6 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mace_fmu.fe.modes import StructureModes
+from mace_fmu.iomodel.modal_source import ModalStructure
 
 #: RGB colours by component name prefix (``mace_em.toml`` [components]); anything else is "other".
 COMPONENT_COLOURS: dict[str, int] = {
@@ -68,10 +69,15 @@ def tube_outer_radius_m(area_m2: float, inertia_m4: float) -> float:
     return float(np.sqrt(max(4.0 * inertia_m4 / area_m2 + area_m2 / np.pi, 0.0) / 2.0))
 
 
-def build_scene(structure_modes: StructureModes, *, segments_per_bar: int = 4) -> Scene:
-    """Bodies of a computed structure: each CBAR in ``segments_per_bar`` pieces, each CONM2 a sphere."""
+def build_scene(structure_modes: StructureModes | ModalStructure, *, segments_per_bar: int = 4) -> Scene:
+    """Bodies of a computed structure: each CBAR in ``segments_per_bar`` pieces, each CONM2 a sphere; for
+    NASTRAN's modes (a ModalStructure) the grids and the geometry deck's element edges (viewer.outline)."""
     if segments_per_bar < 1:
         raise ValueError(f"segments_per_bar must be >= 1, got {segments_per_bar}")
+    if isinstance(structure_modes, ModalStructure):
+        from viewer.outline import outline_scene
+
+        return outline_scene(structure_modes)
     deck = structure_modes.structure.deck
     dofs = structure_modes.model.dofs
     spec = structure_modes.structure.spec

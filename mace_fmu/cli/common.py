@@ -163,6 +163,19 @@ def parameters(args: argparse.Namespace):
 
 _FROM_ARGS = object()
 
+#: the configuration argument's choices: a deck's 1-g and 0-g structures, or NASTRAN's modes ([modes] table)
+CONFIGURATIONS = ("1g", "0g", "modes")
+
+
+def modal_structure_of(args: argparse.Namespace, *, parameter_set=None):
+    """The structure of configuration ``modes``: NASTRAN's modes, which --structure FILE's [modes] table names."""
+    from mace_fmu.iomodel.modal_source import modal_structure
+
+    if not getattr(args, "structure_file", None):
+        raise MaceError("configuration 'modes' needs --structure FILE, a structure file whose [modes] table names "
+                        "NASTRAN's modes (OP2 or punch)")
+    return modal_structure(args.structure_file, parameters=parameter_set)
+
 
 def volts(args: argparse.Namespace, *, parameter_set=_FROM_ARGS, every_grid_moves: bool = False):
     """The volts-volts model the command line asks for (model_options), errors as one message.
@@ -179,6 +192,11 @@ def volts(args: argparse.Namespace, *, parameter_set=_FROM_ARGS, every_grid_move
     electronics = ModelledElectronics(servos=not args.no_servos, bessel=args.bessel, delays=not args.no_delays,
                                       pade_order=args.pade_order)
     grids = "all" if every_grid_moves else motion_grids(getattr(args, "motion_grids", None))
+    if args.configuration == "modes":  # NASTRAN's modes: the structure file's [modes] table, no deck solved
+        modes = modal_structure_of(args, parameter_set=parameters(args) if parameter_set is _FROM_ARGS
+                                   else parameter_set)
+        return volts_model(modes, electronics=electronics, signals=SignalSelection(motion_grids=grids),
+                           max_hz=args.max_hz)
     modes = compute_modes(read_deck(args.deck), configuration=args.configuration, preload=args.preload,
                           max_hz=args.max_hz, structure_file=getattr(args, "structure_file", None),
                           parameters=parameters(args) if parameter_set is _FROM_ARGS else parameter_set)

@@ -8,7 +8,7 @@ import sys
 
 import numpy as np
 
-from mace_fmu.cli.common import deck_option, model_options, volts
+from mace_fmu.cli.common import CONFIGURATIONS, deck_option, model_options, volts
 from mace_fmu.util.atomic import atomic_path, write_text_atomic
 
 
@@ -54,7 +54,9 @@ def cmd_model(args: argparse.Namespace) -> int:
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("model", help="volts-volts state-space model of the 1-g or 0-g structure")
-    p.add_argument("configuration", choices=["1g", "0g"])
+    p.add_argument("configuration", choices=CONFIGURATIONS,
+                   help="the deck's 1-g or 0-g structure, or 'modes': NASTRAN's modes, named by --structure FILE's "
+                        "[modes] table")
     deck_option(p)
     p.add_argument("--poles", action="store_true", help="closed-loop poles next to Table 4.7 (1g) or 5.2 (0g)")
     p.add_argument("--list-max-hz", type=float, default=60.0, help="with --poles: list all poles up to this [Hz]")

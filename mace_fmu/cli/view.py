@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from mace_fmu.cli.common import deck_option, model_options, progress, progress_bar, volts
+from mace_fmu.cli.common import CONFIGURATIONS, deck_option, model_options, progress, progress_bar, volts
 from mace_fmu.errors import MaceError
 
 #: viewer.camera.CAMERA_VIEWS, spelled out so that `mace-fmu --help` does not import meshcat
@@ -57,7 +57,7 @@ def _need_target(args: argparse.Namespace) -> None:
                         "use --html and open the page in a browser")
 
 
-def _check_signals(args: argparse.Namespace, deck) -> str:
+def _check_signals(args: argparse.Namespace, deck, *, modal=None) -> str:
     """Check --output (a sensor or a grid motion of this structure) and the run's times; returns the output.
 
     --input is checked by argparse (its choices). The default output is the sensor collocated
@@ -73,7 +73,7 @@ def _check_signals(args: argparse.Namespace, deck) -> str:
 
     input_signal(args.signal, communication_times(duration_s=args.duration, step_s=args.step),
                  amplitude_v=args.amplitude, chirp_hz=tuple(args.chirp_hz))
-    file = structure_file_for(deck, args.structure_file)
+    file = modal.file if modal is not None else structure_file_for(deck, args.structure_file)
     if file is None or not file.has("actuators"):
         raise MaceError(f"{deck.path}: a time response needs the actuators and sensors of a structure file "
                         "(--structure FILE)")
@@ -82,10 +82,12 @@ def _check_signals(args: argparse.Namespace, deck) -> str:
     if args.input not in actuators:
         raise MaceError(f"--input {args.input!r} is not an actuator of {file.path}: use one of {', '.join(actuators)}")
     if args.output is None:
-        return collocated_sensor(instruments, args.input, grid_positions(deck))
+        return collocated_sensor(instruments, args.input, modal.positions or {} if modal is not None
+                                 else grid_positions(deck))
     sensors = [s.name for s in instruments.sensors]
     motion = parse_motion_output(args.output)
-    grids = build_structure(deck, configuration=args.configuration, structure_file=file).deck.grids
+    grids = modal.modes.dofs.grid_ids if modal is not None else \
+        build_structure(deck, configuration=args.configuration, structure_file=file).deck.grids
     if args.output in sensors or (motion is not None and motion[0] in grids):
         return args.output
     raise MaceError(f"--output {args.output!r} is not an output of the {args.configuration} model: use a sensor "
@@ -123,17 +125,26 @@ def cmd_view_response(args: argparse.Namespace) -> int:
     from viewer import animate_response, plot_response
 
     _need_target(args)
-    deck = read_deck(args.deck)
-    label = structure_label(deck)
-    output = _check_signals(args, deck)
+    if args.configuration == "modes":  # NASTRAN's modes: the scene from the [modes] table's geometry deck
+        from mace_fmu.cli.common import modal_structure_of
+
+        deck, modal = None, modal_structure_of(args)
+        label = modal.name
+    else:
+        deck, modal = read_deck(args.deck), None
+        label = structure_label(deck)
+    output = _check_signals(args, deck, modal=modal)
     out_dir = Path(args.html or args.png).parent if (args.html or args.png) else Path(".")  # FMU next to the page
     if args.fmu:
         fmu = _checked_fmu(args.fmu, args.configuration, label)
-        # only the scene is needed from the FE model; the deck's own range of modes (a fixed low one would hold
-        # no mode of a stiffer structure)
-        with progress_bar() as bar:
-            modes = compute_modes(deck, configuration=args.configuration, preload=args.preload,
-                                  progress=bar, structure_file=args.structure_file)
+        if modal is not None:
+            modes = modal
+        else:
+            # only the scene is needed from the FE model; the deck's own range of modes (a fixed low one would hold
+            # no mode of a stiffer structure)
+            with progress_bar() as bar:
+                modes = compute_modes(deck, configuration=args.configuration, preload=args.preload,
+                                      progress=bar, structure_file=args.structure_file)
     else:
         progress(f"{args.configuration} volts-volts model with the motion of every grid")
         model = volts(args, every_grid_moves=True)
@@ -168,17 +179,24 @@ def cmd_view(args: argparse.Namespace) -> int:
     from viewer import animate_modes
 
     _need_target(args)
-    deck = read_deck(args.deck)
-    max_hz = args.max_hz if args.max_hz is not None else (None if args.mode else 60.0)
-    with progress_bar() as bar:
-        result = compute_modes(deck, configuration=args.configuration, max_hz=max_hz, progress=bar,
-                               structure_file=args.structure_file)
+    if args.configuration == "modes":  # NASTRAN's modes: every mode of the file, drawn on the geometry deck's edges
+        from mace_fmu.cli.common import modal_structure_of
+
+        result = modal_structure_of(args)
+        title = f"{result.name}: NASTRAN's modes"
+    else:
+        deck = read_deck(args.deck)
+        max_hz = args.max_hz if args.max_hz is not None else (None if args.mode else 60.0)
+        with progress_bar() as bar:
+            result = compute_modes(deck, configuration=args.configuration, max_hz=max_hz, progress=bar,
+                                   structure_file=args.structure_file)
+        title = f"{structure_label(deck)} {args.configuration} modes"
     modes = args.mode or list(range(1, result.frequencies_hz.size + 1))
     animation = animate_modes(result, modes, scale=args.scale, cycles=args.cycles,
                               seconds_per_cycle=args.seconds_per_cycle)
     for clip in animation.frames.clips:
         print(f"  {clip.start_s:6.1f}-{clip.end_s:6.1f} s  {clip.title}")
-    _show(animation, args, title=f"{structure_label(deck)} {args.configuration} modes")
+    _show(animation, args, title=title)
     return 0
 
 
@@ -246,7 +264,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("view", help="meshcat animation of mode shapes or FMU time responses (standalone HTML)")
     view = p.add_subparsers(dest="what", required=True)
     p = view.add_parser("modes", help="animate mode shapes (one clip per mode, one after the other)")
-    p.add_argument("configuration", choices=["1g", "0g"])
+    p.add_argument("configuration", choices=CONFIGURATIONS,
+                   help="the deck's 1-g or 0-g structure, or 'modes': NASTRAN's modes, named by --structure FILE's "
+                        "[modes] table (every mode of the file; drawn on its geometry deck's element edges)")
     deck_option(p)
     p.add_argument("--mode", action="append", help="1-based index or label (prefix); repeat for several "
                    "(default: every mode up to --max-hz)")
@@ -272,7 +292,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=cmd_view_pairs)
 
     p = view.add_parser("response", help="an FMU's time response to one input, played on the mesh (fmpy)")
-    p.add_argument("configuration", choices=["1g", "0g"])
+    p.add_argument("configuration", choices=CONFIGURATIONS,
+                   help="the deck's 1-g or 0-g structure, or 'modes': NASTRAN's modes, named by --structure FILE's "
+                        "[modes] table")
     deck_option(p)
     p.add_argument("--input", required=True, metavar="INPUT",
                    help="the driven input, an actuator of the structure file (MACE: "

@@ -64,6 +64,42 @@ def _conm2_matrix(mass: float, offset: np.ndarray, inertia_cg: np.ndarray) -> np
     return m
 
 
+def _conm2_basic(cm, frames) -> np.ndarray:
+    """6x6 mass [kg, kg m, kg m^2] of CONM2 ``cm`` at its grid, in basic axes (before PARAM,WTMASS)."""
+    if cm.cid == -1:
+        raise MaceError(f"{cm.source}: CONM2 {cm.id}: CID = -1 (absolute c.g.) is not supported")
+    rot = frames[cm.cid][1]
+    i11, i21, i22, i31, i32, i33 = cm.inertia
+    inertia = np.array([[i11, -i21, -i31], [-i21, i22, -i32], [-i31, -i32, i33]])
+    return _conm2_matrix(cm.mass, rot @ np.array(cm.offset), rot @ inertia @ rot.T)
+
+
+def conm2_mass(deck: Deck, dofs: DofMap, element: int) -> sparse.csr_array:
+    """The mass matrix [kg, kg m, kg m^2] one CONM2 adds to a model's (basic DOFs ``dofs``, PARAM,WTMASS applied).
+
+    Linear in the card's mass when its inertias scale with it (a scaled body): it is then the derivative of
+    the model's mass matrix with respect to the relative change of that mass.
+
+    Parameters
+    ----------
+    deck : Deck
+        The deck the model was assembled from.
+    dofs : DofMap
+        The model's DOFs (:attr:`FEModel.dofs`).
+    element : int
+        The CONM2 element ID.
+
+    Returns
+    -------
+    scipy.sparse.csr_array
+        (n_dof, n_dof), nonzero on the CONM2's grid only.
+    """
+    block = _conm2_basic(deck.conm2s[element], coordinate_frames(deck)) * mass_factor(deck)
+    idx = dofs.indices(deck.conm2s[element].grid)
+    rows, cols = np.meshgrid(idx, idx, indexing="ij")
+    return sparse.csr_array((block.ravel(), (rows.ravel(), cols.ravel())), shape=(dofs.size, dofs.size))
+
+
 def mass_factor(deck: Deck) -> float:
     """PARAM,WTMASS: NASTRAN multiplies every mass term by it (element and CONM2 masses alike), e.g. 1/386.1
     for a deck in weight units (lbf, in); 1 without the parameter."""
@@ -137,13 +173,7 @@ def assemble(deck: Deck, *, mass: MassKind = "lumped") -> FEModel:
     ids, na, nb, ln = [b.id for b in bar_cards], ga, gb, lengths
 
     for cm in deck.conm2s.values():
-        if cm.cid == -1:
-            raise MaceError(f"{cm.source}: CONM2 {cm.id}: CID = -1 (absolute c.g.) is not supported")
-        rot = frames[cm.cid][1]
-        i11, i21, i22, i31, i32, i33 = cm.inertia
-        inertia = np.array([[i11, -i21, -i31], [-i21, i22, -i32], [-i31, -i32, i33]])
-        idx = dofs.indices(cm.grid)
-        m_glob.add(idx, _conm2_matrix(cm.mass, rot @ np.array(cm.offset), rot @ inertia @ rot.T))
+        m_glob.add(dofs.indices(cm.grid), _conm2_basic(cm, frames))
 
     springs = sorted(deck.celas2s.values(), key=lambda sp: sp.id)
     rows, cols, values = [np.zeros(0, int)], [np.zeros(0, int)], [np.zeros(0)]

@@ -99,6 +99,29 @@ def mass_properties(model: FEModel, deck: Deck) -> MassProperties:
 
 def gravity_load(deck: Deck, model: FEModel, load_id: int) -> np.ndarray:
     """Load vector [N, N m] of a LOAD (or a GRAV) set: M times the uniform acceleration field."""
+    return model.mass @ gravity_field(deck, model, load_id)
+
+
+def gravity_field(deck: Deck, model: FEModel, load_id: int) -> np.ndarray:
+    """The uniform acceleration of a LOAD (or a GRAV) set on every grid's translations, zero on the rotations.
+
+    A mass matrix times it is the set's load (:func:`gravity_load`), so a mass change dM changes the load
+    by dM times it (a mass parameter's weight, mace_fmu.iomodel.stiffness_route).
+
+    Parameters
+    ----------
+    deck : Deck
+        The deck with the GRAV and LOAD cards.
+    model : FEModel
+        Its FE model (the DOFs of the result).
+    load_id : int
+        The LOAD or GRAV set ID.
+
+    Returns
+    -------
+    numpy.ndarray
+        (n_dof,) acceleration [m/s^2] in basic axes on the translations, 0 on the rotations.
+    """
     if load_id in deck.loads:
         card = deck.loads[load_id]
         terms = [(card.scale * s, sid) for s, sid in card.terms]
@@ -116,7 +139,7 @@ def gravity_load(deck: Deck, model: FEModel, load_id: int) -> np.ndarray:
         accel += scale * grav.scale * (frames[grav.cid][1] @ np.array(grav.direction))
     field = np.zeros((len(model.positions), 6))
     field[:, :3] = accel
-    return model.mass @ field.ravel()
+    return field.ravel()
 
 
 def _eigrl(deck: Deck, structure: Structure):
@@ -229,7 +252,8 @@ def compute_modes(deck: Deck | str | os.PathLike | None = None, *, configuration
     max_hz : float or None
         Highest mode [Hz]; by default the deck's EIGRL/EIGR decides (V1, V2, ND), else 250 Hz.
     parameters : ParameterSet, optional
-        Moduli [Pa] and spring stiffnesses [N/m] by name (``E_<material>``, ``k_<spring>``); the modes keep
+        Moduli [Pa], spring stiffnesses [N/m] and masses [kg] by name (``E_<material>``, ``k_<spring>``,
+        ``m_<mass>``); the modes keep
         the set, whose other entries (delays, gains, damping) :func:`~mace_fmu.iomodel.volts.volts_model` takes.
     structure_file : StructureFile, path or None
         What the deck does not say (see :mod:`mace_fmu.structure.file`): by default the bundled one for

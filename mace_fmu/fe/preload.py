@@ -238,7 +238,7 @@ def _advance(state: BarState, delta: np.ndarray) -> BarState:
 
 def tangent_sensitivity(model: FEModel, preload: Preload, *, bar_mask: np.ndarray | None = None,
                         dk_natural: np.ndarray | None = None, dk_springs: sparse.sparray | None = None,
-                        relative_step: float = 1e-2, solve: Callable[[np.ndarray], np.ndarray] | None = None
+                        load_change: np.ndarray | None = None, relative_step: float = 1e-2, solve: Callable[[np.ndarray], np.ndarray] | None = None
                         ) -> sparse.csr_array:
     """d K_T / d(ln p) about a large-displacement preload, the preload re-solved to first order (sparse, basic).
 
@@ -250,6 +250,9 @@ def tangent_sensitivity(model: FEModel, preload: Preload, *, bar_mask: np.ndarra
     the tangent's total derivative (material part, new forces, new geometry). Holding the preload's
     forces instead (the material part alone) missed 22-92 % of the 1-g responses' derivatives with
     respect to the suspension cables' moduli, which redistribute the gravity load among the cables.
+    ``load_change`` (n_dof,) [N, N m per unit ln p] is the dead load's own change, a mass parameter's weight
+    (d M times the gravity field, :func:`mace_fmu.fe.modes.gravity_field`): the equilibrium then moves by
+    K_T^-1 (d F - d f).
     ``solve`` (:func:`preload_solver`) reuses one factorisation of the reduced tangent for many parameters.
     """
     if preload.kind != "large" or preload.constraints is None:
@@ -264,6 +267,8 @@ def tangent_sensitivity(model: FEModel, preload: Preload, *, bar_mask: np.ndarra
         df += internal_force(changed, preload.state, n)
     if dk_springs is not None:
         df += dk_springs @ preload.displacements
+    if load_change is not None:
+        df -= load_change
     t = preload.constraints.transform
     du = -(t @ (solve or preload_solver(preload))(t.T @ df))
     out = []

@@ -34,6 +34,13 @@ def signal_units(arrays: Mapping[str, object]) -> dict[str, str]:
 
 def model_summary(model: VoltsModel) -> str:
     """One-line description of a volts-volts model for an FMU's model description."""
+    from mace_fmu.iomodel.modal_source import ModalStructure
+
+    if isinstance(model.structure_modes, ModalStructure):  # NASTRAN's modes: named by their file, modal parameters
+        built = f"; parameter set {model.parameters.describe()}" if model.parameters is not None else ""
+        return (f"{model.structure_modes.name} modes volts-volts model (NASTRAN's modes of "
+                f"{model.structure_modes.source.name}; modal parameters only): {model.system.nstates} states; "
+                f"{model.electronics.describe()}{built}")
     structure, sys_ = model.structure_modes.structure, model.system
     kind = structure.configuration
     # "<label> <kind>": hosts and `view response --fmu` read which structure and configuration it is

@@ -36,10 +36,13 @@ class ModalPlant:
     removed_states: tuple[tuple[str, str], ...]  #: (state name, reason)
     motion_outputs: tuple[str, ...] = ()  #: grid motion outputs [m, rad] (see motion_output_name)
     motion_grids: tuple[int, ...] = ()  #: the grids behind them, in output order
+    #: (n_sensors, n_actuators) residual flexibility on the sensors [sensor unit per actuator unit], sensor and
+    #: actuator order: the static correction of modes the model lacks (None: none); a block beside the structure
+    static_correction: np.ndarray | None = None
 
 
 def modal_plant(modes: Modes, instruments: Instruments, damping: np.ndarray, *, max_hz: float,
-                motion_grids: Sequence[int] = ()) -> ModalPlant:
+                motion_grids: Sequence[int] = (), static_correction: np.ndarray | None = None) -> ModalPlant:
     """Modal state-space of the modes up to ``max_hz`` [Hz] with the instruments' DOFs (no gains).
 
     ``motion_grids`` adds the six motion components of each named grid as outputs. Directions of
@@ -58,6 +61,9 @@ def modal_plant(modes: Modes, instruments: Instruments, damping: np.ndarray, *, 
         Keep the modes up to this frequency [Hz].
     motion_grids : sequence of int
         Grids whose six motions are outputs too.
+    static_correction : numpy.ndarray, optional
+        (n_sensors, n_actuators) residual flexibility of the modes the model lacks, in the sensors' and
+        actuators' physical units (:func:`mace_fmu.iomodel.modal_source.static_correction`).
 
     Returns
     -------
@@ -73,7 +79,7 @@ def modal_plant(modes: Modes, instruments: Instruments, damping: np.ndarray, *, 
                 name="structure")
     return ModalPlant(system=sys, frequencies_hz=data.frequencies_hz, damping=damping[keep], labels=labels,
                       shapes=shapes, removed_states=tuple(removed), motion_outputs=data.motion_outputs,
-                      motion_grids=tuple(motion_grids))
+                      motion_grids=tuple(motion_grids), static_correction=static_correction)
 
 
 @dataclass(frozen=True)

@@ -4,7 +4,7 @@ The arrays (see :func:`mace_fmu.iomodel.parametric_data.parametric_arrays`) hold
 the diagram, the 0/1 wiring matrices, the retained modes projected on the instruments and the
 projected stiffness sensitivities of the physical parameters. ``build`` turns a parameter vector
 into (A, B, C, D):
-- physical parameters (Young's moduli, spring stiffnesses) by Ritz reanalysis on the retained
+- physical parameters (Young's moduli, spring stiffnesses, concentrated masses) by Ritz reanalysis on the retained
   modes and static-correction vectors (mace_fmu.iomodel.reanalysis), the sensor rows and modal
   inputs carried by the same coefficients, plus each parameter's first-order change of the mode
   shapes through the 1-g preload (mace_fmu.iomodel.stiffness_route);
@@ -82,6 +82,11 @@ class ParametricSystem:
             correction = dict(correction_stiffness=d["correction_stiffness"], correction_dk=d["correction_dk"],
                               correction_coupling=d["correction_coupling"],
                               correction_massive=int(d["correction_massive"]))
+        if "physical_dm" in d:  # a mass parameter: the mass changes too
+            correction["projected_dm"] = d["physical_dm"]
+            if "correction_dm" in d:
+                correction.update(correction_dm=d["correction_dm"],
+                                  correction_mass_coupling=d["correction_mass_coupling"])
         w2, coefficients = ritz_reanalysis(signed_omega2(d["frequencies_hz"]), d["physical_dk"],
                                            self.relative_changes(params), **correction)
         return signed_frequency_hz(w2), coefficients

@@ -19,6 +19,17 @@ a MAC in the mass-normalised basis), so per-mode data (damping ratios, labels) f
 through a crossing; the other eigenpairs (the corrections' own, far above the retained band) are left
 out. Without W (no corrections) this is the reanalysis of eq. 4.6-4.9.
 
+Mass parameters (concentrated masses, :mod:`mace_fmu.iomodel.stiffness_route`) change the mass too:
+
+    M_r = [[I + sum p_i Phi0^T dM_i Phi0,  sum p_i (W^T dM_i Phi0)^T],
+           [sum p_i W^T dM_i Phi0,          diag(I, 0) + sum p_i W^T dM_i W]],
+
+condensed with the same static condensation as K_r (the massless corrections' nominal mass stays
+neglected, their share of a mass change is kept), and the eigen-problem K_c v = omega^2 M_c v is solved
+through the Cholesky factor of M_c, M_c = L L^T: the standard problem L^-1 K_c L^-T y = omega^2 y, v =
+L^-T y, mass-normalised in the changed mass. The pairing then scores the overlap M_c v with each
+nominal mode.
+
 Shared by the updating engine and copied verbatim into FMUs, which re-analyse their physical
 parameters at initialisation.
 """
@@ -31,8 +42,9 @@ from scipy.optimize import linear_sum_assignment
 
 def ritz_reanalysis(omega2_0: np.ndarray, projected_dk: np.ndarray, relative_change: np.ndarray, *,
                     correction_stiffness: np.ndarray | None = None, correction_dk: np.ndarray | None = None,
-                    correction_coupling: np.ndarray | None = None, correction_massive: int = 0
-                    ) -> tuple[np.ndarray, np.ndarray]:
+                    correction_coupling: np.ndarray | None = None, correction_massive: int = 0,
+                    projected_dm: np.ndarray | None = None, correction_dm: np.ndarray | None = None,
+                    correction_mass_coupling: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(omega^2 [rad^2/s^2], coefficients) after relative stiffness-parameter changes.
 
     Parameters
@@ -48,6 +60,10 @@ def ritz_reanalysis(omega2_0: np.ndarray, projected_dk: np.ndarray, relative_cha
         (n_parameters, n_w, n_modes) of the static-correction vectors W; none: the plain reanalysis.
     correction_massive : int
         How many of the vectors (the first ones) carry mass; the rest are massless.
+    projected_dm, correction_dm, correction_mass_coupling : numpy.ndarray, optional
+        Phi0^T dM_i Phi0 (n_parameters, n_modes, n_modes), W^T dM_i W (n_parameters, n_w, n_w) and
+        W^T dM_i Phi0 (n_parameters, n_w, n_modes) [per unit relative change] of the mass parameters (zero for
+        a stiffness parameter); none: no parameter changes a mass.
 
     Returns
     -------
@@ -72,10 +88,40 @@ def ritz_reanalysis(omega2_0: np.ndarray, projected_dk: np.ndarray, relative_cha
     condensation = np.linalg.solve(k_r[kept:, kept:], k_r[kept:, :kept]) if kept < n + n_w else np.zeros((0, kept))
     k_c = k_r[:kept, :kept] - k_r[:kept, kept:] @ condensation
     k_c = 0.5 * (k_c + k_c.T)
-    _, vectors = np.linalg.eigh(k_c)
-    _, order = linear_sum_assignment(-(vectors[:n] ** 2))  # row i: nominal mode i; order[i]: the mode it becomes
+    m_c = _condensed_mass(rel, n, n_w, kept, condensation, projected_dm, correction_dm, correction_mass_coupling)
+    if m_c is None:
+        _, vectors = np.linalg.eigh(k_c)
+        overlap = vectors[:n]
+    else:
+        lower = np.linalg.cholesky(m_c)
+        half = np.linalg.solve(lower, np.linalg.solve(lower, k_c).T)  # L^-1 K_c L^-T (K_c symmetric)
+        _, y = np.linalg.eigh(0.5 * (half + half.T))
+        vectors = np.linalg.solve(lower.T, y)
+        overlap = (m_c @ vectors)[:n]
+    _, order = linear_sum_assignment(-(overlap ** 2))  # row i: nominal mode i; order[i]: the mode it becomes
     chosen = vectors[:, order]
     # LAPACK's eigenvalues are exact to eps |K_c| absolute, and K_c spans the corrections' stiffness beside
     # the slowest modes'; the Rayleigh quotients of its vectors are exact to eps relative
     w2 = np.einsum("ik,ij,jk->k", chosen, k_c, chosen)
+    if m_c is not None:
+        w2 = w2 / np.einsum("ik,ij,jk->k", chosen, m_c, chosen)
     return w2, np.vstack([chosen, -condensation @ chosen])
+
+
+def _condensed_mass(rel: np.ndarray, n: int, n_w: int, kept: int, condensation: np.ndarray,
+                    projected_dm: np.ndarray | None, correction_dm: np.ndarray | None,
+                    correction_mass_coupling: np.ndarray | None) -> np.ndarray | None:
+    """M_c of the module docstring over the kept coordinates, None where no mass changes (M_c = I)."""
+    if projected_dm is None or not np.any(np.tensordot(np.abs(rel), np.abs(projected_dm), axes=1)):
+        return None
+    m_r = np.zeros((n + n_w, n + n_w))
+    m_r[:kept, :kept] = np.eye(kept)
+    m_r[:n, :n] += np.tensordot(rel, projected_dm, axes=1)
+    if n_w and correction_dm is not None:  # without them: the corrections' mass unchanged
+        coupling = np.tensordot(rel, correction_mass_coupling, axes=1)
+        m_r[n:, :n] += coupling
+        m_r[:n, n:] += coupling.T
+        m_r[n:, n:] += np.tensordot(rel, correction_dm, axes=1)
+    t = np.vstack([np.eye(kept), -condensation])
+    m_c = t.T @ (0.5 * (m_r + m_r.T)) @ t
+    return 0.5 * (m_c + m_c.T)

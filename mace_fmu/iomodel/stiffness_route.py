@@ -22,6 +22,15 @@ Three pieces per physical parameter p, all about the configuration the modes are
 Measured on MACE (tests/iomodel/test_parameter_route.py, benchmarks/RESULTS.md): the strain gauge on the
 active strut, whose modulus the nominal modes alone moved 31-85 % wrong, follows the re-solve to
 better than 0.1 %.
+
+A concentrated mass (CONM2, ``m_<name>``: a scaled body, mass and inertias by one factor) enters the same
+way with the roles turned: its mass matrix dM/d(ln m) (exact, the mass is linear in the factor) gives the
+modal mass change Phi0^T dM Phi0 and mass-correction vectors, the residual flexibility's response to the
+inertia forces dM phi_k the change puts on each retained mode, orthonormalised together with the
+stiffness corrections; its material stiffness change is zero. In 1-g the mass changes the weight the
+preload carries, d F = dM g (g the GRAV field): the tangent's total derivative with that load change
+(:func:`~mace_fmu.fe.preload.tangent_sensitivity`; the linear preload's geometric stiffness is linear in
+the load) is its ``total`` stiffness change, carried as the moduli's preload part is.
 """
 
 from __future__ import annotations
@@ -34,15 +43,16 @@ import numpy as np
 from scipy import sparse
 
 from mace_fmu.errors import MaceError
-from mace_fmu.fe.assembly import FEModel, bar_section
+from mace_fmu.fe.assembly import FEModel, bar_section, conm2_mass
 from mace_fmu.fe.beam import natural_stiffness
 from mace_fmu.fe.corotational import BarState, material_tangent
 from mace_fmu.fe.factor import factorize
 from mace_fmu.fe.modal import Modes
-from mace_fmu.fe.preload import Preload, preload_solver, tangent_sensitivity
+from mace_fmu.fe.modes import gravity_field
+from mace_fmu.fe.preload import Preload, geometric_stiffness, preload_solver, tangent_sensitivity
 from mace_fmu.iomodel.modal_ss import modal_data
 from mace_fmu.iomodel.volts import VoltsModel
-from mace_fmu.parameters.kinds import MODULUS, SPRING
+from mace_fmu.parameters.kinds import MASS, MODULUS, SPRING
 from mace_fmu.parameters.sets import parameter_names
 from mace_fmu.util.frequency import ZERO_HZ
 
@@ -57,6 +67,9 @@ MASSIVE_FACTOR = 10.0
 #: the correction solves use K + s M, s this fraction of the lowest flexible omega^2 (rigid bodies and
 #: mechanisms make K singular; the loads carry no component along them, so s changes nothing else)
 SHIFT_FRACTION = 1e-3
+#: a mass parameter whose modal mass change on a zero-frequency mode exceeds this (the modes are mass-normalised:
+#: a share of that mode's unit modal mass) is refused (physical_route)
+RIGID_SHARE = 1e-6
 #: kinds of output rows (ParametricSystem) that the corrections are projected on
 ROW_KINDS = ("disp", "rate", "motion", "acc")
 
@@ -70,6 +83,7 @@ class StiffnessSensitivity:
     description: str  #: what it is, for the FMU's parameter description
     total: sparse.csr_array  #: dK/d(ln p), the preload re-solved to first order (1-g large preload)
     material: sparse.csr_array  #: the same with the preload's forces held (equal to ``total`` otherwise)
+    mass: sparse.csr_array | None = None  #: dM/d(ln p) [kg, kg m, kg m^2] of a mass parameter (None: a stiffness)
 
 
 def material_sensitivity(fe: FEModel, deck, preload: Preload | None, mid: int, *, solve=None,
@@ -117,8 +131,8 @@ def _redistributes(preload: Preload | None) -> bool:
 
 
 def stiffness_sensitivities(model: VoltsModel, *, only: Sequence[str] | None = None) -> list[StiffnessSensitivity]:
-    """The moduli (of the MAT1 cards the bars use) and springs of ``model``'s structure, or those named ``only``,
-    with their stiffness derivatives."""
+    """The moduli (of the MAT1 cards the bars use), springs and named masses of ``model``'s structure, or those
+    named ``only``, with their stiffness (and mass) derivatives."""
     modes = model.structure_modes
     deck, fe, pre = modes.structure.deck, modes.model, modes.preload
     names = parameter_names(deck, modes.structure.file)
@@ -145,7 +159,30 @@ def stiffness_sensitivities(model: VoltsModel, *, only: Sequence[str] | None = N
             else held
         out.append(StiffnessSensitivity(name, float(k), f"stiffness of {spring_name[sid]} (CELAS2 {sid}) [N/m]; "
                                         "reanalysis", total, held))
+    for short, eid in names.masses.items():
+        name = MASS.named(short)
+        if only is not None and name not in only:
+            continue
+        dm = conm2_mass(deck, fe.dofs, eid)
+        out.append(StiffnessSensitivity(name, float(deck.conm2s[eid].mass),
+                                        f"mass of {short} (CONM2 {eid}) [kg], its inertias scaled with it; reanalysis",
+                                        _weight_stiffness(modes, dm, solve), sparse.csr_array(dm.shape), dm))
     return out
+
+
+def _weight_stiffness(modes, dm: sparse.csr_array, solve) -> sparse.csr_array:
+    """dK/d(ln m) of a mass parameter with mass matrix ``dm``: the 1-g preload under the weight change dM g (the
+    large preload re-solved to first order, the linear one's geometric stiffness linear in the load); zero in
+    0-g."""
+    pre, struct = modes.preload, modes.structure
+    if pre is None or struct.preload is None:
+        return sparse.csr_array(dm.shape)
+    load = dm @ gravity_field(struct.deck, modes.model, struct.preload.load)
+    if _redistributes(pre):
+        return sparse.csr_array(tangent_sensitivity(modes.model, pre, load_change=load, solve=solve))
+    if pre.constraints is None:
+        return sparse.csr_array(dm.shape)
+    return sparse.csr_array(geometric_stiffness(modes.model, pre.constraints, load))
 
 
 @dataclass(frozen=True)
@@ -185,6 +222,20 @@ def physical_route(model: VoltsModel, shapes: np.ndarray, sensitivities: Sequenc
     dk[:, ~flexible, :] = 0.0
     dk[:, :, ~flexible] = 0.0
     arrays = {"physical_names": np.array([s.name for s in sensitivities]), "physical_dk": dk}
+    if any(s.mass is not None for s in sensitivities):
+        dm = np.array([shapes.T @ (s.mass @ shapes) if s.mass is not None else np.zeros((n, n))
+                       for s in sensitivities]).reshape(len(sensitivities), n, n)
+        # the zero-frequency cluster is reduced once, at export, with its nominal mass: a mass that moves in a
+        # rigid-body or mechanism mode would change that cluster's modal inputs, which no FMU recomputes
+        moved = [s.name for s, d in zip(sensitivities, dm) if np.max(np.abs(d[~flexible]), initial=0.0) > RIGID_SHARE]
+        if moved:
+            raise MaceError(f"mass parameter(s) {', '.join(moved)}: the mass moves in a rigid-body or mechanism mode "
+                            f"of the {model.structure_modes.structure.configuration} model, whose reduction an FMU "
+                            "does not redo; a mass is a parameter of a structure held against rigid motion (name "
+                            "none in the structure file's [parameters] masses for this configuration)")
+        dm[:, ~flexible, :] = 0.0
+        dm[:, :, ~flexible] = 0.0
+        arrays["physical_dm"] = dm
     if sensitivities and modes.constraints is not None and np.any(flexible):
         arrays.update(_corrections(model, shapes, frequencies, flexible, sensitivities))
     return PhysicalRoute(tuple((s.name, s.value, s.description) for s in sensitivities), arrays)
@@ -227,8 +278,12 @@ def _corrections(model: VoltsModel, shapes: np.ndarray, frequencies: np.ndarray,
     """The static-correction vectors' blocks and rows, and the preload's shape changes (module docstring)."""
     ind = _Independent(model, shapes, frequencies, flexible)
     material = [ind.reduce(s.material) for s in sensitivities]
+    masses = [ind.reduce(s.mass) if s.mass is not None else None for s in sensitivities]
     flex = ind.phi[:, flexible]
-    w = np.hstack([ind.residual(dk @ flex) for dk in material]) if material else np.zeros((ind.phi.shape[0], 0))
+    # the residual flexibility's response to each parameter's forces on each retained mode: a stiffness's
+    # dK phi_k, a mass's inertia forces dM phi_k (omega_k^2 scales a column, which the orthonormalisation undoes)
+    w = np.hstack([ind.residual((dk if dm is None else dm) @ flex) for dk, dm in zip(material, masses)]) \
+        if material else np.zeros((ind.phi.shape[0], 0))
     w, massive = _orthonormal(ind, w, max_hz=float(np.max(np.abs(frequencies))))
     n, n_w = shapes.shape[1], w.shape[1]
     out: dict[str, np.ndarray] = {
@@ -238,6 +293,13 @@ def _corrections(model: VoltsModel, shapes: np.ndarray, frequencies: np.ndarray,
         "correction_coupling": np.zeros((len(material), n_w, n))}
     out["correction_coupling"][:, :, flexible] = np.array([w.T @ (dk @ flex) for dk in material]).reshape(
         len(material), n_w, int(flexible.sum()))
+    if any(dm is not None for dm in masses):
+        zero = sparse.csr_array(ind.m.shape)
+        masses = [zero if dm is None else dm for dm in masses]
+        out["correction_dm"] = np.array([_symmetric(w.T @ (dm @ w)) for dm in masses]).reshape(len(masses), n_w, n_w)
+        out["correction_mass_coupling"] = np.zeros((len(masses), n_w, n))
+        out["correction_mass_coupling"][:, :, flexible] = np.array([w.T @ (dm @ flex) for dm in masses]).reshape(
+            len(masses), n_w, int(flexible.sum()))
     projected = _project(model, ind.t @ w)
     out["correction_b"] = projected.pop("b")
     out.update({f"{kind}_correction": rows for kind, rows in projected.items()})

@@ -27,6 +27,7 @@ from mace_fmu.iomodel.frf import frequency_response
 from mace_fmu.iomodel.instruments import (SPEED_LOOP_GAINS, Instruments, check_accelerometers_have_mass,
                                           load_instruments, resolve_bar_gauges)
 from mace_fmu.iomodel.modal_ss import ModalPlant, modal_plant
+from mace_fmu.iomodel.modal_source import ModalStructure, check_modal_parameters, static_correction
 from mace_fmu.iomodel.model_options import ModelledElectronics, SignalSelection
 from mace_fmu.iomodel.motion import motion_unit, parse_motion_output
 from mace_fmu.parameters.kinds import (DAMPING, DELAY, FREQUENCY_SCALE, SERVO_GAINS, ParameterKind, mode_label,
@@ -46,7 +47,8 @@ class VoltsModel:
     system: ct.StateSpace  #: named inputs [V] and outputs [V]; states "block.state"
     diagram: System  #: the modelica_like block diagram (to_modelica() writes it as Modelica)
     plant: ModalPlant  #: the physical modal model inside
-    structure_modes: StructureModes  #: the modes the model was built from
+    #: the modes the model was built from: the deck route's, or NASTRAN's (a ModalStructure, no FE)
+    structure_modes: StructureModes | ModalStructure
     instruments: Instruments  #: actuators, sensors, electronics, loops and damping it was built with
     electronics: ModelledElectronics  #: which electronics the model contains, and how
     parameters: ParameterSet | None = None  #: the parameter set it was built with (None: the deck's and file's)
@@ -153,8 +155,17 @@ def build_diagram(plant: ModalPlant, instruments: Instruments, *,
     s.add(Gain("actuator_gain", np.diag([a.gain for a in instruments.actuators]), inputs=act_names, outputs=act_names))
     s.connect("actuator_gain.y", "structure.u")
     s.add(Gain("sensor_gain", np.diag([x.gain for x in instruments.sensors]), inputs=sen_names, outputs=sen_names))
-    for name in sen_names:
-        s.connect(f"structure.y[{name}]", f"sensor_gain.u[{name}]")
+    if plant.static_correction is None:
+        for name in sen_names:
+            s.connect(f"structure.y[{name}]", f"sensor_gain.u[{name}]")
+    else:  # the residual flexibility beside the modes: a constant block the FMUs carry as they are
+        s.add(Gain("residual_flexibility", plant.static_correction, inputs=act_names, outputs=sen_names))
+        s.add(Sum("static_correction", signs=(1, 1), size=len(sen_names), signals=sen_names))
+        s.connect("actuator_gain.y", "residual_flexibility.u")
+        for name in sen_names:
+            s.connect(f"structure.y[{name}]", f"static_correction.u1[{name}]")
+            s.connect(f"residual_flexibility.y[{name}]", f"static_correction.u2[{name}]")
+            s.connect(f"static_correction.y[{name}]", f"sensor_gain.u[{name}]")
     _sensor_channels(s, instruments, electronics=electronics)
     for n in plant.motion_outputs:  # grid motion for animation [m, rad]: straight from the structure
         s.expose_output(n, f"structure.y[{n}]")
@@ -260,7 +271,7 @@ def _gimbal_servo(s: System, drives: dict[str, _Drive], instruments: Instruments
 
 
 @single_blas_thread
-def volts_model(modes: StructureModes, *, parameters: ParameterSet | None = None,
+def volts_model(modes: StructureModes | ModalStructure, *, parameters: ParameterSet | None = None,
                 instruments: Instruments | None = None, electronics: ModelledElectronics = ModelledElectronics(),
                 signals: SignalSelection = SignalSelection(), max_hz: float | None = None) -> VoltsModel:
     """Volts-volts model of the structure whose modes are given: actuator volts in, sensor volts out.
@@ -272,8 +283,9 @@ def volts_model(modes: StructureModes, *, parameters: ParameterSet | None = None
 
     Parameters
     ----------
-    modes : StructureModes
-        The modes of the 1-g or 0-g structure (:func:`~mace_fmu.fe.modes.compute_modes`).
+    modes : StructureModes or ModalStructure
+        The modes of the 1-g or 0-g structure (:func:`~mace_fmu.fe.modes.compute_modes`), or NASTRAN's modes
+        (:func:`~mace_fmu.iomodel.modal_source.modal_structure`: modal parameters only, no moduli).
     parameters : ParameterSet, optional
         Delays [s] (defaults: Tables 4.5 and 4.6 from the structure file), servo gains, and open-loop
         damping ratios and frequency scales by mode label (as in ``modes.labels``, e.g. "1st Z bending").
@@ -309,32 +321,23 @@ def volts_model(modes: StructureModes, *, parameters: ParameterSet | None = None
     >>> model.system.ninputs, model.system.noutputs
     (1, 1)
     """
-    _check(isinstance(modes, StructureModes),
-           f"modes must be the StructureModes of compute_modes(...), got {type(modes).__name__}")
+    _check(isinstance(modes, (StructureModes, ModalStructure)),
+           f"modes must be the StructureModes of compute_modes(...), got {type(modes).__name__} (or NASTRAN's modes: "
+           "the ModalStructure of modal_structure(...))")
     _check(isinstance(electronics, ModelledElectronics),
            f"electronics must be a ModelledElectronics record, got {type(electronics).__name__}")
     _check(isinstance(signals, SignalSelection),
            f"signals must be a SignalSelection record, got {type(signals).__name__}")
     if parameters is None:
         parameters = modes.parameters
-    else:
+    elif isinstance(modes, StructureModes):
         _check_moduli_agree(modes, parameters)
-    configuration = modes.structure.configuration
-    file = modes.structure.file
-    if instruments is None:
-        if file is None or not file.has("actuators") or not file.has("sensors"):
-            raise MaceError(f"{modes.structure.deck.path}: a volts-volts model needs actuators and sensors, and this "
-                            "deck has no structure file declaring them (give one: "
-                            "compute_modes(..., structure_file=...), CLI --structure FILE; the bundled mace_em.toml "
-                            "belongs to the bundled MACE deck only)")
-        instruments = load_instruments(file)
-    instruments = resolve_bar_gauges(instruments, modes.model, modes.structure.deck)
-    check_accelerometers_have_mass(instruments, mass=modes.model.mass, dof_map=modes.modes.dofs,
-                                   cd_frames=modes.modes.cd_frames,
-                                   transform=None if modes.constraints is None else modes.constraints.transform)
-    # the moduli and springs must name cards
+    configuration = modes.configuration
+    if isinstance(modes, ModalStructure):
+        instruments = _modal_instruments(modes, instruments, parameters)
+    else:
+        instruments = _deck_instruments(modes, instruments, parameters)
     with naming_the_file(parameters):
-        fe_overrides(parameters, parameter_names(modes.structure.deck, file))
         instruments = apply_parameters(instruments, parameters, modes.labels, configuration=configuration)
         modes = scale_frequencies(modes, parameters, configuration=configuration)
     flexible = modes.frequencies_hz[np.abs(modes.frequencies_hz) >= ZERO_HZ]
@@ -354,12 +357,53 @@ def volts_model(modes: StructureModes, *, parameters: ParameterSet | None = None
     unknown = sorted(set(motion_grids) - set(grids))
     _check(not unknown, f"motion_grids: grid(s) {unknown} are not in the {configuration} model; it has grids "
                         f"{grids[0]}..{grids[-1]} ({len(grids)} in all)")
-    plant = modal_plant(modes.modes, instruments, zeta, max_hz=max_hz, motion_grids=list(motion_grids))
+    plant = modal_plant(modes.modes, instruments, zeta, max_hz=max_hz, motion_grids=list(motion_grids),
+                        static_correction=static_correction(modes, instruments)
+                        if isinstance(modes, ModalStructure) else None)
     diagram = build_diagram(plant, instruments, electronics=electronics)
     system = diagram.compile()
     return VoltsModel(system=select_signals(system, inputs=inputs, outputs=outputs), diagram=diagram, plant=plant,
                       structure_modes=modes, instruments=instruments, electronics=electronics,
                       parameters=parameters if parameters is not None and len(parameters) else None)
+
+
+def _deck_instruments(modes: StructureModes, instruments: Instruments | None,
+                      parameters: ParameterSet | None) -> Instruments:
+    """The instruments of a deck's structure (its structure file's unless given), bar gauges resolved on its
+    bars and accelerometers checked against its mass, after checking that the set's moduli and springs name
+    the deck's cards."""
+    file = modes.structure.file
+    if instruments is None:
+        if file is None or not file.has("actuators") or not file.has("sensors"):
+            raise MaceError(f"{modes.structure.deck.path}: a volts-volts model needs actuators and sensors, and this "
+                            "deck has no structure file declaring them (give one: "
+                            "compute_modes(..., structure_file=...), CLI --structure FILE; the bundled mace_em.toml "
+                            "belongs to the bundled MACE deck only)")
+        instruments = load_instruments(file)
+    instruments = resolve_bar_gauges(instruments, modes.model, modes.structure.deck)
+    check_accelerometers_have_mass(instruments, mass=modes.model.mass, dof_map=modes.modes.dofs,
+                                   cd_frames=modes.modes.cd_frames,
+                                   transform=None if modes.constraints is None else modes.constraints.transform)
+    with naming_the_file(parameters):  # the moduli and springs must name cards
+        fe_overrides(parameters, parameter_names(modes.structure.deck, file))
+    return instruments
+
+
+def _modal_instruments(modes: ModalStructure, instruments: Instruments | None,
+                       parameters: ParameterSet | None) -> Instruments:
+    """The instruments of a structure known by NASTRAN's modes: no bar gauges (no bars), no moduli or springs."""
+    if instruments is None:
+        if not modes.file.has("actuators") or not modes.file.has("sensors"):
+            raise MaceError(f"{modes.file.path}: a volts-volts model needs actuators and sensors; declare them "
+                            "([[actuators]] and [[sensors]] on grids of the modes file)")
+        instruments = load_instruments(modes.file)
+    gauges = [s.name for s in instruments.sensors if s.gauge is not None and not s.dofs]
+    _check(not gauges, f"{instruments.source}: sensor {gauges[0]!r} is a bar strain gauge, which needs the deck's "
+                       f"bar; {modes.source.name} holds NASTRAN's modes only (give the gauge's DOF weights as a "
+                       "displacement sensor)" if gauges else "")
+    with naming_the_file(parameters):
+        check_modal_parameters(modes, parameters)
+    return instruments
 
 
 def _check_moduli_agree(modes: StructureModes, parameters: ParameterSet) -> None:

@@ -17,6 +17,9 @@ physical limits plus the reach of the models behind them:
   first-order redistribution limits it (the Lexan center's modulus at 0.5 x: 1.8 %); zero, which would
   remove an element, is far outside. A full re-solve (``mace-fmu export --parameters``) takes any
   positive value.
+- concentrated masses (CONM2, ``m_<name>``): [0.7, 1.5] x nominal, validated the same way on the three-storey
+  frame's floors (examples/three_storey_frame; tests/iomodel/test_mass_route.py): the reanalysis with the
+  mass change and mass-correction vectors, and the 1-g preload's weight re-solved to first order.
 - delays: [0, 1] s (a millisecond-sampled loop with a second of delay is meaningless).
 - damping ratios: [0, 1]; 1 is a critically damped mode, still a linear system.
 - frequency scales: [0.1, 10], or the bounds given at export (Table 5.3's for the 0-g model).
@@ -37,7 +40,7 @@ from typing import Literal, Mapping
 
 from mace_fmu.util.frequency import ZERO_HZ  # the zero-frequency cluster's edge [Hz]
 
-KindName = Literal["modulus", "spring", "delay", "gain", "damping", "frequency_scale"]
+KindName = Literal["modulus", "spring", "mass", "delay", "gain", "damping", "frequency_scale"]
 
 
 @dataclass(frozen=True)
@@ -92,6 +95,8 @@ MODULUS = ParameterKind("modulus", "E_", "E_", "Pa", 0.7, 1.5, relative_to_nomin
                         description="Young's modulus of a MAT1 card")
 SPRING = ParameterKind("spring", "k_", "k_", "N/m", 0.7, 1.5, relative_to_nominal=True,
                        description="stiffness of a CELAS2 card")
+MASS = ParameterKind("mass", "m_", "m_", "kg", 0.7, 1.5, relative_to_nominal=True,
+                     description="mass of a CONM2 card, its inertias scaled with it")
 DELAY = ParameterKind("delay", "delay_", "delay_", "s", 0.0, 1.0, description="time delay of a channel")
 GAIN = ParameterKind("gain", "", "", "1", -1000.0, 1000.0, relative_to_nominal=True,
                      exact_names=MappingProxyType({"K_a": "V/deg", "K_r": "V/(deg/s)", "K_f": "1", "K_b": "1"}),
@@ -101,7 +106,7 @@ DAMPING = ParameterKind("damping", "damping:", "damping_mode_", "1", 0.0, 1.0, p
 FREQUENCY_SCALE = ParameterKind("frequency_scale", "frequency_scale:", "frequency_scale_mode_", "1", 0.1, 10.0,
                                 per_mode=True, description="factor on an open-loop natural frequency")
 
-KINDS: tuple[ParameterKind, ...] = (MODULUS, SPRING, DELAY, GAIN, DAMPING, FREQUENCY_SCALE)
+KINDS: tuple[ParameterKind, ...] = (MODULUS, SPRING, MASS, DELAY, GAIN, DAMPING, FREQUENCY_SCALE)
 #: the servo gains' names and what they are
 SERVO_GAINS = MappingProxyType({"K_a": "gimbal_angle_gain", "K_r": "gimbal_rate_gain", "K_f": "wheel_forward_gain",
                                 "K_b": "wheel_backward_gain"})

@@ -6,6 +6,9 @@ A parameter set maps names to values in SI units. The names are the FMUs' own:
   CELAS2 card (material and spring names from the ``[parameters]`` table of the structure data
   file, e.g. ``E_lexan_center``, ``k_suspension_device_1``): FE overrides, so they act on the
   modes (and, through the 1-g preload, on gravity's stiffening);
+- ``m_<mass>`` [kg] mass of a CONM2 card named in the ``[parameters]`` table's ``masses`` (e.g.
+  ``m_floor_1``): a scaled body, its inertias I11..I33 scaled by the same factor about its unchanged
+  centre of gravity; an FE override like the moduli (and in 1-g it changes the weight the preload carries);
 - ``delay_<channel>`` [s]: an actuator's computational delay (Table 4.5) or a rate gyro's extra
   delay (Table 4.6), e.g. ``delay_gimbal_primary_x``, ``delay_gyro_bus_y``;
 - ``K_a`` [V/deg], ``K_r`` [V/(deg/s)] gimbal servo gains, ``K_f``, ``K_b`` wheel speed loop gains;
@@ -32,7 +35,7 @@ from types import MappingProxyType
 from typing import Any, Iterator, Mapping
 
 from mace_fmu.errors import MaceError
-from mace_fmu.parameters.kinds import (DAMPING, FREQUENCY_SCALE, MODULUS, SERVO_GAINS, SPRING, KindName,
+from mace_fmu.parameters.kinds import (DAMPING, FREQUENCY_SCALE, MASS, MODULUS, SERVO_GAINS, SPRING, KindName,
                                        kind_of_set_name, unit_of)
 from mace_fmu.util.atomic import write_text_atomic
 from mace_fmu.util.textfile import read_text
@@ -42,7 +45,7 @@ def parameter_kind(name: str) -> KindName:
     known kind."""
     kind = kind_of_set_name(name)
     if kind is None:
-        raise MaceError(f"parameter {name!r}: unknown kind of name; expected E_<material>, k_<spring>, "
+        raise MaceError(f"parameter {name!r}: unknown kind of name; expected E_<material>, k_<spring>, m_<mass>, "
                         f"delay_<channel>, {', '.join(SERVO_GAINS)}, {DAMPING.set_prefix}<mode label> or "
                         f"{FREQUENCY_SCALE.set_prefix}<mode label>")
     return kind.name
@@ -210,10 +213,13 @@ def toml_value(value: Any) -> str:
 # --- the structure's parameter names ----------------------------------------------------------
 @dataclass(frozen=True)
 class ParameterNames:
-    """Which MAT1 and CELAS2 cards the ``E_`` and ``k_`` names of a structure refer to."""
+    """Which MAT1, CELAS2 and CONM2 cards the ``E_``, ``k_`` and ``m_`` names of a structure refer to."""
 
     materials: Mapping[str, int]  #: material name -> MAT1 ID
     springs: Mapping[str, int]  #: spring name -> CELAS2 ID
+    masses: Mapping[str, int] = field(default_factory=dict)  #: mass name -> CONM2 ID (only those the file names)
+    #: CONM2 ID -> (mass [kg], inertias I11 I21 I22 I31 I32 I33 [kg m^2]) of the deck, which an ``m_`` value scales
+    mass_cards: Mapping[int, tuple[float, tuple[float, ...]]] = field(default_factory=dict)
 
 
 def load_parameter_names(path: str | Path | None = None) -> ParameterNames:
@@ -238,13 +244,16 @@ def names_of_table(tables: Mapping[str, Any]) -> ParameterNames:
     """ParameterNames of a structure file's parsed tables (its ``[parameters]``)."""
     table = tables.get("parameters", {})
     return ParameterNames(materials={name: int(mid) for mid, name in table.get("materials", {}).items()},
-                          springs={name: int(sid) for sid, name in table.get("springs", {}).items()})
+                          springs={name: int(sid) for sid, name in table.get("springs", {}).items()},
+                          masses={name: int(eid) for eid, name in table.get("masses", {}).items()})
 
 
 def parameter_names(deck, structure_file=None) -> ParameterNames:
-    """The ``E_`` and ``k_`` names of a deck: its structure file's ``[parameters]`` names, and for every MAT1 and
-    CELAS2 card that table does not name (or every card, without a structure file) ``mat<ID>`` and
-    ``celas<ID>`` (``E_mat2``, ``k_celas138``): a name never reaches a card of another deck.
+    """The ``E_``, ``k_`` and ``m_`` names of a deck: its structure file's ``[parameters]`` names, and for every MAT1
+    and CELAS2 card that table does not name (or every card, without a structure file) ``mat<ID>`` and
+    ``celas<ID>`` (``E_mat2``, ``k_celas138``): a name never reaches a card of another deck. Masses are
+    parameters only where the table's ``masses`` names their CONM2 cards (``masses = { "100" = "floor_1" }``):
+    a deck's every CONM2 as a parameter would grow every FMU by parameters no one asked for.
 
     Parameters
     ----------
@@ -256,20 +265,36 @@ def parameter_names(deck, structure_file=None) -> ParameterNames:
     Returns
     -------
     ParameterNames
-        Material name -> MAT1 ID and spring name -> CELAS2 ID.
+        Material name -> MAT1 ID, spring name -> CELAS2 ID, mass name -> CONM2 ID (with the deck's values).
+
+    Raises
+    ------
+    MaceError
+        A ``masses`` entry naming no CONM2 of the deck (the file and the key named).
     """
     named = names_of_table(structure_file.tables) if structure_file is not None else ParameterNames({}, {})
+    for key, name in (structure_file.tables.get("parameters", {}).get("masses", {}).items()
+                      if structure_file is not None else ()):
+        if not key.strip().isdigit() or int(key) not in deck.conm2s:
+            raise MaceError(f"{structure_file.path}: [parameters] masses: key {key!r} ({name!r}) is no CONM2 element "
+                            f"ID of {deck.path}; expected one of {sorted(deck.conm2s)[:12]}")
+        if not deck.conm2s[int(key)].mass > 0.0:
+            raise MaceError(f"{structure_file.path}: [parameters] masses: key {key!r} ({name!r}): CONM2 {key} has no "
+                            "mass; a mass parameter scales a positive mass")
     materials = {**{f"mat{mid}": mid for mid in deck.mat1s if mid not in named.materials.values()},
                  **named.materials}
     springs = {**{f"celas{sid}": sid for sid in deck.celas2s if sid not in named.springs.values()}, **named.springs}
-    return ParameterNames(materials=materials, springs=springs)
+    cards = {eid: (deck.conm2s[eid].mass, tuple(deck.conm2s[eid].inertia)) for eid in named.masses.values()}
+    return ParameterNames(materials=materials, springs=springs, masses=named.masses, mass_cards=cards)
 
 
 def deck_values(deck, names: ParameterNames | None = None) -> dict[str, float]:
-    """The ``E_`` and ``k_`` values [Pa, N/m] a deck has for every named material and spring it contains."""
+    """The ``E_``, ``k_`` and ``m_`` values [Pa, N/m, kg] a deck has for every named material, spring and mass it
+    contains."""
     names = names if names is not None else load_parameter_names()
     out = {MODULUS.named(n): deck.mat1s[mid].youngs_modulus for n, mid in names.materials.items() if mid in deck.mat1s}
     out.update({SPRING.named(n): deck.celas2s[sid].k for n, sid in names.springs.items() if sid in deck.celas2s})
+    out.update({MASS.named(n): deck.conm2s[eid].mass for n, eid in names.masses.items() if eid in deck.conm2s})
     return out
 
 
@@ -287,19 +312,35 @@ def naming_the_file(parameters: ParameterSet | None) -> Iterator[None]:
 
 def fe_overrides(parameters: ParameterSet | None, names: ParameterNames | None = None
                  ) -> dict[tuple[str, int], dict[str, float]]:
-    """The ``E_`` and ``k_`` entries as deck overrides ({("MAT1", 2): {"e": 2.3e9}, ("CELAS2", 138): {"k": ...}})."""
+    """The ``E_``, ``k_`` and ``m_`` entries as deck overrides ({("MAT1", 2): {"e": 2.3e9}, ("CELAS2", 138): {"k": ...},
+    ("CONM2", 100): {"mass": 6.0, "inertia": (...)}}).
+
+    A mass is a scaled body: ``m_<name>`` = f x the deck's mass scales the CONM2's inertias I11..I33 (about its
+    centre of gravity, whose offset stays) by the same f, so that the floor or payload it models is the same
+    shape of a different density. ``names`` must come from :func:`parameter_names` (which carries the deck's
+    CONM2 values) for a set with masses.
+    """
     if parameters is None:
         return {}
     names = names if names is not None else load_parameter_names()
-    out: dict[tuple[str, int], dict[str, float]] = {}
-    for name, value in parameters.of_kind("modulus", "spring").items():
+    out: dict[tuple[str, int], dict[str, Any]] = {}
+    what = {"MAT1": "material", "CELAS2": "spring", "CONM2": "mass"}
+    for name, value in parameters.of_kind("modulus", "spring", "mass").items():
         kind = kind_of_set_name(name)
-        table, card, key = ((names.materials, "MAT1", "e") if kind is MODULUS else (names.springs, "CELAS2", "k"))
+        table, card, key = {MODULUS.name: (names.materials, "MAT1", "e"), SPRING.name: (names.springs, "CELAS2", "k"),
+                            MASS.name: (names.masses, "CONM2", "mass")}[kind.name]
         short = name.removeprefix(kind.set_prefix)
         if short not in table:
-            raise MaceError(f"parameter {name!r}: no such {'material' if card == 'MAT1' else 'spring'}; known: "
-                            f"{', '.join(name[:2] + n for n in table)}")
+            raise MaceError(f"parameter {name!r}: no such {what[card]}; known: "
+                            f"{', '.join(kind.set_prefix + n for n in table) or 'none (name one in the structure file)'}")
         if value <= 0.0:
             raise MaceError(f"parameter {name!r} must be > 0, got {value}")
+        if kind is MASS:
+            if table[short] not in names.mass_cards:
+                raise MaceError(f"parameter {name!r}: the deck's CONM2 {table[short]} is unknown here (names made "
+                                "without the deck: use parameter_names(deck, structure_file))")
+            mass, inertia = names.mass_cards[table[short]]
+            out[(card, table[short])] = {"mass": value, "inertia": tuple(value / mass * i for i in inertia)}
+            continue
         out[(card, table[short])] = {key: value}
     return out

@@ -19,14 +19,14 @@ from mace_fmu.errors import MaceError
 from mace_fmu.parameters.kinds import kind_of_set_name, mode_label
 from mace_fmu.parameters.sets import ParameterSet
 
-_BUILT_IN = ("modulus", "spring", "frequency_scale")
+_BUILT_IN = ("modulus", "spring", "mass", "frequency_scale")
 
 
 @dataclass(frozen=True)
 class SplitParameters:
     """A set split into what an FMU build takes and what its SSV binds."""
 
-    built_in: ParameterSet | None  #: moduli, springs, frequency scales (with the set's provenance); None if none
+    built_in: ParameterSet | None  #: moduli, springs, masses, frequency scales (with the set's provenance); None if none
     start_values: ParameterSet  #: damping ratios, delays, servo gains
 
 

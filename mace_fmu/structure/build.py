@@ -203,6 +203,9 @@ def build_structure(deck: Deck, *, configuration: Configuration, spec: Structure
     if configuration not in ("1g", "0g"):
         raise MaceError(f"configuration must be '1g' or '0g', got {configuration!r}")
     file = structure_file_for(deck, structure_file)
+    if file is not None and file.has("modes"):
+        raise MaceError(f"{file.path}: its [modes] table points at NASTRAN's modes, not at the deck {deck.path}: build "
+                        "the model from those modes (modal_structure(structure_file); CLI configuration 'modes')")
     spec = spec if spec is not None else (file.spec if file is not None else StructureSpec.empty())
     check_spec_against_deck(spec, deck)
     deck = apply_overrides(deck, overrides or {})

@@ -38,10 +38,12 @@ STRUCTURE_FILE_TABLES = {
     "electronics": "filters and delays",
     "servos": "wheel speed loops and gimbal servos",
     "damping": "modal damping table",
-    "parameters": "names of the MAT1 and CELAS2 cards an update may change",
+    "parameters": "names of the MAT1, CELAS2 and CONM2 cards an update may change",
     "labels": "rules = \"generic\" (default: by strain-energy family) or \"mace\" (MACE's bus, cable and gimbal names)",
     "units": "mass = \"kg\", length = \"m\": the units the deck is written in, for printed labels (nothing is "
              "converted)",
+    "modes": "file = NASTRAN's normal modes (OP2 or punch) instead of a deck; subcase, geometry (a deck, for drawing), "
+             "residual_flexibility (a CSV)",
 }
 
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import pytest
 
-from mace_fmu.parameters.kinds import (DAMPING, DELAY, FREQUENCY_SCALE, GAIN, KINDS, MODULUS, SPRING, ZERO_HZ,
+from mace_fmu.parameters.kinds import (DAMPING, DELAY, FREQUENCY_SCALE, GAIN, KINDS, MASS, MODULUS, SPRING, ZERO_HZ,
                                        declared_range, kind_of_fmu_name, kind_of_set_name, mode_label, mode_number,
                                        unit_of)
 from mace_fmu.parameters.sets import parameter_kind, parameter_unit
@@ -14,6 +14,7 @@ from mace_fmu.parameters.sets import parameter_kind, parameter_unit
 @pytest.mark.parametrize("set_name, fmu_name, kind, unit", [
     ("E_lexan_center", "E_lexan_center", MODULUS, "Pa"),
     ("k_suspension_device_1", "k_suspension_device_1", SPRING, "N/m"),
+    ("m_floor_1", "m_floor_1", MASS, "kg"),
     ("delay_gyro_bus_y", "delay_gyro_bus_y", DELAY, "s"),
     ("K_a", "K_a", GAIN, "V/deg"),
     ("K_r", "K_r", GAIN, "V/(deg/s)"),
@@ -37,6 +38,7 @@ def test_names_of_no_kind_are_not_guessed(name):
 def test_declared_ranges_follow_the_kinds():
     assert declared_range("E_lexan_center", 2.335e9) == pytest.approx((1.6345e9, 3.5025e9), rel=1e-15)
     assert declared_range("k_suspension_device_1", 16.9878) == pytest.approx((11.89146, 25.4817), rel=1e-15)
+    assert declared_range("m_floor_1", 5.2) == pytest.approx((3.64, 7.8), rel=1e-15)
     assert declared_range("delay_rwa_x", 0.00674) == (0.0, 1.0)
     assert declared_range("damping_mode_3", 0.02) == (0.0, 1.0)
     assert declared_range("K_f", 4.3) == (-4300.0, 4300.0) and declared_range("K_a", -2.0) == (-2000.0, 2000.0)
@@ -45,7 +47,7 @@ def test_declared_ranges_follow_the_kinds():
     # a slow mode: the lowest scale keeps it just above the zero-frequency cluster
     low, high = declared_range("frequency_scale_mode_9", 1.0, frequency_hz=0.05)
     assert high == 10.0 and low * 0.05 > ZERO_HZ and low * 0.05 == pytest.approx(ZERO_HZ, rel=1e-8)
-    assert len({k.name for k in KINDS}) == len(KINDS) == 6
+    assert len({k.name for k in KINDS}) == len(KINDS) == 7
 
 
 def test_the_registry_builds_the_names_it_decodes():

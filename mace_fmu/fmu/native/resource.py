@@ -27,7 +27,9 @@ from mace_fmu.util.frequency import ZERO_HZ
 
 MAGIC = b"MACEFMU1"
 FORMAT_VERSION = 1  #: the file layout (shared with the controller FMU's data)
-MODEL_FORMAT = 2  #: the plant's arrays (``format_version``): 2 added the static corrections of the reanalysis
+#: the plant's arrays (``format_version``): 2 added the static corrections of the reanalysis, 3 the mass
+#: parameters' mass changes (``physical_dm``, ``correction_dm``, ``correction_mass_coupling``; zeros without masses)
+MODEL_FORMAT = 3
 MAX_PADE_ORDER = MAX_ORDER  #: the runtime's Pade coefficients are exact integer ratios up to this order
 # The codes below are the runtime's enums in mace_model.c, in their order (tests/fmu/test_native_layers.py holds
 # them to the C source): BLOCK_*, PARAM_*, COUNT_* and ROW_*.
@@ -110,6 +112,11 @@ def _corrections(arrays: Mapping[str, np.ndarray], flexible: np.ndarray) -> dict
                          else np.zeros((n_phys, len(outputs), n_flex))).reshape(n_phys, len(outputs), n_flex),
         "preload_b": (np.asarray(arrays["preload_b"], dtype=float)[:, flexible] if "preload_b" in arrays
                       else np.zeros((n_phys, n_flex, n_in))).reshape(n_phys, n_flex, n_in),
+        # the mass parameters' (zeros for a stiffness parameter, and without mass parameters)
+        "correction_dm": np.asarray(arrays.get("correction_dm", np.zeros((n_phys, n_w, n_w))),
+                                    dtype=float).reshape(n_phys, n_w, n_w),
+        "correction_mass_coupling": np.asarray(arrays.get("correction_mass_coupling", np.zeros((n_phys, n_w, len(
+            arrays["frequencies_hz"])))), dtype=float)[:, :, flexible].reshape(n_phys, n_w, n_flex),
     }
 
 
@@ -182,6 +189,8 @@ def runtime_arrays(arrays: Mapping[str, np.ndarray]) -> dict[str, np.ndarray | l
               "yb": arrays["wiring"].shape[1], "corr": corrections["correction_stiffness"].shape[0],
               "massive": int(arrays["correction_massive"]) if "correction_massive" in arrays else 0}
     dk = np.asarray(arrays["physical_dk"], dtype=float)[:, flexible][:, :, flexible]
+    dm = np.asarray(arrays.get("physical_dm", np.zeros_like(arrays["physical_dk"])), dtype=float)[:, flexible][:, :,
+                                                                                                             flexible]
     out: dict[str, np.ndarray | list[str]] = {
         "format_version": np.array([MODEL_FORMAT], dtype=np.int64),
         "counts": np.array([counts[name] for name in COUNTS], dtype=np.int64),
@@ -191,6 +200,7 @@ def runtime_arrays(arrays: Mapping[str, np.ndarray]) -> dict[str, np.ndarray | l
         "param_kind": par_kind, "param_index": par_index,
         "frequencies_hz": np.asarray(arrays["frequencies_hz"], dtype=float),
         "physical_dk": dk.reshape(len(physical), len(flexible), len(flexible)),
+        "physical_dm": dm.reshape(len(physical), len(flexible), len(flexible)),
         "block_info": info, "wiring": np.asarray(arrays["wiring"], dtype=float),
         "entry": np.asarray(arrays["entry"], dtype=float), "exit": np.asarray(arrays["exit"], dtype=float),
         "input_names": [str(x) for x in arrays["inputs"]], "output_names": [str(x) for x in arrays["outputs"]],

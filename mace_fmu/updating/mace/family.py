@@ -96,7 +96,7 @@ class MaceFamily:
     def solution(self, values: Values) -> MaceSolution:
         """The FE solve at the moduli and springs of ``values`` (cached)."""
         params = self.parameter_set(values)
-        physical = {**self._deck_values, **params.of_kind("modulus", "spring")}
+        physical = {**self._deck_values, **params.of_kind("modulus", "spring", "mass")}
         key = tuple(sorted(physical.items()))
         if key in self._cache:
             self._cache.move_to_end(key)
@@ -130,7 +130,7 @@ class MaceFamily:
                     raise MaceError(f"parameter {name!r}: no mode with that label in the {self.configuration} model")
                 for k in hits:
                     vec[system.index(DAMPING.fmu_name(k + 1))] = value
-            elif kind in ("modulus", "spring"):
+            elif kind in ("modulus", "spring", "mass"):
                 if name in system.parameter_names:  # the reanalysis system; the others were solved with them
                     vec[system.index(name)] = value
             else:

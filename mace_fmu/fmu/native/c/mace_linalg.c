@@ -115,6 +115,45 @@ double ml_norm1(const double *a, size_t r, size_t c) {
     return best;
 }
 
+/* ---- Cholesky ------------------------------------------------------------------------------ */
+
+int ml_cholesky(double *a, size_t n) {
+    size_t i, j, k;
+    for (j = 0; j < n; j++) {
+        double d = a[j * n + j];
+        for (k = 0; k < j; k++) d -= a[j * n + k] * a[j * n + k];
+        if (!(d > 0.0)) return -1;
+        d = sqrt(d);
+        a[j * n + j] = d;
+        for (i = j + 1; i < n; i++) {
+            double s = a[i * n + j];
+            for (k = 0; k < j; k++) s -= a[i * n + k] * a[j * n + k];
+            a[i * n + j] = s / d;
+        }
+        for (i = j + 1; i < n; i++) a[j * n + i] = 0.0;
+    }
+    return 0;
+}
+
+void ml_cholesky_solve(const double *l, size_t n, int lower, double *b, size_t nrhs) {
+    size_t i, k, c;
+    for (c = 0; c < nrhs; c++) {
+        if (lower) {
+            for (i = 0; i < n; i++) {
+                double s = b[i * nrhs + c];
+                for (k = 0; k < i; k++) s -= l[i * n + k] * b[k * nrhs + c];
+                b[i * nrhs + c] = s / l[i * n + i];
+            }
+        } else {
+            for (i = n; i-- > 0;) {
+                double s = b[i * nrhs + c];
+                for (k = i + 1; k < n; k++) s -= l[k * n + i] * b[k * nrhs + c];
+                b[i * nrhs + c] = s / l[i * n + i];
+            }
+        }
+    }
+}
+
 /* ---- symmetric eigen-solution ------------------------------------------------------------ */
 
 int ml_jacobi_eigh(double *a, size_t n, double *w, double *v) {

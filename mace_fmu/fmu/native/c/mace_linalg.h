@@ -35,6 +35,13 @@ double ml_norm1(const double *a, size_t r, size_t c);
  * of v the orthonormal eigenvectors. Returns 0, or -1 if 100 sweeps did not converge. */
 int ml_jacobi_eigh(double *a, size_t n, double *w, double *v);
 
+/* Cholesky factor of a symmetric positive definite a (n x n): a = L L^T, L lower triangular, in place (the
+ * upper triangle is zeroed). Returns 0, or -1 when a pivot is not positive (a not positive definite). */
+int ml_cholesky(double *a, size_t n);
+/* Solves L x = b (lower = 1) or L^T x = b (lower = 0) for nrhs right-hand sides with the factor of
+ * ml_cholesky; b is n x nrhs and is overwritten by x. */
+void ml_cholesky_solve(const double *l, size_t n, int lower, double *b, size_t nrhs);
+
 /* One-to-one assignment rows -> columns that maximises the sum of score[i][col[i]] (square,
  * Hungarian algorithm with potentials). Returns 0 or -1 (allocation). */
 int ml_assign_max(const MaceAlloc *al, const double *score, size_t n, size_t *col);

@@ -33,7 +33,7 @@ typedef struct MaceCsr {
     double *val;
 } MaceCsr;
 
-#define MODEL_FORMAT 2 /* mace_fmu.fmu.native.resource.MODEL_FORMAT: 2 added the static corrections */
+#define MODEL_FORMAT 3 /* mace_fmu.fmu.native.resource.MODEL_FORMAT: 2 added the static corrections, 3 the masses */
 
 static const char STATE_MAGIC[8] = {'M', 'A', 'C', 'E', 'S', 'T', 'A', '1'};
 #define STATE_HEADER 7 /* magic, phase, built, coordinates, n_par, n_in, n */
@@ -50,6 +50,8 @@ struct MaceModel {
     /* the static corrections (mace_fmu/iomodel/stiffness_route.py): W^T K0 W, W^T dK_i W, W^T dK_i Phi0 over the
        flexible modes, their modal inputs and structure output rows; the preload's shape changes per parameter */
     const double *corr_k, *corr_dk, *corr_coupling, *corr_b, *corr_rows, *pre_rows, *pre_b;
+    /* the mass parameters' mass changes (zero for a stiffness): Phi0^T dM_i Phi0, W^T dM_i W, W^T dM_i Phi0 */
+    const double *dm, *corr_dm, *corr_mass_coupling;
     const int64_t *par_kind, *par_index, *block_info, *flex, *keep_disp, *keep_rate, *row_kind, *me_order;
     /* the state vector's order: model exchange s[i] = x[perm[i]] (me_order of the data: dense-LU friendly),
        pos its inverse; co-simulation: the identity (its stepping coordinates are the zero-order hold's) */
@@ -196,6 +198,12 @@ static int load_corrections(MaceModel *m, char *err) {
     dims[2] = nf;
     if (!(m->corr_coupling = (const double *)mace_file_get(&m->file, "correction_coupling", MACE_F64, 3, dims, err)))
         return -1;
+    if (!(m->corr_mass_coupling = (const double *)mace_file_get(&m->file, "correction_mass_coupling", MACE_F64, 3,
+                                                                 dims, err)))
+        return -1;
+    dims[2] = nc;
+    if (!(m->corr_dm = (const double *)mace_file_get(&m->file, "correction_dm", MACE_F64, 3, dims, err))) return -1;
+    dims[2] = nf;
     dims[1] = so;
     if (!(m->pre_rows = (const double *)mace_file_get(&m->file, "preload_rows", MACE_F64, 3, dims, err))) return -1;
     dims[1] = nf;
@@ -220,6 +228,7 @@ static int load_arrays(MaceModel *m, char *err) {
         !(m->par_index = (const int64_t *)entry_1d(m, "param_index", MACE_I64, m->n_par, err)) ||
         !(m->freq0 = (const double *)entry_1d(m, "frequencies_hz", MACE_F64, m->n_modes, err)) ||
         !(m->dk = (const double *)mace_file_get(&m->file, "physical_dk", MACE_F64, 3, dims, err)) ||
+        !(m->dm = (const double *)mace_file_get(&m->file, "physical_dm", MACE_F64, 3, dims, err)) ||
         !(m->block_info = (const int64_t *)entry_2d(m, "block_info", MACE_I64, m->n_blocks, N_INFO, err)) ||
         !(m->wiring = (const double *)entry_2d(m, "wiring", MACE_F64, m->n_block_inputs, m->n_block_outputs, err)) ||
         !(m->entry = (const double *)entry_2d(m, "entry", MACE_F64, m->n_block_inputs, m->n_in, err)) ||
@@ -566,16 +575,70 @@ static void reduced_stiffness(const MaceModel *m, double *k) {
         for (j = 0; j < i; j++) k[i * nt + j] = k[j * nt + i] = 0.5 * (k[i * nt + j] + k[j * nt + i]);
 }
 
+/* The reduced mass in the same basis when a mass parameter changed (returns 1; 0: M_r = diag(I, I, 0) and mm is
+ * untouched): diag(I over the modes and massive corrections, 0 over the massless ones) plus sum p_i of the
+ * mass changes Phi0^T dM_i Phi0, W^T dM_i Phi0 and W^T dM_i W (mace_fmu/iomodel/reanalysis.py). */
+static int reduced_mass(const MaceModel *m, double *mm) {
+    const size_t nf = m->n_flex, nc = m->n_corr, nt = nf + nc, na = nf + m->n_massive;
+    size_t i, j, q;
+    int changed = 0;
+    for (q = 0; q < m->n_phys && !changed; q++) {
+        const double *dm = m->dm + q * nf * nf;
+        if (m->rel[q] == 0.0) continue;
+        for (i = 0; i < nf * nf; i++) changed |= dm[i] != 0.0;
+    }
+    if (!changed) return 0;
+    memset(mm, 0, nt * nt * sizeof(double));
+    for (i = 0; i < na; i++) mm[i * nt + i] = 1.0;
+    for (q = 0; q < m->n_phys; q++) {
+        const double r = m->rel[q], *dm = m->dm + q * nf * nf, *dw = m->corr_dm + q * nc * nc;
+        const double *cw = m->corr_mass_coupling + q * nc * nf;
+        if (r == 0.0) continue;
+        for (i = 0; i < nf; i++)
+            for (j = 0; j < nf; j++) mm[i * nt + j] += r * dm[i * nf + j];
+        for (i = 0; i < nc; i++) {
+            for (j = 0; j < nf; j++) {
+                mm[(nf + i) * nt + j] += r * cw[i * nf + j];
+                mm[j * nt + nf + i] += r * cw[i * nf + j];
+            }
+            for (j = 0; j < nc; j++) mm[(nf + i) * nt + nf + j] += r * dw[i * nc + j];
+        }
+    }
+    for (i = 0; i < nt; i++)
+        for (j = 0; j < i; j++) mm[i * nt + j] = mm[j * nt + i] = 0.5 * (mm[i * nt + j] + mm[j * nt + i]);
+    return 1;
+}
+
+/* M_c = T^T M_r T, T = [I; -g] (g = K_zz^-1 K_za, the condensation of the massless corrections), na x na. */
+static void condensed_mass(const double *mm, const double *g, size_t na, size_t nz, double *mc) {
+    const size_t nt = na + nz;
+    size_t i, j, p, q;
+    for (i = 0; i < na; i++)
+        for (j = 0; j < na; j++) {
+            double acc = mm[i * nt + j];
+            for (p = 0; p < nz; p++) {
+                acc -= mm[i * nt + na + p] * g[p * na + j] + g[p * na + i] * mm[(na + p) * nt + j];
+                for (q = 0; q < nz; q++) acc += g[p * na + i] * mm[(na + p) * nt + na + q] * g[q * na + j];
+            }
+            mc[i * na + j] = acc;
+        }
+    for (i = 0; i < na; i++)
+        for (j = 0; j < i; j++) mc[i * na + j] = mc[j * na + i] = 0.5 * (mc[i * na + j] + mc[j * na + i]);
+}
+
 /* New frequencies of all modes (m->freq) and the coefficients of the new flexible modes, coef
  * ((n_flex + n_corr) x n_flex, column k: new mode k over the nominal flexible modes and the
  * corrections); *changed = 0 means the identity. The massless corrections are condensed with the
  * changed stiffness; each new mode continues the nominal mode it overlaps most (one-to-one). Each
- * mode's frequency scale multiplies its frequency after the reanalysis (shapes unchanged). */
+ * mode's frequency scale multiplies its frequency after the reanalysis (shapes unchanged). A mass change
+ * makes it K_c v = omega^2 M_c v: with M_c = L L^T the standard problem L^-1 K_c L^-T y = omega^2 y, v = L^-T y
+ * (mass-normalised in the changed mass), the overlaps scored on M_c v, omega^2 the Rayleigh quotient. */
 static int reanalyse(MaceModel *m, double *coef, int *changed, char *err) {
     const size_t nf = m->n_flex, nc = m->n_corr, nt = nf + nc, na = nf + m->n_massive, nz = nt - na;
     double *k = NULL, *kc = NULL, *g = NULL, *lu = NULL, *w = NULL, *v = NULL, *score = NULL;
+    double *mm = NULL, *mc = NULL, *kc0 = NULL;
     size_t *col = NULL, *piv = NULL, i, j, q;
-    int status = -1;
+    int status = -1, massed = 0;
     *changed = 0;
     for (q = 0; q < m->n_par; q++) {
         if (m->par_kind[q] == PARAM_PHYSICAL) {
@@ -594,7 +657,10 @@ static int reanalyse(MaceModel *m, double *coef, int *changed, char *err) {
         score = ml_zeros(&m->al, na * na);
         col = (size_t *)m->al.calloc(na + 1, sizeof(size_t));
         piv = (size_t *)m->al.calloc(nz + 1, sizeof(size_t));
-        if (!k || !kc || !g || !lu || !w || !v || !score || !col || !piv) goto oom;
+        mm = ml_zeros(&m->al, nt * nt);
+        mc = ml_zeros(&m->al, na * na);
+        kc0 = ml_zeros(&m->al, na * na);
+        if (!k || !kc || !g || !lu || !w || !v || !score || !col || !piv || !mm || !mc || !kc0) goto oom;
         reduced_stiffness(m, k);
         for (i = 0; i < na; i++) memcpy(kc + i * na, k + i * nt, na * sizeof(double));
         if (nz) { /* K_c = K_aa - K_az K_zz^-1 K_za, g = K_zz^-1 K_za */
@@ -616,12 +682,47 @@ static int reanalyse(MaceModel *m, double *coef, int *changed, char *err) {
             for (i = 0; i < na; i++)
                 for (j = 0; j < i; j++) kc[i * na + j] = kc[j * na + i] = 0.5 * (kc[i * na + j] + kc[j * na + i]);
         }
+        massed = reduced_mass(m, mm);
+        if (massed) { /* the standard problem L^-1 K_c L^-T of K_c v = omega^2 M_c v */
+            condensed_mass(mm, g, na, nz, mc);
+            memcpy(kc0, kc, na * na * sizeof(double));
+            if (ml_cholesky(mc, na) != 0) {
+                snprintf(err, MACE_ERR_LEN, "the reanalysis: the changed mass matrix is not positive definite");
+                goto done;
+            }
+            ml_cholesky_solve(mc, na, 1, kc, na); /* L^-1 K_c */
+            for (i = 0; i < na; i++)              /* its transpose, K_c L^-T (K_c symmetric) */
+                for (j = 0; j < i; j++) {
+                    const double t = kc[i * na + j];
+                    kc[i * na + j] = kc[j * na + i];
+                    kc[j * na + i] = t;
+                }
+            ml_cholesky_solve(mc, na, 1, kc, na); /* L^-1 K_c L^-T */
+            for (i = 0; i < na; i++)
+                for (j = 0; j < i; j++) kc[i * na + j] = kc[j * na + i] = 0.5 * (kc[i * na + j] + kc[j * na + i]);
+        }
         if (ml_jacobi_eigh(kc, na, w, v) != 0) {
             snprintf(err, MACE_ERR_LEN, "the reanalysis eigen-solution did not converge");
             goto done;
         }
-        for (i = 0; i < nf; i++) /* rows of the nominal modes; the corrections' rows score nothing */
-            for (j = 0; j < na; j++) score[i * na + j] = v[i * na + j] * v[i * na + j];
+        if (massed) {
+            for (i = 0; i < nf; i++) /* the overlaps M_c v = L L^T v = L y with the nominal modes */
+                for (j = 0; j < na; j++) {
+                    double acc = 0.0;
+                    for (q = 0; q <= i; q++) acc += mc[i * na + q] * v[q * na + j];
+                    score[i * na + j] = acc * acc;
+                }
+            ml_cholesky_solve(mc, na, 0, v, na); /* v = L^-T y */
+            for (j = 0; j < na; j++) {           /* omega^2: the Rayleigh quotient (v is M_c-normalised) */
+                double acc = 0.0;
+                for (i = 0; i < na; i++)
+                    for (q = 0; q < na; q++) acc += v[i * na + j] * kc0[i * na + q] * v[q * na + j];
+                w[j] = acc;
+            }
+        } else {
+            for (i = 0; i < nf; i++) /* rows of the nominal modes; the corrections' rows score nothing */
+                for (j = 0; j < na; j++) score[i * na + j] = v[i * na + j] * v[i * na + j];
+        }
         if (ml_assign_max(&m->al, score, na, col) != 0) goto oom;
         for (i = 0; i < nf; i++) { /* new mode i continues nominal mode i */
             m->freq[m->flex[i]] = signed_frequency_hz(w[col[i]]);
@@ -658,6 +759,9 @@ done:
     m->al.free(score);
     m->al.free(col);
     m->al.free(piv);
+    m->al.free(mm);
+    m->al.free(mc);
+    m->al.free(kc0);
     return status;
 }
 
