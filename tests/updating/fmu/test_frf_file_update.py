@@ -134,10 +134,11 @@ def test_a_shaker_record_drives_the_fmu_s_force_input_and_the_truth_is_within_th
 
 
 def test_the_frame_example_updated_on_real_data_meets_the_resonances_of_every_driving_point(tmp_path):
-    """examples/three_storey_frame on the rig's measured FRFs: fitted on the floor-1 file, the updated FMU's
-    resonances within 0.3 % of those all three files show (the phase's 90 deg crossing of each driving point),
-    the floor-2 and floor-3 files unseen by the fit. The magnitudes' goal (1 dB over the half-power bands) is
-    not met with the floors' stated masses (the example's text says why); the figure and the animation are
+    """examples/three_storey_frame on the rig's measured FRFs: moduli, floor masses and damping fitted on the
+    floor-1 file, the updated FMU's resonances within 0.3 % of those all three files show (the phase's 90 deg
+    crossing of each driving point), the floor-2 and floor-3 files unseen by the fit. The magnitudes over the
+    half-power bands reach 1.2 dB on the fitted file and 1.7 dB on the others, not the 1 dB goal (the example's
+    text says why); the numbers the example's text states are held here. The figure and the animation are
     written."""
     import importlib.util
 
@@ -150,13 +151,28 @@ def test_the_frame_example_updated_on_real_data_meets_the_resonances_of_every_dr
         assert max(abs(e) for e in result["frequency_error_percent"]) < 0.3, (name, result)
     resonances = np.array([r["resonances_hz"] for r in summary["files"].values()])
     assert np.ptp(resonances, axis=0).max() < 0.005  # the three files' resonances agree to a fifth of a bin
+    fitted, *others = summary["files"].values()
+    assert max(fitted["half_power_error_db"]) < 1.25  # the text: 0.9-1.2 dB
+    assert max(max(r["half_power_error_db"]) for r in others) < 1.75  # the text: 0.3-1.7 dB
+    values = summary["values"]
+    for k, stated in zip((1, 2, 3), (5.30, 4.45, 4.65)):  # the text's floor masses [kg]
+        assert values[f"m_floor_{k}"] == pytest.approx(stated, abs=0.005)
+    assert all(51.5e9 <= values[f"E_storey_{k}"] < 58.5e9 for k in (1, 2, 3))  # the text: 52-58 GPa
     per_file = summary["per_file"]  # the same fit on each driving point's file
-    for name in ("E_storey_1", "E_storey_2", "E_storey_3"):  # one structure, whichever floor is driven
-        values = [fit[name] for fit in per_file.values()]
-        assert max(values) / min(values) - 1 < 0.005, (name, values)
-    for k in (1, 2, 3):  # the fitted file's damping within the three files' scatter, near the owners' 0.2 %
-        values = [fit[f"damping_mode_{k}"] for fit in per_file.values()]
-        assert min(values) <= summary["values"][f"damping_mode_{k}"] <= max(values)
-        assert 0.0013 < summary["values"][f"damping_mode_{k}"] < 0.003
+
+    def spread(name: str) -> float:
+        fits = [fit[name] for fit in per_file.values()]
+        return max(fits) / min(fits) - 1
+
+    # masses and moduli are not told apart between driving points, the total mass is (the text's 7 %, 8 %, 1 %)
+    assert 0.05 < max(spread(f"m_floor_{k}") for k in (1, 2, 3)) < 0.075
+    assert 0.06 < max(spread(f"E_storey_{k}") for k in (1, 2, 3)) < 0.085
+    totals = [sum(fit[f"m_floor_{k}"] for k in (1, 2, 3)) for fit in per_file.values()]
+    assert max(totals) / min(totals) - 1 < 0.015
+    for k in (1, 2, 3):  # the fitted file's damping within the three files' scatter (4-7 %), near the owners' 0.2 %
+        assert min(fit[f"damping_mode_{k}"] for fit in per_file.values()) <= values[f"damping_mode_{k}"] \
+            <= max(fit[f"damping_mode_{k}"] for fit in per_file.values())
+        assert 0.04 < spread(f"damping_mode_{k}") < 0.075
+        assert 0.0013 < values[f"damping_mode_{k}"] < 0.003
     assert (tmp_path / "frame_frfs.png").stat().st_size > 50_000
     assert (tmp_path / "frame_modes.html").stat().st_size > 10_000
