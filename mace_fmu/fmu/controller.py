@@ -163,22 +163,23 @@ def export_controller_fmu(controller: DiscreteController, *, out_dir: str | Path
         raise MaceError(f"controller FMUs are FMI 2 or FMI 3, got FMI version {fmi_version!r}")
     targets = select_platforms(platforms)
     data = controller_data(controller)
-    sources = runtime.source_files(runtime.CONTROLLER_C_FILES)
+    c_files = runtime.CONTROLLER_C_FILES[fmi_version]
+    sources = runtime.source_files(c_files)
     token = runtime_token(data, salt=f"controller fmi{fmi_version}", sources=sources)
     data["guid"] = [token]
     variables = _variables(controller)
     version = metadata.version("mace-fmu")
     summary = (f"sampled-data controller: {controller.a.shape[0]} states, {len(controller.inputs)} inputs, "
                f"{len(controller.outputs)} outputs, sample time {controller.sample_time_s} s")
-    c_files = [p.name for p in sources if p.suffix == ".c"]
-    binaries = runtime.compile_runtimes(targets, c_files=runtime.CONTROLLER_C_FILES, requested=platforms is not None)
+    binaries = runtime.compile_runtimes(targets, c_files=c_files, requested=platforms is not None)
     if fmi_version == 2:
+        c_names = [p.name for p in sources if p.suffix == ".c"]
         description = fmi2_model_description(variables, model_identifier=name, guid=token, description=summary,
-                                             version=version, source_files=c_files, model_exchange=False,
+                                             version=version, source_files=c_names, model_exchange=False,
                                              step_size_s=controller.sample_time_s)
     else:
         description = fmi3_model_description(variables, model_identifier=name, token=token, description=summary,
                                              version=version, step_size_s=controller.sample_time_s)
     return write_native_fmu(Path(out_dir) / f"{name}.fmu", name=name, fmi_version=fmi_version,
                             description=description, data=data, binaries=binaries, sources=sources,
-                            c_files=runtime.CONTROLLER_C_FILES)
+                            c_files=c_files)

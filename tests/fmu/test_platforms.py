@@ -70,7 +70,7 @@ def test_the_symbol_reader_agrees_with_llvm(controllers, tmp_path):
                 found = {line.split()[-1] for line in listed.splitlines() if line.strip()}
                 if name.endswith(".dylib"):
                     found = {n.removeprefix("_") for n in found}
-            assert len(found) > 100 and read_library(path.read_bytes()).exports == found, name
+            assert len(found) > 70 and read_library(path.read_bytes()).exports == found, name  # FMI 3's 75 and more
 
 
 @pytest.mark.slow
@@ -151,7 +151,7 @@ def test_a_missing_toolchain_is_one_warning_line_or_an_error_when_asked_for(tmp_
                                "aarch64-darwin: zig is not installed (pip install ziglang)")
     with zipfile.ZipFile(fmu) as z:
         assert not [n for n in z.namelist() if n.startswith("binaries/")]
-        assert "sources/fmi2_api.c" in z.namelist()
+        assert "sources/fmi2_api.c" in z.namelist() and "sources/fmi3_api.c" not in z.namelist()
     with pytest.raises(MaceError, match="^no C toolchain for x86_64-windows: zig is not installed"):
         export_controller_fmu(_controller(), out_dir=tmp_path, name="ctl", platforms=["x86_64-windows"])
 

@@ -1,6 +1,6 @@
 """Checks of a native FMU's binaries for every platform, from the archive alone (tests/support/binaries.py
-reads them): the folders each FMI version names, each binary's CPU, its exported symbols against the FMI
-headers in the FMU's own sources/, and sources/build_info.json against the binaries and sources."""
+reads them): the folders each FMI version names, each binary's CPU, its exported symbols against its FMI
+version's header in the FMU's own sources/, and sources/build_info.json against the binaries and sources."""
 
 from __future__ import annotations
 
@@ -21,9 +21,10 @@ FMI2_FOLDERS = {"linux64": ("x86_64", ".so"), "aarch64-linux": ("aarch64", ".so"
 FMI3_FOLDERS = {"x86_64-linux": ("x86_64", ".so"), "aarch64-linux": ("aarch64", ".so"),
                 "x86_64-windows": ("x86_64", ".dll"), "x86_64-darwin": ("x86_64", ".dylib"),
                 "aarch64-darwin": ("aarch64", ".dylib")}
-#: what the runtime exports beyond the FMI headers: the whole-record call the updating engine uses
-#: (mace_fmu/updating/fmu/model.py)
-EXTENSIONS = {"maceRunRecord"}
+#: FMI version -> what its binaries export beyond its FMI header: the one allowed extra is FMI 2's
+#: maceRunRecord, the whole-record call the updating engine makes through ctypes (mace_fmu/updating/fmu/model.py,
+#: which loads FMI 2 FMUs only); FMI 3 binaries export exactly fmi3Functions.h's functions
+EXTENSIONS = {2: {"maceRunRecord"}, 3: set()}
 #: files of sources/ written per FMU, not compiled
 GENERATED = {"build_info.json", "buildDescription.xml"}
 #: symbols zig's Mach-O linker defines and exports in every dylib (the image's own header)
@@ -63,9 +64,11 @@ def check_binaries(fmu: Path) -> dict[str, bytes]:
     assert {n for n in entries if n.startswith("binaries/")} == expected
 
     sources = {n.removeprefix("sources/"): data for n, data in entries.items() if n.startswith("sources/")}
-    declared = {h: declared_fmi_functions(sources[h].decode()) for h in ("fmi2Functions.h", "fmi3Functions.h")}
-    every = set().union(*declared["fmi2Functions.h"].values(), *declared["fmi3Functions.h"].values())
-    sections = declared["fmi2Functions.h" if version == 2 else "fmi3Functions.h"]
+    other = 5 - version  # the FMI version this FMU is not: none of its files, none of its functions
+    assert not [n for n in sources if n.startswith(f"fmi{other}")], sorted(sources)
+    sections = declared_fmi_functions(sources[f"fmi{version}Functions.h"].decode())
+    every = set().union(*sections.values())  # all the header declares, as the runtime implements every one
+    allowed = every | EXTENSIONS[version]
     promised = set(sections["common"])
     if md.coSimulation is not None:
         promised |= sections["co-simulation"]
@@ -83,8 +86,9 @@ def check_binaries(fmu: Path) -> dict[str, bytes]:
         for cpu, image in thin.items():
             library = read_library(image)
             extra = MACHO_LINKER_SYMBOLS if library.kind == "macho" else set()
-            assert library.exports == every | EXTENSIONS | extra, (entry, sorted(library.exports ^ (every | EXTENSIONS)))
+            assert library.exports == allowed | extra, (entry, sorted(library.exports ^ (allowed | extra)))
             assert promised <= library.exports
+            assert not [n for n in library.exports if n.startswith(f"fmi{other}")], entry
             if library.kind == "macho":
                 assert read_macho(image)[1] == library.exports, "dyld's export trie differs from the symbol table"
             platform = next(p for p, b in recorded.items() if b["archive_entry"] == entry and p.startswith(cpu))

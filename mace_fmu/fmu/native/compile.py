@@ -3,8 +3,11 @@
 The ``ziglang`` package (a dependency, so ``pip install`` brings it) cross-compiles for every target of
 :mod:`mace_fmu.fmu.native.platforms` from any machine, with its own libc headers and import stubs: one
 compiler, one flag set, five targets. The runtime does not depend on the model (the model is data), so
-one compilation per platform and source version serves every FMU: it is cached on disk (``cache_dir``)
-under a key of the sources, flags, target and zig version, and the targets compile side by side. The
+one compilation per platform, runtime variant and source version serves every FMU: it is cached on disk
+(``cache_dir``) under a key of the sources, flags, target and zig version, and the targets compile side by
+side. There are four variants, the plant and the controller each for FMI 2 and FMI 3 (``C_FILES``,
+``CONTROLLER_C_FILES``): an FMU links only its own FMI version's entry points, so that its binaries
+export that version's functions and nothing of the other. The
 flags are portable: no -march=native and no -ffast-math, and -ffp-contract=off so that no target fuses
 a*b+c into one rounding (ARM would by default), keeping the exact zero-order hold's IEEE arithmetic
 the same on every platform.
@@ -34,12 +37,15 @@ from mace_fmu.errors import MaceError
 from mace_fmu.fmu.native.platforms import PLATFORMS, Platform, entry_path
 
 SOURCE_DIR = Path(__file__).with_name("c")
-#: the plant runtime's C files, in link order; the FMI headers and their licence go into sources/ too
-C_FILES = ("mace_linalg.c", "mace_data.c", "mace_zoh.c", "mace_model.c", "mace_instance.c", "fmi2_api.c",
-           "fmi3_api.c")
-#: the sampled-data controller's: the same FMI layers over another implementation of mace_model.h
-CONTROLLER_C_FILES = ("mace_linalg.c", "mace_data.c", "controller/mace_discrete.c", "mace_instance.c", "fmi2_api.c",
-                      "fmi3_api.c")
+#: the FMI entry points of each FMI version; fmi2_api.c also holds maceRunRecord, the updating engine's call
+API_C_FILES = {2: "fmi2_api.c", 3: "fmi3_api.c"}
+_PLANT_LAYERS = ("mace_linalg.c", "mace_data.c", "mace_zoh.c", "mace_model.c", "mace_instance.c")
+#: the sampled-data controller's layers: another implementation of mace_model.h under the same FMI layers
+_CONTROLLER_LAYERS = ("mace_linalg.c", "mace_data.c", "controller/mace_discrete.c", "mace_instance.c")
+#: FMI version -> the plant runtime's C files, in link order; its headers and their licence go into sources/ too
+C_FILES = {v: (*_PLANT_LAYERS, api) for v, api in API_C_FILES.items()}
+#: FMI version -> the controller runtime's C files, in link order
+CONTROLLER_C_FILES = {v: (*_CONTROLLER_LAYERS, api) for v, api in API_C_FILES.items()}
 #: every target gets these (the C standard, optimisation, exports only what the FMI headers mark)
 CFLAGS = ("-std=c99", "-O3", "-fPIC", "-shared", "-fvisibility=hidden", "-ffp-contract=off", "-g0")
 #: the library file each platform's compilation writes (its name inside the FMU is the model identifier's)
@@ -47,13 +53,22 @@ OUTPUT_STEM = "mace_runtime"
 BUILD_INFO = "build_info.json"
 
 
-def source_files(c_files: tuple[str, ...] = C_FILES) -> list[Path]:
+def source_files(c_files: tuple[str, ...] = C_FILES[2]) -> list[Path]:
     """Every file of a runtime that an FMU's sources/ folder carries (its C files, the headers, the licence).
 
     A host that builds from sources compiles every C file there, so each FMU carries exactly the C
-    files of its own runtime (``C_FILES`` for plants, ``CONTROLLER_C_FILES`` for controllers).
+    files of its own runtime variant (``C_FILES[v]`` for plants, ``CONTROLLER_C_FILES[v]`` for controllers
+    of FMI version v), and the FMI headers of that version only.
     """
-    shared = [p for p in SOURCE_DIR.iterdir() if p.suffix == ".h" or p.name.startswith("LICENSE")]
+    names = {Path(f).name for f in c_files}
+
+    def carried(path: Path) -> bool:
+        if path.name.startswith("LICENSE"):
+            return True
+        version = next((v for v in API_C_FILES if path.name.startswith(f"fmi{v}")), None)
+        return path.suffix == ".h" and (version is None or API_C_FILES[version] in names)
+
+    shared = [p for p in SOURCE_DIR.iterdir() if carried(p)]
     return sorted(shared + [SOURCE_DIR / f for f in c_files], key=lambda p: p.name)
 
 
@@ -137,7 +152,7 @@ def _compile_cached(platform: Platform, c_files: tuple[str, ...], key: str) -> b
     return binary
 
 
-def compile_runtime(platform: Platform = PLATFORMS[0], *, c_files: tuple[str, ...] = C_FILES) -> bytes:
+def compile_runtime(platform: Platform = PLATFORMS[0], *, c_files: tuple[str, ...] = C_FILES[2]) -> bytes:
     """A runtime's shared library for ``platform`` (compiled once per source version and platform, then cached).
 
     Parameters
@@ -145,7 +160,7 @@ def compile_runtime(platform: Platform = PLATFORMS[0], *, c_files: tuple[str, ..
     platform : Platform
         Target and binary folder names (default: x86_64 Linux).
     c_files : tuple of str
-        The runtime's C sources, in link order.
+        The runtime's C sources, in link order (default: the FMI 2 plant's, ``C_FILES[2]``).
 
     Returns
     -------
@@ -162,9 +177,9 @@ def compile_runtime(platform: Platform = PLATFORMS[0], *, c_files: tuple[str, ..
     return _compile_cached(platform, c_files, _cache_key(platform, c_files))
 
 
-def compile_runtimes(platforms: Sequence[Platform], *, c_files: tuple[str, ...] = C_FILES,
+def compile_runtimes(platforms: Sequence[Platform], *, c_files: tuple[str, ...] = C_FILES[2],
                      requested: bool = False) -> dict[Platform, bytes]:
-    """The runtime (plant by default) for each of ``platforms``, compiled side by side.
+    """The runtime (the FMI 2 plant's by default) for each of ``platforms``, compiled side by side.
 
     A platform without a toolchain is an error when the caller ``requested`` it by name, and one warning
     line otherwise (the FMU then carries sources/ for it, which a host can compile).

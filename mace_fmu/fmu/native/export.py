@@ -4,7 +4,8 @@ No code is generated per model: the runtime (``mace_fmu/fmu/native/c``, compiled
 process) reads ``resources/mace_model.bin`` (see :mod:`mace_fmu.fmu.native.resource`) and rebuilds
 the model for its parameters at initialisation. FMI 2.0 FMUs offer co-simulation and model
 exchange; FMI 3.0 FMUs co-simulation. Each carries ``binaries/`` for Linux, Windows and macOS on x86-64
-and ARM (:mod:`mace_fmu.fmu.native.platforms`, compiled with zig), ``sources/`` so that a host on another
+and ARM (:mod:`mace_fmu.fmu.native.platforms`, compiled with zig from its FMI version's entry points only,
+so that they export that version's functions), ``sources/`` so that a host on another
 platform can build its own binary (e.g. ``fmpy.build.build_platform_binary`` or a plain ``cc``), and
 ``sources/build_info.json``, the command that made each binary.
 """
@@ -168,16 +169,17 @@ def export_native_fmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str
     if count_of(data, "states") != len(reference.state_names):
         raise MaceError(f"native FMU: the runtime data describe {count_of(data, 'states')} states, the model has "
                         f"{len(reference.state_names)}")
-    token = runtime_token(data, salt=f"fmi{fmi_version}", sources=runtime.source_files())
+    c_files = runtime.C_FILES[fmi_version]
+    sources = runtime.source_files(c_files)
+    token = runtime_token(data, salt=f"fmi{fmi_version}", sources=sources)
     data["guid"] = [token]
     variables = fmu_variables(arrays, reference.state_names)
     version = metadata.version("mace-fmu")
-    sources = runtime.source_files()
-    c_files = [p.name for p in sources if p.suffix == ".c"]
-    binaries = runtime.compile_runtimes(targets, requested=platforms is not None)
+    binaries = runtime.compile_runtimes(targets, c_files=c_files, requested=platforms is not None)
     if fmi_version == 2:
         description = fmi2_model_description(variables, model_identifier=name, guid=token,
-                                             description=model_summary(model), version=version, source_files=c_files,
+                                             description=model_summary(model), version=version,
+                                             source_files=[p.name for p in sources if p.suffix == ".c"],
                                              jacobian=jacobian_pattern(reference),
                                              state_order=[int(k) for k in data["me_order"]])
     else:
@@ -185,4 +187,4 @@ def export_native_fmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str
                                              description=model_summary(model), version=version)
     return write_native_fmu(Path(out_dir) / f"{name}.fmu", name=name, fmi_version=fmi_version,
                             description=description, data=data, binaries=binaries, sources=sources,
-                            c_files=runtime.C_FILES)
+                            c_files=c_files)
