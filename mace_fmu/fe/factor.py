@@ -1,34 +1,40 @@
 """Sparse factorisation of a symmetric FE matrix, reordered first so that its factors stay thin.
 
 A structure's stiffness is as banded as its numbering lets it be; decks number grids as their
-authors please. Reverse Cuthill-McKee renumbers the DOFs into a narrow band whatever the deck's
-numbering. On a 10k-DOF lattice tower this gives a third fewer nonzeros in the factors than
-SuperLU's default column ordering and half its factor time, with the deck's numbering or a random
-one alike (benchmarks/RESULTS.md, "FE core at scale").
+authors please. The DOFs are renumbered first, in the ordering that fills least for this matrix
+(mace_fmu.fe.ordering): reverse Cuthill-McKee on a slender structure, nested dissection on a wide
+one, each measured by CHOLMOD's symbolic analysis before any number is factored. On a 10k-DOF
+lattice tower RCM gives a third fewer nonzeros in the factors than SuperLU's default column
+ordering and half its factor time, with the deck's numbering or a random one alike; on a 100k-DOF
+lattice 20 x 20 grids wide nested dissection's factor is 0.6 times RCM's (benchmarks/RESULTS.md,
+"FE core at scale").
 
 A positive definite matrix (K - sigma M below every eigenvalue, the modal solution's) is factored
 by CHOLMOD's supernodal Cholesky in that order: half the storage of an LU and dense blocks in the
-triangular solves. A shift-invert eigen-solution is mostly solves, and at 100k DOFs one takes
-41 ms instead of SuperLU's 88 ms, the factorisation 0.5 s instead of 2.7 s. CHOLMOD comes with
-cvxopt's wheels. Its own fill-reducing ordering (AMD) was slower on that tower: 14 s to factor,
-158 ms a solve.
+triangular solves. A shift-invert eigen-solution is mostly solves, and at 100k DOFs (the tower) one
+takes 41 ms instead of SuperLU's 88 ms, the factorisation 0.5 s instead of 2.7 s. CHOLMOD comes
+with cvxopt's wheels. Its solve takes many right-hand sides at once, but gains little from it here
+(8 columns cost 0.75 of 8 single solves on the tower's factor, 1.0 on the wide lattice's).
 Any other matrix (a tangent stiffness that is indefinite on the way to a stable state), or one
-that turns out not to be positive definite, goes to SuperLU with threshold pivoting.
+that turns out not to be positive definite, goes to SuperLU with threshold pivoting, in the
+ordering chosen the same way (AMD excepted: CHOLMOD keeps its permutation to itself).
 """
 
 from __future__ import annotations
 
-from typing import Callable
+from collections.abc import Callable
 
 import numpy as np
 from scipy import sparse
-from scipy.sparse.csgraph import reverse_cuthill_mckee
 from scipy.sparse.linalg import splu
+
+from mace_fmu.fe.ordering import Analysis, analyse, least_fill_permutation
 
 Solve = Callable[[np.ndarray], np.ndarray]
 
 
-def factorize(matrix: sparse.sparray | np.ndarray, *, positive_definite: bool = False) -> Solve:
+def factorize(matrix: sparse.sparray | np.ndarray, *, positive_definite: bool = False,
+              groups: np.ndarray | None = None) -> Solve:
     """A function x = solve(b) for the square symmetric ``matrix``.
 
     Parameters
@@ -38,11 +44,15 @@ def factorize(matrix: sparse.sparray | np.ndarray, *, positive_definite: bool = 
     positive_definite : bool
         Try a sparse Cholesky first (the matrix is expected to be positive definite); it falls back
         to the LU when CHOLMOD is not installed or finds a non-positive pivot.
+    groups : numpy.ndarray, optional
+        One label per row, the grid of each DOF: nested dissection then orders the grids (faster,
+        the same fill), each grid's DOFs together.
 
     Returns
     -------
     callable
-        ``solve(b)`` for a vector ``b`` of the matrix's size, or a matrix of such columns.
+        ``solve(b)`` for a vector ``b`` of the matrix's size, or a matrix of such columns (solved
+        together: one pass over the factor for all of them).
 
     Raises
     ------
@@ -50,15 +60,17 @@ def factorize(matrix: sparse.sparray | np.ndarray, *, positive_definite: bool = 
         The matrix is singular (SuperLU's message).
     """
     a = sparse.csr_array(matrix)
-    perm = reverse_cuthill_mckee(sparse.csr_matrix(a), symmetric_mode=True)
     if positive_definite:
-        solve = _cholesky(a, perm)
+        solve = _cholesky(analyse(a, groups=groups), a.shape[0])
         if solve is not None:
             return solve
-    # threshold pivoting that prefers the diagonal (keeps the band) but still pivots where a tangent
-    # stiffness is indefinite on the way to a stable state (the preload's first Newton steps)
+    # RCM or nested dissection (AMD's permutation stays inside CHOLMOD); a pattern factored before
+    # (Newton iterations) reuses its choice
+    perm = least_fill_permutation(a, groups=groups)
+    # threshold pivoting that prefers the diagonal (keeps the ordering's fill) but still pivots where a
+    # tangent stiffness is indefinite on the way to a stable state (the preload's first Newton steps)
     lu = splu(sparse.csc_array(a[perm][:, perm]), permc_spec="NATURAL", diag_pivot_thresh=0.1,
-              options=dict(SymmetricMode=True))
+              options={"SymmetricMode": True})
     inverse = np.empty_like(perm)
     inverse[perm] = np.arange(len(perm))
 
@@ -69,20 +81,17 @@ def factorize(matrix: sparse.sparray | np.ndarray, *, positive_definite: bool = 
     return solve_lu
 
 
-def _cholesky(a: sparse.csr_array, perm: np.ndarray) -> Solve | None:
-    """CHOLMOD's L L^T of ``a`` in the order ``perm``; None without cvxopt or for a matrix that is not
-    positive definite."""
-    try:
-        import cvxopt
-        import cvxopt.cholmod
-    except ImportError:
+def _cholesky(analysis: Analysis, n: int) -> Solve | None:
+    """CHOLMOD's L L^T in the analysed ordering; None without cvxopt or for a matrix that is not positive
+    definite."""
+    if analysis.symbolic is None:
         return None
-    lower = sparse.tril(a).tocoo()
-    n = a.shape[0]
-    matrix = cvxopt.spmatrix(lower.data, lower.row.astype(int), lower.col.astype(int), (n, n))
+    import cvxopt
+    import cvxopt.cholmod
+
+    factor = analysis.symbolic
     try:
-        factor = cvxopt.cholmod.symbolic(matrix, p=cvxopt.matrix(perm.astype(int)), uplo="L")
-        cvxopt.cholmod.numeric(matrix, factor)
+        cvxopt.cholmod.numeric(analysis.lower, factor)
     except ArithmeticError:  # a non-positive pivot: not positive definite
         return None
 

@@ -201,7 +201,8 @@ def _sparse_modes(k: sparse.csr_array, m: sparse.csr_array, constraints: Constra
     scale = float(np.median(k.diagonal()[k.diagonal() > 0]) / np.median(m.diagonal()[m.diagonal() > 0]))
     sigma = -1e-6 * scale
     try:
-        solve = factorize(k - sigma * m, positive_definite=True)
+        solve = factorize(k - sigma * m, positive_definite=True,
+                          groups=np.array([grid for grid, _ in constraints.independent]))
     except RuntimeError:
         raise MaceError(_unrestrained_message_sparse(k, m, constraints)) from None
     op = LinearOperator((n, n), matvec=lambda x: solve(np.asarray(x, dtype=float).ravel()), dtype=float)

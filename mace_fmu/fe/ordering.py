@@ -1,0 +1,240 @@
+"""Fill-reducing orderings of a symmetric FE matrix, and the one CHOLMOD's own analysis says fills least.
+
+No ordering suits every shape. Reverse Cuthill-McKee keeps the factor inside a band one cross-section
+wide: the least fill on a slender tower, where the band is narrow. On a wide structure the band is
+wide too, and nested dissection (METIS, through pymetis) fills less: cutting the structure along
+small separators, it leaves a factor that grows with the separators' size instead of the
+cross-section's. CHOLMOD's approximate minimum degree (AMD) is the third candidate. The choice is
+made from the matrix, not from its shape: CHOLMOD's symbolic analysis of each candidate (a fraction
+of a second at 100k DOFs, no numbers factored) gives the size of the factor it would store, and the
+smallest wins. Measured on 100k-DOF lattices (benchmarks/RESULTS.md, "Wide structures: the ordering
+chosen by fill"): on a 6 x 6-grid tower RCM's factor is the smallest (263 entries per DOF; nested
+dissection 346, AMD 843); on a 20 x 20-grid one nested dissection's (1242 against RCM's 2072).
+
+Nested dissection orders the graph of the grids, not of the DOFs, when the caller says which DOFs
+share a grid: a sixth of the vertices, the same separators, ten times faster (0.3 s against 3.6 s
+at 100k DOFs) and no more fill. Without pymetis the candidates are RCM and AMD.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import hashlib
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import sparse
+from scipy.sparse.csgraph import reverse_cuthill_mckee
+
+#: Names of the orderings, as reports and benchmarks print them.
+RCM = "reverse Cuthill-McKee"
+NESTED_DISSECTION = "nested dissection (METIS)"
+AMD = "approximate minimum degree (CHOLMOD)"
+
+
+@dataclass(frozen=True)
+class OrderingChoice:
+    """The ordering a factorisation takes and the factor size each candidate would give."""
+
+    method: str  #: the ordering taken: RCM, NESTED_DISSECTION or AMD
+    factor_entries: dict[str, int]  #: entries of CHOLMOD's supernodal factor [-] for each candidate analysed
+
+    def entries_per_row(self, rows: int) -> dict[str, float]:
+        """The factor entries of each candidate divided by the matrix's ``rows`` (fill per DOF)."""
+        return {name: entries / rows for name, entries in self.factor_entries.items()}
+
+
+def candidate_permutations(matrix: sparse.sparray, *, groups: np.ndarray | None = None) -> dict[str, np.ndarray]:
+    """Reverse Cuthill-McKee's and (with pymetis installed) nested dissection's permutations of ``matrix``.
+
+    Parameters
+    ----------
+    matrix : scipy.sparse array
+        A square matrix with a symmetric pattern.
+    groups : numpy.ndarray, optional
+        One label per row (its grid): rows with the same label are kept together, and nested
+        dissection orders the graph of the labels, each weighted by its number of rows.
+
+    Returns
+    -------
+    dict
+        Permutation p (row p[i] of ``matrix`` goes to position i) by ordering name.
+    """
+    pattern = sparse.csr_matrix(matrix)
+    found = {RCM: reverse_cuthill_mckee(pattern, symmetric_mode=True).astype(np.int64)}
+    dissection = _nested_dissection(pattern, groups)
+    if dissection is not None:
+        found[NESTED_DISSECTION] = dissection
+    return found
+
+
+def _nested_dissection(pattern: sparse.csr_matrix, groups: np.ndarray | None) -> np.ndarray | None:
+    try:
+        import pymetis
+    except ImportError:
+        return None
+    n = pattern.shape[0]
+    names, labels = np.unique(np.asarray(groups), return_inverse=True) if groups is not None else (None, None)
+    if groups is None or len(names) == n:
+        labels, weights, incidence = np.arange(n), None, None
+    else:
+        incidence = sparse.csr_matrix((np.ones(n), (np.arange(n), labels)), shape=(n, len(names)))
+        weights = np.bincount(labels)
+    magnitude = abs(pattern).astype(float)
+    magnitude = magnitude + magnitude.T  # METIS reads a symmetric graph (and crashes on one that is not)
+    graph = magnitude if incidence is None else incidence.T @ magnitude @ incidence
+    graph = sparse.csr_matrix(sparse.triu(graph, 1) + sparse.tril(graph, -1))  # METIS takes no self-loops
+    graph.eliminate_zeros()
+    if graph.nnz == 0:  # METIS needs edges; a diagonal matrix fills in no order
+        return np.arange(n, dtype=np.int64)
+    order, _ = pymetis.nested_dissection(adjacency=pymetis.CSRAdjacency(graph.indptr, graph.indices),
+                                         vweights=weights)  # (permutation, its inverse)
+    order = np.asarray(order, dtype=np.int64)
+    if incidence is None:
+        return order
+    position = np.empty_like(order)
+    position[order] = np.arange(len(order))
+    return np.argsort(position[labels], kind="stable").astype(np.int64)  # each group's rows together, in order
+
+
+def supernodal_entries(symbolic: object, rows: int) -> int | None:
+    """Entries CHOLMOD stores for the supernodal factor that ``symbolic`` describes, known after the symbolic
+    analysis alone.
+
+    cvxopt gives no accessor for it, so it is read from the cholmod_factor structure, whose leading
+    fields have kept their layout from CHOLMOD 1 to 5: n, minor, then three pointers, nzmax, seven
+    pointers, nsuper, ssize and xsize, each one machine word. The order is checked against ``rows``.
+
+    Parameters
+    ----------
+    symbolic : object
+        cvxopt.cholmod.symbolic's result (a capsule holding a cholmod_factor).
+    rows : int
+        The order of the analysed matrix.
+
+    Returns
+    -------
+    int or None
+        The factor's entries (xsize: its dense supernodal blocks, padding included), or None when the
+        object is not a CHOLMOD factor of that order or the value is out of range.
+    """
+    api = ctypes.pythonapi
+    api.PyCapsule_GetName.restype = ctypes.c_char_p
+    api.PyCapsule_GetName.argtypes = [ctypes.py_object]
+    api.PyCapsule_GetPointer.restype = ctypes.c_void_p
+    api.PyCapsule_GetPointer.argtypes = [ctypes.py_object, ctypes.c_char_p]
+    try:
+        name = api.PyCapsule_GetName(symbolic)
+        if not name or not name.startswith(b"CHOLMOD FACTOR"):
+            return None
+        address = api.PyCapsule_GetPointer(symbolic, name)
+    except (TypeError, ValueError, ctypes.ArgumentError):
+        return None
+    words = (ctypes.c_size_t * 16).from_address(address)
+    n, xsize = int(words[0]), int(words[15])
+    if n != rows or not rows <= xsize <= rows * (rows + 1):
+        return None
+    return xsize
+
+
+@dataclass(frozen=True)
+class Analysis:
+    """CHOLMOD's symbolic analysis in the ordering that fills least, ready for its numeric factorisation."""
+
+    choice: OrderingChoice  #: the ordering taken and every candidate's factor size
+    permutation: np.ndarray | None  #: the ordering taken (None for AMD, which CHOLMOD keeps to itself)
+    symbolic: object | None  #: cvxopt.cholmod's symbolic factor in that ordering (None without cvxopt)
+    lower: object | None  #: the matrix's lower triangle as the cvxopt.spmatrix it was analysed as
+
+
+def analyse(matrix: sparse.sparray, *, groups: np.ndarray | None = None, with_amd: bool = True) -> Analysis:
+    """Each candidate ordering of the symmetric ``matrix`` through CHOLMOD's symbolic analysis; the one whose
+    factor is smallest. Without cvxopt the choice is reverse Cuthill-McKee, unmeasured.
+
+    Parameters
+    ----------
+    matrix : scipy.sparse array
+        The symmetric matrix (its lower triangle is read).
+    groups : numpy.ndarray, optional
+        One label per row (its grid), see :func:`candidate_permutations`.
+    with_amd : bool
+        Analyse CHOLMOD's AMD too (its permutation is not returned: for a Cholesky factor only).
+
+    Returns
+    -------
+    Analysis
+        The ordering taken, every candidate's factor size, and the symbolic factor.
+    """
+    a = sparse.csr_array(matrix)
+    n = a.shape[0]
+    key = _pattern_key(a, groups, with_amd)
+    known = _CHOSEN.get(key)
+    permutations = {known[0].method: known[1]} if known else candidate_permutations(a, groups=groups)
+    try:
+        import cvxopt
+        from cvxopt import cholmod
+    except ImportError:
+        return Analysis(OrderingChoice(RCM, {}), permutations[RCM], None, None)
+    lower = sparse.tril(a).tocoo()
+    spmatrix = cvxopt.spmatrix(lower.data, lower.row.astype(int), lower.col.astype(int), (n, n))
+    if known and known[1] is None:  # AMD, CHOLMOD's default
+        return Analysis(known[0], None, cholmod.symbolic(spmatrix, uplo="L"), spmatrix)
+    saved = dict(cholmod.options)
+    analysed: dict[str, tuple[object, int | None]] = {}
+    try:
+        cholmod.options["nmethods"] = 1  # the given permutation only (0 would let CHOLMOD pick among others)
+        for name, permutation in permutations.items():
+            symbolic = cholmod.symbolic(spmatrix, p=cvxopt.matrix(permutation.astype(int)), uplo="L")
+            analysed[name] = symbolic, supernodal_entries(symbolic, n)
+        if with_amd:
+            cholmod.options.pop("nmethods")  # without a permutation CHOLMOD's default is AMD
+            symbolic = cholmod.symbolic(spmatrix, uplo="L")
+            analysed[AMD] = symbolic, supernodal_entries(symbolic, n)
+    finally:
+        cholmod.options.clear()
+        cholmod.options.update(saved)
+    if known:
+        return Analysis(known[0], known[1], analysed[known[0].method][0], spmatrix)
+    entries = {name: size for name, (_, size) in analysed.items() if size is not None}
+    best = min(entries, key=entries.__getitem__) if len(entries) == len(analysed) else RCM
+    choice = OrderingChoice(best, entries)
+    if len(_CHOSEN) >= _CHOSEN_KEPT:
+        _CHOSEN.pop(next(iter(_CHOSEN)))
+    _CHOSEN[key] = choice, permutations.get(best)
+    return Analysis(choice, permutations.get(best), analysed[best][0], spmatrix)
+
+
+def least_fill_permutation(matrix: sparse.sparray, *, groups: np.ndarray | None = None) -> np.ndarray:
+    """The permutation of RCM or nested dissection, whichever :func:`analyse` finds the smaller factor for
+    (the LU's ordering: it needs a permutation, not CHOLMOD's symbolic factor).
+
+    Parameters
+    ----------
+    matrix : scipy.sparse array
+        The matrix, with a symmetric pattern.
+    groups : numpy.ndarray, optional
+        One label per row (its grid), see :func:`candidate_permutations`.
+
+    Returns
+    -------
+    numpy.ndarray
+        Permutation p: row p[i] of ``matrix`` goes to position i.
+    """
+    known = _CHOSEN.get(_pattern_key(sparse.csr_array(matrix), groups, False))
+    return known[1] if known else analyse(matrix, groups=groups, with_amd=False).permutation
+
+
+#: The orderings chosen for the last few patterns: a Newton iteration or a parameter study factors
+#: matrices of one pattern again and again, and nested dissection of a 100k-DOF pattern whose grids
+#: are not named costs seconds (the choice depends on the pattern only, never on the values).
+_CHOSEN: dict[tuple, tuple[OrderingChoice, np.ndarray | None]] = {}
+_CHOSEN_KEPT = 4
+
+
+def _pattern_key(a: sparse.csr_array, groups: np.ndarray | None, with_amd: bool) -> tuple:
+    a = a if a.has_sorted_indices else a.sorted_indices()  # a copy: the caller's matrix stays as it was
+    digest = hashlib.blake2b(np.ascontiguousarray(a.indptr, dtype=np.int64).tobytes(), digest_size=16)
+    digest.update(np.ascontiguousarray(a.indices, dtype=np.int64).tobytes())
+    if groups is not None:
+        digest.update(np.unique(np.asarray(groups), return_inverse=True)[1].astype(np.int64).tobytes())
+    return a.shape, a.nnz, with_amd, digest.hexdigest()
