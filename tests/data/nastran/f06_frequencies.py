@@ -33,23 +33,30 @@ def first_eigenvalue_table(lines: list[str]) -> tuple[int, list[tuple[int, str]]
     return start + 1, rows
 
 
-def main(argv: list[str]) -> None:
-    f06, source, program, out = argv
-    lines = open(f06, encoding="latin-1").read().splitlines()
-    title_line, rows = first_eigenvalue_table(lines)
+def write_reference(out: str, *, script: str, source: str, program: str, where: str,
+                    cycles: list[tuple[int, str]]) -> None:
+    """reference_frequencies.toml: where NASTRAN's frequencies were copied from and the CYCLES values as text."""
     text = [
-        "# NASTRAN's natural frequencies of this deck, copied once from its .f06 by "
-        "tests/data/nastran/f06_frequencies.py",
+        f"# NASTRAN's natural frequencies of this deck, copied once from its {script}",
         f'source = "{source}"',
         f'program = "{program}"',
-        f"table_line = {title_line}  # line of the first REAL EIGENVALUES table in that .f06",
+        where,
         "# CYCLES column, mode 1 first [Hz]",
         "cycles = [",
-        *(f"    {value},  # mode {mode}" for mode, value in rows),
+        *(f"    {value},  # mode {mode}" for mode, value in cycles),
         "]",
     ]
     with open(out, "w", encoding="utf-8") as handle:
         handle.write("\n".join(text) + "\n")
+
+
+def main(argv: list[str]) -> None:
+    f06, source, program, out = argv
+    lines = open(f06, encoding="latin-1").read().splitlines()
+    title_line, rows = first_eigenvalue_table(lines)
+    write_reference(out, script=".f06 by tests/data/nastran/f06_frequencies.py", source=source, program=program,
+                    where=f"table_line = {title_line}  # line of the first REAL EIGENVALUES table in that .f06",
+                    cycles=rows)
 
 
 if __name__ == "__main__":

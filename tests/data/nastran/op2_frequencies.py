@@ -46,22 +46,14 @@ def lama_cycles(data: bytes) -> tuple[int, list[float]]:
 
 
 def main(argv: list[str]) -> None:
+    from f06_frequencies import write_reference  # this folder's sibling script (run as a script from here)
+
     op2, source, program, out = argv
     with open(op2, "rb") as handle:
         start, cycles = lama_cycles(handle.read())
-    text = [
-        ("# NASTRAN's natural frequencies of this deck, copied once from its .op2 by "
-         "tests/data/nastran/op2_frequencies.py"),
-        f'source = "{source}"',
-        f'program = "{program}"',
-        f"table_offset = {start}  # byte offset of the first real eigenvalue record in that .op2",
-        "# CYCLES words, mode 1 first [Hz]",
-        "cycles = [",
-        *(f"    {value:.8g},  # mode {mode}" for mode, value in enumerate(cycles, start=1)),
-        "]",
-    ]
-    with open(out, "w", encoding="utf-8") as handle:
-        handle.write("\n".join(text) + "\n")
+    write_reference(out, script=".op2 by tests/data/nastran/op2_frequencies.py", source=source, program=program,
+                    where=f"table_offset = {start}  # byte offset of the first real eigenvalue record in that .op2",
+                    cycles=[(mode, f"{value:.8g}") for mode, value in enumerate(cycles, start=1)])
 
 
 if __name__ == "__main__":
