@@ -52,7 +52,7 @@ def read_nastran_modes(path: str | Path, *, subcase: int | None = None,
     Returns
     -------
     NastranModes
-        ``modes.frequencies_hz`` [Hz] = sign(lambda) sqrt(|lambda|) / (2 pi); ``modes.shapes`` in basic
+        ``modes.frequencies_hz`` [Hz] = sign(lambda) sqrt(abs(lambda)) / (2 pi); ``modes.shapes`` in basic
         coordinates [deck units per unit modal coordinate], rescaled to unit generalized mass when NASTRAN's
         were not 1; ``modes.cd_frames`` the CD axes of each grid in basic; labels "mode <NASTRAN's number>".
         Scalar and extra points are left out (named in ``notes``).
