@@ -150,6 +150,8 @@ def fmu_frequencies_hz(fmu: Path, values: dict, modes: list[int]) -> np.ndarray:
 
     import fmpy
 
+    from mace_fmu.parameters.kinds import frequency_output_name
+
     folder = fmpy.extract(str(fmu))
     description = fmpy.read_model_description(folder)
     ref = {v.name: v.valueReference for v in description.modelVariables}
@@ -159,7 +161,7 @@ def fmu_frequencies_hz(fmu: Path, values: dict, modes: list[int]) -> np.ndarray:
         slave.setReal([ref[n] for n in values], [float(v) for v in values.values()])
         slave.enterInitializationMode()
         slave.exitInitializationMode()
-        return np.array(slave.getReal([ref[f"frequency_mode_{k}"] for k in modes]))
+        return np.array(slave.getReal([ref[frequency_output_name(k)] for k in modes]))
     finally:
         slave.terminate()
         slave.freeInstance()

@@ -22,7 +22,7 @@ def platforms_argument(text: str) -> list[str]:
     if text.strip() == "all":
         return list(BY_NAME)
     try:
-        return [p.name for p in select_platforms(text.split(","))]
+        return [p.name for p in select_platforms(text)]
     except MaceError as exc:
         raise argparse.ArgumentTypeError(str(exc).removeprefix("platforms: ")) from None
 
@@ -39,14 +39,20 @@ def platforms_option(p: argparse.ArgumentParser) -> None:
 
 @contextlib.contextmanager
 def toolchain_warnings_as_lines() -> Iterator[None]:
-    """Print the export's warnings (a platform left out for want of a toolchain) as one line each on stderr."""
+    """Print a platform left out for want of a toolchain as one line on stderr; other warnings pass as Python
+    shows them."""
+    from mace_fmu.fmu.native.compile import MissingToolchainWarning
+
     with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always")
+        warnings.simplefilter("always", MissingToolchainWarning)
         try:
             yield
         finally:
             for warning in caught:
-                print(f"mace-fmu: warning: {warning.message}", file=sys.stderr)
+                if issubclass(warning.category, MissingToolchainWarning):
+                    print(f"mace-fmu: warning: {warning.message}", file=sys.stderr)
+                else:
+                    warnings.showwarning(warning.message, warning.category, warning.filename, warning.lineno)
 
 
 def cmd_export(args: argparse.Namespace) -> int:
@@ -62,7 +68,8 @@ def cmd_export(args: argparse.Namespace) -> int:
     if args.ssp:
         from mace_fmu.cli.ssp import export_ssp
 
-        return export_ssp(args)
+        with toolchain_warnings_as_lines():
+            return export_ssp(args)
     progress(f"{args.configuration} volts-volts model")
     model = volts(args)
     bounds = None

@@ -39,7 +39,7 @@ def export_ssp(args: argparse.Namespace) -> int:
         from mace_fmu.fmu.export import export_fmu
 
         fmu = export_fmu(model, runtime=args.runtime, fmi_version=2, out_dir=tmp, name=name, frequency_bounds=bounds,
-                         platforms=getattr(args, "platforms", None))
+                         platforms=args.platforms)
         import fmpy
 
         tunable = [v.name for v in fmpy.read_model_description(str(fmu)).modelVariables

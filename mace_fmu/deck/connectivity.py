@@ -18,8 +18,10 @@ import os
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from mace_fmu.deck.fields import RawCard, check_text, parse_int, parse_real, split_sections
+from mace_fmu.deck.cards import Source
+from mace_fmu.deck.fields import Fields, RawCard, check_text, parse_int, split_sections
 from mace_fmu.deck.files import cards_with_includes, deck_file_text, without_begin_bulk
+from mace_fmu.deck.parsers.grids import grdset, grid
 from mace_fmu.errors import DeckError
 
 #: corner-to-corner edges of each element's outline, as 0-based positions in its corner grid list
@@ -71,31 +73,6 @@ def _grid(card: RawCard, d: int, file: str) -> int:
     return value
 
 
-def _system(card: RawCard, d: int, default: int, file: str) -> int:
-    text = card.fields[d - 1] if d <= len(card.fields) else ""
-    value = parse_int(text) if text else default
-    if value is None or value < 0:
-        raise DeckError(f"data field {d} is {text!r} (expected a coordinate system ID, an integer >= 0)",
-                        file=card.file or file, line=card.lines[d - 1], card=f"{card.name} {card.fields[0]}")
-    return value
-
-
-def _grid_point(card: RawCard, defaults: tuple[int, int], file: str) -> GridPoint:
-    """GRID: ID, CP, X1, X2, X3, CD (blank CP and CD: GRDSET's, else 0)."""
-    xyz = []
-    for d in (3, 4, 5):
-        text = card.fields[d - 1] if d <= len(card.fields) else ""
-        value = parse_real(text) if text else 0.0
-        if value is None:
-            value = float(parse_int(text)) if parse_int(text) is not None else None
-        if value is None:
-            raise DeckError(f"data field {d} is {text!r} (expected a coordinate, a real number)",
-                            file=card.file or file, line=card.lines[d - 1], card=f"GRID {card.fields[0]}")
-        xyz.append(value)
-    return GridPoint(xyz=(xyz[0], xyz[1], xyz[2]), cp=_system(card, 2, defaults[0], file),
-                     cd=_system(card, 6, defaults[1], file))
-
-
 def _rbe2_legs(card: RawCard, file: str) -> list[tuple[int, int]]:
     """RBE2: EID, GN, CM, GM1, GM2, ... (ALPHA, a real, may end the list): lines from GN to each GM."""
     independent = _grid(card, 2, file)
@@ -111,6 +88,17 @@ def _rbe2_legs(card: RawCard, file: str) -> list[tuple[int, int]]:
             break
         legs.append((independent, value))
     return legs
+
+
+def bulk_cards(path: str | os.PathLike) -> list[RawCard]:
+    """The bulk data cards of the deck ``path`` (case control skipped), its INCLUDEs expanded; DeckError
+    (file, line) for a file that cannot be read or a malformed card."""
+    file = os.fspath(path)
+    text = deck_file_text(file).removeprefix("\ufeff")
+    numbered = [(k, line.rstrip("\r")) for k, line in enumerate(text.split("\n"), start=1)]
+    check_text(numbered, file)
+    _, bulk = split_sections(numbered, file)
+    return cards_with_includes(without_begin_bulk(bulk), file, stack=(os.path.abspath(file),))
 
 
 def read_connectivity(path: str | os.PathLike) -> Connectivity:
@@ -132,19 +120,17 @@ def read_connectivity(path: str | os.PathLike) -> Connectivity:
         A file that cannot be read, or an element card whose grid field is not a grid ID (file, line and card).
     """
     file = os.fspath(path)
-    text = deck_file_text(file).removeprefix("\ufeff")
-    numbered = [(k, line.rstrip("\r")) for k, line in enumerate(text.split("\n"), start=1)]
-    check_text(numbered, file)
-    _, bulk = split_sections(numbered, file)
-    cards = cards_with_includes(without_begin_bulk(bulk), file, stack=(os.path.abspath(file),))
+    cards = bulk_cards(file)
     edges: set[tuple[int, int]] = set()
     counts: dict[str, int] = {}
-    grdset = next((c for c in cards if c.name == "GRDSET"), None)
-    defaults = (_system(grdset, 2, 0, file), _system(grdset, 6, 0, file)) if grdset is not None else (0, 0)
+    settings = next((c for c in cards if c.name == "GRDSET"), None)
+    defaults = grdset(Fields(settings, file), Source(settings.file or file, settings.line)) \
+        if settings is not None else (0, 0, "")
     grids: dict[int, GridPoint] = {}
     for card in cards:
         if card.name == "GRID":
-            grids[_grid(card, 1, file)] = _grid_point(card, defaults, file)
+            point = grid(Fields(card, file), Source(card.file or file, card.line), defaults)
+            grids[point.id] = GridPoint(xyz=point.xyz, cp=point.cp, cd=point.cd)
             continue
         if card.name == "RBE2":
             pairs = _rbe2_legs(card, file)

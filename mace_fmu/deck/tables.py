@@ -22,14 +22,13 @@ from mace_fmu.errors import DeckError
 __all__ = ["CARD_TABLES", "NON_STRUCTURAL", "bulk_tables"]
 
 
-#: cards that change neither mass nor stiffness (loads, frequencies, output sets, aerodynamics, ...): read
-#: past and reported, never an error; any other card we cannot model is one
 #: static loads, whose set a case control's LOAD (or a LOAD card) may select: read past, named in messages
 STATIC_LOADS = frozenset({"FORCE", "FORCE1", "FORCE2", "MOMENT", "MOMENT1", "MOMENT2", "PLOAD", "PLOAD1", "PLOAD2",
                           "PLOAD4"})
-NON_STRUCTURAL = frozenset({
-    "USET", "USET1", "FORCE", "FORCE1", "FORCE2", "MOMENT", "MOMENT1", "MOMENT2", "PLOAD", "PLOAD1", "PLOAD2",
-    "PLOAD4", "TEMP", "TEMPD", "DAREA", "DLOAD", "RLOAD1", "RLOAD2", "TLOAD1", "TLOAD2", "TABLED1", "TABLED2",
+#: cards that change neither mass nor stiffness (loads, frequencies, output sets, aerodynamics, ...): read
+#: past and reported, never an error; any other card we cannot model is one
+NON_STRUCTURAL = STATIC_LOADS | frozenset({
+    "USET", "USET1", "TEMP", "TEMPD", "DAREA", "DLOAD", "RLOAD1", "RLOAD2", "TLOAD1", "TLOAD2", "TABLED1", "TABLED2",
     "TABLED3", "TABLED4", "FREQ", "FREQ1", "FREQ2", "FREQ3", "FREQ4", "FREQ5", "TSTEP", "TSTEPNL", "RANDPS",
     "SET1", "SET2", "SET3", "CAERO1", "CAERO2", "PAERO1", "PAERO2", "SPLINE1", "SPLINE2", "SPLINE4", "SPLINE5",
     "AERO", "AEROS", "MKAERO1", "MKAERO2", "FLFACT", "FLUTTER", "AESTAT", "AESURF", "TRIM", "DESVAR", "DRESP1",
@@ -172,6 +171,7 @@ def _unknown_cards(unknown: dict[str, list], file: str) -> DeckError:
     if len(unknown) == 1 and len(unknown[name]) == 1:
         return DeckError(f"unknown card {name!r} (supported: {supported})", file=first.file or file,
                          line=first.line, card=name)
+
     def at(raw) -> str:  # the deck's own lines by number; an INCLUDE file's by file and line
         return f"line {raw.line}" if (raw.file or file) == file else f"{raw.file}:{raw.line}"
 

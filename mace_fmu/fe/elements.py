@@ -92,13 +92,13 @@ def beam_mass(sec: BeamSection, length: float, kind: MassKind, deck: Deck) -> np
     (NASTRAN's rule; see the module docstring for the run that decides it). A consistent mass asked for by
     the caller keeps mace-fmu's own consistent matrix.
     """
-    if kind == "consistent" and coupled_mass(deck, "lumped") != "consistent":
-        return local_mass(sec, length, kind)
-    m = local_mass(sec, length, kind)
     lumped = local_mass(sec, length, "lumped")
-    polar = sec.rho * (sec.i1 + sec.i2) * length
-    lumped[3, 3] = lumped[9, 9] = polar / 2.0
-    m[np.ix_([0, 3, 6, 9], [0, 3, 6, 9])] = lumped[np.ix_([0, 3, 6, 9], [0, 3, 6, 9])]
+    lumped[3, 3] = lumped[9, 9] = sec.rho * (sec.i1 + sec.i2) * length / 2.0
+    if kind == "lumped":
+        return lumped
+    m = local_mass(sec, length, kind)
+    if coupled_mass(deck, "lumped") == "consistent":  # the deck's coupled mass: axial and torsion lumped
+        m[np.ix_([0, 3, 6, 9], [0, 3, 6, 9])] = lumped[np.ix_([0, 3, 6, 9], [0, 3, 6, 9])]
     return m
 
 

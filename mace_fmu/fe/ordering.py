@@ -186,7 +186,7 @@ def analyse(matrix: sparse.sparray, *, groups: np.ndarray | None = None, with_am
         for name, permutation in permutations.items():
             symbolic = cholmod.symbolic(spmatrix, p=cvxopt.matrix(permutation.astype(int)), uplo="L")
             analysed[name] = symbolic, supernodal_entries(symbolic, n)
-        if with_amd:
+        if with_amd and not known:  # a known choice needs its own analysis only
             cholmod.options.pop("nmethods")  # without a permutation CHOLMOD's default is AMD
             symbolic = cholmod.symbolic(spmatrix, uplo="L")
             analysed[AMD] = symbolic, supernodal_entries(symbolic, n)

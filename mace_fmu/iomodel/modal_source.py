@@ -15,9 +15,10 @@ from __future__ import annotations
 import csv
 import math
 import os
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any
 
 import numpy as np
 
@@ -29,6 +30,7 @@ from mace_fmu.iomodel.instruments import Instruments
 from mace_fmu.parameters.sets import ParameterSet
 from mace_fmu.structure.file import StructureFile, load_structure_file
 from mace_fmu.structure.modes_table import ModesTable, modes_table
+from mace_fmu.util.textfile import read_text
 
 #: the parameter kinds that need the FE: a structure known by its modes alone cannot have them
 FE_PARAMETER_KINDS = ("modulus", "spring", "mass")
@@ -78,10 +80,7 @@ def read_residual_flexibility(path: str | os.PathLike) -> ResidualFlexibility:
         One line naming the file, the line and what was expected.
     """
     file = Path(path)
-    try:
-        text = file.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise MaceError(f"{file}: cannot read the residual flexibility file ({exc})") from None
+    text = read_text(file, what="residual flexibility")
     rows = [(n, row) for n, row in enumerate(csv.reader(text.splitlines()), start=1)
             if row and not row[0].lstrip().startswith("#")]
     if not rows or [c.strip() for c in rows[0][1]] != list(RESIDUAL_COLUMNS):

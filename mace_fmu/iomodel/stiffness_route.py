@@ -295,20 +295,21 @@ def _corrections(model: VoltsModel, shapes: np.ndarray, frequencies: np.ndarray,
         if material else np.zeros((ind.phi.shape[0], 0))
     w, massive = _orthonormal(ind, w, max_hz=float(np.max(np.abs(frequencies))))
     n, n_w = shapes.shape[1], w.shape[1]
-    out: dict[str, np.ndarray] = {
-        "correction_massive": np.array(massive, dtype=np.int64),
-        "correction_stiffness": _symmetric(w.T @ (ind.k @ w)),
-        "correction_dk": np.array([_symmetric(w.T @ (dk @ w)) for dk in material]).reshape(len(material), n_w, n_w),
-        "correction_coupling": np.zeros((len(material), n_w, n))}
-    out["correction_coupling"][:, :, flexible] = np.array([w.T @ (dk @ flex) for dk in material]).reshape(
-        len(material), n_w, int(flexible.sum()))
+
+    def blocks(changes: list) -> tuple[np.ndarray, np.ndarray]:
+        """W^T dX_i W and W^T dX_i Phi0 of each parameter's stiffness or mass change dX_i."""
+        square = np.array([_symmetric(w.T @ (d @ w)) for d in changes]).reshape(len(changes), n_w, n_w)
+        coupling = np.zeros((len(changes), n_w, n))
+        coupling[:, :, flexible] = np.array([w.T @ (d @ flex) for d in changes]).reshape(
+            len(changes), n_w, int(flexible.sum()))
+        return square, coupling
+
+    out: dict[str, np.ndarray] = {"correction_massive": np.array(massive, dtype=np.int64),
+                                  "correction_stiffness": _symmetric(w.T @ (ind.k @ w))}
+    out["correction_dk"], out["correction_coupling"] = blocks(material)
     if any(dm is not None for dm in masses):
         zero = sparse.csr_array(ind.m.shape)
-        masses = [zero if dm is None else dm for dm in masses]
-        out["correction_dm"] = np.array([_symmetric(w.T @ (dm @ w)) for dm in masses]).reshape(len(masses), n_w, n_w)
-        out["correction_mass_coupling"] = np.zeros((len(masses), n_w, n))
-        out["correction_mass_coupling"][:, :, flexible] = np.array([w.T @ (dm @ flex) for dm in masses]).reshape(
-            len(masses), n_w, int(flexible.sum()))
+        out["correction_dm"], out["correction_mass_coupling"] = blocks([zero if dm is None else dm for dm in masses])
     projected = _project(model, ind.t @ w)
     out["correction_b"] = projected.pop("b")
     out.update({f"{kind}_correction": rows for kind, rows in projected.items()})

@@ -13,8 +13,8 @@ import os
 from pathlib import Path
 
 from mace_fmu.deck.cards import Source
-from mace_fmu.deck.fields import Fields, check_text, split_sections
-from mace_fmu.deck.files import cards_with_includes, deck_file_text, without_begin_bulk
+from mace_fmu.deck.connectivity import bulk_cards
+from mace_fmu.deck.fields import Fields
 from mace_fmu.deck.parsers.grids import cord1r, cord2r, grdset, grid
 from mace_fmu.errors import DeckError
 from mace_fmu.nastran_modes.file_modes import CoordCard, FileGeometry
@@ -23,11 +23,7 @@ from mace_fmu.nastran_modes.file_modes import CoordCard, FileGeometry
 def read_deck_geometry(path: Path) -> FileGeometry:
     """GRIDs and coordinate systems of the deck at ``path``; DeckError (file, line, card, field) for a bad one."""
     name = os.fspath(path)
-    physical = deck_file_text(path).removeprefix("\ufeff").split("\n")
-    lines = [(number, line.rstrip("\r")) for number, line in enumerate(physical, start=1)]
-    check_text(lines, name)
-    _, bulk = split_sections(lines, name)
-    raw_cards = cards_with_includes(without_begin_bulk(bulk), name, stack=(os.path.abspath(name),))
+    raw_cards = bulk_cards(name)
     defaults = (0, 0, "")
     for raw in raw_cards:
         if raw.name == "GRDSET":

@@ -166,8 +166,9 @@ def _entries(records: Op2Records, body: bytes, endian: str, card: str, *, ints_b
                      f"words each, or {ints_before + 2 * reals + ints_after} in double precision)")
     table = layouts[-1] if len(layouts) == 1 else _plausible(layouts)
     n_ints = ints_before + ints_after
-    return [(np.array([row[f"i{j}"] for j in range(n_ints)]), np.array([row[f"x{j}"] for j in range(reals)]))
-            for row in table]
+    ints = np.column_stack([table[f"i{j}"] for j in range(n_ints)]).astype(int)
+    values = np.column_stack([table[f"x{j}"] for j in range(reals)]).astype(float)
+    return list(zip(ints, values))
 
 
 def _plausible(layouts: list[np.ndarray]) -> np.ndarray:

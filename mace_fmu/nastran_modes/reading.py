@@ -66,7 +66,8 @@ def read_nastran_modes(path: str | Path, *, subcase: int | None = None,
     source = Path(path)
     if not source.is_file():
         raise MaceError(f"{source}: no such file (expected an OP2 or a punch file of a SOL 103 run)")
-    head = source.read_bytes()[:4]
+    with source.open("rb") as stream:  # the first word tells the kind; the reader then reads the whole file
+        head = stream.read(4)
     is_op2 = head in (b"\x04\x00\x00\x00", b"\x00\x00\x00\x04", b"\x08\x00\x00\x00", b"\x00\x00\x00\x08")
     found = read_op2_modes(source, subcase=subcase) if is_op2 else read_punch_modes(source, subcase=subcase)
     return _to_basic(found, geometry)

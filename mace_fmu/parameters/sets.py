@@ -272,15 +272,15 @@ def parameter_names(deck, structure_file=None) -> ParameterNames:
     MaceError
         A ``masses`` entry naming no CONM2 of the deck (the file and the key named).
     """
-    named = names_of_table(structure_file.tables) if structure_file is not None else ParameterNames({}, {})
     for key, name in (structure_file.tables.get("parameters", {}).get("masses", {}).items()
-                      if structure_file is not None else ()):
+                      if structure_file is not None else ()):  # before names_of_table's int(key)
         if not key.strip().isdigit() or int(key) not in deck.conm2s:
             raise MaceError(f"{structure_file.path}: [parameters] masses: key {key!r} ({name!r}) is no CONM2 element "
                             f"ID of {deck.path}; expected one of {sorted(deck.conm2s)[:12]}")
         if not deck.conm2s[int(key)].mass > 0.0:
             raise MaceError(f"{structure_file.path}: [parameters] masses: key {key!r} ({name!r}): CONM2 {key} has no "
                             "mass; a mass parameter scales a positive mass")
+    named = names_of_table(structure_file.tables) if structure_file is not None else ParameterNames({}, {})
     materials = {**{f"mat{mid}": mid for mid in deck.mat1s if mid not in named.materials.values()},
                  **named.materials}
     springs = {**{f"celas{sid}": sid for sid in deck.celas2s if sid not in named.springs.values()}, **named.springs}

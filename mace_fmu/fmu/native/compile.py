@@ -118,9 +118,10 @@ def build_command(platform: Platform, c_files: tuple[str, ...]) -> list[str]:
             *(Path(f).name for f in c_files), "-lm"]
 
 
-def _cache_key(platform: Platform, c_files: tuple[str, ...]) -> str:
+def _cache_key(platform: Platform, c_files: tuple[str, ...], digest: str) -> str:
+    """The binary's cache key from the toolchain, its command and ``digest``, the runtime's sources_digest."""
     h = hashlib.sha256(json.dumps([zig_version(), build_command(platform, c_files)]).encode())
-    h.update(sources_digest(source_files(c_files)).encode())
+    h.update(digest.encode())
     return h.hexdigest()[:24]
 
 
@@ -174,7 +175,11 @@ def compile_runtime(platform: Platform = PLATFORMS[0], *, c_files: tuple[str, ..
     """
     if not available(platform):
         raise MaceError(f"no C toolchain for {platform.name}: zig is not installed (pip install ziglang)")
-    return _compile_cached(platform, c_files, _cache_key(platform, c_files))
+    return _compile_cached(platform, c_files, _cache_key(platform, c_files, sources_digest(source_files(c_files))))
+
+
+class MissingToolchainWarning(UserWarning):
+    """A platform of the default set left out of an FMU's binaries for want of a toolchain (its sources/ stay)."""
 
 
 def compile_runtimes(platforms: Sequence[Platform], *, c_files: tuple[str, ...] = C_FILES[2],
@@ -189,10 +194,13 @@ def compile_runtimes(platforms: Sequence[Platform], *, c_files: tuple[str, ...] 
         line = f"no C toolchain for {', '.join(p.name for p in missing)}: zig is not installed (pip install ziglang)"
         if requested:
             raise MaceError(line)
-        warnings.warn(line + "; the FMU carries sources/ for them", stacklevel=3)
+        warnings.warn(line + "; the FMU carries sources/ for them", MissingToolchainWarning, stacklevel=3)
     todo = [p for p in platforms if p not in missing]
-    with ThreadPoolExecutor(max_workers=max(1, len(todo))) as pool:
-        return dict(zip(todo, pool.map(functools.partial(compile_runtime, c_files=c_files), todo)))
+    if not todo:
+        return {}
+    digest = sources_digest(source_files(c_files))  # once for every platform (and every in-memory cache hit)
+    with ThreadPoolExecutor(max_workers=len(todo)) as pool:
+        return dict(zip(todo, pool.map(lambda p: _compile_cached(p, c_files, _cache_key(p, c_files, digest)), todo)))
 
 
 def build_info(binaries: dict[Platform, bytes], *, c_files: tuple[str, ...], fmi_version: int, name: str) -> bytes:

@@ -36,7 +36,7 @@ def universal_binary(slices: Mapping[int, bytes]) -> bytes:
     MaceError
         A slice that is not a thin 64-bit Mach-O of the CPU type it is filed under.
     """
-    records, body, offset = [], [], 0
+    records, body = [], []
     ordered = sorted(slices.items(), key=lambda item: (PAGE_ALIGN.get(item[0], 14), item[0]))
     offset = 8 + 20 * len(ordered)
     for cputype, image in ordered:

@@ -25,6 +25,7 @@ from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 
 from mace_fmu.errors import MaceError
+from mace_fmu.fmu.native.macho import universal_binary
 
 
 @dataclass(frozen=True)
@@ -85,8 +86,6 @@ def binary_entries(binaries: Mapping[Platform, bytes], *, fmi_version: int, name
     FMI 3 gives each platform its folder; FMI 2 puts the macOS slices into one universal ``darwin64``
     binary (a single slice stays thin).
     """
-    from mace_fmu.fmu.native.macho import universal_binary
-
     grouped: dict[str, dict[Platform, bytes]] = {}
     for platform, binary in binaries.items():
         grouped.setdefault(entry_path(platform, fmi_version=fmi_version, name=name), {})[platform] = binary

@@ -115,11 +115,12 @@ class MultisineProbe:
         rates = self._cache.setdefault("rates", {})
         if name in rates:
             return rates[name]._one_input(model, name, outputs)
-        probe, h = self, self._one_input(model, name, outputs)
+        d = self._feedthrough(model, name, outputs)  # the first sample's: the same at every sample rate
+        probe, h = self, self._one_input(model, name, outputs, d=d)
         for _ in range(self.max_rate_doublings + 1):
             finer = replace(probe, samples_per_period=2 * probe.samples_per_period, _periods=list(probe._periods),
                             _cache={})
-            h_finer = finer._one_input(model, name, outputs)
+            h_finer = finer._one_input(model, name, outputs, d=d)
             change = np.max(np.abs(h_finer - h)) / max(np.max(np.abs(h_finer)), np.finfo(float).tiny)
             if change <= self.rate_tolerance:
                 rates[name] = probe
@@ -137,12 +138,14 @@ class MultisineProbe:
         rest = np.asarray(model.time_response(times, {name: np.zeros(2)}, outputs=outputs), dtype=float)
         return pulse[0] - rest[0]
 
-    def _one_input(self, model, name: str, outputs: list[str]) -> np.ndarray:
+    def _one_input(self, model, name: str, outputs: list[str], *, d: np.ndarray | None = None) -> np.ndarray:
+        """``name``'s response H[line, output]; ``d``: its feedthrough (:meth:`_feedthrough`) where known."""
         n = self.samples_per_period
         # the feedthrough sees the held value at the sample, half a sample after the multisine's middle: its
         # share of the DFT is D e^(j w T / 2) / sinc(w T / 2), not D
         shift = np.exp(1j * np.pi * self.frequencies_hz * self.sample_time_s) / self._hold_gain - 1.0
-        d = self._feedthrough(model, name, outputs)
+        if d is None:
+            d = self._feedthrough(model, name, outputs)
         while True:
             periods = self._periods[0]
             times, values, lines = self.excitation(periods)

@@ -609,17 +609,21 @@ static int reduced_mass(const MaceModel *m, double *mm) {
     return 1;
 }
 
-/* M_c = T^T M_r T, T = [I; -g] (g = K_zz^-1 K_za, the condensation of the massless corrections), na x na. */
-static void condensed_mass(const double *mm, const double *g, size_t na, size_t nz, double *mc) {
+/* M_c = T^T M_r T, T = [I; -g] (g = K_zz^-1 K_za, the condensation of the massless corrections), na x na:
+ * M_aa - M_az g + g^T h with h = M_zz g - M_za (nz x na, work space), O(nz^2 na + nz na^2). */
+static void condensed_mass(const double *mm, const double *g, size_t na, size_t nz, double *h, double *mc) {
     const size_t nt = na + nz;
     size_t i, j, p, q;
+    for (p = 0; p < nz; p++)
+        for (j = 0; j < na; j++) {
+            double acc = -mm[(na + p) * nt + j];
+            for (q = 0; q < nz; q++) acc += mm[(na + p) * nt + na + q] * g[q * na + j];
+            h[p * na + j] = acc;
+        }
     for (i = 0; i < na; i++)
         for (j = 0; j < na; j++) {
             double acc = mm[i * nt + j];
-            for (p = 0; p < nz; p++) {
-                acc -= mm[i * nt + na + p] * g[p * na + j] + g[p * na + i] * mm[(na + p) * nt + j];
-                for (q = 0; q < nz; q++) acc += g[p * na + i] * mm[(na + p) * nt + na + q] * g[q * na + j];
-            }
+            for (p = 0; p < nz; p++) acc += g[p * na + i] * h[p * na + j] - mm[i * nt + na + p] * g[p * na + j];
             mc[i * na + j] = acc;
         }
     for (i = 0; i < na; i++)
@@ -636,7 +640,7 @@ static void condensed_mass(const double *mm, const double *g, size_t na, size_t 
 static int reanalyse(MaceModel *m, double *coef, int *changed, char *err) {
     const size_t nf = m->n_flex, nc = m->n_corr, nt = nf + nc, na = nf + m->n_massive, nz = nt - na;
     double *k = NULL, *kc = NULL, *g = NULL, *lu = NULL, *w = NULL, *v = NULL, *score = NULL;
-    double *mm = NULL, *mc = NULL, *kc0 = NULL;
+    double *mm = NULL, *mc = NULL, *kc0 = NULL, *h = NULL;
     size_t *col = NULL, *piv = NULL, i, j, q;
     int status = -1, massed = 0;
     *changed = 0;
@@ -660,7 +664,8 @@ static int reanalyse(MaceModel *m, double *coef, int *changed, char *err) {
         mm = ml_zeros(&m->al, nt * nt);
         mc = ml_zeros(&m->al, na * na);
         kc0 = ml_zeros(&m->al, na * na);
-        if (!k || !kc || !g || !lu || !w || !v || !score || !col || !piv || !mm || !mc || !kc0) goto oom;
+        h = ml_zeros(&m->al, nz * na);
+        if (!k || !kc || !g || !lu || !w || !v || !score || !col || !piv || !mm || !mc || !kc0 || !h) goto oom;
         reduced_stiffness(m, k);
         for (i = 0; i < na; i++) memcpy(kc + i * na, k + i * nt, na * sizeof(double));
         if (nz) { /* K_c = K_aa - K_az K_zz^-1 K_za, g = K_zz^-1 K_za */
@@ -684,7 +689,7 @@ static int reanalyse(MaceModel *m, double *coef, int *changed, char *err) {
         }
         massed = reduced_mass(m, mm);
         if (massed) { /* the standard problem L^-1 K_c L^-T of K_c v = omega^2 M_c v */
-            condensed_mass(mm, g, na, nz, mc);
+            condensed_mass(mm, g, na, nz, h, mc);
             memcpy(kc0, kc, na * na * sizeof(double));
             if (ml_cholesky(mc, na) != 0) {
                 snprintf(err, MACE_ERR_LEN, "the reanalysis: the changed mass matrix is not positive definite");
@@ -762,6 +767,7 @@ done:
     m->al.free(mm);
     m->al.free(mc);
     m->al.free(kc0);
+    m->al.free(h);
     return status;
 }
 
