@@ -19,23 +19,22 @@ from typing import Callable
 import numpy as np
 import scipy.linalg as sla
 from scipy import sparse
-from scipy.sparse.linalg import LinearOperator, eigsh
 
 from mace_fmu.errors import MaceError
 from mace_fmu.fe.constraints import Constraints
 from mace_fmu.fe.dofs import DofMap
 from mace_fmu.fe.factor import factorize
+from mace_fmu.fe.lanczos import lowest_modes
 
 MASSLESS_RELATIVE_TOLERANCE = 1e-12
 #: Largest number of independent DOFs solved densely (every mode at once); above it the sparse route.
 #: Measured (benchmarks/RESULTS.md, "FE core at scale"): the MACE deck (474 DOFs, 35 modes) takes the same
 #: time either way; a 1,026-DOF tower's 50 modes 0.17 s dense, 0.09 s sparse; 2,976 DOFs 1.87 s / 0.31 s.
 DENSE_MAX_DOF = 1000
-#: Modes the sparse route looks for first when only a frequency range is given.
-SPARSE_FIRST_BATCH = 40
 #: Lanczos stops when each Ritz pair's residual is below this fraction of its Ritz value. The error of a
-#: symmetric eigenvalue goes with the square of the residual: the 100k-DOF tower's 50 frequencies moved by
-#: 6e-13 against ARPACK's default (machine precision), and 128 solves sufficed instead of 154.
+#: symmetric eigenvalue goes with the square of the residual: with ARPACK the 100k-DOF tower's 50
+#: frequencies moved by 6e-13 against ARPACK's default (machine precision); the block Lanczos that
+#: replaced it gives the wide lattice's 50 within 1e-13 of ARPACK's.
 LANCZOS_TOLERANCE = 1e-8
 
 
@@ -76,7 +75,7 @@ def solve_modes(stiffness: np.ndarray | sparse.sparray, mass: np.ndarray | spars
     """Modes of the constrained system, those with frequency <= ``max_hz`` [Hz] when given.
 
     Up to :data:`DENSE_MAX_DOF` independent DOFs: one dense eigen-solution gives every mode (the
-    massless DOFs condensed out). Above it, sparse shift-invert Lanczos (ARPACK) finds the lowest
+    massless DOFs condensed out). Above it, sparse block shift-invert Lanczos finds the lowest
     modes only: at least those up to ``wanted_hz`` [Hz] (or ``max_hz``) and at least the lowest
     ``wanted_count``; the caller picks among them (an EIGRL's V1, V2, ND).
 
@@ -184,11 +183,11 @@ def _positive_definite(m: np.ndarray) -> bool:
 
 def _sparse_modes(k: sparse.csr_array, m: sparse.csr_array, constraints: Constraints, *, massive: int,
                   up_to_hz: float | None, count: int | None) -> tuple[np.ndarray, np.ndarray] | None:
-    """The lowest modes by shift-invert Lanczos about a small negative shift: (K - sigma M)^-1 M maps
-    every eigenvalue above the shift, rigid-body modes included, to a large one in order, and the
-    massless DOFs' infinite eigenvalues to zero, so they need no condensation. With ``count`` that
-    many are found at least; the number found doubles until one lies above ``up_to_hz`` too. None when
-    that would take more than half the modes there are (the dense route is then the faster);
+    """The lowest modes by block shift-invert Lanczos (mace_fmu.fe.lanczos) about a small negative shift:
+    (K - sigma M)^-1 M maps every eigenvalue above the shift, rigid-body modes included, to a large one
+    in order, and the massless DOFs' infinite eigenvalues to zero, so they need no condensation. With
+    ``count`` that many are found at least; the Krylov space grows until one lies above ``up_to_hz`` too.
+    None when that would take more than half the modes there are (the dense route is then the faster);
     ``massive``: the number of DOFs with mass, which bounds the modes there are."""
     n = k.shape[0]
     if count is None and up_to_hz is None:
@@ -205,21 +204,14 @@ def _sparse_modes(k: sparse.csr_array, m: sparse.csr_array, constraints: Constra
                           groups=np.array([grid for grid, _ in constraints.independent]))
     except RuntimeError:
         raise MaceError(_unrestrained_message_sparse(k, m, constraints)) from None
-    op = LinearOperator((n, n), matvec=lambda x: solve(np.asarray(x, dtype=float).ravel()), dtype=float)
-    wanted = min(max(count or 0, SPARSE_FIRST_BATCH if up_to_hz is not None else 1), massive // 2)
-    while True:
-        # the Krylov space lives in the range of M: no more vectors than DOFs with mass
-        ncv = min(massive, max(2 * wanted + 1, 20))
-        eigval, vec = eigsh(k, k=wanted, M=m, sigma=sigma, which="LM", OPinv=op, tol=LANCZOS_TOLERANCE, ncv=ncv)
-        order = np.argsort(eigval)
-        eigval, vec = eigval[order], vec[:, order]
-        freq = np.sign(eigval) * np.sqrt(np.abs(eigval)) / (2.0 * np.pi)
-        if up_to_hz is None or freq[-1] > up_to_hz:
-            break
-        if wanted >= massive // 2:
-            return None
-        wanted = min(2 * wanted, massive // 2)
-    vec = vec / np.sqrt(np.einsum("im,im->m", vec, m @ vec))  # mass-normalised, as the dense route
+    found = lowest_modes(stiffness=k, mass=m, solve=solve, shift=sigma, count=max(count or 0, 1),
+                         above=None if up_to_hz is None else (2.0 * np.pi * up_to_hz) ** 2,
+                         tolerance=LANCZOS_TOLERANCE, max_dimension=massive // 2)
+    if found is None:  # more than half the modes there are: the dense route is the faster
+        return None
+    eigval = found.eigenvalues
+    freq = np.sign(eigval) * np.sqrt(np.abs(eigval)) / (2.0 * np.pi)
+    vec = found.vectors  # mass-normalised, as the dense route
     return freq, vec
 
 

@@ -18,13 +18,15 @@ at 100k DOFs) and no more fill. Without pymetis the candidates are RCM and AMD.
 
 from __future__ import annotations
 
-import ctypes
 import hashlib
 from dataclasses import dataclass
 
 import numpy as np
 from scipy import sparse
 from scipy.sparse.csgraph import reverse_cuthill_mckee
+
+from mace_fmu.fe.cholmod import factor_layout
+from mace_fmu.fe.cholmod import load as load_cholmod
 
 #: Names of the orderings, as reports and benchmarks print them.
 RCM = "reverse Cuthill-McKee"
@@ -99,42 +101,10 @@ def _nested_dissection(pattern: sparse.csr_matrix, groups: np.ndarray | None) ->
 
 def supernodal_entries(symbolic: object, rows: int) -> int | None:
     """Entries CHOLMOD stores for the supernodal factor that ``symbolic`` describes, known after the symbolic
-    analysis alone.
-
-    cvxopt gives no accessor for it, so it is read from the cholmod_factor structure, whose leading
-    fields have kept their layout from CHOLMOD 1 to 5: n, minor, then three pointers, nzmax, seven
-    pointers, nsuper, ssize and xsize, each one machine word. The order is checked against ``rows``.
-
-    Parameters
-    ----------
-    symbolic : object
-        cvxopt.cholmod.symbolic's result (a capsule holding a cholmod_factor).
-    rows : int
-        The order of the analysed matrix.
-
-    Returns
-    -------
-    int or None
-        The factor's entries (xsize: its dense supernodal blocks, padding included), or None when the
-        object is not a CHOLMOD factor of that order or the value is out of range.
-    """
-    api = ctypes.pythonapi
-    api.PyCapsule_GetName.restype = ctypes.c_char_p
-    api.PyCapsule_GetName.argtypes = [ctypes.py_object]
-    api.PyCapsule_GetPointer.restype = ctypes.c_void_p
-    api.PyCapsule_GetPointer.argtypes = [ctypes.py_object, ctypes.c_char_p]
-    try:
-        name = api.PyCapsule_GetName(symbolic)
-        if not name or not name.startswith(b"CHOLMOD FACTOR"):
-            return None
-        address = api.PyCapsule_GetPointer(symbolic, name)
-    except (TypeError, ValueError, ctypes.ArgumentError):
-        return None
-    words = (ctypes.c_size_t * 16).from_address(address)
-    n, xsize = int(words[0]), int(words[15])
-    if n != rows or not rows <= xsize <= rows * (rows + 1):
-        return None
-    return xsize
+    analysis alone (xsize: its dense supernodal blocks, padding included); None when the object is not a
+    CHOLMOD factor of order ``rows`` (see :func:`mace_fmu.fe.cholmod.factor_layout`)."""
+    layout = factor_layout(symbolic, rows)
+    return None if layout is None else layout.entries
 
 
 @dataclass(frozen=True)
@@ -170,11 +140,10 @@ def analyse(matrix: sparse.sparray, *, groups: np.ndarray | None = None, with_am
     key = _pattern_key(a, groups, with_amd)
     known = _CHOSEN.get(key)
     permutations = {known[0].method: known[1]} if known else candidate_permutations(a, groups=groups)
-    try:
-        import cvxopt
-        from cvxopt import cholmod
-    except ImportError:
+    cholmod = load_cholmod()
+    if cholmod is None:
         return Analysis(OrderingChoice(RCM, {}), permutations[RCM], None, None)
+    import cvxopt
     lower = sparse.tril(a).tocoo()
     spmatrix = cvxopt.spmatrix(lower.data, lower.row.astype(int), lower.col.astype(int), (n, n))
     if known and known[1] is None:  # AMD, CHOLMOD's default

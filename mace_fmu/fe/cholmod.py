@@ -1,0 +1,257 @@
+"""CHOLMOD as cvxopt's wheels ship it: loaded on a BLAS that suits the processor, and solving many
+right-hand sides in one pass over the factor.
+
+Two things in cvxopt's Linux wheels (1.3.x, CHOLMOD 3.0.6) cost the 100k-DOF lattices most of their
+time (benchmarks/RESULTS.md, "A BLAS for CHOLMOD and block solves"):
+
+* Their CHOLMOD is linked against a serial reference-grade ATLAS (``libsatlas``), although the wheels
+  carry an OpenBLAS for cvxopt's own BLAS module, and that OpenBLAS (0.3.15) does not know recent
+  processors and falls back to its Prescott (SSE3) kernels: a 2000 x 2000 product at 16 GFLOP/s where
+  the processor's AVX-512 kernels reach 78. CHOLMOD's supernodal factorisation is dense BLAS 3 on its
+  supernodes: on the wide lattice it took 12.3 s on ATLAS and takes 4.5 s on OpenBLAS's SkylakeX
+  kernels. :func:`load` therefore names OpenBLAS's kernels from the processor's flags (AVX-512:
+  SkylakeX, AVX2 and FMA: Haswell) when nobody has named them (``OPENBLAS_CORETYPE``), and makes the
+  OpenBLAS that cvxopt already loaded the one CHOLMOD's BLAS calls bind to (RTLD_GLOBAL, before
+  CHOLMOD is loaded). Both only where they apply: Linux, cvxopt not imported before, the libraries
+  found; otherwise CHOLMOD runs as shipped, slower and with the same results.
+* cvxopt's ``cholmod.solve`` solves the columns of a right-hand side one after another, each a full
+  pass over the factor (850 MB on the wide lattice). CHOLMOD's own ``cholmod_l_solve`` takes them
+  together, in dense blocks: 16 columns cost 25 ms a column instead of 110. :class:`CholeskySolve`
+  calls it through ctypes on the factor cvxopt computed, after checking that the factor's layout is
+  the one expected; two halves of a wide block go to the two cores (the call releases the GIL, and
+  cvxopt's OpenBLAS runs one thread), 15 ms a column for 16.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import functools
+import glob
+import os
+import platform
+import sys
+import weakref
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+from pathlib import Path
+from types import ModuleType
+
+import numpy as np
+
+#: Columns below which a block is solved on one core: two threads on 8 columns gained nothing
+#: (30 ms a column either way on the wide lattice), on 16 a third.
+PARALLEL_MIN_COLUMNS = 16
+#: The size in bytes set aside for a cholmod_common: CHOLMOD 3's is about 2.5 kB, version 5's under 8 kB.
+_COMMON_BYTES = 1 << 16
+_CHOLMOD_A = 0  # cholmod_solve's system: A x = b
+_CHOLMOD_LONG, _CHOLMOD_REAL, _CHOLMOD_DOUBLE = 2, 1, 0
+
+
+def load() -> ModuleType | None:
+    """cvxopt's ``cholmod`` module, loaded on the fastest BLAS the wheels carry; None without cvxopt.
+
+    Returns
+    -------
+    module or None
+        ``cvxopt.cholmod``.
+    """
+    if "cvxopt.cholmod" not in sys.modules:
+        _prepare_blas()
+    try:
+        from cvxopt import cholmod
+    except ImportError:
+        return None
+    return cholmod
+
+
+def _prepare_blas() -> None:
+    """Name OpenBLAS's kernels for this processor and put cvxopt's OpenBLAS first in the global symbol scope."""
+    if platform.system() != "Linux":
+        return
+    coretype = None if "cvxopt" in sys.modules or "OPENBLAS_CORETYPE" in os.environ else _openblas_coretype()
+    if coretype is not None:
+        os.environ["OPENBLAS_CORETYPE"] = coretype  # read once, when cvxopt's OpenBLAS loads just below
+    try:
+        import cvxopt
+    except ImportError:
+        return
+    finally:
+        if coretype is not None:
+            del os.environ["OPENBLAS_CORETYPE"]  # the processes this one starts choose for themselves
+    for library in _wheel_libraries(Path(cvxopt.__file__).parent, "libopenblas"):
+        try:
+            ctypes.CDLL(str(library), mode=ctypes.RTLD_GLOBAL)  # already loaded by cvxopt: promoted, not reloaded
+        except OSError:
+            continue
+        return
+
+
+def _openblas_coretype() -> str | None:
+    """OpenBLAS's name for the widest kernels this x86-64 processor runs, from /proc/cpuinfo's flags."""
+    if platform.machine() not in ("x86_64", "AMD64"):
+        return None
+    try:
+        with open("/proc/cpuinfo", encoding="ascii", errors="replace") as cpuinfo:
+            flags = next((line.split(":", 1)[1].split() for line in cpuinfo if line.startswith("flags")), [])
+    except OSError:
+        return None
+    if {"avx512f", "avx512cd", "avx512bw", "avx512dq", "avx512vl"} <= set(flags):
+        return "SkylakeX"
+    if {"avx2", "fma"} <= set(flags):
+        return "Haswell"
+    return None
+
+
+def _wheel_libraries(package: Path, stem: str) -> list[Path]:
+    """Shared libraries named ``stem*`` that a cvxopt wheel carries (auditwheel's and delocate's folders)."""
+    folders = (package.parent / "cvxopt.libs", package / ".dylibs", package)
+    return [Path(found) for folder in folders for found in sorted(glob.glob(str(folder / f"{stem}*")))]
+
+
+@dataclass(frozen=True)
+class FactorLayout:
+    """The leading fields of a cholmod_factor, read from the structure cvxopt holds.
+
+    The fields kept their order from CHOLMOD 1 to 5: n, minor, then three pointers, nzmax, seven
+    pointers, nsuper, ssize, xsize, maxcsize, maxesize and four pointers, each one machine word,
+    then the ints ordering, is_ll, is_super, is_monotonic, itype, xtype, dtype.
+    """
+
+    address: int  #: where the cholmod_factor lies
+    rows: int  #: its order n
+    entries: int  #: xsize: entries of the supernodal factor, its dense blocks' padding included
+    index_type: int  #: itype (2: 64-bit integers, cholmod_l_*)
+    value_type: int  #: xtype (1: real)
+    precision: int  #: dtype (0: double)
+
+
+def factor_layout(symbolic: object, rows: int) -> FactorLayout | None:
+    """The cholmod_factor inside cvxopt's capsule ``symbolic``, when it is one of order ``rows``.
+
+    Parameters
+    ----------
+    symbolic : object
+        ``cvxopt.cholmod.symbolic``'s result.
+    rows : int
+        The order of the analysed matrix.
+
+    Returns
+    -------
+    FactorLayout or None
+        None when the object is not a CHOLMOD factor of that order or its sizes are out of range.
+    """
+    api = ctypes.pythonapi
+    api.PyCapsule_GetName.restype = ctypes.c_char_p
+    api.PyCapsule_GetName.argtypes = [ctypes.py_object]
+    api.PyCapsule_GetPointer.restype = ctypes.c_void_p
+    api.PyCapsule_GetPointer.argtypes = [ctypes.py_object, ctypes.c_char_p]
+    try:
+        name = api.PyCapsule_GetName(symbolic)
+        if not name or not name.startswith(b"CHOLMOD FACTOR"):
+            return None
+        address = api.PyCapsule_GetPointer(symbolic, name)
+    except (TypeError, ValueError, ctypes.ArgumentError):
+        return None
+    words = (ctypes.c_size_t * 22).from_address(address)
+    flags = (ctypes.c_int * 7).from_address(address + 22 * ctypes.sizeof(ctypes.c_size_t))
+    n, xsize = int(words[0]), int(words[15])
+    if n != rows or not rows <= xsize <= rows * (rows + 1):
+        return None
+    return FactorLayout(address, n, xsize, int(flags[4]), int(flags[5]), int(flags[6]))
+
+
+class _Dense(ctypes.Structure):
+    _fields_ = [("nrow", ctypes.c_size_t), ("ncol", ctypes.c_size_t), ("nzmax", ctypes.c_size_t),
+                ("d", ctypes.c_size_t), ("x", ctypes.c_void_p), ("z", ctypes.c_void_p),
+                ("xtype", ctypes.c_int), ("dtype", ctypes.c_int)]
+
+
+@functools.cache
+def _cholmod_library() -> ctypes.CDLL | None:
+    """The CHOLMOD library cvxopt's extension uses (the same file, so the same loaded copy), or None."""
+    try:
+        import cvxopt.cholmod
+    except ImportError:
+        return None
+    package = Path(cvxopt.__file__).parent
+    for candidate in [*_wheel_libraries(package, "libcholmod"), Path(cvxopt.cholmod.__file__)]:
+        try:
+            library = ctypes.CDLL(str(candidate))
+            solve, start, finish, free = (library.cholmod_l_solve, library.cholmod_l_start,
+                                          library.cholmod_l_finish, library.cholmod_l_free_dense)
+        except (OSError, AttributeError):
+            continue
+        solve.restype = ctypes.POINTER(_Dense)
+        solve.argtypes = [ctypes.c_int, ctypes.c_void_p, ctypes.POINTER(_Dense), ctypes.c_void_p]
+        free.argtypes = [ctypes.POINTER(ctypes.POINTER(_Dense)), ctypes.c_void_p]
+        start.argtypes = finish.argtypes = [ctypes.c_void_p]
+        return library
+    return None
+
+
+class CholeskySolve:
+    """x = solve(b) on a CHOLMOD factor that cvxopt computed: every column of ``b`` in one call.
+
+    Parameters
+    ----------
+    factor : object
+        ``cvxopt.cholmod``'s numeric factor (the symbolic one after ``cholmod.numeric``).
+    rows : int
+        Its order.
+    """
+
+    def __init__(self, factor: object, rows: int):
+        self._factor = factor  # keeps the cholmod_factor alive as long as this object
+        self.rows = rows
+        layout = factor_layout(factor, rows)
+        library = _cholmod_library()
+        self._direct = (library is not None and layout is not None and layout.index_type == _CHOLMOD_LONG
+                        and layout.value_type == _CHOLMOD_REAL and layout.precision == _CHOLMOD_DOUBLE)
+        if not self._direct:
+            return
+        self._library, self._address = library, layout.address
+        # one cholmod_common (CHOLMOD's workspace) for each of the two threads a block is shared between
+        self._commons = [ctypes.create_string_buffer(_COMMON_BYTES) for _ in range(2)]
+        for common in self._commons:
+            library.cholmod_l_start(common)
+        weakref.finalize(self, _finish, library, self._commons)
+
+    def __call__(self, b: np.ndarray) -> np.ndarray:
+        """Solve for ``b`` of shape (rows,) or (rows, k)."""
+        b = np.asarray(b, dtype=float)
+        columns = b.reshape(self.rows, -1)
+        if not self._direct:
+            return self._cvxopt_solve(columns).reshape(b.shape)
+        width = columns.shape[1]
+        if width < PARALLEL_MIN_COLUMNS:
+            return self._solve_block(columns, self._commons[0]).reshape(b.shape)
+        half = width // 2
+        with ThreadPoolExecutor(max_workers=2) as threads:
+            parts = list(threads.map(self._solve_block, (columns[:, :half], columns[:, half:]), self._commons))
+        return np.hstack(parts).reshape(b.shape)
+
+    def _solve_block(self, columns: np.ndarray, common: ctypes.Array) -> np.ndarray:
+        rhs = np.asfortranarray(columns)
+        rows, width = rhs.shape
+        dense = _Dense(rows, width, rows * width, rows, rhs.ctypes.data, None, _CHOLMOD_REAL, _CHOLMOD_DOUBLE)
+        solution = self._library.cholmod_l_solve(_CHOLMOD_A, self._address, ctypes.byref(dense), common)
+        if not solution:  # CHOLMOD could not allocate its workspace: the slower route has its own
+            return self._cvxopt_solve(columns)
+        try:
+            values = ctypes.cast(solution.contents.x, ctypes.POINTER(ctypes.c_double))
+            return np.ctypeslib.as_array(values, shape=(width, rows)).T.copy()
+        finally:
+            self._library.cholmod_l_free_dense(ctypes.byref(solution), common)
+
+    def _cvxopt_solve(self, columns: np.ndarray) -> np.ndarray:
+        import cvxopt
+        import cvxopt.cholmod
+
+        x = cvxopt.matrix(np.ascontiguousarray(columns))
+        cvxopt.cholmod.solve(self._factor, x)
+        return np.asarray(x)
+
+
+def _finish(library: ctypes.CDLL, commons: list[ctypes.Array]) -> None:
+    for common in commons:
+        library.cholmod_l_finish(common)

@@ -1,0 +1,200 @@
+"""Block shift-invert Lanczos: the lowest modes of K x = lambda M x from solves with K - sigma M, a block of
+right-hand sides at a time.
+
+The method of NASTRAN's READ module (Grimes, Lewis and Simon, "A shifted block Lanczos algorithm for
+solving sparse symmetric generalized eigenproblems", SIAM J. Matrix Anal. Appl. 15, 1994), at one
+shift: the Krylov space of W = (K - sigma M)^-1 M grows a block of ``block_size`` vectors at a time,
+M-orthonormal with full reorthogonalisation, and W's projection on it (a band matrix, symmetric in
+the M inner product) gives Ritz values theta = 1 / (lambda - sigma) and their residuals without a
+further solve.
+
+Why blocks: at 100k DOFs a solve is a pass over a factor of up to a gigabyte, and its cost is the
+reading, not the arithmetic. CHOLMOD solving 16 columns in one pass costs 15 ms a column on the wide
+lattice against 110 ms for one column alone (mace_fmu.fe.cholmod). A block Krylov space needs more
+vectors than ARPACK's single-vector one for the same modes (288 columns against 128 for the wide
+lattice's 50), but they cost a seventh each: 4 s of solves against 14 s (benchmarks/RESULTS.md,
+"A BLAS for CHOLMOD and block solves").
+
+The massless DOFs' infinite eigenvalues are W's zeros: every vector is an image of W (the start
+block too), so they never enter the basis, and the Ritz vectors carry the massless DOFs' static
+response. A block of ``block_size`` finds eigenvalues of that multiplicity; a Krylov space that
+closes early (a deflated direction) is refilled with fresh random images, so an invariant subspace
+found early is not the end of the search.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import sparse
+
+#: Vectors in a block: CHOLMOD's solve shares 16 columns between two cores (mace_fmu.fe.cholmod), and
+#: 16 gave the fewest seconds of solves on the wide lattice (8: 216 columns at 30 ms, 32: 416 at 12 ms).
+BLOCK_SIZE = 16
+#: A direction whose M-norm after reorthogonalisation is below this fraction of the largest Ritz value
+#: (of the block's largest vector for a fresh block) is dropped: the Gram matrix that orthonormalises a
+#: block resolves norms down to the square root of the rounding (1e-8), and a direction that small
+#: means the space is all but invariant there.
+DEFLATION_TOLERANCE = 1e-7
+
+
+@dataclass(frozen=True)
+class LanczosModes:
+    """The lowest eigenpairs found, ascending."""
+
+    eigenvalues: np.ndarray  #: lambda = omega^2 [rad^2/s^2]
+    vectors: np.ndarray  #: (n, modes), M-normalised: x^T M x = 1
+    solved_columns: int  #: right-hand sides solved with K - sigma M [-]
+
+
+def lowest_modes(*, stiffness: sparse.sparray, mass: sparse.sparray, solve: Callable[[np.ndarray], np.ndarray],
+                 shift: float, count: int, above: float | None = None, tolerance: float = 1e-8,
+                 max_dimension: int, block_size: int = BLOCK_SIZE, seed: int = 0) -> LanczosModes | None:
+    """The lowest ``count`` eigenpairs of K x = lambda M x, and more until one lies above ``above``.
+
+    Parameters
+    ----------
+    stiffness, mass : scipy.sparse array
+        K and M, symmetric, of the same order n (M may be singular: massless DOFs).
+    solve : callable
+        x = solve(b) with K - ``shift`` M for b of shape (n, k): the factor's block solve.
+    shift : float
+        sigma [rad^2/s^2], below every eigenvalue (K - sigma M positive definite).
+    count : int
+        Eigenpairs wanted at least.
+    above : float, optional
+        Go on until the highest converged eigenvalue exceeds this [rad^2/s^2].
+    tolerance : float
+        A Ritz pair has converged when its residual ||W x - theta x||_M is below this fraction of theta.
+    max_dimension : int
+        Largest Krylov space [vectors]: None is returned rather than build a larger one.
+    block_size : int
+        Vectors added to the space at a time.
+    seed : int
+        The random start block's seed (the result does not depend on it beyond ``tolerance``).
+
+    Returns
+    -------
+    LanczosModes or None
+        Every leading converged eigenpair, at least ``count``; None when ``max_dimension`` is reached first.
+    """
+    n = stiffness.shape[0]
+    rng = np.random.default_rng(seed)
+    space = _Space(n, min(max_dimension, max(6 * count, 8 * block_size)), max_dimension)
+    block = _fresh_images(solve, mass, space.basis(), rng, block_size)
+    solved = block_size
+    while True:
+        first = space.size
+        if block is None or not space.append(block):
+            return None
+        images = solve(mass @ block)  # W Q_j
+        solved += images.shape[1]
+        basis = space.basis()
+        coupling = _orthogonalise(images, mass, basis, recent=max(first - block_size, 0))
+        space.set_projection(first, coupling)
+        theta, ritz = np.linalg.eigh(space.projection())
+        theta, ritz = theta[::-1], ritz[:, ::-1]  # largest theta: lowest lambda
+        block, residual_map = _orthonormal(images, mass, floor=DEFLATION_TOLERANCE * max(abs(theta[0]), 1e-300))
+        residual = np.linalg.norm(residual_map @ ritz[first:space.size], axis=0)
+        converged = residual <= tolerance * np.abs(theta)
+        leading = int(np.argmin(converged)) if not converged.all() else len(converged)
+        eigenvalues = shift + 1.0 / theta[:leading]
+        if leading >= count and (above is None or (leading and eigenvalues[-1] > above)):
+            vectors = basis @ ritz[:, :leading]
+            vectors /= np.sqrt(np.einsum("im,im->m", vectors, mass @ vectors))
+            return LanczosModes(eigenvalues, vectors, solved)
+        if block.shape[1] < block_size:  # deflated: fresh directions keep the block's width
+            missing = block_size - block.shape[1]
+            fresh = _fresh_images(solve, mass, np.hstack([basis, block]), rng, missing)
+            solved += missing
+            block = block if fresh is None else np.hstack([block, fresh])
+            if block.shape[1] == 0:  # the whole space is invariant: no mode left to find
+                return None
+
+
+class _Space:
+    """The Krylov basis V and W's projection V^T M W V, grown in place (capacity half as large again when full)."""
+
+    def __init__(self, rows: int, capacity: int, limit: int):
+        self.size, self.limit = 0, limit
+        self._vectors = np.empty((rows, capacity), order="F")
+        self._projection = np.zeros((capacity, capacity))
+
+    def basis(self) -> np.ndarray:
+        return self._vectors[:, :self.size]
+
+    def append(self, block: np.ndarray) -> bool:
+        """Add M-orthonormal vectors; False when that would exceed the limit."""
+        end = self.size + block.shape[1]
+        if end > self.limit:
+            return False
+        if end > self._vectors.shape[1]:
+            capacity = min(self.limit, max(end, 3 * self._vectors.shape[1] // 2))
+            grown = np.empty((self._vectors.shape[0], capacity), order="F")
+            grown[:, :self.size] = self.basis()
+            projection = np.zeros((capacity, capacity))
+            projection[:self.size, :self.size] = self._projection[:self.size, :self.size]
+            self._vectors, self._projection = grown, projection
+        self._vectors[:, self.size:end] = block
+        self.size = end
+        return True
+
+    def set_projection(self, first: int, coupling: np.ndarray) -> None:
+        """The columns of V^T M W V for the block from ``first`` (and, by symmetry, its rows)."""
+        self._projection[:self.size, first:self.size] = coupling
+        self._projection[first:self.size, :self.size] = coupling.T
+
+    def projection(self) -> np.ndarray:
+        p = self._projection[:self.size, :self.size]
+        return 0.5 * (p + p.T)
+
+
+def _orthogonalise(images: np.ndarray, mass: sparse.sparray, basis: np.ndarray, *, recent: int) -> np.ndarray:
+    """Make ``images`` M-orthogonal to ``basis`` in place; the coefficients V^T M Y removed.
+
+    Classical Gram-Schmidt, first against the vectors from ``recent`` on (the last two blocks, which
+    hold all of W Q_j's projection in exact arithmetic), then against the whole basis, which removes
+    the rounding by which Lanczos vectors lose their orthogonality; once more if that pass removed
+    more than half of what was left (twice is enough after a pass that removes little).
+    """
+    coupling = np.zeros((basis.shape[1], images.shape[1]))
+    for part in (slice(recent, None), slice(None), slice(None)):
+        before = np.einsum("im,im->m", images, mass @ images)
+        step = basis[:, part].T @ (mass @ images)  # V^T M Y, with M V never stored
+        images -= basis[:, part] @ step
+        coupling[part] += step
+        after = np.einsum("im,im->m", images, mass @ images)
+        if part.start is None and np.all(after > 0.25 * before):
+            break
+    return coupling
+
+
+def _orthonormal(vectors: np.ndarray, mass: sparse.sparray, *, floor: float) -> tuple[np.ndarray, np.ndarray]:
+    """M-orthonormal Q and R with vectors = Q R, the directions whose M-norm is below ``floor`` dropped.
+
+    From the eigen-decomposition of the Gram matrix, twice: one pass leaves Q's columns orthogonal to
+    rounding times the square of the block's condition, the second to rounding.
+    """
+    q, r = vectors, None
+    for _ in range(2):
+        gram = q.T @ (mass @ q)
+        values, axes = np.linalg.eigh(0.5 * (gram + gram.T))
+        keep = values > floor ** 2
+        root = np.sqrt(values[keep])
+        q, step = q @ (axes[:, keep] / root), root[:, None] * axes[:, keep].T
+        r = step if r is None else step @ r
+        floor = 0.5  # the second pass: columns of norm ~1, none to drop
+    return q, r
+
+
+def _fresh_images(solve: Callable[[np.ndarray], np.ndarray], mass: sparse.sparray, basis: np.ndarray,
+                  rng: np.random.Generator, width: int) -> np.ndarray | None:
+    """``width`` images of W of random vectors, M-orthonormal to ``basis``; None when none is left outside it."""
+    images = solve(mass @ rng.standard_normal((basis.shape[0], width)))
+    before = float(np.sqrt(np.max(np.einsum("im,im->m", images, mass @ images)))) if width else 0.0
+    for _ in range(2):
+        images -= basis @ (basis.T @ (mass @ images))
+    fresh, _ = _orthonormal(images, mass, floor=DEFLATION_TOLERANCE * max(before, 1e-300))
+    return fresh if fresh.shape[1] else None

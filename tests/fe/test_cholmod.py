@@ -1,0 +1,108 @@
+"""CHOLMOD through cvxopt: block solves through cholmod_l_solve equal scipy's sparse LU, and on the
+wheels' layout CHOLMOD's BLAS calls go to OpenBLAS with kernels named for the processor."""
+
+from __future__ import annotations
+
+import os
+import platform
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy import sparse
+from scipy.sparse.linalg import splu
+from support.decks import frame_tower
+
+from mace_fmu.deck.reader import read_deck_text
+from mace_fmu.fe import cholmod
+from mace_fmu.fe.assembly import assemble
+from mace_fmu.fe.constraints import build_constraints
+from mace_fmu.fe.factor import factorize
+
+cvxopt = pytest.importorskip("cvxopt")
+
+
+@pytest.fixture(scope="module")
+def lattice() -> tuple[sparse.csr_array, np.ndarray]:
+    """K + M of a clamped 4 x 4-grid lattice, 6 levels (576 DOFs), and the grid of each row."""
+    deck = read_deck_text(frame_tower(nx=4, ny=4, levels=6), name="lattice.bdf")
+    model = assemble(deck)
+    constraints = build_constraints(deck, model.dofs, model.cd_frames, spc_set=1, mpc_set=None)
+    k = constraints.reduce_sparse(model.stiffness)
+    m = constraints.reduce_sparse(model.mass)
+    return sparse.csr_array(0.5 * (k + k.T) + 0.5 * (m + m.T)), np.array([g for g, _ in constraints.independent])
+
+
+@pytest.mark.parametrize("width", [1, 3, 16, 33])
+def test_block_solves_equal_scipys_lu(lattice, width):
+    """1, 3, 16 and 33 right-hand sides (16 and 33 shared between two threads): the solutions equal SuperLU's
+    of the same matrix within 1e-11 of their largest entry."""
+    matrix, grids = lattice
+    b = np.random.default_rng(width).standard_normal((matrix.shape[0], width))
+    solve = factorize(matrix, positive_definite=True, groups=grids)
+    assert isinstance(solve, cholmod.CholeskySolve) and solve._direct  # CHOLMOD's block solve, not the fallback
+    expected = splu(sparse.csc_array(matrix)).solve(b)
+    np.testing.assert_allclose(solve(b), expected, rtol=0, atol=1e-11 * np.abs(expected).max())
+    np.testing.assert_allclose(solve(b[:, 0]), expected[:, 0], rtol=0, atol=1e-11 * np.abs(expected).max())
+
+
+def test_cvxopts_column_by_column_solve_gives_the_same(lattice):
+    """The fallback (cvxopt's own solve, where the factor's layout is not the one expected) agrees to 1e-13."""
+    matrix, grids = lattice
+    b = np.random.default_rng(0).standard_normal((matrix.shape[0], 5))
+    solve = factorize(matrix, positive_definite=True, groups=grids)
+    direct = solve(b)
+    solve._direct = False
+    np.testing.assert_allclose(solve(b), direct, rtol=0, atol=1e-13 * np.abs(direct).max())
+
+
+def test_the_factor_layout_is_read_and_checked(lattice):
+    """The cholmod_factor's order, 64-bit indices, a pattern after the symbolic analysis and real doubles after
+    the numeric factorisation; an object that is not a factor, or a factor of another order, gives None."""
+    matrix, grids = lattice
+    from mace_fmu.fe.ordering import analyse
+
+    analysis = analyse(matrix, groups=grids)
+    layout = cholmod.factor_layout(analysis.symbolic, matrix.shape[0])
+    assert layout is not None
+    assert (layout.rows, layout.index_type, layout.value_type, layout.precision) == (matrix.shape[0], 2, 0, 0)
+    cholmod.load().numeric(analysis.lower, analysis.symbolic)
+    assert cholmod.factor_layout(analysis.symbolic, matrix.shape[0]).value_type == 1
+    assert layout.entries >= sparse.tril(matrix).nnz
+    assert cholmod.factor_layout(analysis.symbolic, matrix.shape[0] + 1) is None
+    assert cholmod.factor_layout(object(), matrix.shape[0]) is None
+
+
+def _wheel_layout() -> bool:
+    package = Path(cvxopt.__file__).parent
+    return bool(cholmod._wheel_libraries(package, "libopenblas") and cholmod._wheel_libraries(package, "libcholmod"))
+
+
+@pytest.mark.skipif(platform.system() != "Linux" or not _wheel_layout(),
+                    reason="cvxopt's Linux wheels carry OpenBLAS and CHOLMOD as separate libraries")
+def test_cholmods_blas_is_openblas_with_the_processors_kernels():
+    """In a fresh process: after ``load`` the dynamic linker binds libcholmod's dgemm_, dsyrk_ and dpotrf_ to
+    the wheels' OpenBLAS (not the ATLAS they link), OpenBLAS runs the kernels named for this processor, and
+    OPENBLAS_CORETYPE is gone from the environment again."""
+    code = ("import ctypes, os\n"
+            "from pathlib import Path\n"
+            "from mace_fmu.fe import cholmod\n"
+            "cholmod.load()\n"
+            "import cvxopt\n"
+            "lib = ctypes.CDLL(str(cholmod._wheel_libraries(Path(cvxopt.__file__).parent, 'libopenblas')[0]))\n"
+            "lib.openblas_get_corename.restype = ctypes.c_char_p\n"
+            "print('core', lib.openblas_get_corename().decode(), 'OPENBLAS_CORETYPE' in os.environ)\n")
+    env = {key: value for key, value in os.environ.items() if key != "OPENBLAS_CORETYPE"}
+    env["LD_DEBUG"] = "bindings"
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, check=True)
+    bindings = [line for line in run.stderr.splitlines() if "libcholmod" in line.split(" to ")[0]]
+    for symbol in ("dgemm_", "dsyrk_", "dpotrf_"):
+        bound = [line for line in bindings if line.endswith(f"`{symbol}'")]
+        assert bound and all("libopenblas" in line.split(" to ")[1] for line in bound), symbol
+    core, in_environment = run.stdout.split()[1:]
+    expected = cholmod._openblas_coretype()
+    if expected is not None:
+        assert core.lower() == expected.lower()
+    assert in_environment == "False"
