@@ -9,11 +9,11 @@ time (benchmarks/RESULTS.md, "A BLAS for CHOLMOD and block solves"):
   processors and falls back to its Prescott (SSE3) kernels: a 2000 x 2000 product at 16 GFLOP/s where
   the processor's AVX-512 kernels reach 78. CHOLMOD's supernodal factorisation is dense BLAS 3 on its
   supernodes: on the wide lattice it took 12.3 s on ATLAS and takes 4.5 s on OpenBLAS's SkylakeX
-  kernels. :func:`load` therefore names OpenBLAS's kernels from the processor's flags (AVX-512:
-  SkylakeX, AVX2 and FMA: Haswell) when nobody has named them (``OPENBLAS_CORETYPE``), and makes the
-  OpenBLAS that cvxopt already loaded the one CHOLMOD's BLAS calls bind to (RTLD_GLOBAL, before
-  CHOLMOD is loaded). Both only where they apply: Linux, cvxopt not imported before, the libraries
-  found; otherwise CHOLMOD runs as shipped, slower and with the same results.
+  kernels. :func:`load` therefore has OpenBLAS select its kernels again with the processor's name
+  for them (AVX-512: SkylakeX, AVX2 and FMA: Haswell) unless the user named them
+  (``OPENBLAS_CORETYPE``), and makes the OpenBLAS that cvxopt loaded the one CHOLMOD's BLAS calls
+  bind to (RTLD_GLOBAL, before CHOLMOD is loaded). Both only where they apply: Linux, CHOLMOD not
+  loaded before, the libraries found; otherwise CHOLMOD runs as shipped, slower, with the same results.
 * cvxopt's ``cholmod.solve`` solves the columns of a right-hand side one after another, each a full
   pass over the factor (850 MB on the wide lattice). CHOLMOD's own ``cholmod_l_solve`` takes them
   together, in dense blocks: 16 columns cost 25 ms a column instead of 110. :class:`CholeskySolve`
@@ -65,25 +65,42 @@ def load() -> ModuleType | None:
 
 
 def _prepare_blas() -> None:
-    """Name OpenBLAS's kernels for this processor and put cvxopt's OpenBLAS first in the global symbol scope."""
+    """Give cvxopt's OpenBLAS the kernels of this processor and put it first in the global symbol scope."""
     if platform.system() != "Linux":
         return
-    coretype = None if "cvxopt" in sys.modules or "OPENBLAS_CORETYPE" in os.environ else _openblas_coretype()
-    if coretype is not None:
-        os.environ["OPENBLAS_CORETYPE"] = coretype  # read once, when cvxopt's OpenBLAS loads just below
     try:
-        import cvxopt
+        import cvxopt  # python-control imports it too: its OpenBLAS may be loaded already, on either route
     except ImportError:
         return
-    finally:
-        if coretype is not None:
-            del os.environ["OPENBLAS_CORETYPE"]  # the processes this one starts choose for themselves
-    for library in _wheel_libraries(Path(cvxopt.__file__).parent, "libopenblas"):
+    for path in _wheel_libraries(Path(cvxopt.__file__).parent, "libopenblas"):
         try:
-            ctypes.CDLL(str(library), mode=ctypes.RTLD_GLOBAL)  # already loaded by cvxopt: promoted, not reloaded
+            library = ctypes.CDLL(str(path), mode=ctypes.RTLD_GLOBAL)  # loaded by cvxopt: promoted, not reloaded
         except OSError:
             continue
+        _choose_kernels(library)
         return
+
+
+def _choose_kernels(openblas: ctypes.CDLL) -> None:
+    """Re-run OpenBLAS's kernel selection (DYNAMIC_ARCH) with this processor's name for it, unless the user
+    named one (``OPENBLAS_CORETYPE``) or the library chose it already. OpenBLAS reads the variable when it
+    selects, which it did when cvxopt loaded it; ``gotoblas_dynamic_quit`` and ``gotoblas_dynamic_init``
+    select again, here before any of CHOLMOD's calls."""
+    wanted = None if "OPENBLAS_CORETYPE" in os.environ else _openblas_coretype()
+    try:
+        corename, again, forget = openblas.openblas_get_corename, openblas.gotoblas_dynamic_init, \
+            openblas.gotoblas_dynamic_quit
+    except AttributeError:  # not a DYNAMIC_ARCH build: its kernels are fixed
+        return
+    corename.restype = ctypes.c_char_p
+    if wanted is None or corename().decode().lower() == wanted.lower():
+        return
+    os.environ["OPENBLAS_CORETYPE"] = wanted
+    try:
+        forget()
+        again()
+    finally:
+        del os.environ["OPENBLAS_CORETYPE"]  # the processes this one starts choose for themselves
 
 
 def _openblas_coretype() -> str | None:

@@ -83,10 +83,12 @@ def _wheel_layout() -> bool:
 @pytest.mark.skipif(platform.system() != "Linux" or not _wheel_layout(),
                     reason="cvxopt's Linux wheels carry OpenBLAS and CHOLMOD as separate libraries")
 def test_cholmods_blas_is_openblas_with_the_processors_kernels():
-    """In a fresh process: after ``load`` the dynamic linker binds libcholmod's dgemm_, dsyrk_ and dpotrf_ to
-    the wheels' OpenBLAS (not the ATLAS they link), OpenBLAS runs the kernels named for this processor, and
+    """In a fresh process that imported python-control first (which loads cvxopt and its OpenBLAS, as the
+    CLI does): after ``load`` the dynamic linker binds libcholmod's dgemm_, dsyrk_ and dpotrf_ to the
+    wheels' OpenBLAS (not the ATLAS they link), OpenBLAS runs the kernels named for this processor, and
     OPENBLAS_CORETYPE is gone from the environment again."""
     code = ("import ctypes, os\n"
+            "import control\n"
             "from pathlib import Path\n"
             "from mace_fmu.fe import cholmod\n"
             "cholmod.load()\n"
