@@ -70,7 +70,7 @@ def lowest_modes(*, stiffness: sparse.sparray, mass: sparse.sparray, solve: Call
     above : float, optional
         Go on until the highest converged eigenvalue exceeds this [rad^2/s^2].
     tolerance : float
-        A Ritz pair has converged when its residual ||W x - theta x||_M is below this fraction of theta.
+        A Ritz pair has converged when the M-norm of its residual W x - theta x is below this fraction of theta.
     max_dimension : int
         Largest Krylov space [vectors]: None is returned rather than build a larger one.
     block_size : int
