@@ -95,8 +95,9 @@ def test_what_a_reciprocal_modal_model_reaches_on_all_three_files(frfs):
     file, so a model can meet the goal there; mode 1 keeps 1.1 dB or more on Experimental.csv, whose peak
     heights break reciprocity (data/README.md). The stiffness matrix this lumped model implies,
     K = Phi^-T Lambda Phi^-1, couples floor 1 to floor 3 by +1.5 to +3.5 kN/m (a storey's stiffness is
-    about 45 kN/m), which a shear chain cannot (its K_13 is zero): the FE model's sway chain misses the
-    shapes, not only the parameters, and its inverse mass matrix Phi Phi^T is diagonal within 6 %."""
+    about 45 kN/m), which a shear chain cannot (its K_13 is zero), while its inverse mass matrix Phi Phi^T is
+    diagonal within 6 %: either the structure couples those floors or the accelerometers see more than their
+    floor's translation; either way the FE model's sway chain misses the shapes, not only the parameters."""
     import importlib.util
 
     spec = importlib.util.spec_from_file_location("frame_example", EXAMPLES / "three_storey_frame" /
