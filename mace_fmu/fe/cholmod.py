@@ -30,6 +30,7 @@ import glob
 import os
 import platform
 import sys
+import threading
 import weakref
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
@@ -229,6 +230,7 @@ class CholeskySolve:
         self._library, self._address = library, layout.address
         # one cholmod_common (CHOLMOD's workspace) for each of the two threads a block is shared between
         self._commons = [ctypes.create_string_buffer(_COMMON_BYTES) for _ in range(2)]
+        self._busy = threading.Lock()
         for common in self._commons:
             library.cholmod_l_start(common)
         weakref.finalize(self, _finish, library, self._commons)
@@ -240,11 +242,12 @@ class CholeskySolve:
         if not self._direct:
             return self._cvxopt_solve(columns).reshape(b.shape)
         width = columns.shape[1]
-        if width < PARALLEL_MIN_COLUMNS:
-            return self._solve_block(columns, self._commons[0]).reshape(b.shape)
-        half = width // 2
-        with ThreadPoolExecutor(max_workers=2) as threads:
-            parts = list(threads.map(self._solve_block, (columns[:, :half], columns[:, half:]), self._commons))
+        with self._busy:  # a cholmod_common keeps CHOLMOD's status and memory counts: one caller at a time
+            if width < PARALLEL_MIN_COLUMNS:
+                return self._solve_block(columns, self._commons[0]).reshape(b.shape)
+            half = width // 2
+            with ThreadPoolExecutor(max_workers=2) as threads:
+                parts = list(threads.map(self._solve_block, (columns[:, :half], columns[:, half:]), self._commons))
         return np.hstack(parts).reshape(b.shape)
 
     def _solve_block(self, columns: np.ndarray, common: ctypes.Array) -> np.ndarray:

@@ -108,3 +108,4 @@ def test_cholmods_blas_is_openblas_with_the_processors_kernels():
     if expected is not None:
         assert core.lower() == expected.lower()
     assert in_environment == "False"
+
