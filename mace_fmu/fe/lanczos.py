@@ -163,13 +163,14 @@ def _orthogonalise(images: np.ndarray, mass: sparse.sparray, basis: np.ndarray, 
     more than half of what was left (twice is enough after a pass that removes little).
     """
     coupling = np.zeros((basis.shape[1], images.shape[1]))
+    mass_images = mass @ images
     for part in (slice(recent, None), slice(None), slice(None)):
-        before = np.einsum("im,im->m", images, mass @ images)
-        step = basis[:, part].T @ (mass @ images)  # V^T M Y, with M V never stored
+        before = np.einsum("im,im->m", images, mass_images)
+        step = basis[:, part].T @ mass_images  # V^T M Y, with M V never stored
         images -= basis[:, part] @ step
         coupling[part] += step
-        after = np.einsum("im,im->m", images, mass @ images)
-        if part.start is None and np.all(after > 0.25 * before):
+        mass_images = mass @ images  # the next pass's, and the norms after this one
+        if part.start is None and np.all(np.einsum("im,im->m", images, mass_images) > 0.25 * before):
             break
     return coupling
 

@@ -69,6 +69,24 @@ class Modes:
         return self.shapes[self.dofs.indices(grid)]
 
 
+class ModesView:
+    """What tables and plots read most, one attribute away (``x.labels``, not ``x.modes.labels``), for a
+    structure that holds its :class:`Modes` as ``modes``; shapes stay on :class:`Modes`, which knows their DOFs."""
+
+    modes: Modes
+
+    @property
+    def frequencies_hz(self) -> np.ndarray:
+        """Natural frequencies [Hz] of the modes (signed: a negative eigenvalue gives a negative one)."""
+        return self.modes.frequencies_hz
+
+    @property
+    def labels(self) -> tuple[str, ...]:
+        """One label per mode: MACE's names ("1st Z bending"), generic ones ("bending Z 1") or NASTRAN's
+        mode numbers ("mode 1")."""
+        return self.modes.labels
+
+
 def solve_modes(stiffness: np.ndarray | sparse.sparray, mass: np.ndarray | sparse.sparray, constraints: Constraints,
                 dofs: DofMap, cd_frames: np.ndarray, *, max_hz: float | None = None,
                 wanted_hz: float | None = None, wanted_count: int | None = None) -> Modes:

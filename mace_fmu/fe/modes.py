@@ -17,7 +17,7 @@ from mace_fmu.fe.autospc import autospc_enabled, constrain_singular_dofs
 from mace_fmu.fe.beam import MassKind
 from mace_fmu.fe.constraints import Constraints, build_constraints
 from mace_fmu.fe.labels import label_modes, rigid_body_vectors
-from mace_fmu.fe.modal import Modes, solve_modes
+from mace_fmu.fe.modal import Modes, ModesView, solve_modes
 from mace_fmu.fe.preload import Preload, PreloadKind, large_displacement_preload, linear_preload
 from mace_fmu.parameters.sets import ParameterSet, deck_fingerprint, fe_overrides, naming_the_file, parameter_names
 from mace_fmu.structure.build import Structure, build_structure
@@ -40,7 +40,7 @@ class MassProperties:
 
 
 @dataclass(frozen=True)
-class StructureModes:
+class StructureModes(ModesView):
     """Everything one modal analysis produces, for tables, state-space models and the viewer."""
 
     structure: Structure  #: the 1-g or 0-g structure (deck, subcases, structure file) the modes are of
@@ -70,17 +70,6 @@ class StructureModes:
         """The stiffness the modes are of [N/m, N m/rad], basic DOFs: the preload's tangent (1-g) or K."""
         return self.preload.tangent_stiffness if self.preload is not None else self.model.stiffness
 
-    # What tables and plots read most, one attribute away: ``modes.labels``, not ``modes.modes.labels``.
-    # Shapes stay on :class:`Modes`, which knows their DOFs (``modes.modes.shape(grid, component)``).
-    @property
-    def frequencies_hz(self) -> np.ndarray:
-        """Natural frequencies [Hz] of the modes (signed: a negative eigenvalue gives a negative one)."""
-        return self.modes.frequencies_hz
-
-    @property
-    def labels(self) -> tuple[str, ...]:
-        """One label per mode, e.g. "1st Z bending" (MACE's names) or "bending Z 1" (generic)."""
-        return self.modes.labels
 
 
 def mass_properties(model: FEModel, deck: Deck) -> MassProperties:

@@ -99,14 +99,6 @@ def _nested_dissection(pattern: sparse.csr_matrix, groups: np.ndarray | None) ->
     return np.argsort(position[labels], kind="stable").astype(np.int64)  # each group's rows together, in order
 
 
-def supernodal_entries(symbolic: object, rows: int) -> int | None:
-    """Entries CHOLMOD stores for the supernodal factor that ``symbolic`` describes, known after the symbolic
-    analysis alone (xsize: its dense supernodal blocks, padding included); None when the object is not a
-    CHOLMOD factor of order ``rows`` (see :func:`mace_fmu.fe.cholmod.factor_layout`)."""
-    layout = factor_layout(symbolic, rows)
-    return None if layout is None else layout.entries
-
-
 @dataclass(frozen=True)
 class Analysis:
     """CHOLMOD's symbolic analysis in the ordering that fills least, ready for its numeric factorisation."""
@@ -154,11 +146,11 @@ def analyse(matrix: sparse.sparray, *, groups: np.ndarray | None = None, with_am
         cholmod.options["nmethods"] = 1  # the given permutation only (0 would let CHOLMOD pick among others)
         for name, permutation in permutations.items():
             symbolic = cholmod.symbolic(spmatrix, p=cvxopt.matrix(permutation.astype(int)), uplo="L")
-            analysed[name] = symbolic, supernodal_entries(symbolic, n)
+            analysed[name] = symbolic, _entries(symbolic, n)
         if with_amd and not known:  # a known choice needs its own analysis only
             cholmod.options.pop("nmethods")  # without a permutation CHOLMOD's default is AMD
             symbolic = cholmod.symbolic(spmatrix, uplo="L")
-            analysed[AMD] = symbolic, supernodal_entries(symbolic, n)
+            analysed[AMD] = symbolic, _entries(symbolic, n)
     finally:
         cholmod.options.clear()
         cholmod.options.update(saved)
@@ -207,3 +199,9 @@ def _pattern_key(a: sparse.csr_array, groups: np.ndarray | None, with_amd: bool)
     if groups is not None:
         digest.update(np.unique(np.asarray(groups), return_inverse=True)[1].astype(np.int64).tobytes())
     return a.shape, a.nnz, with_amd, digest.hexdigest()
+
+
+def _entries(symbolic: object, rows: int) -> int | None:
+    """The entries of the supernodal factor CHOLMOD's symbolic analysis sized (None: not a factor of ``rows``)."""
+    layout = factor_layout(symbolic, rows)
+    return None if layout is None else layout.entries

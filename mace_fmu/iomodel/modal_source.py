@@ -25,7 +25,7 @@ import numpy as np
 from mace_fmu.deck.connectivity import Connectivity, read_connectivity
 from mace_fmu.errors import DeckError, MaceError
 from mace_fmu.fe.dofs import COMPONENT_NAMES
-from mace_fmu.fe.modal import Modes
+from mace_fmu.fe.modal import Modes, ModesView
 from mace_fmu.iomodel.instruments import Instruments
 from mace_fmu.parameters.sets import ParameterSet
 from mace_fmu.structure.file import StructureFile, load_structure_file
@@ -111,7 +111,7 @@ def read_residual_flexibility(path: str | os.PathLike) -> ResidualFlexibility:
 
 
 @dataclass(frozen=True)
-class ModalStructure:
+class ModalStructure(ModesView):
     """A structure known by NASTRAN's normal modes: the modal source of a model without FE.
 
     It offers what the pipeline reads of :class:`~mace_fmu.fe.modes.StructureModes` that needs no FE:
@@ -131,16 +131,6 @@ class ModalStructure:
 
     #: what NASTRAN's modes are of: the structure as its SOL 103 run constrained it (no 1-g/0-g choice here)
     configuration = "modes"
-
-    @property
-    def frequencies_hz(self) -> np.ndarray:
-        """Natural frequencies [Hz] of NASTRAN's modes."""
-        return self.modes.frequencies_hz
-
-    @property
-    def labels(self) -> tuple[str, ...]:
-        """"mode 1", "mode 2", ...: NASTRAN's mode numbers (the damping table's labels)."""
-        return self.modes.labels
 
     @property
     def name(self) -> str:
