@@ -126,3 +126,36 @@ def test_the_result_does_not_depend_on_the_start_block(seed):
     k, m = _membrane(30)
     reference = _lowest(k, m, 20).eigenvalues[:20]
     np.testing.assert_allclose(_lowest(k, m, 20, seed=seed).eigenvalues[:20], reference, rtol=1e-12)
+
+
+def test_a_lattice_s_modes_equal_arpacks_on_the_same_factor():
+    """A second solver on the same matrices: a clamped 4 x 4-grid lattice tower of 30 levels (2,880 DOFs, no
+    rotary mass: half the DOFs massless), its 30 lowest eigenvalues by ARPACK's single-vector shift-invert
+    Lanczos (scipy's eigsh) and by the block Lanczos agree within 1e-11 relative, the shapes within 1e-8 in
+    the modal assurance criterion."""
+    from scipy.sparse.linalg import LinearOperator, eigsh
+    from support.decks import frame_tower
+
+    from mace_fmu.deck.reader import read_deck_text
+    from mace_fmu.fe.assembly import assemble
+    from mace_fmu.fe.constraints import build_constraints
+
+    deck = read_deck_text(frame_tower(nx=4, ny=4, levels=30), name="lattice.bdf")
+    model = assemble(deck)
+    constraints = build_constraints(deck, model.dofs, model.cd_frames, spc_set=1, mpc_set=None)
+    k = sparse.csr_array(constraints.reduce_sparse(model.stiffness))
+    m = sparse.csr_array(constraints.reduce_sparse(model.mass))
+    k, m = sparse.csr_array(0.5 * (k + k.T)), sparse.csr_array(0.5 * (m + m.T))
+    shift = -1e-6 * float(np.median(k.diagonal()) / np.median(m.diagonal()[m.diagonal() > 0]))
+    solve = factorize(k - shift * m, positive_definite=True)
+    found = lowest_modes(stiffness=k, mass=m, solve=solve, shift=shift, count=30, max_dimension=k.shape[0] // 4)
+    op = LinearOperator(k.shape, matvec=lambda x: solve(np.asarray(x, dtype=float).ravel()), dtype=float)
+    values, vectors = eigsh(k, k=30, M=m, sigma=shift, which="LM", OPinv=op, tol=1e-12, ncv=80)
+    order = np.argsort(values)
+    values, vectors = values[order], vectors[:, order]
+    np.testing.assert_allclose(found.eigenvalues[:30], values, rtol=1e-11)
+    x = found.vectors[:, :30]
+    mac = np.einsum("im,im->m", x, m @ vectors) ** 2 / (np.einsum("im,im->m", x, m @ x)
+                                                         * np.einsum("im,im->m", vectors, m @ vectors))
+    distinct = np.r_[True, np.diff(values) > 1e-6 * values[1:]] & np.r_[np.diff(values) > 1e-6 * values[:-1], True]
+    np.testing.assert_allclose(mac[distinct], 1.0, atol=1e-8)  # a repeated pair's vectors are any basis of it
