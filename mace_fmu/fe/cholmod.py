@@ -38,13 +38,14 @@ from pathlib import Path
 from types import ModuleType
 
 import numpy as np
+from scipy import sparse
 
 #: Columns below which a block is solved on one core: two threads on 8 columns gained nothing
 #: (30 ms a column either way on the wide lattice), on 16 a third.
 PARALLEL_MIN_COLUMNS = 16
 #: The size in bytes set aside for a cholmod_common: CHOLMOD 3's is about 2.5 kB, version 5's under 8 kB.
 _COMMON_BYTES = 1 << 16
-_CHOLMOD_A = 0  # cholmod_solve's system: A x = b
+_CHOLMOD_A, _CHOLMOD_L, _CHOLMOD_LT = 0, 4, 5  # cholmod_solve's systems: A x = b, L x = b, L^T x = b
 _CHOLMOD_LONG, _CHOLMOD_REAL, _CHOLMOD_DOUBLE = 2, 1, 0
 
 
@@ -178,6 +179,24 @@ def factor_layout(symbolic: object, rows: int) -> FactorLayout | None:
     return FactorLayout(address, n, xsize, int(flags[4]), int(flags[5]), int(flags[6]))
 
 
+def _factor_words(address: int) -> ctypes.Array:
+    """The 22 machine words that open a cholmod_factor (see :class:`FactorLayout`)."""
+    return (ctypes.c_size_t * 22).from_address(address)
+
+
+def _long_array(address: int, count: int) -> np.ndarray:
+    """A copy of ``count`` 64-bit integers at ``address`` (an array a cholmod_l_* factor holds)."""
+    return np.ctypeslib.as_array((ctypes.c_int64 * count).from_address(address)).copy() if count else \
+        np.zeros(0, dtype=np.int64)
+
+
+class _Sparse(ctypes.Structure):
+    _fields_ = [("nrow", ctypes.c_size_t), ("ncol", ctypes.c_size_t), ("nzmax", ctypes.c_size_t),
+                ("p", ctypes.c_void_p), ("i", ctypes.c_void_p), ("nz", ctypes.c_void_p), ("x", ctypes.c_void_p),
+                ("z", ctypes.c_void_p), ("stype", ctypes.c_int), ("itype", ctypes.c_int), ("xtype", ctypes.c_int),
+                ("dtype", ctypes.c_int), ("sorted", ctypes.c_int), ("packed", ctypes.c_int)]
+
+
 class _Dense(ctypes.Structure):
     _fields_ = [("nrow", ctypes.c_size_t), ("ncol", ctypes.c_size_t), ("nzmax", ctypes.c_size_t),
                 ("d", ctypes.c_size_t), ("x", ctypes.c_void_p), ("z", ctypes.c_void_p),
@@ -195,16 +214,58 @@ def _cholmod_library() -> ctypes.CDLL | None:
     for candidate in [*_wheel_libraries(package, "libcholmod"), Path(cvxopt.cholmod.__file__)]:
         try:
             library = ctypes.CDLL(str(candidate))
-            solve, start, finish, free = (library.cholmod_l_solve, library.cholmod_l_start,
-                                          library.cholmod_l_finish, library.cholmod_l_free_dense)
+            solve, start, finish, free, factorize = (library.cholmod_l_solve, library.cholmod_l_start,
+                                                     library.cholmod_l_finish, library.cholmod_l_free_dense,
+                                                     library.cholmod_l_factorize)
         except (OSError, AttributeError):
             continue
+        factorize.restype = ctypes.c_int
+        factorize.argtypes = [ctypes.POINTER(_Sparse), ctypes.c_void_p, ctypes.c_void_p]
         solve.restype = ctypes.POINTER(_Dense)
         solve.argtypes = [ctypes.c_int, ctypes.c_void_p, ctypes.POINTER(_Dense), ctypes.c_void_p]
         free.argtypes = [ctypes.POINTER(ctypes.POINTER(_Dense)), ctypes.c_void_p]
         start.argtypes = finish.argtypes = [ctypes.c_void_p]
         return library
     return None
+
+
+def numeric(symbolic: object, lower: sparse.csc_array) -> bool | None:
+    """CHOLMOD's numeric factorisation of ``lower``'s matrix into cvxopt's ``symbolic`` factor, through ctypes.
+
+    What ``cvxopt.cholmod.numeric`` does, but with the GIL released while CHOLMOD works, so that two
+    factors can be computed on two cores at once (mace_fmu.fe.substructures).
+
+    Parameters
+    ----------
+    symbolic : object
+        ``cvxopt.cholmod.symbolic``'s result for the same pattern.
+    lower : scipy.sparse.csc_array
+        The lower triangle of the symmetric matrix, its row indices sorted within each column.
+
+    Returns
+    -------
+    bool or None
+        True when the matrix is positive definite and factored, False when CHOLMOD met a non-positive pivot,
+        None when the factor cannot be reached through ctypes (the caller takes cvxopt's route).
+    """
+    n = lower.shape[0]
+    layout = factor_layout(symbolic, n)
+    library = _cholmod_library()
+    if library is None or layout is None or layout.index_type != _CHOLMOD_LONG:
+        return None
+    indptr, indices = lower.indptr.astype(np.int64), lower.indices.astype(np.int64)
+    values = np.ascontiguousarray(lower.data, dtype=float)
+    matrix = _Sparse(n, n, len(values), indptr.ctypes.data, indices.ctypes.data, None, values.ctypes.data, None,
+                     -1, _CHOLMOD_LONG, _CHOLMOD_REAL, _CHOLMOD_DOUBLE, 1, 1)  # stype -1: the lower triangle
+    common = ctypes.create_string_buffer(_COMMON_BYTES)
+    library.cholmod_l_start(common)
+    try:
+        done = library.cholmod_l_factorize(ctypes.byref(matrix), layout.address, common)
+    finally:
+        library.cholmod_l_finish(common)
+    if not done:
+        return None
+    return int(_factor_words(layout.address)[1]) == n  # minor: the column where a non-positive pivot stopped it
 
 
 class CholeskySolve:
@@ -250,11 +311,73 @@ class CholeskySolve:
                 parts = list(threads.map(self._solve_block, (columns[:, :half], columns[:, half:]), self._commons))
         return np.hstack(parts).reshape(b.shape)
 
-    def _solve_block(self, columns: np.ndarray, common: ctypes.Array) -> np.ndarray:
+    @property
+    def direct(self) -> bool:
+        """True when CHOLMOD's own solve is called through ctypes (:meth:`triangular` needs it)."""
+        return self._direct
+
+    def triangular(self, b: np.ndarray, *, transpose: bool) -> np.ndarray:
+        """Solve L x = b (or L^T x = b) with the factor's own triangle, in its order (P A P^T = L L^T).
+
+        Parameters
+        ----------
+        b : numpy.ndarray
+            Shape (rows, k), in the factor's order (row j is the matrix's row ``permutation()[j]``).
+        transpose : bool
+            Solve with L^T instead of L.
+
+        Returns
+        -------
+        numpy.ndarray
+            x, shape (rows, k).
+        """
+        with self._busy:
+            return self._solve_block(np.asarray(b, dtype=float), self._commons[0],
+                                     _CHOLMOD_LT if transpose else _CHOLMOD_L)
+
+    def permutation(self) -> np.ndarray:
+        """The factor's ordering P: row j of the factor is row ``permutation()[j]`` of the matrix."""
+        return _long_array(int(_factor_words(self._address)[2]), self.rows)
+
+    def trailing_block(self, size: int) -> np.ndarray:
+        """The last ``size`` rows and columns of the supernodal factor L, a dense lower triangle.
+
+        Parameters
+        ----------
+        size : int
+            How many of the factor's last rows and columns.
+
+        Returns
+        -------
+        numpy.ndarray
+            Shape (size, size), in the factor's order.
+        """
+        words = _factor_words(self._address)
+        supernodes, first = int(words[13]), self.rows - size
+        bounds = _long_array(int(words[18]), supernodes + 1)  # super: each supernode's first column
+        row_start = _long_array(int(words[19]), supernodes + 1)  # pi: where its row indices start in s
+        value_start = _long_array(int(words[20]), supernodes + 1)  # px: where its values start in x
+        rows_of = _long_array(int(words[21]), int(row_start[-1]))  # s: the row indices
+        values = np.ctypeslib.as_array((ctypes.c_double * int(words[15])).from_address(int(words[8])))
+        block = np.zeros((size, size))
+        # a supernode is a dense column-major block: its columns, and every row below them that they reach
+        for k in range(supernodes - 1, -1, -1):
+            k1, k2 = int(bounds[k]), int(bounds[k + 1])
+            if k2 <= first:
+                break
+            rows = rows_of[row_start[k]:row_start[k + 1]]
+            dense = values[value_start[k]:value_start[k] + len(rows) * (k2 - k1)].reshape(k2 - k1, len(rows)).T
+            c0, keep = max(k1, first), rows >= first
+            block[np.ix_(rows[keep] - first, np.arange(c0, k2) - first)] = dense[keep][:, c0 - k1:]
+        return np.tril(block)
+
+    def _solve_block(self, columns: np.ndarray, common: ctypes.Array, system: int = _CHOLMOD_A) -> np.ndarray:
         rhs = np.asfortranarray(columns)
         rows, width = rhs.shape
         dense = _Dense(rows, width, rows * width, rows, rhs.ctypes.data, None, _CHOLMOD_REAL, _CHOLMOD_DOUBLE)
-        solution = self._library.cholmod_l_solve(_CHOLMOD_A, self._address, ctypes.byref(dense), common)
+        solution = self._library.cholmod_l_solve(system, self._address, ctypes.byref(dense), common)
+        if not solution and system != _CHOLMOD_A:
+            raise MemoryError("CHOLMOD could not allocate the workspace of a triangular solve")
         if not solution:  # CHOLMOD could not allocate its workspace: the slower route has its own
             return self._cvxopt_solve(columns)
         try:

@@ -15,6 +15,8 @@ triangular solves. A shift-invert eigen-solution is mostly solves, and at 100k D
 takes 41 ms instead of SuperLU's 88 ms, the factorisation 0.5 s instead of 2.7 s. CHOLMOD comes
 with cvxopt's wheels (mace_fmu.fe.cholmod loads it on OpenBLAS and solves many right-hand sides in
 one pass over the factor: on the wide lattice 16 columns cost 15 ms a column, one alone 110 ms).
+From a factor of 50 million entries up it is factored as two substructures joined at their interface, one on each core
+(mace_fmu.fe.substructures: the wide lattice's factorisation in about half the time).
 Any other matrix (a tangent stiffness that is indefinite on the way to a stable state), or one
 that turns out not to be positive definite, goes to SuperLU with threshold pivoting, in the
 ordering chosen the same way (AMD excepted: CHOLMOD keeps its permutation to itself).
@@ -31,6 +33,7 @@ from scipy.sparse.linalg import splu
 from mace_fmu.fe.cholmod import CholeskySolve
 from mace_fmu.fe.cholmod import load as load_cholmod
 from mace_fmu.fe.ordering import Analysis, analyse, least_fill_permutation
+from mace_fmu.fe.substructures import substructured_cholesky
 
 Solve = Callable[[np.ndarray], np.ndarray]
 
@@ -63,7 +66,9 @@ def factorize(matrix: sparse.sparray | np.ndarray, *, positive_definite: bool = 
     """
     a = sparse.csr_array(matrix)
     if positive_definite:
-        solve = _cholesky(analyse(a, groups=groups), a.shape[0])
+        analysis = analyse(a, groups=groups)
+        # two substructures on two cores where the matrix is large (mace_fmu.fe.substructures), else the whole
+        solve = substructured_cholesky(a, analysis) or _cholesky(analysis, a.shape[0])
         if solve is not None:
             return solve
     # RCM or nested dissection (AMD's permutation stays inside CHOLMOD); a pattern factored before

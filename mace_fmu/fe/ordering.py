@@ -135,25 +135,16 @@ def analyse(matrix: sparse.sparray, *, groups: np.ndarray | None = None, with_am
     cholmod = load_cholmod()
     if cholmod is None:
         return Analysis(OrderingChoice(RCM, {}), permutations[RCM], None, None)
-    import cvxopt
-    lower = sparse.tril(a).tocoo()
-    spmatrix = cvxopt.spmatrix(lower.data, lower.row.astype(int), lower.col.astype(int), (n, n))
+    spmatrix = _lower_spmatrix(a)
     if known and known[1] is None:  # AMD, CHOLMOD's default
         return Analysis(known[0], None, cholmod.symbolic(spmatrix, uplo="L"), spmatrix)
-    saved = dict(cholmod.options)
     analysed: dict[str, tuple[object, int | None]] = {}
-    try:
-        cholmod.options["nmethods"] = 1  # the given permutation only (0 would let CHOLMOD pick among others)
-        for name, permutation in permutations.items():
-            symbolic = cholmod.symbolic(spmatrix, p=cvxopt.matrix(permutation.astype(int)), uplo="L")
-            analysed[name] = symbolic, _entries(symbolic, n)
-        if with_amd and not known:  # a known choice needs its own analysis only
-            cholmod.options.pop("nmethods")  # without a permutation CHOLMOD's default is AMD
-            symbolic = cholmod.symbolic(spmatrix, uplo="L")
-            analysed[AMD] = symbolic, _entries(symbolic, n)
-    finally:
-        cholmod.options.clear()
-        cholmod.options.update(saved)
+    for name, permutation in permutations.items():
+        symbolic = _symbolic(cholmod, spmatrix, permutation)
+        analysed[name] = symbolic, _entries(symbolic, n)
+    if with_amd and not known:  # a known choice needs its own analysis only
+        symbolic = cholmod.symbolic(spmatrix, uplo="L")  # without a permutation CHOLMOD's default is AMD
+        analysed[AMD] = symbolic, _entries(symbolic, n)
     if known:
         return Analysis(known[0], known[1], analysed[known[0].method][0], spmatrix)
     entries = {name: size for name, (_, size) in analysed.items() if size is not None}
@@ -163,6 +154,48 @@ def analyse(matrix: sparse.sparray, *, groups: np.ndarray | None = None, with_am
         _CHOSEN.pop(next(iter(_CHOSEN)))
     _CHOSEN[key] = choice, permutations.get(best)
     return Analysis(choice, permutations.get(best), analysed[best][0], spmatrix)
+
+
+def symbolic_in_order(matrix: sparse.sparray, permutation: np.ndarray) -> tuple[object, object] | None:
+    """CHOLMOD's symbolic analysis of the symmetric ``matrix`` in the order ``permutation``, as it is given.
+
+    Parameters
+    ----------
+    matrix : scipy.sparse array
+        The symmetric matrix (its lower triangle is read).
+    permutation : numpy.ndarray
+        Row ``permutation[i]`` goes to position i.
+
+    Returns
+    -------
+    tuple or None
+        (cvxopt.cholmod's symbolic factor, the lower triangle as the cvxopt.spmatrix analysed); None without
+        cvxopt.
+    """
+    cholmod = load_cholmod()
+    if cholmod is None:
+        return None
+    spmatrix = _lower_spmatrix(sparse.csr_array(matrix))
+    return _symbolic(cholmod, spmatrix, permutation), spmatrix
+
+
+def _lower_spmatrix(a: sparse.csr_array) -> object:
+    import cvxopt
+
+    lower = sparse.tril(a).tocoo()
+    return cvxopt.spmatrix(lower.data, lower.row.astype(int), lower.col.astype(int), a.shape)
+
+
+def _symbolic(cholmod: object, spmatrix: object, permutation: np.ndarray) -> object:
+    import cvxopt
+
+    saved = dict(cholmod.options)
+    try:
+        cholmod.options["nmethods"] = 1  # the given permutation only (0 would let CHOLMOD pick among others)
+        return cholmod.symbolic(spmatrix, p=cvxopt.matrix(permutation.astype(int)), uplo="L")
+    finally:
+        cholmod.options.clear()
+        cholmod.options.update(saved)
 
 
 def least_fill_permutation(matrix: sparse.sparray, *, groups: np.ndarray | None = None) -> np.ndarray:

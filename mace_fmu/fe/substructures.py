@@ -1,0 +1,222 @@
+"""A large positive definite matrix factored as two substructures on two cores, joined at their interface.
+
+CHOLMOD's supernodal factorisation runs on one core here: cvxopt's wheels carry a single-threaded
+OpenBLAS, and ``cvxopt.cholmod.numeric`` holds the GIL. On the 100k-DOF wide lattice the factorisation
+is the largest single step of the eigen-solution (4.5-7 s of one core, benchmarks/RESULTS.md). The
+fill-reducing ordering already cuts the structure in two: nested dissection numbers one half, then
+the other, then the separator between them; reverse Cuthill-McKee's band can be cut anywhere along
+its length. :func:`bisect` finds where the ordering's frontier (the rows after a cut that touch a row
+before it) is narrowest near the middle; those rows are the interface I, the rest the two
+substructures 1 and 2, which share no entry.
+
+Each substructure is factored with the interface last, in the ordering's own order, through
+CHOLMOD on its own core (mace_fmu.fe.cholmod.numeric releases the GIL):
+
+    [A_11  A_1I]   [L_11  0   ] [L_11  0   ]^T
+    [A_I1  A_II] = [X_1   L_1I] [X_1   L_1I]    with  L_1I L_1I^T = A_II - A_I1 A_11^-1 A_1I,
+
+and the same for 2. The two trailing blocks give the interface's Schur complement without a solve,
+S = A_II - A_I1 A_11^-1 A_1I - A_I2 A_22^-1 A_2I = L_1I L_1I^T + L_2I L_2I^T - A_II, a dense matrix of
+the interface's size (1,536 rows on the wide lattice), factored by LAPACK. A solve is then a forward
+sweep with each substructure's L (on two cores), the interface's dense solve, and a backward sweep
+with each L^T (on two cores): the block elimination of the matrix, exact in exact arithmetic. The
+substructures' factors together hold what the whole matrix's factor in the same ordering holds, so
+the work is the same, on two cores instead of one.
+
+Only where it pays: a factor of at least :data:`MIN_FACTOR_ENTRIES` entries in the ordering chosen
+(mace_fmu.fe.ordering, which measures it), an ordering that CHOLMOD did not keep to itself,
+an interface of at most :data:`MAX_INTERFACE` rows. Otherwise, and wherever CHOLMOD cannot be reached
+through ctypes, mace_fmu.fe.factor factors the whole matrix.
+"""
+
+from __future__ import annotations
+
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import linalg as sla
+from scipy import sparse
+from threadpoolctl import threadpool_limits
+
+from mace_fmu.fe.cholmod import CholeskySolve, numeric
+from mace_fmu.fe.ordering import Analysis, symbolic_in_order
+
+#: The factor size [entries] below which the whole matrix is factored. Below it the factorisation is quick
+#: and the substructures' set-up (their symbolic analyses, the interface) and their solves' overhead cost
+#: what the second core saves: the 100k-DOF tower's factor (26 million entries in RCM's order) takes
+#: 0.9 s whole and 1.6 s as substructures; the wide lattice's (106 million) 7.0 s whole and 3.5 s as
+#: substructures, on the same machine.
+MIN_FACTOR_ENTRIES = 50_000_000
+#: The largest interface taken [rows]: its Schur complement is dense (a 6,000-row one: 0.3 GB, 70 GFLOP
+#: to factor).
+MAX_INTERFACE = 6_000
+#: Where the cut may fall, as fractions of the rows: two substructures of about equal work.
+BALANCE = (0.35, 0.65)
+
+
+@dataclass(frozen=True)
+class Bisection:
+    """Two substructures that share no matrix entry, and the interface rows between them."""
+
+    substructures: tuple[np.ndarray, np.ndarray]  #: each one's rows (without the interface), in the ordering's order
+    interface: np.ndarray  #: the interface's rows, in the ordering's order
+
+
+def bisect(matrix: sparse.sparray, permutation: np.ndarray) -> Bisection | None:
+    """Cut the ordering ``permutation`` of the symmetric ``matrix`` where its frontier is narrowest near the middle.
+
+    Parameters
+    ----------
+    matrix : scipy.sparse array
+        The symmetric matrix (its pattern is read).
+    permutation : numpy.ndarray
+        A fill-reducing ordering: row ``permutation[i]`` goes to position i.
+
+    Returns
+    -------
+    Bisection or None
+        None when every cut within :data:`BALANCE` has more than :data:`MAX_INTERFACE` rows on its frontier,
+        or the narrowest has none (the matrix falls apart there).
+    """
+    n = matrix.shape[0]
+    position = np.empty(n, dtype=np.int64)
+    position[permutation] = np.arange(n)
+    pattern = sparse.coo_array(matrix)
+    earliest = position.copy()  # the earliest position each row reaches (itself included)
+    np.minimum.at(earliest, pattern.row, position[pattern.col])
+    # row r is on the frontier of the cut before position c when earliest[r] < c <= position[r]
+    reaching = earliest < position
+    change = np.zeros(n + 2, dtype=np.int64)
+    np.add.at(change, earliest[reaching] + 1, 1)
+    np.add.at(change, position[reaching] + 1, -1)
+    frontier = np.cumsum(change)[:n + 1]
+    low, high = int(BALANCE[0] * n), int(BALANCE[1] * n)
+    cut = low + int(np.argmin(frontier[low:high + 1]))
+    if not 0 < frontier[cut] <= MAX_INTERFACE:  # no interface: parts not connected, left to the whole factor
+        return None
+    on_interface = (earliest < cut) & (position >= cut)
+    after = permutation[cut:]
+    return Bisection(substructures=(permutation[:cut], after[~on_interface[after]]),
+                     interface=after[on_interface[after]])
+
+
+class _Substructure:
+    """One substructure with the interface: its factor, and where its rows and the interface lie in it."""
+
+    def __init__(self, matrix: sparse.csr_array, rows: np.ndarray, interface: np.ndarray):
+        self.rows = rows
+        own = np.concatenate([rows, interface])
+        block = sparse.csr_array(matrix[own][:, own])
+        self.size, self.inner = len(own), len(rows)
+        analysed = symbolic_in_order(block, np.arange(self.size))  # the ordering's own order, the interface last
+        self._symbolic = None if analysed is None else analysed[0]
+        self._lower = sparse.csc_array(sparse.tril(block))
+        self._lower.sort_indices()
+
+    def factor(self) -> bool | None:
+        """CHOLMOD's numeric factorisation, then L_iI and L_iI L_iI^T (True: done; False: not positive
+        definite; None: CHOLMOD not reachable through ctypes). Runs on a core of its own."""
+        if self._symbolic is None:
+            return None
+        done = numeric(self._symbolic, self._lower)
+        del self._lower  # CHOLMOD holds the values now
+        if not done:
+            return done
+        self.solve = CholeskySolve(self._symbolic, self.size)
+        if not self.solve.direct:
+            return None
+        order = self.solve.permutation()
+        tail = order[self.inner:]
+        if np.any(tail < self.inner):  # CHOLMOD's postorder moved an inner row after the interface
+            return None
+        self.inner_at = np.flatnonzero(order < self.inner)  # the factor positions of the substructure's rows
+        self.inner_rows = self.rows[order[self.inner_at]]  # and the matrix rows they hold
+        block = self.solve.trailing_block(self.size - self.inner)
+        #: L_iI with its rows in the interface's order, its columns in the factor's
+        self.coupling = np.empty_like(block)
+        self.coupling[tail - self.inner] = block
+        #: L_iI L_iI^T = A_II - A_Ii A_ii^-1 A_iI, in the interface's order
+        self.condensed = self.coupling @ self.coupling.T
+        return True
+
+    def forward(self, b: np.ndarray) -> np.ndarray:
+        """L^-1 [b on the substructure's rows; 0 on the interface], in the factor's order."""
+        rhs = np.zeros((self.size, b.shape[1]))
+        rhs[self.inner_at] = b[self.inner_rows]
+        return self.solve.triangular(rhs, transpose=False)
+
+    def backward(self, forward: np.ndarray, interface_part: np.ndarray, out: np.ndarray) -> None:
+        """L^-T [forward's substructure part; ``interface_part``], written into ``out``'s rows of this substructure."""
+        rhs = forward.copy()
+        rhs[self.inner:] = interface_part
+        out[self.inner_rows] = self.solve.triangular(rhs, transpose=True)[self.inner_at]
+
+
+class SubstructuredSolve:
+    """x = solve(b) for a matrix factored as two substructures and their interface (see the module's text).
+
+    Build it with :func:`substructured_cholesky`.
+    """
+
+    def __init__(self, parts: tuple[_Substructure, _Substructure], interface: np.ndarray,
+                 schur: tuple[np.ndarray, bool]):
+        self._parts, self._interface, self._schur = parts, interface, schur
+        self.rows = sum(part.inner for part in parts) + len(interface)
+
+    def __call__(self, b: np.ndarray) -> np.ndarray:
+        """Solve for ``b`` of shape (rows,) or (rows, k)."""
+        b = np.asarray(b, dtype=float)
+        columns = b.reshape(self.rows, -1)
+        count = len(self._interface)
+        x = np.empty_like(columns)
+        # numpy's BLAS threads would wait for the cores the two substructures' sweeps take
+        with threadpool_limits(limits=1, user_api="blas"), ThreadPoolExecutor(max_workers=2) as threads:
+            forward = list(threads.map(lambda part: part.forward(columns), self._parts))
+            # A_Ii A_ii^-1 b_i = X_i y_i = -L_iI w_i, w_i the forward sweep's interface part
+            reduced = columns[self._interface] + sum(part.coupling @ y[-count:] for part, y in zip(self._parts, forward))
+            x[self._interface] = on_interface = sla.cho_solve(self._schur, reduced)
+            list(threads.map(lambda part, y: part.backward(y, part.coupling.T @ on_interface, x), self._parts,
+                             forward))
+        return x.reshape(b.shape)
+
+
+def substructured_cholesky(matrix: sparse.sparray, analysis: Analysis, *,
+                           min_factor_entries: int | None = None) -> SubstructuredSolve | None:
+    """The positive definite ``matrix`` factored as two substructures on two cores, in ``analysis``'s ordering.
+
+    Parameters
+    ----------
+    matrix : scipy.sparse array
+        Symmetric, expected positive definite.
+    analysis : Analysis
+        mace_fmu.fe.ordering's analysis of the matrix: the ordering cut, and its factor's size.
+    min_factor_entries : int, optional
+        The factor size [entries] from which substructures are taken; :data:`MIN_FACTOR_ENTRIES` when absent.
+
+    Returns
+    -------
+    SubstructuredSolve or None
+        None where substructures do not pay or cannot be had (a small factor, no ordering to cut, a wide
+        interface, CHOLMOD not reachable through ctypes) and where the matrix is not positive definite:
+        the caller factors the whole matrix, which tells the two apart.
+    """
+    a = sparse.csr_array(matrix)
+    permutation = analysis.permutation
+    least = MIN_FACTOR_ENTRIES if min_factor_entries is None else min_factor_entries
+    if permutation is None or analysis.choice.factor_entries.get(analysis.choice.method, 0) < least:
+        return None
+    cut = bisect(a, permutation)
+    if cut is None:
+        return None
+    parts = tuple(_Substructure(a, rows, cut.interface) for rows in cut.substructures)
+    with ThreadPoolExecutor(max_workers=2) as threads:
+        factored = list(threads.map(_Substructure.factor, parts))
+    if not all(factored):
+        return None
+    schur = parts[0].condensed + parts[1].condensed - a[cut.interface][:, cut.interface].toarray()
+    try:
+        factor = sla.cho_factor(schur, lower=True)
+    except np.linalg.LinAlgError:
+        return None
+    return SubstructuredSolve(parts, cut.interface, factor)

@@ -1,0 +1,149 @@
+"""Two substructures factored on two cores and joined at their interface (mace_fmu.fe.substructures): the
+cut is a true separation, and the solutions, the factor's pieces and the modes equal a second solver's
+(SciPy's SuperLU, LAPACK's dense Cholesky, ARPACK on SuperLU)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy import linalg as sla
+from scipy import sparse
+from scipy.sparse.linalg import eigsh, splu
+from support.decks import frame_tower
+
+from mace_fmu.deck.reader import read_deck_text
+from mace_fmu.fe import factor, substructures
+from mace_fmu.fe.assembly import assemble
+from mace_fmu.fe.cholmod import CholeskySolve, numeric
+from mace_fmu.fe.constraints import build_constraints
+from mace_fmu.fe.ordering import NESTED_DISSECTION, RCM, analyse, symbolic_in_order
+
+pytest.importorskip("cvxopt")
+
+
+def _lattice(nx: int, ny: int, levels: int) -> tuple[sparse.csr_array, sparse.csr_array, np.ndarray]:
+    """K and M of a clamped lattice of nx x ny grids a level, and the grid of each row."""
+    deck = read_deck_text(frame_tower(nx=nx, ny=ny, levels=levels), name="lattice.bdf")
+    model = assemble(deck)
+    constraints = build_constraints(deck, model.dofs, model.cd_frames, spc_set=1, mpc_set=None)
+    k = constraints.reduce_sparse(model.stiffness)
+    m = constraints.reduce_sparse(model.mass)
+    return (sparse.csr_array(0.5 * (k + k.T)), sparse.csr_array(0.5 * (m + m.T)),
+            np.array([g for g, _ in constraints.independent]))
+
+
+@pytest.fixture(scope="module")
+def wide() -> tuple[sparse.csr_array, sparse.csr_array, np.ndarray]:
+    """A 10 x 10-grid lattice, 8 levels (4,800 DOFs): nested dissection is its ordering."""
+    return _lattice(10, 10, 8)
+
+
+@pytest.fixture(scope="module")
+def slender() -> tuple[sparse.csr_array, sparse.csr_array, np.ndarray]:
+    """A 3 x 3-grid tower, 40 levels (2,160 DOFs): reverse Cuthill-McKee is its ordering."""
+    return _lattice(3, 3, 40)
+
+
+def _solve(matrix: sparse.csr_array, grids: np.ndarray) -> substructures.SubstructuredSolve:
+    solve = substructures.substructured_cholesky(matrix, analyse(matrix, groups=grids), min_factor_entries=0)
+    assert isinstance(solve, substructures.SubstructuredSolve)
+    return solve
+
+
+@pytest.mark.parametrize("shape, ordering", [("wide", NESTED_DISSECTION), ("slender", RCM)])
+def test_the_cut_separates_the_matrix(shape, ordering, request):
+    """No entry joins the two substructures; with the interface they hold every row once; the interface is
+    one level of the lattice or less (6 DOFs per grid), and each side holds at least a third of the rows."""
+    k, m, grids = request.getfixturevalue(shape)
+    matrix = sparse.csr_array(k + m)
+    analysis = analyse(matrix, groups=grids)
+    assert analysis.choice.method == ordering
+    cut = substructures.bisect(matrix, analysis.permutation)
+    first, second = cut.substructures
+    assert abs(matrix[first][:, second]).sum() == 0
+    every = np.concatenate([first, second, cut.interface])
+    assert np.array_equal(np.sort(every), np.arange(matrix.shape[0]))
+    per_level = 6 * len(np.unique(grids)) // (8 if shape == "wide" else 40)
+    assert 0 < len(cut.interface) <= per_level
+    assert min(len(first), len(second)) >= matrix.shape[0] // 3
+
+
+@pytest.mark.parametrize("shape", ["wide", "slender"])
+@pytest.mark.parametrize("width", [1, 16, 33])
+def test_solutions_equal_scipys_lu(shape, width, request):
+    """K - sigma M below the first eigenvalue (the modal solution's), 1, 16 and 33 right-hand sides: the
+    substructured solution equals SuperLU's of the whole matrix within 1e-11 of its largest entry."""
+    k, m, grids = request.getfixturevalue(shape)
+    matrix = sparse.csr_array(k + 1e-3 * m)
+    b = np.random.default_rng(width).standard_normal((matrix.shape[0], width))
+    expected = splu(sparse.csc_array(matrix)).solve(b)
+    x = _solve(matrix, grids)(b)
+    np.testing.assert_allclose(x, expected, rtol=0, atol=1e-11 * np.abs(expected).max())
+    np.testing.assert_allclose(_solve(matrix, grids)(b[:, 0]), expected[:, 0], rtol=0,
+                               atol=1e-11 * np.abs(expected).max())
+
+
+def test_the_factors_pieces_equal_lapacks_dense_cholesky(slender):
+    """The triangular solves and the trailing block read from CHOLMOD's supernodal factor, against LAPACK's
+    dense Cholesky of the same matrix in the factor's own order."""
+    k, m, _ = slender
+    matrix = sparse.csr_array(k + m)
+    n = matrix.shape[0]
+    order = np.random.default_rng(1).permutation(n)  # any ordering: the factor's own is read back
+    symbolic, _ = symbolic_in_order(matrix, order)
+    lower = sparse.csc_array(sparse.tril(matrix))
+    lower.sort_indices()
+    assert numeric(symbolic, lower) is True
+    solve = CholeskySolve(symbolic, n)
+    p = solve.permutation()
+    dense = sla.cholesky(matrix.toarray()[np.ix_(p, p)], lower=True)
+    np.testing.assert_allclose(solve.trailing_block(40), dense[-40:, -40:], rtol=0, atol=1e-12 * np.abs(dense).max())
+    b = np.random.default_rng(2).standard_normal((n, 3))
+    for transpose in (False, True):
+        expected = sla.solve_triangular(dense, b, lower=True, trans=1 if transpose else 0)
+        np.testing.assert_allclose(solve.triangular(b, transpose=transpose), expected, rtol=0,
+                                   atol=1e-10 * np.abs(expected).max())
+
+
+def test_a_matrix_that_is_not_positive_definite_is_left_to_the_whole_factor(wide):
+    """K - sigma M with sigma above the first eigenvalue: no substructures (None) and no numeric factor through
+    ctypes (False); factorize's LU then solves it, equal to SuperLU."""
+    k, m, grids = wide
+    first = eigsh(k, M=m, k=1, sigma=0.0, return_eigenvectors=False)[0]
+    matrix = sparse.csr_array(k - 2.0 * first * m)
+    assert substructures.substructured_cholesky(matrix, analyse(matrix, groups=grids), min_factor_entries=0) is None
+    symbolic, _ = symbolic_in_order(matrix, np.arange(matrix.shape[0]))
+    lower = sparse.csc_array(sparse.tril(matrix))
+    lower.sort_indices()
+    assert numeric(symbolic, lower) is False
+    b = np.random.default_rng(3).standard_normal(matrix.shape[0])
+    expected = splu(sparse.csc_array(matrix)).solve(b)
+    np.testing.assert_allclose(factor.factorize(matrix, positive_definite=True, groups=grids)(b), expected, rtol=0,
+                               atol=1e-9 * np.abs(expected).max())
+
+
+def test_small_factors_stay_whole(wide):
+    """Below MIN_FACTOR_ENTRIES (the default) the whole matrix is factored: a 4,800-DOF lattice's factor is far
+    smaller."""
+    k, m, grids = wide
+    matrix = sparse.csr_array(k + m)
+    analysis = analyse(matrix, groups=grids)
+    assert analysis.choice.factor_entries[analysis.choice.method] < substructures.MIN_FACTOR_ENTRIES
+    assert substructures.substructured_cholesky(matrix, analysis) is None
+    assert isinstance(factor.factorize(matrix, positive_definite=True, groups=grids), CholeskySolve)
+
+
+def test_the_lowest_modes_through_substructures_equal_arpacks(wide, monkeypatch):
+    """The modal solution's shift-invert Lanczos on substructures (forced on the 4,800-DOF lattice): its 12
+    lowest eigenvalues equal ARPACK's (scipy's eigsh, shift-invert on SuperLU) within 1e-10."""
+    from mace_fmu.fe.lanczos import lowest_modes
+
+    k, m, grids = wide
+    monkeypatch.setattr(substructures, "MIN_FACTOR_ENTRIES", 0)
+    sigma = -1e-3
+    solve = factor.factorize(sparse.csr_array(k - sigma * m), positive_definite=True, groups=grids)
+    assert isinstance(solve, substructures.SubstructuredSolve)
+    found = lowest_modes(stiffness=k, mass=m, solve=solve, shift=sigma, count=12, above=None, tolerance=1e-8,
+                         max_dimension=k.shape[0] // 2)
+    expected = np.sort(eigsh(k, M=m, k=12, sigma=sigma, return_eigenvectors=False))
+    np.testing.assert_allclose(found.eigenvalues[:12], expected, rtol=1e-10)
