@@ -31,8 +31,19 @@ def parse_int(text: str) -> int | None:
     return int(text) if _INT.fullmatch(text) else None
 
 
+#: deletes the characters of a real written as Python reads it too ("1.5e-3"); what is left is not one
+_PLAIN_REAL = str.maketrans("", "", "0123456789.+-eE")
+
+
 def parse_real(text: str) -> float | None:
     """The real written in ``text`` (decimal point required), or None when it is not one."""
+    if "." in text and not text.translate(_PLAIN_REAL):
+        # digits, signs, a point and an E: the forms Python's float reads are the same numbers in NASTRAN, and
+        # the others ("1.5-3", "1.5e") fail there and are read below (a large deck has hundreds of thousands)
+        try:
+            return float(text)
+        except ValueError:
+            pass
     m = _REAL.fullmatch(text)
     if m is None:
         return None

@@ -178,6 +178,24 @@ def test_real_numbers(text: str, value: float | None) -> None:
     assert parse_real(text) == value
 
 
+def test_plain_reals_read_as_nastrans_grammar_reads_them() -> None:
+    """Strings of digits, signs, points and E's (the ones parse_real gives to Python's float first), 30,000 at
+    random: each is read as NASTRAN's grammar of a real reads it (a decimal point, an E/D or implicit exponent),
+    the grammar applied on its own."""
+    from mace_fmu.deck import fields
+
+    def by_grammar(text: str) -> float | None:
+        m = fields._REAL.fullmatch(text)
+        return None if m is None else float(f"{m.group(1)}e{m.group(2) or m.group(3) or '0'}")
+
+    rng = np.random.default_rng(7)
+    alphabet = np.array(list("0123456789.+-eE"))
+    weights = np.array([3.0] * 10 + [4.0, 1.0, 1.0, 1.0, 1.0])
+    for _ in range(30_000):
+        text = "".join(rng.choice(alphabet, size=rng.integers(1, 9), p=weights / weights.sum()))
+        assert parse_real(text) == by_grammar(text), text
+
+
 def test_implicit_exponent_in_cards() -> None:
     d = deck(sf("PBAR", 5, 5, "7.92E-6", "4.99-12", "4.99-12", "9.98-12"), sf("MAT1", 5, "198.2E9", "", "1.0D-1"))
     assert d.pbars[5].i1 == 4.99e-12 and d.pbars[5].j == pytest.approx(9.98e-12, rel=1e-15)
