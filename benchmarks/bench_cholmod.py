@@ -8,7 +8,9 @@ bench_fe_scale.py), clamped base, sigma as the modal solution takes it.
 
 Columns: the factorisation [s]; ms per right-hand-side column for blocks of 1, 8, 16 and 32 columns solved in
 one ``cholmod_l_solve`` call, the same blocks shared between two threads (16 and 32), and cvxopt's own
-``cholmod.solve`` (column by column) on 16; with ``--eigen`` the 50 lowest modes by the block Lanczos and by
+``cholmod.solve`` (column by column) on 16; the same matrix as two substructures on two cores
+(mace_fmu.fe.substructures, forced: their analyses, factors and interface [s], ms a column for 16, and the
+largest difference of their solution from the whole factor's, relative to its largest entry); with ``--eigen`` the 50 lowest modes by the block Lanczos and by
 ARPACK's single-vector Lanczos on the same factor (columns solved, seconds, largest relative difference of
 the eigenvalues).
 """
@@ -78,6 +80,15 @@ def run_one(size: str, blas: str, eigen: bool) -> dict:
     out["one_call_ms"] = {w: per_column_ms(lambda b: solve._solve_block(b, solve._commons[0]), w) for w in (1, 8, 16, 32)}
     out["two_threads_ms"] = {w: per_column_ms(solve, w) for w in (16, 32)}
     out["cvxopt_ms"] = per_column_ms(solve._cvxopt_solve, 16)
+    from mace_fmu.fe.substructures import substructured_cholesky
+
+    t0 = time.perf_counter()
+    halves = substructured_cholesky(shifted, analysis, min_factor_entries=0)
+    out["substructures_s"] = time.perf_counter() - t0
+    halves(rhs[:, :1])
+    out["substructures_ms"] = per_column_ms(halves, 16)
+    whole = solve(rhs[:, :16])
+    out["substructures_apart"] = float(np.abs(halves(rhs[:, :16]) - whole).max() / np.abs(whole).max())
     if eigen:
         from scipy.sparse.linalg import LinearOperator, eigsh
 
@@ -120,8 +131,9 @@ def main() -> None:
     print(machine_line(numpy=numpy.__version__, scipy=scipy.__version__))
     print(f"date: {time.strftime('%Y-%m-%d %H:%M')}, load: {os.getloadavg()[0]:.2f}, size: {args.size}")
     print("| BLAS | rows | factor [s] | 1 / 8 / 16 / 32 columns, one call [ms a column] | 16 / 32, two threads | "
-          "cvxopt's solve, 16 | block Lanczos: columns, s | ARPACK: columns, s | eigenvalues apart |")
-    print("|---|---|---|---|---|---|---|---|---|")
+          "cvxopt's solve, 16 | substructures: factor [s], 16 [ms a column], apart | block Lanczos: columns, s | "
+          "ARPACK: columns, s | eigenvalues apart |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for blas in ("shipped", "chosen"):
         cmd = [sys.executable, str(Path(__file__).resolve()), "--one", blas, "--size", args.size]
         proc = subprocess.run(cmd + (["--eigen"] if args.eigen else []), capture_output=True, text=True, cwd=HERE,
@@ -134,7 +146,9 @@ def main() -> None:
         two = " / ".join(f"{v:.0f}" for v in r["two_threads_ms"].values())
         eig = (f"{r['block_lanczos']['columns']}, {r['block_lanczos']['s']:.1f} | {r['arpack']['columns']}, "
                f"{r['arpack']['s']:.1f} | {r['eigenvalue_difference']:.1e}") if "arpack" in r else "- | - | -"
-        print(f"| {blas} | {r['rows']} | {r['factor_s']:.2f} | {one} | {two} | {r['cvxopt_ms']:.0f} | {eig} |", flush=True)
+        halves = f"{r['substructures_s']:.2f}, {r['substructures_ms']:.0f}, {r['substructures_apart']:.0e}"
+        print(f"| {blas} | {r['rows']} | {r['factor_s']:.2f} | {one} | {two} | {r['cvxopt_ms']:.0f} | {halves} | {eig} |",
+              flush=True)
 
 
 if __name__ == "__main__":

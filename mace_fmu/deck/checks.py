@@ -11,7 +11,7 @@ import numpy as np
 
 from mace_fmu.deck.cards import CBeam, Deck, Mpc
 from mace_fmu.deck.fields import TEMPERATURE, Selections
-from mace_fmu.deck.geometry import bar_orientation, coordinate_frames, grid_positions
+from mace_fmu.deck.geometry import bar_orientations, coordinate_frames, grid_positions
 from mace_fmu.errors import DeckError
 
 
@@ -144,7 +144,7 @@ def _check_bars(deck: Deck, frames: dict) -> None:
     bars = (*deck.bars.values(), *deck.beams.values())
     if bars:
         axis = np.array([pos[b.gb] for b in bars]) - np.array([pos[b.ga] for b in bars])
-        v = np.array([bar_orientation(deck, b, pos, frames) for b in bars])
+        v = bar_orientations(deck, bars, pos, frames)
         length = np.linalg.norm(axis, axis=1)
         short = length < 1e-9
         parallel = ~short & (np.linalg.norm(np.cross(axis, v), axis=1) <= 1e-6 * length * np.linalg.norm(v, axis=1))

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 
 from mace_fmu.deck.cards import CBar, Cord1R, Cord2R, Deck
@@ -131,3 +133,25 @@ def bar_orientation(deck: Deck, bar: CBar, positions: dict[int, np.ndarray],
     if getattr(bar, "orientation_basic", False):  # OFFT B..
         return np.asarray(bar.v, dtype=float)
     return frames[deck.grids[bar.ga].cd][1] @ np.asarray(bar.v, dtype=float)
+
+
+def bar_orientations(deck: Deck, bars: Sequence[CBar], positions: dict[int, np.ndarray],
+                     frames: dict[int, Frame]) -> np.ndarray:
+    """:func:`bar_orientation` of every bar of ``bars`` at once (a 100k-DOF lattice has 78k): (n, 3) in basic."""
+    out = np.zeros((len(bars), 3))
+    if not bars:
+        return out
+    by_grid = np.array([b.g0 is not None for b in bars])
+    if by_grid.any():
+        chosen = [b for b, g in zip(bars, by_grid) if g]
+        out[by_grid] = (np.array([positions[b.g0] for b in chosen]) - np.array([positions[b.ga] for b in chosen]))
+    rest = np.flatnonzero(~by_grid)
+    if rest.size:
+        vectors = np.array([bars[i].v for i in rest], dtype=float)
+        # OFFT B..: the vector is in basic; otherwise in GA's displacement system, one rotation per system
+        system = np.array([-1 if getattr(bars[i], "orientation_basic", False) else deck.grids[bars[i].ga].cd
+                           for i in rest])
+        for cd in np.unique(system):
+            mine = system == cd
+            out[rest[mine]] = vectors[mine] if cd == -1 else vectors[mine] @ frames[int(cd)][1].T
+    return out

@@ -8,7 +8,7 @@ import numpy as np
 from scipy import sparse
 
 from mace_fmu.deck.cards import Deck
-from mace_fmu.deck.geometry import bar_orientation, coordinate_frames, grid_positions
+from mace_fmu.deck.geometry import bar_orientations, coordinate_frames, grid_positions
 from mace_fmu.errors import MaceError
 from mace_fmu.fe.beam import (BeamSection, MassKind, local_frames, local_stiffness, natural_stiffness,
                               to_basic_many)
@@ -115,6 +115,16 @@ def _rotation_invariant(matrix: np.ndarray) -> bool:
             and bool(np.all(diagonal.reshape(4, 3) == diagonal.reshape(4, 3)[:, :1])))
 
 
+def _grid_indices(dofs: DofMap, grids: list[int]) -> np.ndarray:
+    """The index of each grid in ``dofs`` (a vectorised DofMap.grid_index, whose message an unknown grid gets)."""
+    known = np.asarray(dofs.grid_ids, dtype=np.int64)
+    wanted = np.asarray(grids, dtype=np.int64)
+    found = np.minimum(np.searchsorted(known, wanted), max(len(known) - 1, 0))
+    if len(wanted) and (not len(known) or np.any(known[found] != wanted)):
+        return np.array([dofs.grid_index(g) for g in grids], dtype=np.int64)
+    return found.astype(np.int64)
+
+
 def assemble(deck: Deck, *, mass: MassKind = "lumped") -> FEModel:
     """Assemble K and M of every element of ``deck`` (no constraints applied), as sparse matrices.
 
@@ -144,32 +154,31 @@ def assemble(deck: Deck, *, mass: MassKind = "lumped") -> FEModel:
     k_glob, m_glob = MatrixTriplets(n), MatrixTriplets(n)
 
     bar_cards = sorted(deck.bars.values(), key=lambda b: b.id)
-    ga = np.array([dofs.grid_index(b.ga) for b in bar_cards], dtype=np.int64)
-    gb = np.array([dofs.grid_index(b.gb) for b in bar_cards], dtype=np.int64)
+    ga, gb = _grid_indices(dofs, [b.ga for b in bar_cards]), _grid_indices(dofs, [b.gb for b in bar_cards])
     axes = positions[gb] - positions[ga]
     lengths = np.linalg.norm(axes, axis=1)
-    fr = local_frames(axes, np.array([bar_orientation(deck, b, pos, frames) for b in bar_cards]).reshape(-1, 3))
+    fr = local_frames(axes, bar_orientations(deck, bar_cards, pos, frames))
     # The element matrices in element axes depend on the section and the length only: computed once per
     # distinct pair (a lattice has a handful), then rotated to basic all at once.
-    cache: dict[tuple[int, float], tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
-    k_loc, m_loc, kn = [], [], []
-    for bar, length in zip(bar_cards, lengths.tolist()):
-        key = (bar.pid, length)
-        if key not in cache:
-            sec = bar_section(deck, bar.pid)
-            cache[key] = (local_stiffness(sec, length), bar_mass(sec, length, mass, deck),
-                          natural_stiffness(sec, length))
-        k_e, m_e, kn_e = cache[key]
-        k_loc.append(k_e), m_loc.append(m_e), kn.append(kn_e)
+    distinct: dict[tuple[int, float], int] = {}
+    which = np.array([distinct.setdefault((bar.pid, length), len(distinct))
+                      for bar, length in zip(bar_cards, lengths.tolist())], dtype=np.int64)
+    k_one, m_one, kn_one = [], [], []
+    for pid, length in distinct:
+        sec = bar_section(deck, pid)
+        k_one.append(local_stiffness(sec, length))
+        m_one.append(bar_mass(sec, length, mass, deck))
+        kn_one.append(natural_stiffness(sec, length))
     if bar_cards:
         idx = np.concatenate([6 * ga[:, None] + np.arange(6), 6 * gb[:, None] + np.arange(6)], axis=1)
-        k_glob.add_many(idx, to_basic_many(np.array(k_loc), fr))
-        if all(_rotation_invariant(m_e) for _, m_e, _ in cache.values()):
+        k_glob.add_many(idx, to_basic_many(np.array(k_one)[which], fr))
+        if all(_rotation_invariant(m_e) for m_e in m_one):
             # NASTRAN's lumped bar mass: m I on each end's translations, the same in every frame, so
             # only its diagonal is added (a 100k-DOF tower's mass blocks would be 80 MB of zeros)
-            m_glob.add_diagonal(idx, np.array([np.diag(m_e) for m_e in m_loc]))
+            m_glob.add_diagonal(idx, np.array([np.diag(m_e) for m_e in m_one])[which])
         else:
-            m_glob.add_many(idx, to_basic_many(np.array(m_loc), fr))
+            m_glob.add_many(idx, to_basic_many(np.array(m_one)[which], fr))
+    kn = np.array(kn_one)[which] if bar_cards else np.zeros((0, 7, 7))
     ids, na, nb, ln = [b.id for b in bar_cards], ga, gb, lengths
 
     for cm in deck.conm2s.values():

@@ -412,6 +412,26 @@ def test_orientation_vector_in_cd_system_and_by_g0() -> None:
     np.testing.assert_allclose(bar_orientation(d, d.bars[2], pos, frames), [-2.0, 0.0, 5.0])
 
 
+def test_all_bars_oriented_at_once_as_one_by_one() -> None:
+    """bar_orientations (every bar at once, what the check and the assembly use) gives each bar what
+    bar_orientation gives it alone: a vector in GA's CD system, one in basic (OFFT BGG), one by G0, in any mix."""
+    from mace_fmu.deck.geometry import bar_orientations
+
+    d = deck(sf("CORD2R", 1, "", "0.0", "0.0", "0.0", "0.0", "0.0", "1.0"), sf("", "0.0", "1.0", "0.0"),
+             sf("GRID", 1, "", "0.0", "0.0", "0.0", 1), sf("GRID", 2, "", "2.0", "0.0", "0.0"),
+             sf("GRID", 3, "", "0.0", "0.0", "5.0"), sf("GRID", 4, "", "1.0", "1.0", "0.0", 1),
+             sf("MAT1", 1, "7.0E10"), sf("PBAR", 1, 1, "1.0"),
+             sf("CBAR", 1, 1, 1, 2, "1.0", "0.0", "0.0"), sf("CBAR", 2, 1, 2, 1, 3),
+             sf("CBAR", 3, 1, 1, 2, "0.0", "1.0", "0.0", "BGG"), sf("CBAR", 4, 1, 4, 3, "0.3", "0.0", "1.0"),
+             sf("CBAR", 5, 1, 2, 3, "0.0", "1.0", "0.0"), sf("CBAR", 6, 1, 4, 2, 3))
+    frames = coordinate_frames(d)
+    pos = grid_positions(d, frames)
+    bars = list(d.bars.values())
+    expected = np.array([bar_orientation(d, b, pos, frames) for b in bars])
+    np.testing.assert_allclose(bar_orientations(d, bars, pos, frames), expected, rtol=0, atol=1e-14)
+    assert bar_orientations(d, [], pos, frames).shape == (0, 3)
+
+
 def test_read_deck_from_file(tmp_path: Path) -> None:
     path = tmp_path / "model.bdf"
     path.write_text("SOL 103\nCEND\nSUBCASE 4\nBEGIN BULK\n" + "\n".join(BAR) + "\nENDDATA\n")
