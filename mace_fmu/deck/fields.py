@@ -221,13 +221,14 @@ class Fields:
         self.raw = raw
         self.file = raw.file or file
         self.label = raw.name  #: becomes "NAME ID" once the ID is read
+        self._fields, self._count = raw.fields, len(raw.fields)  # read millions of times in a large deck
 
     def __len__(self) -> int:
-        return len(self.raw.fields)
+        return self._count
 
     def text(self, d: int) -> str:
         """Stripped text of data field ``d`` ('' when blank or beyond the card)."""
-        return self.raw.fields[d - 1] if d <= len(self.raw.fields) else ""
+        return self._fields[d - 1] if d <= self._count else ""
 
     def error(self, message: str, d: int | None = None, name: str = "", last: int | None = None) -> DeckError:
         """A DeckError at the line holding field ``d`` (the card's first line when absent)."""

@@ -140,16 +140,20 @@ class _Substructure:
         self.condensed = self.coupling @ self.coupling.T
         return True
 
-    def forward(self, b: np.ndarray) -> np.ndarray:
-        """L^-1 [b on the substructure's rows; 0 on the interface], in the factor's order."""
+    def forward(self, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """y = L^-1 [b on the substructure's rows; 0 on the interface] (the factor's order), and what the
+        substructure takes off the interface's right-hand side, A_Ii A_ii^-1 b_i = X_i y_i = -L_iI w_i (w_i:
+        y's interface part), with its sign turned (the interface's order)."""
         rhs = np.zeros((self.size, b.shape[1]))
         rhs[self.inner_at] = b[self.inner_rows]
-        return self.solve.triangular(rhs, transpose=False)
+        y = self.solve.triangular(rhs, transpose=False)
+        return y, self.coupling @ y[self.inner:]
 
-    def backward(self, forward: np.ndarray, interface_part: np.ndarray, out: np.ndarray) -> None:
-        """L^-T [forward's substructure part; ``interface_part``], written into ``out``'s rows of this substructure."""
-        rhs = forward.copy()
-        rhs[self.inner:] = interface_part
+    def backward(self, y: np.ndarray, on_interface: np.ndarray, out: np.ndarray) -> None:
+        """L^-T [y's substructure part; L_iI^T x_I]: x_i = A_ii^-1 (b_i - A_iI x_I), written into ``out``'s rows
+        of this substructure (``on_interface``: x_I, in the interface's order)."""
+        rhs = y.copy()
+        rhs[self.inner:] = self.coupling.T @ on_interface
         out[self.inner_rows] = self.solve.triangular(rhs, transpose=True)[self.inner_at]
 
 
@@ -168,16 +172,13 @@ class SubstructuredSolve:
         """Solve for ``b`` of shape (rows,) or (rows, k)."""
         b = np.asarray(b, dtype=float)
         columns = b.reshape(self.rows, -1)
-        count = len(self._interface)
         x = np.empty_like(columns)
         # numpy's BLAS threads would wait for the cores the two substructures' sweeps take
         with threadpool_limits(limits=1, user_api="blas"), ThreadPoolExecutor(max_workers=2) as threads:
             forward = list(threads.map(lambda part: part.forward(columns), self._parts))
-            # A_Ii A_ii^-1 b_i = X_i y_i = -L_iI w_i, w_i the forward sweep's interface part
-            reduced = columns[self._interface] + sum(part.coupling @ y[-count:] for part, y in zip(self._parts, forward))
+            reduced = columns[self._interface] + forward[0][1] + forward[1][1]
             x[self._interface] = on_interface = sla.cho_solve(self._schur, reduced)
-            list(threads.map(lambda part, y: part.backward(y, part.coupling.T @ on_interface, x), self._parts,
-                             forward))
+            list(threads.map(lambda part, swept: part.backward(swept[0], on_interface, x), self._parts, forward))
         return x.reshape(b.shape)
 
 
