@@ -72,6 +72,8 @@ def check_text(lines: Lines, file: str) -> None:
     """Control characters (other than tab) are no deck's content: reject them with their line and column."""
     if not lines:
         raise DeckError("the file is empty (expected bulk data cards)", file=file, line=1)
+    if not _CONTROL.search("\n".join(text for _, text in lines)):  # one search; the line only for a message
+        return
     for number, text in lines:
         if m := _CONTROL.search(text):
             raise DeckError(f"control character U+{ord(m.group()):04X} at column {m.start() + 1} (expected text)",
@@ -89,7 +91,8 @@ def split_sections(lines: Lines, file: str) -> tuple[Lines | None, Lines]:
         case, bulk = None, lines
     else:
         case, bulk = lines[(cend if cend is not None else -1) + 1:begin], lines[begin + 1:]
-    end = next((i for i, (_, t) in enumerate(bulk) if re.match(r"ENDDATA\b", _code(t), re.I)), None)
+    end = next((i for i, (_, t) in enumerate(bulk)
+                if t.lstrip()[:1] in ("E", "e") and re.match(r"ENDDATA\b", _code(t), re.I)), None)
     if end is None and begin is not None:
         raise DeckError(f"BEGIN BULK at line {lines[begin][0]} has no ENDDATA (expected ENDDATA after the "
                         "bulk data)", file=file, line=lines[-1][0])
@@ -178,8 +181,8 @@ def split_cards(lines: Iterable[tuple[int, str]], file: str) -> list[RawCard]:
     """Group numbered bulk-data lines into cards (comments and blank lines dropped)."""
     cards: list[RawCard] = []
     for number, text in lines:
-        text = text.split("$", 1)[0].rstrip()
-        if not text.strip():
+        text = (text.split("$", 1)[0] if "$" in text else text).rstrip()
+        if not text:
             continue
         head, data, free = _physical(text)
         continuation = head == "" or head[0] in "+*"

@@ -64,7 +64,8 @@ def without_begin_bulk(bulk: Lines) -> Lines:
     """
     # A second BEGIN BULK line repeats the section's start; NASTRAN reads past it (bah_plane.bdf and
     # ha144ds.bdf of tests/data/nastran have one and ran), and so does this reader.
-    return [(number, text) for number, text in bulk if not _BEGIN_BULK.fullmatch(text.split("$", 1)[0].strip())]
+    return [(number, text) for number, text in bulk
+            if text.lstrip()[:1] not in ("B", "b") or not _BEGIN_BULK.fullmatch(text.split("$", 1)[0].strip())]
 
 
 def cards_with_includes(lines: Lines, file: str, *, stack: tuple[str, ...]) -> list[RawCard]:

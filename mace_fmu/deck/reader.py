@@ -16,6 +16,7 @@ from mace_fmu.deck.fields import case_control, check_text, split_sections
 from mace_fmu.deck.files import cards_with_includes, deck_file_text, without_begin_bulk
 from mace_fmu.deck.tables import bulk_tables
 from mace_fmu.errors import DeckError
+from mace_fmu.util.collector import collector_paused
 
 
 def read_deck(path: str | os.PathLike[str]) -> Deck:
@@ -61,6 +62,11 @@ def read_deck_text(text: str, *, name: str = "<string>") -> Deck:
     DeckError
         A malformed or inconsistent card: the message names ``name``, the line, the card and the field.
     """
+    with collector_paused():  # hundreds of thousands of objects, none in a cycle (mace_fmu.util.collector)
+        return _read(text, name)
+
+
+def _read(text: str, name: str) -> Deck:
     # Split on newlines only, so that line numbers match what an editor shows.
     physical = text.removeprefix("\ufeff").split("\n")  # a byte-order mark, which some editors write
     if physical and physical[-1] == "":

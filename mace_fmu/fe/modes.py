@@ -23,6 +23,7 @@ from mace_fmu.parameters.sets import ParameterSet, deck_fingerprint, fe_override
 from mace_fmu.structure.build import Structure, build_structure
 from mace_fmu.structure.file import Configuration, StructureFile, bundled_deck_path, structure_file_for
 from mace_fmu.util.frequency import DEFAULT_MAX_HZ
+from mace_fmu.util.collector import collector_paused
 from mace_fmu.util.progress import ProgressCallback
 from mace_fmu.util.threads import single_blas_thread
 
@@ -219,6 +220,7 @@ def _check_preload_elements(deck: Deck) -> None:
 
 
 @single_blas_thread
+@collector_paused()  # a large deck's cards stay alive: the collector's passes would walk them all
 def compute_modes(deck: Deck | str | os.PathLike | None = None, *, configuration: Configuration = "1g",
                   preload: PreloadKind = "large", mass: MassKind = "lumped", max_hz: float | None = None,
                   parameters: ParameterSet | None = None,
