@@ -10,7 +10,8 @@ before it) is narrowest near the middle; those rows are the interface I, the res
 substructures 1 and 2, which share no entry.
 
 Each substructure is factored with the interface last, in the ordering's own order, through
-CHOLMOD on its own core (mace_fmu.fe.cholmod.numeric releases the GIL):
+CHOLMOD on its own core (mace_fmu.fe.cholmod.numeric releases the GIL; the wheel's OpenBLAS, although
+single-threaded, takes a lock around its buffer allocation, so two threads may call it at once):
 
     [A_11  A_1I]   [L_11  0   ] [L_11  0   ]^T
     [A_I1  A_II] = [X_1   L_1I] [X_1   L_1I]    with  L_1I L_1I^T = A_II - A_I1 A_11^-1 A_1I,
