@@ -142,6 +142,7 @@ class FactorLayout:
     index_type: int  #: itype (2: 64-bit integers, cholmod_l_*)
     value_type: int  #: xtype (1: real)
     precision: int  #: dtype (0: double)
+    supernodal_ll: bool = False  #: is_super and is_ll: a supernodal L L^T (what :meth:`CholeskySolve.triangular` needs)
 
 
 def factor_layout(symbolic: object, rows: int) -> FactorLayout | None:
@@ -176,7 +177,8 @@ def factor_layout(symbolic: object, rows: int) -> FactorLayout | None:
     n, xsize = int(words[0]), int(words[15])
     if n != rows or not rows <= xsize <= rows * (rows + 1):
         return None
-    return FactorLayout(address, n, xsize, int(flags[4]), int(flags[5]), int(flags[6]))
+    return FactorLayout(address, n, xsize, int(flags[4]), int(flags[5]), int(flags[6]),
+                        supernodal_ll=bool(flags[1]) and bool(flags[2]))
 
 
 def _factor_words(address: int) -> ctypes.Array:
@@ -312,9 +314,14 @@ class CholeskySolve:
         return np.hstack(parts).reshape(b.shape)
 
     @property
-    def direct(self) -> bool:
-        """True when CHOLMOD's own solve is called through ctypes (:meth:`triangular` needs it)."""
-        return self._direct
+    def supernodal_ll(self) -> bool:
+        """True when CHOLMOD's own solve is called through ctypes on a supernodal L L^T factor: what
+        :meth:`triangular`, :meth:`permutation` and :meth:`trailing_block` need (a simplicial factor, which
+        CHOLMOD may choose for a very sparse matrix, holds L D L^T and none of the supernodes read)."""
+        if not self._direct:
+            return False
+        layout = factor_layout(self._factor, self.rows)
+        return layout is not None and layout.supernodal_ll
 
     def triangular(self, b: np.ndarray, *, transpose: bool) -> np.ndarray:
         """Solve L x = b (or L^T x = b) with the factor's own triangle, in its order (P A P^T = L L^T).

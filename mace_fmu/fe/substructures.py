@@ -125,7 +125,7 @@ class _Substructure:
         if not done:
             return done
         self.solve = CholeskySolve(self._symbolic, self.size)
-        if not self.solve.direct:
+        if not self.solve.supernodal_ll:
             return None
         order = self.solve.permutation()
         tail = order[self.inner:]

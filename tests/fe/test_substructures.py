@@ -147,3 +147,24 @@ def test_the_lowest_modes_through_substructures_equal_arpacks(wide, monkeypatch)
                          max_dimension=k.shape[0] // 2)
     expected = np.sort(eigsh(k, M=m, k=12, sigma=sigma, return_eigenvectors=False))
     np.testing.assert_allclose(found.eigenvalues[:12], expected, rtol=1e-10)
+
+
+def test_a_simplicial_factor_is_recognised_and_not_read_as_supernodes(slender):
+    """CHOLMOD's simplicial L D L^T (asked for through cvxopt's options) has no supernodes to read and a unit
+    triangle: the ctypes factorisation refuses it (None: cvxopt's route) and CholeskySolve does not offer its
+    triangle, so the substructures are never built on one."""
+    import cvxopt.cholmod
+
+    k, m, _ = slender
+    matrix = sparse.csr_array(k + m)
+    saved = dict(cvxopt.cholmod.options)
+    cvxopt.cholmod.options["supernodal"] = 0
+    try:
+        symbolic, _ = symbolic_in_order(matrix, np.arange(matrix.shape[0]))
+    finally:
+        cvxopt.cholmod.options.clear()
+        cvxopt.cholmod.options.update(saved)
+    lower = sparse.csc_array(sparse.tril(matrix))
+    lower.sort_indices()
+    assert numeric(symbolic, lower) is None
+    assert CholeskySolve(symbolic, matrix.shape[0]).supernodal_ll is False
