@@ -15,8 +15,9 @@ triangular solves. A shift-invert eigen-solution is mostly solves, and at 100k D
 takes 41 ms instead of SuperLU's 88 ms, the factorisation 0.5 s instead of 2.7 s. CHOLMOD comes
 with cvxopt's wheels (mace_fmu.fe.cholmod loads it on OpenBLAS and solves many right-hand sides in
 one pass over the factor: on the wide lattice 16 columns cost 15 ms a column, one alone 110 ms).
-From a factor of 50 million entries up it is factored as two substructures joined at their interface, one on each core
-(mace_fmu.fe.substructures: the wide lattice's factorisation in about half the time).
+From a factor of 50 million entries up it is factored as two substructures joined at their
+interface, one on each core (mace_fmu.fe.substructures: the wide lattice's factorisation in 3.0 s
+instead of 4.5 s, benchmarks/RESULTS.md).
 Any other matrix (a tangent stiffness that is indefinite on the way to a stable state), or one
 that turns out not to be positive definite, goes to SuperLU with threshold pivoting, in the
 ordering chosen the same way (AMD excepted: CHOLMOD keeps its permutation to itself).
