@@ -217,6 +217,8 @@ def substructured_cholesky(matrix: sparse.sparray, analysis: Analysis, *,
     if not all(factored):
         return None
     schur = parts[0].condensed + parts[1].condensed - a[cut.interface][:, cut.interface].toarray()
+    for part in parts:
+        del part.condensed  # in the Schur complement now
     try:
         factor = sla.cho_factor(schur, lower=True)
     except np.linalg.LinAlgError:
