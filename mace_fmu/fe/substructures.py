@@ -24,14 +24,15 @@ with each L^T (on two cores): the block elimination of the matrix, exact in exac
 substructures' factors together hold what the whole matrix's factor in the same ordering holds, so
 the work is the same, on two cores instead of one.
 
-Only where it pays: a factor of at least :data:`MIN_FACTOR_ENTRIES` entries in the ordering chosen
-(mace_fmu.fe.ordering, which measures it), an ordering that CHOLMOD did not keep to itself,
+Only where it pays: two cores or more, a factor of at least :data:`MIN_FACTOR_ENTRIES` entries in the
+ordering chosen (mace_fmu.fe.ordering, which measures it), an ordering that CHOLMOD did not keep to itself,
 an interface of at most :data:`MAX_INTERFACE` rows. Otherwise, and wherever CHOLMOD cannot be reached
 through ctypes, mace_fmu.fe.factor factors the whole matrix.
 """
 
 from __future__ import annotations
 
+import os
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
@@ -54,6 +55,13 @@ MIN_FACTOR_ENTRIES = 50_000_000
 MAX_INTERFACE = 6_000
 #: Where the cut may fall, as fractions of the rows: two substructures of about equal work.
 BALANCE = (0.35, 0.65)
+
+
+def usable_cores() -> int:
+    """The cores this process may run on (its affinity where the system tells it, else the machine's)."""
+    if hasattr(os, "sched_getaffinity"):
+        return len(os.sched_getaffinity(0))
+    return os.cpu_count() or 1
 
 
 @dataclass(frozen=True)
@@ -199,14 +207,16 @@ def substructured_cholesky(matrix: sparse.sparray, analysis: Analysis, *,
     Returns
     -------
     SubstructuredSolve or None
-        None where substructures do not pay or cannot be had (a small factor, no ordering to cut, a wide
-        interface, CHOLMOD not reachable through ctypes) and where the matrix is not positive definite:
+        None where substructures do not pay or cannot be had (a small factor, one core, no ordering to cut, a
+        wide interface, CHOLMOD not reachable through ctypes) and where the matrix is not positive definite:
         the caller factors the whole matrix, which tells the two apart.
     """
     a = sparse.csr_array(matrix)
     permutation = analysis.permutation
     least = MIN_FACTOR_ENTRIES if min_factor_entries is None else min_factor_entries
     if permutation is None or analysis.choice.factor_entries.get(analysis.choice.method, 0) < least:
+        return None
+    if usable_cores() < 2:  # one after the other on one core, the two halves cost more than the whole
         return None
     cut = bisect(a, permutation)
     if cut is None:

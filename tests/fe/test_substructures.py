@@ -133,6 +133,17 @@ def test_small_factors_stay_whole(wide):
     assert isinstance(factor.factorize(matrix, positive_definite=True, groups=grids), CholeskySolve)
 
 
+def test_one_core_factors_the_whole(wide, monkeypatch):
+    """On one core the two halves would run one after the other: the whole matrix is factored instead."""
+    k, m, grids = wide
+    matrix = sparse.csr_array(k + m)
+    analysis = analyse(matrix, groups=grids)
+    assert isinstance(substructures.substructured_cholesky(matrix, analysis, min_factor_entries=0),
+                      substructures.SubstructuredSolve)
+    monkeypatch.setattr(substructures, "usable_cores", lambda: 1)
+    assert substructures.substructured_cholesky(matrix, analysis, min_factor_entries=0) is None
+
+
 def test_the_lowest_modes_through_substructures_equal_arpacks(wide, monkeypatch):
     """The modal solution's shift-invert Lanczos on substructures (forced on the 4,800-DOF lattice): its 12
     lowest eigenvalues equal ARPACK's (scipy's eigsh, shift-invert on SuperLU) within 1e-10."""
