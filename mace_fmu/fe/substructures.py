@@ -21,8 +21,8 @@ S = A_II - A_I1 A_11^-1 A_1I - A_I2 A_22^-1 A_2I = L_1I L_1I^T + L_2I L_2I^T - A
 the interface's size (1,536 rows on the wide lattice), factored by LAPACK. A solve is then a forward
 sweep with each substructure's L (on two cores), the interface's dense solve, and a backward sweep
 with each L^T (on two cores): the block elimination of the matrix, exact in exact arithmetic. The
-substructures' factors together hold what the whole matrix's factor in the same ordering holds, so
-the work is the same, on two cores instead of one.
+substructures' factors together hold what the whole matrix's factor in the same ordering holds (the
+interface's dense block twice), so the work is about the same, on two cores instead of one.
 
 Only where it pays: two cores or more, a factor of at least :data:`MIN_FACTOR_ENTRIES` entries in the
 ordering chosen (mace_fmu.fe.ordering, which measures it), an ordering that CHOLMOD did not keep to itself,
