@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import subprocess
 import sys
 import time
@@ -124,12 +123,9 @@ def main() -> None:
     if args.one:
         print(json.dumps(run_one(args.size, args.one, args.eigen)))
         return
-    import numpy
-    import scipy
-    from common import machine_line
+    from common import print_run_header
 
-    print(machine_line(numpy=numpy.__version__, scipy=scipy.__version__))
-    print(f"date: {time.strftime('%Y-%m-%d %H:%M')}, load: {os.getloadavg()[0]:.2f}, size: {args.size}")
+    print_run_header(size=args.size)
     print("| BLAS | rows | factor [s] | 1 / 8 / 16 / 32 columns, one call [ms a column] | 16 / 32, two threads | "
           "cvxopt's solve, 16 | substructures: factor [s], 16 [ms a column], apart | block Lanczos: columns, s | "
           "ARPACK: columns, s | eigenvalues apart |")

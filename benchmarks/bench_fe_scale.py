@@ -166,12 +166,9 @@ def main() -> None:
             rcm_only()
         print(json.dumps(run_one(args.one[0], args.one[1], args.volts)))
         return
-    import numpy
-    import scipy
-    from common import machine_line
+    from common import print_run_header
 
-    print(machine_line(numpy=numpy.__version__, scipy=scipy.__version__))
-    print(f"date: {time.strftime('%Y-%m-%d %H:%M')}, load: {os.getloadavg()[0]:.2f}, ordering: {args.ordering}")
+    print_run_header(ordering=args.ordering)
     print("| deck | grids x levels | DOFs | structure | read [s] | assemble [s] | deck -> 50 modes [s] | volts model [s] "
           "| peak memory [MB] | ordering | factor entries per DOF (RCM / ND / AMD) | deck -> FMU [s] | its peak [MB] | "
           "load |")

@@ -27,6 +27,17 @@ def machine_line(**versions: str) -> str:
     return f"- machine: {cpu_name()}, {os.cpu_count()} cores, Python {platform.python_version()}{libs}"
 
 
+def print_run_header(**context: str) -> None:
+    """Print what heads a benchmark's table in RESULTS.md: the machine line (numpy and scipy versions) and
+    the date, the load before the run and ``context`` ("ordering: chosen")."""
+    import numpy
+    import scipy
+
+    print(machine_line(numpy=numpy.__version__, scipy=scipy.__version__))
+    extra = "".join(f", {key}: {value}" for key, value in context.items())
+    print(f"date: {time.strftime('%Y-%m-%d %H:%M')}, load: {os.getloadavg()[0]:.2f}{extra}")
+
+
 def timed(fn: Callable[[], Any], runs: int) -> tuple[float, float, Any]:
     """Median and minimum wall time [s] of ``runs`` calls of ``fn``, and its last result."""
     times, out = [], None

@@ -126,18 +126,14 @@ def grid_positions(deck: Deck, frames: dict[int, Frame] | None = None) -> dict[i
 def bar_orientation(deck: Deck, bar: CBar, positions: dict[int, np.ndarray],
                     frames: dict[int, Frame]) -> np.ndarray:
     """Orientation vector of ``bar`` (CBAR or CBEAM) in basic: R_cd(GA) @ v (v itself for OFFT B..), or
-    pos[G0] - pos[GA]."""
-    if bar.g0 is not None:
-        return positions[bar.g0] - positions[bar.ga]
-    assert bar.v is not None
-    if getattr(bar, "orientation_basic", False):  # OFFT B..
-        return np.asarray(bar.v, dtype=float)
-    return frames[deck.grids[bar.ga].cd][1] @ np.asarray(bar.v, dtype=float)
+    pos[G0] - pos[GA] (:func:`bar_orientations` of the one bar)."""
+    return bar_orientations(deck, [bar], positions, frames)[0]
 
 
 def bar_orientations(deck: Deck, bars: Sequence[CBar], positions: dict[int, np.ndarray],
                      frames: dict[int, Frame]) -> np.ndarray:
-    """:func:`bar_orientation` of every bar of ``bars`` at once (a 100k-DOF lattice has 78k): (n, 3) in basic."""
+    """Orientation vector in basic of every bar of ``bars`` (CBAR or CBEAM), all at once (a 100k-DOF lattice has
+    78k): R_cd(GA) @ v, v itself for OFFT B.., or pos[G0] - pos[GA]; (n, 3)."""
     out = np.zeros((len(bars), 3))
     if not bars:
         return out

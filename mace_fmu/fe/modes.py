@@ -22,8 +22,8 @@ from mace_fmu.fe.preload import Preload, PreloadKind, large_displacement_preload
 from mace_fmu.parameters.sets import ParameterSet, deck_fingerprint, fe_overrides, naming_the_file, parameter_names
 from mace_fmu.structure.build import Structure, build_structure
 from mace_fmu.structure.file import Configuration, StructureFile, bundled_deck_path, structure_file_for
-from mace_fmu.util.frequency import DEFAULT_MAX_HZ
 from mace_fmu.util.collector import collector_paused
+from mace_fmu.util.frequency import DEFAULT_MAX_HZ
 from mace_fmu.util.progress import ProgressCallback
 from mace_fmu.util.threads import single_blas_thread
 
@@ -70,7 +70,6 @@ class StructureModes(ModesView):
     def stiffness(self):
         """The stiffness the modes are of [N/m, N m/rad], basic DOFs: the preload's tangent (1-g) or K."""
         return self.preload.tangent_stiffness if self.preload is not None else self.model.stiffness
-
 
 
 def mass_properties(model: FEModel, deck: Deck) -> MassProperties:

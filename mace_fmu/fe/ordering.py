@@ -156,7 +156,7 @@ def analyse(matrix: sparse.sparray, *, groups: np.ndarray | None = None, with_am
     return Analysis(choice, permutations.get(best), analysed[best][0], spmatrix)
 
 
-def symbolic_in_order(matrix: sparse.sparray, permutation: np.ndarray) -> tuple[object, object] | None:
+def symbolic_in_order(matrix: sparse.sparray, permutation: np.ndarray) -> object | None:
     """CHOLMOD's symbolic analysis of the symmetric ``matrix`` in the order ``permutation``, as it is given.
 
     Parameters
@@ -168,15 +168,13 @@ def symbolic_in_order(matrix: sparse.sparray, permutation: np.ndarray) -> tuple[
 
     Returns
     -------
-    tuple or None
-        (cvxopt.cholmod's symbolic factor, the lower triangle as the cvxopt.spmatrix analysed); None without
-        cvxopt.
+    object or None
+        cvxopt.cholmod's symbolic factor; None without cvxopt.
     """
     cholmod = load_cholmod()
     if cholmod is None:
         return None
-    spmatrix = _lower_spmatrix(sparse.csr_array(matrix))
-    return _symbolic(cholmod, spmatrix, permutation), spmatrix
+    return _symbolic(cholmod, _lower_spmatrix(sparse.csr_array(matrix)), permutation)
 
 
 def _lower_spmatrix(a: sparse.csr_array) -> object:

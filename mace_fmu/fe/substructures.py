@@ -118,8 +118,7 @@ class _Substructure:
         own = np.concatenate([rows, interface])
         block = sparse.csr_array(matrix[own][:, own])
         self.size, self.inner = len(own), len(rows)
-        analysed = symbolic_in_order(block, np.arange(self.size))  # the ordering's own order, the interface last
-        self._symbolic = None if analysed is None else analysed[0]
+        self._symbolic = symbolic_in_order(block, np.arange(self.size))  # the ordering's own, the interface last
         self._lower = sparse.csc_array(sparse.tril(block))
         self._lower.sort_indices()
 

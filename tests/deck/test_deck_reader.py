@@ -412,9 +412,11 @@ def test_orientation_vector_in_cd_system_and_by_g0() -> None:
     np.testing.assert_allclose(bar_orientation(d, d.bars[2], pos, frames), [-2.0, 0.0, 5.0])
 
 
-def test_all_bars_oriented_at_once_as_one_by_one() -> None:
-    """bar_orientations (every bar at once, what the check and the assembly use) gives each bar what
-    bar_orientation gives it alone: a vector in GA's CD system, one in basic (OFFT BGG), one by G0, in any mix."""
+def test_all_bars_oriented_at_once_against_the_closed_form() -> None:
+    """bar_orientations (every bar at once, what the check and the assembly use), a mix of vectors in GA's CD
+    system, in basic (OFFT BGG) and by G0, against the closed form: system 1's axes are x = basic Y,
+    y = -basic X, z = basic Z, so (1, 0, 0) there is (0, 1, 0) in basic and (0.3, 0, 1) is (0, 0.3, 1); a G0
+    gives pos(G0) - pos(GA)."""
     from mace_fmu.deck.geometry import bar_orientations
 
     d = deck(sf("CORD2R", 1, "", "0.0", "0.0", "0.0", "0.0", "0.0", "1.0"), sf("", "0.0", "1.0", "0.0"),
@@ -427,7 +429,8 @@ def test_all_bars_oriented_at_once_as_one_by_one() -> None:
     frames = coordinate_frames(d)
     pos = grid_positions(d, frames)
     bars = list(d.bars.values())
-    expected = np.array([bar_orientation(d, b, pos, frames) for b in bars])
+    expected = np.array([[0.0, 1.0, 0.0], [-2.0, 0.0, 5.0], [0.0, 1.0, 0.0], [0.0, 0.3, 1.0], [0.0, 1.0, 0.0],
+                         [-1.0, -1.0, 5.0]])
     np.testing.assert_allclose(bar_orientations(d, bars, pos, frames), expected, rtol=0, atol=1e-14)
     assert bar_orientations(d, [], pos, frames).shape == (0, 3)
 

@@ -90,7 +90,7 @@ def test_the_factors_pieces_equal_lapacks_dense_cholesky(slender):
     matrix = sparse.csr_array(k + m)
     n = matrix.shape[0]
     order = np.random.default_rng(1).permutation(n)  # any ordering: the factor's own is read back
-    symbolic, _ = symbolic_in_order(matrix, order)
+    symbolic = symbolic_in_order(matrix, order)
     lower = sparse.csc_array(sparse.tril(matrix))
     lower.sort_indices()
     assert numeric(symbolic, lower) is True
@@ -112,7 +112,7 @@ def test_a_matrix_that_is_not_positive_definite_is_left_to_the_whole_factor(wide
     first = eigsh(k, M=m, k=1, sigma=0.0, return_eigenvectors=False)[0]
     matrix = sparse.csr_array(k - 2.0 * first * m)
     assert substructures.substructured_cholesky(matrix, analyse(matrix, groups=grids), min_factor_entries=0) is None
-    symbolic, _ = symbolic_in_order(matrix, np.arange(matrix.shape[0]))
+    symbolic = symbolic_in_order(matrix, np.arange(matrix.shape[0]))
     lower = sparse.csc_array(sparse.tril(matrix))
     lower.sort_indices()
     assert numeric(symbolic, lower) is False
@@ -171,7 +171,7 @@ def test_a_simplicial_factor_is_recognised_and_not_read_as_supernodes(slender):
     saved = dict(cvxopt.cholmod.options)
     cvxopt.cholmod.options["supernodal"] = 0
     try:
-        symbolic, _ = symbolic_in_order(matrix, np.arange(matrix.shape[0]))
+        symbolic = symbolic_in_order(matrix, np.arange(matrix.shape[0]))
     finally:
         cvxopt.cholmod.options.clear()
         cvxopt.cholmod.options.update(saved)
