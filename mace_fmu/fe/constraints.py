@@ -32,9 +32,14 @@ class Constraints:
         return sparse.csr_array(t.T @ sparse.csr_array(matrix) @ t)
 
 
-def cd_rotation(cd_frames: np.ndarray) -> np.ndarray:
+def cd_rotation(cd_frames: np.ndarray) -> sparse.csr_array:
     """Block-diagonal Lambda with u_basic = Lambda @ u_cd (translations and rotations per grid)."""
-    return sparse.block_diag([blk for r in cd_frames for blk in (r, r)], format="csr")
+    blocks = np.repeat(np.asarray(cd_frames, dtype=float), 2, axis=0)  # each grid's frame for u, then theta
+    count = len(blocks)
+    # one 3 x 3 block per row of blocks: BSR holds exactly that (a list of 200,000 blocks to block_diag took 0.3 s)
+    rotation = sparse.bsr_array((blocks, np.arange(count), np.arange(count + 1)), shape=(3 * count, 3 * count)).tocsr()
+    rotation.eliminate_zeros()  # a basic frame's zeros would widen every product's pattern
+    return rotation
 
 
 def _rigid_transfer(offset_m: np.ndarray) -> np.ndarray:

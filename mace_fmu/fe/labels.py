@@ -76,6 +76,33 @@ def _grid_mask(model: FEModel, grids: frozenset[int]) -> np.ndarray:
 _CHUNK = 4000
 
 
+#: natural DOFs of a bar by family: 0 stretch, 1/4 torsion, 2/5 rotation about element y, 3/6 about element z
+_FAMILIES = ((0,), (1, 4), (2, 5), (3, 6))
+
+
+def _family_energies(jacobian: np.ndarray, k_natural: np.ndarray, dof_index: np.ndarray, shapes: np.ndarray,
+                     bars: np.ndarray) -> np.ndarray:
+    """(4, len(bars), n_modes) strain energy of the chosen ``bars`` per mode in each family of natural DOFs
+    (stretch, torsion, bending about element y, about element z): 1/2 d_f^T k_ff d_f with d = B phi.
+
+    In chunks of bars: the gathered shapes of 70k bars would be 350 MB. The families' blocks are at most
+    2 x 2, so their quadratic forms are written out rather than run through stacked products.
+    """
+    out = np.empty((len(_FAMILIES), len(bars), shapes.shape[1]))
+    for start in range(0, len(bars), _CHUNK):
+        rows = bars[start:start + _CHUNK]
+        d = np.matmul(jacobian[rows], shapes[dof_index[rows]])  # (chunk, 7, n_modes) natural deformations
+        k = k_natural[rows]
+        for f, family in enumerate(_FAMILIES):
+            energy = out[f, start:start + len(rows)]
+            energy[:] = 0.0
+            for i in family:
+                for j in family:
+                    energy += k[:, i, j, None] * d[:, i] * d[:, j]
+            energy *= 0.5
+    return out
+
+
 class _Energies:
     """Per-mode energy bookkeeping shared by the rules."""
 
@@ -91,34 +118,21 @@ class _Energies:
                                 for a, b in zip(model.bars.node_a, model.bars.node_b)], dtype=bool)
         # None: the undeformed structure, whose jacobian has a closed form
         b = undeformed_jacobian(model.bars) if state is None else deformation_jacobian(model.bars, state)[1]
-        b, dof_index = b[bus_bar], bar_dof_indices(model.bars)[bus_bar]
-        # natural deformations per mode, in chunks of bars: the gathered shapes of 70k bars would be 350 MB
-        d = np.concatenate([np.matmul(b[s:s + _CHUNK], phi[dof_index[s:s + _CHUNK]])
-                            for s in range(0, len(b), _CHUNK)]) if len(b) else np.zeros((0, 7, phi.shape[1]))
-        kn = model.bars.k_natural[bus_bar]
-
-        def part(idx: list[int]) -> np.ndarray:
-            sub = kn[:, idx][:, :, idx]
-            d_part = d[:, idx]
-            return 0.5 * (d_part * np.matmul(sub, d_part)).sum(axis=1)
-
-        # natural DOFs: 0 stretch, 1/4 torsion, 2/5 rotation about element y, 3/6 about element z
-        self.bus_torsion = part([1, 4])
-        plane_z = part([3, 6])  # bending in the element x-y plane
-        plane_y = part([2, 5])
+        stretch, self.bus_torsion, plane_y, plane_z = _family_energies(
+            b, model.bars.k_natural, bar_dof_indices(model.bars), phi, np.flatnonzero(bus_bar))
         frames = model.bars.frames0[bus_bar]
         # each plane's energy with the bending axis of that plane: element z for x-y, element y for x-z
         energies = np.concatenate([plane_z, plane_y])  # (2 n_bar, n_modes)
         axes = np.abs(np.concatenate([frames[:, 2], frames[:, 1]]))  # (2 n_bar, 3)
         # Assign each bar's plane energy to the basic axis it bends about (Y or Z: MACE's bus lies along X).
-        about_y = energies[axes[:, 1] >= axes[:, 2]].sum(0)
-        about_z = energies[axes[:, 1] < axes[:, 2]].sum(0)
+        about_y = (axes[:, 1] >= axes[:, 2]) @ energies
+        about_z = (axes[:, 1] < axes[:, 2]) @ energies
         self.bus_bending = {"Y": about_y, "Z": about_z}
-        self.bus_stretch = part([0]).sum(0)
+        self.bus_stretch = stretch.sum(0)
         self.bus_strain = self.bus_torsion.sum(0) + about_y + about_z + self.bus_stretch
         # the same plane energies by the basic axis each bar's bending axis lies closest to
         closest = np.argmax(axes, axis=1)
-        self.bending_about = np.array([energies[closest == axis].sum(0) for axis in range(3)])
+        self.bending_about = (closest == np.arange(3)[:, None]) @ energies
         xa = model.positions[model.bars.node_a[bus_bar], 0]
         self.torsion_x = (self.bus_torsion * xa[:, None]).sum(0) / np.maximum(self.bus_torsion.sum(0), 1e-300)
 
