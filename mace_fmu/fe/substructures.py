@@ -116,19 +116,24 @@ class _Substructure:
     def __init__(self, matrix: sparse.csr_array, rows: np.ndarray, interface: np.ndarray):
         self.rows = rows
         own = np.concatenate([rows, interface])
-        block = sparse.csr_array(matrix[own][:, own])
+        self._block = sparse.csr_array(matrix[own][:, own])
         self.size, self.inner = len(own), len(rows)
-        self._symbolic = symbolic_in_order(block, np.arange(self.size))  # the ordering's own, the interface last
-        self._lower = sparse.csc_array(sparse.tril(block))
-        self._lower.sort_indices()
 
     def factor(self) -> bool | None:
-        """CHOLMOD's numeric factorisation, then L_iI and L_iI L_iI^T (True: done; False: not positive
-        definite; None: CHOLMOD not reachable through ctypes). Runs on a core of its own."""
+        """CHOLMOD's analysis in the ordering's own order (the interface last) and its numeric factorisation,
+        then L_iI and L_iI L_iI^T (True: done; False: not positive definite; None: CHOLMOD not reachable
+        through ctypes). Runs on a thread of its own: the analysis holds Python's lock, the factorisation
+        does not, so one substructure's analysis overlaps the other's factorisation."""
+        block = self._block
+        del self._block
+        self._symbolic = symbolic_in_order(block, np.arange(self.size))
         if self._symbolic is None:
             return None
-        done = numeric(self._symbolic, self._lower)
-        del self._lower  # CHOLMOD holds the values now
+        lower = sparse.csc_array(sparse.tril(block))
+        lower.sort_indices()
+        del block
+        done = numeric(self._symbolic, lower)
+        del lower  # CHOLMOD holds the values now
         if not done:
             return done
         self.solve = CholeskySolve(self._symbolic, self.size)
