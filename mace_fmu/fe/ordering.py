@@ -19,6 +19,7 @@ at 100k DOFs) and no more fill. Without pymetis the candidates are RCM and AMD.
 from __future__ import annotations
 
 import hashlib
+import threading
 from dataclasses import dataclass
 
 import numpy as np
@@ -137,13 +138,13 @@ def analyse(matrix: sparse.sparray, *, groups: np.ndarray | None = None, with_am
         return Analysis(OrderingChoice(RCM, {}), permutations[RCM], None, None)
     spmatrix = _lower_spmatrix(a)
     if known and known[1] is None:  # AMD, CHOLMOD's default
-        return Analysis(known[0], None, cholmod.symbolic(spmatrix, uplo="L"), spmatrix)
+        return Analysis(known[0], None, _symbolic(cholmod, spmatrix, None), spmatrix)
     analysed: dict[str, tuple[object, int | None]] = {}
     for name, permutation in permutations.items():
         symbolic = _symbolic(cholmod, spmatrix, permutation)
         analysed[name] = symbolic, _entries(symbolic, n)
     if with_amd and not known:  # a known choice needs its own analysis only
-        symbolic = cholmod.symbolic(spmatrix, uplo="L")  # without a permutation CHOLMOD's default is AMD
+        symbolic = _symbolic(cholmod, spmatrix, None)
         analysed[AMD] = symbolic, _entries(symbolic, n)
     if known:
         return Analysis(known[0], known[1], analysed[known[0].method][0], spmatrix)
@@ -184,16 +185,26 @@ def _lower_spmatrix(a: sparse.csr_array) -> object:
     return cvxopt.spmatrix(lower.data, lower.row.astype(int), lower.col.astype(int), a.shape)
 
 
-def _symbolic(cholmod: object, spmatrix: object, permutation: np.ndarray) -> object:
+#: cvxopt.cholmod reads one options dictionary for the whole process, and an analysis in a given order changes
+#: it for the call: two substructures analysed on two threads would otherwise restore each other's change and
+#: leave it set (a later AMD analysis then failed, in 2 of 7 runs of the wide lattice)
+_OPTIONS = threading.Lock()
+
+
+def _symbolic(cholmod: object, spmatrix: object, permutation: np.ndarray | None) -> object:
+    """cvxopt.cholmod's symbolic factor of ``spmatrix`` in the order ``permutation`` (None: CHOLMOD's AMD)."""
     import cvxopt
 
-    saved = dict(cholmod.options)
-    try:
-        cholmod.options["nmethods"] = 1  # the given permutation only (0 would let CHOLMOD pick among others)
-        return cholmod.symbolic(spmatrix, p=cvxopt.matrix(permutation.astype(int)), uplo="L")
-    finally:
-        cholmod.options.clear()
-        cholmod.options.update(saved)
+    with _OPTIONS:
+        if permutation is None:  # without a permutation CHOLMOD's default is AMD
+            return cholmod.symbolic(spmatrix, uplo="L")
+        saved = dict(cholmod.options)
+        try:
+            cholmod.options["nmethods"] = 1  # the given permutation only (0 would let CHOLMOD pick among others)
+            return cholmod.symbolic(spmatrix, p=cvxopt.matrix(permutation.astype(int)), uplo="L")
+        finally:
+            cholmod.options.clear()
+            cholmod.options.update(saved)
 
 
 def least_fill_permutation(matrix: sparse.sparray, *, groups: np.ndarray | None = None) -> np.ndarray:

@@ -179,3 +179,34 @@ def test_a_simplicial_factor_is_recognised_and_not_read_as_supernodes(slender):
     lower.sort_indices()
     assert numeric(symbolic, lower) is None
     assert CholeskySolve(symbolic, matrix.shape[0]).supernodal_ll is False
+
+
+def test_analyses_on_two_threads_leave_cholmods_options_as_they_were(wide):
+    """Two substructures are analysed on two threads, and cvxopt.cholmod keeps one options dictionary that an
+    analysis in a given order changes for the call: 400 analyses from two threads, switching threads as often
+    as Python can, leave the dictionary as it was, and CHOLMOD's own AMD analysis works after them (without
+    the lock, a thread restored the other's change and left it set: 2 of 7 runs of the wide lattice failed)."""
+    import sys
+    import threading
+
+    from mace_fmu.fe.cholmod import load
+    from mace_fmu.fe.ordering import _lower_spmatrix, _symbolic
+
+    cholmod = load()
+    k, m, _ = wide
+    lower = _lower_spmatrix(sparse.csr_array(k + m))
+    permutation = np.arange(k.shape[0])
+    before = dict(cholmod.options)
+    interval = sys.getswitchinterval()
+    sys.setswitchinterval(1e-6)
+    try:
+        threads = [threading.Thread(target=lambda: [_symbolic(cholmod, lower, permutation) for _ in range(200)])
+                   for _ in range(2)]
+        for thread in threads:
+            thread.start()
+        for thread in threads:
+            thread.join()
+    finally:
+        sys.setswitchinterval(interval)
+    assert dict(cholmod.options) == before
+    assert _symbolic(cholmod, lower, None) is not None
