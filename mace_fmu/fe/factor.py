@@ -34,7 +34,7 @@ from scipy.sparse.linalg import splu
 from mace_fmu.fe.cholmod import CholeskySolve
 from mace_fmu.fe.cholmod import load as load_cholmod
 from mace_fmu.fe.ordering import Analysis, analyse, least_fill_permutation
-from mace_fmu.fe.substructures import substructured_cholesky
+from mace_fmu.fe.substructures import NotPositiveDefinite, substructured_cholesky
 
 Solve = Callable[[np.ndarray], np.ndarray]
 
@@ -69,7 +69,10 @@ def factorize(matrix: sparse.sparray | np.ndarray, *, positive_definite: bool = 
     if positive_definite:
         analysis = analyse(a, groups=groups)
         # two substructures on two cores where the matrix is large (mace_fmu.fe.substructures), else the whole
-        solve = substructured_cholesky(a, analysis) or _cholesky(analysis, a.shape[0])
+        try:
+            solve = substructured_cholesky(a, analysis) or _cholesky(analysis, a.shape[0])
+        except NotPositiveDefinite:  # the whole would fail as well: to the LU at once
+            solve = None
         if solve is not None:
             return solve
     # RCM or nested dissection (AMD's permutation stays inside CHOLMOD); a pattern factored before

@@ -212,8 +212,12 @@ def substructured_cholesky(matrix: sparse.sparray, analysis: Analysis, *,
     -------
     SubstructuredSolve or None
         None where substructures do not pay or cannot be had (a small factor, one core, no ordering to cut, a
-        wide interface, CHOLMOD not reachable through ctypes) and where the matrix is not positive definite:
-        the caller factors the whole matrix, which tells the two apart.
+        wide interface, CHOLMOD not reachable through ctypes): the caller factors the whole matrix.
+
+    Raises
+    ------
+    NotPositiveDefinite
+        A substructure or the interface's Schur complement is not positive definite, so neither is the matrix.
     """
     a = sparse.csr_array(matrix)
     permutation = analysis.permutation
@@ -228,6 +232,8 @@ def substructured_cholesky(matrix: sparse.sparray, analysis: Analysis, *,
     parts = tuple(_Substructure(a, rows, cut.interface) for rows in cut.substructures)
     with ThreadPoolExecutor(max_workers=2) as threads:
         factored = list(threads.map(_Substructure.factor, parts))
+    if any(done is False for done in factored):
+        raise NotPositiveDefinite("a substructure's factorisation met a non-positive pivot")
     if not all(factored):
         return None
     schur = parts[0].condensed + parts[1].condensed - a[cut.interface][:, cut.interface].toarray()
@@ -236,5 +242,12 @@ def substructured_cholesky(matrix: sparse.sparray, analysis: Analysis, *,
     try:
         factor = sla.cho_factor(schur, lower=True)
     except np.linalg.LinAlgError:
-        return None
+        raise NotPositiveDefinite("the interface's Schur complement met a non-positive pivot") from None
     return SubstructuredSolve(parts, cut.interface, factor)
+
+
+class NotPositiveDefinite(ArithmeticError):
+    """The matrix is not positive definite, as a substructure's factorisation shows: each substructure with the
+    interface is a principal submatrix and the interface's Schur complement is the Schur complement of one,
+    and both are positive definite when the whole matrix is. A Cholesky factorisation of the whole would fail
+    too, so the caller goes to its LU at once (at 100k DOFs the whole's factorisation is 4.5 s)."""

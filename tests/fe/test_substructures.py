@@ -105,17 +105,21 @@ def test_the_factors_pieces_equal_lapacks_dense_cholesky(slender):
                                    atol=1e-10 * np.abs(expected).max())
 
 
-def test_a_matrix_that_is_not_positive_definite_is_left_to_the_whole_factor(wide):
-    """K - sigma M with sigma above the first eigenvalue: no substructures (None) and no numeric factor through
-    ctypes (False); factorize's LU then solves it, equal to SuperLU."""
+def test_a_matrix_that_is_not_positive_definite_goes_to_the_lu_at_once(wide, monkeypatch):
+    """K - sigma M with sigma above the first eigenvalue: the ctypes factorisation says False, the substructures
+    say the matrix is not positive definite, and factorize goes to its LU without factoring the whole matrix
+    again (substructures forced on this 4,800-DOF lattice); the LU's solution equals SuperLU's."""
     k, m, grids = wide
     first = eigsh(k, M=m, k=1, sigma=0.0, return_eigenvectors=False)[0]
     matrix = sparse.csr_array(k - 2.0 * first * m)
-    assert substructures.substructured_cholesky(matrix, analyse(matrix, groups=grids), min_factor_entries=0) is None
+    with pytest.raises(substructures.NotPositiveDefinite):
+        substructures.substructured_cholesky(matrix, analyse(matrix, groups=grids), min_factor_entries=0)
     symbolic = symbolic_in_order(matrix, np.arange(matrix.shape[0]))
     lower = sparse.csc_array(sparse.tril(matrix))
     lower.sort_indices()
     assert numeric(symbolic, lower) is False
+    monkeypatch.setattr(substructures, "MIN_FACTOR_ENTRIES", 0)
+    monkeypatch.setattr(factor, "_cholesky", lambda *args: pytest.fail("the whole matrix was factored again"))
     b = np.random.default_rng(3).standard_normal(matrix.shape[0])
     expected = splu(sparse.csc_array(matrix)).solve(b)
     np.testing.assert_allclose(factor.factorize(matrix, positive_definite=True, groups=grids)(b), expected, rtol=0,
