@@ -8,12 +8,11 @@ import numpy as np
 from scipy import sparse
 
 from mace_fmu.deck.cards import Deck
-from mace_fmu.deck.geometry import bar_orientations, coordinate_frames, grid_positions
+from mace_fmu.deck.geometry import coordinate_frames, grid_positions
 from mace_fmu.errors import MaceError
-from mace_fmu.fe.beam import (BeamSection, MassKind, local_frames, local_stiffness, natural_stiffness,
-                              to_basic_many)
+from mace_fmu.fe.beam import (BeamSection, MassKind, local_stiffness, natural_stiffness)
 from mace_fmu.fe.dofs import DofMap, scalar_element_entries
-from mace_fmu.fe.elements import add_elements, bar_mass, coupled_mass
+from mace_fmu.fe.elements import add_elements, bar_mass, coupled_mass, line_elements
 from mace_fmu.fe.triplets import MatrixTriplets
 
 
@@ -115,16 +114,6 @@ def _rotation_invariant(matrix: np.ndarray) -> bool:
             and bool(np.all(diagonal.reshape(4, 3) == diagonal.reshape(4, 3)[:, :1])))
 
 
-def _grid_indices(dofs: DofMap, grids: list[int]) -> np.ndarray:
-    """The index of each grid in ``dofs`` (a vectorised DofMap.grid_index, whose message an unknown grid gets)."""
-    known = np.asarray(dofs.grid_ids, dtype=np.int64)
-    wanted = np.asarray(grids, dtype=np.int64)
-    found = np.minimum(np.searchsorted(known, wanted), max(len(known) - 1, 0))
-    if len(wanted) and (not len(known) or np.any(known[found] != wanted)):
-        return np.array([dofs.grid_index(g) for g in grids], dtype=np.int64)
-    return found.astype(np.int64)
-
-
 def assemble(deck: Deck, *, mass: MassKind = "lumped") -> FEModel:
     """Assemble K and M of every element of ``deck`` (no constraints applied), as sparse matrices.
 
@@ -154,32 +143,20 @@ def assemble(deck: Deck, *, mass: MassKind = "lumped") -> FEModel:
     k_glob, m_glob = MatrixTriplets(n), MatrixTriplets(n)
 
     bar_cards = sorted(deck.bars.values(), key=lambda b: b.id)
-    ga, gb = _grid_indices(dofs, [b.ga for b in bar_cards]), _grid_indices(dofs, [b.gb for b in bar_cards])
-    axes = positions[gb] - positions[ga]
-    lengths = np.linalg.norm(axes, axis=1)
-    fr = local_frames(axes, bar_orientations(deck, bar_cards, pos, frames))
-    # The element matrices in element axes depend on the section and the length only: computed once per
-    # distinct pair (a lattice has a handful), then rotated to basic all at once.
-    distinct: dict[tuple[int, float], int] = {}
-    which = np.array([distinct.setdefault((bar.pid, length), len(distinct))
-                      for bar, length in zip(bar_cards, lengths.tolist())], dtype=np.int64)
-    k_one, m_one, kn_one = [], [], []
-    for pid, length in distinct:
-        sec = bar_section(deck, pid)
-        k_one.append(local_stiffness(sec, length))
-        m_one.append(bar_mass(sec, length, mass, deck))
-        kn_one.append(natural_stiffness(sec, length))
-    if bar_cards:
-        idx = np.concatenate([6 * ga[:, None] + np.arange(6), 6 * gb[:, None] + np.arange(6)], axis=1)
-        k_glob.add_many(idx, to_basic_many(np.array(k_one)[which], fr))
+    lines = line_elements(deck, bar_cards, dofs, pos, frames)
+    sections = [bar_section(deck, pid) for pid, _ in lines.distinct]
+    k_one = [local_stiffness(sec, length) for sec, (_, length) in zip(sections, lines.distinct)]
+    m_one = [bar_mass(sec, length, mass, deck) for sec, (_, length) in zip(sections, lines.distinct)]
+    kn_one = [natural_stiffness(sec, length) for sec, (_, length) in zip(sections, lines.distinct)]
+    if lines.count:
+        k_glob.add_many(lines.dof_indices, lines.to_basic(k_one))
         if all(_rotation_invariant(m_e) for m_e in m_one):
             # NASTRAN's lumped bar mass: m I on each end's translations, the same in every frame, so
             # only its diagonal is added (a 100k-DOF tower's mass blocks would be 80 MB of zeros)
-            m_glob.add_diagonal(idx, np.array([np.diag(m_e) for m_e in m_one])[which])
+            m_glob.add_diagonal(lines.dof_indices, np.array([np.diag(m_e) for m_e in m_one])[lines.pair])
         else:
-            m_glob.add_many(idx, to_basic_many(np.array(m_one)[which], fr))
-    kn = np.array(kn_one)[which] if bar_cards else np.zeros((0, 7, 7))
-    ids, na, nb, ln = [b.id for b in bar_cards], ga, gb, lengths
+            m_glob.add_many(lines.dof_indices, lines.to_basic(m_one))
+    kn = np.array(kn_one)[lines.pair] if lines.count else np.zeros((0, 7, 7))
 
     for cm in deck.conm2s.values():
         m_glob.add(dofs.indices(cm.grid), _conm2_basic(cm, frames))
@@ -198,8 +175,8 @@ def assemble(deck: Deck, *, mass: MassKind = "lumped") -> FEModel:
     stiffness = sparse.csr_array(k_glob.matrix() + k_spring)
     mass_matrix = sparse.csr_array(m_glob.matrix() * mass_factor(deck))
 
-    bars = Bars(ids=np.array(ids, dtype=np.int64), node_a=na, node_b=nb, frames0=fr.reshape(-1, 3, 3),
-                lengths0=ln, k_natural=np.array(kn).reshape(-1, 7, 7))
+    bars = Bars(ids=np.array([b.id for b in bar_cards], dtype=np.int64), node_a=lines.node_a, node_b=lines.node_b,
+                frames0=lines.frames.reshape(-1, 3, 3), lengths0=lines.lengths, k_natural=np.array(kn).reshape(-1, 7, 7))
     return FEModel(dofs=dofs, positions=positions, cd_frames=cd_frames, stiffness=stiffness, mass=mass_matrix,
                    bars=bars, spring_stiffness=k_spring, spring_ids=tuple(sp.id for sp in springs),
                    spring_vectors=vectors, spring_constants=constants)

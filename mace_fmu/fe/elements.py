@@ -37,12 +37,16 @@ Guide, PARAM COUPMASS and the CBEAM/CROD remarks):
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+from typing import Sequence
+
 import numpy as np
 
-from mace_fmu.deck.cards import Deck
-from mace_fmu.deck.geometry import bar_orientation
+from mace_fmu.deck.cards import CBar, CBeam, Deck
+from mace_fmu.deck.geometry import bar_orientations
 from mace_fmu.errors import MaceError
-from mace_fmu.fe.beam import BeamSection, MassKind, local_frame, local_mass, local_stiffness, to_basic
+from mace_fmu.fe.beam import (BeamSection, MassKind, local_frame, local_frames, local_mass, local_stiffness, to_basic,
+                              to_basic_many)
 from mace_fmu.fe.dofs import DofMap, scalar_element_entries
 from mace_fmu.fe.triplets import MatrixTriplets
 
@@ -117,6 +121,69 @@ def _rod_matrices(e: float, g: float, area: float, j: float, mass_per_length: fl
     return k, m
 
 
+@dataclass(frozen=True)
+class LineElements:
+    """CBARs or CBEAMs, all at once: their ends, lengths and element frames, and the distinct (property,
+    length) pairs whose element matrices they share (in element axes those depend on the section and the
+    length only, and a lattice has a handful of pairs for tens of thousands of elements)."""
+
+    node_a: np.ndarray  #: (n,) row of end A's grid in per-grid arrays
+    node_b: np.ndarray  #: (n,) row of end B's grid
+    lengths: np.ndarray  #: (n,) [m]
+    frames: np.ndarray  #: (n, 3, 3) element axes, rows x, y, z in basic
+    distinct: tuple[tuple[int, float], ...]  #: the distinct (property ID, length [m]) pairs
+    pair: np.ndarray  #: (n,) each element's index into ``distinct``
+
+    @property
+    def count(self) -> int:
+        """Number of elements."""
+        return len(self.lengths)
+
+    @property
+    def dof_indices(self) -> np.ndarray:
+        """(n, 12) global DOF indices: the six of end A, then the six of end B."""
+        six = np.arange(6)
+        return np.concatenate([6 * self.node_a[:, None] + six, 6 * self.node_b[:, None] + six], axis=1)
+
+    def to_basic(self, per_pair: Sequence[np.ndarray]) -> np.ndarray:
+        """(n, 12, 12) each element's matrix in basic, from one matrix in element axes per distinct pair."""
+        return to_basic_many(np.array(per_pair)[self.pair], self.frames)
+
+
+def line_elements(deck: Deck, cards: Sequence[CBar | CBeam], dofs: DofMap, positions: dict[int, np.ndarray],
+                  frames: dict) -> LineElements:
+    """The ends, lengths, element frames and distinct (property, length) pairs of ``cards`` (CBAR or CBEAM).
+
+    Parameters
+    ----------
+    deck : Deck
+        The deck the cards belong to (their orientation's coordinate systems).
+    cards : sequence of CBar or CBeam
+        The elements, in the order wanted.
+    dofs : DofMap
+        The model's DOFs.
+    positions : dict
+        Grid ID -> position in basic [m].
+    frames : dict
+        The deck's coordinate frames.
+
+    Returns
+    -------
+    LineElements
+        The elements' geometry, all at once.
+    """
+    node_a = dofs.grid_indices([c.ga for c in cards])
+    node_b = dofs.grid_indices([c.gb for c in cards])
+    axes = np.array([positions[c.gb] - positions[c.ga] for c in cards]).reshape(len(cards), 3)
+    lengths = np.linalg.norm(axes, axis=1)
+    element_frames = local_frames(axes, bar_orientations(deck, cards, positions, frames)) if len(cards) \
+        else np.zeros((0, 3, 3))
+    distinct: dict[tuple[int, float], int] = {}
+    pair = np.array([distinct.setdefault((c.pid, length), len(distinct)) for c, length in zip(cards, lengths.tolist())],
+                    dtype=np.int64)
+    return LineElements(node_a, node_b, lengths, element_frames, tuple(distinct), pair)
+
+
 def add_elements(deck: Deck, dofs: DofMap, positions: dict[int, np.ndarray], frames: dict, cd_frames: np.ndarray,
                  stiffness: MatrixTriplets, mass: MatrixTriplets, kind: MassKind) -> None:
     """Add the CBEAM, CROD/CONROD, CONM1 and CMASS1/CMASS2 matrices of ``deck`` to ``stiffness`` and ``mass`` in place.
@@ -124,14 +191,13 @@ def add_elements(deck: Deck, dofs: DofMap, positions: dict[int, np.ndarray], fra
     ``positions``: grid ID -> position in basic [m]; ``frames``: coordinate frames of the deck;
     ``cd_frames``: (n_grid, 3, 3) displacement-system axes; ``kind``: "lumped" or "consistent" mass.
     """
-    for beam in sorted(deck.beams.values(), key=lambda b: b.id):
-        axis = positions[beam.gb] - positions[beam.ga]
-        length = float(np.linalg.norm(axis))
-        frame = local_frame(axis, bar_orientation(deck, beam, positions, frames))  # type: ignore[arg-type]
-        sec = beam_section(deck, beam.pid)
-        idx = np.concatenate([dofs.indices(beam.ga), dofs.indices(beam.gb)])
-        stiffness.add(idx, to_basic(local_stiffness(sec, length), frame))
-        mass.add(idx, to_basic(beam_mass(sec, length, kind, deck), frame))
+    beams = line_elements(deck, sorted(deck.beams.values(), key=lambda b: b.id), dofs, positions, frames)
+    if beams.count:
+        sections = [beam_section(deck, pid) for pid, _ in beams.distinct]
+        stiffness.add_many(beams.dof_indices, beams.to_basic(
+            [local_stiffness(sec, length) for sec, (_, length) in zip(sections, beams.distinct)]))
+        mass.add_many(beams.dof_indices, beams.to_basic(
+            [beam_mass(sec, length, kind, deck) for sec, (_, length) in zip(sections, beams.distinct)]))
 
     for rod in sorted(deck.rods.values(), key=lambda r: r.id):
         if rod.pid is not None:

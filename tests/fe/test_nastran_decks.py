@@ -192,6 +192,32 @@ def test_cbeam_lumped_mass_carries_the_torsional_inertia_nastran_reports():
     assert result.mass_properties.inertia_about_reference_kgm2[0, 0] == pytest.approx(3.765757e-03, rel=1e-6)
 
 
+
+def test_cbeams_assembled_all_at_once_have_the_stiffness_of_the_same_cbars():
+    """CBEAMs go through the same vectorised geometry as CBARs (ends, lengths, element frames, the distinct
+    (property, length) pairs), the CBAR route being the one NASTRAN's decks check: twelve elements of two
+    sections and several lengths, oriented by a vector in a rotated CD system, by G0 and by a basic vector
+    (OFFT BGG), have the same stiffness as CBEAMs (PBEAM without I12) as CBARs, to rounding."""
+    grids = "\n".join(f"GRID,{g},,{x:.1f},{y:.1f},{z:.1f},{cd}" for g, (x, y, z, cd) in enumerate(
+        [(0, 0, 0, 0), (1, 0, 0, 7), (2, 0.5, 0, 0), (2, 1.5, 1, 7), (0, 1, 1, 0), (3, 1, 0, 0), (1, 3, 2, 0)],
+        start=1))
+    connections = [(1, 2), (2, 3), (3, 4), (4, 5), (5, 1), (1, 3), (2, 4), (3, 5), (4, 6), (6, 1), (2, 6), (5, 6)]
+    orientations = [",0.0,0.0,1.0,", ",7,,,", ",0.3,1.0,0.2,BGG"]  # grid 7 orients, in no element
+
+    def deck(card: str, prop: str) -> str:
+        elements = "\n".join(f"{card},{e},{1 + e % 2},{a},{b}{orientations[e % 3]}"
+                              for e, (a, b) in enumerate(connections, start=1))
+        return (f"BEGIN BULK\nCORD2R,7,0,0.0,0.0,0.0,0.3,0.2,0.9\n,1.0,0.5,0.1\n{grids}\n{elements}\n"
+                f"{prop.format(1, '2.0e-4,3.0e-8,5.0e-8')}\n{prop.format(2, '1.0e-4,2.0e-8,1.0e-8')}\n"
+                "MAT1,1,70.0e9,,0.33,2700.0\nENDDATA\n")
+
+    # PBEAM's shear factors default to 1.0 (QRG), PBAR's to none: given here (second continuation)
+    bars = assembly.assemble(read_deck_text(deck("CBAR", "PBAR,{},1,{},4.0e-8\n,,,,,,,,\n,1.0,1.0"))).stiffness.toarray()
+    beams = assembly.assemble(read_deck_text(deck("CBEAM", "PBEAM,{},1,{},0.0,4.0e-8"))).stiffness.toarray()
+    assert np.count_nonzero(bars) > 900  # 12 elements, each coupling 12 DOFs
+    np.testing.assert_allclose(beams, bars, rtol=0, atol=1e-12 * np.abs(bars).max())
+
+
 def test_coupled_cbeam_mass_gives_nastrans_frequencies_of_the_buckled_strut():
     """nlfltr/buckled (MSC/NASTRAN 4/28/98): 71 CBEAMs under PARAM,COUPMASS,1, a CONM2 on an RBE2, SUPORT, WTMASS
     and grids in CORD2R systems. Its EIGRL asks for 50 roots and the .f06 as published holds the first 15: one
