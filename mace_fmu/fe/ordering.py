@@ -223,8 +223,12 @@ def least_fill_permutation(matrix: sparse.sparray, *, groups: np.ndarray | None 
     numpy.ndarray
         Permutation p: row p[i] of ``matrix`` goes to position i.
     """
-    known = _CHOSEN.get(_pattern_key(sparse.csr_array(matrix), groups, False))
-    return known[1] if known else analyse(matrix, groups=groups, with_amd=False).permutation
+    a = sparse.csr_array(matrix)
+    for with_amd in (False, True):  # a Cholesky's analysis of the same pattern (then not positive definite) too
+        known = _CHOSEN.get(_pattern_key(a, groups, with_amd))
+        if known and known[1] is not None:  # AMD's choice has no permutation to give
+            return known[1]
+    return analyse(a, groups=groups, with_amd=False).permutation
 
 
 #: The orderings chosen for the last few patterns: a Newton iteration or a parameter study factors

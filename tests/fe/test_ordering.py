@@ -64,6 +64,20 @@ def test_a_wide_lattice_is_ordered_by_nested_dissection_which_fills_less():
     assert np.count_nonzero(np.diff(grids[analysis.permutation])) == len(np.unique(grids)) - 1
 
 
+
+def test_the_lus_ordering_reuses_the_choice_a_cholesky_analysis_made(monkeypatch):
+    """A matrix expected positive definite that is not goes from CHOLMOD to the LU: the LU's permutation is the
+    one the Cholesky's analysis of the same pattern chose (nested dissection here, the least fill with AMD
+    analysed too, so also without it), not a second round of orderings and analyses."""
+    from mace_fmu.fe import ordering
+
+    matrix, grids = _lattice(10, 10, 3)
+    chosen = analyse(matrix, groups=grids)
+    assert chosen.choice.method == NESTED_DISSECTION
+    monkeypatch.setattr(ordering, "candidate_permutations", lambda *args, **kwargs: pytest.fail("ordered again"))
+    np.testing.assert_array_equal(ordering.least_fill_permutation(matrix, groups=grids), chosen.permutation)
+
+
 def test_a_slender_tower_keeps_reverse_cuthill_mckee():
     """3 x 3 grids a level, 20 levels: the band is one level wide, RCM fills least (dense count) and is chosen."""
     matrix, grids = _lattice(3, 3, 20)
