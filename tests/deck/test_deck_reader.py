@@ -198,9 +198,9 @@ def test_plain_reals_read_as_nastrans_grammar_reads_them() -> None:
 
 
 def test_the_plain_bar_route_reads_what_the_checked_route_reads_and_nothing_it_refuses() -> None:
-    """CBARs read without the field-by-field checks (the one-line card with a vector or G0) give the record the
-    checked route gives, and a card that route refuses never passes: 20,000 cards of fields drawn at random from
-    valid and invalid IDs, reals, words and blanks, on one line or two."""
+    """CBARs and CBEAMs read without the field-by-field checks (the one-line card with a vector or G0) give the
+    record the checked route gives, and a card that route refuses never passes: 20,000 cards of fields drawn at
+    random from valid and invalid IDs, reals, words and blanks, on one line or two, read as either card."""
     from mace_fmu.deck.fields import Fields, RawCard
     from mace_fmu.deck.parsers import bars
 
@@ -216,19 +216,19 @@ def test_the_plain_bar_route_reads_what_the_checked_route_reads_and_nothing_it_r
         fields.append(str(rng.choice(tails)))
         if rng.random() < 0.1:  # a continuation: pin flags and offsets, blank or not
             fields += [str(rng.choice(["", "", "0", "1", "0.0", "2.5"])) for _ in range(8)]
-        raw = RawCard("CBAR", 1, fields=fields, lines=[1] * len(fields))
         quick = bars._plain_two_node_beam(fields)
-        try:
-            f = Fields(raw, "deck.bdf")
-            checked = bars._two_node_beam(f, "OFFT")
-            f.end(16)
-        except DeckError:
-            assert quick is None, fields
-            continue
-        if quick is not None:
-            plain += 1
-            assert quick == checked, fields
-    assert plain > 500  # the draw reaches the route it tests
+        for name, offt, last in (("CBAR", "OFFT", 16), ("CBEAM", "OFFT/BIT", 18)):
+            f = Fields(RawCard(name, 1, fields=fields, lines=[1] * len(fields)), "deck.bdf")
+            try:
+                checked = bars._two_node_beam(f, offt)
+                f.end(last)  # a CBEAM's SA and SB (fields 17-18) lie beyond these cards
+            except DeckError:
+                assert quick is None, fields
+                continue
+            if quick is not None:
+                plain += 1
+                assert quick == checked, fields
+    assert plain > 1000  # the draw reaches the route it tests
 
 
 def test_implicit_exponent_in_cards() -> None:

@@ -73,7 +73,7 @@ def _two_node_beam(f: Fields, offt_name: str) -> dict:
 
 
 def _plain_two_node_beam(fields: list[str]) -> dict | None:
-    """What :func:`_two_node_beam` returns for the usual one-line card (EID PID GA GB, then a G0 or a vector
+    """What :func:`_two_node_beam` returns for the usual one-line CBAR or CBEAM (EID PID GA GB, then a G0 or a vector
     of reals; OFFT and every later field blank), read without its field-by-field checks: 80,000 bars of a
     large deck took 0.5 s through them. None for any other card, which the checked route reads or refuses
     with its message, so nothing this accepts differs from what that route would return."""
@@ -116,6 +116,9 @@ def cbar(f: Fields, src: Source) -> CBar:
 def cbeam(f: Fields, src: Source) -> CBeam:
     """CBEAM (QRG): EID PID GA GB X1 X2 X3 (or G0) OFFT/BIT; PA PB W1A ... W3B; SA SB. Without offsets, pin
     flags or scalar points (mace-fmu models none of them)."""
+    plain = _plain_two_node_beam(f.raw.fields)
+    if plain is not None:
+        return CBeam(**plain, source=src)
     fields = _two_node_beam(f, "OFFT/BIT")
     for d, name in ((17, "SA"), (18, "SB")):
         f.blank(d, name)
