@@ -10,7 +10,7 @@ from scipy import sparse
 from mace_fmu.deck.cards import Deck
 from mace_fmu.deck.geometry import coordinate_frames, grid_positions
 from mace_fmu.errors import MaceError
-from mace_fmu.fe.beam import (BeamSection, MassKind, local_stiffness, natural_stiffness)
+from mace_fmu.fe.beam import BeamSection, MassKind, local_stiffness, natural_stiffness
 from mace_fmu.fe.dofs import DofMap, scalar_element_entries
 from mace_fmu.fe.elements import add_elements, bar_mass, coupled_mass, line_elements
 from mace_fmu.fe.triplets import MatrixTriplets
@@ -176,7 +176,8 @@ def assemble(deck: Deck, *, mass: MassKind = "lumped") -> FEModel:
     mass_matrix = sparse.csr_array(m_glob.matrix() * mass_factor(deck))
 
     bars = Bars(ids=np.array([b.id for b in bar_cards], dtype=np.int64), node_a=lines.node_a, node_b=lines.node_b,
-                frames0=lines.frames.reshape(-1, 3, 3), lengths0=lines.lengths, k_natural=np.array(kn).reshape(-1, 7, 7))
+                frames0=lines.frames.reshape(-1, 3, 3), lengths0=lines.lengths,
+                k_natural=np.array(kn).reshape(-1, 7, 7))
     return FEModel(dofs=dofs, positions=positions, cd_frames=cd_frames, stiffness=stiffness, mass=mass_matrix,
                    bars=bars, spring_stiffness=k_spring, spring_ids=tuple(sp.id for sp in springs),
                    spring_vectors=vectors, spring_constants=constants)

@@ -27,7 +27,8 @@ interface's dense block twice), so the work is about the same, on two cores inst
 Only where it pays: two cores or more, a factor of at least :data:`MIN_FACTOR_ENTRIES` entries in the
 ordering chosen (mace_fmu.fe.ordering, which measures it), an ordering that CHOLMOD did not keep to itself,
 an interface of at most :data:`MAX_INTERFACE` rows. Otherwise, and wherever CHOLMOD cannot be reached
-through ctypes, mace_fmu.fe.factor factors the whole matrix.
+through ctypes, mace_fmu.fe.factor factors the whole matrix. A substructure or a Schur complement that is
+not positive definite proves the whole is not (:class:`NotPositiveDefinite`): the caller goes to its LU.
 """
 
 from __future__ import annotations
@@ -195,6 +196,13 @@ class SubstructuredSolve:
         return x.reshape(b.shape)
 
 
+class NotPositiveDefinite(ArithmeticError):
+    """The matrix is not positive definite, as a substructure's factorisation shows: each substructure with the
+    interface is a principal submatrix and the interface's Schur complement is the Schur complement of one,
+    and both are positive definite when the whole matrix is. A Cholesky factorisation of the whole would fail
+    too, so the caller goes to its LU at once (at 100k DOFs the whole's factorisation is 4.5 s)."""
+
+
 def substructured_cholesky(matrix: sparse.sparray, analysis: Analysis, *,
                            min_factor_entries: int | None = None) -> SubstructuredSolve | None:
     """The positive definite ``matrix`` factored as two substructures on two cores, in ``analysis``'s ordering.
@@ -245,9 +253,3 @@ def substructured_cholesky(matrix: sparse.sparray, analysis: Analysis, *,
         raise NotPositiveDefinite("the interface's Schur complement met a non-positive pivot") from None
     return SubstructuredSolve(parts, cut.interface, factor)
 
-
-class NotPositiveDefinite(ArithmeticError):
-    """The matrix is not positive definite, as a substructure's factorisation shows: each substructure with the
-    interface is a principal submatrix and the interface's Schur complement is the Schur complement of one,
-    and both are positive definite when the whole matrix is. A Cholesky factorisation of the whole would fail
-    too, so the caller goes to its LU at once (at 100k DOFs the whole's factorisation is 4.5 s)."""

@@ -212,7 +212,8 @@ def test_cbeams_assembled_all_at_once_have_the_stiffness_of_the_same_cbars():
                 "MAT1,1,70.0e9,,0.33,2700.0\nENDDATA\n")
 
     # PBEAM's shear factors default to 1.0 (QRG), PBAR's to none: given here (second continuation)
-    bars = assembly.assemble(read_deck_text(deck("CBAR", "PBAR,{},1,{},4.0e-8\n,,,,,,,,\n,1.0,1.0"))).stiffness.toarray()
+    pbar = "PBAR,{},1,{},4.0e-8\n,,,,,,,,\n,1.0,1.0"
+    bars = assembly.assemble(read_deck_text(deck("CBAR", pbar))).stiffness.toarray()
     beams = assembly.assemble(read_deck_text(deck("CBEAM", "PBEAM,{},1,{},0.0,4.0e-8"))).stiffness.toarray()
     assert np.count_nonzero(bars) > 900  # 12 elements, each coupling 12 DOFs
     np.testing.assert_allclose(beams, bars, rtol=0, atol=1e-12 * np.abs(bars).max())
