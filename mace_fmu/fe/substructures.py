@@ -252,4 +252,3 @@ def substructured_cholesky(matrix: sparse.sparray, analysis: Analysis, *,
     except np.linalg.LinAlgError:
         raise NotPositiveDefinite("the interface's Schur complement met a non-positive pivot") from None
     return SubstructuredSolve(parts, cut.interface, factor)
-
