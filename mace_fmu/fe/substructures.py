@@ -33,7 +33,6 @@ not positive definite proves the whole is not (:class:`NotPositiveDefinite`): th
 
 from __future__ import annotations
 
-import os
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
@@ -44,6 +43,7 @@ from threadpoolctl import threadpool_limits
 
 from mace_fmu.fe.cholmod import CholeskySolve, numeric
 from mace_fmu.fe.ordering import Analysis, symbolic_in_order
+from mace_fmu.util.threads import usable_cores
 
 #: The factor size [entries] below which the whole matrix is factored. Below it the factorisation is quick
 #: and the substructures' set-up (their symbolic analyses, the interface) and their solves' overhead cost
@@ -56,13 +56,6 @@ MIN_FACTOR_ENTRIES = 50_000_000
 MAX_INTERFACE = 6_000
 #: Where the cut may fall, as fractions of the rows: two substructures of about equal work.
 BALANCE = (0.35, 0.65)
-
-
-def usable_cores() -> int:
-    """The cores this process may run on (its affinity where the system tells it, else the machine's)."""
-    if hasattr(os, "sched_getaffinity"):
-        return len(os.sched_getaffinity(0))
-    return os.cpu_count() or 1
 
 
 @dataclass(frozen=True)

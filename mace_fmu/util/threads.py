@@ -9,6 +9,7 @@ busy core cost more than they share out on matrices of this size.
 from __future__ import annotations
 
 import functools
+import os
 from typing import Callable, TypeVar
 
 from threadpoolctl import threadpool_limits
@@ -23,3 +24,10 @@ def single_blas_thread(function: F) -> F:
         with threadpool_limits(limits=1, user_api="blas"):
             return function(*args, **kwargs)
     return wrapper  # type: ignore[return-value]
+
+
+def usable_cores() -> int:
+    """The cores this process may run on (its affinity where the system tells it, else the machine's)."""
+    if hasattr(os, "sched_getaffinity"):
+        return len(os.sched_getaffinity(0))
+    return os.cpu_count() or 1
