@@ -144,10 +144,10 @@ def assemble(deck: Deck, *, mass: MassKind = "lumped") -> FEModel:
 
     bar_cards = sorted(deck.bars.values(), key=lambda b: b.id)
     lines = line_elements(deck, bar_cards, dofs, pos, frames)
-    sections = [bar_section(deck, pid) for pid, _ in lines.distinct]
-    k_one = [local_stiffness(sec, length) for sec, (_, length) in zip(sections, lines.distinct)]
-    m_one = [bar_mass(sec, length, mass, deck) for sec, (_, length) in zip(sections, lines.distinct)]
-    kn_one = [natural_stiffness(sec, length) for sec, (_, length) in zip(sections, lines.distinct)]
+    pairs = [(bar_section(deck, pid), length) for pid, length in lines.distinct]
+    k_one = [local_stiffness(sec, length) for sec, length in pairs]
+    m_one = [bar_mass(sec, length, mass, deck) for sec, length in pairs]
+    kn_one = [natural_stiffness(sec, length) for sec, length in pairs]
     if lines.count:
         k_glob.add_many(lines.dof_indices, lines.to_basic(k_one))
         if all(_rotation_invariant(m_e) for m_e in m_one):

@@ -37,6 +37,7 @@ Guide, PARAM COUPMASS and the CBEAM/CROD remarks):
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from typing import Sequence
 
@@ -139,7 +140,7 @@ class LineElements:
         """Number of elements."""
         return len(self.lengths)
 
-    @property
+    @functools.cached_property  # read for the stiffness and for the mass
     def dof_indices(self) -> np.ndarray:
         """(n, 12) global DOF indices: the six of end A, then the six of end B."""
         six = np.arange(6)
@@ -193,11 +194,9 @@ def add_elements(deck: Deck, dofs: DofMap, positions: dict[int, np.ndarray], fra
     """
     beams = line_elements(deck, sorted(deck.beams.values(), key=lambda b: b.id), dofs, positions, frames)
     if beams.count:
-        sections = [beam_section(deck, pid) for pid, _ in beams.distinct]
-        stiffness.add_many(beams.dof_indices, beams.to_basic(
-            [local_stiffness(sec, length) for sec, (_, length) in zip(sections, beams.distinct)]))
-        mass.add_many(beams.dof_indices, beams.to_basic(
-            [beam_mass(sec, length, kind, deck) for sec, (_, length) in zip(sections, beams.distinct)]))
+        pairs = [(beam_section(deck, pid), length) for pid, length in beams.distinct]
+        stiffness.add_many(beams.dof_indices, beams.to_basic([local_stiffness(sec, length) for sec, length in pairs]))
+        mass.add_many(beams.dof_indices, beams.to_basic([beam_mass(sec, length, kind, deck) for sec, length in pairs]))
 
     for rod in sorted(deck.rods.values(), key=lambda r: r.id):
         if rod.pid is not None:
