@@ -126,3 +126,17 @@ def test_the_cholesky_and_the_lu_solve_alike_and_an_indefinite_matrix_falls_back
     assert _cholesky(analyse(indefinite), indefinite.shape[0]) is None
     x = factorize(indefinite, positive_definite=True)(b)
     assert np.linalg.norm(indefinite @ x - b) <= 1e-8 * np.linalg.norm(b)
+
+
+def test_the_cd_rotation_is_the_block_diagonal_of_each_grids_frame_twice():
+    """The CD rotation built as one block array equals scipy's block_diag of each grid's frame (translations,
+    then rotations), on random frames and on basic ones (whose zeros it does not store)."""
+    from scipy.spatial.transform import Rotation
+
+    from mace_fmu.fe.constraints import cd_rotation
+
+    frames = np.concatenate([Rotation.random(40, random_state=3).as_matrix(), np.broadcast_to(np.eye(3), (5, 3, 3))])
+    expected = sparse.block_diag([block for frame in frames for block in (frame, frame)], format="csr")
+    built = cd_rotation(frames)
+    assert abs(built - expected).max() == 0.0
+    assert built.nnz == 80 * 9 + 10 * 3  # a basic frame stores its three ones only
