@@ -16,10 +16,16 @@ lattice's 50), but they cost a seventh each: 4 s of solves against 14 s (benchma
 "A BLAS for CHOLMOD and block solves").
 
 The massless DOFs' infinite eigenvalues are W's zeros: every vector is an image of W (the start
-block too), so they never enter the basis, and the Ritz vectors carry the massless DOFs' static
-response. A block of ``block_size`` finds eigenvalues of that multiplicity; a Krylov space that
-closes early (a deflated direction) is refilled with fresh random images, so an invariant subspace
-found early is not the end of the search.
+block too), so they never enter the basis. A block of ``block_size`` finds eigenvalues of that
+multiplicity; a Krylov space that closes early (a deflated direction) is refilled with fresh random
+images, so an invariant subspace found early is not the end of the search.
+
+Only the DOFs that M touches take part in the iteration. W Q needs Q on them alone (M Q is zero
+elsewhere), and so does every M inner product, so the basis is kept and orthogonalised on those rows:
+a beam model without rotary inertia has half its DOFs massless, and the Gram-Schmidt, the largest
+cost after the solves, reads half as much. The other rows of each image W Q_j are kept as the solve
+gives them, and the Ritz vectors are returned as W x / theta = (W V y) / theta: one more step of
+inverse iteration, whose massless DOFs carry the static response of the massive ones exactly.
 
 Memory: there is no restart, so the basis keeps every vector, about six per mode wanted (288 vectors,
 230 MB, for the 100k-DOF wide lattice's 50 modes); hundreds of modes at 100k DOFs take gigabytes.
@@ -91,52 +97,93 @@ def lowest_modes(*, stiffness: sparse.sparray, mass: sparse.sparray, solve: Call
     """
     n = stiffness.shape[0]
     rng = np.random.default_rng(seed)
-    space = _Space(n, min(max_dimension, max(6 * count, 8 * block_size)), max_dimension)
-    block = _fresh_images(solve, mass, space.basis(), rng, block_size)
+    touched = _MassRows(mass)
+    space = _Space(touched.rows.size, n - touched.rows.size, min(max_dimension, max(6 * count, 8 * block_size)),
+                   max_dimension)
+
+    def images_of(vectors: np.ndarray) -> tuple[np.ndarray, np.ndarray]:  # W Q on M's rows and on the others
+        loads = np.zeros((n, vectors.shape[1]))
+        loads[touched.rows] = touched @ vectors
+        images = solve(loads)
+        return images[touched.rows], images[touched.others]
+
+    block = _fresh_images(images_of, touched, space.basis(), rng, block_size)
     solved = block_size
     while True:
         first = space.size
         if block is None or not space.append(block):
             return None
-        images = solve(mass @ block)  # W Q_j
+        images, elsewhere = images_of(block)  # W Q_j
+        space.set_images(first, elsewhere)
         solved += images.shape[1]
         basis = space.basis()
         # the basis is read twice a pass: at 100k DOFs, hundreds of megabytes, which BLAS on every core reads
         # faster (the wide lattice's Gram-Schmidt 1.66-1.79 s on one thread, 1.41-1.49 s on two)
         threads = usable_cores() if basis.size >= SHARED_GRAM_SCHMIDT_ENTRIES else 1
         with threadpool_limits(limits=threads, user_api="blas"):
-            coupling = _orthogonalise(images, mass, basis, recent=max(first - block_size, 0))
+            coupling = _orthogonalise(images, touched, basis, recent=max(first - block_size, 0))
         space.set_projection(first, coupling)
         theta, ritz = np.linalg.eigh(space.projection())
         theta, ritz = theta[::-1], ritz[:, ::-1]  # largest theta: lowest lambda
-        block, residual_map = _orthonormal(images, mass, floor=DEFLATION_TOLERANCE * max(abs(theta[0]), 1e-300))
+        block, residual_map = _orthonormal(images, touched, floor=DEFLATION_TOLERANCE * max(abs(theta[0]), 1e-300))
         residual = np.linalg.norm(residual_map @ ritz[first:space.size], axis=0)
         converged = residual <= tolerance * np.abs(theta)
         leading = int(np.argmin(converged)) if not converged.all() else len(converged)
         eigenvalues = shift + 1.0 / theta[:leading]
         if leading >= count and (above is None or (leading and eigenvalues[-1] > above)):
-            vectors = basis @ ritz[:, :leading]
-            vectors /= np.sqrt(np.einsum("im,im->m", vectors, mass @ vectors))
+            y, theta = ritz[:, :leading], theta[:leading]
+            # W x = V T y + Q_(j+1) R_j y_j with T y = theta y: on M's rows V y plus the residual's share
+            vectors = np.empty((n, leading))
+            vectors[touched.rows] = basis @ y + block @ (residual_map @ y[first:]) / theta
+            vectors[touched.others] = space.images() @ y / theta
+            on_rows = vectors[touched.rows]
+            vectors /= np.sqrt(np.einsum("im,im->m", on_rows, touched @ on_rows))
             return LanczosModes(eigenvalues, vectors, solved)
         if block.shape[1] < block_size:  # deflated: fresh directions keep the block's width
             missing = block_size - block.shape[1]
-            fresh = _fresh_images(solve, mass, np.hstack([basis, block]), rng, missing)
+            fresh = _fresh_images(images_of, touched, np.hstack([basis, block]), rng, missing)
             solved += missing
             block = block if fresh is None else np.hstack([block, fresh])
             if block.shape[1] == 0:  # the whole space is invariant: no mode left to find
                 return None
 
 
-class _Space:
-    """The Krylov basis V and W's projection V^T M W V, grown in place (capacity half as large again when full)."""
+class _MassRows:
+    """M on the DOFs it touches (``rows``, a row or column with a nonzero entry), as ``touched @ x`` for x on
+    those rows; a diagonal M (lumped masses) as a product with its diagonal."""
 
-    def __init__(self, rows: int, capacity: int, limit: int):
+    def __init__(self, mass: sparse.sparray):
+        coo = sparse.coo_array(mass)
+        nonzero = coo.data != 0
+        self.rows = np.unique(np.concatenate([coo.row[nonzero], coo.col[nonzero]]))
+        self.others = np.setdiff1d(np.arange(mass.shape[0]), self.rows)
+        block = sparse.csr_array(mass)[self.rows][:, self.rows]
+        diagonal = block.diagonal()
+        self._diagonal = diagonal[:, None] if block.count_nonzero() == np.count_nonzero(diagonal) else None
+        self._block = block
+
+    def __matmul__(self, x: np.ndarray) -> np.ndarray:
+        return self._diagonal * x if self._diagonal is not None else self._block @ x
+
+
+class _Space:
+    """The Krylov basis V on M's rows, the images W V on the other rows, and W's projection V^T M W V, grown
+    in place (capacity half as large again when full)."""
+
+    def __init__(self, rows: int, other_rows: int, capacity: int, limit: int):
         self.size, self.limit = 0, limit
-        self._vectors = np.empty((rows, capacity), order="F")
+        # row-major: a block's columns land as a short run in each row, the order the solve's images come in
+        # (column-major storage took 0.1 s more to fill on the wide lattice)
+        self._vectors = np.empty((rows, capacity))
+        self._images = np.empty((other_rows, capacity))
         self._projection = np.zeros((capacity, capacity))
 
     def basis(self) -> np.ndarray:
         return self._vectors[:, :self.size]
+
+    def images(self) -> np.ndarray:
+        """W V on the rows M does not touch."""
+        return self._images[:, :self.size]
 
     def append(self, block: np.ndarray) -> bool:
         """Add M-orthonormal vectors; False when that would exceed the limit."""
@@ -145,14 +192,18 @@ class _Space:
             return False
         if end > self._vectors.shape[1]:
             capacity = min(self.limit, max(end, 3 * self._vectors.shape[1] // 2))
-            grown = np.empty((self._vectors.shape[0], capacity), order="F")
-            grown[:, :self.size] = self.basis()
+            self._vectors, self._images = (_grown(array, self.size, capacity) for array in (self._vectors,
+                                                                                             self._images))
             projection = np.zeros((capacity, capacity))
             projection[:self.size, :self.size] = self._projection[:self.size, :self.size]
-            self._vectors, self._projection = grown, projection
+            self._projection = projection
         self._vectors[:, self.size:end] = block
         self.size = end
         return True
+
+    def set_images(self, first: int, images: np.ndarray) -> None:
+        """W of the vectors from ``first`` on, on the rows M does not touch."""
+        self._images[:, first:first + images.shape[1]] = images
 
     def set_projection(self, first: int, coupling: np.ndarray) -> None:
         """The columns of V^T M W V for the block from ``first`` (and, by symmetry, its rows)."""
@@ -164,7 +215,13 @@ class _Space:
         return 0.5 * (p + p.T)
 
 
-def _orthogonalise(images: np.ndarray, mass: sparse.sparray, basis: np.ndarray, *, recent: int) -> np.ndarray:
+def _grown(array: np.ndarray, used: int, capacity: int) -> np.ndarray:
+    grown = np.empty((array.shape[0], capacity))
+    grown[:, :used] = array[:, :used]
+    return grown
+
+
+def _orthogonalise(images: np.ndarray, mass: _MassRows, basis: np.ndarray, *, recent: int) -> np.ndarray:
     """Make ``images`` M-orthogonal to ``basis`` in place; the coefficients V^T M Y removed.
 
     Classical Gram-Schmidt, first against the vectors from ``recent`` on (the last two blocks, which
@@ -185,7 +242,7 @@ def _orthogonalise(images: np.ndarray, mass: sparse.sparray, basis: np.ndarray, 
     return coupling
 
 
-def _orthonormal(vectors: np.ndarray, mass: sparse.sparray, *, floor: float) -> tuple[np.ndarray, np.ndarray]:
+def _orthonormal(vectors: np.ndarray, mass: _MassRows, *, floor: float) -> tuple[np.ndarray, np.ndarray]:
     """M-orthonormal Q and R with vectors = Q R, the directions whose M-norm is below ``floor`` dropped.
 
     From the eigen-decomposition of the Gram matrix, twice: one pass leaves Q's columns orthogonal to
@@ -203,10 +260,11 @@ def _orthonormal(vectors: np.ndarray, mass: sparse.sparray, *, floor: float) -> 
     return q, r
 
 
-def _fresh_images(solve: Callable[[np.ndarray], np.ndarray], mass: sparse.sparray, basis: np.ndarray,
-                  rng: np.random.Generator, width: int) -> np.ndarray | None:
-    """``width`` images of W of random vectors, M-orthonormal to ``basis``; None when none is left outside it."""
-    images = solve(mass @ rng.standard_normal((basis.shape[0], width)))
+def _fresh_images(images_of: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]], mass: _MassRows,
+                  basis: np.ndarray, rng: np.random.Generator, width: int) -> np.ndarray | None:
+    """``width`` images of W of random vectors (on M's rows), M-orthonormal to ``basis``; None when none is left
+    outside it."""
+    images, _ = images_of(rng.standard_normal((basis.shape[0], width)))
     before = float(np.sqrt(np.max(np.einsum("im,im->m", images, mass @ images)))) if width else 0.0
     for _ in range(2):
         images -= basis @ (basis.T @ (mass @ images))

@@ -87,6 +87,28 @@ def test_massless_dofs_are_condensed_and_carry_their_static_response():
     np.testing.assert_allclose(x[o], static, atol=1e-9 * np.abs(x).max())
 
 
+def test_a_coupled_mass_on_some_dofs_only():
+    """The chain of the test above with a consistent (coupled) mass between each two neighbouring massive DOFs,
+    m / 6 [[2, 1], [1, 2]], and none on the others: the eigenvalues equal the dense solution of the statically
+    condensed problem (1e-11), the vectors are M-normalised, and their massless DOFs carry the static response
+    -K_oo^-1 K_oa x_a of the massive ones."""
+    n, mass_kg = 1201, 3.0
+    k, _ = _chain(n)
+    a, o = np.arange(0, n, 2), np.arange(1, n, 2)
+    m = np.zeros((n, n))
+    for left, right in zip(a[:-1], a[1:]):
+        m[np.ix_([left, right], [left, right])] += mass_kg / 6.0 * np.array([[2.0, 1.0], [1.0, 2.0]])
+    found = _lowest(k, sparse.csr_array(m), 12)
+    kd = k.toarray()
+    condensed = kd[np.ix_(a, a)] - kd[np.ix_(a, o)] @ np.linalg.solve(kd[np.ix_(o, o)], kd[np.ix_(o, a)])
+    dense = sla.eigh(condensed, m[np.ix_(a, a)], eigvals_only=True)
+    np.testing.assert_allclose(found.eigenvalues[:12], dense[:12], rtol=1e-11)
+    x = found.vectors[:, :12]
+    np.testing.assert_allclose(np.einsum("im,im->m", x, m @ x), 1.0, rtol=1e-12)
+    static = -np.linalg.solve(kd[np.ix_(o, o)], kd[np.ix_(o, a)] @ x[a])
+    np.testing.assert_allclose(x[o], static, atol=1e-9 * np.abs(x).max())
+
+
 def test_it_goes_on_until_a_mode_lies_above_the_frequency_asked():
     """Asked for one mode and every mode up to the 25th chain eigenvalue: it returns at least 26, in order,
     the last above it, equal to the dense solution's (1e-11 relative or 1e-14 of the highest eigenvalue)."""
