@@ -4,7 +4,8 @@ No ordering suits every shape. Reverse Cuthill-McKee keeps the factor inside a b
 wide: the least fill on a slender tower, where the band is narrow. On a wide structure the band is
 wide too, and nested dissection (METIS, through pymetis) fills less: cutting the structure along
 small separators, it leaves a factor that grows with the separators' size instead of the
-cross-section's. CHOLMOD's approximate minimum degree (AMD) is the third candidate. The choice is
+cross-section's. CHOLMOD's approximate minimum degree (AMD) is the third candidate (its analysis, the
+longest, runs through ctypes on a thread of its own, beside the other two). The choice is
 made from the matrix, not from its shape: CHOLMOD's symbolic analysis of each candidate (a fraction
 of a second at 100k DOFs, no numbers factored) gives the size of the factor it would store, and the
 smallest wins. Measured on 100k-DOF lattices (benchmarks/RESULTS.md, "Wide structures: the ordering
@@ -20,13 +21,14 @@ from __future__ import annotations
 
 import hashlib
 import threading
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
 from scipy import sparse
 from scipy.sparse.csgraph import reverse_cuthill_mckee
 
-from mace_fmu.fe.cholmod import factor_layout
+from mace_fmu.fe.cholmod import factor_layout, own_analysis_entries
 from mace_fmu.fe.cholmod import load as load_cholmod
 
 #: Names of the orderings, as reports and benchmarks print them.
@@ -132,29 +134,45 @@ def analyse(matrix: sparse.sparray, *, groups: np.ndarray | None = None, with_am
     n = a.shape[0]
     key = _pattern_key(a, groups, with_amd)
     known = _CHOSEN.get(key)
-    permutations = {known[0].method: known[1]} if known else candidate_permutations(a, groups=groups)
     cholmod = load_cholmod()
     if cholmod is None:
+        permutations = {known[0].method: known[1]} if known else candidate_permutations(a, groups=groups)
         return Analysis(OrderingChoice(RCM, {}), permutations[RCM], None, None)
-    spmatrix = _lower_spmatrix(a)
+    lower = sparse.csc_array(sparse.tril(a))
+    lower.sort_indices()
+    spmatrix = _lower_spmatrix(lower)
     if known and known[1] is None:  # AMD, CHOLMOD's default
         return Analysis(known[0], None, _symbolic(cholmod, spmatrix, None), spmatrix)
-    analysed: dict[str, tuple[object, int | None]] = {}
-    for name, permutation in permutations.items():
-        symbolic = _symbolic(cholmod, spmatrix, permutation)
-        analysed[name] = symbolic, _entries(symbolic, n)
-    if with_amd and not known:  # a known choice needs its own analysis only
-        symbolic = _symbolic(cholmod, spmatrix, None)
-        analysed[AMD] = symbolic, _entries(symbolic, n)
-    if known:
-        return Analysis(known[0], known[1], analysed[known[0].method][0], spmatrix)
+    if known:  # a known choice needs its own analysis only
+        return Analysis(known[0], known[1], _symbolic(cholmod, spmatrix, known[1]), spmatrix)
+    # CHOLMOD's own (AMD) analysis releases Python's lock through ctypes: it runs while the other candidates
+    # are ordered and analysed, which hold it (the wide lattice's analyses: 0.66-0.83 s against 0.79-0.89 s)
+    with ThreadPoolExecutor(max_workers=1) as thread:
+        own = thread.submit(own_analysis_entries, lower) if with_amd else None
+        permutations: dict[str, np.ndarray | None] = dict(candidate_permutations(a, groups=groups))
+        analysed = {name: _analysed(cholmod, spmatrix, permutation, n) for name, permutation in permutations.items()}
+        own_entries = None if own is None else own.result()
+    if with_amd:
+        permutations[AMD] = None
+        # without ctypes, cvxopt's analysis: the symbolic factor at once
+        analysed[AMD] = (None, own_entries) if own_entries is not None else _analysed(cholmod, spmatrix, None, n)
     entries = {name: size for name, (_, size) in analysed.items() if size is not None}
     best = min(entries, key=entries.__getitem__) if len(entries) == len(analysed) else RCM
+    symbolic = analysed[best][0]
+    if symbolic is None:  # AMD counted through ctypes: its symbolic factor, for the factorisation
+        symbolic = _symbolic(cholmod, spmatrix, None)
     choice = OrderingChoice(best, entries)
     if len(_CHOSEN) >= _CHOSEN_KEPT:
         _CHOSEN.pop(next(iter(_CHOSEN)))
-    _CHOSEN[key] = choice, permutations.get(best)
-    return Analysis(choice, permutations.get(best), analysed[best][0], spmatrix)
+    _CHOSEN[key] = choice, permutations[best]
+    return Analysis(choice, permutations[best], symbolic, spmatrix)
+
+
+def _analysed(cholmod: object, spmatrix: object, permutation: np.ndarray | None,
+              rows: int) -> tuple[object, int | None]:
+    """The symbolic factor in the order ``permutation`` (None: CHOLMOD's AMD) and its entries."""
+    symbolic = _symbolic(cholmod, spmatrix, permutation)
+    return symbolic, _entries(symbolic, rows)
 
 
 def symbolic_in_order(matrix: sparse.sparray, permutation: np.ndarray) -> object | None:
@@ -178,7 +196,8 @@ def symbolic_in_order(matrix: sparse.sparray, permutation: np.ndarray) -> object
     return _symbolic(cholmod, _lower_spmatrix(sparse.csr_array(matrix)), permutation)
 
 
-def _lower_spmatrix(a: sparse.csr_array) -> object:
+def _lower_spmatrix(a: sparse.sparray) -> object:
+    """The lower triangle of ``a`` (already the lower triangle: itself) as a cvxopt.spmatrix."""
     import cvxopt
 
     lower = sparse.tril(a).tocoo()

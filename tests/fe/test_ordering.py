@@ -65,6 +65,26 @@ def test_a_wide_lattice_is_ordered_by_nested_dissection_which_fills_less():
 
 
 
+def test_an_irregular_graph_takes_cholmods_own_amd_and_is_solved():
+    """A random sparse graph (600 rows, 1,500 random links) has no band and no small separators: CHOLMOD's own
+    AMD fills least (counted through ctypes beside the other candidates), the analysis carries cvxopt's AMD
+    symbolic factor of the same size, and the Cholesky in it solves A x = b."""
+    from mace_fmu.fe.ordering import _entries
+
+    rng = np.random.default_rng(0)
+    rows, cols = rng.integers(0, 600, 1500), rng.integers(0, 600, 1500)
+    links = sparse.csr_array(sparse.coo_array((np.ones(1500), (rows, cols)), shape=(600, 600)))
+    links = links + links.T
+    matrix = sparse.csr_array(links + sparse.diags_array(np.asarray(links.sum(axis=1)).ravel() + 1.0))
+    analysis = analyse(matrix)
+    entries = analysis.choice.factor_entries
+    assert analysis.choice.method == AMD and entries[AMD] == min(entries.values())
+    assert analysis.permutation is None and _entries(analysis.symbolic, 600) == entries[AMD]
+    b = rng.standard_normal(600)
+    x = factorize(matrix, positive_definite=True)(b)
+    assert np.linalg.norm(matrix @ x - b) <= 1e-10 * np.linalg.norm(b)
+
+
 def test_the_lus_ordering_reuses_the_choice_a_cholesky_analysis_made(monkeypatch):
     """A matrix expected positive definite that is not goes from CHOLMOD to the LU: the LU's permutation is the
     one the Cholesky's analysis of the same pattern chose (nested dissection here, the least fill with AMD
