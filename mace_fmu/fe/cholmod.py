@@ -444,7 +444,8 @@ class CholeskySolve:
             return self._cvxopt_solve(columns)
         try:
             values = ctypes.cast(solution.contents.x, ctypes.POINTER(ctypes.c_double))
-            return np.ctypeslib.as_array(values, shape=(width, rows)).T.copy()
+            # CHOLMOD's columns as they lie (column-major): a copy without a transposition
+            return np.ctypeslib.as_array(values, shape=(width, rows)).T.copy(order="F")
         finally:
             self._library.cholmod_l_free_dense(ctypes.byref(solution), common)
 

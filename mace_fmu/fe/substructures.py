@@ -151,7 +151,7 @@ class _Substructure:
         """y = L^-1 [b on the substructure's rows; 0 on the interface] (the factor's order), and what the
         substructure takes off the interface's right-hand side, A_Ii A_ii^-1 b_i = X_i y_i = -L_iI w_i (w_i:
         y's interface part), with its sign turned (the interface's order)."""
-        rhs = np.zeros((self.size, b.shape[1]))
+        rhs = np.zeros((self.size, b.shape[1]), order="F")  # column-major, as CHOLMOD reads it
         rhs[self.inner_at] = b[self.inner_rows]
         y = self.solve.triangular(rhs, transpose=False)
         return y, self.coupling @ y[self.inner:]
@@ -159,7 +159,7 @@ class _Substructure:
     def backward(self, y: np.ndarray, on_interface: np.ndarray, out: np.ndarray) -> None:
         """L^-T [y's substructure part; L_iI^T x_I]: x_i = A_ii^-1 (b_i - A_iI x_I), written into ``out``'s rows
         of this substructure (``on_interface``: x_I, in the interface's order)."""
-        rhs = y.copy()
+        rhs = y.copy(order="K")  # column-major, as the forward sweep left it
         rhs[self.inner:] = self.coupling.T @ on_interface
         out[self.inner_rows] = self.solve.triangular(rhs, transpose=True)[self.inner_at]
 
