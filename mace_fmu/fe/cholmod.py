@@ -241,6 +241,17 @@ _SWITCH_OFFSET, _SUPERNODAL_OFFSET = 40, 48
 _CHOLMOD_AUTO, _CHOLMOD_SUPERNODAL = 1, 2
 
 
+def _lower_triangle(lower: sparse.csc_array) -> tuple[_Sparse, tuple[np.ndarray, ...]]:
+    """``lower`` as CHOLMOD's sparse matrix (stype -1: the lower triangle of a symmetric one), and the arrays it
+    points into, which must outlive CHOLMOD's use of it."""
+    n = lower.shape[0]
+    indptr, indices = lower.indptr.astype(np.int64), lower.indices.astype(np.int64)
+    values = np.ascontiguousarray(lower.data, dtype=float)
+    matrix = _Sparse(n, n, len(values), indptr.ctypes.data, indices.ctypes.data, None, values.ctypes.data, None,
+                     -1, _CHOLMOD_LONG, _CHOLMOD_REAL, _CHOLMOD_DOUBLE, 1, 1)
+    return matrix, (indptr, indices, values)
+
+
 def own_analysis_entries(lower: sparse.csc_array) -> int | None:
     """The entries of the supernodal factor CHOLMOD's own analysis (its AMD ordering) sizes for ``lower``'s matrix.
 
@@ -262,11 +273,7 @@ def own_analysis_entries(lower: sparse.csc_array) -> int | None:
     library = _cholmod_library()
     if library is None:
         return None
-    n = lower.shape[0]
-    indptr, indices = lower.indptr.astype(np.int64), lower.indices.astype(np.int64)
-    values = np.ascontiguousarray(lower.data, dtype=float)
-    matrix = _Sparse(n, n, len(values), indptr.ctypes.data, indices.ctypes.data, None, values.ctypes.data, None,
-                     -1, _CHOLMOD_LONG, _CHOLMOD_REAL, _CHOLMOD_DOUBLE, 1, 1)  # stype -1: the lower triangle
+    matrix, _arrays = _lower_triangle(lower)
     common = ctypes.create_string_buffer(_COMMON_BYTES)
     library.cholmod_l_start(common)
     try:
@@ -310,10 +317,7 @@ def numeric(symbolic: object, lower: sparse.csc_array) -> bool | None:
     library = _cholmod_library()
     if library is None or layout is None or layout.index_type != _CHOLMOD_LONG:
         return None
-    indptr, indices = lower.indptr.astype(np.int64), lower.indices.astype(np.int64)
-    values = np.ascontiguousarray(lower.data, dtype=float)
-    matrix = _Sparse(n, n, len(values), indptr.ctypes.data, indices.ctypes.data, None, values.ctypes.data, None,
-                     -1, _CHOLMOD_LONG, _CHOLMOD_REAL, _CHOLMOD_DOUBLE, 1, 1)  # stype -1: the lower triangle
+    matrix, _arrays = _lower_triangle(lower)
     common = ctypes.create_string_buffer(_COMMON_BYTES)
     library.cholmod_l_start(common)
     try:

@@ -117,8 +117,9 @@ def lowest_modes(*, stiffness: sparse.sparray, mass: sparse.sparray, solve: Call
         space.set_images(first, elsewhere)
         solved += images.shape[1]
         basis = space.basis()
-        # the basis is read twice a pass: at 100k DOFs, hundreds of megabytes, which BLAS on every core reads
-        # faster (the wide lattice's Gram-Schmidt 1.66-1.79 s on one thread, 1.41-1.49 s on two)
+        # the basis is read twice a pass: at 100k DOFs, a hundred megabytes and more, which BLAS on every core
+        # reads faster (the wide lattice's Gram-Schmidt, on its DOFs with mass: 0.89-1.08 s on one thread,
+        # 0.65-0.73 s on two)
         threads = usable_cores() if basis.size >= SHARED_GRAM_SCHMIDT_ENTRIES else 1
         with threadpool_limits(limits=threads, user_api="blas"):
             coupling = _orthogonalise(images, touched, basis, recent=max(first - block_size, 0))
