@@ -1,4 +1,5 @@
-"""What every benchmark shares: the machine line for RESULTS.md and a repeat-and-time loop."""
+"""What every benchmark shares: the machine line for RESULTS.md, a repeat-and-time loop, and two measures of the
+machine's state during a run (the CPU time the host took, and the speed of a fixed Python loop)."""
 
 from __future__ import annotations
 
@@ -46,3 +47,28 @@ def timed(fn: Callable[[], Any], runs: int) -> tuple[float, float, Any]:
         out = fn()
         times.append(time.perf_counter() - t0)
     return statistics.median(times), min(times), out
+
+
+def stolen_cpu_s() -> float | None:
+    """CPU time the hypervisor has taken from this virtual machine since boot [s], summed over its cores
+    (/proc/stat's "steal"); None where the system does not count it. The difference over a run says how
+    much of its wall time the host's other guests took."""
+    try:
+        with open("/proc/stat") as stat:
+            fields = stat.readline().split()
+    except OSError:
+        return None
+    if len(fields) < 9 or fields[0] != "cpu":
+        return None
+    return int(fields[8]) / os.sysconf("SC_CLK_TCK")
+
+
+def python_loop_s() -> float:
+    """The fastest of three runs of 3 million additions in a Python loop [s]: the machine's speed for
+    interpreted work at the moment, taken before a run (on the 2-core machine 0.107-0.195 s in one hour)."""
+    def once() -> float:
+        start, total = time.perf_counter(), 0
+        for i in range(3_000_000):
+            total += i
+        return time.perf_counter() - start
+    return min(once() for _ in range(3))
