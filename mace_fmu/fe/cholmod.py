@@ -219,13 +219,16 @@ def _cholmod_library() -> ctypes.CDLL | None:
             solve, start, finish, free, factorize = (library.cholmod_l_solve, library.cholmod_l_start,
                                                      library.cholmod_l_finish, library.cholmod_l_free_dense,
                                                      library.cholmod_l_factorize)
-            analyze, free_factor = library.cholmod_l_analyze, library.cholmod_l_free_factor
+            analyze, analyze_p = library.cholmod_l_analyze, library.cholmod_l_analyze_p
+            free_factor = library.cholmod_l_free_factor
         except (OSError, AttributeError):
             continue
         factorize.restype = ctypes.c_int
         factorize.argtypes = [ctypes.POINTER(_Sparse), ctypes.c_void_p, ctypes.c_void_p]
-        analyze.restype = ctypes.c_void_p
+        analyze.restype = analyze_p.restype = ctypes.c_void_p
         analyze.argtypes = [ctypes.POINTER(_Sparse), ctypes.c_void_p]
+        analyze_p.argtypes = [ctypes.POINTER(_Sparse), ctypes.c_void_p, ctypes.c_void_p, ctypes.c_size_t,
+                              ctypes.c_void_p]
         free_factor.argtypes = [ctypes.POINTER(ctypes.c_void_p), ctypes.c_void_p]
         solve.restype = ctypes.POINTER(_Dense)
         solve.argtypes = [ctypes.c_int, ctypes.c_void_p, ctypes.POINTER(_Dense), ctypes.c_void_p]
@@ -235,9 +238,11 @@ def _cholmod_library() -> ctypes.CDLL | None:
     return None
 
 
-#: Where cholmod_common keeps ``supernodal_switch`` (a double, 40.0 after cholmod_l_start) and ``supernodal`` (an
-#: int, CHOLMOD_AUTO = 1): after dbound, grow0, grow1, grow2, maxrank, in every CHOLMOD 3 (cholmod_core.h)
-_SWITCH_OFFSET, _SUPERNODAL_OFFSET = 40, 48
+#: Where cholmod_common keeps ``supernodal_switch`` (a double, 40.0 after cholmod_l_start), ``supernodal`` (an int,
+#: CHOLMOD_AUTO = 1), ``print`` (3) and ``nmethods`` (0): the order of cholmod_core.h in every CHOLMOD 3 (dbound,
+#: grow0, grow1, grow2, maxrank, supernodal_switch, supernodal, the final_* flags, zrelax, nrelax, four prefer
+#: and quick flags, print, precise, try_catch, error_handler, nmethods)
+_SWITCH_OFFSET, _SUPERNODAL_OFFSET, _PRINT_OFFSET, _NMETHODS_OFFSET = 40, 48, 144, 168
 _CHOLMOD_AUTO, _CHOLMOD_SUPERNODAL = 1, 2
 
 
@@ -252,17 +257,21 @@ def _lower_triangle(lower: sparse.csc_array) -> tuple[_Sparse, tuple[np.ndarray,
     return matrix, (indptr, indices, values)
 
 
-def own_analysis_entries(lower: sparse.csc_array) -> int | None:
-    """The entries of the supernodal factor CHOLMOD's own analysis (its AMD ordering) sizes for ``lower``'s matrix.
+def analysis_entries(lower: sparse.csc_array, permutation: np.ndarray | None = None) -> int | None:
+    """The entries of the supernodal factor CHOLMOD's symbolic analysis sizes for ``lower``'s matrix in the order
+    ``permutation`` (None: CHOLMOD's own, AMD).
 
-    The number ``cvxopt.cholmod.symbolic`` without a permutation gives, computed through ctypes with Python's
-    lock released, so that it runs beside the other candidates' orderings (mace_fmu.fe.ordering): the wide
-    lattice's takes 0.25-0.35 s.
+    The number ``cvxopt.cholmod.symbolic`` gives, computed through ctypes with Python's lock released, so that
+    the candidates' analyses run beside each other and beside the nested dissection's ordering
+    (mace_fmu.fe.ordering): on the wide lattice AMD's takes 0.25-0.35 s, RCM's and nested dissection's
+    0.06-0.08 s.
 
     Parameters
     ----------
     lower : scipy.sparse.csc_array
         The lower triangle of the symmetric matrix, its row indices sorted within each column.
+    permutation : numpy.ndarray, optional
+        Row ``permutation[i]`` goes to position i; None for CHOLMOD's own ordering.
 
     Returns
     -------
@@ -274,15 +283,22 @@ def own_analysis_entries(lower: sparse.csc_array) -> int | None:
     if library is None:
         return None
     matrix, _arrays = _lower_triangle(lower)
+    order = None if permutation is None else np.ascontiguousarray(permutation, dtype=np.int64)
     common = ctypes.create_string_buffer(_COMMON_BYTES)
     library.cholmod_l_start(common)
     try:
         supernodal = ctypes.c_int.from_buffer(common, _SUPERNODAL_OFFSET)
-        if (ctypes.c_double.from_buffer(common, _SWITCH_OFFSET).value != 40.0
-                or supernodal.value != _CHOLMOD_AUTO):
+        methods = ctypes.c_int.from_buffer(common, _NMETHODS_OFFSET)
+        if (ctypes.c_double.from_buffer(common, _SWITCH_OFFSET).value != 40.0 or supernodal.value != _CHOLMOD_AUTO
+                or ctypes.c_int.from_buffer(common, _PRINT_OFFSET).value != 3 or methods.value != 0):
             return None  # not the layout expected: leave it to cvxopt
         supernodal.value = _CHOLMOD_SUPERNODAL  # as cvxopt's analyses, whatever the matrix's size
-        factor = ctypes.c_void_p(library.cholmod_l_analyze(ctypes.byref(matrix), common))
+        if order is None:
+            factor = ctypes.c_void_p(library.cholmod_l_analyze(ctypes.byref(matrix), common))
+        else:
+            methods.value = 1  # the given order only, as cvxopt's analysis with a permutation
+            factor = ctypes.c_void_p(library.cholmod_l_analyze_p(ctypes.byref(matrix), order.ctypes.data, None, 0,
+                                                                 common))
         if not factor.value:
             return None
         try:

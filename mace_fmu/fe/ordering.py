@@ -4,8 +4,8 @@ No ordering suits every shape. Reverse Cuthill-McKee keeps the factor inside a b
 wide: the least fill on a slender tower, where the band is narrow. On a wide structure the band is
 wide too, and nested dissection (METIS, through pymetis) fills less: cutting the structure along
 small separators, it leaves a factor that grows with the separators' size instead of the
-cross-section's. CHOLMOD's approximate minimum degree (AMD) is the third candidate (its analysis, the
-longest, runs through ctypes on a thread of its own, beside the other two). The choice is
+cross-section's. CHOLMOD's approximate minimum degree (AMD) is the third candidate (the analyses run
+through ctypes on two threads, beside the nested dissection's ordering). The choice is
 made from the matrix, not from its shape: CHOLMOD's symbolic analysis of each candidate (a fraction
 of a second at 100k DOFs, no numbers factored) gives the size of the factor it would store, and the
 smallest wins. Measured on 100k-DOF lattices (benchmarks/RESULTS.md, "Wide structures: the ordering
@@ -19,6 +19,7 @@ at 100k DOFs) and no more fill. Without pymetis the candidates are RCM and AMD.
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import threading
 from concurrent.futures import ThreadPoolExecutor
@@ -28,7 +29,7 @@ import numpy as np
 from scipy import sparse
 from scipy.sparse.csgraph import reverse_cuthill_mckee
 
-from mace_fmu.fe.cholmod import factor_layout, own_analysis_entries
+from mace_fmu.fe.cholmod import analysis_entries, factor_layout
 from mace_fmu.fe.cholmod import load as load_cholmod
 
 #: Names of the orderings, as reports and benchmarks print them.
@@ -104,12 +105,27 @@ def _nested_dissection(pattern: sparse.csr_matrix, groups: np.ndarray | None) ->
 
 @dataclass(frozen=True)
 class Analysis:
-    """CHOLMOD's symbolic analysis in the ordering that fills least, ready for its numeric factorisation."""
+    """The ordering that fills least, and CHOLMOD's symbolic analysis in it for a numeric factorisation.
+
+    The symbolic factor is made when it is first asked for: the substructures (mace_fmu.fe.substructures)
+    analyse their own blocks and never need the whole matrix's (0.2 s at 100k DOFs)."""
 
     choice: OrderingChoice  #: the ordering taken and every candidate's factor size
     permutation: np.ndarray | None  #: the ordering taken (None for AMD, which CHOLMOD keeps to itself)
-    symbolic: object | None  #: cvxopt.cholmod's symbolic factor in that ordering (None without cvxopt)
-    lower: object | None  #: the matrix's lower triangle as the cvxopt.spmatrix it was analysed as
+    lower_triangle: sparse.csc_array | None  #: the matrix's lower triangle (None without cvxopt)
+
+    @functools.cached_property
+    def lower(self) -> object | None:
+        """The lower triangle as the cvxopt.spmatrix the symbolic factor is made from (None without cvxopt)."""
+        return None if self.lower_triangle is None else _lower_spmatrix(self.lower_triangle)
+
+    @functools.cached_property
+    def symbolic(self) -> object | None:
+        """cvxopt.cholmod's symbolic factor in the ordering taken (None without cvxopt)."""
+        cholmod = load_cholmod()
+        if cholmod is None or self.lower is None:
+            return None
+        return _symbolic(cholmod, self.lower, self.permutation)
 
 
 def analyse(matrix: sparse.sparray, *, groups: np.ndarray | None = None, with_amd: bool = True) -> Analysis:
@@ -137,42 +153,33 @@ def analyse(matrix: sparse.sparray, *, groups: np.ndarray | None = None, with_am
     cholmod = load_cholmod()
     if cholmod is None:
         permutations = {known[0].method: known[1]} if known else candidate_permutations(a, groups=groups)
-        return Analysis(OrderingChoice(RCM, {}), permutations[RCM], None, None)
+        return Analysis(OrderingChoice(RCM, {}), permutations[RCM], None)
     lower = sparse.csc_array(sparse.tril(a))
     lower.sort_indices()
-    spmatrix = _lower_spmatrix(lower)
-    if known and known[1] is None:  # AMD, CHOLMOD's default
-        return Analysis(known[0], None, _symbolic(cholmod, spmatrix, None), spmatrix)
-    if known:  # a known choice needs its own analysis only
-        return Analysis(known[0], known[1], _symbolic(cholmod, spmatrix, known[1]), spmatrix)
-    # CHOLMOD's own (AMD) analysis releases Python's lock through ctypes: it runs while the other candidates
-    # are ordered and analysed, which hold it (the wide lattice's analyses: 0.66-0.83 s against 0.79-0.89 s)
-    with ThreadPoolExecutor(max_workers=1) as thread:
-        own = thread.submit(own_analysis_entries, lower) if with_amd else None
+    if known:  # the choice made for this pattern before
+        return Analysis(known[0], known[1], lower)
+    # CHOLMOD's analyses through ctypes release Python's lock: AMD's, the longest, runs while the nested
+    # dissection orders the grids, then RCM's and nested dissection's side by side (the wide lattice's
+    # analyses: 0.44-0.66 s, against 0.55-0.96 s with those two through cvxopt and the chosen order's
+    # symbolic factor made at once, which the substructures never use)
+    with ThreadPoolExecutor(max_workers=2) as threads:
+        counting = {AMD: threads.submit(analysis_entries, lower)} if with_amd else {}
         permutations: dict[str, np.ndarray | None] = dict(candidate_permutations(a, groups=groups))
-        analysed = {name: _analysed(cholmod, spmatrix, permutation, n) for name, permutation in permutations.items()}
-        own_entries = None if own is None else own.result()
+        counting.update({name: threads.submit(analysis_entries, lower, permutation)
+                         for name, permutation in permutations.items()})
+        counted = {name: count.result() for name, count in counting.items()}
     if with_amd:
         permutations[AMD] = None
-        # without ctypes, cvxopt's analysis: the symbolic factor at once
-        analysed[AMD] = (None, own_entries) if own_entries is not None else _analysed(cholmod, spmatrix, None, n)
-    entries = {name: size for name, (_, size) in analysed.items() if size is not None}
-    best = min(entries, key=entries.__getitem__) if len(entries) == len(analysed) else RCM
-    symbolic = analysed[best][0]
-    if symbolic is None:  # AMD counted through ctypes: its symbolic factor, for the factorisation
-        symbolic = _symbolic(cholmod, spmatrix, None)
+    if any(count is None for count in counted.values()):  # CHOLMOD not reachable through ctypes: cvxopt's
+        spmatrix = _lower_spmatrix(lower)
+        counted = {name: _entries(_symbolic(cholmod, spmatrix, permutations[name]), n) for name in counted}
+    entries = {name: size for name, size in counted.items() if size is not None}
+    best = min(entries, key=entries.__getitem__) if len(entries) == len(counted) else RCM
     choice = OrderingChoice(best, entries)
     if len(_CHOSEN) >= _CHOSEN_KEPT:
         _CHOSEN.pop(next(iter(_CHOSEN)))
     _CHOSEN[key] = choice, permutations[best]
-    return Analysis(choice, permutations[best], symbolic, spmatrix)
-
-
-def _analysed(cholmod: object, spmatrix: object, permutation: np.ndarray | None,
-              rows: int) -> tuple[object, int | None]:
-    """The symbolic factor in the order ``permutation`` (None: CHOLMOD's AMD) and its entries."""
-    symbolic = _symbolic(cholmod, spmatrix, permutation)
-    return symbolic, _entries(symbolic, rows)
+    return Analysis(choice, permutations[best], lower)
 
 
 def symbolic_in_order(matrix: sparse.sparray, permutation: np.ndarray) -> object | None:

@@ -112,11 +112,12 @@ def test_cholmods_blas_is_openblas_with_the_processors_kernels():
 
 
 @pytest.mark.parametrize("shape", [(2, 2, 3), (4, 4, 6), (10, 10, 3)])
-def test_cholmods_own_analysis_through_ctypes_sizes_the_factor_as_cvxopts(shape):
-    """CHOLMOD's own (AMD) analysis through ctypes, which runs beside the other candidates' orderings, sizes the
-    same supernodal factor as cvxopt.cholmod.symbolic without a permutation: lattices of 72 (where CHOLMOD's
-    default would take a simplicial factor), 576 and 1,800 DOFs."""
-    from mace_fmu.fe.ordering import _entries, _lower_spmatrix, _symbolic
+def test_cholmods_analyses_through_ctypes_size_the_factor_as_cvxopts(shape):
+    """CHOLMOD's symbolic analyses through ctypes, which run beside each other and beside the nested dissection,
+    size the same supernodal factor as cvxopt.cholmod.symbolic: CHOLMOD's own order (AMD) and each candidate's
+    given order, on lattices of 72 (where CHOLMOD's default would take a simplicial factor), 576 and 1,800
+    DOFs."""
+    from mace_fmu.fe.ordering import _entries, _lower_spmatrix, _symbolic, candidate_permutations
 
     deck = read_deck_text(frame_tower(nx=shape[0], ny=shape[1], levels=shape[2]), name="lattice.bdf")
     model = assemble(deck)
@@ -125,6 +126,9 @@ def test_cholmods_own_analysis_through_ctypes_sizes_the_factor_as_cvxopts(shape)
     matrix = sparse.csr_array(0.5 * (matrix + matrix.T))
     lower = sparse.csc_array(sparse.tril(matrix))
     lower.sort_indices()
-    expected = _entries(_symbolic(cholmod.load(), _lower_spmatrix(matrix), None), matrix.shape[0])
-    assert expected > 0
-    assert cholmod.own_analysis_entries(lower) == expected
+    grids = np.array([g for g, _ in constraints.independent])
+    orders = {"AMD": None, **candidate_permutations(matrix, groups=grids)}
+    for name, permutation in orders.items():
+        expected = _entries(_symbolic(cholmod.load(), _lower_spmatrix(matrix), permutation), matrix.shape[0])
+        assert expected > 0
+        assert cholmod.analysis_entries(lower, permutation) == expected, name
