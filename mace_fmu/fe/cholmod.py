@@ -146,12 +146,13 @@ class FactorLayout:
 
 
 def factor_layout(symbolic: object, rows: int) -> FactorLayout | None:
-    """The cholmod_factor inside cvxopt's capsule ``symbolic``, when it is one of order ``rows``.
+    """The cholmod_factor inside cvxopt's capsule ``symbolic`` (or a :class:`SymbolicFactor`), when it is one of
+    order ``rows``.
 
     Parameters
     ----------
     symbolic : object
-        ``cvxopt.cholmod.symbolic``'s result.
+        ``cvxopt.cholmod.symbolic``'s result or a :class:`SymbolicFactor`.
     rows : int
         The order of the analysed matrix.
 
@@ -160,6 +161,8 @@ def factor_layout(symbolic: object, rows: int) -> FactorLayout | None:
     FactorLayout or None
         None when the object is not a CHOLMOD factor of that order or its sizes are out of range.
     """
+    if isinstance(symbolic, SymbolicFactor):
+        return _layout_at(symbolic.address, rows)
     api = ctypes.pythonapi
     api.PyCapsule_GetName.restype = ctypes.c_char_p
     api.PyCapsule_GetName.argtypes = [ctypes.py_object]
@@ -172,6 +175,10 @@ def factor_layout(symbolic: object, rows: int) -> FactorLayout | None:
         address = api.PyCapsule_GetPointer(symbolic, name)
     except (TypeError, ValueError, ctypes.ArgumentError):
         return None
+    return _layout_at(address, rows)
+
+
+def _layout_at(address: int, rows: int) -> FactorLayout | None:
     words = (ctypes.c_size_t * 22).from_address(address)
     flags = (ctypes.c_int * 7).from_address(address + 22 * ctypes.sizeof(ctypes.c_size_t))
     n, xsize = int(words[0]), int(words[15])
@@ -279,6 +286,39 @@ def analysis_entries(lower: sparse.csc_array, permutation: np.ndarray | None = N
         The factor's entries (its dense blocks' padding included); None when CHOLMOD is not reachable
         through ctypes or its workspace is not laid out as expected.
     """
+    factor = symbolic_factor(lower, permutation)
+    return None if factor is None else int(_factor_words(factor.address)[15])  # xsize, as FactorLayout.entries
+
+
+class SymbolicFactor:
+    """A CHOLMOD factor made by a symbolic analysis through ctypes (:func:`symbolic_factor`), freed with this
+    object. :func:`numeric` fills it, :class:`CholeskySolve` solves with it, as with cvxopt's."""
+
+    def __init__(self, library: ctypes.CDLL, address: int):
+        self.address = address
+        weakref.finalize(self, _free_factor, library, address)
+
+
+def symbolic_factor(lower: sparse.csc_array, permutation: np.ndarray | None = None) -> SymbolicFactor | None:
+    """CHOLMOD's supernodal symbolic analysis of ``lower``'s matrix in the order ``permutation`` (None: CHOLMOD's
+    own, AMD), through ctypes with Python's lock released.
+
+    The factor ``cvxopt.cholmod.symbolic`` makes with cvxopt's options (supernodal; with a permutation, that one
+    only), without holding the lock: two substructures' analyses run beside each other
+    (mace_fmu.fe.substructures), where cvxopt's made the second wait for the first.
+
+    Parameters
+    ----------
+    lower : scipy.sparse.csc_array
+        The lower triangle of the symmetric matrix, its row indices sorted within each column.
+    permutation : numpy.ndarray, optional
+        Row ``permutation[i]`` goes to position i; None for CHOLMOD's own ordering.
+
+    Returns
+    -------
+    SymbolicFactor or None
+        None when CHOLMOD is not reachable through ctypes or its workspace is not laid out as expected.
+    """
     library = _cholmod_library()
     if library is None:
         return None
@@ -294,23 +334,24 @@ def analysis_entries(lower: sparse.csc_array, permutation: np.ndarray | None = N
             return None  # not the layout expected: leave it to cvxopt
         supernodal.value = _CHOLMOD_SUPERNODAL  # as cvxopt's analyses, whatever the matrix's size
         if order is None:
-            factor = ctypes.c_void_p(library.cholmod_l_analyze(ctypes.byref(matrix), common))
+            address = library.cholmod_l_analyze(ctypes.byref(matrix), common)
         else:
             methods.value = 1  # the given order only, as cvxopt's analysis with a permutation
-            factor = ctypes.c_void_p(library.cholmod_l_analyze_p(ctypes.byref(matrix), order.ctypes.data, None, 0,
-                                                                 common))
-        if not factor.value:
-            return None
-        try:
-            return int(_factor_words(factor.value)[15])  # xsize, as FactorLayout.entries
-        finally:
-            library.cholmod_l_free_factor(ctypes.byref(factor), common)
+            address = library.cholmod_l_analyze_p(ctypes.byref(matrix), order.ctypes.data, None, 0, common)
+        return SymbolicFactor(library, address) if address else None
     finally:
         library.cholmod_l_finish(common)
 
 
+def _free_factor(library: ctypes.CDLL, address: int) -> None:
+    common = ctypes.create_string_buffer(_COMMON_BYTES)
+    library.cholmod_l_start(common)
+    library.cholmod_l_free_factor(ctypes.byref(ctypes.c_void_p(address)), common)
+    library.cholmod_l_finish(common)
+
+
 def numeric(symbolic: object, lower: sparse.csc_array) -> bool | None:
-    """CHOLMOD's numeric factorisation of ``lower``'s matrix into cvxopt's ``symbolic`` factor, through ctypes.
+    """CHOLMOD's numeric factorisation of ``lower``'s matrix into the ``symbolic`` factor, through ctypes.
 
     What ``cvxopt.cholmod.numeric`` does, but with the GIL released while CHOLMOD works, so that two
     factors can be computed on two cores at once (mace_fmu.fe.substructures).
@@ -318,7 +359,7 @@ def numeric(symbolic: object, lower: sparse.csc_array) -> bool | None:
     Parameters
     ----------
     symbolic : object
-        ``cvxopt.cholmod.symbolic``'s result for the same pattern.
+        ``cvxopt.cholmod.symbolic``'s result or :func:`symbolic_factor`'s for the same pattern.
     lower : scipy.sparse.csc_array
         The lower triangle of the symmetric matrix, its row indices sorted within each column.
 
@@ -346,12 +387,13 @@ def numeric(symbolic: object, lower: sparse.csc_array) -> bool | None:
 
 
 class CholeskySolve:
-    """x = solve(b) on a CHOLMOD factor that cvxopt computed: every column of ``b`` in one call.
+    """x = solve(b) on a CHOLMOD factor: every column of ``b`` in one call.
 
     Parameters
     ----------
     factor : object
-        ``cvxopt.cholmod``'s numeric factor (the symbolic one after ``cholmod.numeric``).
+        ``cvxopt.cholmod``'s numeric factor (the symbolic one after ``cholmod.numeric``), or a
+        :class:`SymbolicFactor` after :func:`numeric`.
     rows : int
         Its order.
     """
@@ -439,18 +481,22 @@ class CholeskySolve:
         bounds = _long_array(int(words[18]), supernodes + 1)  # super: each supernode's first column
         row_start = _long_array(int(words[19]), supernodes + 1)  # pi: where its row indices start in s
         value_start = _long_array(int(words[20]), supernodes + 1)  # px: where its values start in x
-        rows_of = _long_array(int(words[21]), int(row_start[-1]))  # s: the row indices
+        last = int(np.searchsorted(bounds, first, side="right")) - 1  # the supernode that holds column ``first``
+        # s: the row indices of those supernodes only (all of them are millions of entries)
+        rows_of = _long_array(int(words[21]) + 8 * int(row_start[last]), int(row_start[-1] - row_start[last]))
         values = np.ctypeslib.as_array((ctypes.c_double * int(words[15])).from_address(int(words[8])))
         block = np.zeros((size, size))
         # a supernode is a dense column-major block: its columns, and every row below them that they reach
-        for k in range(supernodes - 1, -1, -1):
+        for k in range(last, supernodes):
             k1, k2 = int(bounds[k]), int(bounds[k + 1])
-            if k2 <= first:
-                break
-            rows = rows_of[row_start[k]:row_start[k + 1]]
+            rows = rows_of[row_start[k] - row_start[last]:row_start[k + 1] - row_start[last]]
             dense = values[value_start[k]:value_start[k] + len(rows) * (k2 - k1)].reshape(k2 - k1, len(rows)).T
-            c0, keep = max(k1, first), rows >= first
-            block[np.ix_(rows[keep] - first, np.arange(c0, k2) - first)] = dense[keep][:, c0 - k1:]
+            c0, below = max(k1, first), int(np.searchsorted(rows, first))  # a supernode's rows are sorted
+            at = rows[below:] - first
+            if len(at) and at[-1] - at[0] == len(at) - 1:  # consecutive rows (the last supernodes' are): a slice
+                block[at[0]:at[-1] + 1, c0 - first:k2 - first] = dense[below:, c0 - k1:]
+            else:
+                block[at, c0 - first:k2 - first] = dense[below:, c0 - k1:]
         return np.tril(block)
 
     def _solve_block(self, columns: np.ndarray, common: ctypes.Array, system: int = _CHOLMOD_A) -> np.ndarray:
@@ -460,6 +506,8 @@ class CholeskySolve:
         solution = self._library.cholmod_l_solve(system, self._address, ctypes.byref(dense), common)
         if not solution and system != _CHOLMOD_A:
             raise MemoryError("CHOLMOD could not allocate the workspace of a triangular solve")
+        if not solution and isinstance(self._factor, SymbolicFactor):  # cvxopt cannot solve with it
+            raise MemoryError("CHOLMOD could not allocate the workspace of a solve")
         if not solution:  # CHOLMOD could not allocate its workspace: the slower route has its own
             return self._cvxopt_solve(columns)
         try:

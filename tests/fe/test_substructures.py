@@ -14,7 +14,7 @@ from support.decks import frame_tower
 from mace_fmu.deck.reader import read_deck_text
 from mace_fmu.fe import factor, substructures
 from mace_fmu.fe.assembly import assemble
-from mace_fmu.fe.cholmod import CholeskySolve, numeric
+from mace_fmu.fe.cholmod import CholeskySolve, SymbolicFactor, numeric, symbolic_factor
 from mace_fmu.fe.constraints import build_constraints
 from mace_fmu.fe.ordering import NESTED_DISSECTION, RCM, analyse, symbolic_in_order
 
@@ -83,26 +83,34 @@ def test_solutions_equal_scipys_lu(shape, width, request):
                                atol=1e-11 * np.abs(expected).max())
 
 
-def test_the_factors_pieces_equal_lapacks_dense_cholesky(slender):
+@pytest.mark.parametrize("analysed_by", ["cvxopt", "ctypes"])
+def test_the_factors_pieces_equal_lapacks_dense_cholesky(slender, analysed_by):
     """The triangular solves and the trailing block read from CHOLMOD's supernodal factor, against LAPACK's
-    dense Cholesky of the same matrix in the factor's own order."""
+    dense Cholesky of the same matrix in the factor's own order: for the symbolic factor cvxopt makes and for
+    the one made through ctypes (the substructures' route), whose trailing block is read from its last
+    supernodes only (40 rows) and from all of them (the whole factor)."""
     k, m, _ = slender
     matrix = sparse.csr_array(k + m)
     n = matrix.shape[0]
     order = np.random.default_rng(1).permutation(n)  # any ordering: the factor's own is read back
-    symbolic = symbolic_in_order(matrix, order)
     lower = sparse.csc_array(sparse.tril(matrix))
     lower.sort_indices()
+    symbolic = symbolic_in_order(matrix, order) if analysed_by == "cvxopt" else symbolic_factor(lower, order)
+    assert isinstance(symbolic, SymbolicFactor) == (analysed_by == "ctypes")
     assert numeric(symbolic, lower) is True
     solve = CholeskySolve(symbolic, n)
     p = solve.permutation()
     dense = sla.cholesky(matrix.toarray()[np.ix_(p, p)], lower=True)
-    np.testing.assert_allclose(solve.trailing_block(40), dense[-40:, -40:], rtol=0, atol=1e-12 * np.abs(dense).max())
+    for size in (40, n):
+        np.testing.assert_allclose(solve.trailing_block(size), dense[-size:, -size:], rtol=0,
+                                   atol=1e-12 * np.abs(dense).max())
     b = np.random.default_rng(2).standard_normal((n, 3))
     for transpose in (False, True):
         expected = sla.solve_triangular(dense, b, lower=True, trans=1 if transpose else 0)
         np.testing.assert_allclose(solve.triangular(b, transpose=transpose), expected, rtol=0,
                                    atol=1e-10 * np.abs(expected).max())
+    expected = sla.cho_solve((dense, True), b[p])
+    np.testing.assert_allclose(solve(b)[p], expected, rtol=0, atol=1e-10 * np.abs(expected).max())
 
 
 def test_a_matrix_that_is_not_positive_definite_goes_to_the_lu_at_once(wide, monkeypatch):
