@@ -45,7 +45,7 @@ from scipy import sparse
 PARALLEL_MIN_COLUMNS = 16
 #: The size in bytes set aside for a cholmod_common: CHOLMOD 3's is about 2.5 kB, version 5's under 8 kB.
 _COMMON_BYTES = 1 << 16
-_CHOLMOD_A, _CHOLMOD_L, _CHOLMOD_LT = 0, 4, 5  # cholmod_solve's systems: A x = b, L x = b, L^T x = b
+_CHOLMOD_A = 0  # cholmod_solve's system A x = b
 _CHOLMOD_LONG, _CHOLMOD_REAL, _CHOLMOD_DOUBLE = 2, 1, 0
 
 
@@ -228,6 +228,7 @@ def _cholmod_library() -> ctypes.CDLL | None:
                                                      library.cholmod_l_factorize)
             analyze, analyze_p = library.cholmod_l_analyze, library.cholmod_l_analyze_p
             free_factor = library.cholmod_l_free_factor
+            sweeps = library.cholmod_l_super_lsolve, library.cholmod_l_super_ltsolve
         except (OSError, AttributeError):
             continue
         factorize.restype = ctypes.c_int
@@ -237,6 +238,9 @@ def _cholmod_library() -> ctypes.CDLL | None:
         analyze_p.argtypes = [ctypes.POINTER(_Sparse), ctypes.c_void_p, ctypes.c_void_p, ctypes.c_size_t,
                               ctypes.c_void_p]
         free_factor.argtypes = [ctypes.POINTER(ctypes.c_void_p), ctypes.c_void_p]
+        for sweep in sweeps:
+            sweep.restype = ctypes.c_int
+            sweep.argtypes = [ctypes.c_void_p, ctypes.POINTER(_Dense), ctypes.POINTER(_Dense), ctypes.c_void_p]
         solve.restype = ctypes.POINTER(_Dense)
         solve.argtypes = [ctypes.c_int, ctypes.c_void_p, ctypes.POINTER(_Dense), ctypes.c_void_p]
         free.argtypes = [ctypes.POINTER(ctypes.POINTER(_Dense)), ctypes.c_void_p]
@@ -455,9 +459,45 @@ class CholeskySolve:
         numpy.ndarray
             x, shape (rows, k).
         """
-        with self._busy:
-            return self._solve_block(np.asarray(b, dtype=float), self._commons[0],
-                                     _CHOLMOD_LT if transpose else _CHOLMOD_L)
+        x = np.array(b, dtype=float, order="F")
+        self.sweep(x, transpose=transpose, workspace=self.sweep_workspace(x.shape[1]))
+        return x
+
+    def sweep_workspace(self, columns: int) -> np.ndarray:
+        """The workspace :meth:`sweep` needs for ``columns`` right-hand sides (the largest supernode's rows below
+        its columns, times ``columns``)."""
+        return np.empty(max(columns * int(_factor_words(self._address)[17]), 1))  # maxesize
+
+    def sweep(self, x: np.ndarray, *, transpose: bool, workspace: np.ndarray) -> None:
+        """Solve L x = b (or L^T x = b) in place: ``x`` holds b, in the factor's order, and is overwritten by x.
+
+        What :meth:`triangular` does without allocating: CHOLMOD's supernodal sweep on the caller's arrays (the
+        substructures' solves keep theirs from one block to the next).
+
+        Parameters
+        ----------
+        x : numpy.ndarray
+            Shape (rows, k), column-major (Fortran order), float64.
+        transpose : bool
+            Solve with L^T instead of L.
+        workspace : numpy.ndarray
+            From :meth:`sweep_workspace` for k columns or more.
+        """
+        rows, width = x.shape
+        if (rows != self.rows or x.dtype != np.float64 or not x.flags.f_contiguous or workspace.dtype != np.float64
+                or not workspace.flags.c_contiguous or workspace.size < width * int(_factor_words(self._address)[17])):
+            raise ValueError("sweep needs a column-major float64 array of the factor's rows and a large enough "
+                             "workspace (sweep_workspace)")
+        if not self.supernodal_ll:
+            raise ValueError("only a supernodal L L^T factor has the sweeps")
+        solution = _Dense(rows, width, rows * width, rows, x.ctypes.data, None, _CHOLMOD_REAL, _CHOLMOD_DOUBLE)
+        scratch = _Dense(workspace.size, 1, workspace.size, workspace.size, workspace.ctypes.data, None, _CHOLMOD_REAL,
+                         _CHOLMOD_DOUBLE)
+        sweep = self._library.cholmod_l_super_ltsolve if transpose else self._library.cholmod_l_super_lsolve
+        with self._busy:  # the status CHOLMOD writes into the cholmod_common
+            done = sweep(self._address, ctypes.byref(solution), ctypes.byref(scratch), self._commons[0])
+        if not done:
+            raise ArithmeticError("CHOLMOD's triangular sweep failed (an integer overflow in the BLAS)")
 
     def permutation(self) -> np.ndarray:
         """The factor's ordering P: row j of the factor is row ``permutation()[j]`` of the matrix."""
@@ -499,13 +539,11 @@ class CholeskySolve:
                 block[at, c0 - first:k2 - first] = dense[below:, c0 - k1:]
         return np.tril(block)
 
-    def _solve_block(self, columns: np.ndarray, common: ctypes.Array, system: int = _CHOLMOD_A) -> np.ndarray:
+    def _solve_block(self, columns: np.ndarray, common: ctypes.Array) -> np.ndarray:
         rhs = np.asfortranarray(columns)
         rows, width = rhs.shape
         dense = _Dense(rows, width, rows * width, rows, rhs.ctypes.data, None, _CHOLMOD_REAL, _CHOLMOD_DOUBLE)
-        solution = self._library.cholmod_l_solve(system, self._address, ctypes.byref(dense), common)
-        if not solution and system != _CHOLMOD_A:
-            raise MemoryError("CHOLMOD could not allocate the workspace of a triangular solve")
+        solution = self._library.cholmod_l_solve(_CHOLMOD_A, self._address, ctypes.byref(dense), common)
         if not solution and isinstance(self._factor, SymbolicFactor):  # cvxopt cannot solve with it
             raise MemoryError("CHOLMOD could not allocate the workspace of a solve")
         if not solution:  # CHOLMOD could not allocate its workspace: the slower route has its own

@@ -33,6 +33,7 @@ not positive definite proves the whole is not (:class:`NotPositiveDefinite`): th
 
 from __future__ import annotations
 
+import threading
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
@@ -112,6 +113,8 @@ class _Substructure:
         own = np.concatenate([rows, interface])
         self._block = sparse.csr_array(matrix[own][:, own])
         self.size, self.inner = len(own), len(rows)
+        self._y: np.ndarray | None = None  # the sweeps' array and CHOLMOD's workspace, made at the first solve
+        self._workspace: np.ndarray | None = None
 
     def factor(self) -> bool | None:
         """CHOLMOD's analysis in the ordering's own order (the interface last) and its numeric factorisation,
@@ -139,8 +142,8 @@ class _Substructure:
         tail = order[self.inner:]
         if np.any(tail < self.inner):  # CHOLMOD's postorder moved an inner row after the interface
             return None
-        self.inner_at = np.flatnonzero(order < self.inner)  # the factor positions of the substructure's rows
-        self.inner_rows = self.rows[order[self.inner_at]]  # and the matrix rows they hold
+        # so the factor's first ``inner`` positions hold the substructure's rows: these matrix rows
+        self.inner_rows = self.rows[order[:self.inner]]
         block = self.solve.trailing_block(self.size - self.inner)
         #: L_iI with its rows in the interface's order, its columns in the factor's
         self.coupling = np.empty_like(block)
@@ -150,21 +153,32 @@ class _Substructure:
         self.condensed = sla.blas.dsyrk(1.0, self.coupling.T, trans=1, lower=1)
         return True
 
-    def forward(self, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """y = L^-1 [b on the substructure's rows; 0 on the interface] (the factor's order), and what the
-        substructure takes off the interface's right-hand side, A_Ii A_ii^-1 b_i = X_i y_i = -L_iI w_i (w_i:
-        y's interface part), with its sign turned (the interface's order)."""
-        rhs = np.zeros((self.size, b.shape[1]), order="F")  # column-major, as CHOLMOD reads it
-        rhs[self.inner_at] = b[self.inner_rows]
-        y = self.solve.triangular(rhs, transpose=False)
-        return y, self.coupling @ y[self.inner:]
+    def forward(self, b: np.ndarray) -> np.ndarray:
+        """y = L^-1 [b on the substructure's rows; 0 on the interface] (the factor's order), kept for
+        :meth:`backward`, and what the substructure takes off the interface's right-hand side,
+        A_Ii A_ii^-1 b_i = X_i y_i = -L_iI w_i (w_i: y's interface part), with its sign turned (the interface's
+        order)."""
+        y = self._swept(b.shape[1])
+        y[:self.inner] = b[self.inner_rows]
+        y[self.inner:] = 0.0
+        self.solve.sweep(y, transpose=False, workspace=self._workspace)
+        return self.coupling @ y[self.inner:]
 
-    def backward(self, y: np.ndarray, on_interface: np.ndarray, out: np.ndarray) -> None:
+    def backward(self, on_interface: np.ndarray, out: np.ndarray) -> None:
         """L^-T [y's substructure part; L_iI^T x_I]: x_i = A_ii^-1 (b_i - A_iI x_I), written into ``out``'s rows
         of this substructure (``on_interface``: x_I, in the interface's order)."""
-        rhs = y.copy(order="K")  # column-major, as the forward sweep left it
-        rhs[self.inner:] = self.coupling.T @ on_interface
-        out[self.inner_rows] = self.solve.triangular(rhs, transpose=True)[self.inner_at]
+        y = self._y
+        y[self.inner:] = self.coupling.T @ on_interface
+        self.solve.sweep(y, transpose=True, workspace=self._workspace)
+        out[self.inner_rows] = y[:self.inner]
+
+    def _swept(self, columns: int) -> np.ndarray:
+        """The array the sweeps work in, kept from one solve to the next (column-major, as CHOLMOD reads it):
+        fresh arrays of 6 MB and CHOLMOD's own copies in and out cost the wide lattice 10-15 ms a solve."""
+        if self._y is None or self._y.shape[1] != columns:
+            self._y = np.empty((self.size, columns), order="F")
+            self._workspace = self.solve.sweep_workspace(columns)
+        return self._y
 
 
 class SubstructuredSolve:
@@ -177,6 +191,7 @@ class SubstructuredSolve:
                  schur: tuple[np.ndarray, bool]):
         self._parts, self._interface, self._schur = parts, interface, schur
         self.rows = sum(part.inner for part in parts) + len(interface)
+        self._busy = threading.Lock()  # the substructures keep their sweeps' arrays: one solve at a time
 
     def __call__(self, b: np.ndarray) -> np.ndarray:
         """Solve for ``b`` of shape (rows,) or (rows, k)."""
@@ -184,11 +199,11 @@ class SubstructuredSolve:
         columns = b.reshape(self.rows, -1)
         x = np.empty_like(columns)
         # numpy's BLAS threads would wait for the cores the two substructures' sweeps take
-        with threadpool_limits(limits=1, user_api="blas"), ThreadPoolExecutor(max_workers=2) as threads:
-            forward = list(threads.map(lambda part: part.forward(columns), self._parts))
-            reduced = columns[self._interface] + forward[0][1] + forward[1][1]
+        with self._busy, threadpool_limits(limits=1, user_api="blas"), ThreadPoolExecutor(max_workers=2) as threads:
+            taken = list(threads.map(lambda part: part.forward(columns), self._parts))
+            reduced = columns[self._interface] + taken[0] + taken[1]
             x[self._interface] = on_interface = sla.cho_solve(self._schur, reduced, check_finite=False)
-            list(threads.map(lambda part, swept: part.backward(swept[0], on_interface, x), self._parts, forward))
+            list(threads.map(lambda part: part.backward(on_interface, x), self._parts))
         return x.reshape(b.shape)
 
 

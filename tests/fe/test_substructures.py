@@ -111,6 +111,10 @@ def test_the_factors_pieces_equal_lapacks_dense_cholesky(slender, analysed_by):
                                    atol=1e-10 * np.abs(expected).max())
     expected = sla.cho_solve((dense, True), b[p])
     np.testing.assert_allclose(solve(b)[p], expected, rtol=0, atol=1e-10 * np.abs(expected).max())
+    with pytest.raises(ValueError, match="column-major"):  # the in-place sweep reads its array as CHOLMOD does
+        solve.sweep(np.ones((n, 3)), transpose=False, workspace=solve.sweep_workspace(3))
+    with pytest.raises(ValueError, match="workspace"):
+        solve.sweep(np.ones((n, 3), order="F"), transpose=False, workspace=solve.sweep_workspace(1)[:0])
 
 
 def test_a_matrix_that_is_not_positive_definite_goes_to_the_lu_at_once(wide, monkeypatch):
