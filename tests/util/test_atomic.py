@@ -122,7 +122,8 @@ def _export(folder: Path, *extra: str) -> subprocess.Popen:
 
 
 def _kill_while_writing(folder: Path, signum: int) -> subprocess.Popen:
-    """Start an export and send ``signum`` once its temporary FMU exists; None if it finished first."""
+    """Start an export and send ``signum`` once its temporary FMU exists; None if it finished first (an export
+    that failed on its own is an error, with its message)."""
     proc = _export(folder)
     while proc.poll() is None:
         if _leftovers(folder):
@@ -130,7 +131,8 @@ def _kill_while_writing(folder: Path, signum: int) -> subprocess.Popen:
             _, proc.stderr_text = proc.communicate(timeout=120)  # kept for the failure message
             return proc
         time.sleep(0.002)
-    proc.communicate()
+    _, stderr = proc.communicate()
+    assert proc.returncode == 0, stderr[-2000:]
     return None
 
 
@@ -140,19 +142,22 @@ def test_a_build_killed_mid_way_keeps_the_previous_fmu(tmp_path: Path, signum: i
     a loaded machine. Whenever it lands, the final name holds the previous file or a whole new FMU, never
     part of one; the attempts go on until one lands mid-way, which must keep the previous file."""
     final = tmp_path / "MACE_0g_native.fmu"
-    for _attempt in range(6):
+    missed = []
+    for _attempt in range(10):
         final.write_bytes(PREVIOUS)
         proc = _kill_while_writing(tmp_path, signum)
         if proc is None:  # finished before its temporary file was seen
+            missed.append("finished before its temporary FMU was seen")
             continue
         if final.read_bytes() == PREVIOUS:
             break
         with zipfile.ZipFile(final) as archive:  # the signal came after the rename: a whole FMU
             assert archive.testzip() is None and "modelDescription.xml" in archive.namelist()
+        missed.append(f"the signal landed after the rename (exit status {proc.returncode})")
         for leftover in _leftovers(tmp_path):
             (tmp_path / leftover).unlink()
     else:
-        pytest.fail("six exports ended before a signal landed while their temporary FMU existed")
+        pytest.fail("ten exports ended before a signal landed while their temporary FMU existed: " + "; ".join(missed))
     if signum == signal.SIGKILL:  # no chance to clean up: a hidden temporary file may stay, never the final name
         assert proc.returncode == -signal.SIGKILL
         assert all(name.startswith(".MACE_0g_native.fmu.") for name in _leftovers(tmp_path))
