@@ -269,26 +269,21 @@ def _lower_triangle(lower: sparse.csc_array) -> tuple[_Sparse, tuple[np.ndarray,
 
 
 def analysis_entries(lower: sparse.csc_array, permutation: np.ndarray | None = None) -> int | None:
-    """The entries of the supernodal factor CHOLMOD's symbolic analysis sizes for ``lower``'s matrix in the order
-    ``permutation`` (None: CHOLMOD's own, AMD).
-
-    The number ``cvxopt.cholmod.symbolic`` gives, computed through ctypes with Python's lock released, so that
+    """The entries of the supernodal factor :func:`symbolic_factor` makes for ``lower``'s matrix in the order
+    ``permutation``: the number ``cvxopt.cholmod.symbolic`` gives, counted with Python's lock released, so that
     the candidates' analyses run beside each other and beside the nested dissection's ordering
     (mace_fmu.fe.ordering): on the wide lattice AMD's takes 0.25-0.35 s, RCM's and nested dissection's
     0.06-0.08 s.
 
     Parameters
     ----------
-    lower : scipy.sparse.csc_array
-        The lower triangle of the symmetric matrix, its row indices sorted within each column.
-    permutation : numpy.ndarray, optional
-        Row ``permutation[i]`` goes to position i; None for CHOLMOD's own ordering.
+    lower, permutation
+        As :func:`symbolic_factor`.
 
     Returns
     -------
     int or None
-        The factor's entries (its dense blocks' padding included); None when CHOLMOD is not reachable
-        through ctypes or its workspace is not laid out as expected.
+        The factor's entries (its dense blocks' padding included); None where :func:`symbolic_factor` gives none.
     """
     factor = symbolic_factor(lower, permutation)
     return None if factor is None else int(_factor_words(factor.address)[15])  # xsize, as FactorLayout.entries
