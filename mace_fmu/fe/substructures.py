@@ -174,7 +174,7 @@ class _Substructure:
 
     def _swept(self, columns: int) -> np.ndarray:
         """The array the sweeps work in, kept from one solve to the next (column-major, as CHOLMOD reads it):
-        fresh arrays of 6 MB and CHOLMOD's own copies in and out cost the wide lattice 10-15 ms a solve."""
+        fresh arrays of 6 MB and CHOLMOD's own copies in and out cost the wide lattice 8-17 ms a solve."""
         if self._y is None or self._y.shape[1] != columns:
             self._y = np.empty((self.size, columns), order="F")
             self._workspace = self.solve.sweep_workspace(columns)
