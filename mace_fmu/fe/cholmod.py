@@ -429,7 +429,7 @@ class CholeskySolve:
                 parts = list(threads.map(self._solve_block, (columns[:, :half], columns[:, half:]), self._commons))
         return np.hstack(parts).reshape(b.shape)
 
-    @property
+    @functools.cached_property  # fixed once factored; read by every sweep
     def supernodal_ll(self) -> bool:
         """True when CHOLMOD's own solve is called through ctypes on a supernodal L L^T factor: what
         :meth:`triangular`, :meth:`permutation` and :meth:`trailing_block` need (a simplicial factor, which

@@ -31,7 +31,7 @@ import numpy as np
 from scipy import sparse
 from scipy.sparse.linalg import splu
 
-from mace_fmu.fe.cholmod import CholeskySolve
+from mace_fmu.fe.cholmod import CholeskySolve, SymbolicFactor, numeric
 from mace_fmu.fe.cholmod import load as load_cholmod
 from mace_fmu.fe.ordering import Analysis, analyse, least_fill_permutation
 from mace_fmu.fe.substructures import NotPositiveDefinite, substructured_cholesky
@@ -95,11 +95,14 @@ def factorize(matrix: sparse.sparray | np.ndarray, *, positive_definite: bool = 
 def _cholesky(analysis: Analysis, n: int) -> Solve | None:
     """CHOLMOD's L L^T in the analysed ordering; None without cvxopt or for a matrix that is not positive
     definite."""
-    if analysis.symbolic is None:
+    symbolic = analysis.symbolic
+    if symbolic is None:
         return None
-    cholmod = load_cholmod()
-    try:
-        cholmod.numeric(analysis.lower, analysis.symbolic)
-    except ArithmeticError:  # a non-positive pivot: not positive definite
-        return None
-    return CholeskySolve(analysis.symbolic, n)
+    done = numeric(symbolic, analysis.lower_triangle)  # False: a non-positive pivot, not positive definite
+    if done is None and not isinstance(symbolic, SymbolicFactor):  # a cvxopt factor ctypes cannot take: cvxopt's
+        try:
+            load_cholmod().numeric(analysis.lower, symbolic)
+            done = True
+        except ArithmeticError:
+            done = False
+    return CholeskySolve(symbolic, n) if done else None

@@ -29,7 +29,7 @@ import numpy as np
 from scipy import sparse
 from scipy.sparse.csgraph import reverse_cuthill_mckee
 
-from mace_fmu.fe.cholmod import analysis_entries, factor_layout
+from mace_fmu.fe.cholmod import analysis_entries, factor_layout, symbolic_factor
 from mace_fmu.fe.cholmod import load as load_cholmod
 
 #: Names of the orderings, as reports and benchmarks print them.
@@ -116,16 +116,13 @@ class Analysis:
 
     @functools.cached_property
     def lower(self) -> object | None:
-        """The lower triangle as the cvxopt.spmatrix the symbolic factor is made from (None without cvxopt)."""
+        """The lower triangle as a cvxopt.spmatrix, for cvxopt's own factorisation (None without cvxopt)."""
         return None if self.lower_triangle is None else _lower_spmatrix(self.lower_triangle)
 
     @functools.cached_property
     def symbolic(self) -> object | None:
-        """cvxopt.cholmod's symbolic factor in the ordering taken (None without cvxopt)."""
-        cholmod = load_cholmod()
-        if cholmod is None or self.lower is None:
-            return None
-        return _symbolic(cholmod, self.lower, self.permutation)
+        """CHOLMOD's symbolic factor in the ordering taken (:func:`symbolic_of_lower`; None without cvxopt)."""
+        return None if self.lower_triangle is None else symbolic_of_lower(self.lower_triangle, self.permutation)
 
 
 def analyse(matrix: sparse.sparray, *, groups: np.ndarray | None = None, with_amd: bool = True) -> Analysis:
@@ -182,25 +179,49 @@ def analyse(matrix: sparse.sparray, *, groups: np.ndarray | None = None, with_am
     return Analysis(choice, permutations[best], lower)
 
 
-def symbolic_in_order(matrix: sparse.sparray, permutation: np.ndarray) -> object | None:
+def symbolic_in_order(matrix: sparse.sparray, permutation: np.ndarray | None) -> object | None:
     """CHOLMOD's symbolic analysis of the symmetric ``matrix`` in the order ``permutation``, as it is given.
 
     Parameters
     ----------
     matrix : scipy.sparse array
         The symmetric matrix (its lower triangle is read).
-    permutation : numpy.ndarray
+    permutation : numpy.ndarray or None
+        Row ``permutation[i]`` goes to position i; None for CHOLMOD's own ordering (AMD).
+
+    Returns
+    -------
+    object or None
+        The symbolic factor (see :func:`symbolic_of_lower`); None without cvxopt.
+    """
+    lower = sparse.csc_array(sparse.tril(sparse.csr_array(matrix)))
+    lower.sort_indices()
+    return symbolic_of_lower(lower, permutation)
+
+
+def symbolic_of_lower(lower: sparse.csc_array, permutation: np.ndarray | None) -> object | None:
+    """CHOLMOD's supernodal symbolic analysis of the matrix whose lower triangle is ``lower``, in the order
+    ``permutation`` (None: CHOLMOD's AMD): through ctypes with Python's lock released
+    (:func:`mace_fmu.fe.cholmod.symbolic_factor`, so that the two substructures' analyses run side by side), or
+    cvxopt's where CHOLMOD cannot be reached that way. Either factor goes to
+    :func:`mace_fmu.fe.cholmod.numeric` and :class:`mace_fmu.fe.cholmod.CholeskySolve`.
+
+    Parameters
+    ----------
+    lower : scipy.sparse.csc_array
+        The lower triangle, its row indices sorted within each column.
+    permutation : numpy.ndarray or None
         Row ``permutation[i]`` goes to position i.
 
     Returns
     -------
     object or None
-        cvxopt.cholmod's symbolic factor; None without cvxopt.
+        A :class:`mace_fmu.fe.cholmod.SymbolicFactor` or cvxopt.cholmod's symbolic factor; None without cvxopt.
     """
-    cholmod = load_cholmod()
+    cholmod = load_cholmod()  # first: it readies the BLAS CHOLMOD binds to
     if cholmod is None:
         return None
-    return _symbolic(cholmod, _lower_spmatrix(sparse.csr_array(matrix)), permutation)
+    return symbolic_factor(lower, permutation) or _symbolic(cholmod, _lower_spmatrix(lower), permutation)
 
 
 def _lower_spmatrix(a: sparse.sparray) -> object:

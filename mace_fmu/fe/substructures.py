@@ -42,8 +42,8 @@ from scipy import linalg as sla
 from scipy import sparse
 from threadpoolctl import threadpool_limits
 
-from mace_fmu.fe.cholmod import CholeskySolve, numeric, symbolic_factor
-from mace_fmu.fe.ordering import Analysis, symbolic_in_order
+from mace_fmu.fe.cholmod import CholeskySolve, numeric
+from mace_fmu.fe.ordering import Analysis, symbolic_of_lower
 from mace_fmu.util.threads import usable_cores
 
 #: The factor size [entries] below which the whole matrix is factored. Below it the factorisation is quick
@@ -121,14 +121,12 @@ class _Substructure:
         then L_iI and L_iI L_iI^T (True: done; False: not positive definite; None: CHOLMOD not reachable
         through ctypes). Runs on a thread of its own; neither the analysis nor the factorisation holds Python's
         lock."""
-        block = self._block
-        del self._block
-        lower = sparse.csc_array(sparse.tril(block))
+        lower = sparse.csc_array(sparse.tril(self._block))
         lower.sort_indices()
+        del self._block
         # through ctypes, Python's lock released: the two substructures' analyses run side by side (cvxopt's held
         # the lock, so one waited for the other: 0.15 s each on the wide lattice, 0.03 s through ctypes)
-        self._symbolic = symbolic_factor(lower, np.arange(self.size)) or symbolic_in_order(block, np.arange(self.size))
-        del block
+        self._symbolic = symbolic_of_lower(lower, np.arange(self.size))
         if self._symbolic is None:
             return None
         done = numeric(self._symbolic, lower)

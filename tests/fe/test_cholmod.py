@@ -49,10 +49,16 @@ def test_block_solves_equal_scipys_lu(lattice, width):
 
 
 def test_cvxopts_column_by_column_solve_gives_the_same(lattice):
-    """The fallback (cvxopt's own solve, where the factor's layout is not the one expected) agrees to 1e-13."""
+    """The fallback (cvxopt's own solve, where the factor's layout is not the one expected: a factor cvxopt made,
+    as where CHOLMOD cannot be reached through ctypes) agrees to 1e-13."""
+    from mace_fmu.fe.ordering import _symbolic, analyse
+
     matrix, grids = lattice
     b = np.random.default_rng(0).standard_normal((matrix.shape[0], 5))
-    solve = factorize(matrix, positive_definite=True, groups=grids)
+    analysis = analyse(matrix, groups=grids)
+    symbolic = _symbolic(cholmod.load(), analysis.lower, analysis.permutation)
+    cholmod.load().numeric(analysis.lower, symbolic)
+    solve = cholmod.CholeskySolve(symbolic, matrix.shape[0])
     direct = solve(b)
     solve._direct = False
     np.testing.assert_allclose(solve(b), direct, rtol=0, atol=1e-13 * np.abs(direct).max())
@@ -62,17 +68,21 @@ def test_the_factor_layout_is_read_and_checked(lattice):
     """The cholmod_factor's order, 64-bit indices, a pattern after the symbolic analysis and real doubles after
     the numeric factorisation; an object that is not a factor, or a factor of another order, gives None."""
     matrix, grids = lattice
-    from mace_fmu.fe.ordering import analyse
+    from mace_fmu.fe.ordering import _symbolic, analyse
 
     analysis = analyse(matrix, groups=grids)
-    layout = cholmod.factor_layout(analysis.symbolic, matrix.shape[0])
+    symbolic = _symbolic(cholmod.load(), analysis.lower, analysis.permutation)  # cvxopt's capsule
+    layout = cholmod.factor_layout(symbolic, matrix.shape[0])
     assert layout is not None
     assert (layout.rows, layout.index_type, layout.value_type, layout.precision) == (matrix.shape[0], 2, 0, 0)
-    cholmod.load().numeric(analysis.lower, analysis.symbolic)
-    assert cholmod.factor_layout(analysis.symbolic, matrix.shape[0]).value_type == 1
+    cholmod.load().numeric(analysis.lower, symbolic)
+    assert cholmod.factor_layout(symbolic, matrix.shape[0]).value_type == 1
     assert layout.entries >= sparse.tril(matrix).nnz
-    assert cholmod.factor_layout(analysis.symbolic, matrix.shape[0] + 1) is None
+    assert cholmod.factor_layout(symbolic, matrix.shape[0] + 1) is None
     assert cholmod.factor_layout(object(), matrix.shape[0]) is None
+    # the analysis's own factor, made through ctypes, has the same layout and size
+    assert isinstance(analysis.symbolic, cholmod.SymbolicFactor)
+    assert cholmod.factor_layout(analysis.symbolic, matrix.shape[0]).entries == layout.entries
 
 
 def _wheel_layout() -> bool:

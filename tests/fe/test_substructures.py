@@ -16,7 +16,8 @@ from mace_fmu.fe import factor, substructures
 from mace_fmu.fe.assembly import assemble
 from mace_fmu.fe.cholmod import CholeskySolve, SymbolicFactor, numeric, symbolic_factor
 from mace_fmu.fe.constraints import build_constraints
-from mace_fmu.fe.ordering import NESTED_DISSECTION, RCM, analyse, symbolic_in_order
+from mace_fmu.fe import cholmod as cholmod_module
+from mace_fmu.fe.ordering import NESTED_DISSECTION, RCM, _lower_spmatrix, _symbolic, analyse, symbolic_in_order
 
 pytest.importorskip("cvxopt")
 
@@ -95,7 +96,8 @@ def test_the_factors_pieces_equal_lapacks_dense_cholesky(slender, analysed_by):
     order = np.random.default_rng(1).permutation(n)  # any ordering: the factor's own is read back
     lower = sparse.csc_array(sparse.tril(matrix))
     lower.sort_indices()
-    symbolic = symbolic_in_order(matrix, order) if analysed_by == "cvxopt" else symbolic_factor(lower, order)
+    symbolic = (_symbolic(cholmod_module.load(), _lower_spmatrix(lower), order) if analysed_by == "cvxopt"
+                else symbolic_factor(lower, order))
     assert isinstance(symbolic, SymbolicFactor) == (analysed_by == "ctypes")
     assert numeric(symbolic, lower) is True
     solve = CholeskySolve(symbolic, n)
@@ -192,8 +194,8 @@ def test_a_simplicial_factor_is_recognised_and_not_read_as_supernodes(slender):
     matrix = sparse.csr_array(k + m)
     saved = dict(cvxopt.cholmod.options)
     cvxopt.cholmod.options["supernodal"] = 0
-    try:
-        symbolic = symbolic_in_order(matrix, np.arange(matrix.shape[0]))
+    try:  # cvxopt's own analysis (the ctypes one is always supernodal)
+        symbolic = _symbolic(cvxopt.cholmod, _lower_spmatrix(matrix), np.arange(matrix.shape[0]))
     finally:
         cvxopt.cholmod.options.clear()
         cvxopt.cholmod.options.update(saved)
