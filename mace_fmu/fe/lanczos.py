@@ -12,7 +12,7 @@ Why blocks: at 100k DOFs a solve is a pass over a factor of up to a gigabyte, an
 reading, not the arithmetic. CHOLMOD solving 16 columns in one pass costs 15 ms a column on the wide
 lattice against 110 ms for one column alone (mace_fmu.fe.cholmod). A block Krylov space needs more
 vectors than ARPACK's single-vector one for the same modes (288 columns against 128 for the wide
-lattice's 50), but they cost a seventh each: 4 s of solves against 14 s (benchmarks/RESULTS.md,
+lattice's 50, both to a residual of 1e-8), but they cost a seventh each: 4 s of solves against 14 s (benchmarks/RESULTS.md,
 "A BLAS for CHOLMOD and block solves").
 
 The massless DOFs' infinite eigenvalues are W's zeros: every vector is an image of W (the start
@@ -27,13 +27,14 @@ cost after the solves, reads half as much. The other rows of each image W Q_j ar
 gives them, and the Ritz vectors are returned as W x / theta = (W V y) / theta: one more step of
 inverse iteration, whose massless DOFs carry the static response of the massive ones exactly.
 
-Memory: there is no restart, so the basis keeps every vector, about six per mode wanted (288 vectors,
-230 MB, for the 100k-DOF wide lattice's 50 modes); hundreds of modes at 100k DOFs take gigabytes.
+Memory: there is no restart, so the basis keeps every vector, about five per mode wanted (256 vectors,
+205 MB, for the 100k-DOF wide lattice's 50 modes to mace_fmu.fe.modal's tolerance); hundreds of modes at 100k DOFs take gigabytes.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -50,8 +51,8 @@ BLOCK_SIZE = 16
 #: block resolves norms down to the square root of the rounding (1e-8), and a direction that small
 #: means the space is all but invariant there.
 DEFLATION_TOLERANCE = 1e-7
-#: From this many basis entries (32 MB) the Gram-Schmidt's products run on every usable core; below, the
-#: threads would cost more than they share out (mace_fmu.util.threads).
+#: From this many basis entries (32 MB) the Gram-Schmidt's products run on every usable core (_SharedRows);
+#: below, the threads would cost more than they share out (mace_fmu.util.threads).
 SHARED_GRAM_SCHMIDT_ENTRIES = 1 << 22
 
 
@@ -107,46 +108,46 @@ def lowest_modes(*, stiffness: sparse.sparray, mass: sparse.sparray, solve: Call
         images = solve(loads)
         return touched.coordinates(images[touched.rows]), images[touched.others]
 
-    block = _fresh_images(images_of, touched, space.basis(), rng, block_size)
-    solved = block_size
-    while True:
-        first = space.size
-        if block is None or not space.append(block):
-            return None
-        images, elsewhere = images_of(block)  # W Q_j
-        space.set_images(first, elsewhere)
-        solved += images.shape[1]
-        basis = space.basis()
-        # the basis is read twice a pass: at 100k DOFs, a hundred megabytes and more, which BLAS on every core
-        # reads faster (the wide lattice's Gram-Schmidt, on its DOFs with mass: 0.89-1.08 s on one thread,
-        # 0.65-0.73 s on two)
-        threads = usable_cores() if basis.size >= SHARED_GRAM_SCHMIDT_ENTRIES else 1
-        with threadpool_limits(limits=threads, user_api="blas"):
-            coupling = _orthogonalise(images, touched, basis, recent=max(first - block_size, 0))
-        space.set_projection(first, coupling)
-        theta, ritz = np.linalg.eigh(space.projection())
-        theta, ritz = theta[::-1], ritz[:, ::-1]  # largest theta: lowest lambda
-        block, residual_map = _orthonormal(images, touched, floor=DEFLATION_TOLERANCE * max(abs(theta[0]), 1e-300))
-        residual = np.linalg.norm(residual_map @ ritz[first:space.size], axis=0)
-        converged = residual <= tolerance * np.abs(theta)
-        leading = int(np.argmin(converged)) if not converged.all() else len(converged)
-        eigenvalues = shift + 1.0 / theta[:leading]
-        if leading >= count and (above is None or (leading and eigenvalues[-1] > above)):
-            y, theta = ritz[:, :leading], theta[:leading]
-            # W x = V T y + Q_(j+1) R_j y_j with T y = theta y: on M's rows V y plus the residual's share
-            on_rows = basis @ y + block @ (residual_map @ y[first:]) / theta
-            norms = np.sqrt(np.einsum("im,im->m", on_rows, touched @ on_rows))
-            vectors = np.empty((n, leading))
-            vectors[touched.rows] = touched.rows_of(on_rows) / norms
-            vectors[touched.others] = space.images() @ y / (theta * norms)
-            return LanczosModes(eigenvalues, vectors, solved)
-        if block.shape[1] < block_size:  # deflated: fresh directions keep the block's width
-            missing = block_size - block.shape[1]
-            fresh = _fresh_images(images_of, touched, np.hstack([basis, block]), rng, missing)
-            solved += missing
-            block = block if fresh is None else np.hstack([block, fresh])
-            if block.shape[1] == 0:  # the whole space is invariant: no mode left to find
+    # numpy's BLAS on one thread, the Gram-Schmidt's products shared out by threads of our own (_SharedRows):
+    # OpenBLAS's own threads spin for a while after each product, and in the solve that follows that spinning
+    # took cores from the substructures' sweeps
+    with threadpool_limits(limits=1, user_api="blas"), _SharedRows(touched.rows.size) as rows:
+        block = _fresh_images(images_of, touched, space.basis(), rng, block_size)
+        solved = block_size
+        while True:
+            first = space.size
+            if block is None or not space.append(block):
                 return None
+            images, elsewhere = images_of(block)  # W Q_j
+            space.set_images(first, elsewhere)
+            solved += images.shape[1]
+            basis = space.basis()
+            coupling = _orthogonalise(images, touched, basis, recent=max(first - block_size, 0), rows=rows)
+            space.set_projection(first, coupling)
+            theta, ritz = np.linalg.eigh(space.projection())
+            theta, ritz = theta[::-1], ritz[:, ::-1]  # largest theta: lowest lambda
+            floor = DEFLATION_TOLERANCE * max(abs(theta[0]), 1e-300)
+            block, residual_map = _orthonormal(images, touched, floor=floor)
+            residual = np.linalg.norm(residual_map @ ritz[first:space.size], axis=0)
+            converged = residual <= tolerance * np.abs(theta)
+            leading = int(np.argmin(converged)) if not converged.all() else len(converged)
+            eigenvalues = shift + 1.0 / theta[:leading]
+            if leading >= count and (above is None or (leading and eigenvalues[-1] > above)):
+                y, theta = ritz[:, :leading], theta[:leading]
+                # W x = V T y + Q_(j+1) R_j y_j with T y = theta y: on M's rows V y plus the residual's share
+                on_rows = basis @ y + block @ (residual_map @ y[first:]) / theta
+                norms = np.sqrt(np.einsum("im,im->m", on_rows, touched @ on_rows))
+                vectors = np.empty((n, leading))
+                vectors[touched.rows] = touched.rows_of(on_rows) / norms
+                vectors[touched.others] = space.images() @ y / (theta * norms)
+                return LanczosModes(eigenvalues, vectors, solved)
+            if block.shape[1] < block_size:  # deflated: fresh directions keep the block's width
+                missing = block_size - block.shape[1]
+                fresh = _fresh_images(images_of, touched, np.hstack([basis, block]), rng, missing)
+                solved += missing
+                block = block if fresh is None else np.hstack([block, fresh])
+                if block.shape[1] == 0:  # the whole space is invariant: no mode left to find
+                    return None
 
 
 class _MassRows:
@@ -238,7 +239,52 @@ def _grown(array: np.ndarray, used: int, capacity: int) -> np.ndarray:
     return grown
 
 
-def _orthogonalise(images: np.ndarray, mass: _MassRows, basis: np.ndarray, *, recent: int) -> np.ndarray:
+class _SharedRows:
+    """The Gram-Schmidt's products with the basis, V^T Y and Y - V S, each core taking a share of the rows (a
+    context manager: its threads end with it).
+
+    The basis is read twice a pass: at 100k DOFs a hundred megabytes and more, which every core reads faster
+    than one (the wide lattice's Gram-Schmidt: 0.89-1.08 s on one thread, 0.65-0.73 s on two). The threads
+    are ours, not BLAS's: OpenBLAS's wait for more work by spinning, and that spinning took the cores from
+    the substructures' sweeps in the solve that follows (0.35 s of the wide lattice's solves).
+    """
+
+    def __init__(self, rows: int):
+        cores = usable_cores()
+        bounds = np.linspace(0, rows, cores + 1).astype(int)
+        self._shares = [slice(a, b) for a, b in zip(bounds[:-1], bounds[1:])]
+        self._threads = ThreadPoolExecutor(max_workers=cores) if cores > 1 else None
+
+    def __enter__(self) -> _SharedRows:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        if self._threads is not None:
+            self._threads.shutdown()
+
+    def _shared(self, basis: np.ndarray) -> bool:
+        """Whether ``basis`` is large enough for the threads to pay (below, they cost more than they share out)."""
+        return self._threads is not None and basis.size >= SHARED_GRAM_SCHMIDT_ENTRIES
+
+    def project(self, basis: np.ndarray, vectors: np.ndarray) -> np.ndarray:
+        """V^T Y (``basis`` V and ``vectors`` Y on the same rows)."""
+        if not self._shared(basis):
+            return basis.T @ vectors
+        return sum(self._threads.map(lambda rows: basis[rows].T @ vectors[rows], self._shares))
+
+    def subtract(self, vectors: np.ndarray, basis: np.ndarray, coefficients: np.ndarray) -> None:
+        """Y -= V S in place."""
+        if not self._shared(basis):
+            vectors -= basis @ coefficients
+            return
+
+        def share(rows: slice) -> None:
+            vectors[rows] -= basis[rows] @ coefficients
+        list(self._threads.map(share, self._shares))
+
+
+def _orthogonalise(images: np.ndarray, mass: _MassRows, basis: np.ndarray, *, recent: int,
+                   rows: _SharedRows) -> np.ndarray:
     """Make ``images`` M-orthogonal to ``basis`` in place; the coefficients V^T M Y removed.
 
     Classical Gram-Schmidt, first against the vectors from ``recent`` on (the last two blocks, which
@@ -250,8 +296,8 @@ def _orthogonalise(images: np.ndarray, mass: _MassRows, basis: np.ndarray, *, re
     mass_images = mass @ images
     for part in (slice(recent, None), slice(None), slice(None)):
         before = np.einsum("im,im->m", images, mass_images)
-        step = basis[:, part].T @ mass_images  # V^T M Y, with M V never stored
-        images -= basis[:, part] @ step
+        step = rows.project(basis[:, part], mass_images)  # V^T M Y, with M V never stored
+        rows.subtract(images, basis[:, part], step)
         coupling[part] += step
         mass_images = mass @ images  # the next pass's, and the norms after this one
         if part.start is None and np.all(np.einsum("im,im->m", images, mass_images) > 0.25 * before):

@@ -13,8 +13,10 @@ import pytest
 import scipy.linalg as sla
 from scipy import sparse
 
+from mace_fmu.fe import lanczos
 from mace_fmu.fe.factor import factorize
 from mace_fmu.fe.lanczos import lowest_modes
+from mace_fmu.fe.modal import LANCZOS_TOLERANCE
 
 
 def _chain(masses: int, *, k_n_per_m: float = 1.0e4, m_kg: float = 2.0) -> tuple[sparse.csr_array, sparse.csr_array]:
@@ -40,14 +42,15 @@ def _lowest(k: sparse.csr_array, m: sparse.csr_array, count: int, **options: obj
                         max_dimension=options.pop("max_dimension", k.shape[0] // 2), **options)
 
 
-def test_a_fixed_fixed_chain_matches_its_closed_form():
+@pytest.mark.parametrize("tolerance", [1e-8, LANCZOS_TOLERANCE])
+def test_a_fixed_fixed_chain_matches_its_closed_form(tolerance):
     """2000 masses: omega_j^2 = 4 k / m sin^2(j pi / (2 (N + 1))), the lowest 30 within 1e-11 relative or
     1e-14 of the highest eigenvalue (the rounding of any solver of this matrix, dense ones included);
     every vector M-normalised and, within 1e-10 in the modal assurance criterion, the closed-form shape
-    sin(i j pi / (N + 1))."""
+    sin(i j pi / (N + 1)). At the default residual tolerance and at the one the modal solution uses."""
     n, k_n_per_m, m_kg = 2000, 1.0e4, 2.0
     k, m = _chain(n, k_n_per_m=k_n_per_m, m_kg=m_kg)
-    found = _lowest(k, m, 30)
+    found = _lowest(k, m, 30, tolerance=tolerance)
     j = np.arange(1, len(found.eigenvalues) + 1)
     exact = 4.0 * k_n_per_m / m_kg * np.sin(j * np.pi / (2 * (n + 1))) ** 2
     assert len(found.eigenvalues) >= 30
@@ -150,11 +153,17 @@ def test_the_result_does_not_depend_on_the_start_block(seed):
     np.testing.assert_allclose(_lowest(k, m, 20, seed=seed).eigenvalues[:20], reference, rtol=1e-12)
 
 
-def test_a_lattice_s_modes_equal_arpacks_on_the_same_factor():
+@pytest.mark.parametrize("tolerance, shared", [(1e-8, False), (LANCZOS_TOLERANCE, False), (LANCZOS_TOLERANCE, True)])
+def test_a_lattice_s_modes_equal_arpacks_on_the_same_factor(tolerance, shared, monkeypatch):
     """A second solver on the same matrices: a clamped 4 x 4-grid lattice tower of 30 levels (2,880 DOFs, no
     rotary mass: half the DOFs massless), its 30 lowest eigenvalues by ARPACK's single-vector shift-invert
     Lanczos (scipy's eigsh) and by the block Lanczos agree within 1e-11 relative, the shapes within 1e-8 in
-    the modal assurance criterion."""
+    the modal assurance criterion: at the default residual tolerance and at the modal solution's, and with
+    the Gram-Schmidt's products shared out between threads (``shared``: from the first vector on, where a
+    large model's take the threads from 4M basis entries)."""
+    if shared:
+        monkeypatch.setattr(lanczos, "SHARED_GRAM_SCHMIDT_ENTRIES", 0)
+        monkeypatch.setattr(lanczos, "usable_cores", lambda: 3)  # three shares of the rows, whatever the machine
     from scipy.sparse.linalg import LinearOperator, eigsh
     from support.decks import frame_tower
 
@@ -170,7 +179,8 @@ def test_a_lattice_s_modes_equal_arpacks_on_the_same_factor():
     k, m = sparse.csr_array(0.5 * (k + k.T)), sparse.csr_array(0.5 * (m + m.T))
     shift = -1e-6 * float(np.median(k.diagonal()) / np.median(m.diagonal()[m.diagonal() > 0]))
     solve = factorize(k - shift * m, positive_definite=True)
-    found = lowest_modes(stiffness=k, mass=m, solve=solve, shift=shift, count=30, max_dimension=k.shape[0] // 4)
+    found = lowest_modes(stiffness=k, mass=m, solve=solve, shift=shift, count=30, max_dimension=k.shape[0] // 4,
+                         tolerance=tolerance)
     op = LinearOperator(k.shape, matvec=lambda x: solve(np.asarray(x, dtype=float).ravel()), dtype=float)
     values, vectors = eigsh(k, k=30, M=m, sigma=shift, which="LM", OPinv=op, tol=1e-12, ncv=80)
     order = np.argsort(values)
