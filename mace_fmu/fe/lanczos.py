@@ -12,8 +12,8 @@ Why blocks: at 100k DOFs a solve is a pass over a factor of up to a gigabyte, an
 reading, not the arithmetic. CHOLMOD solving 16 columns in one pass costs 15 ms a column on the wide
 lattice against 110 ms for one column alone (mace_fmu.fe.cholmod). A block Krylov space needs more
 vectors than ARPACK's single-vector one for the same modes (288 columns against 128 for the wide
-lattice's 50, both to a residual of 1e-8), but they cost a seventh each: 4 s of solves against 14 s (benchmarks/RESULTS.md,
-"A BLAS for CHOLMOD and block solves").
+lattice's 50, both to a residual of 1e-8), but they cost a seventh each: 4 s of solves against 14 s
+(benchmarks/RESULTS.md, "A BLAS for CHOLMOD and block solves").
 
 The massless DOFs' infinite eigenvalues are W's zeros: every vector is an image of W (the start
 block too), so they never enter the basis. A block of ``block_size`` finds eigenvalues of that
@@ -28,7 +28,8 @@ gives them, and the Ritz vectors are returned as W x / theta = (W V y) / theta: 
 inverse iteration, whose massless DOFs carry the static response of the massive ones exactly.
 
 Memory: there is no restart, so the basis keeps every vector, about five per mode wanted (256 vectors,
-205 MB, for the 100k-DOF wide lattice's 50 modes to mace_fmu.fe.modal's tolerance); hundreds of modes at 100k DOFs take gigabytes.
+205 MB, for the 100k-DOF wide lattice's 50 modes to mace_fmu.fe.modal's tolerance); hundreds of modes at
+100k DOFs take gigabytes.
 """
 
 from __future__ import annotations
@@ -246,7 +247,7 @@ class _SharedRows:
     The basis is read twice a pass: at 100k DOFs a hundred megabytes and more, which every core reads faster
     than one (the wide lattice's Gram-Schmidt: 0.89-1.08 s on one thread, 0.65-0.73 s on two). The threads
     are ours, not BLAS's: OpenBLAS's wait for more work by spinning, and that spinning took the cores from
-    the substructures' sweeps in the solve that follows (0.35 s of the wide lattice's solves).
+    the substructures' sweeps in the solve that follows (0.35-0.4 s of the wide lattice's 4.6 s of solves).
     """
 
     def __init__(self, rows: int):
