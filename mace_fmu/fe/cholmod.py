@@ -268,27 +268,6 @@ def _lower_triangle(lower: sparse.csc_array) -> tuple[_Sparse, tuple[np.ndarray,
     return matrix, (indptr, indices, values)
 
 
-def analysis_entries(lower: sparse.csc_array, permutation: np.ndarray | None = None) -> int | None:
-    """The entries of the supernodal factor :func:`symbolic_factor` makes for ``lower``'s matrix in the order
-    ``permutation``: the number ``cvxopt.cholmod.symbolic`` gives, counted with Python's lock released, so that
-    the candidates' analyses run beside each other and beside the nested dissection's ordering
-    (mace_fmu.fe.ordering): on the wide lattice AMD's takes 0.25-0.35 s, RCM's and nested dissection's
-    0.06-0.08 s.
-
-    Parameters
-    ----------
-    lower, permutation
-        As :func:`symbolic_factor`.
-
-    Returns
-    -------
-    int or None
-        The factor's entries (its dense blocks' padding included); None where :func:`symbolic_factor` gives none.
-    """
-    factor = symbolic_factor(lower, permutation)
-    return None if factor is None else int(_factor_words(factor.address)[15])  # xsize, as FactorLayout.entries
-
-
 class SymbolicFactor:
     """A CHOLMOD factor made by a symbolic analysis through ctypes (:func:`symbolic_factor`), freed with this
     object. :func:`numeric` fills it, :class:`CholeskySolve` solves with it, as with cvxopt's."""
@@ -303,8 +282,10 @@ def symbolic_factor(lower: sparse.csc_array, permutation: np.ndarray | None = No
     own, AMD), through ctypes with Python's lock released.
 
     The factor ``cvxopt.cholmod.symbolic`` makes with cvxopt's options (supernodal; with a permutation, that one
-    only), without holding the lock: two substructures' analyses run beside each other
-    (mace_fmu.fe.substructures), where cvxopt's made the second wait for the first.
+    only), without holding the lock: the candidate orderings' analyses run beside each other and beside the
+    nested dissection's ordering (mace_fmu.fe.ordering; on the wide lattice AMD's takes 0.25-0.35 s, RCM's and
+    nested dissection's 0.06-0.08 s), and two substructures' side by side (mace_fmu.fe.substructures), where
+    cvxopt's made the second wait for the first.
 
     Parameters
     ----------

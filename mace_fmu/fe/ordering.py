@@ -29,7 +29,7 @@ import numpy as np
 from scipy import sparse
 from scipy.sparse.csgraph import reverse_cuthill_mckee
 
-from mace_fmu.fe.cholmod import analysis_entries, factor_layout, symbolic_factor
+from mace_fmu.fe.cholmod import factor_layout, symbolic_factor
 from mace_fmu.fe.cholmod import load as load_cholmod
 
 #: Names of the orderings, as reports and benchmarks print them.
@@ -107,12 +107,13 @@ def _nested_dissection(pattern: sparse.csr_matrix, groups: np.ndarray | None) ->
 class Analysis:
     """The ordering that fills least, and CHOLMOD's symbolic analysis in it for a numeric factorisation.
 
-    The symbolic factor is made when it is first asked for: the substructures (mace_fmu.fe.substructures)
-    analyse their own blocks and never need the whole matrix's (0.2 s at 100k DOFs)."""
+    The symbolic factor is the one :func:`analyse` sized the ordering with (a few megabytes at 100k DOFs: the
+    pattern, no values); for a choice recalled from an earlier pattern it is made when first asked for."""
 
     choice: OrderingChoice  #: the ordering taken and every candidate's factor size
     permutation: np.ndarray | None  #: the ordering taken (None for AMD, which CHOLMOD keeps to itself)
     lower_triangle: sparse.csc_array | None  #: the matrix's lower triangle (None without cvxopt)
+    analysed: object | None = None  #: the chosen ordering's symbolic factor, as the analysis made it
 
     @functools.cached_property
     def lower(self) -> object | None:
@@ -122,7 +123,9 @@ class Analysis:
     @functools.cached_property
     def symbolic(self) -> object | None:
         """CHOLMOD's symbolic factor in the ordering taken (:func:`symbolic_of_lower`; None without cvxopt)."""
-        return None if self.lower_triangle is None else symbolic_of_lower(self.lower_triangle, self.permutation)
+        if self.analysed is not None or self.lower_triangle is None:
+            return self.analysed
+        return symbolic_of_lower(self.lower_triangle, self.permutation)
 
 
 def analyse(matrix: sparse.sparray, *, groups: np.ndarray | None = None, with_amd: bool = True) -> Analysis:
@@ -157,46 +160,27 @@ def analyse(matrix: sparse.sparray, *, groups: np.ndarray | None = None, with_am
         return Analysis(known[0], known[1], lower)
     # CHOLMOD's analyses through ctypes release Python's lock: AMD's, the longest, runs while the nested
     # dissection orders the grids, then RCM's and nested dissection's side by side (the wide lattice's
-    # analyses: 0.44-0.66 s, against 0.55-0.96 s with those two through cvxopt and the chosen order's
-    # symbolic factor made at once, which the substructures never use)
+    # analyses: 0.44-0.66 s, against 0.55-0.96 s with those two through cvxopt)
     with ThreadPoolExecutor(max_workers=2) as threads:
-        counting = {AMD: threads.submit(analysis_entries, lower)} if with_amd else {}
+        analysing = {AMD: threads.submit(symbolic_factor, lower)} if with_amd else {}
         permutations: dict[str, np.ndarray | None] = dict(candidate_permutations(a, groups=groups))
-        counting.update({name: threads.submit(analysis_entries, lower, permutation)
-                         for name, permutation in permutations.items()})
-        counted = {name: count.result() for name, count in counting.items()}
+        analysing.update({name: threads.submit(symbolic_factor, lower, permutation)
+                          for name, permutation in permutations.items()})
+        factors = {name: analysis.result() for name, analysis in analysing.items()}
     if with_amd:
         permutations[AMD] = None
-    if any(count is None for count in counted.values()):  # CHOLMOD not reachable through ctypes: cvxopt's
+    if any(made is None for made in factors.values()):  # CHOLMOD not reachable through ctypes: cvxopt's
         spmatrix = _lower_spmatrix(lower)
-        counted = {name: _entries(_symbolic(cholmod, spmatrix, permutations[name]), n) for name in counted}
+        factors = {name: _symbolic(cholmod, spmatrix, permutations[name]) for name in factors}
+    counted = {name: _entries(made, n) for name, made in factors.items()}
     entries = {name: size for name, size in counted.items() if size is not None}
     best = min(entries, key=entries.__getitem__) if len(entries) == len(counted) else RCM
     choice = OrderingChoice(best, entries)
     if len(_CHOSEN) >= _CHOSEN_KEPT:
         _CHOSEN.pop(next(iter(_CHOSEN)))
     _CHOSEN[key] = choice, permutations[best]
-    return Analysis(choice, permutations[best], lower)
-
-
-def symbolic_in_order(matrix: sparse.sparray, permutation: np.ndarray | None) -> object | None:
-    """CHOLMOD's symbolic analysis of the symmetric ``matrix`` in the order ``permutation``, as it is given.
-
-    Parameters
-    ----------
-    matrix : scipy.sparse array
-        The symmetric matrix (its lower triangle is read).
-    permutation : numpy.ndarray or None
-        Row ``permutation[i]`` goes to position i; None for CHOLMOD's own ordering (AMD).
-
-    Returns
-    -------
-    object or None
-        The symbolic factor (see :func:`symbolic_of_lower`); None without cvxopt.
-    """
-    lower = sparse.csc_array(sparse.tril(sparse.csr_array(matrix)))
-    lower.sort_indices()
-    return symbolic_of_lower(lower, permutation)
+    # the chosen order's factor is kept for the numeric factorisation, not analysed again
+    return Analysis(choice, permutations[best], lower, factors.get(best) if best in entries else None)
 
 
 def symbolic_of_lower(lower: sparse.csc_array, permutation: np.ndarray | None) -> object | None:

@@ -85,6 +85,26 @@ def test_an_irregular_graph_takes_cholmods_own_amd_and_is_solved():
     assert np.linalg.norm(matrix @ x - b) <= 1e-10 * np.linalg.norm(b)
 
 
+def test_the_chosen_orderings_factor_is_the_one_the_analysis_sized(monkeypatch):
+    """The symbolic factor a Cholesky is computed in is the one the choice was made with, not a second analysis
+    of the same order: a wide lattice (nested dissection), a slender one (RCM) and a thin one (AMD), each factor's
+    size the chosen candidate's, and its Cholesky solving A x = b to 1e-10."""
+    from mace_fmu.fe import ordering
+    from mace_fmu.fe.factor import _cholesky
+    from mace_fmu.fe.ordering import _entries
+
+    monkeypatch.setattr(ordering, "symbolic_of_lower", lambda *args: pytest.fail("the order was analysed again"))
+    for shape, method in (((10, 10, 3), NESTED_DISSECTION), ((3, 3, 40), RCM), ((2, 2, 40), AMD)):
+        matrix, grids = _lattice(*shape)
+        ordering._CHOSEN.clear()  # a choice recalled from an earlier test has no factor to give
+        analysis = analyse(matrix, groups=grids)
+        assert analysis.choice.method == method
+        assert _entries(analysis.symbolic, matrix.shape[0]) == analysis.choice.factor_entries[method]
+        b = np.random.default_rng(1).standard_normal(matrix.shape[0])
+        x = _cholesky(analysis, matrix.shape[0])(b)
+        assert np.linalg.norm(matrix @ x - b) <= 1e-10 * np.linalg.norm(b)
+
+
 def test_the_lus_ordering_reuses_the_choice_a_cholesky_analysis_made(monkeypatch):
     """A matrix expected positive definite that is not goes from CHOLMOD to the LU: the LU's permutation is the
     one the Cholesky's analysis of the same pattern chose (nested dissection here, the least fill with AMD

@@ -17,7 +17,7 @@ from mace_fmu.fe.assembly import assemble
 from mace_fmu.fe.cholmod import CholeskySolve, SymbolicFactor, numeric, symbolic_factor
 from mace_fmu.fe.constraints import build_constraints
 from mace_fmu.fe import cholmod as cholmod_module
-from mace_fmu.fe.ordering import NESTED_DISSECTION, RCM, _lower_spmatrix, _symbolic, analyse, symbolic_in_order
+from mace_fmu.fe.ordering import NESTED_DISSECTION, RCM, _lower_spmatrix, _symbolic, analyse, symbolic_of_lower
 
 pytest.importorskip("cvxopt")
 
@@ -128,9 +128,9 @@ def test_a_matrix_that_is_not_positive_definite_goes_to_the_lu_at_once(wide, mon
     matrix = sparse.csr_array(k - 2.0 * first * m)
     with pytest.raises(substructures.NotPositiveDefinite):
         substructures.substructured_cholesky(matrix, analyse(matrix, groups=grids), min_factor_entries=0)
-    symbolic = symbolic_in_order(matrix, np.arange(matrix.shape[0]))
     lower = sparse.csc_array(sparse.tril(matrix))
     lower.sort_indices()
+    symbolic = symbolic_of_lower(lower, np.arange(matrix.shape[0]))
     assert numeric(symbolic, lower) is False
     monkeypatch.setattr(substructures, "MIN_FACTOR_ENTRIES", 0)
     monkeypatch.setattr(factor, "_cholesky", lambda *args: pytest.fail("the whole matrix was factored again"))
