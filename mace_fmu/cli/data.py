@@ -23,6 +23,8 @@ def _summary(data: TimeHistory | FrequencyResponseData) -> list[str]:
         head = f"frequency response: {f.size} frequencies, {f[0]:.6g} to {f[-1]:.6g} Hz"
         if data.coherence is not None:
             head += f", coherence {np.min(data.coherence):.3f} to {np.max(data.coherence):.3f}"
+        if data.averages is not None:
+            head += f", {data.averages} averages"
     return [head, f"inputs: {signals(data.inputs)}", f"outputs: {signals(data.outputs)}"]
 
 
@@ -46,7 +48,7 @@ def cmd_h1(args: argparse.Namespace) -> int:
     if args.band is not None and not args.band[0] < args.band[1]:
         raise MaceError(f"--band {args.band[0]:g} {args.band[1]:g}: expected LOW < HIGH [Hz]")
     frd = h1_estimate(history, segment_length=args.segment, window=args.window, overlap=args.overlap,
-                      band_hz=tuple(args.band) if args.band else None)
+                      band_hz=tuple(args.band) if args.band else None, inputs_held=args.inputs_held)
     write_frequency_response(frd, args.output)
     print(f"{args.output}: {frd.source}")
     for line in _summary(frd):
@@ -69,6 +71,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     h1.add_argument("--window", default="hann", help="scipy.signal window name (default hann)")
     h1.add_argument("--overlap", type=float, default=0.5, help="overlap of segments, a fraction (default 0.5)")
     h1.add_argument("--band", type=float, nargs=2, metavar=("LOW", "HIGH"), help="keep frequencies in [LOW, HIGH] Hz")
+    h1.add_argument("--inputs-held", action="store_true",
+                    help="the record's inputs were held over each sample (a simulation's record, e.g. an FMU's; "
+                    "DAC commands logged instead of the measured signal): divide the hold's half-sample delay and "
+                    "droop out, so that the file is the continuous response an analyser measures")
     h1.add_argument("-o", "--output", required=True, help="output file: .csv, .uff or .unv")
     check.set_defaults(func=cmd_check)
     h1.set_defaults(func=cmd_h1)

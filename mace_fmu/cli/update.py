@@ -101,7 +101,8 @@ def cmd_fmu_update(args: argparse.Namespace) -> int:
                           channel_map=args.map, segment_s=args.segment_s, weighting=args.weighting,
                           held_inputs=[name for group in args.hold_input for name in group],
                           noise_rms_fraction=noise_fraction, gain_uncertainty=_gain_uncertainty(args.gain_uncertainty),
-                          bands_hz=[tuple(band) for band in args.band_hz])
+                          bands_hz=[tuple(band) for band in args.band_hz], averages=args.averages,
+                          frf_floor=None if args.frf_floor_percent is None else args.frf_floor_percent / 100.0)
     where = f"the Dask cluster at {args.scheduler}" if args.scheduler else \
         f"{args.workers or 'one per core'} local worker processes"
     gains = len(problem.family.gain_outputs)
@@ -113,27 +114,45 @@ def cmd_fmu_update(args: argparse.Namespace) -> int:
                                 runner=runner, progress=bar)
     report = _write_fmu_update(problem, result, out=Path(args.out), noise_fraction=noise_fraction, strict=args.strict)
     _say(report.summary())
-    return 0 if report.converged else NOT_CONVERGED
+    for line in report.misfit_lines()[:8]:
+        _say(f"  {line}")
+    return NOT_CONVERGED if report.failed else 0
 
 
 def _write_fmu_update(problem, result, *, out: Path, noise_fraction: float | None, strict: bool):
-    """parameters.toml, convergence.toml and uncertainty.toml of an FMU update into ``out``, and its table on
-    stdout; returns the convergence report."""
-    from mace_fmu.updating.engine.convergence import convergence_report, missing_noise_floor, noise_floor
+    """parameters.toml, convergence.toml, uncertainty.toml, summary.json and the residual figure of an FMU update
+    into ``out``, and its table on stdout; returns the convergence report."""
+    from mace_fmu.updating.engine.convergence import (blocks_with_noise, convergence_report, missing_noise_floor,
+                                                      noise_floor)
+    from mace_fmu.updating.engine.residuals import residual_figure
     from mace_fmu.updating.engine.uncertainty import format_uncertainty, stage_uncertainty, uncertainty_toml
     from mace_fmu.updating.fmu.update import fmu_parameters
 
     floor = noise_floor(problem.cost, noise_rms_fraction=noise_fraction)
-    report = convergence_report(result, noise_floor=floor, strict=strict,
+    report = convergence_report(result, noise_floor=floor, strict=strict, cost=problem.cost,
                                 missing_floor=missing_noise_floor(problem.cost, noise_rms_fraction=noise_fraction))
     params = fmu_parameters(result, family=problem.family, data=", ".join(problem.data_files), cost=problem.cost,
                             convergence=report)
     out.mkdir(parents=True, exist_ok=True)
-    # with a noise floor, the noise is the data's, not what the fit left over (which includes any misfit)
+    # the residual is the noise when the model explains the data: the covariance from the noise's level (the
+    # floor's, not what the fit left over); otherwise from the residuals themselves, their correlations included
     sigma2 = floor.expected_cost / result.final_residual.size if floor is not None else None
-    uncertainty = stage_uncertainty(result, noise_variance=sigma2)
+    from_residuals = report.verdict != "explained" or (report.residuals is not None and not report.residuals.white)
+    blocks = blocks_with_noise(problem.cost, floor) if from_residuals else None
+    uncertainty = stage_uncertainty(result, noise_variance=sigma2, residual_blocks=blocks,
+                                    noise_source=f"from the noise floor ({floor.source})" if floor else "")
+    figure = residual_figure(report.residuals, out / "residuals.png") if report.residuals is not None else None
+    summary = {"fmu": str(problem.family.interface.path), "data": list(problem.data_files), "cost": problem.cost.name,
+               "start": dict(problem.start), "values": dict(result.values), "initial_cost": result.initial_cost,
+               "seconds": result.seconds, **report.to_json(),
+               "uncertainty": [{"stage": st.stage, "method": st.method, "method_text": st.method_text,
+                                "standard_deviation_percent": st.standard_deviation_percent,
+                                "interval_95": {n: list(v) for n, v in st.interval_95.items()}} for st in uncertainty]}
     written = [params.write(out / "parameters.toml"), write_text_atomic(out / "convergence.toml", report.to_toml()),
-               write_text_atomic(out / "uncertainty.toml", uncertainty_toml(uncertainty))]
+               write_text_atomic(out / "uncertainty.toml", uncertainty_toml(uncertainty)),
+               write_text_atomic(out / "summary.json", json.dumps(summary, indent=1, default=float) + "\n")]
+    if figure is not None:
+        written.append(figure)
     units = problem.family.interface.units
     print(f"{'parameter':<28} {'start':>14} {'updated':>14}  change")
     for n in problem.names:
@@ -196,22 +215,23 @@ def cmd_mace_update(args: argparse.Namespace) -> int:
     for path in paths:
         print(f"wrote {path}")
     _say(report.summary())
-    return 0 if report.converged else NOT_CONVERGED
+    return NOT_CONVERGED if report.failed else 0
 
 
-_EXIT_STATUS = (f"exit status: 0 converged (a parameter that ends at a bound is named on the terminal and in "
-                f"convergence.toml; --strict makes it {NOT_CONVERGED}); 2 bad input (nothing written); "
-                f"{NOT_CONVERGED} the update stopped without converging (at its iteration cap, a stalled step, with "
-                "the time cost more than 3 standard deviations above the noise floor, or without a noise floor to "
-                "hold the time cost to): the results are written all the same, with converged = false and the "
-                "reasons in convergence.toml")
+_EXIT_STATUS = (f"exit status: 0 converged, whether the model explains the data to their noise or not (a model "
+                f"error: residuals above the noise or correlated with the inputs, said on the terminal and in "
+                f"convergence.toml; a parameter that ends at a bound is named; --strict makes either {NOT_CONVERGED}); "
+                f"2 bad input (nothing written); {NOT_CONVERGED} the update stopped without converging (at its "
+                "iteration cap): the results are written all the same, with converged = false and the reasons in "
+                "convergence.toml")
 
 
 def _out_option(p: argparse.ArgumentParser, *, required: bool = False) -> None:
     p.add_argument("-o", "--out", type=folder_argument, required=required, help="directory for parameters.toml, "
                    "convergence.toml, uncertainty.toml, report.txt, summary.json and figures")
-    p.add_argument("--strict", action="store_true", help=f"a parameter that ends at a bound counts as not converged "
-                   f"(exit {NOT_CONVERGED}); by default it is named and the update may converge")
+    p.add_argument("--strict", action="store_true", help=f"a parameter that ends at a bound counts as not converged, "
+                   f"and a model the data show wrong (residuals above the noise or correlated with the inputs) as a "
+                   f"failure (exit {NOT_CONVERGED}); by default both are named and the exit status is 0")
 
 
 def _sample_options(p: argparse.ArgumentParser) -> None:
@@ -267,8 +287,16 @@ def _fmu_options(p: argparse.ArgumentParser) -> None:
                              "the channel map's gain_uncertainty_percent column): its gain is estimated with the "
                              "parameters, with that prior, and the parameters' uncertainty includes it"))
     p.add_argument("--weighting", choices=["noise", "none"], default=None,
-                   help=("time histories, log-frf: each bin's log error over its noise standard deviation (default), or "
-                             "unweighted"))
+                   help=("log-frf: each line's log error over its noise standard deviation (default; a time "
+                         "history's from the record, a frequency-response file's from its coherence and averages), "
+                         "or unweighted"))
+    p.add_argument("--averages", type=positive_integer, default=None, metavar="N",
+                   help=("measured frequency responses given alone: the averages behind their estimates, where the "
+                         "files do not state them (the analyser's setting; files of mace-fmu data h1 state it)"))
+    p.add_argument("--frf-floor-percent", type=positive_number, default=None, metavar="P",
+                   help=("measured frequency responses given alone: the error the coherence does not see (leakage "
+                         "at lightly damped resonances, calibration), P %% of each output's whole response "
+                         "(default 1)"))
 
 
 def register(sub: argparse._SubParsersAction) -> None:

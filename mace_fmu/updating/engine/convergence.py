@@ -1,16 +1,22 @@
-"""Whether an update converged, and how far its cost ended above the measurement noise.
+"""The verdict on an update: converged or not, and whether the model then explains the data to their noise.
 
-Two questions a test engineer asks before signing an updated parameter set:
+Two questions a test engineer asks before signing an updated parameter set, and three verdicts:
 
 1. Did the update stop on a convergence test, or on its iteration cap? Each stage says so
-   (:class:`~mace_fmu.updating.engine.solve.StageOutcome`). A fit that meets its test with a parameter at a
-   bound has converged, and says which: the data ask for a value outside the allowed range, so that
-   parameter has no two-sided interval (``strict`` counts it as not converged).
-2. For the time-domain cost, is the fit as good as the noise allows? At the true parameters the
-   cost j^T j is a sum of squared noise samples: with each output's noise variance sigma_o^2
-   (normalised by the output's RMS, as the cost is), its mean is sum_o N_o sigma_o^2 and its
-   standard deviation sqrt(2 sum_o N_o sigma_o^4) (chi-square). A final cost several standard
-   deviations above that mean is a fit that stopped short, whatever the tests said.
+   (:class:`~mace_fmu.updating.engine.solve.StageOutcome`). A stage that ended on its cap has **not
+   converged** (exit 3), and that is the only way not to converge. A fit that meets its test with a
+   parameter at a bound has converged, and says which: the data ask for a value outside the allowed
+   range, so that parameter's interval is one-sided (``strict`` counts it as not converged).
+2. Having converged, does the model **explain the data to their noise**, or is there a **model error**?
+   At the true parameters of a right model the residual is the measurement noise: its sum of squares
+   is chi-square about the noise's (for the time cost: each output's noise variance sigma_o^2, normalised
+   by the output's RMS as the cost is, mean sum_o N_o sigma_o^2, standard deviation
+   sqrt(2 sum_o N_o sigma_o^4)), and it is uncorrelated with the inputs. A converged fit whose residual is
+   far above the noise, or correlated with the inputs (:mod:`~mace_fmu.updating.engine.residuals`, the
+   ``resid`` tests), is a finding about the model, not a failure of the fit: the model (a missing element,
+   mode or sensor dynamics; or a local minimum of the cost: start elsewhere to tell them apart) cannot
+   reproduce the data, by how much and where is said. Its intervals then come from the residuals
+   themselves (:mod:`~mace_fmu.updating.engine.uncertainty`). ``strict`` makes a model error exit 3.
 
 The noise is estimated from the data when the inputs are band-limited: above the inputs' band
 a linear structure's outputs hold only noise, so the mean of each output's Welch spectrum there,
@@ -22,16 +28,20 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 import scipy.signal
 
 from mace_fmu.errors import MaceError
 from mace_fmu.updating.engine.costs import TimeResponseCost
+from mace_fmu.updating.engine.residual_blocks import ResidualBlock
+from mace_fmu.updating.engine.residuals import ResidualAnalysis, analyse_residuals
 from mace_fmu.updating.engine.solve import UpdateResult
 
-#: a final cost more than this many standard deviations above the noise floor has not converged
+#: a final cost more than this many standard deviations above the noise floor is not explained by the noise
 SIGMA_LIMIT = 3.0
+Verdict = Literal["explained", "model error", "not converged", "untested"]
 #: the inputs' band ends where their summed spectrum falls below this fraction of its peak
 BAND_EDGE = 1e-6
 
@@ -54,7 +64,7 @@ def time_noise_floor(cost: TimeResponseCost, *, noise_rms_fraction: float | None
     """The noise floor of a time cost: from ``noise_rms_fraction`` (noise RMS / output RMS, every output)
     when given, else estimated above the inputs' band; None when the inputs fill the band (no quiet
     part of the spectrum to measure the noise in)."""
-    data = cost.data
+    data = cost.compared
     outputs = list(data.outputs)
     n = len(data.times_s)
     if noise_rms_fraction is not None:
@@ -91,7 +101,7 @@ def _no_quiet_band(f: np.ndarray, edge: float, fs: float) -> bool:
 
 def _input_band(cost: TimeResponseCost) -> tuple[np.ndarray, float, float]:
     """(Welch frequencies [Hz], the inputs' band edge [Hz], the sample rate [Hz]) of a time cost's data."""
-    data = cost.data
+    data = cost.compared
     fs = 1.0 / float(np.median(np.diff(data.times_s)))
     f, p_in = scipy.signal.welch(np.array(list(data.inputs.values())), fs=fs, nperseg=min(len(data.times_s), 1024),
                                  axis=-1)
@@ -154,13 +164,38 @@ def noise_floor(cost, *, noise_rms_fraction: float | None = None) -> NoiseFloor 
 
 @dataclass(frozen=True)
 class ConvergenceReport:
-    """Whether an update may be trusted as an optimum, and why."""
+    """Whether an update converged, and whether the model explains the data to their noise."""
 
     converged: bool  #: every stage ended on a convergence test (and, ``strict``, no parameter at a bound)
-    reasons: tuple[str, ...]  #: the stages' stopping tests, and the noise-floor verdict when there is one
+    reasons: tuple[str, ...]  #: the stages' stopping tests, and the noise-floor comparison when there is one
     final_cost: float  #: j^T j at the end
     noise_floor: NoiseFloor | None  #: the time cost's expected value from the data's noise (None: not a time cost)
     at_bounds: tuple[tuple[str, str], ...] = ()  #: (parameter, "lower" or "upper") the fit ended at
+    residuals: ResidualAnalysis | None = None  #: the residual's channels: noise or misfit (None: no channels)
+    sigma_limit: float = SIGMA_LIMIT  #: a final cost this many standard deviations above the noise floor is a misfit
+    strict: bool = False  #: a model error counts as a failure (exit 3)
+    untested_because: str = ""  #: why the residual could not be held to the noise ("" when it could)
+
+    @property
+    def above_noise_floor(self) -> bool:
+        """The final cost lies more than ``sigma_limit`` standard deviations above the noise floor."""
+        return self.noise_floor is not None and self.noise_floor.sigmas_above(self.final_cost) > self.sigma_limit
+
+    @property
+    def verdict(self) -> Verdict:
+        """"not converged", "model error" (converged, the model does not explain the data to their noise),
+        "explained" (converged, it does) or "untested" (converged; no noise and no input to test against)."""
+        if not self.converged:
+            return "not converged"
+        if self.above_noise_floor or (self.residuals is not None and self.residuals.misfits()):
+            return "model error"
+        tested = self.noise_floor is not None or (self.residuals is not None and self.residuals.tested)
+        return "explained" if tested else "untested"
+
+    @property
+    def failed(self) -> bool:
+        """The exit status of the update is 3: not converged, or (``strict``) a model error."""
+        return self.verdict == "not converged" or (self.strict and self.verdict == "model error")
 
     def bound_note(self) -> str:
         """What ending at a bound means, naming the parameters ("" without any)."""
@@ -171,19 +206,54 @@ class ConvergenceReport:
                 "interval is one-sided (no two-sided confidence interval); widen the bound or fix the parameter if "
                 "that value is not plausible")
 
+    def misfit_lines(self) -> list[str]:
+        """One line per channel the model does not explain, worst first (the residual analysis's)."""
+        return [c.text() for c in self.residuals.misfits()] if self.residuals is not None else []
+
+    def headline(self) -> str:
+        """The verdict in words, without the reasons."""
+        bound = f" (with {self.bound_note()})" if self.at_bounds else ""
+        if self.verdict == "not converged":
+            return "NOT CONVERGED" + bound
+        if self.verdict == "explained":
+            return f"converged{bound}: the model explains the data to their noise"
+        if self.verdict == "untested":
+            return (f"converged{bound}; whether the model explains the data was not tested"
+                    + (f" ({self.untested_because})" if self.untested_because else ""))
+        ratio = self._worst_ratio()
+        how = f" (residual RMS up to {ratio:.3g} x the noise's)" if ratio is not None else ""
+        estimate = any(c.domain == "frequency" for c in (self.residuals.misfits() if self.residuals else ()))
+        causes = ("a model error (an element, mode or sensor dynamics the model lacks), a local minimum of the cost "
+                  "(start elsewhere to tell)" + (", or errors of the frequency-response estimate its coherence does "
+                                                 "not show (leakage: longer segments)" if estimate else ""))
+        return (f"converged{bound}, but the model does not explain the data to their noise{how}: {causes}; the "
+                "intervals come from the residuals")
+
+    def _worst_ratio(self) -> float | None:
+        ratios = [c.rms_over_noise for c in (self.residuals.channels if self.residuals else ())
+                  if c.rms_over_noise is not None]
+        if self.noise_floor is not None and self.noise_floor.expected_cost > 0:
+            ratios.append(math.sqrt(self.final_cost / self.noise_floor.expected_cost))
+        return max(ratios) if ratios else None
+
     def summary(self) -> str:
-        """One line for the terminal."""
-        head = "converged" if self.converged else "NOT CONVERGED"
-        note = f" (with {self.bound_note()})" if self.at_bounds else ""
-        return f"{head}{note}: " + "; ".join(self.reasons)
+        """One line for the terminal: the verdict and the stopping tests."""
+        return f"{self.headline()}: " + "; ".join(self.reasons)
 
     def to_toml(self) -> str:
         """The report as TOML (``convergence.toml`` beside the parameters)."""
         def q(text: str) -> str:
             return '"' + text.replace("\\", "\\\\").replace('"', '\\"') + '"'
 
-        lines = ["# mace-fmu: did the update converge, and how far above the noise did it end?", "",
-                 f"converged = {'true' if self.converged else 'false'}",
+        def num(x: float | None) -> str:
+            return "nan" if x is None or x != x else (repr(float(x)) if math.isfinite(x) else
+                                                      ("inf" if x > 0 else "-inf"))
+
+        lines = ["# mace-fmu: did the update converge, and does the model explain the data to their noise?", "",
+                 f"verdict = {q(self.verdict)}", f"converged = {'true' if self.converged else 'false'}",
+                 f"explained = {'true' if self.verdict == 'explained' else 'false'}",
+                 f"model_error = {'true' if self.verdict == 'model error' else 'false'}",
+                 f"headline = {q(self.headline())}",
                  "reasons = [" + ", ".join(q(r) for r in self.reasons) + "]", f"final_cost = {self.final_cost!r}"]
         if self.at_bounds:
             lines += ["", "[at_bounds]", *(f"{q(n)} = {q(side)}" for n, side in self.at_bounds),
@@ -195,33 +265,74 @@ class ConvergenceReport:
                       f"sigmas_above = {nf.sigmas_above(self.final_cost)!r}", f"source = {q(nf.source)}",
                       "noise_rms_percent = { " + ", ".join(f"{q(o)} = {v!r}" for o, v in nf.noise_rms_percent.items())
                       + " }"]
+        for c in (self.residuals.channels if self.residuals is not None else ()):
+            lines += ["", "[[channel]]", f"name = {q(c.name)}", f"domain = {q(c.domain)}",
+                      f"explained = {'true' if c.explained else 'false'}", f"rms = {num(c.rms)}",
+                      f"noise_rms = {num(c.noise_rms)}", f"rms_over_noise = {num(c.rms_over_noise)}",
+                      f"sigmas_above = {num(c.sigmas_above)}", f"whiteness_p = {num(c.whiteness_p)}",
+                      "correlated_inputs = [" + ", ".join(q(i) for i in c.correlated_inputs) + "]",
+                      "input_correlation_p = { " + ", ".join(f"{q(i)} = {num(p)}"
+                                                             for i, p in c.input_correlation_p.items()) + " }",
+                      "band_hz = [" + (", ".join(num(x) for x in c.band_hz) if c.band_hz else "") + "]",
+                      f"delay_s = {num(c.delay_s)}", f"text = {q(c.text())}"]
         return "\n".join(lines) + "\n"
+
+    def to_json(self) -> dict:
+        """The verdict's fields for ``summary.json``."""
+        channels = [] if self.residuals is None else [
+            {"name": c.name, "explained": c.explained, "rms_over_noise": c.rms_over_noise,
+             "sigmas_above": c.sigmas_above, "white": c.white, "correlated_inputs": list(c.correlated_inputs),
+             "band_hz": list(c.band_hz) if c.band_hz else None, "delay_s": c.delay_s, "text": c.text()}
+            for c in self.residuals.channels]
+        return {"verdict": self.verdict, "converged": self.converged, "explained": self.verdict == "explained",
+                "model_error": self.verdict == "model error", "headline": self.headline(),
+                "reasons": list(self.reasons), "final_cost": self.final_cost,
+                "at_bounds": {n: side for n, side in self.at_bounds},
+                "noise_floor_sigmas_above": (self.noise_floor.sigmas_above(self.final_cost)
+                                             if self.noise_floor is not None else None),
+                "channels": channels}
+
+
+def blocks_with_noise(cost, noise: NoiseFloor | None) -> tuple[ResidualBlock, ...]:
+    """The cost's measured channels (:func:`~mace_fmu.updating.engine.costs.residual_blocks`), each time channel
+    with its noise from ``noise`` (by the floor's channel names; a frequency channel knows its own)."""
+    from mace_fmu.updating.engine.costs import residual_blocks
+
+    blocks = residual_blocks(cost)
+    if noise is None:
+        return blocks
+    return tuple(b.with_noise(noise.noise_rms_percent[b.name] / 100.0)
+                 if b.domain == "time" and b.name in noise.noise_rms_percent else b for b in blocks)
 
 
 def convergence_report(result: UpdateResult, *, noise_floor: NoiseFloor | None = None,
-                       sigma_limit: float = SIGMA_LIMIT, strict: bool = False,
-                       missing_floor: str = "") -> ConvergenceReport:
-    """The verdict on ``result``: its stages' tests, and (with a noise floor) the final cost against it.
+                       sigma_limit: float = SIGMA_LIMIT, strict: bool = False, missing_floor: str = "",
+                       cost=None) -> ConvergenceReport:
+    """The verdict on ``result``: its stages' tests, the final cost against the noise floor, and (given the
+    ``cost``) the residual analysis of every measured channel.
 
     Parameters
     ----------
     result : UpdateResult
         The update to judge.
     noise_floor : NoiseFloor, optional
-        The time cost expected at the truth (:func:`noise_floor`); without one only the stopping
-        tests and bounds decide.
+        The time cost expected at the truth (:func:`noise_floor`).
     sigma_limit : float
-        A final cost more than this many standard deviations above the floor has not converged.
+        A final cost (or a channel's) more than this many standard deviations above its noise is a misfit.
     strict : bool
-        Count a parameter ending at a bound as not converged (by default it is named, not failed).
+        Count a parameter ending at a bound as not converged and a model error as a failure (exit 3).
     missing_floor : str
-        Why a time cost's noise floor could not be found (:func:`missing_noise_floor`): the fit is then not
-        held to the noise, which is said, and the update does not count as converged.
+        Why a time cost's noise floor could not be found (:func:`missing_noise_floor`): the residual's level
+        is then not held to the noise, which is said; the correlation tests are still made.
+    cost : Cost, optional
+        The update's cost: its measured channels (``residual_blocks``) are analysed
+        (:func:`~mace_fmu.updating.engine.residuals.analyse_residuals`); without it only the stopping tests,
+        bounds and noise floor decide.
 
     Returns
     -------
     ConvergenceReport
-        ``converged`` and the reasons, for the terminal line and ``convergence.toml``.
+        The verdict and its reasons, for the terminal, ``convergence.toml`` and ``summary.json``.
     """
     reasons = list(result.reasons)
     converged = result.converged and not (strict and result.at_bounds)
@@ -229,14 +340,15 @@ def convergence_report(result: UpdateResult, *, noise_floor: NoiseFloor | None =
         reasons.append("--strict: a parameter at a bound counts as not converged")
     if noise_floor is not None:
         k = noise_floor.sigmas_above(result.final_cost)
-        verdict = (f"final cost {result.final_cost:.6g} is {k:+.1f} standard deviations from the noise floor "
-                   f"{noise_floor.expected_cost:.6g} +- {noise_floor.standard_deviation:.3g}")
-        if k > sigma_limit:
-            converged = False
-            verdict += f" (more than {sigma_limit:g} above: the fit stopped short of the optimum)"
-        reasons.append(verdict)
+        reasons.append(f"final cost {result.final_cost:.6g} is {k:+.1f} standard deviations from the noise floor "
+                       f"{noise_floor.expected_cost:.6g} +- {noise_floor.standard_deviation:.3g}")
     elif missing_floor:
-        converged = False
         reasons.append(missing_floor)
+    blocks = blocks_with_noise(cost, noise_floor) if cost is not None else ()
+    residuals = analyse_residuals(result.final_residual, blocks, sigma_limit=sigma_limit) if blocks else None
+    why = missing_floor
+    if not why and noise_floor is None and residuals is not None and not residuals.tested:
+        why = "the data carry no noise (no coherence) and no inputs to correlate the residual with"
     return ConvergenceReport(converged=converged, reasons=tuple(reasons), final_cost=result.final_cost,
-                             noise_floor=noise_floor, at_bounds=result.at_bounds)
+                             noise_floor=noise_floor, at_bounds=result.at_bounds, residuals=residuals,
+                             sigma_limit=sigma_limit, strict=strict, untested_because=why if not noise_floor else "")

@@ -17,6 +17,7 @@ from mace_fmu.errors import MaceError
 from mace_fmu.iomodel.pole_pairing import pair_poles
 from mace_fmu.updating.engine.linear_model import LinearModel
 from mace_fmu.updating.engine.measured import FrequencyResponseData, MeasuredMode, TimeHistory
+from mace_fmu.updating.engine.residual_blocks import ResidualBlock, frequency_blocks, time_blocks
 
 
 class Cost(Protocol):
@@ -31,6 +32,19 @@ class Cost(Protocol):
     def entry_labels(self) -> list[str]:
         """What each entry of j is, for tables and cost spectra."""
         ...
+
+
+def residual_blocks(cost: object) -> tuple[ResidualBlock, ...]:
+    """The measured channels of ``cost``'s residual vector (its ``residual_blocks()``); () for a cost that
+    has none (modal costs: one number per mode, no signal to analyse)."""
+    blocks = getattr(cost, "residual_blocks", None)
+    return tuple(blocks()) if callable(blocks) else ()
+
+
+def _end(blocks: tuple[ResidualBlock, ...]) -> int:
+    """The length of a residual vector made of ``blocks`` (they cover it)."""
+    return 1 + max(int(max(b.rows.max(), -1 if b.imaginary_rows is None else b.imaginary_rows.max()))
+                   for b in blocks) if blocks else 0
 
 
 class UnpairedModeError(MaceError):
@@ -119,6 +133,13 @@ class FrequencyResponseCost:
         e = e.transpose(2, 1, 0).reshape(-1)  # (input, output, frequency): one spectrum per channel pair
         return np.concatenate([e.real, e.imag])
 
+    def residual_blocks(self) -> tuple[ResidualBlock, ...]:
+        """One block per input-output pair (input-major, as the residual is stacked)."""
+        if self.kind != "log":
+            return ()  # differences of complex responses are not log errors: no noise model for them here
+        return frequency_blocks(pairs=tuple((i, o) for i in self.data.inputs for o in self.data.outputs),
+                                frequencies_hz=self.data.frequencies_hz)
+
     def entry_labels(self) -> list[str]:
         one = [f"{i} -> {o} {f:.4g} Hz" for i in self.data.inputs for o in self.data.outputs
                for f in self.data.frequencies_hz]
@@ -131,25 +152,54 @@ class TimeResponseCost:
     """Output errors of a simulation driven by the measured inputs (eq. 4.3), zero-order hold.
 
     j = [(y_data - y_model)(t_i) / s_o] stacked over the outputs, with s_o each output's RMS in the
-    data when ``normalise`` (so that channels in different units weigh alike), else 1.
+    data when ``normalise`` (so that channels in different units weigh alike), else 1. The model is
+    driven from the record's first sample, at rest; the errors are compared from ``compare_from_s`` [s]
+    on, so that a part of a record (its second half, a window) is compared with the structure in the
+    state the record's earlier part left it in, and a record that starts mid-stream (the structure
+    already moving, which the model at rest cannot know) is compared after its start's transient.
     """
 
     data: TimeHistory
     normalise: bool = True
     name: str = "time"
+    compare_from_s: float = 0.0  #: errors before this time [s] are not compared (the simulation still runs)
+
+    def __post_init__(self) -> None:
+        t = self.data.times_s
+        if not (np.isfinite(self.compare_from_s) and t[0] <= self.compare_from_s <= t[-2]):
+            raise MaceError(f"{self.data.source}: comparison from {self.compare_from_s!r} s, expected a time in "
+                            f"[{t[0]:g}, {t[-2]:g}] s (the record's)")
+
+    @property
+    def compared(self) -> TimeHistory:
+        """The part of the record the errors are taken over."""
+        keep = self.data.times_s >= self.compare_from_s - 1e-9 * self.data.sample_time_s
+        if keep.all():
+            return self.data
+        return TimeHistory(self.data.times_s[keep], {k: v[keep] for k, v in self.data.inputs.items()},
+                           {k: v[keep] for k, v in self.data.outputs.items()},
+                           source=f"{self.data.source} (from {self.compare_from_s:g} s)", units=self.data.units)
 
     def residual(self, model: LinearModel) -> np.ndarray:
         outs = list(self.data.outputs)
         y = model.time_response(self.data.times_s, self.data.inputs, outputs=outs)
+        compared = self.compared
+        y = y[y.shape[0] - compared.times_s.size:]
         err = []
         for k, name in enumerate(outs):
-            measured = self.data.outputs[name]
+            measured = compared.outputs[name]
             scale = float(np.sqrt(np.mean(measured**2))) if self.normalise else 1.0
             err.append((measured - y[:, k]) / (scale if scale > 0 else 1.0))
         return np.concatenate(err)
 
+    def residual_blocks(self) -> tuple[ResidualBlock, ...]:
+        """One block per output, its error samples over the output's RMS (or 1)."""
+        compared = self.compared
+        return time_blocks(outputs=tuple(compared.outputs), times_s=compared.times_s, inputs=compared.inputs)
+
     def entry_labels(self) -> list[str]:
-        return [f"{o} t={t:.4g} s" for o in self.data.outputs for t in self.data.times_s]
+        compared = self.compared
+        return [f"{o} t={t:.4g} s" for o in compared.outputs for t in compared.times_s]
 
 
 @dataclass(frozen=True)
@@ -167,6 +217,18 @@ class SeveralTests:
 
     def residual(self, model: LinearModel) -> np.ndarray:
         return np.concatenate([w * c.residual(model) for c, w in zip(self.tests, self.weights)])
+
+    def residual_blocks(self) -> tuple[ResidualBlock, ...]:
+        """Each test's blocks, named "<test>: <channel>", scaled by its weight; () unless every test has them."""
+        out: list[ResidualBlock] = []
+        offset = 0
+        for c, w, label in zip(self.tests, self.weights, self.labels):
+            blocks = residual_blocks(c)
+            if not blocks:
+                return ()
+            out += [b.shifted(offset, prefix=f"{label}: ", scale=w) for b in blocks]
+            offset += _end(blocks)
+        return tuple(out)
 
     def entry_labels(self) -> list[str]:
         return [f"{label}: {e}" for c, label in zip(self.tests, self.labels) for e in c.entry_labels()]
@@ -204,6 +266,10 @@ class WithPriors:
             raise MaceError(f"prior on {', '.join(missing)}, which the model has no parameter of")
         prior = [self.noise_sd * (values[n] - mean) / sd for n, (mean, sd) in self.priors.items()]
         return np.concatenate([self.cost.residual(model), np.array(prior, dtype=float)])
+
+    def residual_blocks(self) -> tuple[ResidualBlock, ...]:
+        """The data's blocks (the priors, after them, are no measured channel)."""
+        return residual_blocks(self.cost)
 
     def entry_labels(self) -> list[str]:
         return self.cost.entry_labels() + [f"prior {n}" for n in self.priors]

@@ -10,14 +10,22 @@ from mace_fmu.updating.engine.measured import FrequencyResponseData, TimeHistory
 
 
 def h1_estimate(history: TimeHistory, *, segment_length: int, window: str = "hann", overlap: float = 0.5,
-                band_hz: tuple[float, float] | None = None) -> FrequencyResponseData:
+                band_hz: tuple[float, float] | None = None, inputs_held: bool = False) -> FrequencyResponseData:
     """H1 = S_yu S_uu^-1 [output unit / input unit] at the Welch frequencies [Hz], with multiple coherence.
 
     Cross spectra by ``scipy.signal.csd`` (``segment_length`` samples per segment, ``window``,
     ``overlap`` fraction of a segment, mean removed per segment). With several inputs the full
     matrix S_uu is inverted at each frequency, so simultaneous inputs must not be fully
     correlated. ``band_hz`` keeps [low, high] (inclusive); without it every frequency above 0 Hz.
-    The settings are stated in the result's ``source``.
+    The settings are stated in the result's ``source``, the number of segments averaged in its
+    ``averages`` (what the coherence's variance needs, :mod:`~mace_fmu.updating.engine.frf_noise`).
+
+    A record whose inputs were held over each sample (a simulation's: an FMU holds each input value
+    for the step; a record that logs a DAC's commands rather than the measured signal) has the
+    hold's response e^(-j pi f T) sinc(f T) in its H1: a half-sample delay and a droop, 21.6 deg and
+    2.3 % at 60 Hz sampled at 500 Hz. An analyser's FRF of the continuous signals has neither, and the
+    FMU updates compare with that (:mod:`~mace_fmu.updating.engine.multisine`): ``inputs_held``
+    divides the hold out.
 
     Parameters
     ----------
@@ -31,6 +39,8 @@ def h1_estimate(history: TimeHistory, *, segment_length: int, window: str = "han
         Overlap of the segments, a fraction of one.
     band_hz : tuple of float, optional
         [low, high] [Hz] to keep (inclusive).
+    inputs_held : bool
+        The inputs were held over each sample: divide the hold's response out (above).
 
     Returns
     -------
@@ -73,14 +83,20 @@ def h1_estimate(history: TimeHistory, *, segment_length: int, window: str = "han
                         f"{f[keep][k]:.6g} Hz (inputs {', '.join(inputs)} zero or fully correlated there)")
     h_t = np.linalg.solve(s_uu, s_uy)  # (k, m, p)
     response = np.transpose(h_t, (0, 2, 1))  # (k, p, m)
+    if inputs_held:
+        t = history.sample_time_s
+        response = response / (np.exp(-1j * np.pi * f[keep] * t) * np.sinc(f[keep] * t))[:, None, None]
     # Multiple coherence of each output with all inputs: (S_yu S_uu^-1 S_uy)_cc / S_yy,cc.
     explained = np.einsum("kac,kac->kc", np.conj(s_uy), h_t).real
     # an output with no power there (all zeros) has nothing to explain: coherence 0, not 0/0
     ratio = np.divide(explained, s_yy, out=np.zeros_like(s_yy), where=s_yy > 0)
     coherence = np.clip(ratio, 0.0, 1.0)
+    step = int(segment_length) - int(round(overlap * segment_length))
+    averages = 1 + (n - int(segment_length)) // step  # scipy's Welch segments
     settings = (f"Welch: {segment_length}-sample segments ({segment_length * history.sample_time_s:.6g} s, "
-                f"{fs / segment_length:.6g} Hz resolution), {window} window, {overlap:.0%} overlap")
+                f"{fs / segment_length:.6g} Hz resolution), {window} window, {overlap:.0%} overlap, {averages} "
+                f"averages" + (", the inputs' hold divided out" if inputs_held else ""))
     return FrequencyResponseData(f[keep], tuple(inputs), tuple(outputs), response,
                                  source=f"H1 estimate of {history.source} ({settings})",
                                  units={name: history.unit(name) for name in inputs + outputs},
-                                 coherence=coherence)
+                                 coherence=coherence, averages=averages)

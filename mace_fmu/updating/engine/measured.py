@@ -136,6 +136,8 @@ class FrequencyResponseData:
     source: str = "<memory>"  #: the file it was read from
     units: Mapping[str, str] = field(default_factory=dict)  #: signal -> unit; "V" where not given
     coherence: np.ndarray | None = None  #: (k, output) multiple coherence of each output with all inputs
+    #: the number of averages (Welch segments) behind the estimate and its coherence; None where not stated
+    averages: int | None = None
 
     def __post_init__(self) -> None:
         f = np.asarray(self.frequencies_hz, dtype=float)
@@ -168,6 +170,16 @@ class FrequencyResponseData:
                 raise DataError(f"{self.source}: output {self.outputs[i]!r}: {what} at row {k}", source=self.source,
                                 what=what, channel=self.outputs[i], row=k)
             object.__setattr__(self, "coherence", c)
+        if self.averages is not None and not (isinstance(self.averages, (int, np.integer)) and self.averages >= 1):
+            raise MaceError(f"{self.source}: averages {self.averages!r}, expected a whole number >= 1 (the Welch "
+                            "segments or analyser averages behind the estimate)")
+
+    def lines(self, keep: np.ndarray) -> FrequencyResponseData:
+        """The same data at the lines ``keep`` (a boolean mask or indices), coherence and averages kept."""
+        return FrequencyResponseData(self.frequencies_hz[keep], self.inputs, self.outputs, self.response[keep],
+                                     source=self.source, units=self.units,
+                                     coherence=None if self.coherence is None else self.coherence[keep],
+                                     averages=self.averages)
 
     def unit(self, signal: str) -> str:
         """The unit of an input or output signal, e.g. "V"; the response's unit is output unit / input unit."""

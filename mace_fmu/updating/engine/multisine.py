@@ -40,6 +40,8 @@ from typing import Sequence
 import numpy as np
 
 from mace_fmu.errors import MaceError
+from mace_fmu.updating.engine.frf_noise import FrfNoise
+from mace_fmu.updating.engine.residual_blocks import ResidualBlock, frequency_blocks
 from mace_fmu.updating.engine.measured import FrequencyResponseData
 from mace_fmu.updating.engine.simulated_frf import log_ratio_labels, log_ratio_residual, measured_pairs
 
@@ -186,29 +188,24 @@ def multisine_probe(frequencies_hz: np.ndarray, *, samples_per_cycle: int = 20) 
     return MultisineProbe(frequencies_hz=f, period_s=period, samples_per_period=samples)
 
 
-def coherence_weights(data: FrequencyResponseData) -> np.ndarray | None:
-    """w[k, output, input] = sqrt(gamma^2 / (1 - gamma^2)), proportional to one over the standard deviation of
-    log H at each bin (Bendat and Piersol: sd(log |H|) ~ sqrt((1 - gamma^2) / (2 n gamma^2)) for n averages,
-    which a file does not say); None when the data carry no coherence."""
-    if data.coherence is None:
-        return None
-    gamma2 = np.clip(np.asarray(data.coherence, dtype=float), 0.0, 1.0 - 1e-12)
-    w = np.sqrt(gamma2 / (1.0 - gamma2))
-    return np.repeat(w[:, :, None], len(data.inputs), axis=2)
-
-
 @dataclass(frozen=True)
 class ProbedFrequencyResponseCost:
     """j = w [log |G_data / G_model|, phase difference] over ``pairs`` (input, output) and the data's
     frequencies, G_model the model's response from :class:`MultisineProbe` runs at exactly those frequencies:
     measured frequency responses (a UFF 58 or CSV file of an analyser) compared with a model known only by
-    simulation. ``weights``: w[k, output, input] (None: 1, eq. 4.17), e.g. :func:`coherence_weights`."""
+    simulation. ``noise``: the data's noise (:func:`~mace_fmu.updating.engine.frf_noise.frf_noise`), w its
+    weights, each log error in units of its noise; None: w = 1 (eq. 4.17 as printed)."""
 
     data: FrequencyResponseData
     probe: MultisineProbe
     pairs: tuple[tuple[str, str], ...] = ()  #: (input, output) channels compared; () means every pair
-    weights: np.ndarray | None = None
+    noise: FrfNoise | None = None
     name: str = "log-frf"
+
+    @property
+    def weights(self) -> np.ndarray | None:
+        """w[k, output, input] of each log error (None: 1)."""
+        return None if self.noise is None else self.noise.weights
 
     def __post_init__(self) -> None:
         pairs = measured_pairs(self.data, self.pairs)
@@ -222,6 +219,11 @@ class ProbedFrequencyResponseCost:
 
     def residual(self, model) -> np.ndarray:
         return log_ratio_residual(self.data, self.model_response(model), pairs=self.pairs, weights=self.weights)
+
+    def residual_blocks(self) -> tuple[ResidualBlock, ...]:
+        """One block per compared pair; with noise weights each entry's noise is 1."""
+        blocks = frequency_blocks(pairs=self.pairs, frequencies_hz=self.data.frequencies_hz)
+        return blocks if self.weights is None else tuple(b.with_noise(1.0) for b in blocks)
 
     def entry_labels(self) -> list[str]:
         return log_ratio_labels(self.data, self.pairs)

@@ -16,6 +16,7 @@ import scipy.signal as signal
 
 from mace_fmu.errors import MaceError
 from mace_fmu.updating.engine.h1 import h1_estimate
+from mace_fmu.updating.engine.residual_blocks import ResidualBlock, frequency_blocks
 from mace_fmu.updating.engine.measured import FrequencyResponseData, TimeHistory
 
 
@@ -116,6 +117,11 @@ class SimulatedFrequencyResponseCost:
                 h[:, k, j] = g if same else np.interp(f, est.frequencies_hz, g.real) + 1j * np.interp(
                     f, est.frequencies_hz, g.imag)
         return log_ratio_residual(self.data, h, pairs=self.pairs, weights=self.weights)
+
+    def residual_blocks(self) -> tuple[ResidualBlock, ...]:
+        """One block per compared pair; with noise weights each entry's noise is 1."""
+        blocks = frequency_blocks(pairs=self.pairs, frequencies_hz=self.data.frequencies_hz)
+        return blocks if self.weights is None else tuple(b.with_noise(1.0) for b in blocks)
 
     def entry_labels(self) -> list[str]:
         return log_ratio_labels(self.data, self.pairs)

@@ -10,6 +10,12 @@ follow; each right singular vector v_k whose standard deviation sigma / s_k exce
 tolerance is a combination the data do not fix, written in parameter names
 ("0.08 E_active_strut_end + 0.32 E_active_strut_piezo - 0.95 E_active_strut_center").
 The penalty of eq. 4.18, when on, is a regularisation and is left out: the uncertainty is the data's.
+
+That covariance assumes the residual is white noise of variance sigma^2. When it is not (the model does
+not explain the data: :mod:`~mace_fmu.updating.engine.convergence`), the covariance comes from the
+residuals themselves, the sandwich (J^T J)^-1 M (J^T J)^-1 of
+:mod:`~mace_fmu.updating.engine.residual_covariance`, and the weak directions are the covariance's
+eigenvectors. Every stage names the method it used (``method``).
 """
 
 from __future__ import annotations
@@ -19,6 +25,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from mace_fmu.updating.engine.residual_blocks import ResidualBlock
+from mace_fmu.updating.engine.residual_covariance import residual_covariance
 from mace_fmu.updating.engine.solve import UpdateResult
 
 Z95 = 1.959963984540054  #: two-sided 95 % quantile of the normal distribution
@@ -58,6 +66,8 @@ class StageUncertainty:
     singular_values: np.ndarray  #: of J (per unit relative change), largest first
     weak_directions: tuple[WeakDirection, ...]  #: combinations with sd above the tolerance, weakest first
     tolerance_percent: float  #: standard deviation below which a parameter counts as determined [%]
+    method: str = "noise"  #: how the covariance was found: "noise" (sigma^2 (J^T J)^-1) or "residuals" (sandwich)
+    method_text: str = ""  #: the method in words, for the report
 
     @property
     def not_fixed(self) -> tuple[str, ...]:
@@ -72,7 +82,8 @@ def _stage_jacobians(result: UpdateResult) -> dict[str, tuple]:
 
 
 def stage_uncertainty(result: UpdateResult, *, tolerance_percent: float = DEFAULT_TOLERANCE_PERCENT,
-                      noise_variance: float | None = None) -> tuple[StageUncertainty, ...]:
+                      noise_variance: float | None = None, noise_source: str = "",
+                      residual_blocks: tuple[ResidualBlock, ...] | None = None) -> tuple[StageUncertainty, ...]:
     """The uncertainty of every stage that has cost sensitivities (the cost-sensitivity method).
 
     Parameters
@@ -85,33 +96,59 @@ def stage_uncertainty(result: UpdateResult, *, tolerance_percent: float = DEFAUL
     noise_variance : float, optional
         sigma^2 per residual when known (e.g. the noise floor's expected cost / m); default: the
         final cost / (m - n).
+    noise_source : str
+        Where ``noise_variance`` came from, for the report.
+    residual_blocks : tuple of ResidualBlock, optional
+        Given, the covariance comes from the residuals themselves (the sandwich of
+        :mod:`~mace_fmu.updating.engine.residual_covariance`): for a residual that is not white noise at
+        the stated level.
 
     Returns
     -------
     tuple of StageUncertainty
         Per stage: standard deviations [% of the value], correlations, 95 % intervals [SI], singular
-        values and the weak directions in parameter names.
+        values, the weak directions in parameter names, and the method.
     """
     out = []
     for stage, (names, jac) in _stage_jacobians(result).items():
         m, n = jac.shape
         sigma2 = noise_variance if noise_variance is not None else result.final_cost / max(m - n, 1)
-        out.append(linearised_uncertainty(stage=stage, names=names, values={k: float(result.values[k]) for k in names},
-                                          jacobian=jac, noise_variance=sigma2, tolerance_percent=tolerance_percent))
+        values = {k: float(result.values[k]) for k in names}
+        if residual_blocks and m == result.final_residual.size:
+            cov = residual_covariance(jac, result.final_residual, residual_blocks, other_variance=sigma2)
+            out.append(linearised_uncertainty(
+                stage=stage, names=names, values=values, jacobian=jac, noise_variance=sigma2,
+                tolerance_percent=tolerance_percent, covariance=cov, method="residuals",
+                method_text="from the residuals (the model does not explain the data to their noise): the sandwich "
+                            "(J^T J)^-1 M (J^T J)^-1, M from the residual's spectra and cross-spectra (Huber 1967, "
+                            "White 1982, Brillinger 1981)"))
+        else:
+            how = noise_source or ("the final cost / (m - n)" if noise_variance is None else "the stated noise")
+            out.append(linearised_uncertainty(stage=stage, names=names, values=values, jacobian=jac,
+                                              noise_variance=sigma2, tolerance_percent=tolerance_percent,
+                                              method_text=f"from the noise: sigma^2 (J^T J)^-1, sigma^2 {how}"))
     return tuple(out)
 
 
 def linearised_uncertainty(*, stage: str, names, values: dict, jacobian: np.ndarray, noise_variance: float,
-                           tolerance_percent: float = DEFAULT_TOLERANCE_PERCENT) -> StageUncertainty:
+                           tolerance_percent: float = DEFAULT_TOLERANCE_PERCENT, covariance: np.ndarray | None = None,
+                           method: str = "noise", method_text: str = "") -> StageUncertainty:
     """The uncertainty of parameters ``names`` at ``values`` [SI] from J = d j / d delta (per unit relative
-    change, one column per name, m rows) and the noise variance per residual: sigma^2 (J^T J)^-1."""
+    change, one column per name, m rows) and the noise variance per residual: sigma^2 (J^T J)^-1, or the
+    ``covariance`` (per unit relative change) given (``method`` "residuals")."""
     jac = np.asarray(jacobian, dtype=float)
     m, n = jac.shape
     sigma2 = float(noise_variance)
     u, s, vt = np.linalg.svd(jac, full_matrices=False)
     tiny = s <= s[0] * 1e-12 if len(s) else np.zeros(0, dtype=bool)
-    inv = np.where(tiny, np.inf, 1.0 / np.where(tiny, 1.0, s))
-    cov = (vt.T * (sigma2 * inv**2)) @ vt if not tiny.any() else np.full((n, n), np.inf)
+    if covariance is None:
+        inv = np.where(tiny, np.inf, 1.0 / np.where(tiny, 1.0, s))
+        cov = (vt.T * (sigma2 * inv**2)) @ vt if not tiny.any() else np.full((n, n), np.inf)
+        directions = [(100 * math.sqrt(sigma2) * inv[k], vt[k]) for k in range(len(s))]
+    else:
+        cov = np.full((n, n), np.inf) if tiny.any() else np.asarray(covariance, dtype=float)
+        w, v = np.linalg.eigh(cov) if not tiny.any() else (np.full(n, np.inf), np.eye(n))
+        directions = [(100 * math.sqrt(max(w[k], 0.0)), v[:, k]) for k in range(n)]
     sd = np.sqrt(np.abs(np.diag(cov)))
     with np.errstate(invalid="ignore", divide="ignore"):
         corr = cov / np.outer(sd, sd)
@@ -119,24 +156,28 @@ def linearised_uncertainty(*, stage: str, names, values: dict, jacobian: np.ndar
     interval = {k: (values[k] * (1 - Z95 * sd_percent[k] / 100), values[k] * (1 + Z95 * sd_percent[k] / 100))
                 for k in names}
     weak = []
-    for k in range(len(s)):
-        sd_dir = 100 * math.sqrt(sigma2) * inv[k]
+    for sd_dir, vec in directions:
         if sd_dir > tolerance_percent:
-            v = vt[k] * np.sign(vt[k][np.argmax(np.abs(vt[k]))])
+            vec = vec * np.sign(vec[np.argmax(np.abs(vec))])
             weak.append(WeakDirection(standard_deviation_percent=float(sd_dir),
-                                      coefficients={nm: float(c) for nm, c in zip(names, v)}))
+                                      coefficients={nm: float(c) for nm, c in zip(names, vec)}))
     weak.sort(key=lambda w: -w.standard_deviation_percent)
     return StageUncertainty(stage=stage, names=tuple(names), values=dict(values), residuals=m, noise_variance=sigma2,
                             standard_deviation_percent=sd_percent, correlation=corr, interval_95=interval,
-                            singular_values=s, weak_directions=tuple(weak), tolerance_percent=tolerance_percent)
+                            singular_values=s, weak_directions=tuple(weak), tolerance_percent=tolerance_percent,
+                            method=method, method_text=method_text)
 
 
 def format_uncertainty(stages: tuple[StageUncertainty, ...]) -> str:
     """The terminal table: value, standard deviation, 95 % interval, and what the data do not fix."""
     lines = []
     for st in stages:
-        lines.append(f"{st.stage}: uncertainty from {st.residuals} residuals, noise sd {math.sqrt(st.noise_variance):.3g} "
-                     f"per residual (tolerance {st.tolerance_percent:g} %)")
+        if st.method == "residuals":
+            lines.append(f"{st.stage}: uncertainty from {st.residuals} residuals, {st.method_text} (tolerance "
+                         f"{st.tolerance_percent:g} %)")
+        else:
+            lines.append(f"{st.stage}: uncertainty from {st.residuals} residuals, noise sd "
+                         f"{math.sqrt(st.noise_variance):.3g} per residual (tolerance {st.tolerance_percent:g} %)")
         width = max([28, *(len(n) for n in st.names)])
         lines.append(f"  {'parameter':<{width}} {'value':>13} {'sd %':>8}  95 % interval")
         for n in st.names:
@@ -162,6 +203,7 @@ def uncertainty_toml(stages: tuple[StageUncertainty, ...]) -> str:
     for st in stages:
         lines += ["[[stage]]", f"name = {q(st.stage)}", f"residuals = {st.residuals}",
                   f"noise_variance = {num(st.noise_variance)}", f"tolerance_percent = {num(st.tolerance_percent)}",
+                  f"method = {q(st.method)}", f"method_text = {q(st.method_text)}",
                   "parameters = [" + ", ".join(q(n) for n in st.names) + "]",
                   "values = [" + ", ".join(num(st.values[n]) for n in st.names) + "]",
                   "standard_deviation_percent = [" + ", ".join(num(st.standard_deviation_percent[n]) for n in st.names)

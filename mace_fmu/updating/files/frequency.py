@@ -12,6 +12,7 @@ from mace_fmu.updating.engine.measured import DataError, FrequencyResponseData
 from mace_fmu.updating.files.channels import ChannelMap, Label, check_present, format_label, parse_label, resolve
 from mace_fmu.updating.files.timehistory import read_csv_columns
 from mace_fmu.util.atomic import atomic_path
+from mace_fmu.util.textfile import read_text
 
 FRF_SUFFIXES = (".csv", ".uff", ".unv")
 _COHERENCE = re.compile(r"^coherence:(.+?) \[1\]$")
@@ -25,6 +26,21 @@ UFF_FRF = 4
 UFF_DIRECTIONS = {1: "X", 2: "Y", 3: "Z", 4: "RX", 5: "RY", 6: "RZ"}
 #: the ID lines (4 and 5) that carry the model's signal names, so that a file reads back by name
 UFF_OUTPUT_ID, UFF_INPUT_ID = "output: ", "input: "
+#: how a file states the number of averages behind its estimate: a CSV comment line ``# averages = 7`` before
+#: the header, UFF 58's ID line 3 ``averages: 7`` (dataset 58 has no field of its own for it)
+_CSV_AVERAGES = re.compile(r"^#\s*averages\s*[=:]\s*(\S+)\s*$")
+_UFF_AVERAGES = re.compile(r"^averages\s*[=:]\s*(\S+)\s*$")
+
+
+def _averages(text: str, *, at: str) -> int:
+    """The number of averages a file states (``text``: what follows ``averages =``), checked."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1 or str(value) != text.strip():
+        raise MaceError(f"{at}: averages {text!r}, expected a whole number >= 1 (the estimate's averages)")
+    return value
 
 
 # --- CSV ----------------------------------------------------------------------------------------
@@ -42,6 +58,11 @@ def _pair_units(text: str, *, at: str, label: str) -> tuple[str, str]:
 def _read_csv(path: Path, channel_map: ChannelMap | None) -> FrequencyResponseData:
     labels, columns, lines, header_line = read_csv_columns(path, dtype=complex)
     at = f"{path}:{header_line}"
+    averages = None
+    for number, line in enumerate(read_text(path).splitlines()[:header_line - 1], start=1):
+        m = _CSV_AVERAGES.match(line.strip())
+        if m:
+            averages = _averages(m.group(1), at=f"{path}:{number}")
     first = parse_label(labels[0], where=at)
     if first.name != "frequency" or first.role is not None or first.unit != "Hz":
         raise MaceError(f"{at}: the first column is {labels[0]!r}, expected 'frequency [Hz]'")
@@ -111,7 +132,7 @@ def _read_csv(path: Path, channel_map: ChannelMap | None) -> FrequencyResponseDa
         raise MaceError(f"{at}: coherence columns for {len(coherence)} of {len(outputs)} outputs (all or none)")
     gamma2 = np.column_stack([coherence[channel_of[out]] for out in outputs]) if coherence else None
     return _frd(frequencies, inputs, outputs, response, units, source=str(path),
-                row_at=lambda k: f"{path}:{lines[k]}", channel_of=channel_of, coherence=gamma2)
+                row_at=lambda k: f"{path}:{lines[k]}", channel_of=channel_of, coherence=gamma2, averages=averages)
 
 
 def _signal(label: Label, channel_map: ChannelMap | None, at: str, role: str) -> str | None:
@@ -124,7 +145,8 @@ def _signal(label: Label, channel_map: ChannelMap | None, at: str, role: str) ->
     return signal
 
 
-def _frd(f, inputs, outputs, response, units, *, source, row_at, channel_of, coherence=None) -> FrequencyResponseData:
+def _frd(f, inputs, outputs, response, units, *, source, row_at, channel_of, coherence=None,
+         averages=None) -> FrequencyResponseData:
     # The response's NaN check, located per channel pair (FrequencyResponseData only knows the row).
     for i, out in enumerate(outputs):
         for j, inp in enumerate(inputs):
@@ -134,7 +156,7 @@ def _frd(f, inputs, outputs, response, units, *, source, row_at, channel_of, coh
                                 f"response is NaN or inf ({bad.size} of {len(f)} rows)")
     try:
         return FrequencyResponseData(f, tuple(inputs), tuple(outputs), response, source=source, units=units,
-                                     coherence=coherence)
+                                     coherence=coherence, averages=averages)
     except DataError as exc:
         channel = "frequency" if exc.channel is None else channel_of.get(exc.channel, exc.channel)
         raise MaceError(f"{row_at(exc.row)}: channel {channel!r}: {exc.what}") from None
@@ -157,8 +179,11 @@ def _write_csv(frd: FrequencyResponseData, path: Path) -> None:
         for i, out in enumerate(frd.outputs):
             labels.append(f"coherence:{out} [1]")
             columns.append(frd.coherence[:, i])
+    header = ",".join(labels)
+    if frd.averages is not None:
+        header = f"# averages = {frd.averages}\n{header}"
     with atomic_path(path) as tmp:
-        np.savetxt(tmp, np.column_stack(columns), fmt="%.17g", delimiter=",", header=",".join(labels), comments="")
+        np.savetxt(tmp, np.column_stack(columns), fmt="%.17g", delimiter=",", header=header, comments="")
 
 
 # --- UFF dataset 58 -----------------------------------------------------------------------------
@@ -276,7 +301,8 @@ def _read_uff(path: Path, channel_map: ChannelMap | None) -> FrequencyResponseDa
     signals = _UffSignals(channel_map)
     pairs: dict[tuple[str, str], tuple[int, np.ndarray]] = {}
     first: tuple[int, np.ndarray] | None = None  # the first kept dataset: its frequencies are everyone's
-    for k, dataset, f, h in _uff_frf_datasets(path):
+    datasets = _uff_frf_datasets(path)
+    for k, dataset, f, h in datasets:
         at = f"{path}: dataset {k}"
         out, inp = (signals.end(dataset, role, at=at) for role in ("output", "input"))
         if out is None or inp is None:
@@ -294,6 +320,12 @@ def _read_uff(path: Path, channel_map: ChannelMap | None) -> FrequencyResponseDa
     if first is None:
         raise MaceError(f"{path}: every FRF dataset has a channel the channel map ignores")
     k0, f0 = first
+    stated = {k: _averages(m.group(1), at=f"{path}: dataset {k} (ID line 3)") for k, dataset, _, _ in datasets
+              for m in [_UFF_AVERAGES.match(str(dataset.get("id3", "")).strip())] if m}
+    if len(set(stated.values())) > 1:
+        raise MaceError(f"{path}: the datasets state different numbers of averages ("
+                        + ", ".join(f"dataset {k}: {v}" for k, v in sorted(stated.items())) + "): one estimate has one")
+    averages = next(iter(stated.values()), None)
     response = np.empty((f0.size, len(signals.outputs), len(signals.inputs)), dtype=complex)
     for i, out in enumerate(signals.outputs):
         for j, inp in enumerate(signals.inputs):
@@ -302,7 +334,8 @@ def _read_uff(path: Path, channel_map: ChannelMap | None) -> FrequencyResponseDa
                                 "output/input pair (every output needs one per input)")
             response[:, i, j] = pairs[(out, inp)][1]
     return _frd(f0, signals.inputs, signals.outputs, response, signals.units, source=str(path),
-                row_at=lambda row: f"{path}: dataset {k0} row {row}", channel_of=signals.channel_of)
+                row_at=lambda row: f"{path}: dataset {k0} row {row}", channel_of=signals.channel_of,
+                averages=averages)
 
 
 def _uff_abscissa(f: np.ndarray) -> np.ndarray:
@@ -329,7 +362,8 @@ def _write_uff(frd: FrequencyResponseData, path: Path) -> None:
                 if len(unit) > 20 or not unit or unit.upper() == "NONE":
                     raise MaceError(f"{path}: unit {unit!r} does not fit a UFF units label (1 to 20 characters)")
             dataset = pyuff.prepare_58(
-                binary=0, id1="frequency response function", id2=frd.source[:80], id3="NONE",
+                binary=0, id1="frequency response function", id2=frd.source[:80],
+                id3="NONE" if frd.averages is None else f"averages: {frd.averages}",
                 id4=UFF_OUTPUT_ID + out, id5=UFF_INPUT_ID + inp, func_type=UFF_FRF,
                 rsp_node=i + 1, rsp_dir=0, ref_node=j + 1, ref_dir=0,
                 data=frd.response[:, i, j].astype(complex), x=frd.frequencies_hz, abscissa_spacing=0,

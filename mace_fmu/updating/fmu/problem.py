@@ -18,7 +18,7 @@ from mace_fmu.updating.engine.costs import Cost, WithPriors
 from mace_fmu.updating.engine.measured import FrequencyResponseData, TimeHistory
 from mace_fmu.updating.engine.simulated_frf import H1Estimator
 from mace_fmu.updating.fmu.model import FmuFamily, gain_parameter, read_fmu_interface
-from mace_fmu.updating.fmu.update import COST_KINDS, CostKind, Weighting, fmu_cost
+from mace_fmu.updating.fmu.update import COST_KINDS, WEIGHTINGS, CostKind, Weighting, fmu_cost
 
 
 @dataclass(frozen=True)
@@ -41,7 +41,8 @@ def fmu_problem(*, fmu: str | os.PathLike, data: Sequence[str | os.PathLike], na
                 segment_s: float | None = None, weighting: Weighting | None = None,
                 held_inputs: Sequence[str] = (), noise_rms_fraction: float | None = None,
                 gain_uncertainty: Mapping[str, float] | None = None,
-                bands_hz: Sequence[tuple[float, float]] = ()) -> FmuProblem:
+                bands_hz: Sequence[tuple[float, float]] = (), averages: int | None = None,
+                frf_floor: float | None = None) -> FmuProblem:
     """Read and check everything an FMU update needs; no simulation runs.
 
     Parameters
@@ -67,8 +68,9 @@ def fmu_problem(*, fmu: str | os.PathLike, data: Sequence[str | os.PathLike], na
     segment_s : float, optional
         Time histories: H1 segment length [s] of the log-FRF cost (default 2 s).
     weighting : {"noise", "none"}, optional
-        Time histories, log-FRF: each bin over its noise standard deviation (the default), or eq. 4.17 as
-        printed.
+        Log-FRF: each bin over its noise standard deviation (the default), or eq. 4.17 as printed. The
+        noise of a time history's H1 is estimated from the record; that of a measured frequency response
+        from its coherence and number of averages (:mod:`~mace_fmu.updating.engine.frf_noise`).
     held_inputs : sequence of str
         FMU inputs the data lack that are to be held at 0 V (any other input the data lack is an
         error: a silently grounded input biases every parameter).
@@ -81,6 +83,12 @@ def fmu_problem(*, fmu: str | os.PathLike, data: Sequence[str | os.PathLike], na
     bands_hz : sequence of (float, float)
         Measured frequency responses alone: the bands [Hz] the cost compares, e.g. one about each
         resonance (default: every frequency of the files).
+    averages : int, optional
+        Measured frequency responses alone: the averages behind their estimates, where the files do not
+        state them (the coherence's noise needs them).
+    frf_floor : float, optional
+        Measured frequency responses alone: the error floor, a fraction of each output's response
+        (default :data:`~mace_fmu.updating.engine.frf_noise.DEFAULT_FLOOR`).
 
     Returns
     -------
@@ -123,16 +131,22 @@ def fmu_problem(*, fmu: str | os.PathLike, data: Sequence[str | os.PathLike], na
         (histories if isinstance(item, TimeHistory) else responses).append(item)
     if not histories:
         # what shapes an H1 estimate or a time record's noise has no meaning here: refused, never ignored
-        unused = {"segment_s (--segment-s)": segment_s, "weighting (--weighting)": weighting,
+        unused = {"segment_s (--segment-s)": segment_s,
                   "noise_rms_fraction (--noise-rms-percent)": noise_rms_fraction,
                   "held_inputs (--hold-input)": tuple(held_inputs) or None}
         given = [option for option, value in unused.items() if value is not None]
         if given:
             raise MaceError(f"{', '.join(given)}: for time histories; measured frequency responses given alone are "
-                            "compared line by line (weighted by their coherence where the files give it) and each "
-                            "input is driven alone, so this has no effect: leave it out")
+                            "compared line by line (each over its noise, from the coherence and the averages) and "
+                            "each input is driven alone, so this has no effect: leave it out")
         return _frequency_response_problem(interface, responses, names=names, start=start, cost=cost,
-                                           bands_hz=bands_hz, gain_uncertainty=gain_uncertainty, data=data)
+                                           bands_hz=bands_hz, gain_uncertainty=gain_uncertainty, data=data,
+                                           weighting=weighting, averages=averages, floor=frf_floor)
+    frf_only = {"averages (--averages)": averages, "frf_floor (--frf-floor-percent)": frf_floor}
+    given = [option for option, value in frf_only.items() if value is not None]
+    if given:
+        raise MaceError(f"{', '.join(given)}: for measured frequency responses given alone (the noise of a time "
+                        "history's H1 is estimated from the record itself): leave it out")
     segment_s = 2.0 if segment_s is None else segment_s
     weighting = "noise" if weighting is None else weighting
     if bands_hz:
@@ -183,11 +197,15 @@ def fmu_problem(*, fmu: str | os.PathLike, data: Sequence[str | os.PathLike], na
 def _frequency_response_problem(interface, responses: list[FrequencyResponseData], *, names: tuple[str, ...],
                                 start: dict[str, float], cost: CostKind, bands_hz: Sequence[tuple[float, float]],
                                 gain_uncertainty: Mapping[str, float] | None,
-                                data: Sequence[str | os.PathLike]) -> FmuProblem:
+                                data: Sequence[str | os.PathLike], weighting: Weighting | None,
+                                averages: int | None, floor: float | None) -> FmuProblem:
     """An update on measured frequency responses alone: each file's FRFs in the band against the FMU's, from
-    periodic runs at exactly the files' frequencies, weighted by the coherence where a file gives it."""
+    periodic runs at exactly the files' frequencies, each log error over its noise (``weighting`` "noise": from
+    the coherence and the averages, :mod:`~mace_fmu.updating.engine.frf_noise`) or unweighted ("none"); by
+    default "noise" for a file with coherence, "none" for one without (its noise is not known)."""
     from mace_fmu.updating.engine.costs import SeveralTests
-    from mace_fmu.updating.engine.multisine import ProbedFrequencyResponseCost, coherence_weights, multisine_probe
+    from mace_fmu.updating.engine.frf_noise import DEFAULT_FLOOR, frf_noise
+    from mace_fmu.updating.engine.multisine import ProbedFrequencyResponseCost, multisine_probe
 
     if cost != "log-frf":
         raise MaceError(f"{responses[0].source}: measured frequency responses are compared by the log-frf cost "
@@ -195,9 +213,19 @@ def _frequency_response_problem(interface, responses: list[FrequencyResponseData
     if gain_uncertainty:
         raise MaceError("--gain-uncertainty weighs a gain against the noise of time histories; measured frequency "
                         "responses alone do not give it")
+    if weighting is not None and weighting not in WEIGHTINGS:
+        raise MaceError(f"weighting must be one of {', '.join(WEIGHTINGS)}, got {weighting!r}")
     in_band = [_in_bands(frd, bands_hz) for frd in responses]
-    costs = [ProbedFrequencyResponseCost(data=frd, probe=multisine_probe(frd.frequencies_hz),
-                                         weights=coherence_weights(frd)) for frd in in_band]
+    chosen = [weighting or ("noise" if frd.coherence is not None else "none") for frd in in_band]
+    if "noise" not in chosen and (averages is not None or floor is not None):
+        raise MaceError("--averages and --frf-floor-percent set the noise the lines are weighted by: the data are "
+                        "compared unweighted (--weighting none, or files without coherence), so they have no "
+                        "effect; leave them out")
+    floor = DEFAULT_FLOOR if floor is None else floor
+    noises = [frf_noise(frd, averages=averages, floor=floor) if how == "noise" else None
+              for frd, how in zip(in_band, chosen)]
+    costs = [ProbedFrequencyResponseCost(data=frd, probe=multisine_probe(frd.frequencies_hz), noise=noise)
+             for frd, noise in zip(in_band, noises)]
     the_cost = costs[0] if len(costs) == 1 else SeveralTests(tests=tuple(costs), weights=(1.0,) * len(costs),
                                                                labels=tuple(frd.source for frd in in_band))
     family = FmuFamily(interface=interface, fixed=start)
@@ -221,9 +249,7 @@ def _in_bands(frd: FrequencyResponseData, bands_hz: Sequence[tuple[float, float]
         bands = ", ".join(f"{low:g}-{high:g}" for low, high in bands_hz)
         raise MaceError(f"{frd.source}: {int(keep.sum())} frequencies in {bands} Hz (the file has "
                         f"{frd.frequencies_hz[0]:g} to {frd.frequencies_hz[-1]:g} Hz)")
-    return FrequencyResponseData(frd.frequencies_hz[keep], frd.inputs, frd.outputs, frd.response[keep],
-                                 source=frd.source, units=frd.units,
-                                 coherence=None if frd.coherence is None else frd.coherence[keep])
+    return frd.lines(keep)
 
 
 def _gain_priors(given: Mapping[str, float], mapping, histories: Sequence[TimeHistory]) -> dict[str, float]:

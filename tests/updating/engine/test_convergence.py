@@ -37,7 +37,7 @@ def _update(cost, *, off: float = 0.02, **settings):
              **{f"damping:{label}": z for label, z in zip(MODE_LABELS, true_damping())}}
     bounds = {n: Bounds(0.2 * start[n], 5.0 * start[n]) for n in start}
     bounds.update(settings.pop("bounds", {}))
-    run = UpdateSettings(method="reanalysis", penalty=False, relative_step=1e-4, **settings)
+    run = UpdateSettings(**{"method": "reanalysis", "penalty": False, "relative_step": 1e-4, **settings})
     return update(family, cost, start=start, stages=[Stage("stiffness", ("k_1", "k_2"))], bounds=bounds,
                   settings=run)
 
@@ -46,21 +46,29 @@ def test_a_converged_update_names_its_stopping_test_and_ends_on_the_noise_floor(
     cost = TimeResponseCost(_record(band_limited=False))
     result = _update(cost)
     floor = time_noise_floor(cost, noise_rms_fraction=NOISE / math.sqrt(1 + NOISE**2))
-    report = convergence_report(result, noise_floor=floor)
-    assert result.converged and report.converged, report.summary()
+    report = convergence_report(result, noise_floor=floor, cost=cost)
+    assert result.converged and report.verdict == "explained", report.summary()
+    (channel,) = report.residuals.channels
+    assert channel.white and not channel.correlated_inputs and abs(channel.rms_over_noise - 1) < 0.05
     assert any(test in result.reasons[0] for test in ("largest step", "cost fell", "first-order", "no lower cost"))
     assert abs(floor.sigmas_above(result.final_cost)) < 3.0
     np.testing.assert_allclose([result.values["k_1"], result.values["k_2"]], [0.75, 1.20], rtol=0.01)
 
 
-def test_a_local_minimum_is_caught_by_the_noise_floor_though_the_steps_stopped():
-    """From 10 % off, the time cost's phase-drift minima hold the update: its steps stop (a stated test),
-    and only the noise floor tells that the answer is wrong."""
+def test_a_local_minimum_is_a_converged_fit_the_model_does_not_explain_and_never_called_unconverged():
+    """From 10 % off, the time cost's phase-drift minima hold the update: its steps stop (a stated test). That is
+    converged; the residual, far above the noise and correlated with the force, says the model at these values
+    does not explain the data, and the verdict names both causes it cannot tell apart (a model error or a local
+    minimum), never "stopped short of the optimum"."""
     cost = TimeResponseCost(_record(band_limited=False))
     result = _update(cost, off=0.10)
-    report = convergence_report(result, noise_floor=time_noise_floor(cost, noise_rms_fraction=NOISE))
-    assert result.converged and not report.converged
-    assert "standard deviations from the noise floor" in report.reasons[-1] and "stopped short" in report.reasons[-1]
+    report = convergence_report(result, noise_floor=time_noise_floor(cost, noise_rms_fraction=NOISE), cost=cost)
+    assert result.converged and report.converged and report.verdict == "model error" and not report.failed
+    assert "standard deviations from the noise floor" in report.reasons[-1]
+    assert "stopped short" not in report.summary() and "local minimum" in report.headline()
+    (channel,) = report.residuals.channels
+    assert channel.rms_over_noise > 3 and channel.above_noise and not channel.white
+    assert convergence_report(result, noise_floor=report.noise_floor, cost=cost, strict=True).failed
 
 
 def test_an_update_stopped_by_its_cap_says_so_in_the_result_and_the_written_report():
@@ -69,11 +77,11 @@ def test_an_update_stopped_by_its_cap_says_so_in_the_result_and_the_written_repo
     floor = time_noise_floor(cost, noise_rms_fraction=NOISE / math.sqrt(1 + NOISE**2))
     report = convergence_report(result, noise_floor=floor)
     assert not result.converged and "iteration cap reached (max_outer = 1)" in result.reasons[0]
-    assert not report.converged and "NOT CONVERGED" in report.summary()
+    assert not report.converged and report.verdict == "not converged" and "NOT CONVERGED" in report.summary()
     import tomllib
 
     parsed = tomllib.loads(report.to_toml())
-    assert parsed["converged"] is False and "iteration cap" in parsed["reasons"][0]
+    assert parsed["converged"] is False and parsed["verdict"] == "not converged" and "iteration cap" in parsed["reasons"][0]
     assert parsed["noise_floor"]["sigmas_above"] == pytest.approx(floor.sigmas_above(result.final_cost))
 
 
@@ -110,8 +118,8 @@ def test_help_documents_the_exit_status(capsys):
     with pytest.raises(SystemExit):
         main(["update", "--help"])
     text = " ".join(capsys.readouterr().out.split())
-    assert "exit status: 0 converged (a parameter that ends at a bound is named" in text
-    assert "--strict makes it 3); 2 bad input (nothing written); 3 the update stopped without converging" in text
+    assert "exit status: 0 converged, whether the model explains the data to their noise or not (a model error" in text
+    assert "2 bad input (nothing written); 3 the update stopped without converging (at its iteration cap)" in text
 
 
 def test_the_trust_radius_grows_while_the_linearisation_holds_and_shrinks_when_it_does_not():
@@ -128,19 +136,64 @@ def test_the_trust_radius_grows_while_the_linearisation_holds_and_shrinks_when_i
 
 
 
-def test_a_noise_floor_that_cannot_be_found_is_said_with_the_remedy_and_is_no_convergence():
-    """White inputs fill the band to Nyquist: no quiet band to measure the noise in. The verdict says the
-    noise-floor test was not made and how to supply the noise; the update does not count as converged (a fit
-    to another structure's data passed silently this way); with the noise given the test is made."""
+def test_without_a_noise_floor_the_residual_is_still_held_to_the_input_correlation_test():
+    """White inputs fill the band to Nyquist: no quiet band to measure the noise in. The reasons say the level
+    test was not made and how to supply the noise; the fit has converged, and the residual's correlation with the
+    force still tells a right model (explained) from one the data show wrong (a sensor lag the model lacks)."""
     from mace_fmu.updating.engine.convergence import convergence_report, missing_noise_floor, noise_floor
 
     cost = TimeResponseCost(_record(band_limited=False))
     result = _update(cost, off=0.02)
     why = missing_noise_floor(cost)
     assert "noise-floor test not made: the inputs fill the band up to" in why and "--noise-rms-percent" in why
-    report = convergence_report(result, noise_floor=noise_floor(cost), missing_floor=why)
-    assert result.converged and not report.converged and report.reasons[-1] == why
+    report = convergence_report(result, noise_floor=noise_floor(cost), missing_floor=why, cost=cost)
+    assert report.converged and report.verdict == "explained" and report.reasons[-1] == why
+    assert report.residuals.channels[0].noise_rms is None
+    lagged = TimeResponseCost(_lagged_record(samples=SAMPLES, seed=3, lag_s=0.4))
+    wrong = convergence_report(_update(lagged), noise_floor=None, missing_floor=missing_noise_floor(lagged),
+                               cost=lagged)
+    assert wrong.converged and wrong.verdict == "model error" and wrong.residuals.channels[0].noise_rms is None
     assert missing_noise_floor(cost, noise_rms_fraction=NOISE) == ""
     given = convergence_report(result, noise_floor=noise_floor(cost, noise_rms_fraction=NOISE))
     assert given.noise_floor is not None and "standard deviations from the noise floor" in given.reasons[-1]
     assert missing_noise_floor(TimeResponseCost(_record(band_limited=True))) == ""
+
+
+def _lagged_record(*, samples: int, seed: int, lag_s: float) -> object:
+    """The two-mass record as a sensor with a first-order lag of ``lag_s`` [s] reads it (a sensor dynamics the
+    two-mass model lacks), with the same 5 % white noise."""
+    import scipy.signal
+
+    clean = two_mass_record(samples=samples, noise=0.0, seed=seed)
+    y = clean.outputs["displacement_1"]
+    a = np.exp(-clean.sample_time_s / lag_s)
+    lagged = scipy.signal.lfilter([1 - a], [1, -a], y)
+    rng = np.random.default_rng(seed + 1)
+    noisy = lagged + NOISE * np.sqrt(np.mean(lagged**2)) * rng.standard_normal(lagged.size)
+    from mace_fmu.updating.engine.measured import TimeHistory
+
+    return TimeHistory(clean.times_s, clean.inputs, {"displacement_1": noisy}, source="lagged sensor")
+
+
+def test_a_sensor_the_model_lacks_is_a_model_error_with_its_size_and_band_and_intervals_from_the_residuals():
+    """The data's sensor lags by 0.4 s (a dynamics the two-mass model has not): the fit converges (step test),
+    exit status 0, and the verdict says the model does not explain the data: residual RMS several times the
+    noise, correlated with the force. The intervals then come from the residuals (the sandwich), wider than the
+    noise's, and say so."""
+    from mace_fmu.updating.engine.convergence import noise_floor
+    from mace_fmu.updating.engine.uncertainty import stage_uncertainty
+
+    cost = TimeResponseCost(_lagged_record(samples=SAMPLES, seed=11, lag_s=0.4))
+    result = _update(cost, off=0.02, method="cost-sensitivity", perturbation="reanalysis", max_outer=20)
+    floor = noise_floor(cost, noise_rms_fraction=NOISE)
+    report = convergence_report(result, noise_floor=floor, cost=cost)
+    assert result.converged and report.verdict == "model error" and not report.failed
+    (channel,) = report.residuals.channels
+    assert channel.rms_over_noise > 2 and channel.correlated_inputs == ("force_1",)
+    assert "model does not explain the data to their noise" in report.headline()
+    noise_based = stage_uncertainty(result, noise_variance=floor.expected_cost / result.final_residual.size)[0]
+    from_residuals = stage_uncertainty(result, noise_variance=floor.expected_cost / result.final_residual.size,
+                                       residual_blocks=report.residuals and cost.residual_blocks())[0]
+    assert from_residuals.method == "residuals" and "sandwich" in from_residuals.method_text
+    for name in ("k_1", "k_2"):
+        assert from_residuals.standard_deviation_percent[name] > 1.5 * noise_based.standard_deviation_percent[name]

@@ -85,7 +85,27 @@ def test_h1_with_coherence_round_trips_through_csv(tmp_path):
     path = write_frequency_response(frd, tmp_path / "h1.csv")
     back = read_frequency_response(path)
     assert np.array_equal(back.coherence, frd.coherence) and np.array_equal(back.response, frd.response)
-    assert path.read_text().splitlines()[0].endswith(",coherence:gyro_bus_x [1],coherence:gyro_payload_z [1]")
+    # 400 samples in half-overlapping 64-sample segments: 1 + (400 - 64) // 32 = 11 averages, stated and read back
+    assert frd.averages == back.averages == 11
+    first, header = path.read_text().splitlines()[:2]
+    assert first == "# averages = 11"
+    assert header.endswith(",coherence:gyro_bus_x [1],coherence:gyro_payload_z [1]")
+
+
+@pytest.mark.parametrize("suffix", [".csv", ".uff"])
+def test_the_averages_travel_with_the_file_and_a_bad_count_names_its_line(tmp_path, suffix):
+    """The coherence's noise needs the averages: written and read back by both formats; a file's own count that
+    is no whole number >= 1 is refused at its line (CSV) or dataset (UFF)."""
+    frd = h1_estimate(_history(400), segment_length=64, band_hz=(5.0, 40.0))
+    path = write_frequency_response(frd, tmp_path / f"h1{suffix}")
+    assert read_frequency_response(path).averages == 11
+    text = path.read_text()
+    bad = text.replace("averages = 11", "averages = 2.5") if suffix == ".csv" else text.replace("averages: 11",
+                                                                                                 "averages: 0 ")
+    path.write_text(bad)
+    with pytest.raises(MaceError, match=r"(h1\.csv:1|dataset 1 \(ID line 3\)): averages '(2\.5|0)', expected a whole "
+                                        r"number >= 1"):
+        read_frequency_response(path)
 
 
 @pytest.mark.parametrize("suffix", [".uff", ".unv"])
