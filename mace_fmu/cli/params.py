@@ -77,7 +77,7 @@ def cmd_list(args: argparse.Namespace) -> int:
     names = sorted(interface.parameters) if args.sort else list(interface.parameters)
     width = max([9, *(len(n) for n in names)])
     print(f"{len(names)} parameters of {args.fmu} (set through FMI before initialisation; a parameter set names "
-          "per-mode ones by label: damping:<label>)")
+          "per-mode ones as here or by label: damping:<label>)")
     print(f"{'parameter':<{width}} {'start':>14} {'min':>12} {'max':>12}  unit  description")
     for n in names:
         low, high = interface.ranges.get(n, (float("-inf"), float("inf")))

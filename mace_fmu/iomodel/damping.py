@@ -21,12 +21,15 @@ def _violin_key(label: str) -> tuple[int, frozenset[int]] | None:
 
 def modal_damping(labels: tuple[str, ...], frequencies_hz: np.ndarray, table: DampingTable, *,
                   zero_hz: float = 0.01) -> np.ndarray:
-    """Damping ratio of every mode: zero-frequency, by label, by violin family, else the default."""
+    """Damping ratio of every mode: zero-frequency, by mode number (a parameter set's), by label, by violin family,
+    else the default."""
     zeta = np.full(len(labels), table.default)
     family_members: dict[int, list[int]] = {}
     for i, (label, f) in enumerate(zip(labels, frequencies_hz)):
         if abs(f) < zero_hz:
             zeta[i] = table.zero_frequency
+        elif i + 1 in table.by_mode:
+            zeta[i] = table.by_mode[i + 1]
         elif label in table.by_label:
             zeta[i] = table.by_label[label]
         elif (key := _violin_key(label)) is not None:

@@ -131,12 +131,15 @@ class ViolinFamily:
 
 @dataclass(frozen=True)
 class DampingTable:
-    """Open-loop modal damping ratios by mode label (Table 4.7 measurement model)."""
+    """Open-loop modal damping ratios by mode label (Table 4.7 measurement model), and a parameter set's by mode."""
 
     default: float
     zero_frequency: float
     by_label: Mapping[str, float]
     violin_families: tuple[ViolinFamily, ...]
+    #: 1-based mode number -> ratio: a parameter set's damping ratios, either spelling resolved to the modes
+    #: (mace_fmu.parameters.per_mode); before the labels, as a set's value overrides the file's
+    by_mode: Mapping[int, float] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)

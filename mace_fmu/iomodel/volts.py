@@ -30,8 +30,9 @@ from mace_fmu.iomodel.modal_ss import ModalPlant, modal_plant
 from mace_fmu.iomodel.modal_source import ModalStructure, check_modal_parameters, static_correction
 from mace_fmu.iomodel.model_options import ModelledElectronics, SignalSelection
 from mace_fmu.iomodel.motion import motion_unit, parse_motion_output
-from mace_fmu.parameters.kinds import (DAMPING, DELAY, FREQUENCY_SCALE, SERVO_GAINS, ParameterKind, mode_label,
+from mace_fmu.parameters.kinds import (DAMPING, DELAY, FREQUENCY_SCALE, SERVO_GAINS, ParameterKind, mode_number,
                                        split_loop_name)
+from mace_fmu.parameters.per_mode import resolve_mode_names
 from mace_fmu.parameters.sets import ParameterSet, fe_overrides, naming_the_file, parameter_names
 from mace_fmu.util.frequency import ZERO_HZ
 from mace_fmu.util.threads import single_blas_thread
@@ -424,12 +425,15 @@ def _check_moduli_agree(modes: StructureModes, parameters: ParameterSet) -> None
 
 def apply_parameters(instruments: Instruments, parameters: ParameterSet | None, mode_labels: Sequence[str], *,
                      configuration: str = "") -> Instruments:
-    """Instruments with the set's delays [s], servo gains and damping ratios by mode label replaced.
+    """Instruments with the set's delays [s], servo gains and damping ratios replaced.
 
     Names are checked against the instrument file and ``mode_labels``; a MaceError names the
-    entry and what is allowed. A damping ratio whose mode the structure lacks is skipped only when
-    the set was made for the other structure (its provenance says so): a 1-g set carries the
-    damping of suspension and violin modes, which the 0-g structure does not have.
+    entry and what is allowed. A damping ratio is named by mode label (``damping:<label>``: every mode
+    with the label) or by mode number (``damping_mode_<k>``, 1-based in ``mode_labels``' order, as the
+    FMU names it); both resolve to the modes (:func:`~mace_fmu.parameters.per_mode.resolve_mode_names`).
+    A damping ratio whose mode label the structure lacks is skipped only when the set was made for the
+    other structure (its provenance says so): a 1-g set carries the damping of suspension and violin
+    modes, which the 0-g structure does not have; a mode number of such a set is refused.
 
     Parameters
     ----------
@@ -438,7 +442,7 @@ def apply_parameters(instruments: Instruments, parameters: ParameterSet | None, 
     parameters : ParameterSet or None
         The set whose delays [s], servo gains and damping ratios apply (None: no change).
     mode_labels : sequence of str
-        The structure's mode labels, which damping names refer to.
+        The structure's mode labels in mode order, which damping names refer to.
     configuration : str
         "1g" or "0g": the structure the instruments are for.
 
@@ -475,22 +479,21 @@ def apply_parameters(instruments: Instruments, parameters: ParameterSet | None, 
             raise MaceError(f"parameter {name!r}: no {'speed' if loops is sv.wheels else 'position'} loop on an "
                             f"actuator {actuator!r}; loops: {', '.join(loops) or 'none'}")
         loop_gains.setdefault(actuator, {})[symbol] = value
-    known = set(mode_labels)
-    prov = parameters.provenance
-    other_structure = prov is not None and prov.configuration not in ("", configuration)
-    damping = {}
-    for name, value in parameters.of_kind("damping").items():
-        label = mode_label(name)
-        if label not in known and other_structure:
-            continue
-        if label not in known:
-            raise MaceError(f"parameter {name!r}: no mode labelled {label!r} in the {configuration} structure; labels: "
-                            f"{', '.join(sorted(known))}")
+    given = parameters.of_kind("damping")
+    for name, value in given.items():
         _check_range(name, value, DAMPING)
-        damping[label] = value
+    damping = {mode_number(name): value for name, value in resolve_mode_names(
+        given, mode_labels=mode_labels, model=f"{configuration} structure", source=parameters.source,
+        other_structure=_other_structure(parameters, configuration)).items()}
     return replace(instruments, electronics=replace(el, actuator_delays_s=actuators, sensor_delays_s=sensors),
                    servos=replace(sv, **gains, loop_gains=loop_gains),
-                   damping=replace(instruments.damping, by_label={**instruments.damping.by_label, **damping}))
+                   damping=replace(instruments.damping, by_mode={**instruments.damping.by_mode, **damping}))
+
+
+def _other_structure(parameters: ParameterSet, configuration: str) -> str:
+    """The structure ``parameters`` were made for when it is not ``configuration`` (their provenance), else ""."""
+    prov = parameters.provenance
+    return prov.configuration if prov is not None and prov.configuration not in ("", configuration) else ""
 
 
 def _check_range(name: str, value: float, kind: ParameterKind) -> None:
@@ -505,7 +508,8 @@ def _check_range(name: str, value: float, kind: ParameterKind) -> None:
 
 def scale_frequencies(modes: StructureModes, parameters: ParameterSet | None, *,
                       configuration: str = "") -> StructureModes:
-    """``modes`` with each ``frequency_scale:<label>`` of the set multiplying its label's frequencies [Hz].
+    """``modes`` with each frequency scale of the set multiplying its modes' frequencies [Hz]: ``frequency_scale:<label>``
+    every mode with the label, ``frequency_scale_mode_<k>`` mode k (1-based, as the FMU names it).
 
     Shapes are kept: the scale is a modal adjustment of the open-loop model (thesis 5.3), not an FE
     change. A set made for the other structure (its provenance says so) scales nothing: an updated
@@ -532,18 +536,14 @@ def scale_frequencies(modes: StructureModes, parameters: ParameterSet | None, *,
         A label the modes do not have, or a scale that is not > 0.
     """
     scales = parameters.of_kind("frequency_scale") if parameters is not None else {}
-    prov = parameters.provenance if parameters is not None else None
-    if not scales or (prov is not None and prov.configuration not in ("", configuration)):
+    if not scales or _other_structure(parameters, configuration):
         return modes
-    labels = modes.labels
-    frequencies = np.array(modes.frequencies_hz, dtype=float)
     for name, value in scales.items():
-        label = mode_label(name)
-        if label not in labels:
-            raise MaceError(f"parameter {name!r}: no mode labelled {label!r} in the {configuration} structure; labels: "
-                            f"{', '.join(sorted(set(labels)))}")
         _check_range(name, value, FREQUENCY_SCALE)
-        frequencies[[k for k, x in enumerate(labels) if x == label]] *= value
+    frequencies = np.array(modes.frequencies_hz, dtype=float)
+    for name, value in resolve_mode_names(scales, mode_labels=modes.labels, model=f"{configuration} structure",
+                                          source=parameters.source).items():
+        frequencies[mode_number(name) - 1] *= value
     return replace(modes, modes=replace(modes.modes, frequencies_hz=frequencies))
 
 

@@ -1,10 +1,13 @@
 """One record per kind of model parameter: its names, its SI unit and the range every FMU declares.
 
-A parameter has two spellings. In a :class:`~mace_fmu.parameters.sets.ParameterSet` a modal
-parameter is named by its mode's label (``damping:1st Z bending``), so that a set fits any model
-that has such a mode; in an FMU it is named by the mode's number (``damping_mode_14``), because an
-FMU's variables are fixed. Physical parameters, delays and gains are spelled the same in both.
-This module is the only place that decodes a name: every other module asks it.
+A modal parameter has two spellings: by its mode's label (``damping:1st Z bending``), so that a set
+fits any model that has such a mode, and by the mode's 1-based number in the model's retained-mode
+order (``damping_mode_14``), because an FMU's variables are fixed. A
+:class:`~mace_fmu.parameters.sets.ParameterSet` takes both (the engine and the 0-g prediction write
+labels, an FMU update writes the FMU's numbers); where a set meets a model the names are resolved
+to its modes once (:mod:`mace_fmu.parameters.per_mode`). Physical parameters, delays and gains are
+spelled the same in both. This module is the only place that decodes a name: every other module
+asks it.
 
 The range is what both FMU kinds declare as ``min``/``max`` and refuse outside, so that a host
 that honours the model description never meets a refusal (:func:`declared_range`). Ranges are
@@ -171,6 +174,55 @@ def kind_of_fmu_name(name: str) -> ParameterKind | None:
         Its kind: prefix, unit and valid range.
     """
     return _match(name, in_fmu=True)
+
+
+def kind_of_name(name: str) -> ParameterKind | None:
+    """The kind of a parameter name in either spelling, a set's or an FMU's (``damping:1st Z bending`` and
+    ``damping_mode_14`` alike), None if unknown: what a parameter set takes.
+
+    Parameters
+    ----------
+    name : str
+        A parameter name.
+
+    Returns
+    -------
+    ParameterKind or None
+        Its kind: prefix, unit and valid range.
+    """
+    return kind_of_set_name(name) or kind_of_fmu_name(name)
+
+
+@dataclass(frozen=True)
+class ModeReference:
+    """The mode a per-mode parameter name addresses: by label (a set's spelling) or by number (an FMU's)."""
+
+    kind: ParameterKind  #: DAMPING or FREQUENCY_SCALE
+    label: str | None = None  #: the mode label of ``damping:<label>``, None for a name by number
+    number: int | None = None  #: the 1-based mode number of ``damping_mode_<k>``, None for a name by label
+
+
+def mode_reference(name: str) -> ModeReference | None:
+    """The kind and the mode of a per-mode name in either spelling (``damping:1st Z bending`` -> label
+    "1st Z bending", ``damping_mode_14`` -> number 14); None for a name that is not per mode.
+
+    Parameters
+    ----------
+    name : str
+        A parameter name.
+
+    Returns
+    -------
+    ModeReference or None
+        Its kind and the mode's label or number.
+    """
+    kind = kind_of_fmu_name(name)
+    if kind is not None and kind.per_mode:
+        return ModeReference(kind, number=int(name[len(kind.fmu_prefix):]))
+    kind = kind_of_set_name(name)
+    if kind is not None and kind.per_mode:
+        return ModeReference(kind, label=name[len(kind.set_prefix):])
+    return None
 
 
 def mode_number(name: str) -> int:

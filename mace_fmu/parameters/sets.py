@@ -16,7 +16,10 @@ A parameter set maps names to values in SI units. The names are the FMUs' own:
   ``damping:1st Z bending``;
 - ``frequency_scale:<mode label>`` [-] factor on the open-loop natural frequency of the modes with
   that label, after the FE analysis (the updated nominal 0-g model of thesis 5.3 is made of these
-  and damping ratios, see mace_fmu.zero_g.nominal).
+  and damping ratios, see mace_fmu.zero_g.nominal);
+- ``damping_mode_<k>``, ``frequency_scale_mode_<k>``: the same of mode k alone, 1-based in the model's
+  retained-mode order, as an FMU names them (an FMU update writes these). Both spellings are taken
+  wherever a set is applied to a model (mace_fmu.parameters.per_mode resolves them against its modes).
 
 Names not given keep the deck's and the data file's values.
 """
@@ -36,24 +39,25 @@ from typing import Any, Iterator, Mapping
 
 from mace_fmu.errors import MaceError
 from mace_fmu.parameters.kinds import (DAMPING, FREQUENCY_SCALE, MASS, MODULUS, SERVO_GAINS, SPRING, KindName,
-                                       kind_of_set_name, unit_of)
+                                       kind_of_name, kind_of_set_name, unit_of)
 from mace_fmu.util.atomic import write_text_atomic
 from mace_fmu.util.textfile import read_text
 
 def parameter_kind(name: str) -> KindName:
     """What a parameter-set name refers to (:mod:`mace_fmu.parameters.kinds`); a MaceError for a name of no
     known kind."""
-    kind = kind_of_set_name(name)
+    kind = kind_of_name(name)
     if kind is None:
         raise MaceError(f"parameter {name!r}: unknown kind of name; expected E_<material>, k_<spring>, m_<mass>, "
-                        f"delay_<channel>, {', '.join(SERVO_GAINS)}, {DAMPING.set_prefix}<mode label> or "
-                        f"{FREQUENCY_SCALE.set_prefix}<mode label>")
+                        f"delay_<channel>, {', '.join(SERVO_GAINS)}, {DAMPING.set_prefix}<mode label>, "
+                        f"{DAMPING.fmu_prefix}<k>, {FREQUENCY_SCALE.set_prefix}<mode label> or "
+                        f"{FREQUENCY_SCALE.fmu_prefix}<k>")
     return kind.name
 
 
 def parameter_unit(name: str) -> str:
     """SI unit of a parameter, as the FMUs declare it."""
-    kind = kind_of_set_name(name)
+    kind = kind_of_name(name)
     return "1" if kind is None else unit_of(kind, name)
 
 

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 from typing import Sequence
 
 from mace_fmu.errors import MaceError
-from mace_fmu.parameters.kinds import kind_of_set_name, mode_label
+from mace_fmu.parameters.per_mode import resolve_mode_names
 from mace_fmu.parameters.sets import ParameterSet
 
 _BUILT_IN = ("modulus", "spring", "mass", "frequency_scale")
@@ -36,8 +36,10 @@ def split_parameters(parameters: ParameterSet | None) -> SplitParameters:
         return SplitParameters(built_in=None, start_values=ParameterSet({}))
     physical = parameters.of_kind(*_BUILT_IN)
     rest = {n: v for n, v in parameters.values.items() if n not in physical}
-    return SplitParameters(built_in=ParameterSet(physical, parameters.provenance) if physical else None,
-                           start_values=ParameterSet(rest, parameters.provenance))
+    # both halves keep the file they came from: an error in either names it
+    source = parameters.source
+    return SplitParameters(built_in=ParameterSet(physical, parameters.provenance, source=source) if physical else None,
+                           start_values=ParameterSet(rest, parameters.provenance, source=source))
 
 
 def fmu_start_values(parameters: ParameterSet, *, mode_labels: Sequence[str],
@@ -47,7 +49,8 @@ def fmu_start_values(parameters: ParameterSet, *, mode_labels: Sequence[str],
     Parameters
     ----------
     parameters
-        Values by set name (``damping:<label>``, ``frequency_scale:<label>``, ``delay_<channel>``, ``K_a`` ...).
+        Values by name (``damping:<label>`` or ``damping_mode_<k>``, ``frequency_scale:<label>`` or
+        ``frequency_scale_mode_<k>``, ``delay_<channel>``, ``K_a`` ...).
     mode_labels
         The FMU's open-loop mode labels, mode 1 first (a label names every mode that carries it).
     fmu_parameters
@@ -57,21 +60,14 @@ def fmu_start_values(parameters: ParameterSet, *, mode_labels: Sequence[str],
     -------
     dict
         FMU variable name -> value [SI]; a label becomes ``damping_mode_<k>`` / ``frequency_scale_mode_<k>``
-        of each mode k that carries it. A MaceError names a set entry the FMU has nothing for.
+        of each mode k that carries it (:func:`~mace_fmu.parameters.per_mode.resolve_mode_names`). A MaceError
+        names the set's file and an entry the FMU has nothing for.
     """
     available = set(fmu_parameters)
-    out: dict[str, float] = {}
-    for name, value in parameters.values.items():
-        kind = kind_of_set_name(name)
-        if kind is not None and kind.per_mode:
-            label = mode_label(name)
-            targets = [kind.fmu_name(k + 1) for k, x in enumerate(mode_labels) if x == label]
-            targets = [t for t in targets if t in available]
-            if not targets:
-                raise MaceError(f"parameter {name!r}: the FMU has no mode labelled {label!r} with such a parameter")
-            out.update({t: value for t in targets})
-        elif name in available:
-            out[name] = value
-        else:
-            raise MaceError(f"parameter {name!r}: the FMU has no parameter of that name")
+    out = resolve_mode_names(parameters.values, mode_labels=mode_labels, model="plant FMU", source=parameters.source,
+                             available=available)
+    for name in out:
+        if name not in available:
+            where = f"{parameters.source}: " if parameters.source else ""
+            raise MaceError(f"{where}parameter {name!r}: the FMU has no parameter of that name")
     return out

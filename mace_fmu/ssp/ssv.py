@@ -37,6 +37,7 @@ ANNOTATION_TYPE = "org.mace-fmu.parameter-set"
 BASE_UNITS: dict[str, dict[str, str]] = {
     "1": {},
     "Pa": {"kg": "1", "m": "-1", "s": "-2"},
+    "kg": {"kg": "1"},  # a concentrated mass, m_<mass>
     "N/m": {"kg": "1", "s": "-2"},
     "s": {"s": "1"},
     "Hz": {"s": "-1"},

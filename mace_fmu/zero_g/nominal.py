@@ -38,6 +38,7 @@ from mace_fmu.iomodel.pole_pairing import REAL_POLE_DAMPING, pair_poles
 from mace_fmu.iomodel.poles import ClosedLoopPole, closed_loop_poles, label_poles
 from mace_fmu.iomodel.volts import VoltsModel, volts_model
 from mace_fmu.parameters.kinds import DAMPING, FREQUENCY_SCALE, kind_of_set_name, mode_label
+from mace_fmu.parameters.per_mode import label_mode_names
 from mace_fmu.parameters.sets import ParameterSet, Provenance, deck_fingerprint, now_utc, tool_version
 from mace_fmu.structure.file import StructureFile, is_bundled_deck
 from mace_fmu.thesis import thesis_data
@@ -401,6 +402,10 @@ def predict_zero_g(*, parameters: ParameterSet | None = None, measured: Sequence
 
     begin_stage(progress, "1-g closed-loop model and the residual errors", number=1, stages=4)
     v1 = volts_model(compute_modes(deck, configuration="1g", structure_file=structure_file, parameters=parameters))
+    if parameters is not None:  # mode numbers (an FMU update's) count the 1-g modes: the 0-g model gets their labels
+        parameters = ParameterSet(label_mode_names(parameters.values, mode_labels=v1.structure_modes.labels,
+                                                   model="1g structure", source=parameters.source),
+                                  parameters.provenance, source=parameters.source)
     p1 = closed_loop_poles(v1)
     one_g = [p1[i] for i in _pair([(m.label, m.pattern, m.frequency_hz) for m in measured], p1, what="the 1-g model")]
 

@@ -363,6 +363,25 @@ def test_a_1g_parameter_set_from_an_update_is_carried_to_0g(run):
     assert abs(first.nominal_hz / first.unaltered_hz / (first.measured_1g_hz / first.model_1g_hz) - 1) < 1e-6
 
 
+def test_a_1g_set_by_mode_number_predicts_as_the_same_set_by_label():
+    """An FMU update's 1-g set names modes by the 1-g FMU's numbers (``damping_mode_<k>``); predict-0g takes each
+    as its label in the 1-g structure (numbers count other modes in 0-g), so the prediction is the set's by label:
+    the same rows, the same nominal 0-g set, the 1-g-only suspension damping dropped."""
+    from mace_fmu.zero_g.nominal import predict_zero_g
+
+    provenance = Provenance(created="2026-01-01T00:00:00+00:00", tool="test", configuration="1g")
+    damping = {"Y suspension twist (Y rotation)": 0.09, "1st Z bending": 0.02}
+    labels = compute_modes(configuration="1g").labels  # predict-0g's 1-g structure: the bundled deck's, large preload
+    by_number = {"E_lexan_center": 2.3e9, **{f"damping_mode_{labels.index(x) + 1}": z for x, z in damping.items()}}
+    by_label = {"E_lexan_center": 2.3e9, **{f"damping:{x}": z for x, z in damping.items()}}
+    number, label = (predict_zero_g(parameters=ParameterSet(values, provenance)) for values in (by_number, by_label))
+    assert number.rows == label.rows
+    assert dict(number.parameters.values) == dict(label.parameters.values)
+    assert "damping:1st Z bending" in number.parameters.values  # by label: the 0-g structure numbers it otherwise
+    assert "damping:Y suspension twist (Y rotation)" not in number.parameters.values  # no such 0-g mode
+    assert not [n for n in number.parameters.values if n.startswith("damping_mode_")]
+
+
 def test_frequency_scales_of_a_0g_set_leave_a_1g_model_alone(run, nominal):
     """scale_frequencies applies a set's scales to the structure its provenance names, and only to that one."""
     from mace_fmu.iomodel.volts import scale_frequencies

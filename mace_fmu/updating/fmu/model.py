@@ -78,45 +78,36 @@ class FmuInterface:
             raise MaceError(f"{self.path}: no parameter(s) {', '.join(unknown)}{hint} (all {len(self.parameters)} "
                             f"parameters: mace-fmu params list {self.path})")
 
-    def mode_parameters(self) -> dict[str, list[str]]:
-        """A parameter set's per-mode names (``damping:<label>``, ``frequency_scale:<label>``) -> this FMU's
-        parameters of the modes with that label (``damping_mode_<k>``), read from the parameters'
-        descriptions (a MACE FMU's say each mode's label); empty for an FMU without such parameters."""
-        from mace_fmu.parameters.kinds import DAMPING, FREQUENCY_SCALE, kind_of_fmu_name
+    @property
+    def mode_labels(self) -> tuple[str, ...]:
+        """The label of each mode the FMU has per-mode parameters of (``damping_mode_<k>``), mode 1 first, read from
+        the parameters' descriptions (a MACE FMU's say each mode's label; "" where they do not); empty for an FMU
+        without such parameters."""
+        from mace_fmu.parameters.kinds import DAMPING, FREQUENCY_SCALE, mode_reference
 
-        out: dict[str, list[str]] = {}
-        for name, text in self.descriptions.items():
-            kind = kind_of_fmu_name(name)
-            if kind is DAMPING and ": " in text:  # "open-loop damping ratio of mode 14: 1st Z bending"
-                label = text.split(": ", 1)[1].strip()
-            elif kind is FREQUENCY_SCALE and "(" in text:  # "... frequency of mode 14 (1st Z bending) relative ..."
-                label = text.split("(", 1)[1].split(")", 1)[0].strip()
-            else:
+        labels: dict[int, str] = {}
+        for name in self.parameters:
+            ref, text = mode_reference(name), self.descriptions.get(name, "")
+            if ref is None or ref.number is None:
                 continue
-            out.setdefault(kind.set_name(label), []).append(name)
-        return out
+            label = ""
+            if ref.kind is DAMPING and ": " in text:  # "open-loop damping ratio of mode 14: 1st Z bending"
+                label = text.split(": ", 1)[1].strip()
+            elif ref.kind is FREQUENCY_SCALE and "(" in text:  # "... frequency of mode 14 (1st Z bending) relative ..."
+                label = text.split("(", 1)[1].split(")", 1)[0].strip()
+            labels[ref.number] = labels.get(ref.number) or label
+        return tuple(labels.get(k, "") for k in range(1, max(labels, default=0) + 1))
 
     def values_by_fmu_name(self, values: Mapping[str, float], *, source: str) -> dict[str, float]:
-        """``values`` with a parameter set's per-mode names translated to this FMU's (every mode with the
-        label gets the value), other names kept; a MaceError naming ``source`` for a label no mode has."""
-        from mace_fmu.parameters.kinds import kind_of_set_name
+        """``values`` by this FMU's names: a per-mode name by label (``damping:<label>``) becomes the FMU's
+        parameter of every mode with that label, one by number (``damping_mode_<k>``) is checked against the
+        FMU's modes (:func:`~mace_fmu.parameters.per_mode.resolve_mode_names`); other names are kept. A
+        MaceError names ``source``, the parameter and what the FMU has."""
+        from mace_fmu.parameters.per_mode import resolve_mode_names
 
-        modes = self.mode_parameters()
-        out: dict[str, float] = {}
-        for name, value in values.items():
-            kind = kind_of_set_name(name)
-            if kind is None or not kind.per_mode or name in self.parameters:
-                out[name] = value
-                continue
-            if name not in modes:
-                import difflib
-
-                close = difflib.get_close_matches(name, list(modes), n=3)
-                raise MaceError(f"{source}: {name!r}: {self.path} has no mode with that label"
-                                + (f"; closest: {', '.join(close)}" if close else "")
-                                + f" (its parameters: mace-fmu params list {self.path})")
-            out.update({fmu_name: value for fmu_name in modes[name]})
-        return out
+        return resolve_mode_names(values, mode_labels=self.mode_labels, model=f"FMU {self.path}", source=source,
+                                  available=set(self.parameters),
+                                  hint=f" (its parameters: mace-fmu params list {self.path})")
 
     def check_signals(self, *, inputs: Sequence[str], outputs: Sequence[str], where: str,
                       units: Mapping[str, str] | None = None) -> None:

@@ -26,7 +26,8 @@ from mace_fmu.iomodel.parametric import ParametricSystem
 from mace_fmu.iomodel.parametric_data import parametric_arrays, with_physical
 from mace_fmu.iomodel.stiffness_route import StiffnessSensitivity, physical_route, stiffness_sensitivities
 from mace_fmu.iomodel.volts import VoltsModel, volts_model
-from mace_fmu.parameters.kinds import DAMPING, kind_of_set_name, mode_label
+from mace_fmu.parameters.kinds import DAMPING, mode_reference
+from mace_fmu.parameters.per_mode import label_mode_names, resolve_mode_names
 from mace_fmu.parameters.sets import ParameterSet, deck_values, parameter_kind
 from mace_fmu.structure.file import Configuration, bundled_deck_path
 from mace_fmu.updating.engine.linear_model import LinearModel
@@ -85,6 +86,11 @@ class MaceFamily:
         self.solves = 0  #: FE solves done (for benchmarks)
         nominal = self.solution(self.base.values)
         self._reference = nominal
+        # the update's values name modes by label; a base set by number (an FMU update's) is put in the same
+        # spelling once, so that an updated value replaces the base's rather than meeting it as a second name
+        self.base = ParameterSet(label_mode_names(self.base.values, mode_labels=nominal.system.mode_labels,
+                                                  model=f"{configuration} model", source=self.base.source),
+                                 self.base.provenance, source=self.base.source)
         # moduli and springs of the analysed structure (0-g has no suspension springs)
         self.physical = tuple(deck_values(nominal.volts.structure_modes.structure.deck))
 
@@ -121,16 +127,12 @@ class MaceFamily:
     def vector(self, system: ParametricSystem, values: Values) -> np.ndarray:
         """The FMU-ordered parameter vector of ``system`` with ``values`` (and the base set) written in."""
         vec = system.nominal.copy()
-        labels = np.array(system.mode_labels)
-        for name, value in self.parameter_set(values).values.items():
+        params = self.parameter_set(values)
+        for name, value in resolve_mode_names(params.values, mode_labels=system.mode_labels,
+                                              model=f"{self.configuration} model", source=params.source,
+                                              available=set(system.parameter_names)).items():
             kind = parameter_kind(name)
-            if kind == "damping":
-                hits = np.flatnonzero(labels == mode_label(name))
-                if not hits.size:
-                    raise MaceError(f"parameter {name!r}: no mode with that label in the {self.configuration} model")
-                for k in hits:
-                    vec[system.index(DAMPING.fmu_name(k + 1))] = value
-            elif kind in ("modulus", "spring", "mass"):
+            if kind in ("modulus", "spring", "mass"):
                 if name in system.parameter_names:  # the reanalysis system; the others were solved with them
                     vec[system.index(name)] = value
             else:
@@ -153,18 +155,17 @@ class MaceFamily:
     def current_values(self, names: Sequence[str]) -> dict[str, float]:
         """Values [SI] of ``names`` at the base point: the base set's, else the deck's and the data file's."""
         sol = self.solution(self.base.values)
-        labels = np.array(sol.system.mode_labels)
         out = {}
         for n in names:
             if n in self.base:
                 out[n] = self.base[n]
             elif n in self._deck_values:
                 out[n] = self._deck_values[n]
-            elif kind_of_set_name(n) is DAMPING:
-                hits = np.flatnonzero(labels == mode_label(n))
-                if not hits.size:
-                    raise MaceError(f"parameter {n!r}: no mode with that label in the {self.configuration} model")
-                out[n] = float(sol.system.nominal[sol.system.index(DAMPING.fmu_name(hits[0] + 1))])
+            elif mode_reference(n) is not None:  # the first of its modes (a label may name several)
+                first, *_ = resolve_mode_names({n: 0.0}, mode_labels=sol.system.mode_labels,
+                                               model=f"{self.configuration} model",
+                                               available=set(sol.system.parameter_names))
+                out[n] = float(sol.system.nominal[sol.system.index(first)])
             elif n in sol.system.parameter_names:
                 out[n] = float(sol.system.nominal[sol.system.index(n)])
             else:

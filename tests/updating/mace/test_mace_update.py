@@ -143,6 +143,21 @@ def test_model_and_export_take_the_updated_parameters(run, capsys, tmp_path):
             assert start[name] == pytest.approx(value, rel=1e-12), name
 
 
+def test_the_family_takes_a_start_set_by_mode_number_as_the_same_set_by_label():
+    """``update mace --start`` with an FMU update's set (``damping_mode_<k>``): the family keys its base by mode
+    label, as the update's own values are, so an updated value replaces the start's, and both spellings give one
+    model."""
+    nominal = MaceFamily(configuration="0g", max_hz=20.0)
+    k = nominal.solution(nominal.base.values).system.mode_labels.index("1st Z bending") + 1
+    families = [MaceFamily(configuration="0g", max_hz=20.0, base=ParameterSet({"E_lexan_center": 2.4e9, name: 0.03}))
+                for name in (f"damping_mode_{k}", "damping:1st Z bending")]
+    assert [dict(f.base.values) for f in families] == [{"E_lexan_center": 2.4e9, "damping:1st Z bending": 0.03}] * 2
+    number, label = (f.full({"damping:1st Z bending": 0.05}) for f in families)
+    assert np.array_equal(number.a, label.a) and np.array_equal(number.b, label.b)
+    system = families[0].solution(families[0].base.values).system
+    assert families[0].vector(system, {"damping:1st Z bending": 0.05})[system.index(f"damping_mode_{k}")] == 0.05
+
+
 def test_bad_start_files_stop_before_any_work(tmp_path, capsys):
     bad = tmp_path / "bad.toml"
     bad.write_text("[values]\nE_unobtainium = 1e9\n")
