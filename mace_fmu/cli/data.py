@@ -7,6 +7,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from mace_fmu.cli.preflight import output_option
+
 if TYPE_CHECKING:
     from mace_fmu.updating.engine.measured import FrequencyResponseData, TimeHistory
 
@@ -69,6 +71,6 @@ def register(sub: argparse._SubParsersAction) -> None:
     h1.add_argument("--window", default="hann", help="scipy.signal window name (default hann)")
     h1.add_argument("--overlap", type=float, default=0.5, help="overlap of segments, a fraction (default 0.5)")
     h1.add_argument("--band", type=float, nargs=2, metavar=("LOW", "HIGH"), help="keep frequencies in [LOW, HIGH] Hz")
-    h1.add_argument("-o", "--output", required=True, help="output file: .csv, .uff or .unv")
+    output_option(h1, "-o", "--output", kind="file", required=True, help="output file: .csv, .uff or .unv")
     check.set_defaults(func=cmd_check)
     h1.set_defaults(func=cmd_h1)
