@@ -10,6 +10,7 @@ from typing import Sequence
 
 from mace_fmu.cli import (build, controller, data, export, model, modes, params, plan, predict, report, study, update,
                           view)
+from mace_fmu.cli.preflight import run_checks
 from mace_fmu.errors import MaceError
 
 __all__ = ["build_parser", "main"]
@@ -51,13 +52,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     Returns
     -------
     int
-        The exit status: 0 done, 2 bad input (one line on stderr, nothing written), 3 an update that did
-        not converge (its results written), 130 interrupted.
+        The exit status: 0 done, 2 bad input (one line on stderr, nothing written; an output that cannot be
+        written and a ``--scheduler`` where no Dask scheduler answers are found before any work), 3 an update
+        that did not converge (its results written), 130 interrupted.
     """
     args = build_parser().parse_args(argv)
     in_main_thread = threading.current_thread() is threading.main_thread()  # signal handlers live there only
     previous = signal.signal(signal.SIGTERM, _terminated) if in_main_thread else None
     try:
+        run_checks(args)  # every output writable, a scheduler answering: before any work, not after it
         return args.func(args)
     except MaceError as exc:
         print(f"mace-fmu: error: {exc}", file=sys.stderr)

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import argparse
 
-from mace_fmu.cli.common import (deck_option, folder_argument, model_variant, parameters, parameters_option, progress,
-                                 progress_bar)
+from mace_fmu.cli.common import deck_option, model_variant, parameters, parameters_option, progress, progress_bar
+from mace_fmu.cli.preflight import output_option
 from mace_fmu.util.frequency import hz_text
 
 
@@ -91,8 +91,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("build", help="the main job: modes next to the thesis tables, and the FMUs of both models")
     deck_option(p)
     parameters_option(p)
-    p.add_argument("-o", "--out", type=folder_argument, default="fmus",
-                   help="where to write the FMUs: MACE_<1g|0g>_native.fmu (FMI 2.0), MACE_<1g|0g>_native_fmi3.fmu, "
-                   "MACE_<1g|0g>_pythonfmu.fmu (default ./fmus); with --parameters P.toml MACE_1g_native_P.fmu "
-                   "and so on, never the plain model's names")
+    output_option(p, "-o", "--out", kind="folder", default="fmus",
+                  help="where to write the FMUs: MACE_<1g|0g>_native.fmu (FMI 2.0), MACE_<1g|0g>_native_fmi3.fmu, "
+                  "MACE_<1g|0g>_pythonfmu.fmu (default ./fmus); with --parameters P.toml MACE_1g_native_P.fmu "
+                  "and so on, never the plain model's names")
     p.set_defaults(func=cmd_build)

@@ -18,18 +18,6 @@ from mace_fmu.util.progress import ProgressCallback, Step
 BUNDLED_DECK = str(Path(__file__).resolve().parents[1] / "data" / "mace_em.bdf")
 
 
-def folder_argument(text: str) -> str:
-    """argparse ``type`` of an output folder: refused at once (one line, exit 2) when a file stands where the
-    folder must go, before any work; created only when something is written into it."""
-    from mace_fmu.util.atomic import output_folder
-
-    try:
-        output_folder(text, create=False)
-    except MaceError as exc:
-        raise argparse.ArgumentTypeError(str(exc)) from None
-    return text
-
-
 def model_variant(args: argparse.Namespace) -> str:
     """What sets this FMU's model apart from the plain one, for its name: the parameter set's file stem
     and "bounded" with frequency bounds ("" for the plain model, which keeps the plain name)."""

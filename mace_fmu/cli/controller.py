@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import argparse
 
-from mace_fmu.cli.common import folder_argument, progress
+from mace_fmu.cli.common import progress
 from mace_fmu.cli.export import platforms_option, toolchain_warnings_as_lines
+from mace_fmu.cli.preflight import output_option
 from mace_fmu.errors import MaceError
 
 
@@ -59,6 +60,6 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--step", type=float, default=0.002, help="sample time of --lqg [s] (default 0.002)")
     p.add_argument("--name", default="controller", help="model identifier and file name (default: controller)")
     p.add_argument("--fmi-version", type=int, choices=[2, 3], default=2, help="FMI version (default 2)")
-    p.add_argument("-o", "--out", type=folder_argument, default=".", help="output directory")
+    output_option(p, "-o", "--out", kind="folder", default=".", help="output directory")
     platforms_option(p)
     p.set_defaults(func=cmd_export_controller)

@@ -7,6 +7,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from mace_fmu.cli.preflight import output_option
+
 if TYPE_CHECKING:
     from mace_fmu.updating.engine.measured import FrequencyResponseData, TimeHistory
 
@@ -75,6 +77,6 @@ def register(sub: argparse._SubParsersAction) -> None:
                     help="the record's inputs were held over each sample (a simulation's record, e.g. an FMU's; "
                     "DAC commands logged instead of the measured signal): divide the hold's half-sample delay and "
                     "droop out, so that the file is the continuous response an analyser measures")
-    h1.add_argument("-o", "--output", required=True, help="output file: .csv, .uff or .unv")
+    output_option(h1, "-o", "--output", kind="file", required=True, help="output file: .csv, .uff or .unv")
     check.set_defaults(func=cmd_check)
     h1.set_defaults(func=cmd_h1)

@@ -9,8 +9,8 @@ import warnings
 from collections.abc import Iterator
 from pathlib import Path
 
-from mace_fmu.cli.common import (CONFIGURATIONS, deck_option, folder_argument, model_options, model_variant, progress,
-                                  volts)
+from mace_fmu.cli.common import CONFIGURATIONS, deck_option, model_options, model_variant, progress, volts
+from mace_fmu.cli.preflight import output_option
 from mace_fmu.errors import MaceError
 
 
@@ -94,10 +94,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="the deck's 1-g or 0-g structure, or 'modes': NASTRAN's modes, named by --structure FILE's "
                         "[modes] table")
     deck_option(p)
-    p.add_argument("-o", "--out", type=folder_argument, default=".",
-                   help="output directory (writes e.g. MACE_1g_native.fmu; with --motion-grids "
-                   "MACE_1g_native_motion.fmu; with --parameters P.toml MACE_1g_native_P.fmu, with "
-                   "--frequency-bounds too MACE_0g_native_P_bounded.fmu: never the plain model's name)")
+    output_option(p, "-o", "--out", kind="folder", default=".", used=lambda args: not args.ssp,
+                  help="output directory (writes e.g. MACE_1g_native.fmu; with --motion-grids "
+                  "MACE_1g_native_motion.fmu; with --parameters P.toml MACE_1g_native_P.fmu, with "
+                  "--frequency-bounds too MACE_0g_native_P_bounded.fmu: never the plain model's name)")
     p.add_argument("--runtime", choices=["native", "pythonfmu"], default="native",
                    help="native: C runtime, no Python needed in the host, FMI 2.0 co-simulation and model exchange "
                         "(default); pythonfmu: FMI 2.0 co-simulation through Python")
@@ -106,10 +106,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--frequency-bounds", metavar="FILE",
                    help="table_5_3.toml of mace-fmu predict-0g: its bounds become the min/max of the modes' "
                         "frequency_scale_mode_<k> (with --parameters zero_g_nominal.toml: the updated nominal 0-g FMU)")
-    p.add_argument("--ssp", metavar="FILE.ssp",
-                   help="write an SSP 1.0 package instead of a bare FMU: the plant FMU (FMI 2.0) with the moduli, "
-                        "springs and frequency scales of --parameters built in, and the set's damping ratios, delays "
-                        "and gains as an SSV file bound to it")
+    output_option(p, "--ssp", kind="file", metavar="FILE.ssp",
+                  help="write an SSP 1.0 package instead of a bare FMU: the plant FMU (FMI 2.0) with the moduli, "
+                       "springs and frequency scales of --parameters built in, and the set's damping ratios, delays "
+                       "and gains as an SSV file bound to it")
     p.add_argument("--controller", metavar="FILE.fmu",
                    help="with --ssp: a controller FMU (mace-fmu export-controller) wired to the plant by signal names "
                         "(its inputs read the plant outputs of those names, its outputs drive the plant inputs)")

@@ -9,6 +9,7 @@ import sys
 import numpy as np
 
 from mace_fmu.cli.common import CONFIGURATIONS, deck_option, model_options, volts
+from mace_fmu.cli.preflight import output_option
 from mace_fmu.util.atomic import atomic_path, write_text_atomic
 
 
@@ -61,7 +62,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--poles", action="store_true", help="closed-loop poles next to Table 4.7 (1g) or 5.2 (0g)")
     p.add_argument("--list-max-hz", type=float, default=60.0, help="with --poles: list all poles up to this [Hz]")
     p.add_argument("--json", action="store_true", help="states, signal names and poles as JSON")
-    p.add_argument("--npz", metavar="FILE", help="write A, B, C, D and the signal names to FILE (.npz)")
-    p.add_argument("--modelica", metavar="FILE", help="write the model as Modelica source (.mo)")
+    output_option(p, "--npz", kind="file", metavar="FILE", help="write A, B, C, D and the signal names to FILE (.npz)")
+    output_option(p, "--modelica", kind="file", metavar="FILE", help="write the model as Modelica source (.mo)")
     model_options(p)
     p.set_defaults(func=cmd_model)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from mace_fmu.cli.preflight import output_option
 from mace_fmu.errors import MaceError
 
 
@@ -98,12 +99,14 @@ def register(sub: argparse._SubParsersAction) -> None:
     to.add_argument("parameters", help="parameter set TOML (mace-fmu update mace, update fmu or predict-0g)")
     to.add_argument("--frequency-bounds", metavar="FILE",
                     help="table_5_3.toml of mace-fmu predict-0g: its bounds travel in the SSV too")
-    to.add_argument("-o", "--out", help="SSV file to write (default: the TOML's name with .ssv)")
+    output_option(to, "-o", "--out", kind="file", derived=lambda args: Path(args.parameters).with_suffix(".ssv"),
+                  help="SSV file to write (default: the TOML's name with .ssv)")
     to.set_defaults(func=cmd_to_ssv)
     back = psub.add_parser("from-ssv", help="an SSV file of to-ssv (or with our parameter names) as a TOML set")
     back.add_argument("ssv", help="SSV file")
-    back.add_argument("-o", "--out", help="TOML parameter set to write (default: the SSV's name with .toml)")
-    back.add_argument("--frequency-bounds-out", metavar="FILE",
-                      help="where to write the SSV's frequency bounds ([[mode]] rows that export "
-                           "--frequency-bounds reads)")
+    output_option(back, "-o", "--out", kind="file", derived=lambda args: Path(args.ssv).with_suffix(".toml"),
+                  help="TOML parameter set to write (default: the SSV's name with .toml)")
+    output_option(back, "--frequency-bounds-out", kind="file", metavar="FILE",
+                  help="where to write the SSV's frequency bounds ([[mode]] rows that export "
+                       "--frequency-bounds reads)")
     back.set_defaults(func=cmd_from_ssv)

@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 
 from mace_fmu.cli.common import positive_integer, progress_bar
+from mace_fmu.cli.preflight import output_option, scheduler_options
 from mace_fmu.errors import MaceError
 from mace_fmu.util.atomic import write_text_atomic
 
@@ -39,8 +40,6 @@ def cmd_plan(args: argparse.Namespace) -> int:
     twice = sorted({n for n in names if names.count(n) > 1})
     if twice:
         raise MaceError(f"parameter {twice[0]!r} named twice in --update (name each once)")
-    if args.out is not None and Path(args.out).is_dir():
-        raise MaceError(f"-o {args.out}: is a directory; give the file to write (e.g. plan.toml)")
     candidates = read_test_plan(args.tests)
     from mace_fmu.updating.fmu.model import read_fmu_interface
 
@@ -58,7 +57,8 @@ def cmd_plan(args: argparse.Namespace) -> int:
     print(f"  planning {len(candidates)} candidate(s) for {len(names)} parameter(s) of {Path(args.fmu).name}",
           file=sys.stderr, flush=True)
     with progress_bar() as bar:
-        with DaskRunner(scheduler=args.scheduler, workers=args.workers, progress=bar, task="FMU runs") as runner:
+        with DaskRunner(scheduler=args.scheduler, workers=args.workers, progress=bar, task="FMU runs",
+                        connect_timeout_s=args.scheduler_timeout) as runner:
             planned = plan_tests(fmu=args.fmu, parameters=names, candidates=candidates, seed=args.seed,
                                  values=values, runner=runner, progress=bar)
     print(format_plan(planned))
@@ -85,8 +85,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "values only: the cable moduli's predicted sd halved between the start values and a point 2-3 %% "
                    "away")
     p.add_argument("--seed", type=int, default=0, help="seed of the excitation's white noise (default 0)")
-    p.add_argument("--scheduler", metavar="ADDRESS", help="run the FMU simulations on this Dask cluster")
+    scheduler_options(p, scheduler_help="run the FMU simulations on this Dask cluster")
     p.add_argument("--workers", type=positive_integer, default=None, help="local worker processes (default: one per core)")
-    p.add_argument("-o", "--out", metavar="FILE", help="also write each candidate's predicted uncertainty (TOML, "
-                   "as uncertainty.toml)")
+    output_option(p, "-o", "--out", kind="file", metavar="FILE",
+                  help="also write each candidate's predicted uncertainty (TOML, as uncertainty.toml)")
     p.set_defaults(func=cmd_plan)

@@ -7,7 +7,8 @@ import json
 import sys
 from pathlib import Path
 
-from mace_fmu.cli.common import deck_option, folder_argument, parameters, parameters_option, progress, progress_bar
+from mace_fmu.cli.common import deck_option, parameters, parameters_option, progress, progress_bar
+from mace_fmu.cli.preflight import output_option
 from mace_fmu.errors import MaceError
 
 
@@ -19,9 +20,7 @@ def cmd_predict(args: argparse.Namespace) -> int:
     # everything is checked before anything is computed or written
     if args.fmu and args.out is None:
         raise MaceError("--fmu writes into the output directory: give -o DIR")
-    out = Path(args.out) if args.out is not None else None
-    if out is not None and out.exists() and not out.is_dir():
-        raise MaceError(f"-o {out}: exists and is not a directory")
+    out = Path(args.out) if args.out is not None else None  # checked with every output before the command
     rule = BoundRule(heavy_damping=args.heavy_damping, minimum_bound=args.minimum_bound_percent / 100.0,
                      error_fraction=args.error_fraction, heavy_bound=args.heavy_bound_percent / 100.0,
                      correct_heavy=args.correct_heavy)
@@ -70,9 +69,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--measured", metavar="FILE",
                    help="1-g measurement model (CSV: label, pattern, frequency_hz, damping, pattern_0g; pattern_0g "
                         "empty for modes the 0-g structure lacks); default: Table 4.7's measured column")
-    p.add_argument("-o", "--out", type=folder_argument, default=None, metavar="DIR",
-                   help="write table_5_3.csv/.toml/.txt and zero_g_nominal.toml (the parameter set of the nominal "
-                        "model, for export/build --parameters) into DIR")
+    output_option(p, "-o", "--out", kind="folder", default=None, metavar="DIR",
+                  help="write table_5_3.csv/.toml/.txt and zero_g_nominal.toml (the parameter set of the nominal "
+                       "model, for export/build --parameters) into DIR")
     p.add_argument("--fmu", action="store_true", help="also export the nominal 0-g FMU with the bounds as the "
                    "min/max of its frequency_scale_mode_<k> (MACE_0g_<runtime>_nominal.fmu in DIR; another deck's "
                    "FMU is named after its file)")

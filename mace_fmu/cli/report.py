@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import argparse
 
-from mace_fmu.cli.common import deck_option, folder_argument, progress
+from mace_fmu.cli.common import deck_option, progress
+from mace_fmu.cli.preflight import output_option
 
 
 def cmd_report(args: argparse.Namespace) -> int:
@@ -20,5 +21,5 @@ def cmd_report(args: argparse.Namespace) -> int:
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("report", help="Bode plots of the 1-g and 0-g models (PNG; thesis Figs. 4.15, 4.16, 5.1, 5.2)")
     deck_option(p)
-    p.add_argument("-o", "--out", type=folder_argument, default="report", help="output directory (default ./report)")
+    output_option(p, "-o", "--out", kind="folder", default="report", help="output directory (default ./report)")
     p.set_defaults(func=cmd_report)

@@ -7,7 +7,8 @@ from pathlib import Path
 
 import numpy as np
 
-from mace_fmu.cli.common import folder_argument, positive_integer, progress
+from mace_fmu.cli.common import positive_integer, progress
+from mace_fmu.cli.preflight import output_option, scheduler_options
 from mace_fmu.errors import MaceError
 
 FIGURE_OF_AUTHORITY = {"low": "A2", "moderate": "A3", "high": "A4"}
@@ -154,7 +155,8 @@ def cmd_robust_0g(args: argparse.Namespace) -> int:
     if not args.serial:
         from mace_fmu.util.runner import DaskRunner
 
-        runner = DaskRunner(scheduler=args.scheduler, workers=args.workers, task="closed-loop runs")
+        runner = DaskRunner(scheduler=args.scheduler, workers=args.workers, task="closed-loop runs",
+                            connect_timeout_s=args.scheduler_timeout)
         progress(f"Dask: {runner.workers} workers" + (f" at {args.scheduler}" if args.scheduler else " (local)"))
     try:
         with progress_bar() as bar:
@@ -181,7 +183,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("study", help="modelling-for-control studies of thesis Appendix A (PNG figures and a table)")
     studies = p.add_subparsers(dest="study", required=True)
     s = studies.add_parser("lqg-sensitivity", help="A.1: LQG designed on mismodelled stiffnesses (Figs. A.2-A.4)")
-    s.add_argument("--out", default="study", help="output directory (default ./study)")
+    output_option(s, "--out", kind="folder", default="study", help="output directory (default ./study)")
     s.add_argument("--k1", default="0.1:3.0:0.05", help="design k1 grid START:STOP:STEP [N/m] (default 0.1:3.0:0.05)")
     s.add_argument("--k2", default="0.1:2.0:0.05", help="design k2 grid START:STOP:STEP [N/m] (default 0.1:2.0:0.05)")
     s.add_argument("--theta", type=float, default=None, help="sensor noise intensity for all authorities (default 1)")
@@ -189,7 +191,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     s.set_defaults(func=cmd_lqg_sensitivity)
     r = studies.add_parser("reduced-order", help="A.2: LQG on balanced and updated 4-mode models of a cantilever "
                            "(Table A.1, Figs. A.6-A.8)")
-    r.add_argument("--out", default="study", help="output directory (default ./study)")
+    output_option(r, "--out", kind="folder", default="study", help="output directory (default ./study)")
     r.add_argument("--max-iterations", type=int, default=200, help="BFGS iterations of the update (default 200)")
     r.add_argument("--rho", type=float, default=None,
                    help="rho = theta (default: the value giving the thesis's J_full = 7.58e-6)")
@@ -197,7 +199,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     r.set_defaults(func=cmd_reduced_order)
     o = studies.add_parser("robust-0g", help="LQG on the nominal 0-g model closed around the 0-g FMU over its frequency "
                            "bounds: corners and a Monte Carlo sample on Dask (PNG, CSV and a summary)")
-    o.add_argument("-o", "--out", type=folder_argument, default="study", help="output directory (default ./study)")
+    output_option(o, "-o", "--out", kind="folder", default="study", help="output directory (default ./study)")
     o.add_argument("--samples", type=int, default=100, help="Monte Carlo samples, uniform in the bounds (default 100)")
     o.add_argument("--seed", type=int, default=1, help="seed of the sample (default 1)")
     o.add_argument("--critical", type=int, default=4, help="parameters whose 2^N corners are run: the N that move the "
@@ -212,7 +214,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     o.add_argument("--states", type=int, default=30, help="states of the reduced design model (default 30)")
     o.add_argument("--duration", type=float, default=4.0, help="simulated time of each run [s]: 1 s of disturbance, "
                    "then settling (default 4)")
-    o.add_argument("--scheduler", help="address of a Dask scheduler, e.g. tcp://host:8786 (default: a local cluster)")
+    scheduler_options(o, used=lambda args: not args.serial,
+                      scheduler_help="address of a Dask scheduler, e.g. tcp://host:8786 (default: a local cluster)")
     o.add_argument("--workers", type=positive_integer, default=None, help="local cluster workers (default: the machine's cores)")
     o.add_argument("--serial", action="store_true", help="run in this process, no Dask")
     o.set_defaults(func=cmd_robust_0g)

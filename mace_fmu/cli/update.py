@@ -7,9 +7,10 @@ import json
 import sys
 from pathlib import Path
 
-from mace_fmu.cli.common import deck_option, folder_argument, positive_integer, positive_number, progress_bar
+from mace_fmu.cli.common import deck_option, positive_integer, positive_number, progress_bar
+from mace_fmu.cli.preflight import output_option, scheduler_options
 from mace_fmu.errors import MaceError
-from mace_fmu.util.atomic import write_text_atomic
+from mace_fmu.util.atomic import output_folder, write_text_atomic
 from mace_fmu.util.textfile import read_toml
 
 #: exit status of an update that wrote its results but did not converge (see ``mace-fmu update --help``)
@@ -109,7 +110,8 @@ def cmd_fmu_update(args: argparse.Namespace) -> int:
     _say(f"updating {len(problem.names) - gains} parameter(s)" + (f" and {gains} sensor gain(s)" if gains else "")
          + f" of {Path(args.fmu).name} on the {args.cost} cost; FMU runs on {where}")
     with progress_bar() as bar:
-        with DaskRunner(scheduler=args.scheduler, workers=args.workers, progress=bar, task="FMU runs") as runner:
+        with DaskRunner(scheduler=args.scheduler, workers=args.workers, progress=bar, task="FMU runs",
+                        connect_timeout_s=args.scheduler_timeout) as runner:
             result = update_fmu(family=problem.family, cost=problem.cost, start=problem.start, stages=[problem.names],
                                 runner=runner, progress=bar)
     report = _write_fmu_update(problem, result, out=Path(args.out), noise_fraction=noise_fraction, strict=args.strict)
@@ -133,7 +135,7 @@ def _write_fmu_update(problem, result, *, out: Path, noise_fraction: float | Non
                                 missing_floor=missing_noise_floor(problem.cost, noise_rms_fraction=noise_fraction))
     params = fmu_parameters(result, family=problem.family, data=", ".join(problem.data_files), cost=problem.cost,
                             convergence=report)
-    out.mkdir(parents=True, exist_ok=True)
+    output_folder(out)  # checked before the update; should it have gone since, a line that says so
     # the residual is the noise when the model explains the data: the covariance from the noise's level (the
     # floor's, not what the fit left over); otherwise from the residuals themselves, their correlations included
     sigma2 = floor.expected_cost / result.final_residual.size if floor is not None else None
@@ -183,9 +185,7 @@ def cmd_mace_update(args: argparse.Namespace) -> int:
     from mace_fmu.updating.mace.report import write_report
     from mace_fmu.updating.mace.update import format_mode_rows, mode_rows, run_mace_update, scores
 
-    out = Path(args.out)
-    if out.exists() and not out.is_dir():
-        raise MaceError(f"-o {out}: exists and is not a directory")
+    out = Path(args.out)  # checked with every output before the command
     deck = read_deck(args.deck)
     start = ParameterSet.read(args.start) if args.start else None
     measured = read_measured_modes(args.measured) if args.measured else None
@@ -227,8 +227,8 @@ _EXIT_STATUS = (f"exit status: 0 converged, whether the model explains the data 
 
 
 def _out_option(p: argparse.ArgumentParser, *, required: bool = False) -> None:
-    p.add_argument("-o", "--out", type=folder_argument, required=required, help="directory for parameters.toml, "
-                   "convergence.toml, uncertainty.toml, report.txt, summary.json and figures")
+    output_option(p, "-o", "--out", kind="folder", required=required, help="directory for parameters.toml, "
+                  "convergence.toml, uncertainty.toml, report.txt, summary.json and figures")
     p.add_argument("--strict", action="store_true", help=f"a parameter that ends at a bound counts as not converged, "
                    f"and a model the data show wrong (residuals above the noise or correlated with the inputs) as a "
                    f"failure (exit {NOT_CONVERGED}); by default both are named and the exit status is 0")
@@ -265,8 +265,8 @@ def _fmu_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--cost", choices=["time", "log-frf"], default="time",
                    help=("time: output errors (eq. 4.3); log-frf: log ratio of H1 estimates (eq. 4.5/4.17)"))
     where = p.add_mutually_exclusive_group()  # --workers sizes a local cluster; a scheduler's cluster has its own
-    where.add_argument("--scheduler", metavar="ADDRESS", help=("run the FMU simulations on this Dask cluster "
-                       "(default: local worker processes)"))
+    scheduler_options(p, group=where,
+                      scheduler_help="run the FMU simulations on this Dask cluster (default: local worker processes)")
     where.add_argument("--workers", type=positive_integer, default=None,
                        help=("local worker processes (default: one per core)"))
     p.add_argument("--map", metavar="FILE", help=("channel map: data channel names and units to the FMU's signals"))

@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 
 from mace_fmu.cli.common import CONFIGURATIONS, deck_option, model_options, progress, progress_bar, volts
+from mace_fmu.cli.preflight import output_option
 from mace_fmu.errors import MaceError
 
 #: viewer.camera.CAMERA_VIEWS, spelled out so that `mace-fmu --help` does not import meshcat
@@ -224,9 +225,9 @@ def cmd_view_pairs(args: argparse.Namespace) -> int:
 
 def _output_options(p: argparse.ArgumentParser, *, html: str) -> None:
     """Where the animation goes and from where it is seen (both view commands)."""
-    p.add_argument("--html", help=html)
-    p.add_argument("--png", type=_png_path, help="write a still of the page (a .png file) through headless Chromium, "
-                   "if installed")
+    output_option(p, "--html", kind="file", help=html)
+    output_option(p, "--png", kind="file", type=_png_path,
+                  help="write a still of the page (a .png file) through headless Chromium, if installed")
     p.add_argument("--png-size", type=int, nargs=2, default=[1200, 800], metavar=("WIDTH", "HEIGHT"),
                    help="size of the still [px] (default 1200 800)")
     p.add_argument("--camera", choices=CAMERA_CHOICES, default="iso",

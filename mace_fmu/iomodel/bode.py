@@ -13,7 +13,7 @@ from mace_fmu.deck.cards import Deck
 from mace_fmu.fe.modes import compute_modes
 from mace_fmu.iomodel.volts import VoltsModel, volts_model
 from mace_fmu.structure.file import StructureFile
-from mace_fmu.util.atomic import save_figure_atomic
+from mace_fmu.util.atomic import output_folder, save_figure_atomic
 
 # Disturbance (secondary gimbal) to performance (payload gyro): thesis Figs. 4.15/5.1 and 4.16/5.2
 CHANNELS = (
@@ -52,8 +52,7 @@ def bode_report(deck: Deck | None = None, *, structure_file: StructureFile | str
     list of Path
         The PNG files written.
     """
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
+    out = output_folder(out_dir)  # one line naming it, not a traceback, if it cannot be made
     f = np.logspace(np.log10(0.1), np.log10(250.0), 2000) if frequencies_hz is None else frequencies_hz
     models, responses = {}, {}
     for kind in ("1g", "0g"):

@@ -46,7 +46,10 @@ def atomic_path(final: str | os.PathLike) -> Iterator[Path]:
     # created still finds it in the cleanup below (mkstemp would return it only afterwards).
     tmp_path = final.parent / f".{final.name}.{secrets.token_hex(6)}.part"
     try:
-        os.close(os.open(tmp_path, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o600))
+        try:
+            os.close(os.open(tmp_path, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o600))
+        except OSError as exc:  # a folder that takes no files (read-only, /proc): one line, not a traceback
+            raise MaceError(f"{final}: cannot write into its folder {final.parent} ({exc.strerror or exc})") from None
         yield tmp_path
         mask = os.umask(0)
         os.umask(mask)

@@ -15,6 +15,102 @@ from typing import Any, Callable, Iterable
 from mace_fmu.errors import MaceError
 from mace_fmu.util.progress import ProgressCallback, Step
 
+#: how long a scheduler address is given to answer [s]: a cluster's scheduler answers in milliseconds, a
+#: loaded one in seconds; what does not answer by then is not going to
+DEFAULT_CONNECT_TIMEOUT_S = 20.0
+
+#: the exchange after the connection gets this much longer than the connection [s], so that when the
+#: connection is the problem, Dask's own timeout fires first with its reason (refused, unresolvable)
+_GRACE_S = 1.0
+
+
+def _why_no_scheduler(exc: BaseException, *, timeout_s: float) -> str:
+    """The reason, in words, that an address gave no Dask scheduler's answer."""
+    from distributed.comm import CommClosedError
+
+    if isinstance(exc, TimeoutError) and not str(exc):  # the bound of check_scheduler: connected, then nothing
+        return f"no answer in Dask's protocol within {timeout_s + _GRACE_S:g} s"
+    if isinstance(exc, CommClosedError):
+        return "the other end closed the connection"
+    if isinstance(exc, OSError):  # refused, unreachable: the system's words, under Dask's wrappers
+        root = exc
+        while root.__cause__ is not None:
+            root = root.__cause__
+        if getattr(root, "strerror", None):
+            return f"cannot connect: {root.strerror}"
+        return f"cannot connect within {timeout_s:g} s" if root is not exc else str(exc)
+    # a service that speaks first (SSH, SMTP) has its greeting read as a Dask frame length: an exabyte
+    # allocation (MemoryError) or a dimension beyond numpy's (ValueError); other garbage fails in msgpack
+    # named by the builtin class it is (numpy's _ArrayMemoryError is a MemoryError, msgpack's ExtraData a ValueError)
+    builtin = next(c for c in type(exc).__mro__ if c.__module__ == "builtins")
+    return f"what answered does not speak Dask's protocol: {builtin.__name__}"
+
+
+def check_scheduler(address: str, *, timeout_s: float = DEFAULT_CONNECT_TIMEOUT_S, name: str | None = None) -> None:
+    """Raise a MaceError unless a Dask scheduler answers at ``address`` within ``timeout_s``.
+
+    ``dask.distributed.Client(address, timeout=...)`` bounds the TCP connection only: a service that
+    accepts and stays silent keeps it waiting for the handshake for ever, and one that speaks first
+    has its bytes read as a frame length (Dask then allocates exabytes). This asks the address for
+    its identity, the whole exchange bounded by ``timeout_s`` (and a second), and says in one line what
+    went wrong.
+
+    Parameters
+    ----------
+    address : str
+        The scheduler's address, e.g. ``tcp://host:8786``.
+    timeout_s : float
+        Longest wait for the connection (Dask's ``timeout``) [s]; the answer must come within a second more.
+    name : str, optional
+        How the message names the address, e.g. ``"--scheduler tcp://host:8786"`` (default: the address).
+
+    Raises
+    ------
+    MaceError
+        ``<name>: no Dask scheduler answered (<why>)``, or ``<name>: not a Dask address (...)``.
+    """
+    import asyncio
+    import threading
+
+    from distributed.comm import connect
+    from distributed.comm.addressing import parse_address
+    from distributed.comm.registry import get_backend
+
+    name = name or address
+    try:
+        get_backend(parse_address(address)[0])
+    except (ValueError, TypeError) as exc:
+        raise MaceError(f"{name}: not a Dask address ({exc}); expected e.g. tcp://host:8786") from None
+
+    async def identity():
+        comm = await connect(address, timeout=timeout_s)
+        try:
+            await comm.write({"op": "identity"})
+            return await comm.read()
+        finally:
+            comm.abort()
+
+    outcome: list = []
+
+    def ask() -> None:
+        try:
+            outcome.append(asyncio.run(asyncio.wait_for(identity(), timeout_s + _GRACE_S)))
+        except Exception as exc:
+            outcome.append(exc)
+
+    # a loop of its own in a daemon thread: the caller may be inside an event loop (a notebook), and a
+    # connection that ignores its cancellation keeps neither the caller nor the interpreter's exit waiting
+    thread = threading.Thread(target=ask, name="mace-fmu scheduler check", daemon=True)
+    thread.start()
+    thread.join(timeout_s + 5.0 + _GRACE_S)
+    answer = outcome[0] if outcome else TimeoutError()
+    if isinstance(answer, Exception):
+        raise MaceError(f"{name}: no Dask scheduler answered ({_why_no_scheduler(answer, timeout_s=timeout_s)})")
+    kind = answer.get("type") if isinstance(answer, dict) else None
+    if kind != "Scheduler":
+        what = f"a Dask {kind}" if isinstance(kind, str) else "something that is not Dask"
+        raise MaceError(f"{name}: no Dask scheduler answered ({what} answered; give the scheduler's address)")
+
 
 class DaskRunner:
     """``runner(fn, items)`` on a dask.distributed cluster, results in the order of ``items``.
@@ -23,10 +119,14 @@ class DaskRunner:
     (default: the machine's cores) is started and closed with the runner (use it as a context
     manager). One numerical thread per worker: the workers are the parallelism, and a fixed
     thread count keeps every result bit for bit what a serial run gives.
+
+    With ``scheduler``, the address must answer as a Dask scheduler within ``connect_timeout_s``
+    seconds (:func:`check_scheduler`), else a MaceError says so in one line.
     """
 
     def __init__(self, *, scheduler: str | None = None, client: Any = None, workers: int | None = None,
-                 progress: ProgressCallback | None = None, task: str = "model runs", connect_timeout_s: float = 10.0):
+                 progress: ProgressCallback | None = None, task: str = "model runs",
+                 connect_timeout_s: float = DEFAULT_CONNECT_TIMEOUT_S):
         try:
             from dask.distributed import Client, LocalCluster
         except ImportError as exc:  # dask[distributed] is a dependency; say what is missing if it is not there
@@ -36,10 +136,12 @@ class DaskRunner:
         if client is not None:
             self.client = client
         elif scheduler is not None:
+            check_scheduler(scheduler, timeout_s=connect_timeout_s)  # Client alone can hang or allocate exabytes
             try:
                 self.client = Client(scheduler, timeout=f"{connect_timeout_s}s")
-            except (OSError, TimeoutError) as exc:
-                raise MaceError(f"cannot reach the Dask scheduler at {scheduler}: {exc}") from None
+            except Exception as exc:  # it answered a moment ago: whatever stops the client now, in one line
+                raise MaceError(f"{scheduler}: the Dask client could not connect ({type(exc).__name__}: {exc})") \
+                    from None
         else:
             n = workers or os.cpu_count() or 1
             if n < 1:

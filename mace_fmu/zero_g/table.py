@@ -10,7 +10,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from mace_fmu.thesis import thesis_data
-from mace_fmu.util.atomic import write_text_atomic
+from mace_fmu.util.atomic import output_folder, write_text_atomic
 from mace_fmu.util.textfile import read_toml
 from mace_fmu.zero_g.nominal import ZeroGPrediction, ZeroGRow
 
@@ -162,8 +162,7 @@ def write_prediction(prediction: ZeroGPrediction, out_dir: str | Path) -> dict[s
     dict of str to Path
         The written files by kind ("csv", "toml", "text", "parameters").
     """
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
+    out = output_folder(out_dir)  # one line naming it, not a traceback, if it cannot be made
     return {"csv": write_text_atomic(out / "table_5_3.csv", as_csv(prediction)),
             "toml": write_text_atomic(out / "table_5_3.toml", as_toml(prediction)),
             "text": write_text_atomic(out / "table_5_3.txt", format_table(prediction) + "\n"),

@@ -265,13 +265,13 @@ def test_the_parser_loads_no_numerics(tmp_path):
 
 
 def test_an_output_folder_that_is_a_file_is_refused_before_any_work(capsys, tmp_path):
-    (tmp_path / "taken").write_text("a file\n")
-    for argv in (["export", "0g", "-o", str(tmp_path / "taken")], ["export", "0g", "-o", str(tmp_path / "taken" / "x")],
-                 ["build", "-o", str(tmp_path / "taken")]):
-        with pytest.raises(SystemExit) as stopped:
-            main(argv)
-        err = capsys.readouterr().err
-        assert stopped.value.code == 2 and "taken exists and is not a folder" in err and "Traceback" not in err, err
+    taken = tmp_path / "taken"
+    taken.write_text("a file\n")
+    for argv, why in ((["export", "0g", "-o", str(taken)], "is a file, not a folder (outputs go into a folder)"),
+                      (["export", "0g", "-o", str(taken / "x")], f"cannot create the folder ({taken} is a file)"),
+                      (["build", "-o", str(taken)], "is a file, not a folder (outputs go into a folder)")):
+        code, out, err = _run(capsys, argv)
+        assert code == 2 and out == "" and err == f"mace-fmu: error: -o {argv[-1]}: {why}\n", err
 
 
 def test_a_pade_order_beyond_the_runtimes_is_one_line(capsys):

@@ -2,8 +2,11 @@
 
 from __future__ import annotations
 
+import threading
+
 import numpy as np
 import pytest
+from support.sockets import GARBAGE, SSH_GREETING, not_a_scheduler
 
 from mace_fmu.errors import MaceError
 from mace_fmu.updating.engine.costs import TimeResponseCost
@@ -54,5 +57,42 @@ def test_a_failing_run_raises_its_own_error(runner):
 
 
 def test_an_unreachable_scheduler_is_a_clear_error():
-    with pytest.raises(MaceError, match="cannot reach the Dask scheduler at tcp://127.0.0.1:9"):
+    with pytest.raises(MaceError, match=r"^tcp://127.0.0.1:9: no Dask scheduler answered \(cannot connect"):
         DaskRunner(scheduler="tcp://127.0.0.1:9", connect_timeout_s=1.0)
+
+
+@pytest.mark.parametrize("greeting, why", [
+    (SSH_GREETING, "what answered does not speak Dask's protocol: MemoryError"),  # Dask's 2.8 EiB allocation
+    (GARBAGE, "what answered does not speak Dask's protocol: ValueError"),
+    (b"", "no answer in Dask's protocol within 2 s"),  # Client(timeout=...) alone waited for ever
+], ids=["an SSH server", "garbage", "silence"])
+def test_an_address_where_another_service_answers_is_one_error_within_the_timeout(greeting, why):
+    outcome: list[BaseException | DaskRunner] = []
+
+    def connect(address: str) -> None:
+        try:
+            outcome.append(DaskRunner(scheduler=address, connect_timeout_s=1.0))
+        except BaseException as exc:
+            outcome.append(exc)
+
+    with not_a_scheduler(greeting) as address:
+        # in a thread of its own, so that a runner that hangs (as Client did) fails the test instead of hanging it
+        attempt = threading.Thread(target=connect, args=(address,), daemon=True)
+        attempt.start()
+        attempt.join(1.0 + 6.0)  # the bound: the timeout, a second's grace, the check's own margin
+    assert outcome, "DaskRunner still waiting after 7 s"
+    assert isinstance(outcome[0], MaceError), repr(outcome[0])
+    assert str(outcome[0]) == f"{address}: no Dask scheduler answered ({why})"
+
+
+def test_a_scheduler_passes_the_check_and_a_worker_is_named_for_what_it_is(runner):
+    from mace_fmu.util.runner import check_scheduler
+
+    check_scheduler(runner.client.scheduler.address, timeout_s=5.0)
+    with DaskRunner(scheduler=runner.client.scheduler.address, connect_timeout_s=5.0) as by_address:
+        assert by_address(lambda x: x + 1, [1, 2]) == [2, 3]
+    worker = next(iter(runner.client.scheduler_info()["workers"]))
+    with pytest.raises(MaceError, match=r": no Dask scheduler answered \(a Dask Worker answered; give the scheduler's"):
+        check_scheduler(worker, timeout_s=5.0, name=f"--scheduler {worker}")
+    with pytest.raises(MaceError, match=r"^http://host:8786: not a Dask address \(unknown address scheme 'http'"):
+        check_scheduler("http://host:8786")

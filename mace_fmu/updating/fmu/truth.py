@@ -22,6 +22,7 @@ from mace_fmu.errors import MaceError
 from mace_fmu.updating.engine.measured import FrequencyResponseData, TimeHistory
 from mace_fmu.updating.engine.simulated_frf import H1Estimator
 from mace_fmu.updating.fmu.model import FmuFamily, FmuModel
+from mace_fmu.util.atomic import output_folder
 
 GIMBALS = ("gimbal_primary_x", "gimbal_primary_z", "gimbal_secondary_x", "gimbal_secondary_z")
 RATE_GYROS = ("gyro_payload_x", "gyro_payload_z", "gyro_bus_x", "gyro_bus_y", "gyro_bus_z")
@@ -77,8 +78,7 @@ def measure_test_article(family: FmuFamily, *, out_dir: str | os.PathLike, secon
     history = TimeHistory(t, inputs, {o: y[:, k] for k, o in enumerate(RATE_GYROS)}, source="test article")
     estimator = estimator or default_estimator(step_s=step_s)
     frd = estimator(history)
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
+    out = output_folder(out_dir)  # one line naming it, not a traceback, if it cannot be made
     files = (write_time_history(history, out / "test_article_time.csv"),
              write_frequency_response(frd, out / "test_article_frf.uff"),
              write_frequency_response(frd, out / "test_article_frf.csv"))
