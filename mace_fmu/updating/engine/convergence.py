@@ -36,7 +36,7 @@ import scipy.signal
 from mace_fmu.errors import MaceError
 from mace_fmu.updating.engine.costs import TimeResponseCost
 from mace_fmu.updating.engine.residual_blocks import ResidualBlock
-from mace_fmu.updating.engine.residuals import ResidualAnalysis, analyse_residuals
+from mace_fmu.updating.engine.residuals import RATIO_LIMIT, ResidualAnalysis, analyse_residuals
 from mace_fmu.updating.engine.solve import UpdateResult
 
 #: a final cost more than this many standard deviations above the noise floor is not explained by the noise
@@ -178,8 +178,11 @@ class ConvergenceReport:
 
     @property
     def above_noise_floor(self) -> bool:
-        """The final cost lies more than ``sigma_limit`` standard deviations above the noise floor."""
-        return self.noise_floor is not None and self.noise_floor.sigmas_above(self.final_cost) > self.sigma_limit
+        """The final cost lies more than ``sigma_limit`` standard deviations above the noise floor, and its RMS
+        more than :data:`~mace_fmu.updating.engine.residuals.RATIO_LIMIT` times the floor's."""
+        nf = self.noise_floor
+        return (nf is not None and nf.sigmas_above(self.final_cost) > self.sigma_limit
+                and self.final_cost > RATIO_LIMIT**2 * nf.expected_cost)
 
     @property
     def verdict(self) -> Verdict:

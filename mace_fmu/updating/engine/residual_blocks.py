@@ -34,6 +34,8 @@ class ResidualBlock:
     noise_sd: float | None = None
     scale: float = 1.0  #: the factor the cost put on this block (a test's weight among several tests)
     group: str = ""  #: the test (record or file) the block belongs to: blocks of one test share its noise
+    #: frequency blocks: the weight the cost put on each line (the entries are weight x log error; None: 1)
+    line_weights: np.ndarray | None = None
 
     def values(self, vector: np.ndarray) -> np.ndarray:
         """This block's entries of ``vector`` (a residual, or a Jacobian's rows): real samples for a time
@@ -64,11 +66,15 @@ def time_blocks(*, outputs: tuple[str, ...], times_s: np.ndarray, inputs: Mappin
                                inputs=inputs) for k, o in enumerate(outputs))
 
 
-def frequency_blocks(*, pairs: tuple[tuple[str, str], ...], frequencies_hz: np.ndarray,
-                     offset: int = 0) -> tuple[ResidualBlock, ...]:
-    """The blocks of a log-FRF cost: every pair's log magnitudes (pair after pair), then every pair's phases."""
+def frequency_blocks(*, pairs: tuple[tuple[str, str], ...], frequencies_hz: np.ndarray, offset: int = 0,
+                     weights: np.ndarray | None = None, outputs: tuple[str, ...] = (),
+                     inputs: tuple[str, ...] = ()) -> tuple[ResidualBlock, ...]:
+    """The blocks of a log-FRF cost: every pair's log magnitudes (pair after pair), then every pair's phases.
+    ``weights``: w[k, output, input] the cost multiplied the log errors by (``outputs``, ``inputs`` its axes)."""
     n, half = len(frequencies_hz), len(pairs) * len(frequencies_hz)
     return tuple(ResidualBlock(name=f"{i} -> {o}", domain="frequency",
                                rows=offset + np.arange(k * n, (k + 1) * n), axis=frequencies_hz,
-                               imaginary_rows=offset + half + np.arange(k * n, (k + 1) * n), noise_sd=None)
+                               imaginary_rows=offset + half + np.arange(k * n, (k + 1) * n), noise_sd=None,
+                               line_weights=None if weights is None else
+                               np.asarray(weights)[:, outputs.index(o), inputs.index(i)])
                  for k, (i, o) in enumerate(pairs))

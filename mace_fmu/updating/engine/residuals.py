@@ -7,7 +7,10 @@ of the cost (:mod:`~mace_fmu.updating.engine.residual_blocks`):
 
 - **level**: the residual's RMS over the noise's, where the noise is known (a time record's noise floor,
   a frequency response's coherence); a channel whose sum of squares lies more than ``sigma_limit``
-  standard deviations above its chi-square mean is not explained;
+  standard deviations above its chi-square mean, and whose RMS is more than ``RATIO_LIMIT`` times the
+  noise's, is not explained. The second condition is there because the noise's own level is known to a few
+  per cent at best (a noise floor read from a spectrum, a coherence's variance formula): over tens of
+  thousands of samples a residual 2 % above it is statistically certain and says nothing about the model;
 - **correlation with the inputs** (time records): a part of the output that the input drives and the model
   misses is coherent with the input. ``resid`` tests the cross-correlation at lags -25..25; a lightly damped
   structure's misfit (a resonance a few per cent off) rings for hundreds of samples and shows at 25 lags
@@ -45,8 +48,10 @@ from mace_fmu.updating.engine.residual_blocks import ResidualBlock
 MAX_LAG = 25
 #: significance of the correlation tests, over all channels and inputs together (Bonferroni)
 ALPHA = 0.01
-#: a channel's sum of squares this many chi-square standard deviations above its mean is not noise
+#: a channel's sum of squares this many chi-square standard deviations above its mean is not noise ...
 SIGMA_LIMIT = 3.0
+#: ... when its RMS is also more than this many times the noise's (the noise's level is known to some per cent)
+RATIO_LIMIT = 1.1
 
 
 @dataclass(frozen=True)
@@ -73,8 +78,10 @@ class ChannelFinding:
 
     @property
     def above_noise(self) -> bool:
-        """The residual is larger than the noise allows."""
-        return self.sigmas_above is not None and self.sigmas_above > self.sigma_limit
+        """The residual is larger than the noise allows (statistically and by more than ``RATIO_LIMIT``)."""
+        ratio = self.rms_over_noise
+        return (self.sigmas_above is not None and self.sigmas_above > self.sigma_limit and ratio is not None
+                and ratio > RATIO_LIMIT)
 
     @property
     def correlated_inputs(self) -> tuple[str, ...]:
@@ -271,8 +278,11 @@ def _input_coherence(e: np.ndarray, inputs, *, fs: float) -> tuple[float | None,
     p = float(scipy.stats.binom.sf(count - 1, bins, 0.01)) if count > 0 else 1.0
     if not significant.any():
         return p, None
-    hits = f[significant]
-    return p, (float(hits.min()), float(hits.max()))
+    # the band holding the middle 80 % of the residual's power that the inputs explain, at the significant bins
+    # (a few bins significant by chance anywhere must not stretch it)
+    share = np.where(significant, explained, 0.0)
+    cumulative = np.cumsum(share) / np.sum(share)
+    return p, (float(f[np.searchsorted(cumulative, 0.1)]), float(f[min(np.searchsorted(cumulative, 0.9), f.size - 1)]))
 
 
 def _time_band(e: np.ndarray, dt: float, noise_sd: float | None) -> tuple[float, float] | None:
@@ -302,25 +312,27 @@ def _frequency_channel(block: ResidualBlock, e: np.ndarray, *, sigma_limit: floa
     if np.sum(excess) > 0 and (noise is None or sigmas is not None and sigmas > sigma_limit):
         cumulative = np.cumsum(excess) / np.sum(excess)
         band = (float(f[np.searchsorted(cumulative, 0.1)]), float(f[min(np.searchsorted(cumulative, 0.9), n - 1)]))
+    weights = np.ones(n) if block.line_weights is None else np.asarray(block.line_weights, dtype=float)
     return ChannelFinding(name=block.name, domain="frequency", samples=n, rms=rms, noise_rms=noise, sigmas_above=sigmas,
-                          band_hz=band, delay_s=_delay(f, e.imag, noise), sigma_limit=sigma_limit)
+                          band_hz=band, delay_s=_delay(f, e.imag, weights), sigma_limit=sigma_limit)
 
 
-def _delay(f: np.ndarray, phase: np.ndarray, noise: float | None) -> float | None:
-    """The delay tau [s] of phase = a - 2 pi f tau fitted to the phase residual [rad], where the trend is
-    significant (t > 5) and explains at least a quarter of the phase residual's variance; else None."""
-    if f.size < 8 or np.ptp(f) <= 0:
+def _delay(f: np.ndarray, weighted_phase: np.ndarray, weights: np.ndarray) -> float | None:
+    """The delay tau [s] of phase = a - 2 pi f tau fitted (weighted least squares) to the phase error [rad] of
+    each line (``weighted_phase`` / ``weights``: the cost's entries are weight x phase), where the trend is
+    significant (t > 5) and explains at least a quarter of the phase error's weighted variance; else None."""
+    ok = weights > 0
+    if ok.sum() < 8 or np.ptp(f[ok]) <= 0:
         return None
-    x = np.column_stack([np.ones_like(f), -2 * np.pi * f])
-    coef, *_ = np.linalg.lstsq(x, phase, rcond=None)
-    fit = x @ coef
-    resid = phase - fit
+    f, w, y = f[ok], weights[ok], weighted_phase[ok]
+    x = np.column_stack([w, -2 * np.pi * f * w])  # the model a - 2 pi f tau, weighted like the entries
+    coef, *_ = np.linalg.lstsq(x, y, rcond=None)
+    resid = y - x @ coef
     s2 = float(resid @ resid) / max(f.size - 2, 1)
-    if noise is not None:
-        s2 = max(s2, noise**2)
-    cov = s2 * np.linalg.inv(x.T @ x)
+    cov = s2 * np.linalg.pinv(x.T @ x)
     t = abs(coef[1]) / math.sqrt(cov[1, 1]) if cov[1, 1] > 0 else 0.0
-    centred = phase - phase.mean()
+    mean = float(w @ y) / float(w @ w)
+    centred = y - w * mean
     explained = 1.0 - float(resid @ resid) / float(centred @ centred) if centred @ centred > 0 else 0.0
     return float(coef[1]) if t > 5 and explained > 0.25 else None
 

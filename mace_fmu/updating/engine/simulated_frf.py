@@ -120,7 +120,8 @@ class SimulatedFrequencyResponseCost:
 
     def residual_blocks(self) -> tuple[ResidualBlock, ...]:
         """One block per compared pair; with noise weights each entry's noise is 1."""
-        blocks = frequency_blocks(pairs=self.pairs, frequencies_hz=self.data.frequencies_hz)
+        blocks = frequency_blocks(pairs=self.pairs, frequencies_hz=self.data.frequencies_hz, weights=self.weights,
+                                  outputs=self.data.outputs, inputs=self.data.inputs)
         return blocks if self.weights is None else tuple(b.with_noise(1.0) for b in blocks)
 
     def entry_labels(self) -> list[str]:
