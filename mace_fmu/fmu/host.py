@@ -1,8 +1,11 @@
 """What our own FMI 2.0 host loops share: status names, callbacks that keep an FMU's messages instead of
-printing, and the repair of fmpy's logger proxy after a simulation with a logger of our own."""
+printing, the repair of fmpy's logger proxy after a simulation with a logger of our own, and the release of
+the process-wide state a pythonfmu FMU's binary would otherwise write into after freeing it at exit."""
 
 from __future__ import annotations
 
+import ctypes
+import os
 from contextlib import contextmanager
 from typing import Any, Iterator
 
@@ -67,3 +70,52 @@ def fmpy_logger_restored() -> Iterator[None]:
         callbacks = fmi2CallbackFunctions()
         callbacks.logger = _LASTING_FMPY_LOGGER[0]
         addLoggerProxy(byref(callbacks))
+
+
+def release_pythonfmu_state(library: ctypes.CDLL | str | os.PathLike) -> bool:
+    """Free the interpreter guard a pythonfmu FMU's binary keeps for the process, so that the process can exit.
+
+    pythonfmu's wrapper (0.6.4 on, upstream PR #213; ``PySlaveInstance.cpp`` of 0.7.0) keeps one
+    ``std::shared_ptr<PyState>`` in a static that its first ``fmi2Instantiate`` fills (a 128-byte heap block),
+    and an ``__attribute__((destructor))`` function, ``onLibraryUnload``, that empties it through the exported
+    ``finalizePythonInterpreter`` (``pyState = nullptr``). The wrapper defines ``STB_GNU_UNIQUE`` symbols, so
+    the loader never unloads it (fmpy's ``freeLibrary`` leaves it mapped) and the two run only at ``exit()``,
+    in the wrong order: the static's destructor, registered with ``__cxa_atexit`` when the binary was loaded,
+    runs first and frees the block; ``_dl_fini`` then runs ``onLibraryUnload``, whose assignment decrements the
+    reference count in the freed block (offset 8). When glibc has put the block in a bin, offset 8 is its
+    ``bk`` link: the next free that consolidates the bin aborts with "corrupted double-linked list". Seen in
+    the Dask workers of ``mace-fmu update fmu``, after their results were delivered (status 0, the right
+    answer); valgrind reports the access to the freed block in every run (``tests/fmu/test_pythonfmu_exit.py``).
+
+    Called while the interpreter runs, the same function empties the static and frees the block once; the
+    destructor and ``onLibraryUnload`` then find it empty and do nothing. In a Python host this is the whole
+    effect: the block's thread initialises Python only when no interpreter runs, so it has none to finalise,
+    and no instance holds the block (``createInstance`` stores it in its own argument, after the instance has
+    copied that argument). An instantiation afterwards fills the static again, so call this after every
+    instantiation of the binary, a failed one included, from the thread that instantiated
+    (``finalizePythonInterpreter`` takes no lock against ``createInstance``).
+
+    Parameters
+    ----------
+    library : ctypes.CDLL or path
+        The FMU's loaded binary (fmpy's ``FMU2Slave.dll``), or its path; a binary this process has not loaded
+        is not loaded by this call.
+
+    Returns
+    -------
+    bool
+        True if the binary is a pythonfmu wrapper and its state was released; False for any other binary
+        (a native FMU's, pythonfmu's Windows DLL, which does not export the function) or one not loaded.
+    """
+    if not isinstance(library, ctypes.CDLL):
+        try:  # RTLD_NOLOAD: the handle of the binary fmpy loaded, found by its path even if the file is gone
+            library = ctypes.CDLL(os.fspath(library), mode=os.RTLD_NOLOAD | os.RTLD_NOW | os.RTLD_LOCAL)
+        except (OSError, AttributeError):  # not loaded here, or a platform without dlopen's flags
+            return False
+    try:
+        release = library.finalizePythonInterpreter
+    except AttributeError:
+        return False
+    release.argtypes, release.restype = [], None
+    release()
+    return True

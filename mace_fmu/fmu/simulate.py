@@ -1,10 +1,11 @@
 """Run a MACE FMU (through fmpy) with a test signal on one input; inputs [V], outputs in their units.
 
-pythonfmu pitfall: its native wrapper has been seen to corrupt the heap of a process that loaded
-pythonfmu FMUs, so that Python aborts at exit ("corrupted double-linked list") after all work was
-done; deleting extracted FMU folders and loading more FMUs makes it likelier. The simulation
-therefore runs, by default, in a fresh worker process that returns the samples: the caller's
-process never loads the FMU's native code.
+pythonfmu pitfalls: its native wrapper writes into a block it has freed when a process that loaded
+it exits ("corrupted double-linked list" after all work was done, some runs in several); every
+simulation here releases that block at once (:func:`mace_fmu.fmu.host.release_pythonfmu_state`).
+The wrapper also releases the slave's Python objects a second time after a Python exception in it.
+The simulation therefore runs, by default, in a fresh worker process that returns the samples: the
+caller's process never loads the FMU's native code.
 """
 
 from __future__ import annotations
@@ -23,7 +24,7 @@ import numpy as np
 
 from mace_fmu.errors import MaceError
 from mace_fmu.fmu.archive import check_fmu
-from mace_fmu.fmu.host import fmpy_logger_restored, status_name
+from mace_fmu.fmu.host import fmpy_logger_restored, release_pythonfmu_state, status_name
 
 log = logging.getLogger(__name__)
 
@@ -148,7 +149,8 @@ def _simulate(fmu: str, table: np.ndarray, outputs: list[str], step_s: float) ->
     """fmpy's co-simulation with the input table, sampled at every step; MaceError with the FMU's logged reason.
 
     Debug logging is switched on because pythonfmu forwards an FMU's messages, errors included,
-    only then; messages of warning level and above go to this module's logger.
+    only then; messages of warning level and above go to this module's logger. A pythonfmu FMU's
+    process-wide state is released after the run (see the module docstring).
     """
     messages: list[str] = []
 
@@ -158,17 +160,33 @@ def _simulate(fmu: str, table: np.ndarray, outputs: list[str], step_s: float) ->
             messages.append(f"{status_name(status)}: {text}")
             log.log(logging.WARNING if status == 1 else logging.ERROR, "%s: %s", fmu, text)
 
-    try:
-        with fmpy_logger_restored():
-            result = fmpy.simulate_fmu(fmu, start_time=0.0, stop_time=float(table["time"][-1]),
-                                       output_interval=step_s, input=table, output=outputs, debug_logging=True,
-                                       logger=collect)
-    except Exception as exc:  # fmpy raises a bare Exception naming the FMI call and its status
-        raise MaceError(f"{fmu}: {exc}" + (f" FMU log: {' | '.join(messages)}" if messages else "")) from None
+    with tempfile.TemporaryDirectory(prefix="mace_fmu_sim_") as tmp:
+        folder, md = fmu, None
+        try:
+            md = fmpy.read_model_description(fmu)
+            if not os.path.isdir(fmu):  # unpacked here, not in simulate_fmu's own folder: its binary's path is known
+                folder = fmpy.extract(fmu, unzipdir=tmp)
+            with fmpy_logger_restored():
+                result = fmpy.simulate_fmu(folder, start_time=0.0, stop_time=float(table["time"][-1]),
+                                           output_interval=step_s, input=table, output=outputs, debug_logging=True,
+                                           logger=collect)
+        except Exception as exc:  # fmpy raises a bare Exception naming the FMI call and its status
+            raise MaceError(f"{fmu}: {exc}" + (f" FMU log: {' | '.join(messages)}" if messages else "")) from None
+        finally:  # a failed run has instantiated the FMU all the same
+            if md is not None and md.coSimulation is not None and "pythonfmu" in (md.generationTool or "").lower():
+                release_pythonfmu_state(_binary_path(folder, md.coSimulation.modelIdentifier))
     if len(result) != len(table) and messages:  # fmpy stops quietly at a discarded step: say why
         raise MaceError(f"{fmu}: the simulation stopped at t = {result['time'][-1]:g} s of "
                         f"{table['time'][-1]:g} s. FMU log: {' | '.join(messages)}")
     return result
+
+
+def _binary_path(folder: str, model_identifier: str) -> str:
+    """The path fmpy loads an extracted FMU's binary from (``fmpy.fmi1._FMU``), for this platform."""
+    from fmpy import platform, sharedLibraryExtension
+
+    directory = os.path.abspath(os.path.join(folder, "binaries", platform))
+    return os.path.join(directory, model_identifier + sharedLibraryExtension)
 
 
 _DONE = "mace-fmu worker: samples written"

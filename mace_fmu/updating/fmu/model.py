@@ -6,9 +6,13 @@ physical parameters at initialisation, any other FMU does whatever it does with 
 :class:`FmuFamily` maps parameter values to such a model (the engine's ``ModelFamily``).
 
 Each process loads (extracts and instantiates) an FMU once and reuses the instance, resetting it
-between runs (``fmi2Reset``): a Dask worker pays the load once however many runs it gets. FMUs
-written by pythonfmu are run only in worker processes (see :mod:`mace_fmu.fmu.simulate` for the
-heap corruption they have caused in the process that loaded them); native FMUs run anywhere.
+between runs (``fmi2Reset``): a Dask worker pays the load once however many runs it gets. After a
+pythonfmu FMU's instantiation the process-wide state its binary would write into after freeing it at
+exit is released (:func:`mace_fmu.fmu.host.release_pythonfmu_state`: the workers' "corrupted
+double-linked list"). FMUs written by pythonfmu are still run only in worker processes: their wrapper
+releases the slave's Python objects a second time after any Python exception in it
+(``PySlaveInstance::handle_py_exception``, then ``fmi2Reset`` or the destructor), a risk kept out of
+the caller's process; native FMUs run anywhere.
 """
 
 from __future__ import annotations
@@ -28,7 +32,7 @@ import numpy as np
 
 from mace_fmu.errors import MaceError
 from mace_fmu.fmu.archive import check_cosimulation_fmu
-from mace_fmu.fmu.host import collecting_callbacks, status_name
+from mace_fmu.fmu.host import collecting_callbacks, release_pythonfmu_state, status_name
 
 #: an output's gain as an update parameter, "gain:strain_strut2_y": the data are gain x the FMU's output
 GAIN_PREFIX = "gain:"
@@ -192,7 +196,11 @@ class _LoadedFmu:
 
         callbacks = collecting_callbacks(self.messages)  # errors reach this instance's messages, not stdout
         self._callbacks = callbacks  # kept alive as long as the instance
-        self.slave.instantiate(callbacks=callbacks)
+        try:
+            self.slave.instantiate(callbacks=callbacks)
+        finally:  # else the binary writes into a freed block at exit (a failed instantiation too)
+            if interface.written_by_pythonfmu:
+                release_pythonfmu_state(self.slave.dll)
         self._fresh = True
         self._record = self._whole_record_function() if whole_record else None
 
@@ -301,9 +309,9 @@ def _loaded(path: str, guid: str) -> _LoadedFmu:
     if interface.guid != guid:
         raise MaceError(f"{path}: the FMU changed while in use (GUID {interface.guid}, expected {guid})")
     if interface.written_by_pythonfmu and not _in_worker_process():
-        raise MaceError(f"{path}: FMUs written by pythonfmu are simulated in worker processes only (they "
-                        "have corrupted the heap of the process that loaded them): pass a Dask runner (CLI: "
-                        "--workers N or --scheduler ADDRESS), or export a native FMU")
+        raise MaceError(f"{path}: FMUs written by pythonfmu are simulated in worker processes only (their "
+                        "wrapper releases a slave's Python objects twice after an error in it): pass a Dask runner "
+                        "(CLI: --workers N or --scheduler ADDRESS), or export a native FMU")
     return _LoadedFmu(interface)
 
 

@@ -120,8 +120,8 @@ def update_fmu(*, family: FmuFamily, cost: Cost, start: Mapping[str, float], sta
                         + ", ".join(f"{n} = {start[n]:g}" for n in bad))
     if family.interface.written_by_pythonfmu:
         if runner is map:
-            raise MaceError(f"{family.interface.path}: FMUs written by pythonfmu run in worker processes only (they "
-                            "have corrupted the heap of the process that loaded them): pass a Dask runner "
+            raise MaceError(f"{family.interface.path}: FMUs written by pythonfmu run in worker processes only (their "
+                            "wrapper releases a slave's Python objects twice after an error in it): pass a Dask runner "
                             "(runner=DaskRunner(...); the CLI always uses one), or export a native FMU")
         family = dataclasses.replace(family, runner=runner)  # every run of it, the base point's too, goes there
     outside = [f"{n} = {start[n]:.6g} (declared [{lo:.6g}, {hi:.6g}])" for n in names

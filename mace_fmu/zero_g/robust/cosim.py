@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from mace_fmu.fmu.host import collecting_callbacks
+from mace_fmu.fmu.host import collecting_callbacks, release_pythonfmu_state
 from mace_fmu.zero_g.robust.loop import LoopSpec, LoopVerdict, judge
 
 
@@ -65,7 +65,11 @@ def run_fmu_loop(unzipped: str | os.PathLike, *, loop: LoopSpec, compensator: Sa
     failure = ""
     # one BLAS thread: the compensator's products then sum in one order, serial or on a Dask worker
     with threadpool_limits(limits=1, user_api="blas"):
-        fmu.instantiate(callbacks=callbacks)
+        try:
+            fmu.instantiate(callbacks=callbacks)
+        finally:  # else a pythonfmu binary writes into a freed block at exit (a failed instantiation too)
+            if "pythonfmu" in (md.generationTool or "").lower():
+                release_pythonfmu_state(fmu.dll)
         try:
             fmu.setupExperiment(startTime=0.0)
             fmu.enterInitializationMode()
