@@ -219,7 +219,7 @@ def test_cli_updates_an_fmu_parameter_and_writes_it_by_the_fmus_name(capsys, fmu
     code, out, err = run_cli(capsys, ["update", "fmu", str(fmu), "--data", str(logged), "--map", str(channel_map),
                                    "--update", "E_lexan_center", "--cost", "time", "--start", str(start),
                                    "--workers", "1", "-o", str(tmp_path / "o"), "--hold-input", UNRECORDED])
-    assert code in (0, 3), err  # 3: written, but the verdict is not converged (see convergence.toml)
+    assert code == 0, err  # converged; whether the model explains the data is convergence.toml's verdict
     written = tomllib.loads((tmp_path / "o" / "parameters.toml").read_text())
     assert written["provenance"]["configuration"] == "1g" and written["provenance"]["fitted_to"] == fmu.name
     values = written["values"]
