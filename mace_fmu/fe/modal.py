@@ -89,6 +89,12 @@ class ModesView:
         mode numbers ("mode 1")."""
         return self.modes.labels
 
+    @property
+    def rank_frequencies_hz(self) -> np.ndarray:
+        """The frequencies [Hz] per-mode data keyed by rank (a violin family's damping ratios) are ranked by: the
+        modes' own, unless they continue other modes (:attr:`mace_fmu.fe.modes.StructureModes.reference_frequencies_hz`)."""
+        return self.frequencies_hz
+
 
 def solve_modes(stiffness: np.ndarray | sparse.sparray, mass: np.ndarray | sparse.sparray, constraints: Constraints,
                 dofs: DofMap, cd_frames: np.ndarray, *, max_hz: float | None = None,

@@ -5,6 +5,7 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import Literal
 
 import numpy as np
 
@@ -18,15 +19,20 @@ from mace_fmu.fe.beam import MassKind
 from mace_fmu.fe.constraints import Constraints, build_constraints
 from mace_fmu.fe.labels import label_modes, rigid_body_vectors
 from mace_fmu.fe.modal import Modes, ModesView, solve_modes
+from mace_fmu.fe.pairing import continue_modes
 from mace_fmu.fe.preload import Preload, PreloadKind, large_displacement_preload, linear_preload
 from mace_fmu.parameters.sets import ParameterSet, deck_fingerprint, fe_overrides, naming_the_file, parameter_names
 from mace_fmu.structure.build import Structure, build_structure
 from mace_fmu.structure.file import Configuration, StructureFile, bundled_deck_path, structure_file_for
 from mace_fmu.util.collector import collector_paused
-from mace_fmu.util.frequency import DEFAULT_MAX_HZ
+from mace_fmu.util.frequency import DEFAULT_MAX_HZ, ZERO_HZ
 from mace_fmu.util.progress import ProgressCallback
 from mace_fmu.util.threads import single_blas_thread
 
+
+
+#: a re-solve that continues other modes looks this much further (in frequency and in count) for them
+_CONTINUATION_REACH = 1.5
 
 
 @dataclass(frozen=True)
@@ -55,6 +61,15 @@ class StructureModes(ModesView):
     constraints: Constraints | None = None
     #: the parameter set the modes were computed with (its moduli and springs are in ``structure.deck``)
     parameters: ParameterSet | None = None
+    #: the frequencies [Hz] of the modes these continue (a parameter set's re-solve: mode k is the physical mode
+    #: the nominal structure's mode k became, :func:`~mace_fmu.fe.pairing.continue_modes`); data keyed by a
+    #: mode's rank (a violin family's damping ratios) follow it by these. None: modes of their own
+    reference_frequencies_hz: np.ndarray | None = None
+
+    @property
+    def rank_frequencies_hz(self) -> np.ndarray:
+        """The frequencies [Hz] per-mode data are ranked by: the continued modes' where these continue others."""
+        return self.reference_frequencies_hz if self.reference_frequencies_hz is not None else self.frequencies_hz
 
     @property
     def configuration(self) -> Configuration:
@@ -224,7 +239,8 @@ def compute_modes(deck: Deck | str | os.PathLike | None = None, *, configuration
                   preload: PreloadKind = "large", mass: MassKind = "lumped", max_hz: float | None = None,
                   parameters: ParameterSet | None = None,
                   structure_file: StructureFile | str | os.PathLike | None = None,
-                  progress: ProgressCallback | None = None) -> StructureModes:
+                  progress: ProgressCallback | None = None,
+                  continue_from: StructureModes | Literal["nominal"] | None = "nominal") -> StructureModes:
     """Modes of the 1-g or 0-g structure of a deck, labelled, with the structure's mass properties.
 
     Parameters
@@ -252,6 +268,13 @@ def compute_modes(deck: Deck | str | os.PathLike | None = None, *, configuration
     progress : callable, optional
         Called with a :class:`~mace_fmu.util.progress.Step` after each preload increment; nothing is
         printed (the increments are also logged at DEBUG level).
+    continue_from : StructureModes, "nominal" or None
+        With ``parameters`` that change moduli, springs or masses: the modes these continue. "nominal" (the
+        default): the deck's own modes, solved first; mode k of the result is then the physical mode the
+        nominal mode k became, with its label, as an FMU's parameter route keys them
+        (:func:`~mace_fmu.fe.pairing.continue_modes`), so that an FMU exported with the set equals the
+        nominal FMU with the set given through FMI. None: the re-solve's own modes, in frequency order and
+        labelled afresh.
 
     Returns
     -------
@@ -309,13 +332,25 @@ def compute_modes(deck: Deck | str | os.PathLike | None = None, *, configuration
     if auto:
         modal, removed_modal = constrain_singular_dofs(modal, stiffness, model.mass)
         removed = tuple(dict.fromkeys(removed + removed_modal))
+    reference = None
+    if overrides and continue_from is not None:
+        reference = continue_from if isinstance(continue_from, StructureModes) else compute_modes(
+            deck, configuration=configuration, preload=preload, mass=mass, max_hz=max_hz, structure_file=file,
+            continue_from=None)
     wanted_hz, wanted_count = _modes_to_find(struct.deck, struct, max_hz)
-    modes = _requested_modes(solve_modes(stiffness, model.mass, modal, model.dofs, model.cd_frames,
-                                         wanted_hz=wanted_hz, wanted_count=wanted_count),
-                             struct.deck, struct, max_hz)
+    if reference is not None:  # the continuations may have moved above the range: look further
+        wanted_hz = _CONTINUATION_REACH * float(np.max(np.abs(reference.frequencies_hz)))
+        wanted_count = _CONTINUATION_REACH * len(reference.frequencies_hz)
+    modes = solve_modes(stiffness, model.mass, modal, model.dofs, model.cd_frames, wanted_hz=wanted_hz,
+                        wanted_count=wanted_count)
+    if reference is None:
+        modes = _requested_modes(modes, struct.deck, struct, max_hz)
     modes = label_modes(model, modes, struct.spec, reference=props.reference_point_m,
                         state=pre.state if pre is not None else None,
                         bar_forces=pre.bar_forces if pre is not None else None)
+    if reference is not None:
+        modes = continue_modes(reference.modes, reference.model, modes, zero_hz=ZERO_HZ)
     return StructureModes(structure=struct, model=model, modes=modes, mass_properties=props, preload=pre,
                           auto_constrained=removed, constraints=modal,
-                          parameters=parameters if parameters is not None and len(parameters) else None)
+                          parameters=parameters if parameters is not None and len(parameters) else None,
+                          reference_frequencies_hz=None if reference is None else reference.rank_frequencies_hz)

@@ -88,3 +88,64 @@ def carry_labels(reference: Modes, reference_model: FEModel, other: Modes) -> Mo
     for i, j in zip(rows, cols):
         labels[j] = reference.labels[i]
     return dataclasses.replace(other, labels=tuple(labels))
+
+
+def continue_modes(reference: Modes, reference_model: FEModel, other: Modes, *, zero_hz: float) -> Modes:
+    """The modes of ``other`` (a re-solve with more modes than ``reference``) that continue ``reference``'s, in
+    its order and with its labels: mode k of the result is the physical mode reference mode k became.
+
+    The zero-frequency cluster (rigid bodies, mechanisms: a basis of their span, labelled by motion, whatever
+    the stiffness) is the re-solve's own; each flexible mode is the re-solve's mode of the one-to-one pairing
+    with the largest total MAC (mass-weighted by the reference). An FMU's parameter route pairs its re-analysed
+    modes the same way (:func:`~mace_fmu.iomodel.reanalysis.ritz_reanalysis`), and keys its per-mode data
+    (damping ratios, frequency scales) by the index of the mode continued: a re-solve in frequency order with
+    fresh labels handed them to other modes wherever two modes crossed (a violin and a bending mode, two
+    bending modes renamed 3rd and 4th).
+
+    Parameters
+    ----------
+    reference : Modes
+        The modes to continue (the nominal structure's).
+    reference_model : FEModel
+        Their model (its mass weights the MAC).
+    other : Modes
+        The re-solve's modes, enough of them that every reference mode's continuation is among them.
+    zero_hz : float
+        Modes below this [Hz] form the zero-frequency cluster.
+
+    Returns
+    -------
+    Modes
+        ``len(reference)`` modes of ``other``: its zero cluster, then the continuations, in the reference's order.
+
+    Raises
+    ------
+    MaceError
+        When the two zero-frequency clusters differ in size (a parameter that frees or holds a mechanism).
+    """
+    import dataclasses
+
+    from scipy.optimize import linear_sum_assignment
+
+    from mace_fmu.errors import MaceError
+
+    zero_ref = np.abs(reference.frequencies_hz) < zero_hz
+    zero_other = np.abs(other.frequencies_hz) < zero_hz
+    if zero_ref.sum() != zero_other.sum():
+        raise MaceError(f"the re-solve has {int(zero_other.sum())} zero-frequency modes, the nominal structure "
+                        f"{int(zero_ref.sum())}: a parameter value that frees or holds a rigid-body motion or a "
+                        "mechanism")
+    flex_ref, flex_other = np.flatnonzero(~zero_ref), np.flatnonzero(~zero_other)
+    if len(flex_other) < len(flex_ref):
+        raise MaceError(f"the re-solve found {len(flex_other)} flexible modes, fewer than the {len(flex_ref)} it "
+                        "must continue")
+    mac = mac_matrix(reference, reference_model, other)[np.ix_(flex_ref, flex_other)]
+    rows, cols = linear_sum_assignment(-mac)
+    order = np.empty(len(reference), dtype=int)
+    order[np.flatnonzero(zero_ref)] = np.flatnonzero(zero_other)
+    order[flex_ref[rows]] = flex_other[cols]
+    labels = list(other.labels[k] for k in order) if other.labels else [""] * len(order)
+    for i in flex_ref:
+        labels[i] = reference.labels[i] if reference.labels else labels[i]
+    return dataclasses.replace(other, frequencies_hz=other.frequencies_hz[order], shapes=other.shapes[:, order],
+                               labels=tuple(labels))

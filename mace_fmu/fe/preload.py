@@ -284,6 +284,57 @@ def tangent_sensitivity(model: FEModel, preload: Preload, *, bar_mask: np.ndarra
     return dk if dk_springs is None else sparse.csr_array(dk + sparse.csr_array(dk_springs))
 
 
+def linear_tangent_sensitivity(model: FEModel, preload: Preload, *, bar_mask: np.ndarray | None = None,
+                               dk_natural: np.ndarray | None = None, dk_springs: sparse.sparray | None = None,
+                               load_change: np.ndarray | None = None,
+                               solve: Callable[[np.ndarray], np.ndarray] | None = None) -> sparse.csr_array:
+    """d K_T / d(ln p) about a linear preload, its static solution re-solved (sparse, basic).
+
+    The linear preload's tangent is K + K_sigma(N), N = K_n B u the bar forces of the linear solution u = K^-1 F
+    on the undeformed geometry (:func:`linear_preload`). A stiffness change d K (bars ``bar_mask`` by
+    ``dk_natural``, springs by ``dk_springs``; a mass's weight ``load_change``) moves the solution by
+    d u = K^-1 (d F - d K u), and the forces by d N = d K_n B u + K_n B d u, which K_sigma is linear in: the
+    derivative is exact (d K + K_sigma(d N)). Holding the forces instead (the material part alone) left the
+    1-g FMU with a linear preload 0.22 % off the re-solve at +-5 % of every modulus at once. ``solve``
+    (:func:`linear_preload_solver`) reuses one factorisation of the reduced K for many parameters.
+    """
+    if preload.kind != "linear" or preload.constraints is None:
+        raise MaceError("linear_tangent_sensitivity: needs a linear preload with its constraints")
+    n = model.dofs.size
+    bars = model.bars
+    _, b = deformation_jacobian(bars, preload.state)
+    idx = bar_dof_indices(bars)
+    u = preload.displacements
+    deformation = np.einsum("nki,ni->nk", b, u[idx])
+    dk = sparse.csr_array((n, n))
+    dn_own = np.zeros_like(preload.bar_forces)
+    df = np.zeros(n)
+    if dk_natural is not None:
+        mask = np.asarray(bar_mask, dtype=bool)
+        dn_own[mask] = np.einsum("nij,nj->ni", dk_natural, deformation[mask])
+        f_e = np.einsum("nki,nk->ni", b[mask], dn_own[mask])
+        df += np.bincount(idx[mask].ravel(), weights=f_e.ravel(), minlength=n)
+        dk_bars = np.zeros_like(bars.k_natural)
+        dk_bars[mask] = dk_natural
+        dk = dk + material_tangent(dataclasses.replace(bars, k_natural=dk_bars), preload.state, n)[1]
+    if dk_springs is not None:
+        df += dk_springs @ u
+        dk = dk + sparse.csr_array(dk_springs)
+    if load_change is not None:
+        df -= load_change
+    t = preload.constraints.transform
+    du = -(t @ (solve or linear_preload_solver(model, preload))(t.T @ df))
+    dn = dn_own + np.einsum("nij,nj->ni", bars.k_natural, np.einsum("nki,ni->nk", b, du[idx]))
+    geometric = tangent_parts(bars, preload.state, n, natural_forces=dn).geometric
+    return sparse.csr_array(dk + geometric)
+
+
+def linear_preload_solver(model: FEModel, preload: Preload) -> Callable[[np.ndarray], np.ndarray]:
+    """Solve with the linear preload's reduced stiffness T^T K T (factored once): its static solution's matrix."""
+    t = preload.constraints.transform
+    return _factor(t.T @ model.stiffness @ t, preload.constraints)
+
+
 def preload_solver(preload: Preload) -> Callable[[np.ndarray], np.ndarray]:
     """Solve with the preload's reduced tangent T^T K_T T (factored once): for :func:`tangent_sensitivity`."""
     t = preload.constraints.transform

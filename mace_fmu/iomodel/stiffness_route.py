@@ -49,7 +49,8 @@ from mace_fmu.fe.corotational import BarState, material_tangent
 from mace_fmu.fe.factor import factorize
 from mace_fmu.fe.modal import Modes
 from mace_fmu.fe.modes import gravity_field
-from mace_fmu.fe.preload import Preload, geometric_stiffness, preload_solver, tangent_sensitivity
+from mace_fmu.fe.preload import (Preload, geometric_stiffness, linear_preload_solver, linear_tangent_sensitivity,
+                                 preload_solver, tangent_sensitivity)
 from mace_fmu.iomodel.modal_ss import modal_data
 from mace_fmu.iomodel.volts import VoltsModel
 from mace_fmu.parameters.kinds import MASS, MODULUS, SPRING
@@ -72,6 +73,7 @@ SHIFT_FRACTION = 1e-3
 RIGID_SHARE = 1e-6
 #: kinds of output rows (ParametricSystem) that the corrections are projected on
 ROW_KINDS = ("disp", "rate", "motion", "acc")
+
 
 
 @dataclass(frozen=True)
@@ -120,7 +122,7 @@ def material_sensitivity(fe: FEModel, deck, preload: Preload | None, mid: int, *
                     for i, length in zip(ids[mine].tolist(), fe.bars.lengths0[mine].tolist())]).reshape(-1, 7, 7)
     if _redistributes(preload) and not forces_held:
         # the gravity load redistributes (suspension cables, springs): the preload re-solved to first order
-        return tangent_sensitivity(fe, preload, bar_mask=mine, dk_natural=dkn, solve=solve)
+        return _preload_sensitivity(fe, preload)(fe, preload, bar_mask=mine, dk_natural=dkn, solve=solve)
     bars = dataclasses.replace(fe.bars, ids=ids[mine], node_a=fe.bars.node_a[mine], node_b=fe.bars.node_b[mine],
                                frames0=fe.bars.frames0[mine], lengths0=fe.bars.lengths0[mine], k_natural=dkn)
     if preload is not None:
@@ -132,8 +134,18 @@ def material_sensitivity(fe: FEModel, deck, preload: Preload | None, mid: int, *
 
 
 def _redistributes(preload: Preload | None) -> bool:
-    """A large-displacement preload with its constraints: a stiffness change moves the preload itself."""
-    return preload is not None and preload.kind == "large" and preload.constraints is not None
+    """A preload with its constraints: a stiffness change moves the preload itself."""
+    return preload is not None and preload.constraints is not None
+
+
+def _preload_sensitivity(fe: FEModel, preload: Preload):
+    """The preload's total derivative of its kind: the large one's (updated geometry) or the linear one's."""
+    return tangent_sensitivity if preload.kind == "large" else linear_tangent_sensitivity
+
+
+def _preload_solver(fe: FEModel, preload: Preload):
+    """One factorisation for all of a preload's sensitivities."""
+    return preload_solver(preload) if preload.kind == "large" else linear_preload_solver(fe, preload)
 
 
 def stiffness_sensitivities(model: VoltsModel, *, only: Sequence[str] | None = None) -> list[StiffnessSensitivity]:
@@ -144,7 +156,7 @@ def stiffness_sensitivities(model: VoltsModel, *, only: Sequence[str] | None = N
     names = parameter_names(deck, modes.structure.file)
     material_name = {mid: name for name, mid in names.materials.items()}
     spring_name = {sid: name for name, sid in names.springs.items()}
-    solve = preload_solver(pre) if _redistributes(pre) else None
+    solve = _preload_solver(fe, pre) if _redistributes(pre) else None
     out = []
     for mid in sorted({deck.pbars[b.pid].mid for b in deck.bars.values()}):
         name = MODULUS.named(material_name[mid])
@@ -161,8 +173,8 @@ def stiffness_sensitivities(model: VoltsModel, *, only: Sequence[str] | None = N
             continue
         e = sparse.csr_array(fe.spring_vectors[[row]])  # (1, n_dof)
         held = sparse.csr_array(k * (e.T @ e))
-        total = sparse.csr_array(tangent_sensitivity(fe, pre, dk_springs=held, solve=solve)) if _redistributes(pre) \
-            else held
+        total = sparse.csr_array(_preload_sensitivity(fe, pre)(fe, pre, dk_springs=held, solve=solve)) \
+            if _redistributes(pre) else held
         out.append(StiffnessSensitivity(name, float(k), f"stiffness of {spring_name[sid]} (CELAS2 {sid}) [N/m]; "
                                         "reanalysis", total, held))
     for short, eid in names.masses.items():
@@ -184,10 +196,11 @@ def _weight_stiffness(modes, dm: sparse.csr_array, solve) -> sparse.csr_array:
     if pre is None or struct.preload is None:
         return sparse.csr_array(dm.shape)
     load = dm @ gravity_field(struct.deck, modes.model, struct.preload.load)
-    if _redistributes(pre):
-        return sparse.csr_array(tangent_sensitivity(modes.model, pre, load_change=load, solve=solve))
     if pre.constraints is None:
         return sparse.csr_array(dm.shape)
+    if pre.kind == "large":
+        return sparse.csr_array(tangent_sensitivity(modes.model, pre, load_change=load, solve=solve))
+    # the linear preload: the load's change moves the static solution, whose geometric stiffness is linear in it
     return sparse.csr_array(geometric_stiffness(modes.model, pre.constraints, load))
 
 

@@ -348,7 +348,7 @@ def volts_model(modes: StructureModes | ModalStructure, *, parameters: Parameter
         max_hz = float(np.max(modes.frequencies_hz))
     _check(max_hz >= flexible.min(),
            f"max_hz = {max_hz} Hz is below the first flexible mode ({flexible.min():.3f} Hz); allowed: >= that")
-    zeta = modal_damping(modes.labels, modes.frequencies_hz, instruments.damping)
+    zeta = modal_damping(modes.labels, modes.rank_frequencies_hz, instruments.damping)
     grids = modes.modes.dofs.grid_ids
     inputs, outputs = signals.inputs, signals.outputs
     motion_grids = grids if signals.motion_grids == "all" else signals.motion_grids

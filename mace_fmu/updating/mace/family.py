@@ -107,8 +107,9 @@ class MaceFamily:
         if key in self._cache:
             self._cache.move_to_end(key)
             return self._cache[key]
+        # the family carries labels from its own reference (the update's start), not from the deck's nominal
         modes = compute_modes(self.deck, configuration=self.configuration, preload=self.preload, max_hz=self.max_hz,
-                              parameters=params)
+                              parameters=params, continue_from=None)
         if self._reference is not None:  # labels (and the damping ratios keyed by them) follow the mode
             ref = self._reference.volts.structure_modes
             modes = dataclasses.replace(modes, modes=carry_labels(ref.modes, ref.model, modes.modes))
@@ -186,7 +187,8 @@ class MaceFamily:
         out = dict(values)
         for _ in range(3):
             fresh = volts_model(compute_modes(self.deck, configuration=self.configuration, preload=self.preload,
-                                              max_hz=self.max_hz, parameters=self.parameter_set(out))).plant
+                                              max_hz=self.max_hz, parameters=self.parameter_set(out),
+                                              continue_from=None)).plant
             differ = np.flatnonzero(fresh.damping != carried)
             if not differ.size:
                 return out
@@ -225,5 +227,5 @@ class MaceBasis:
     def modes_of(self, values: Values) -> tuple[np.ndarray, np.ndarray]:
         fam = self.family
         modes = compute_modes(fam.deck, configuration=fam.configuration, preload=fam.preload, max_hz=1.1 * fam.max_hz,
-                              parameters=fam.parameter_set(values))
+                              parameters=fam.parameter_set(values), continue_from=None)
         return modes.frequencies_hz, self._phi0.T @ self._mass @ modes.modes.shapes
