@@ -4,11 +4,14 @@ The wheel is built from the source tree exactly as ``pip install .`` builds it (
 the pyproject's own setuptools), then installed with ``--no-deps`` into a new virtual environment
 whose dependencies come from this environment's site-packages (a path entry, so none of its
 ``.pth`` files, and with them no editable install of mace-fmu, is active). ``mace-fmu build`` then
-runs from an unrelated folder, with the bundled deck and data read from the installed package.
+runs from an unrelated folder, with the bundled deck and data read from the installed package, as on a
+fresh machine: zig's cache and the runtime cache empty. The wheel carries the native runtime's binaries
+(compiled by setup.py when it was built), so that build compiles nothing (issue 51, item 8).
 """
 
 from __future__ import annotations
 
+import os
 import re
 import site
 import subprocess
@@ -40,6 +43,14 @@ def test_non_editable_install_runs_the_main_job_from_another_folder(tmp_path: Pa
             "mace_fmu/fmu/slave.py", "viewer/html.py", "modelica_like/system.py",
             "mace_fmu/fmu/native/c/controller/mace_discrete.c"} <= names
     assert "License-Expression: MIT" in metadata.splitlines()
+    # the runtime's binaries, compiled by the build: four variants of five platforms, for these sources
+    from mace_fmu.fmu.native import compile as runtime
+    from mace_fmu.fmu.native.platforms import PLATFORMS
+
+    prebuilt = {n.rsplit("/", 1)[1] for n in names if n.startswith("mace_fmu/fmu/native/prebuilt/")}
+    assert len(prebuilt) == 20, sorted(prebuilt)
+    assert prebuilt == {runtime._file_name(p, runtime._cache_key(p, c_files, runtime.sources_digest(
+        runtime.source_files(c_files)))) for c_files in runtime.VARIANTS.values() for p in PLATFORMS}
 
     venv = tmp_path / "venv"
     subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True)
@@ -57,9 +68,13 @@ def test_non_editable_install_runs_the_main_job_from_another_folder(tmp_path: Pa
     where = subprocess.run([str(python), "-c", "import mace_fmu; print(mace_fmu.__file__)"], cwd=work,
                            check=True, capture_output=True, text=True).stdout.strip()
     assert Path(where).is_relative_to(Path(purelib)), where
+    fresh = {"ZIG_GLOBAL_CACHE_DIR": str(tmp_path / "zig-cache"), "MACE_FMU_CACHE_DIR": str(tmp_path / "mace-cache")}
     run = subprocess.run([str(venv / "bin" / "mace-fmu"), "build"], cwd=work, capture_output=True, text=True,
-                         timeout=900)
+                         timeout=900, env={**os.environ, **fresh})
     assert run.returncode == 0, run.stderr
+    # nothing compiled: no line of a compilation, nothing in zig's cache or the runtime cache
+    assert "native FMU runtime" not in run.stderr, run.stderr
+    assert not any(Path(folder).exists() and any(Path(folder).iterdir()) for folder in fresh.values())
     assert "Table 5.1, 0-g column" in run.stdout and "Table 3.15" in run.stdout
     assert sorted(p.name for p in (work / "fmus").iterdir()) == sorted(
         f"MACE_{s}_{k}.fmu" for s in ("1g", "0g") for k in ("native", "native_fmi3", "pythonfmu"))

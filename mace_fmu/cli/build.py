@@ -4,25 +4,25 @@ from __future__ import annotations
 
 import argparse
 
-from mace_fmu.cli.common import deck_option, model_variant, parameters, parameters_option, progress, progress_bar
+from mace_fmu.cli.common import (deck_option, model_variant, parameters, parameters_option, progress, progress_bar,
+                                 step_lines)
 from mace_fmu.cli.preflight import output_option
 from mace_fmu.util.frequency import hz_text
 
 
 def cmd_build(args: argparse.Namespace) -> int:
-    # imported here, as in the other commands, so that `mace-fmu modes` starts without control/pythonfmu
+    # imported here, as in the other commands, so that `mace-fmu modes` starts without control/pythonfmu; each
+    # stage's imports come after its progress line, as they take seconds together on a busy machine
+    progress(f"deck {args.deck}")
     from mace_fmu.deck.reader import read_deck
-    from mace_fmu.fe.modes import DEFAULT_MAX_HZ, compute_modes
-    from mace_fmu.fmu.export import export_fmu
-    from mace_fmu.fmu.naming import fmu_model_name
-    from mace_fmu.iomodel.parametric_data import parametric_arrays
-    from mace_fmu.iomodel.volts import volts_model
 
     deck = read_deck(args.deck)
     params = parameters(args)
     if params is not None:
         progress(f"parameter set {args.parameters} ({len(params)} values)")
     progress("0-g modes (suspension removed, linear)")
+    from mace_fmu.fe.modes import DEFAULT_MAX_HZ, compute_modes
+
     # the modes the FMUs are built from: up to 250 Hz, the thesis's cut-off, whatever a deck's EIGRL says
     m0 = compute_modes(deck, configuration="0g", max_hz=DEFAULT_MAX_HZ, parameters=params,
                        structure_file=args.structure_file)
@@ -35,14 +35,20 @@ def cmd_build(args: argparse.Namespace) -> int:
     print(thesis_tables(m0, results))
     print()
     for configuration, modes in (("1g", results["large"]), ("0g", m0)):
-        progress(f"{configuration} volts-volts model and FMUs")
+        progress(f"{configuration} volts-volts model and its parametric arrays")
+        from mace_fmu.fmu.export import export_fmu
+        from mace_fmu.fmu.naming import fmu_model_name
+        from mace_fmu.iomodel.parametric_data import parametric_arrays
+        from mace_fmu.iomodel.volts import volts_model
+
         model = volts_model(modes, parameters=params)
         arrays = parametric_arrays(model)  # what every runtime's FMU carries: computed once
         for runtime, fmi_version in (("native", 2), ("native", 3), ("pythonfmu", 2)):
             name = fmu_model_name(configuration, runtime=runtime, fmi_version=fmi_version, variant=model_variant(args))
+            progress(f"{runtime} FMU (FMI {fmi_version}) {name}.fmu")
             path = export_fmu(model, runtime=runtime, fmi_version=fmi_version, out_dir=args.out, name=name,
-                              arrays=arrays)
-            print(f"wrote {path}")
+                              arrays=arrays, progress=step_lines)
+            print(f"wrote {path}", flush=True)  # beside the progress lines on stderr, in their order
     print()
     print(low_modes(results))
     return 0

@@ -32,6 +32,12 @@ def progress(message: str) -> None:
     print(f"  {message}", file=sys.stderr, flush=True)
 
 
+def step_lines(step: Step) -> None:
+    """A progress callback that writes every step as one line on stderr, ``task: detail``: for steps of seconds
+    to minutes each (the native runtime's compilation), where a log needs each one and a bar would say less."""
+    progress(f"{step.task}: {step.detail}" if step.detail else f"{step.task} ({step.done} of {step.total})")
+
+
 @contextlib.contextmanager
 def progress_bar(*, task_lines: bool = False) -> Iterator[ProgressCallback]:
     """A progress callback that draws one tqdm bar on stderr (none when stderr is not a terminal).

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from mace_fmu.cli.common import progress
+from mace_fmu.cli.common import progress, step_lines
 from mace_fmu.cli.export import platforms_option, toolchain_warnings_as_lines
 from mace_fmu.cli.preflight import output_option
 from mace_fmu.errors import MaceError
@@ -46,7 +46,7 @@ def cmd_export_controller(args: argparse.Namespace) -> int:
         controller = lqg_controller(step_s=args.step)
     with toolchain_warnings_as_lines():
         path = export_controller_fmu(controller, out_dir=args.out, name=args.name, fmi_version=args.fmi_version,
-                                     platforms=args.platforms)
+                                     platforms=args.platforms, progress=step_lines)
     print(f"wrote {path} ({controller.a.shape[0]} states, sample time {controller.sample_time_s} s, inputs "
           f"{', '.join(controller.inputs)}, outputs {', '.join(controller.outputs)})")
     return 0

@@ -9,7 +9,8 @@ import warnings
 from collections.abc import Iterator
 from pathlib import Path
 
-from mace_fmu.cli.common import CONFIGURATIONS, deck_option, model_options, model_variant, progress, volts
+from mace_fmu.cli.common import (CONFIGURATIONS, deck_option, model_options, model_variant, progress, step_lines,
+                                 volts)
 from mace_fmu.cli.preflight import output_option
 from mace_fmu.errors import MaceError
 
@@ -83,7 +84,7 @@ def cmd_export(args: argparse.Namespace) -> int:
 
     with toolchain_warnings_as_lines():
         path = export_fmu(model, runtime=args.runtime, fmi_version=args.fmi_version, out_dir=args.out, name=name,
-                          frequency_bounds=bounds, platforms=args.platforms)
+                          frequency_bounds=bounds, platforms=args.platforms, progress=step_lines)
     print(f"wrote {path}")
     return 0
 

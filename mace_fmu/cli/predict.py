@@ -7,7 +7,7 @@ import json
 import sys
 from pathlib import Path
 
-from mace_fmu.cli.common import deck_option, parameters, parameters_option, progress, progress_bar
+from mace_fmu.cli.common import deck_option, parameters, parameters_option, progress, progress_bar, step_lines
 from mace_fmu.cli.preflight import output_option
 from mace_fmu.errors import MaceError
 
@@ -44,7 +44,7 @@ def cmd_predict(args: argparse.Namespace) -> int:
         from mace_fmu.fmu.export import export_fmu
 
         paths["fmu"] = export_fmu(prediction.model, runtime=args.runtime, out_dir=out, name=name,
-                                  frequency_bounds=prediction.frequency_bounds)
+                                  frequency_bounds=prediction.frequency_bounds, progress=step_lines)
     if out is not None:
         paths.update(write_prediction(prediction, out))
     if args.json:

@@ -6,7 +6,7 @@ import argparse
 import tempfile
 from pathlib import Path
 
-from mace_fmu.cli.common import parameters, progress, volts
+from mace_fmu.cli.common import parameters, progress, step_lines, volts
 from mace_fmu.errors import MaceError
 
 
@@ -39,7 +39,7 @@ def export_ssp(args: argparse.Namespace) -> int:
         from mace_fmu.fmu.export import export_fmu
 
         fmu = export_fmu(model, runtime=args.runtime, fmi_version=2, out_dir=tmp, name=name, frequency_bounds=bounds,
-                         platforms=args.platforms)
+                         platforms=args.platforms, progress=step_lines)
         import fmpy
 
         tunable = [v.name for v in fmpy.read_model_description(str(fmu)).modelVariables

@@ -104,6 +104,8 @@ def cmd_fmu_update(args: argparse.Namespace) -> int:
                           noise_rms_fraction=noise_fraction, gain_uncertainty=_gain_uncertainty(args.gain_uncertainty),
                           bands_hz=[tuple(band) for band in args.band_hz], averages=args.averages,
                           frf_floor=None if args.frf_floor_percent is None else args.frf_floor_percent / 100.0)
+    for note in problem.notes:
+        _say(note)
     where = f"the Dask cluster at {args.scheduler}" if args.scheduler else \
         f"{args.workers or 'one per core'} local worker processes"
     gains = len(problem.family.gain_outputs)

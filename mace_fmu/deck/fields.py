@@ -197,19 +197,44 @@ def split_cards(lines: Iterable[tuple[int, str]], file: str) -> list[RawCard]:
             raise DeckError("small-field continuation after an odd number of large-field lines (expected a '*' "
                             "continuation to complete the logical line)", file=file, line=number, card=card.name)
         if free and len(data) > capacity:
-            extra = data[capacity:]
-            # One extra item is allowed: it is the field-10 continuation marker.
-            if len(extra) > 1 or (extra[0] and extra[0][0] not in "+*"):
-                raise DeckError(f"free-field line has {len(data)} fields after field 1 (expected at most "
-                                f"{capacity} data fields and a continuation marker)",
-                                file=file, line=number, card=card.name)
-            data = data[:capacity]
+            data = _free_field_images(data, capacity, file=file, line=number, card=card.name)
         if not continuation:
             cards.append(card)
         # Short lines are padded so that each continuation starts at its positional data field.
-        card.fields += data + [""] * (capacity - len(data))
-        card.lines += [number] * capacity
+        padded = -(-max(len(data), 1) // capacity) * capacity
+        card.fields += data + [""] * (padded - len(data))
+        card.lines += [number] * padded
     return cards
+
+
+def _free_field_images(items: list[str], capacity: int, *, file: str, line: int, card: str) -> list[str]:
+    """The data fields of a free-field line longer than one card image.
+
+    NASTRAN converts a free-field line into fixed-field card images of ten fields (NASTRAN-95 User's Manual
+    2.4.1.2; field 10 of an image is its continuation field): the items after the card name fill fields 2-9
+    (``capacity`` data fields, 4 in large field), then field 10, and the items after that continue on implicit
+    continuation images, each a field 1 (the continuation's marker), its data fields and its field 10. So the
+    data go on at the next logical line's first data field; a field 10 or field 1 must hold a continuation
+    marker (blank, or starting with + or *), and a datum written there is refused rather than shifted."""
+    data = list(items[:capacity])
+    rest = items[capacity:]
+    image = 1
+    while rest:
+        for k, marker in enumerate(rest[:2]):  # field 10 of this image, field 1 of the next
+            if marker and marker[0] not in "+*":
+                where = f"field 10 of card image {image}" if k == 0 else f"field 1 of card image {image + 1}"
+                raise DeckError(f"free-field line: {marker!r} (item {len(items) - len(rest) + k + 2} of the line) "
+                                f"falls in {where}, a continuation field (NASTRAN reads a free-field line as card "
+                                f"images of 10 fields: fields 2-{capacity + 1} data, fields 10 and 1 continuation "
+                                "markers; expected a blank or a marker such as '+' there)",
+                                file=file, line=line, card=card)
+        rest = rest[2:]
+        if rest:
+            chunk = rest[:capacity]
+            data += chunk + [""] * (capacity - len(chunk))
+            rest = rest[capacity:]
+            image += 1
+    return data
 
 
 def _bound(minimum: float | None, above: float | None) -> str:

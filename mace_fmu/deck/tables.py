@@ -19,26 +19,36 @@ from mace_fmu.deck.parsers.constraints import Thru
 from mace_fmu.deck.parsers.grids import grdset, grid
 from mace_fmu.errors import DeckError
 
-__all__ = ["CARD_TABLES", "NON_STRUCTURAL", "bulk_tables"]
+__all__ = ["AERODYNAMIC", "CARD_TABLES", "NON_STRUCTURAL", "bulk_tables"]
 
 
 #: static loads, whose set a case control's LOAD (or a LOAD card) may select: read past, named in messages
 STATIC_LOADS = frozenset({"FORCE", "FORCE1", "FORCE2", "MOMENT", "MOMENT1", "MOMENT2", "PLOAD", "PLOAD1", "PLOAD2",
                           "PLOAD4"})
+#: the aeroelastic bulk data of NASTRAN's SOL 144-146 (MSC Nastran Quick Reference Guide, the aeroelastic
+#: entries): aerodynamic panels and their properties, splines to the structure, flight conditions, control
+#: surfaces, flutter and gust data, monitor points. None changes the structure's mass or stiffness, so every
+#: one is read past: the refusal of the cards a reader cannot model says so, and must never list one of them
+AERODYNAMIC = frozenset({
+    "AECOMP", "AECOMPL", "AECONFIG", "AEDW", "AEFACT", "AEFORCE", "AELINK", "AELIST", "AEPARM", "AEPRESS", "AERO",
+    "AEROS", "AESCALE", "AESTAT", "AESURF", "AESURFS", "AESYMXY", "AESYMXZ", "CAERO1", "CAERO2", "CAERO3", "CAERO4",
+    "CAERO5", "CSSCHD", "DIVERG", "FLFACT", "FLUTTER", "GUST", "MKAERO1", "MKAERO2", "MONDSP1", "MONPNT1", "MONPNT2",
+    "MONPNT3", "PAERO1", "PAERO2", "PAERO3", "PAERO4", "PAERO5", "SPLINE1", "SPLINE2", "SPLINE3", "SPLINE4",
+    "SPLINE5", "SPLINE6", "SPLINE7", "SPLINRB", "TRIM", "TRIM2", "UXVEC",
+})
 #: cards that change neither mass nor stiffness (loads, frequencies, output sets, aerodynamics, ...): read
 #: past and reported, never an error; any other card we cannot model is one
-NON_STRUCTURAL = STATIC_LOADS | frozenset({
+NON_STRUCTURAL = STATIC_LOADS | AERODYNAMIC | frozenset({
     "USET", "USET1", "TEMP", "TEMPD", "DAREA", "DLOAD", "RLOAD1", "RLOAD2", "TLOAD1", "TLOAD2", "TABLED1", "TABLED2",
     "TABLED3", "TABLED4", "FREQ", "FREQ1", "FREQ2", "FREQ3", "FREQ4", "FREQ5", "TSTEP", "TSTEPNL", "RANDPS",
-    "SET1", "SET2", "SET3", "CAERO1", "CAERO2", "PAERO1", "PAERO2", "SPLINE1", "SPLINE2", "SPLINE4", "SPLINE5",
-    "AERO", "AEROS", "MKAERO1", "MKAERO2", "FLFACT", "FLUTTER", "AESTAT", "AESURF", "TRIM", "DESVAR", "DRESP1",
+    "SET1", "SET2", "SET3", "DESVAR", "DRESP1",
     "DCONSTR", "DVPREL1", "DOPTPRM", "EIGC", "TABDMP1", "PLOTEL", "ECHOOFF", "ECHOON",
     # SUPORT only names the DOFs along which NASTRAN's modal solution computes the rigid-body modes (printed as
     # 0.0 Hz); with a statically determinate set, as NASTRAN requires, the elastic modes are those of the
     # unsupported structure, which is what mace-fmu solves (its rigid-body modes come out near 0 Hz).
     "SUPORT", "SUPORT1",
-    # gust, random-response and monitor-point data of the aeroelastic solutions
-    "GUST", "TABRND1", "MONPNT1", "MONPNT3",
+    # random-response data of the aeroelastic solutions (gust and monitor points: AERODYNAMIC)
+    "TABRND1",
     # a material's temperature dependence (MATT1 with its TABLEM1 tables) acts only where the case control
     # selects material temperatures, which the deck's check refuses beside a MATT1; a DTI is a table
     "MATT1", "TABLEM1", "DTI",

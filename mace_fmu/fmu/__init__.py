@@ -13,6 +13,7 @@ if TYPE_CHECKING:  # what editors and type checkers follow; at run time a name i
     from mace_fmu.fmu.export import export_fmu
     from mace_fmu.fmu.naming import fmu_model_name
     from mace_fmu.fmu.simulate import FmuRun, simulate_input_response
+    from mace_fmu.fmu.validation import validate_fmu
 
 __all__, __getattr__, __dir__ = lazy_exports(__name__, {
     "export_fmu": "export",
@@ -22,4 +23,5 @@ __all__, __getattr__, __dir__ = lazy_exports(__name__, {
     "simulate_input_response": "simulate",
     "FmuRun": "simulate",
     "fmu_model_name": "naming",
+    "validate_fmu": "validation",
 })

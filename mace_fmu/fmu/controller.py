@@ -31,6 +31,7 @@ from mace_fmu.fmu.native.model_description import (INPUT_LIMIT_V, FmuVariable, f
                                                    fmi3_model_description)
 from mace_fmu.fmu.native.platforms import select_platforms
 from mace_fmu.util.atomic import atomic_path
+from mace_fmu.util.progress import ProgressCallback
 
 FORMAT_VERSION = 1
 
@@ -135,7 +136,8 @@ def _variables(controller: DiscreteController) -> list[FmuVariable]:
 
 
 def export_controller_fmu(controller: DiscreteController, *, out_dir: str | Path = ".", name: str = "controller",
-                          fmi_version: Literal[2, 3] = 2, platforms: Sequence[str] | None = None) -> Path:
+                          fmi_version: Literal[2, 3] = 2, platforms: Sequence[str] | None = None,
+                          progress: ProgressCallback | None = None) -> Path:
     """Write ``out_dir/<name>.fmu``, the controller as a native co-simulation FMU, and return its path.
 
     Parameters
@@ -151,6 +153,9 @@ def export_controller_fmu(controller: DiscreteController, *, out_dir: str | Path
     platforms
         The platforms to carry binaries for (FMI 3 tuples, see :mod:`mace_fmu.fmu.native.platforms`);
         default all five.
+    progress
+        Told of the runtime's compilation, step by step, when it has to be compiled (not prebuilt or cached:
+        see :func:`~mace_fmu.fmu.native.compile.compile_runtimes`).
 
     Returns
     -------
@@ -171,7 +176,7 @@ def export_controller_fmu(controller: DiscreteController, *, out_dir: str | Path
     version = metadata.version("mace-fmu")
     summary = (f"sampled-data controller: {controller.a.shape[0]} states, {len(controller.inputs)} inputs, "
                f"{len(controller.outputs)} outputs, sample time {controller.sample_time_s} s")
-    binaries = runtime.compile_runtimes(targets, c_files=c_files, requested=platforms is not None)
+    binaries = runtime.compile_runtimes(targets, c_files=c_files, requested=platforms is not None, progress=progress)
     if fmi_version == 2:
         c_names = [p.name for p in sources if p.suffix == ".c"]
         description = fmi2_model_description(variables, model_identifier=name, guid=token, description=summary,

@@ -32,6 +32,7 @@ from mace_fmu.iomodel.parametric_data import parametric_arrays, with_frequency_b
 from mace_fmu.iomodel.volts import VoltsModel
 from mace_fmu.util import frequency
 from mace_fmu.util.atomic import atomic_zip, output_folder
+from mace_fmu.util.progress import ProgressCallback
 from modelica_like import algebra
 
 SLAVE_SOURCE = Path(__file__).with_name("slave.py")
@@ -127,7 +128,8 @@ FmuRuntime = Literal["native", "pythonfmu"]
 
 def export_fmu(model: VoltsModel, *, runtime: FmuRuntime = "native", fmi_version: int = 2, out_dir: str | Path = ".",
                name: str | None = None, arrays: dict[str, np.ndarray] | None = None,
-               frequency_bounds: Mapping[int, float] | None = None, platforms: Sequence[str] | None = None) -> Path:
+               frequency_bounds: Mapping[int, float] | None = None, platforms: Sequence[str] | None = None,
+               progress: ProgressCallback | None = None) -> Path:
     """Write ``model`` as an FMU ``out_dir/<name>.fmu`` and return its path: the one export call.
 
     Parameters
@@ -150,6 +152,9 @@ def export_fmu(model: VoltsModel, *, runtime: FmuRuntime = "native", fmi_version
         Native runtime: the platforms to carry binaries for, FMI 3 tuples (``"x86_64-linux"``,
         ``"aarch64-linux"``, ``"x86_64-windows"``, ``"x86_64-darwin"``, ``"aarch64-darwin"``); default all five.
         A pythonfmu FMU runs wherever its host's Python does and takes none.
+    progress
+        Native runtime: told of the runtime's compilation, step by step, when it has to be compiled (not
+        prebuilt or cached: see :func:`~mace_fmu.fmu.native.compile.compile_runtimes`).
 
     Raises
     ------
@@ -166,7 +171,7 @@ def export_fmu(model: VoltsModel, *, runtime: FmuRuntime = "native", fmi_version
         from mace_fmu.fmu.native.export import export_native_fmu
 
         return export_native_fmu(model, out_dir=out_dir, name=name, fmi_version=fmi_version, arrays=arrays,
-                                 frequency_bounds=frequency_bounds, platforms=platforms)
+                                 frequency_bounds=frequency_bounds, platforms=platforms, progress=progress)
     if runtime != "pythonfmu":
         raise MaceError(f"runtime must be 'native' or 'pythonfmu', got {runtime!r}")
     if fmi_version != 2:

@@ -218,7 +218,8 @@ def _read_modes(table: ModesTable) -> Any:
     CORD cards where one is given (its CD systems turn the vectors to basic; shells and solids are passed over)."""
     from mace_fmu.nastran_modes import read_nastran_modes
 
-    return read_nastran_modes(table.file, subcase=table.subcase, geometry=table.geometry)
+    return read_nastran_modes(table.file, subcase=table.subcase, geometry=table.geometry,
+                              normalisation=table.normalisation)
 
 
 def _check_output_systems(table: ModesTable, connectivity: Connectivity, modes: Modes) -> None:

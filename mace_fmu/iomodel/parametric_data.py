@@ -200,6 +200,11 @@ def _with_parameters(arrays: dict[str, np.ndarray], parameters: Sequence[tuple[s
     old = list(out.get("param_names", []))
     new = [p[0] for p in parameters]
     ranges = [declared_range(name, value, frequency_hz=(frequencies_hz or {}).get(name)) for name, value, _ in parameters]
+    for (name, value, description), (low, high) in zip(parameters, ranges):
+        # FMI: min <= start <= max, which every host checks; such an FMU would be refused wherever it is run
+        if not low <= value <= high:
+            raise MaceError(f"parameter {name} = {value!r} ({description}) lies outside the range its FMU declares, "
+                            f"[{low:g}, {high:g}]: every host would refuse the FMU")
     out.update(
         param_names=np.array(old + new), param_values=np.concatenate([out.get("param_values", []),
                                                                        [p[1] for p in parameters]]).astype(float),

@@ -43,3 +43,11 @@ class FileModes:
     skipped_points: tuple[int, ...]  #: scalar and extra points in the file, left out (one component, no frame)
     geometry: FileGeometry | None  #: the file's own grids and systems, when it has them
     where: str  #: the table or block the eigenvectors came from, for messages
+    eigenvalues_from: str = ""  #: the table or block the eigenvalues came from, for messages ("": ``where``)
+    #: (NORM, where) the run's eigenvalue request states (EIGR/EIGRL of an OP2's DYNAMICS table): "MASS", "MAX" or
+    #: "POINT"; None when the file does not say
+    run_normalisation: tuple[str, str] | None = None
+    #: NASTRAN's numbers of the vectors that are residual vectors (PARAM,RESVEC: static shapes appended to the
+    #: modes and orthogonalised with them), not eigenvectors of the structure
+    residual_vectors: tuple[int, ...] = ()
+    notes: tuple[str, ...] = ()  #: what the file says that the reader could not settle (kept in the result's notes)

@@ -7,13 +7,19 @@ Tables read (the layouts of MSC's DMAP Programmer's Guide, as pyNastran reads th
   word 4, mode in word 5, eigenvalue in word 6; format code, words per point in words 9 and 10) and
   the data: 8 words per point (ID * 10 + device code, point type, T1 T2 T3 R1 R2 R3). ``BOUGV1`` holds
   the vectors in the basic system, the others in each grid's displacement (CD) system. SORT1, real.
-- ``LAMA``/``BLAMA``: 7 words per mode (mode, extraction order, eigenvalue, radians, cycles,
-  generalized mass, generalized stiffness).
+- ``LAMA``: 7 words per mode (mode, extraction order, eigenvalue, radians, cycles, generalized mass,
+  generalized stiffness); word 11 of its header record, the residual vector augmentation flag.
 - ``GEOM1*``: GRID (4501, 45, 1: ID, CP, X1-3, CD, PS, SEID) and CORD1R/C/S, CORD2R/C/S.
+- ``DYNAMICS``: EIGR (307, 3, 85) and EIGRL (308, 8, 348), the run's eigenvalue requests: how many roots (ND)
+  or up to which frequency (V2) it asked for, and how it normalised the vectors (NORM).
+
+The other tables are named in messages: a buckling run's (approach code 8, ``BLAMA``), a complex eigenvalue
+run's (9, ``CLAMA``), a static run's (1) results are said to be what they are.
 """
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -28,6 +34,19 @@ REAL_EIGENVALUES_APPROACH = 2
 GRID_POINT = 1  #: word 2 of a point's entry: 1 a grid; scalar (2, 7) and extra points (3) are left out
 #: GEOM1 record keys (word 1 of the 3-word key) of the cards read
 GRID_KEY, CORD2_KEYS, CORD1_KEYS = 4501, {2101: "R", 2001: "C", 2201: "S"}, {1801: "R", 1701: "C", 1901: "S"}
+#: DYNAMICS record keys of the real eigenvalue requests
+EIGR_KEY, EIGRL_KEY = (307, 3, 85), (308, 8, 348)
+#: what a vector table holds, by the approach code of its IDENT (word 1 // 10; pyNastran's op2_common.py)
+APPROACHES = {1: "static displacements (SOL 101)", 2: "normal modes", 3: "differential stiffness displacements",
+              4: "differential stiffness displacements", 5: "frequency response (SOL 108, 111)",
+              6: "transient response (SOL 109, 112)", 7: "pre-buckling static displacements (SOL 105)",
+              8: "buckling modes (SOL 105)", 9: "complex modes (SOL 107, 110)",
+              10: "nonlinear static displacements (SOL 106)", 11: "geometric nonlinear static displacements",
+              12: "transient (CONTRAN) results"}
+#: the eigenvalue summary tables and what each holds
+SUMMARIES = {"LAMA": "real eigenvalues", "BLAMA": "buckling eigenvalues", "CLAMA": "complex eigenvalues"}
+#: the sort code (table code // 1000) bits: complex values, SORT2, random results (pyNastran's sort_bits.py)
+COMPLEX_BIT, SORT2_BIT, RANDOM_BIT = 1, 2, 4
 
 
 def _is_vector_table(name: str) -> bool:
@@ -35,14 +54,15 @@ def _is_vector_table(name: str) -> bool:
 
 
 def _wanted(name: str) -> bool:
-    return _is_vector_table(name) or name in ("LAMA", "BLAMA") or name.startswith("GEOM1")
+    return _is_vector_table(name) or name == "LAMA" or name.startswith(("GEOM1", "DYNAMIC"))
 
 
 def read_op2_modes(path: Path, *, subcase: int | None) -> FileModes:
     """The real eigenvectors of one subcase of the OP2 at ``path`` (the only one when ``subcase`` is None).
 
     MaceError (one line: file, table, record) for a truncated or corrupted file, a file without real
-    eigenvectors, several subcases and none chosen, or SORT2 / complex eigenvectors.
+    eigenvectors (saying what it holds: a buckling, complex eigenvalue or static run's results), several
+    subcases and none chosen, or SORT2 / complex eigenvectors.
     """
     records = Op2Records(path, path.read_bytes())
     endian = records.endian
@@ -50,34 +70,62 @@ def read_op2_modes(path: Path, *, subcase: int | None) -> FileModes:
     summaries: list[np.ndarray] = []
     grids: dict[int, tuple[int, tuple[float, float, float], int]] = {}
     coords: dict[int, CoordCard] = {}
+    names: list[str] = []  # every table, in file order: what the file holds, for messages
+    held: dict[str, set[str]] = {}  # what the vector tables hold other than normal modes -> their tables
+    methods: list[dict] = []  # the run's EIGR/EIGRL requests
+    augmented = False  # LAMA's residual vector augmentation flag
     has_geometry = False
     for table in records.tables(_wanted):
+        names.append(table.name)
         if _is_vector_table(table.name):
-            _read_vectors(records, table.name, table.records, endian, blocks)
-        elif table.name in ("LAMA", "BLAMA"):
+            _read_vectors(records, table.name, table.records, endian, blocks, held)
+        elif table.name == "LAMA":
             records.table = table.name
             summaries.append(_read_summary(records, table.records, endian))
+            augmented |= _residual_flag(table.records, endian)
+        elif table.name.startswith("DYNAMIC"):
+            methods += _eigenvalue_requests(table.records, endian, table=table.name)
         elif table.name.startswith("GEOM1"):
             has_geometry = True
             records.table = table.name
             _read_geometry(records, table.records, endian, grids, coords)
-    records.table, records.record = "OUGV1", "its IDENT records"
+    first = next((n for n in names if _is_vector_table(n)), "OUGV1")
+    records.table, records.record = first, "its IDENT records"
     if not blocks:
-        records.fail("no real eigenvectors in the file (expected an OUGV1 table of a SOL 103 run: add "
-                     "DISPLACEMENT(PLOT)=ALL or VECTOR=ALL to the case control and PARAM,POST,-1 or -2)")
+        records.fail(_what_the_file_holds(names, held))
     if subcase is None:
         if len(blocks) > 1:
             records.fail(f"eigenvectors of subcases {sorted(blocks)} (expected one: choose it with subcase=)")
         subcase = next(iter(blocks))
     if subcase not in blocks:
         records.fail(f"no eigenvectors of subcase {subcase} (the file has subcases {sorted(blocks)})")
-    return _assemble(path, subcase, blocks[subcase], summaries,
-                     FileGeometry(grids=grids, coords=coords) if has_geometry else None)
+    found = _assemble(path, subcase, blocks[subcase], summaries,
+                      FileGeometry(grids=grids, coords=coords) if has_geometry else None)
+    return _with_request(found, methods, augmented=augmented)
+
+
+def _what_the_file_holds(names: list[str], held: dict[str, set[str]]) -> str:
+    """The problem of an OP2 without real eigenvectors: what its tables hold instead, and what to ask NASTRAN for."""
+    summaries = [f"{SUMMARIES[n]} ({n})" for n in dict.fromkeys(names) if n in SUMMARIES]
+    if held:
+        what = "; ".join(f"{kind} in {', '.join(sorted(tables))}" for kind, tables in held.items())
+        return (f"no real eigenvectors of a normal-modes run in the file: it holds {what}"
+                + (f", and {', '.join(summaries)}" if summaries else "")
+                + " (expected the OP2 of a SOL 103 run: its normal modes)")
+    if "LAMA" in names:
+        return ("the file has the eigenvalues (LAMA) but no eigenvectors (expected an OUGV1 table of the SOL 103 run: "
+                "add DISPLACEMENT(PLOT)=ALL or VECTOR=ALL to the case control)")
+    shown = ", ".join(list(dict.fromkeys(names))[:12]) + (" ..." if len(set(names)) > 12 else "")
+    return (f"no eigenvectors in the file: its tables are {shown or 'none'}"
+            + (f", with {', '.join(summaries)}" if summaries else "")
+            + " (expected an OUGV1 table of a SOL 103 run: add DISPLACEMENT(PLOT)=ALL or VECTOR=ALL to the case "
+              "control and PARAM,POST,-1 or -2)")
 
 
 def _read_vectors(records: Op2Records, name: str, raw: tuple[bytes, ...], endian: str,
-                  blocks: dict[int, list]) -> None:
-    """Append (table, mode, eigenvalue, ids, types, values) of every real eigenvector of the table."""
+                  blocks: dict[int, list], held: dict[str, set[str]]) -> None:
+    """Append (table, mode, eigenvalue, ids, types, values) of every real eigenvector of the table; what its other
+    IDENTs hold (static displacements, buckling modes ...) goes into ``held``."""
     records.table = name
     for k in range(0, len(raw) - 1, 2):
         records.record = f"record {k + 3} (the IDENT of a vector)"
@@ -86,9 +134,16 @@ def _read_vectors(records: Op2Records, name: str, raw: tuple[bytes, ...], endian
             records.fail(f"the IDENT record has {len(ident) // 4} words (expected {IDENT_WORDS})")
         words = np.frombuffer(ident, dtype=endian + "i4")
         approach, table_code = int(words[0]) // 10, int(words[1])
+        sort_code = table_code // 1000
         if approach != REAL_EIGENVALUES_APPROACH or table_code % 1000 != EIGENVECTOR_TABLE_CODE:
-            continue  # static displacements, transient or frequency response: not modes
-        if table_code // 1000 != 0:
+            kind = APPROACHES.get(approach, f"results of approach code {approach}")
+            if sort_code & RANDOM_BIT:
+                kind = "random response (SOL 111 with RANDOM, SOL 112)"
+            held.setdefault(kind, set()).add(name)
+            continue
+        if sort_code & COMPLEX_BIT:
+            records.fail("the eigenvectors are complex (expected real ones: the normal modes of a SOL 103 run)")
+        if sort_code & SORT2_BIT:
             records.fail("the eigenvectors are in SORT2 (expected SORT1: the default, or SORT1 in the request)")
         num_wide, fmt = int(words[9]), int(words[8])
         if num_wide != 8 or fmt not in (0, 1):
@@ -118,6 +173,72 @@ def _read_summary(records: Op2Records, raw: tuple[bytes, ...], endian: str) -> n
     rows = np.frombuffer(raw[1], dtype=endian + "f4").reshape(-1, 7).astype(float)
     rows[:, :2] = ints[:, :2]
     return rows
+
+
+def _residual_flag(raw: tuple[bytes, ...], endian: str) -> bool:
+    """Whether a LAMA's header record (record 3) says the run augmented its modes with residual vectors (word 11,
+    RSFLAG of MSC's DMAP Programmer's Guide, as pyNastran reads it)."""
+    if not raw or len(raw[0]) < 44:
+        return False
+    return int(np.frombuffer(raw[0][:44], dtype=endian + "i4")[10]) != 0
+
+
+def _eigenvalue_requests(raw: tuple[bytes, ...], endian: str, *, table: str) -> list[dict]:
+    """The EIGR and EIGRL entries of a DYNAMICS table: card, SID, V2 [Hz] (None: not given), ND (0: not given),
+    NORM ("MASS", "MAX" or "POINT"). EIGR: 18 words per entry; EIGRL: 13 words and its frequency segments, laid
+    out in 27 words by the writers of the public files; a record of another length is read for its first entry."""
+    found = []
+    for record in raw:
+        if len(record) < 12 or len(record) % 4:
+            continue
+        key = tuple(int(v) for v in np.frombuffer(record[:12], dtype=endian + "i4"))
+        body = record[12:]
+        if key == EIGR_KEY:
+            stride = 72
+        elif key == EIGRL_KEY:
+            stride = 108 if len(body) % 108 == 0 else len(body)
+        else:
+            continue
+        for start in range(0, len(body) - min(stride, 52) + 1, stride):
+            entry = body[start:start + stride]
+            ints = np.frombuffer(entry[:52], dtype=endian + "i4")
+            reals = np.frombuffer(entry[:52], dtype=endian + "f4")
+            if key == EIGR_KEY:  # SID, METHOD(2), F1, F2, NE, ND, 2 unused, NORM(2), G, C, ...
+                v2 = float(reals[4]) or None
+                nd, norm = int(ints[6]), entry[36:44]
+                card = f"EIGR {int(ints[0])}"
+            else:  # SID, V1, V2, ND, MSGLVL, MAXSET, SHFSCL, FLAG1, FLAG2 (0: V1, V2 given), NORM(2), ALPH, NUMS
+                v2 = float(reals[2]) if int(ints[8]) == 0 and reals[2] > 0 else None
+                nd, norm = int(ints[3]), entry[36:44]
+                card = f"EIGRL {int(ints[0])}"
+            name = norm.decode("latin-1").replace("\x00", " ").strip().upper() or "MASS"  # NORM's default: MASS
+            found.append({"card": card, "v2": v2, "nd": max(nd, 0), "norm": name, "where": f"{card} in table {table}"})
+    return found
+
+
+def _with_request(found: FileModes, methods: list[dict], *, augmented: bool) -> FileModes:
+    """``found`` with what the run's eigenvalue request says: how it normalised the vectors, and which vectors
+    are residual vectors. NASTRAN returns at most ND eigenvectors, none above V2: a vector beyond them is a
+    residual vector (PARAM,RESVEC) that the run appended and orthogonalised with the modes. With several
+    requests in the file (one per subcase's METHOD) only a NORM they all share is taken."""
+    norms = {m["norm"] for m in methods}
+    run_norm = (methods[0]["norm"], methods[0]["where"] if len(methods) == 1 else
+                "every EIGR/EIGRL of table DYNAMICS") if len(norms) == 1 else None
+    residual: list[int] = []
+    notes = list(found.notes)
+    if len(methods) == 1:
+        request = methods[0]
+        hz = np.sign(found.eigenvalues) * np.sqrt(np.abs(found.eigenvalues)) / (2 * np.pi)
+        beyond = np.zeros(len(found.mode_numbers), dtype=bool)
+        if request["nd"]:
+            beyond |= np.arange(len(beyond)) >= request["nd"]
+        if request["v2"] is not None:
+            beyond |= hz > request["v2"] * (1 + 1e-6)
+        residual = [int(m) for m in found.mode_numbers[beyond]]
+    elif augmented:
+        notes.append("the run augmented its modes with residual vectors (LAMA's flag; PARAM,RESVEC) and the file "
+                     "does not say which of the vectors they are")
+    return replace(found, run_normalisation=run_norm, residual_vectors=tuple(residual), notes=tuple(notes))
 
 
 def _read_geometry(records: Op2Records, raw: tuple[bytes, ...], endian: str,
@@ -206,7 +327,8 @@ def _assemble(path: Path, subcase: int, vectors: list, summaries: list[np.ndarra
         mode_numbers=mode_numbers,
         eigenvalues=summary[:, 2] if summary is not None else np.array(eigenvalues),
         generalized_masses=summary[:, 5] if summary is not None else None,
-        skipped_points=skipped, geometry=geometry, where=f"table {table}")
+        skipped_points=skipped, geometry=geometry, where=f"table {table}",
+        eigenvalues_from="table LAMA" if summary is not None else f"table {table}, its IDENT records")
 
 
 def _matching_summary(summaries: list[np.ndarray], modes: np.ndarray, eigenvalues: np.ndarray) -> np.ndarray | None:

@@ -78,6 +78,10 @@ def read_punch_modes(path: Path, *, subcase: int | None) -> FileModes:
         vectors[gid] = np.array([_number(path, k, v, f"grid {gid}") for v in fields[2:5]]
                                 + [_number(path, k + 1, v, f"grid {gid}") for v in rotations[1:4]])
         k += 1
+    if not modes and not any(line.startswith("$") for line in lines):
+        raise MaceError(f"{path}: a text file without a punch file's $ lines ($TITLE, $EIGENVECTOR, ...): neither a "
+                        "punch file nor an OP2 (expected a binary OP2 or the punch file of a SOL 103 run, whatever "
+                        "the file's name)")
     return _assemble(path, modes, skipped, subcase)
 
 
@@ -102,7 +106,7 @@ def _assemble(path: Path, modes: dict, skipped: set[int], subcase: int | None) -
     return FileModes(source=path, subcase=subcase, grid_ids=grid_ids, vectors=np.stack(columns, axis=2), frame="cd",
                      mode_numbers=np.array([b[0] for b in blocks]), eigenvalues=np.array([b[1] for b in blocks]),
                      generalized_masses=None, skipped_points=tuple(sorted(skipped)), geometry=None,
-                     where="$EIGENVECTOR blocks")
+                     where="$EIGENVECTOR blocks", eigenvalues_from="$EIGENVALUE lines")
 
 
 def _number(path: Path, line: int, text: str, where: str) -> float:

@@ -16,6 +16,7 @@ from mace_fmu.nastran_modes.frames import resolve_geometry
 from mace_fmu.nastran_modes.normalisation import normalise
 from mace_fmu.nastran_modes.op2 import read_op2_modes
 from mace_fmu.nastran_modes.punch import read_punch_modes
+from mace_fmu.util.frequency import ZERO_HZ
 
 
 @dataclass(frozen=True)
@@ -32,8 +33,14 @@ class NastranModes:
     notes: tuple[str, ...] = ()  #: what was left out or assumed (scalar points, unknown output systems)
 
 
-def read_nastran_modes(path: str | Path, *, subcase: int | None = None,
-                       geometry: str | Path | None = None) -> NastranModes:
+#: how a formatted (ASCII) OUTPUT2 file opens: NASTRAN's character set, the key to the encoding of what follows
+FORMATTED_OUTPUT2 = b"X 0123456789ABCDEFGHIJKLMNOPQRSTUVWXYZ"
+#: the first bytes read to tell a binary OP2, a formatted one, a punch file and anything else apart
+HEAD_BYTES = 4096
+
+
+def read_nastran_modes(path: str | Path, *, subcase: int | None = None, geometry: str | Path | None = None,
+                       normalisation: str | None = None) -> NastranModes:
     """Read the real eigenvectors and eigenvalues of a NASTRAN SOL 103 run.
 
     Parameters
@@ -48,33 +55,74 @@ def read_nastran_modes(path: str | Path, *, subcase: int | None = None,
         card parsers; other cards, shells and solids included, are passed over): the grids' CD systems and
         positions. Without it an OP2's own GEOM1 tables are used; with neither, every grid's CD system is
         taken as basic (and ``notes`` says so).
+    normalisation : {"mass"}, optional
+        The user's statement that the vectors are mass-normalised, for a file without generalized masses whose
+        vectors look normalised otherwise (the largest component of each is 1); without it such a file is
+        refused (:mod:`mace_fmu.nastran_modes.normalisation`).
 
     Returns
     -------
     NastranModes
         ``modes.frequencies_hz`` [Hz] = sign(lambda) sqrt(abs(lambda)) / (2 pi); ``modes.shapes`` in basic
         coordinates [deck units per unit modal coordinate], rescaled to unit generalized mass when NASTRAN's
-        were not 1; ``modes.cd_frames`` the CD axes of each grid in basic; labels "mode <NASTRAN's number>".
-        Scalar and extra points are left out (named in ``notes``).
+        were not 1; ``modes.cd_frames`` the CD axes of each grid in basic; labels "mode <NASTRAN's number>",
+        "residual vector <k>" for the vectors beyond the run's ND or V2 (PARAM,RESVEC). Scalar and extra points
+        are left out (named in ``notes``).
 
     Raises
     ------
     MaceError
         One line naming the file, the table (or line) and the record, for a truncated, corrupted or
-        unsupported file, or a subcase that is not in it.
+        unsupported file (a formatted OUTPUT2; a buckling, complex eigenvalue or static run's results, said to be
+        what they are), a subcase that is not in it, a negative eigenvalue (an unstable mode), or vectors that
+        the file shows are not mass-normalised and cannot be (no generalized masses).
     """
     source = Path(path)
     if not source.is_file():
         raise MaceError(f"{source}: no such file (expected an OP2 or a punch file of a SOL 103 run)")
-    with source.open("rb") as stream:  # the first word tells the kind; the reader then reads the whole file
-        head = stream.read(4)
-    is_op2 = head in (b"\x04\x00\x00\x00", b"\x00\x00\x00\x04", b"\x08\x00\x00\x00", b"\x00\x00\x00\x08")
-    found = read_op2_modes(source, subcase=subcase) if is_op2 else read_punch_modes(source, subcase=subcase)
-    return _to_basic(found, geometry)
+    with source.open("rb") as stream:  # the first bytes tell the kind; the reader then reads the whole file
+        head = stream.read(HEAD_BYTES)
+    kind = _kind_of(head)
+    if kind == "formatted":
+        raise MaceError(f"{source}: a formatted (ASCII) OUTPUT2 file: it opens with NASTRAN's character-set line "
+                        "(expected a binary OP2, OUTPUT2's default unformatted form, e.g. PARAM,POST,-1; or a punch "
+                        "file)")
+    found = read_punch_modes(source, subcase=subcase) if kind == "text" else read_op2_modes(source, subcase=subcase)
+    return _to_basic(found, geometry, normalisation=normalisation)
 
 
-def _to_basic(found: FileModes, geometry: str | Path | None) -> NastranModes:
-    notes = []
+def _kind_of(head: bytes) -> str:
+    """"op2" (binary: Fortran records, or anything else that is not text, which the OP2 reader names), "formatted"
+    (a formatted OUTPUT2), or "text" (a punch file, or text the punch reader names): told from the content, not
+    from the file's suffix."""
+    if head[:4] in (b"\x04\x00\x00\x00", b"\x00\x00\x00\x04", b"\x08\x00\x00\x00", b"\x00\x00\x00\x08"):
+        return "op2"
+    if b"\x00" in head:
+        return "op2"  # binary, not an OP2's first record: the OP2 reader says what it found
+    if head.lstrip().upper().startswith(FORMATTED_OUTPUT2):
+        return "formatted"
+    return "text"
+
+
+def _check_eigenvalues(found: FileModes) -> None:
+    """A negative eigenvalue is an unstable mode (a pole at +sqrt(-lambda) 1/s), not a vibration: refused, one line
+    naming the mode and its value. Rigid-body modes' round-off (|f| below ZERO_HZ, either sign) is no such mode."""
+    eigenvalues = np.asarray(found.eigenvalues, dtype=float)
+    hz = np.sqrt(np.abs(eigenvalues)) / (2.0 * np.pi)
+    bad = np.flatnonzero((eigenvalues < 0) & (hz >= ZERO_HZ))
+    if bad.size:
+        k = int(bad[0])
+        more = f" ({bad.size - 1} more negative)" if bad.size > 1 else ""
+        raise MaceError(f"{found.source}: {found.eigenvalues_from or found.where}: mode {int(found.mode_numbers[k])} "
+                        f"has the eigenvalue {eigenvalues[k]:.7g} rad^2/s^2 (-{hz[k]:.4g} Hz){more}: an unstable "
+                        f"mode, a pole at +{np.sqrt(-eigenvalues[k]):.4g} 1/s, which no model of vibrations holds "
+                        "(expected eigenvalues >= 0: a structure under a compressive preload beyond buckling, or a "
+                        "modelling error; rigid-body round-off below 0.01 Hz is taken as 0)")
+
+
+def _to_basic(found: FileModes, geometry: str | Path | None, *, normalisation: str | None = None) -> NastranModes:
+    _check_eigenvalues(found)
+    notes = list(found.notes)
     if found.skipped_points:
         shown = ", ".join(str(p) for p in found.skipped_points[:8]) + (" ..." if len(found.skipped_points) > 8 else "")
         notes.append(f"{len(found.skipped_points)} scalar or extra points left out (IDs {shown})")
@@ -103,11 +151,21 @@ def _to_basic(found: FileModes, geometry: str | Path | None) -> NastranModes:
         vectors = np.concatenate([np.einsum("gij,gjm->gim", frames, vectors[:, :3]),
                                   np.einsum("gij,gjm->gim", frames, vectors[:, 3:])], axis=1)
     shapes = vectors.reshape(6 * len(grid_ids), -1)
-    shapes, normalisation = normalise(found.source, shapes, found.generalized_masses)
+    shapes, normalised = normalise(found.source, shapes, found.generalized_masses,
+                                   run_normalisation=found.run_normalisation,
+                                   file_vectors=found.vectors.reshape(-1, found.vectors.shape[2]), stated=normalisation,
+                                   where=found.where)
     eigenvalues = np.asarray(found.eigenvalues, dtype=float)
     frequencies = np.sign(eigenvalues) * np.sqrt(np.abs(eigenvalues)) / (2.0 * np.pi)
+    residual = {m: k for k, m in enumerate(found.residual_vectors, start=1)}
+    labels = tuple(f"residual vector {residual[int(m)]}" if int(m) in residual else f"mode {m}"
+                   for m in found.mode_numbers)
+    if residual:
+        notes.append(f"{len(residual)} residual vector(s) (NASTRAN's vectors {', '.join(map(str, residual))}, beyond "
+                     "what the run's eigenvalue request asked for: PARAM,RESVEC) kept as pseudo-modes, labelled "
+                     "'residual vector <k>'")
     modes = Modes(frequencies_hz=frequencies, shapes=shapes, dofs=DofMap(tuple(int(g) for g in grid_ids)),
-                  cd_frames=frames, labels=tuple(f"mode {m}" for m in found.mode_numbers))
+                  cd_frames=frames, labels=labels)
     return NastranModes(modes=modes, eigenvalues=eigenvalues, generalized_masses=found.generalized_masses,
-                        normalisation=normalisation, grid_positions=positions, source=found.source,
+                        normalisation=normalised, grid_positions=positions, source=found.source,
                         units="the deck's units", notes=tuple(notes))

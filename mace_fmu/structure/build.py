@@ -19,7 +19,8 @@ from mace_fmu.deck.cards import Deck, Subcase
 from mace_fmu.deck.checks import check_deck
 from mace_fmu.errors import DeckError, MaceError
 from mace_fmu.structure.file import (Configuration, StructureFile, StructureSpec, _ids_text,
-                                     check_instruments_against_deck, check_spec_against_deck, structure_file_for)
+                                     check_instruments_against_deck, check_parameters_against_deck,
+                                     check_spec_against_deck, structure_file_for)
 
 
 @dataclass(frozen=True)
@@ -210,6 +211,8 @@ def build_structure(deck: Deck, *, configuration: Configuration, spec: Structure
                         "the model from those modes (modal_structure(structure_file); CLI configuration 'modes')")
     spec = spec if spec is not None else (file.spec if file is not None else StructureSpec.empty())
     check_spec_against_deck(spec, deck)
+    if file is not None:
+        check_parameters_against_deck(file, deck)  # the deck as read: a suspension spring is named for 1-g and 0-g
     deck = apply_overrides(deck, overrides or {})
     preload, modal = _subcases(deck)
     if configuration == "1g":

@@ -24,6 +24,7 @@ from typing import Any, Literal, Mapping
 from mace_fmu.deck.card_tables import ELEMENT_TABLES
 from mace_fmu.deck.cards import Deck
 from mace_fmu.errors import MaceError
+from mace_fmu.structure.values import PARAMETER_KEYS, check_values, key_line
 from mace_fmu.util.textfile import read_text
 
 Configuration = Literal["1g", "0g"]
@@ -43,7 +44,7 @@ STRUCTURE_FILE_TABLES = {
     "units": "mass = \"kg\", length = \"m\": the units the deck is written in, for printed labels (nothing is "
              "converted)",
     "modes": "file = NASTRAN's normal modes (OP2 or punch) instead of a deck; subcase, geometry (a deck, for drawing), "
-             "residual_flexibility (a CSV)",
+             "residual_flexibility (a CSV), normalisation = \"mass\" (stated, for a file without generalized masses)",
 }
 
 
@@ -193,6 +194,7 @@ def _load_structure_file(path: str, mtime_ns: int, size: int) -> StructureFile:
     if unknown:
         raise MaceError(f"{_where(file, text, unknown[0])}: unknown table {unknown[0]!r}; a structure file has "
                         + "; ".join(f"[{k}] ({v})" for k, v in STRUCTURE_FILE_TABLES.items()))
+    check_values(file, text, data)  # damping ratios, delays, parameter names ...: each value, once, at reading
     return StructureFile(path=file, tables=MappingProxyType(data), spec=_spec_of(file, text, data))
 
 
@@ -344,3 +346,25 @@ def check_spec_against_deck(spec: StructureSpec, deck: Deck) -> None:
     if problems:
         raise MaceError(f"{spec.source}: names IDs that {deck.path} lacks: " + "; ".join(problems)
                         + " (is it the structure file of another deck?)")
+
+
+def check_parameters_against_deck(file: StructureFile, deck: Deck) -> None:
+    """A MaceError naming the structure file, its line, the ``[parameters]`` table and the card when an entry names
+    a MAT1, CELAS2 or CONM2 ID ``deck`` lacks, with the IDs of that card the deck has.
+
+    Without the check such an entry is silently no parameter at all (the card it was meant for keeps its default
+    name, ``E_mat<ID>``). ``deck`` is the deck as read, before the suspension is removed for the 0-g structure (a
+    suspension spring is named once, for both structures).
+    """
+    table = file.tables.get("parameters", {})
+    if not isinstance(table, dict):
+        return
+    text = read_text(file.path, what="structure")
+    have = {"materials": deck.mat1s, "springs": deck.celas2s, "masses": deck.conm2s}
+    for key, card in PARAMETER_KEYS.items():
+        for ident, name in dict(table.get(key, {})).items():
+            if int(ident) not in have[key]:
+                line = key_line(text, "parameters", key)
+                ids = _ids_text(list(have[key])) if have[key] else "none"
+                raise MaceError(f"{file.path}:{line}: [parameters] {key}: \"{ident}\" = {name!r} names {card} {ident}, "
+                                f"which {deck.path} lacks (its {card} IDs: {ids})")

@@ -8,6 +8,7 @@ SOL 103 OP2 or punch file), not by a deck this tool solves::
     subcase = 1                          # optional: the SOL 103 subcase (default: the only one)
     geometry = "plate.bdf"               # optional: the deck, read for drawing only (grids, element edges)
     residual_flexibility = "resflex.csv" # optional: static correction for the modes not in the file
+    normalisation = "mass"               # optional: the vectors are mass-normalised, for a file that cannot show it
 
 Paths are relative to the structure file's folder. Everything else in the file (actuators, sensors,
 electronics, servos, damping) means what it means for a deck; the damping table's labels are
@@ -29,6 +30,8 @@ MODES_KEYS = {
     "subcase": "the SOL 103 subcase whose modes to take (default: the file's only one)",
     "geometry": "a deck whose grids and elements are drawn (read for drawing only; no FE is built)",
     "residual_flexibility": "a CSV of the static flexibility of the modes not in the file, between instrument DOFs",
+    "normalisation": "\"mass\": the vectors are mass-normalised, stated for a file without generalized masses (no LAMA "
+                     "table, a punch file) whose vectors look normalised otherwise",
 }
 
 
@@ -41,6 +44,7 @@ class ModesTable:
     geometry: Path | None  #: a deck read for drawing only (None: nothing to draw but what the modes file gives)
     residual_flexibility: Path | None  #: static correction CSV (None: none)
     source: Path  #: the structure file
+    normalisation: str | None = None  #: "mass": the user states the vectors are mass-normalised (None: not stated)
 
 
 def modes_table(file: StructureFile) -> ModesTable | None:
@@ -77,6 +81,10 @@ def modes_table(file: StructureFile) -> ModesTable | None:
     subcase = table.get("subcase")
     if subcase is not None and (isinstance(subcase, bool) or not isinstance(subcase, int) or subcase < 1):
         raise MaceError(f"{where}: subcase must be a positive integer (a SUBCASE ID), got {subcase!r}")
+    normalisation = table.get("normalisation")
+    if normalisation is not None and normalisation != "mass":
+        raise MaceError(f"{where}: normalisation must be \"mass\" (the statement that the file's vectors are "
+                        f"mass-normalised), got {normalisation!r}")
     folder = file.path.parent
 
     def path_of(key: str, *, must_exist: bool = True) -> Path | None:
@@ -91,4 +99,5 @@ def modes_table(file: StructureFile) -> ModesTable | None:
         return path
 
     return ModesTable(file=path_of("file"), subcase=subcase, geometry=path_of("geometry"),
-                      residual_flexibility=path_of("residual_flexibility"), source=file.path)
+                      residual_flexibility=path_of("residual_flexibility"), source=file.path,
+                      normalisation=normalisation)

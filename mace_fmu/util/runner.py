@@ -4,12 +4,16 @@ The updating engine takes a ``runner``: any function with the signature of the b
 (``runner(fn, items) -> iterable of fn(item)``, in order). ``map`` itself runs serially; a
 :class:`DaskRunner` spreads the calls over the workers of a ``dask.distributed`` cluster, so the
 same code runs on a laptop's cores or on a user's cluster (``scheduler="tcp://host:8786"``).
-The functions and items must be picklable (cloudpickle: closures and lambdas are fine).
+The functions and items must be picklable (cloudpickle: closures and lambdas are fine). A file the
+runs read goes to the workers as bytes (:meth:`DaskRunner.ship`, :mod:`mace_fmu.util.shipping`): the
+workers of a cluster need not see the client's files.
 """
 
 from __future__ import annotations
 
 import os
+import uuid
+from pathlib import Path
 from typing import Any, Callable, Iterable
 
 from mace_fmu.errors import MaceError
@@ -122,6 +126,9 @@ class DaskRunner:
 
     With ``scheduler``, the address must answer as a Dask scheduler within ``connect_timeout_s``
     seconds (:func:`check_scheduler`), else a MaceError says so in one line.
+
+    The workers need the same mace-fmu and Python packages as the client, not its files: a file the runs
+    read is sent with :meth:`ship`.
     """
 
     def __init__(self, *, scheduler: str | None = None, client: Any = None, workers: int | None = None,
@@ -153,6 +160,54 @@ class DaskRunner:
             self.client = Client(self._own_cluster)
         self.progress = progress
         self.task = task
+        self._shipped: dict[str, str] = {}  # SHA-256 -> the name of the plugin that ships it
+        self._id = uuid.uuid4().hex[:12]  # plugin names of this runner's own: closing it leaves other clients' alone
+
+    def ship(self, path: str | os.PathLike, *, sha256: str | None = None) -> str:
+        """Send the bytes of the file at ``path`` to every worker of the cluster, now and joining later, once.
+
+        Each worker keeps them in its local directory under their SHA-256 until it stops; a task finds
+        them with :func:`mace_fmu.util.shipping.shipped_copy`. A file already shipped by this runner is
+        not sent again; closing the runner frees the scheduler's copy.
+
+        Parameters
+        ----------
+        path : path
+            The file, as this process names it (relative to this process's folder).
+        sha256 : str, optional
+            The digest the file was read with: a file changed since is a MaceError.
+
+        Returns
+        -------
+        str
+            The file's SHA-256 (hex), by which the workers find it.
+
+        Raises
+        ------
+        MaceError
+            The file cannot be read, changed since it was read (``sha256``), or a worker cannot store it.
+        """
+        from mace_fmu.util.shipped_file import ShippedFile
+        from mace_fmu.util.shipping import sha256_of
+
+        try:
+            data = Path(path).read_bytes()
+        except OSError as exc:
+            raise MaceError(f"{path}: cannot read the file to send to the Dask workers "
+                            f"({exc.strerror or exc})") from None
+        digest = sha256_of(data)
+        if sha256 is not None and digest != sha256:
+            raise MaceError(f"{path}: the file changed while in use (SHA-256 {digest[:12]}..., read as "
+                            f"{sha256[:12]}...)")
+        if digest not in self._shipped:
+            name = f"mace-fmu-file-{digest[:16]}-{self._id}"
+            try:
+                self.client.register_plugin(ShippedFile(data, name=Path(path).name), name=name)
+            except Exception as exc:  # a worker's full or read-only disk: in one line, with the worker's words
+                raise MaceError(f"{path}: the Dask workers could not store it ({type(exc).__name__}: {exc})") \
+                    from None
+            self._shipped[digest] = name
+        return digest
 
     def __call__(self, fn: Callable[[Any], Any], items: Iterable[Any]) -> list[Any]:
         """[fn(item) for item in items], computed on the cluster; the first failure is raised."""
@@ -174,6 +229,13 @@ class DaskRunner:
         return len(self.client.scheduler_info()["workers"])
 
     def close(self) -> None:
+        """Free the scheduler's copies of the shipped files and close what this runner started."""
+        for name in self._shipped.values():
+            try:  # the workers keep their copies until they stop; a cluster already gone needs nothing freed
+                self.client.unregister_worker_plugin(name)
+            except Exception:
+                pass
+        self._shipped.clear()
         if self._own_client:
             self.client.close()
         if self._own_cluster is not None:

@@ -47,6 +47,21 @@ def test_bar1_load_selects_a_force_set_directly():
         compute_modes(deck, configuration="1g")
 
 
+def test_bar1_has_no_mass_and_the_modes_say_so(capsys):
+    """bar1.dat is a static deck: its MAT1 has no RHO and it has no mass element. Its 0-g modes said "no modes in
+    the range asked for, up to 250 Hz" (issue 51, item 7): K phi = lambda M phi with M = 0 has no finite root, and
+    the message now says why."""
+    path = NASTRAN / "frame_three_bars" / "bar1.dat"
+    message = (f"{path}: the deck has no mass: no CONM1, CONM2, CMASS1, CMASS2 or PMASS card and no density (RHO) on "
+               "its MAT1 cards nor non-structural mass (NSM) on its properties, so it has no vibration modes (expected "
+               "RHO on the MAT1 cards, or mass elements)")
+    with pytest.raises(MaceError) as caught:
+        compute_modes(read_deck(path), configuration="0g")
+    assert str(caught.value) == message
+    code, _, err = _cli(capsys, ["modes", "0g", "--deck", str(path)])
+    assert code == 2 and err == f"mace-fmu: error: {message}\n"
+
+
 def test_grid_point_forces_load_selects_pload1_cards_directly():
     """models/grid_point_forces/bar_grid_point_forces.bdf (with its INCLUDE cbar_cbeam.blk): subcase 1's
     ``LOAD = 10`` names ten PLOAD1 cards directly; read, and the structure's modes computed."""

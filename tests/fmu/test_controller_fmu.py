@@ -11,7 +11,6 @@ import zipfile
 
 import control as ct
 import fmpy
-import fmpy.validation
 import numpy as np
 import pytest
 from fmpy.fmi1 import FMICallException
@@ -21,6 +20,7 @@ from fmpy.fmi3 import FMU3Slave
 from mace_fmu.cli import main
 from mace_fmu.errors import MaceError
 from mace_fmu.fmu.controller import DiscreteController, export_controller_fmu
+from mace_fmu.fmu.validation import validate_fmu
 
 STEP = 0.002
 
@@ -139,7 +139,7 @@ def test_model_description_validates_and_carries_only_the_controller_runtime(exp
     assert md.modelExchange is None and md.coSimulation is not None
     assert float(md.defaultExperiment.stepSize) == STEP
     if version == 2:
-        assert fmpy.validation.validate_fmu(str(fmu)) == []
+        assert validate_fmu(str(fmu)) == []
     with zipfile.ZipFile(fmu) as z:
         sources = {n.split("/")[-1] for n in z.namelist() if n.startswith("sources/") and n.endswith(".c")}
     # a host that builds from sources compiles every C file there: no plant model beside the controller's

@@ -14,7 +14,6 @@ import fmpy
 import numpy as np
 import pytest
 from fmpy.fmi1 import FMICallException
-from fmpy.validation import validate_fmu
 from support.fmu_checks import (DURATION, check_close, initialised_slave, make_inputs, nominal_slave, rss_bytes,
                                 run_in_libcosim, run_steps, value_references, zoh_reference)
 from support.paths import EXAMPLES
@@ -22,6 +21,7 @@ from support.paths import EXAMPLES
 from mace_fmu.deck.reader import read_deck
 from mace_fmu.fe.modes import compute_modes
 from mace_fmu.fmu.export import export_fmu
+from mace_fmu.fmu.validation import validate_fmu
 from mace_fmu.iomodel.model_options import ModelledElectronics, SignalSelection
 from mace_fmu.iomodel.motion import MOTION_COMPONENTS
 from mace_fmu.iomodel.volts import volts_model

@@ -29,7 +29,6 @@ from fmpy import calloc, free
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi2 import (FMU2Model, FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
                        fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
-from fmpy.validation import validate_fmu
 from support.fmu_checks import (check_close, initialised_slave, make_inputs, nominal_slave, rss_bytes, run_in_libcosim,
                                 run_steps, value_references, zoh_reference)
 from support.paths import SUPPORT
@@ -39,6 +38,7 @@ from mace_fmu.errors import MaceError
 from mace_fmu.fe.modes import compute_modes
 from mace_fmu.fmu.export import export_fmu
 from mace_fmu.fmu.native import compile as runtime
+from mace_fmu.fmu.validation import validate_fmu
 from mace_fmu.iomodel.model_options import ModelledElectronics
 from mace_fmu.iomodel.parametric import ParametricSystem
 from mace_fmu.iomodel.parametric_data import parametric_arrays

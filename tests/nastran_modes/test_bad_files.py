@@ -86,10 +86,14 @@ def test_complex_or_sort2_vectors_are_refused(tmp_path):
     assert "14 words per point in format 2 (expected real ones" in match["problem"]
 
 
-def test_a_static_run_has_no_eigenvectors_and_the_message_says_what_to_request():
+def test_a_static_run_is_said_to_hold_static_displacements():
+    """models/plate/plate.op2 (SOL 101): asking it for DISPLACEMENT(PLOT)=ALL, as the message once did, changes
+    nothing; what the file holds does (issue 51, item 7)."""
     match = _error(NASTRAN / "plate_static" / "plate.op2")
-    assert match["table"] == "OUGV1"
-    assert "no real eigenvectors in the file" in match["problem"] and "SOL 103" in match["problem"]
+    assert match["table"] == "OUGV1" and match["record"] == "its IDENT records"
+    assert match["problem"] == ("no real eigenvectors of a normal-modes run in the file: it holds static "
+                                "displacements (SOL 101) in OUGV1 (expected the OP2 of a SOL 103 run: its normal "
+                                "modes)")
 
 
 def test_a_subcase_that_is_not_in_the_file():

@@ -160,9 +160,13 @@ def test_mass_normalisation_is_checked_and_nastrans_max_normalisation_rescaled()
 
 
 def test_without_generalized_masses_the_normalisation_says_so():
+    """solid_shell_bar's OP2 has no LAMA, but its DYNAMICS table holds the run's EIGRL (NORM=MASS); plate_py's OP2
+    has neither: its vectors are taken as NASTRAN's default normalisation, and the text says so."""
     ours = read_nastran_modes(op2_path("solid_shell_bar"))
     assert ours.generalized_masses is None
-    assert ours.normalisation.startswith("not stated")
+    assert ours.normalisation == ("MASS, as the run asked (EIGRL 1 in table DYNAMICS: NORM=MASS); the file has no "
+                                  "generalized masses to check it")
+    assert read_nastran_modes(op2_path("plate_py")).normalisation.startswith("not stated")
 
 
 def test_beam_modes_agree_with_the_fe_core_solving_the_deck():

@@ -17,12 +17,12 @@ from pathlib import Path
 import fmpy
 import numpy as np
 import pytest
-from fmpy.validation import validate_fmu
 from support.fmu_checks import initialised_slave, make_inputs, run_steps, zoh_reference
 
 from mace_fmu.cli import main
 from mace_fmu.fe.modes import compute_modes
 from mace_fmu.fmu.export import export_fmu
+from mace_fmu.fmu.validation import validate_fmu
 from mace_fmu.iomodel.parametric import ParametricSystem
 from mace_fmu.iomodel.parametric_data import parametric_arrays
 from mace_fmu.iomodel.pole_pairing import pair_poles

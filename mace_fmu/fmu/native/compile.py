@@ -3,12 +3,16 @@
 The ``ziglang`` package (a dependency, so ``pip install`` brings it) cross-compiles for every target of
 :mod:`mace_fmu.fmu.native.platforms` from any machine, with its own libc headers and import stubs: one
 compiler, one flag set, five targets. The runtime does not depend on the model (the model is data), so
-one compilation per platform, runtime variant and source version serves every FMU: it is cached on disk
-(``cache_dir``) under a key of the sources, flags, target and zig version, and the targets compile side by
-side. There are four variants, the plant and the controller each for FMI 2 and FMI 3 (``C_FILES``,
-``CONTROLLER_C_FILES``): an FMU links only its own FMI version's entry points, so that its binaries
-export that version's functions and nothing of the other. The
-flags are portable: no -march=native and no -ffast-math, and -ffp-contract=off so that no target fuses
+one compilation per platform, runtime variant and source version serves every FMU, under a key of the
+sources, flags, target and zig version. The package build compiles every variant for every platform
+into the package (``PREBUILT_DIR``, by :func:`prebuild`, run from ``setup.py``), so that an export on a
+fresh machine compiles nothing: zig's first build for a target makes its C libraries (the mingw-w64 C
+runtime for Windows takes minutes). Binaries the package lacks (sources changed since the build, another
+zig) are compiled at first use, the targets side by side, reported step by step to a progress callback,
+and kept on disk (``cache_dir``). There are four variants (``VARIANTS``), the plant and the controller
+each for FMI 2 and FMI 3 (``C_FILES``, ``CONTROLLER_C_FILES``): an FMU links only its own FMI version's
+entry points, so that its binaries export that version's functions and nothing of the other. The flags
+are portable: no -march=native and no -ffast-math, and -ffp-contract=off so that no target fuses
 a*b+c into one rounding (ARM would by default), keeping the exact zero-order hold's IEEE arithmetic
 the same on every platform.
 
@@ -27,14 +31,16 @@ import shutil
 import subprocess
 import sys
 import tempfile
+import time
 import warnings
 from collections.abc import Sequence
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 from importlib import metadata
 from pathlib import Path
 
 from mace_fmu.errors import MaceError
 from mace_fmu.fmu.native.platforms import PLATFORMS, Platform, entry_path
+from mace_fmu.util.progress import ProgressCallback, Step
 
 SOURCE_DIR = Path(__file__).with_name("c")
 #: the FMI entry points of each FMI version; fmi2_api.c also holds maceRunRecord, the updating engine's call
@@ -46,6 +52,13 @@ _CONTROLLER_LAYERS = ("mace_linalg.c", "mace_data.c", "controller/mace_discrete.
 C_FILES = {v: (*_PLANT_LAYERS, api) for v, api in API_C_FILES.items()}
 #: FMI version -> the controller runtime's C files, in link order
 CONTROLLER_C_FILES = {v: (*_CONTROLLER_LAYERS, api) for v, api in API_C_FILES.items()}
+#: every runtime variant by what it is: the package build compiles each for every platform
+VARIANTS = {"plant, FMI 2": C_FILES[2], "plant, FMI 3": C_FILES[3],
+            "controller, FMI 2": CONTROLLER_C_FILES[2], "controller, FMI 3": CONTROLLER_C_FILES[3]}
+#: the binaries compiled when the package was built (setup.py), named as in the cache
+PREBUILT_DIR = Path(__file__).with_name("prebuilt")
+#: while a compilation runs, a progress step at least this often [s]: the first one on a machine takes minutes
+HEARTBEAT_S = 15.0
 #: every target gets these (the C standard, optimisation, exports only what the FMI headers mark)
 CFLAGS = ("-std=c99", "-O3", "-fPIC", "-shared", "-fvisibility=hidden", "-ffp-contract=off", "-g0")
 #: the library file each platform's compilation writes (its name inside the FMU is the model identifier's)
@@ -137,20 +150,75 @@ def _compile(platform: Platform, c_files: tuple[str, ...]) -> bytes:
         return (Path(tmp) / f"{OUTPUT_STEM}{platform.suffix}").read_bytes()
 
 
-@functools.lru_cache(maxsize=32)
-def _compile_cached(platform: Platform, c_files: tuple[str, ...], key: str) -> bytes:
-    cached = cache_dir() / f"{OUTPUT_STEM}-{key}-{platform.name}{platform.suffix}"
-    if cached.is_file():
-        return cached.read_bytes()
+def _file_name(platform: Platform, key: str) -> str:
+    """A binary's file name in the cache and in the package's prebuilt binaries."""
+    return f"{OUTPUT_STEM}-{key}-{platform.name}{platform.suffix}"
+
+
+#: (platform, key) -> binary, read or compiled by this process
+_MEMORY: dict[tuple[Platform, str], bytes] = {}
+
+
+def _stored(platform: Platform, key: str) -> bytes | None:
+    """The binary of ``key`` from this process's memory, the package's prebuilt binaries or the cache; None if
+    it has to be compiled."""
+    if (platform, key) in _MEMORY:
+        return _MEMORY[platform, key]
+    for folder in (PREBUILT_DIR, cache_dir()):
+        path = folder / _file_name(platform, key)
+        if path.is_file():
+            _MEMORY[platform, key] = binary = path.read_bytes()
+            return binary
+    return None
+
+
+def _write(path: Path, binary: bytes) -> None:
+    """Write ``binary`` to ``path`` atomically: parallel exports (pytest-xdist) never read half a file."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with tempfile.NamedTemporaryFile(dir=path.parent, delete=False, prefix=".tmp-") as f:
+        f.write(binary)
+    os.replace(f.name, path)
+
+
+def _compile_and_keep(platform: Platform, c_files: tuple[str, ...], key: str) -> bytes:
     binary = _compile(platform, c_files)
+    _MEMORY[platform, key] = binary
     try:  # an unwritable cache costs a compilation per process, nothing else
-        cached.parent.mkdir(parents=True, exist_ok=True)
-        with tempfile.NamedTemporaryFile(dir=cached.parent, delete=False, prefix=".tmp-") as f:
-            f.write(binary)
-        os.replace(f.name, cached)  # atomic: parallel exports (pytest-xdist) never read half a file
+        _write(cache_dir() / _file_name(platform, key), binary)
     except OSError:
         pass
     return binary
+
+
+def _variant_name(c_files: tuple[str, ...]) -> str:
+    return next((name for name, files in VARIANTS.items() if files == tuple(c_files)), "custom")
+
+
+def _compile_side_by_side(platforms: Sequence[Platform], c_files: tuple[str, ...], keys: dict[Platform, str],
+                          progress: ProgressCallback | None) -> dict[Platform, bytes]:
+    """Compile ``platforms`` at once, reporting the start, each platform done and, while none finishes, a
+    step every ``HEARTBEAT_S`` seconds (the first compilation on a machine is minutes long)."""
+    def report(done: int, detail: str) -> None:
+        if progress is not None:
+            progress(Step(f"native FMU runtime ({_variant_name(c_files)})", done, len(platforms), detail))
+
+    report(0, f"compiling for {', '.join(p.name for p in platforms)} with zig {zig_version()}: seconds per "
+              "platform once zig's own cache holds its C libraries, minutes the first time on a machine")
+    start = time.monotonic()
+    binaries: dict[Platform, bytes] = {}
+    with ThreadPoolExecutor(max_workers=len(platforms)) as pool:
+        futures = {pool.submit(_compile_and_keep, p, c_files, keys[p]): p for p in platforms}
+        pending = set(futures)
+        while pending:
+            finished, pending = wait(pending, timeout=HEARTBEAT_S, return_when=FIRST_COMPLETED)
+            for future in finished:
+                platform = futures[future]
+                binaries[platform] = future.result()  # a failure is raised here, in one MaceError
+                report(len(binaries), f"{platform.name} compiled ({time.monotonic() - start:.0f} s)")
+            if not finished:
+                still = [p.name for p in platforms if any(futures[f] == p for f in pending)]
+                report(len(binaries), f"still compiling for {', '.join(still)} ({time.monotonic() - start:.0f} s)")
+    return binaries
 
 
 def compile_runtime(platform: Platform = PLATFORMS[0], *, c_files: tuple[str, ...] = C_FILES[2]) -> bytes:
@@ -173,9 +241,7 @@ def compile_runtime(platform: Platform = PLATFORMS[0], *, c_files: tuple[str, ..
     MaceError
         zig is missing or fails (its messages included).
     """
-    if not available(platform):
-        raise MaceError(f"no C toolchain for {platform.name}: zig is not installed (pip install ziglang)")
-    return _compile_cached(platform, c_files, _cache_key(platform, c_files, sources_digest(source_files(c_files))))
+    return compile_runtimes([platform], c_files=c_files, requested=True)[platform]
 
 
 class MissingToolchainWarning(UserWarning):
@@ -183,11 +249,34 @@ class MissingToolchainWarning(UserWarning):
 
 
 def compile_runtimes(platforms: Sequence[Platform], *, c_files: tuple[str, ...] = C_FILES[2],
-                     requested: bool = False) -> dict[Platform, bytes]:
-    """The runtime (the FMI 2 plant's by default) for each of ``platforms``, compiled side by side.
+                     requested: bool = False, progress: ProgressCallback | None = None) -> dict[Platform, bytes]:
+    """The runtime (the FMI 2 plant's by default) for each of ``platforms``: the package's prebuilt binary or
+    the cached one, else compiled, the platforms side by side.
 
     A platform without a toolchain is an error when the caller ``requested`` it by name, and one warning
     line otherwise (the FMU then carries sources/ for it, which a host can compile).
+
+    Parameters
+    ----------
+    platforms : sequence of Platform
+        The targets.
+    c_files : tuple of str
+        The runtime variant's C sources, in link order (default: the FMI 2 plant's, ``C_FILES[2]``).
+    requested : bool
+        Whether the caller named these platforms (a missing toolchain is then an error).
+    progress : callable, optional
+        Called with a :class:`~mace_fmu.util.progress.Step` when compiling starts, as each platform is
+        done, and every ``HEARTBEAT_S`` seconds in between; never when every binary is prebuilt or cached.
+
+    Returns
+    -------
+    dict
+        Platform -> the shared library's bytes, in the order of ``platforms``.
+
+    Raises
+    ------
+    MaceError
+        A requested platform without zig, or a compiler failure (its messages included).
     """
     missing = [p for p in platforms if not available(p)]
     if missing:
@@ -199,8 +288,51 @@ def compile_runtimes(platforms: Sequence[Platform], *, c_files: tuple[str, ...] 
     if not todo:
         return {}
     digest = sources_digest(source_files(c_files))  # once for every platform (and every in-memory cache hit)
-    with ThreadPoolExecutor(max_workers=len(todo)) as pool:
-        return dict(zip(todo, pool.map(lambda p: _compile_cached(p, c_files, _cache_key(p, c_files, digest)), todo)))
+    keys = {p: _cache_key(p, c_files, digest) for p in todo}
+    binaries = {p: b for p in todo if (b := _stored(p, keys[p])) is not None}
+    missing = [p for p in todo if p not in binaries]
+    if missing:
+        binaries.update(_compile_side_by_side(missing, c_files, keys, progress))
+    return {p: binaries[p] for p in todo}
+
+
+def prebuild(folder: str | os.PathLike = PREBUILT_DIR, *, progress: ProgressCallback | None = None) -> list[Path]:
+    """Compile every runtime variant for every platform into ``folder`` (what the package build ships).
+
+    Run by ``setup.py`` when the package is built (a wheel, or ``pip install -e .``): an export then finds
+    its binaries there and compiles nothing. Binaries of other source versions in ``folder`` are removed.
+
+    Parameters
+    ----------
+    folder : path
+        Where to write them (default: the package's ``PREBUILT_DIR``).
+    progress : callable, optional
+        Progress steps of the compilations (see :func:`compile_runtimes`).
+
+    Returns
+    -------
+    list of Path
+        The binaries, four variants of five platforms.
+
+    Raises
+    ------
+    MaceError
+        zig is missing or fails.
+    """
+    folder = Path(folder)
+    written = []
+    for c_files in VARIANTS.values():
+        digest = sources_digest(source_files(c_files))
+        for platform, binary in compile_runtimes(PLATFORMS, c_files=c_files, requested=True,
+                                                 progress=progress).items():
+            path = folder / _file_name(platform, _cache_key(platform, c_files, digest))
+            if not path.is_file():
+                _write(path, binary)
+            written.append(path)
+    for old in folder.glob(f"{OUTPUT_STEM}-*"):
+        if old not in written:
+            old.unlink()
+    return written
 
 
 def build_info(binaries: dict[Platform, bytes], *, c_files: tuple[str, ...], fmi_version: int, name: str) -> bytes:

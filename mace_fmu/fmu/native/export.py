@@ -34,6 +34,7 @@ from mace_fmu.iomodel.parametric import ParametricSystem
 from mace_fmu.iomodel.parametric_data import parametric_arrays, with_frequency_bounds
 from mace_fmu.iomodel.volts import VoltsModel
 from mace_fmu.util.atomic import atomic_zip
+from mace_fmu.util.progress import ProgressCallback
 
 FmiVersion = Literal[2, 3]
 RESOURCE_NAME = "mace_model.bin"
@@ -117,7 +118,7 @@ def jacobian_pattern(system: ParametricSystem, *, samples: int = 2, seed: int = 
 def export_native_fmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str | None = None,
                       fmi_version: FmiVersion = 2, arrays: dict[str, np.ndarray] | None = None,
                       frequency_bounds: Mapping[int, float] | None = None,
-                      platforms: Sequence[str] | None = None) -> Path:
+                      platforms: Sequence[str] | None = None, progress: ProgressCallback | None = None) -> Path:
     """Write a native FMU (the C runtime, compiled here) of ``model`` and return its path.
 
     Parameters
@@ -142,6 +143,9 @@ def export_native_fmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str
         The platforms to carry binaries for, FMI 3 tuples (``"x86_64-linux"``, ``"aarch64-linux"``,
         ``"x86_64-windows"``, ``"x86_64-darwin"``, ``"aarch64-darwin"``); default all five. One named here
         that cannot be built is an error; without zig the default set is one warning and sources/ only.
+    progress : callable, optional
+        Native runtime: told of the runtime's compilation, step by step, when it has to be compiled (not
+        prebuilt or cached: see :func:`~mace_fmu.fmu.native.compile.compile_runtimes`).
 
     Returns
     -------
@@ -175,7 +179,7 @@ def export_native_fmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str
     data["guid"] = [token]
     variables = fmu_variables(arrays, reference.state_names)
     version = metadata.version("mace-fmu")
-    binaries = runtime.compile_runtimes(targets, c_files=c_files, requested=platforms is not None)
+    binaries = runtime.compile_runtimes(targets, c_files=c_files, requested=platforms is not None, progress=progress)
     if fmi_version == 2:
         description = fmi2_model_description(variables, model_identifier=name, guid=token,
                                              description=model_summary(model), version=version,

@@ -138,6 +138,9 @@ class FrequencyResponseData:
     coherence: np.ndarray | None = None  #: (k, output) multiple coherence of each output with all inputs
     #: the number of averages (Welch segments) behind the estimate and its coherence; None where not stated
     averages: int | None = None
+    #: how exactly the file states each frequency, relative: half a unit of the last digit it keeps (5e-6 for UFF
+    #: 58's E13.5, six significant digits); 0 for a file that keeps them exactly (CSV '%.17g', an estimate in memory)
+    frequency_precision: float = 0.0
 
     def __post_init__(self) -> None:
         f = np.asarray(self.frequencies_hz, dtype=float)
@@ -170,6 +173,9 @@ class FrequencyResponseData:
                 raise DataError(f"{self.source}: output {self.outputs[i]!r}: {what} at row {k}", source=self.source,
                                 what=what, channel=self.outputs[i], row=k)
             object.__setattr__(self, "coherence", c)
+        if not (isinstance(self.frequency_precision, (int, float)) and 0.0 <= self.frequency_precision < 1e-2):
+            raise MaceError(f"{self.source}: frequency_precision {self.frequency_precision!r}, expected a relative "
+                            "precision in [0, 0.01) (5e-6 for six significant digits)")
         if self.averages is not None and not (isinstance(self.averages, (int, np.integer)) and self.averages >= 1):
             raise MaceError(f"{self.source}: averages {self.averages!r}, expected a whole number >= 1 (the Welch "
                             "segments or analyser averages behind the estimate)")
@@ -179,7 +185,7 @@ class FrequencyResponseData:
         return FrequencyResponseData(self.frequencies_hz[keep], self.inputs, self.outputs, self.response[keep],
                                      source=self.source, units=self.units,
                                      coherence=None if self.coherence is None else self.coherence[keep],
-                                     averages=self.averages)
+                                     averages=self.averages, frequency_precision=self.frequency_precision)
 
     def unit(self, signal: str) -> str:
         """The unit of an input or output signal, e.g. "V"; the response's unit is output unit / input unit."""

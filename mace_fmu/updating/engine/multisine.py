@@ -59,6 +59,9 @@ class MultisineProbe:
     #: largest change of the response, relative to the largest, when the sample rate doubles (module docstring)
     rate_tolerance: float = 1e-3
     max_rate_doublings: int = 6  #: 20 samples per cycle become at most 1280
+    #: the lines as the data state them, before :func:`multisine_probe` put them on the grid (None: the same)
+    given_hz: np.ndarray | None = None
+    note: str = ""  #: how the lines were put on the grid, when any moved by more than round-off ("": none did)
     _periods: list = field(default_factory=lambda: [2], repr=False, compare=False)  #: learnt run length
     _cache: dict = field(default_factory=dict, repr=False, compare=False)  #: one period of the input
 
@@ -165,27 +168,135 @@ class MultisineProbe:
             self._periods[0] = 2 * periods
 
 
-def multisine_probe(frequencies_hz: np.ndarray, *, samples_per_cycle: int = 20) -> MultisineProbe:
+#: the floor of every line's tolerance, in steps of the grid: the round-off of frequencies computed as k x spacing
+#: (CSV '%.17g', an estimate in memory), which earlier versions held every file to
+GRID_FLOOR = 1e-6
+
+
+def multisine_probe(frequencies_hz: np.ndarray, *, samples_per_cycle: int = 20,
+                    precision: float = 0.0) -> MultisineProbe:
     """The probe for measured frequencies on a uniform grid (as an FFT analyser gives them): the period is one
     over the grid's spacing, the sample time at least ``samples_per_cycle`` per cycle of the highest line.
+
+    A file keeps each frequency to some digits (UFF 58: six, ``precision`` 5e-6): a line may then lie up to
+    ``precision`` x f from its multiple of the spacing. The spacing is the one every line agrees with within its
+    precision (one step of the grid is the smallest gap between two lines), estimated by least squares over all
+    the lines; the probe runs at the lines put exactly on the grid, k x spacing (a periodic signal has no other),
+    and says so in :attr:`MultisineProbe.note` when any line moved by more than round-off.
+
+    Parameters
+    ----------
+    frequencies_hz : numpy.ndarray
+        The lines [Hz], increasing and positive.
+    samples_per_cycle : int, optional
+        Samples per cycle of the highest line (the sample rate may rise later, :class:`MultisineProbe`).
+    precision : float, optional
+        How exactly the lines are stated, relative (the data's ``frequency_precision``; 0: exactly, to the
+        round-off of k x spacing, :data:`GRID_FLOOR` of a step).
+
+    Returns
+    -------
+    MultisineProbe
+        Its ``frequencies_hz`` on the grid, ``given_hz`` the lines as stated.
 
     Raises
     ------
     MaceError
-        Frequencies that are not whole multiples of one spacing (no periodic signal has all of them).
+        Frequencies that are not whole multiples of one spacing within their precision (no periodic signal has
+        all of them).
     """
     f = np.asarray(frequencies_hz, dtype=float)
     if f.ndim != 1 or f.size == 0 or not np.all(f > 0):
         raise MaceError("a periodic probe needs one or more positive frequencies")
-    spacing = float(np.min(np.diff(f))) if f.size > 1 else float(f[0])
-    multiples = f / spacing
-    if not np.allclose(multiples, np.rint(multiples), rtol=0, atol=1e-6):
-        raise MaceError(f"frequencies from {f[0]:g} to {f[-1]:g} Hz are not whole multiples of {spacing:g} Hz: no "
-                        "periodic signal has all of them (give the data on a uniform grid)")
+    if f.size > 1 and np.any(np.diff(f) <= 0):
+        raise MaceError("a periodic probe needs increasing frequencies")
+    if not 0.0 <= precision < 1e-2:
+        raise MaceError(f"precision {precision!r}: expected a relative precision in [0, 0.01)")
+    spacing, k, several = _grid(f, precision)
+    lines = k * spacing
+    moved = np.abs(lines / f - 1.0)
+    note = ""
+    if moved.max() > 1e-12:
+        note = (f"{f.size} lines from {f[0]:g} to {f[-1]:g} Hz put on the grid k x {spacing:.10g} Hz (the spacing by "
+                f"least squares over every line; the largest move {moved.max():.2g} of a line"
+                + (f", within the {precision:g} the data state them to" if precision else "")
+                + ("; the lines' digits fit finer grids too: the coarsest was taken, the shortest period" if several
+                   else "") + ")")
     period = 1.0 / spacing
-    samples = int(np.ceil(samples_per_cycle * f[-1] * period))
+    samples = int(np.ceil(samples_per_cycle * lines[-1] * period))
     samples += samples % 2  # an even period: the lines sit below the Nyquist bin
-    return MultisineProbe(frequencies_hz=f, period_s=period, samples_per_period=samples)
+    return MultisineProbe(frequencies_hz=lines, period_s=period, samples_per_period=samples, given_hz=f, note=note)
+
+
+def _grid(f: np.ndarray, precision: float) -> tuple[float, np.ndarray, bool]:
+    """(spacing [Hz], each line's multiple k, whether the data fit other grids too) of lines that are whole
+    multiples of one spacing within their precision; MaceError otherwise.
+
+    Each line f_i allows the spacings [f_i - t_i, f_i + t_i] / k_i (t_i its tolerance). The smallest gaps (one
+    step each) bound the spacing at first; a line whose multiple is then the only one possible narrows the
+    bounds, until every line's multiple is known. Lines far above their spacing, stated to few digits, may fit
+    several grids (400 Hz to six digits is 400 +- 0.002 Hz, 4 % of a 0.049 Hz step): then the coarsest grid that
+    fits every line is taken (the shortest period), each of them within the data's precision of the lines. The
+    spacing is the least-squares one (each line weighed by its tolerance), kept within the bounds every line
+    allows."""
+    if f.size == 1:
+        return float(f[0]), np.ones(1, dtype=int), False
+    gaps = np.diff(f)
+    smallest = float(gaps.min())
+    tolerance = precision * f + GRID_FLOOR * smallest
+    gap_tolerance = tolerance[:-1] + tolerance[1:]
+    # every gap as small as the smallest within the tolerances is one step: each bounds the spacing
+    one_step = gaps - gap_tolerance <= smallest + gap_tolerance[int(np.argmin(gaps))]
+    low = float(np.max((gaps - gap_tolerance)[one_step]))
+    high = float(np.min((gaps + gap_tolerance)[one_step]))
+
+    def refuse(detail: str) -> MaceError:
+        return MaceError(f"frequencies from {f[0]:g} to {f[-1]:g} Hz are not whole multiples of {smallest:g} Hz: no "
+                         f"periodic signal has all of them ({detail}; give the data on a uniform grid)")
+
+    found = _multiples(f, tolerance, low, high)
+    several = isinstance(found, tuple) and found[0] == "several"
+    if several:  # the lowest line's multiple decides the rest: the smallest that fits every line
+        fewest, most = (int(v) for v in found[1:])
+        for k0 in range(fewest, min(most, fewest + 100_000) + 1):
+            tried = _multiples(f, tolerance, max(low, (f[0] - tolerance[0]) / k0),
+                               min(high, (f[0] + tolerance[0]) / k0))
+            if isinstance(tried, np.ndarray):
+                found = tried
+                break
+    if not isinstance(found, np.ndarray):
+        line = int(found[1]) if found[0] == "none" else 0
+        detail = (f"{f[line]:g} Hz is {f[line] / (0.5 * (low + high)):.4f} steps"
+                  + (f", more than its precision {precision:g} allows" if precision else "")
+                  if found[0] == "none" else "no one spacing fits every line within its precision")
+        raise refuse(detail)
+    k = found
+    bounds_low = float(np.max((f - tolerance) / k))
+    bounds_high = float(np.min((f + tolerance) / k))
+    weight = 1.0 / tolerance**2
+    spacing = float(np.sum(weight * k * f) / np.sum(weight * k * k))
+    return min(max(spacing, bounds_low), bounds_high), k, several
+
+
+def _multiples(f: np.ndarray, tolerance: np.ndarray, low: float, high: float) -> np.ndarray | tuple:
+    """Each line's multiple of a spacing in [low, high] that puts every line within its tolerance (an int array);
+    else ("none", the first line no multiple fits) or ("several", fewest, most multiples of the lowest line)."""
+    known = np.zeros(f.size, dtype=bool)
+    while True:
+        if low > high:
+            return ("none", int(np.flatnonzero(known)[-1]) if known.any() else 0)
+        fewest = np.maximum(np.ceil((f - tolerance) / high), 1)
+        most = np.floor((f + tolerance) / low)
+        if np.any(most < fewest):
+            return ("none", int(np.flatnonzero(most < fewest)[0]))
+        sure = most == fewest
+        if sure.all():
+            return fewest.astype(int)
+        if not np.any(sure & ~known):
+            return ("several", fewest[0], most[0])
+        known |= sure
+        low = max(low, float(np.max((f - tolerance)[known] / fewest[known])))
+        high = min(high, float(np.min((f + tolerance)[known] / fewest[known])))
 
 
 @dataclass(frozen=True)
@@ -209,7 +320,9 @@ class ProbedFrequencyResponseCost:
 
     def __post_init__(self) -> None:
         pairs = measured_pairs(self.data, self.pairs)
-        if not np.allclose(self.probe.frequencies_hz, self.data.frequencies_hz, rtol=1e-12, atol=0.0):
+        given = self.probe.given_hz if self.probe.given_hz is not None else self.probe.frequencies_hz
+        if given.shape != self.data.frequencies_hz.shape or not np.allclose(given, self.data.frequencies_hz,
+                                                                             rtol=1e-12, atol=0.0):
             raise MaceError(f"{self.data.source}: the probe's lines are not the data's frequencies")
         object.__setattr__(self, "pairs", tuple(pairs))
 

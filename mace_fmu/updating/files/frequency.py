@@ -26,6 +26,8 @@ UFF_FRF = 4
 UFF_DIRECTIONS = {1: "X", 2: "Y", 3: "Z", 4: "RX", 5: "RY", 6: "RZ"}
 #: the ID lines (4 and 5) that carry the model's signal names, so that a file reads back by name
 UFF_OUTPUT_ID, UFF_INPUT_ID = "output: ", "input: "
+#: how exactly dataset 58 states a frequency (E13.5: six significant digits), relative: half a unit of the sixth
+UFF_FREQUENCY_PRECISION = 5e-6
 #: how a file states the number of averages behind its estimate: a CSV comment line ``# averages = 7`` before
 #: the header, UFF 58's ID line 3 ``averages: 7`` (dataset 58 has no field of its own for it)
 _CSV_AVERAGES = re.compile(r"^#\s*averages\s*[=:]\s*(\S+)\s*$")
@@ -146,7 +148,7 @@ def _signal(label: Label, channel_map: ChannelMap | None, at: str, role: str) ->
 
 
 def _frd(f, inputs, outputs, response, units, *, source, row_at, channel_of, coherence=None,
-         averages=None) -> FrequencyResponseData:
+         averages=None, frequency_precision=0.0) -> FrequencyResponseData:
     # The response's NaN check, located per channel pair (FrequencyResponseData only knows the row).
     for i, out in enumerate(outputs):
         for j, inp in enumerate(inputs):
@@ -156,7 +158,7 @@ def _frd(f, inputs, outputs, response, units, *, source, row_at, channel_of, coh
                                 f"response is NaN or inf ({bad.size} of {len(f)} rows)")
     try:
         return FrequencyResponseData(f, tuple(inputs), tuple(outputs), response, source=source, units=units,
-                                     coherence=coherence, averages=averages)
+                                     coherence=coherence, averages=averages, frequency_precision=frequency_precision)
     except DataError as exc:
         channel = "frequency" if exc.channel is None else channel_of.get(exc.channel, exc.channel)
         raise MaceError(f"{row_at(exc.row)}: channel {channel!r}: {exc.what}") from None
@@ -335,11 +337,11 @@ def _read_uff(path: Path, channel_map: ChannelMap | None) -> FrequencyResponseDa
             response[:, i, j] = pairs[(out, inp)][1]
     return _frd(f0, signals.inputs, signals.outputs, response, signals.units, source=str(path),
                 row_at=lambda row: f"{path}: dataset {k0} row {row}", channel_of=signals.channel_of,
-                averages=averages)
+                averages=averages, frequency_precision=UFF_FREQUENCY_PRECISION)
 
 
 def _uff_abscissa(f: np.ndarray) -> np.ndarray:
-    """The frequencies as dataset 58 stores them (E13.5: six significant digits)."""
+    """The frequencies as dataset 58 stores them (E13.5: six significant digits, UFF_FREQUENCY_PRECISION)."""
     return np.array([float(f"{x:13.5e}") for x in f])
 
 

@@ -5,8 +5,11 @@
 physical parameters at initialisation, any other FMU does whatever it does with its parameters.
 :class:`FmuFamily` maps parameter values to such a model (the engine's ``ModelFamily``).
 
-Each process loads (extracts and instantiates) an FMU once and reuses the instance, resetting it
-between runs (``fmi2Reset``): a Dask worker pays the load once however many runs it gets. After a
+Each process loads (extracts and instantiates) an FMU once per thread and reuses the instance, resetting it
+between runs (``fmi2Reset``): a Dask worker pays the load once however many runs it gets, and two tasks
+at once in a worker of several threads never share an instance. A worker reads the FMU's bytes the
+client sent it (:meth:`~mace_fmu.util.runner.DaskRunner.ship`, by :func:`ship_fmu`), not the client's
+path, which names nothing on another machine or in another folder. After a
 pythonfmu FMU's instantiation the process-wide state its binary would write into after freeing it at
 exit is released (:func:`mace_fmu.fmu.host.release_pythonfmu_state`: the workers' "corrupted
 double-linked list"). FMUs written by pythonfmu are still run only in worker processes: their wrapper
@@ -18,11 +21,13 @@ the caller's process; native FMUs run anywhere.
 from __future__ import annotations
 
 import ctypes
+import dataclasses
 import functools
 import hashlib
 import os
 import shutil
 import tempfile
+import threading
 import weakref
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -33,6 +38,7 @@ import numpy as np
 from mace_fmu.errors import MaceError
 from mace_fmu.fmu.archive import check_cosimulation_fmu
 from mace_fmu.fmu.host import collecting_callbacks, release_pythonfmu_state, status_name
+from mace_fmu.util.shipping import sha256_of, shipped_copy
 
 #: an output's gain as an update parameter, "gain:strain_strut2_y": the data are gain x the FMU's output
 GAIN_PREFIX = "gain:"
@@ -60,6 +66,7 @@ class FmuInterface:
     #: the declared [min, max] of each parameter (-inf, inf where the FMU declares none) [FMU units]
     ranges: Mapping[str, tuple[float, float]] = field(default_factory=dict)
     descriptions: Mapping[str, str] = field(default_factory=dict)  #: of each parameter, as the FMU gives them
+    sha256: str = ""  #: of the file's bytes, by which a Dask worker finds the copy sent to it
 
     @property
     def configuration(self) -> str:
@@ -136,6 +143,7 @@ def read_fmu_interface(path: str | os.PathLike) -> FmuInterface:
 
     path = check_cosimulation_fmu(path)
     md = fmpy.read_model_description(os.fspath(path))
+    digest = sha256_of(path.read_bytes())
     real = [v for v in md.modelVariables if v.type == "Real"]
     parameters = {v.name: float(v.start) for v in real
                   if v.causality == "parameter" and v.variability in ("fixed", "tunable") and v.start is not None}
@@ -149,7 +157,8 @@ def read_fmu_interface(path: str | os.PathLike) -> FmuInterface:
                         ranges={v.name: (float(v.min) if v.min is not None else -np.inf,
                                          float(v.max) if v.max is not None else np.inf)
                                 for v in real if v.name in parameters},
-                        descriptions={v.name: v.description or "" for v in real if v.name in parameters})
+                        descriptions={v.name: v.description or "" for v in real if v.name in parameters},
+                        sha256=digest)
 
 
 def _in_worker_process() -> bool:
@@ -182,7 +191,7 @@ class _LoadedFmu:
     through FMI call by call.
     """
 
-    def __init__(self, interface: FmuInterface, *, whole_record: bool = True):
+    def __init__(self, interface: FmuInterface, *, whole_record: bool = True, file: str | None = None):
         from fmpy import extract
         from fmpy.fmi2 import FMU2Slave
 
@@ -190,7 +199,7 @@ class _LoadedFmu:
         self.messages: list[str] = []
         folder = _extraction_folder()
         weakref.finalize(self, shutil.rmtree, folder, True)
-        extract(interface.path, unzipdir=folder)
+        extract(file or interface.path, unzipdir=folder)
         self.slave = FMU2Slave(guid=interface.guid, unzipDirectory=folder, modelIdentifier=interface.model_identifier,
                                instanceName="mace_fmu_cost")
 
@@ -302,17 +311,25 @@ class _LoadedFmu:
         return y
 
 
-@functools.lru_cache(maxsize=4)
-def _loaded(path: str, guid: str) -> _LoadedFmu:
-    """This process's instance of the FMU (one per process: a Dask worker loads it at its first run)."""
-    interface = read_fmu_interface(path)
+@functools.lru_cache(maxsize=8)
+def _loaded(path: str, guid: str, sha256: str = "", thread: int = 0) -> _LoadedFmu:
+    """This thread's instance of the FMU (a Dask worker loads it at its first run): from the copy the client
+    shipped to this worker if there is one, else from ``path``. ``thread`` keys the instance: one instance
+    runs one record at a time."""
+    local = shipped_copy(sha256=sha256, name=Path(path).name)
+    if local is None and _in_worker_process() and not os.path.isfile(path):
+        raise MaceError(f"{path}: no such FMU file on the Dask worker (folder {os.getcwd()}), and none was sent "
+                        "to it: run the FMU through update_fmu or plan_tests, which send it, or "
+                        "call DaskRunner.ship(path) first")
+    interface = read_fmu_interface(local or path)
     if interface.guid != guid:
         raise MaceError(f"{path}: the FMU changed while in use (GUID {interface.guid}, expected {guid})")
     if interface.written_by_pythonfmu and not _in_worker_process():
         raise MaceError(f"{path}: FMUs written by pythonfmu are simulated in worker processes only (their "
                         "wrapper releases a slave's Python objects twice after an error in it): pass a Dask runner "
                         "(CLI: --workers N or --scheduler ADDRESS), or export a native FMU")
-    return _LoadedFmu(interface)
+    # messages name the FMU as the client does, wherever its bytes were read from
+    return _LoadedFmu(dataclasses.replace(interface, path=path), file=os.fspath(local or path))
 
 
 def _digest(*arrays: np.ndarray) -> str:
@@ -322,10 +339,10 @@ def _digest(*arrays: np.ndarray) -> str:
     return h.hexdigest()
 
 
-def _run_in_worker(path: str, guid: str, values: Mapping[str, float], t: np.ndarray, u: np.ndarray,
+def _run_in_worker(path: str, guid: str, sha256: str, values: Mapping[str, float], t: np.ndarray, u: np.ndarray,
                    names: Sequence[str], outs: Sequence[str]) -> np.ndarray:
     """One FMU run where this function is executed (a Dask worker: see :class:`FmuModel`)."""
-    return _loaded(path, guid).run(values, t, u, names, outs)
+    return _loaded(path, guid, sha256, threading.get_ident()).run(values, t, u, names, outs)
 
 
 def _run_packed(args: tuple) -> np.ndarray:
@@ -385,7 +402,8 @@ class FmuModel:
             raise MaceError(f"time_response: inputs have {u.shape[0]} samples, times have {len(t)}")
         key = (_digest(t, u), tuple(names), tuple(outs))
         if key not in self._memo:
-            args = (self.interface.path, self.interface.guid, dict(self.values), t, u, names, outs)
+            args = (self.interface.path, self.interface.guid, self.interface.sha256, dict(self.values), t, u, names,
+                    outs)
             if self.interface.written_by_pythonfmu and self.runner is not None and not _in_worker_process():
                 (y,) = list(self.runner(_run_packed, [args]))
             else:
@@ -456,3 +474,18 @@ class FmuFamily:
 def fmu_family(path: str | os.PathLike, *, fixed: Mapping[str, float] | None = None) -> FmuFamily:
     """The family of the FMU at ``path`` (interface read and checked once)."""
     return FmuFamily(interface=read_fmu_interface(Path(path)), fixed=dict(fixed or {}))
+
+
+def ship_fmu(interface: FmuInterface, runner: Callable) -> None:
+    """Send the FMU's bytes to the workers of ``runner`` when it has workers (a
+    :class:`~mace_fmu.util.runner.DaskRunner`: its ``ship``); ``map`` and other runners run where the path is
+    read. Each worker then loads the FMU from its own copy, wherever it runs.
+
+    Raises
+    ------
+    MaceError
+        The file changed since ``interface`` was read from it, or the workers cannot store it.
+    """
+    ship = getattr(runner, "ship", None)
+    if ship is not None:
+        ship(interface.path, sha256=interface.sha256)

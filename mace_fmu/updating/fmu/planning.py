@@ -32,7 +32,7 @@ from mace_fmu.updating.engine.costs import SeveralTests, TimeResponseCost, WithP
 from mace_fmu.updating.engine.measured import TimeHistory
 from mace_fmu.updating.engine.sensitivity import cost_sensitivities
 from mace_fmu.updating.engine.uncertainty import StageUncertainty, linearised_uncertainty
-from mace_fmu.updating.fmu.model import FmuFamily, gain_parameter, read_fmu_interface
+from mace_fmu.updating.fmu.model import FmuFamily, gain_parameter, read_fmu_interface, ship_fmu
 from mace_fmu.updating.fmu.truth import band_limited_noise
 from mace_fmu.updating.fmu.update import FMU_SETTINGS
 from mace_fmu.util.progress import ProgressCallback
@@ -105,6 +105,7 @@ def predict_uncertainty(*, family: FmuFamily, parameters: Sequence[str], candida
     family = dataclasses.replace(family, gain_outputs=tuple(gains), fixed={**family.fixed, **held})
     if interface.written_by_pythonfmu:
         family = dataclasses.replace(family, runner=runner)
+    ship_fmu(interface, runner)  # the workers read the FMU's bytes, not the client's path
     base = {n: float((values or {}).get(n, interface.parameters[n])) for n in names}
     base.update({gain_parameter(o): 1.0 for o in gains})
     truth = family.full(base)

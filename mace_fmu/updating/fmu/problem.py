@@ -34,6 +34,8 @@ class FmuProblem:
     data_files: tuple[str, ...]  #: the measured data files read
     histories: tuple[TimeHistory, ...] = ()  #: every test's time history (``history`` is the first)
     responses: tuple[FrequencyResponseData, ...] = ()  #: every measured frequency response, in the band
+    #: what was made of the data before the update, said where it runs (a file's lines put on the analyser's grid)
+    notes: tuple[str, ...] = ()
 
 
 def fmu_problem(*, fmu: str | os.PathLike, data: Sequence[str | os.PathLike], names: Sequence[str],
@@ -224,14 +226,17 @@ def _frequency_response_problem(interface, responses: list[FrequencyResponseData
     floor = DEFAULT_FLOOR if floor is None else floor
     noises = [frf_noise(frd, averages=averages, floor=floor) if how == "noise" else None
               for frd, how in zip(in_band, chosen)]
-    costs = [ProbedFrequencyResponseCost(data=frd, probe=multisine_probe(frd.frequencies_hz), noise=noise)
-             for frd, noise in zip(in_band, noises)]
+    # a file keeps its frequencies to some digits (UFF 58: six): the probe puts them back on the analyser's grid
+    probes = [multisine_probe(frd.frequencies_hz, precision=frd.frequency_precision) for frd in in_band]
+    costs = [ProbedFrequencyResponseCost(data=frd, probe=probe, noise=noise)
+             for frd, probe, noise in zip(in_band, probes, noises)]
     the_cost = costs[0] if len(costs) == 1 else SeveralTests(tests=tuple(costs), weights=(1.0,) * len(costs),
                                                                labels=tuple(frd.source for frd in in_band))
     family = FmuFamily(interface=interface, fixed=start)
     return FmuProblem(family=family, names=names, start={n: start.get(n, interface.parameters[n]) for n in names},
                       history=None, frequency_data=in_band[0], cost=the_cost,
-                      data_files=tuple(os.fspath(p) for p in data), responses=tuple(in_band))
+                      data_files=tuple(os.fspath(p) for p in data), responses=tuple(in_band),
+                      notes=tuple(f"{frd.source}: {probe.note}" for frd, probe in zip(in_band, probes) if probe.note))
 
 
 def _in_bands(frd: FrequencyResponseData, bands_hz: Sequence[tuple[float, float]]) -> FrequencyResponseData:

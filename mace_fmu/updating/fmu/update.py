@@ -24,7 +24,7 @@ from mace_fmu.updating.engine.costs import Cost, TimeResponseCost
 from mace_fmu.updating.engine.measured import FrequencyResponseData, TimeHistory
 from mace_fmu.updating.engine.simulated_frf import H1Estimator, SimulatedFrequencyResponseCost, log_h1_weights, principal_pairs
 from mace_fmu.updating.engine.solve import Bounds, Stage, UpdateResult, UpdateSettings, update
-from mace_fmu.updating.fmu.model import FmuFamily
+from mace_fmu.updating.fmu.model import FmuFamily, ship_fmu
 from mace_fmu.util.atomic import write_text_atomic
 from mace_fmu.util.progress import ProgressCallback
 
@@ -129,6 +129,7 @@ def update_fmu(*, family: FmuFamily, cost: Cost, start: Mapping[str, float], sta
     if outside:
         raise MaceError(f"{family.interface.path}: start values outside the FMU's declared ranges: "
                         + "; ".join(outside))
+    ship_fmu(family.interface, runner)  # the workers read the FMU's bytes, not the client's path
     plan = [Stage(name=f"stage {k + 1}", parameters=tuple(s)) for k, s in enumerate(stages)]
     return update(family, cost, start=dict(start), stages=plan, bounds=declared_bounds(family, names, start),
                   settings=settings, runner=runner, progress=progress)

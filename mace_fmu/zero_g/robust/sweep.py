@@ -6,15 +6,19 @@ Corners: all 2^n when the box has at most ``critical_count`` parameters; otherwi
 runs) span the corners and the rest stay nominal: 2^n corners of 15 Table 5.3 bounds would be
 32768 runs. Every run goes through ``runner`` (``map``, or a :class:`~mace_fmu.util.runner.DaskRunner`);
 the runs are independent and their results come back in order, so any runner gives the same
-numbers bit for bit.
+numbers bit for bit. A runner with workers (a DaskRunner) gets the FMU's bytes
+(:meth:`~mace_fmu.util.runner.DaskRunner.ship`): each worker extracts its own copy once, wherever it runs.
 """
 
 from __future__ import annotations
 
+import functools
 import os
 import tempfile
+import threading
 from dataclasses import dataclass
 from functools import partial
+from pathlib import Path
 from typing import Callable
 
 import numpy as np
@@ -22,6 +26,7 @@ import scipy.stats
 
 from mace_fmu.errors import MaceError
 from mace_fmu.util.progress import ProgressCallback, Step
+from mace_fmu.util.shipping import sha256_of, shipped_copy
 from mace_fmu.zero_g.robust.box import (DEFAULT_PATTERN, ParameterBox, SweepPoint, corner_points, monte_carlo_points,
                                         nominal_point, read_box, screening_points)
 from mace_fmu.zero_g.robust.cosim import SampledCompensator, run_fmu_loop
@@ -85,10 +90,48 @@ class SweepResult:
         return max(candidates, key=lambda i: (not self.runs[i].stable, self.runs[i].cost_rms_v))
 
 
-def _run_point(values: tuple[float, ...], *, folder: str, names: tuple[str, ...], loop: LoopSpec,
+@dataclass(frozen=True)
+class _SweptFmu:
+    """The FMU of a sweep as its runs find it: the client's path and extraction, and the bytes' SHA-256."""
+
+    path: str  #: as the client names it
+    sha256: str
+    folder: str  #: where the client extracted it
+
+    def unzipped(self) -> str:
+        """The extracted FMU this process runs: a Dask worker's own copy of the bytes shipped to it, else the
+        client's extraction (a serial run, or a runner that shipped nothing)."""
+        copy = shipped_copy(sha256=self.sha256, name=Path(self.path).name)
+        if copy is None:
+            if not os.path.isdir(self.folder):
+                raise MaceError(f"{self.path}: no extracted FMU at {self.folder} in this process, and none was sent "
+                                "to it: run the sweep through robust_sweep with the DaskRunner, which sends it")
+            return self.folder
+        with _EXTRACTING:  # two tasks at once in one worker: one extracts, the other waits and reuses it
+            return _extracted(os.fspath(copy))
+
+
+_EXTRACTING = threading.Lock()
+
+
+@functools.lru_cache(maxsize=4)
+def _extracted(copy: str) -> str:
+    """``copy`` (a shipped FMU in a worker's local directory) extracted beside it, once per process."""
+    import fmpy
+
+    folder = Path(copy).parent / "unzipped"
+    if not (folder / "modelDescription.xml").is_file():
+        # extracted aside and renamed: a folder left by an interrupted extraction is never taken for a whole one
+        partial_folder = tempfile.mkdtemp(prefix=".unzipping-", dir=Path(copy).parent)
+        fmpy.extract(copy, unzipdir=partial_folder)
+        os.replace(partial_folder, folder)
+    return os.fspath(folder)
+
+
+def _run_point(values: tuple[float, ...], *, fmu: _SweptFmu, names: tuple[str, ...], loop: LoopSpec,
                compensator: SampledCompensator) -> RunResult:
     """One closed-loop co-simulation (module level, so Dask can pickle it)."""
-    run = run_fmu_loop(folder, loop=loop, compensator=compensator, parameters=dict(zip(names, values)))
+    run = run_fmu_loop(fmu.unzipped(), loop=loop, compensator=compensator, parameters=dict(zip(names, values)))
     v = run.verdict
     return RunResult(cost_rms_v=v.cost_rms_v, growth_ratio=v.growth_ratio, stable=v.stable, failure=run.failure)
 
@@ -118,8 +161,8 @@ def robust_sweep(fmu: str | os.PathLike, *, compensator, loop: LoopSpec = LoopSp
                  progress: ProgressCallback | None = None) -> SweepResult:
     """Run the sweep of ``compensator`` (discrete ``control.StateSpace``, measurement -> control) on ``fmu``.
 
-    The box is ``read_box(fmu, pattern=..., ranges=...)``. ``fmu`` must be readable at the same
-    path by every worker of ``runner`` (a local cluster, or a shared file system).
+    The box is ``read_box(fmu, pattern=..., ranges=...)``. The workers of a DaskRunner get the FMU's bytes
+    (they need not see ``fmu``'s path: another folder, another machine).
 
     Parameters
     ----------
@@ -156,13 +199,17 @@ def robust_sweep(fmu: str | os.PathLike, *, compensator, loop: LoopSpec = LoopSp
     box = read_box(fmu, pattern=pattern, ranges=ranges)
     check_loop_signals(fmu, loop)
     sampled = SampledCompensator.of(compensator)
+    digest = sha256_of(Path(fmu).read_bytes())
+    ship = getattr(runner, "ship", None)
+    if ship is not None:  # the workers read the FMU's bytes, not the client's path
+        ship(fmu, sha256=digest)
     with tempfile.TemporaryDirectory(prefix="mace_fmu_robust_") as tmp:
-        folder = fmpy.extract(os.fspath(fmu), unzipdir=tmp)
-        run = partial(_run_point, folder=folder, names=box.names, loop=loop, compensator=sampled)
+        swept = _SweptFmu(path=os.fspath(fmu), sha256=digest, folder=fmpy.extract(os.fspath(fmu), unzipdir=tmp))
+        run = partial(_run_point, fmu=swept, names=box.names, loop=loop, compensator=sampled)
         first = [nominal_point(box)] + screening_points(box)
         if progress:
             progress(Step("robustness sweep", 0, 2, f"{len(first) + 1} nominal, open-loop and screening runs"))
-        open_loop = list(runner(partial(_run_point, folder=folder, names=(), loop=loop, compensator=OPEN_LOOP), [()]))[0]
+        open_loop = list(runner(partial(_run_point, fmu=swept, names=(), loop=loop, compensator=OPEN_LOOP), [()]))[0]
         first_runs = list(runner(run, [p.values for p in first]))
         nominal = first_runs[0].cost_rms_v
         screen = np.array([r.cost_rms_v for r in first_runs[1:]]).reshape(len(box.names), 2)

@@ -50,3 +50,43 @@ def test_the_probe_gives_the_state_space_response_at_every_line(frame):
 def test_frequencies_no_period_holds_are_refused():
     with pytest.raises(MaceError, match=r"not whole multiples of 0.1 Hz: no periodic signal has all of them"):
         multisine_probe(np.array([1.0, 1.1, 1.25]))
+
+
+def test_an_h1_estimate_read_back_from_uff_58_is_probed_on_the_analyser_s_grid(tmp_path):
+    """UFF 58 keeps six digits of each frequency (E13.5), so an H1 estimate read back from the file has its lines
+    up to 5e-6 off the analyser's grid, fs / N: the probe finds each line's bin on that grid (the truth: the bins
+    the estimate was computed at) and runs at the lines put back on it; the cost then takes the file's data."""
+    from mace_fmu.updating.engine.measured import TimeHistory
+    from mace_fmu.updating.engine.multisine import ProbedFrequencyResponseCost
+    from mace_fmu.updating.files import (
+        h1_estimate,
+        read_frequency_response,
+        write_frequency_response,
+    )
+
+    fs_hz, segment = 200.0, 1024
+    rng = np.random.default_rng(3)
+    u = rng.standard_normal(16 * segment)
+    history = TimeHistory(np.arange(u.size) / fs_hz, {"force": u}, {"acc": np.convolve(u, [0.5, 0.3, 0.2])[:u.size]},
+                          units={"force": "N", "acc": "m/s^2"}, source="shaker run")
+    h1 = h1_estimate(history, segment_length=segment, band_hz=(1.0, 60.0))
+    back = read_frequency_response(write_frequency_response(h1, tmp_path / "h1.uff"))
+    moved = np.abs(back.frequencies_hz / h1.frequencies_hz - 1)
+    assert 1e-7 < moved.max() <= 5e-6 and back.frequency_precision == 5e-6  # what the six digits did
+    probe = multisine_probe(back.frequencies_hz, precision=back.frequency_precision)
+    np.testing.assert_array_equal(probe.bins, np.rint(h1.frequencies_hz * segment / fs_hz).astype(int))
+    assert probe.period_s == pytest.approx(segment / fs_hz, rel=1e-6)
+    np.testing.assert_allclose(probe.frequencies_hz, h1.frequencies_hz, rtol=1e-6)
+    assert "put on the grid" in probe.note and "within the 5e-06 the data state them to" in probe.note
+    cost = ProbedFrequencyResponseCost(data=back, probe=probe)
+    assert cost.pairs == (("force", "acc"),)
+
+
+def test_lines_off_the_grid_by_more_than_their_precision_are_still_refused():
+    grid = np.arange(6, 308) * 0.1953125
+    stated = np.array([float(f"{x:13.5e}") for x in grid])
+    stated[150] *= 1 + 2e-5  # four times what six digits can do
+    with pytest.raises(MaceError, match=r"not whole multiples of 0.19\d* Hz: no periodic signal has all of them "
+                                        r"\(.*more than its precision 5e-06 allows; give the data on a uniform grid\)"):
+        multisine_probe(stated, precision=5e-6)
+    assert multisine_probe(grid).note == ""  # lines on the grid are taken as they are

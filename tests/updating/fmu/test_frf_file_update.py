@@ -10,6 +10,7 @@ update must bring its moduli to the re-solve's, the FMU's response coming from p
 
 from __future__ import annotations
 
+import re
 import tomllib
 
 import numpy as np
@@ -60,6 +61,28 @@ def test_an_frf_file_alone_brings_the_fmu_s_moduli_to_the_full_re_solve_s(frame,
         assert values[name] == pytest.approx(truth, rel=2e-3), name
     for k in (1, 2, 3):  # the data's damping is the structure file's, which the update must leave
         assert values[f"damping_mode_{k}"] == pytest.approx(0.002, rel=2e-3)
+
+
+def test_the_same_data_in_a_uff_58_file_give_the_same_moduli(frame, capsys):
+    """UFF 58 keeps six digits of each frequency (E13.5): the file's lines, up to 5e-6 off the analyser's grid,
+    are put back on it (said on stderr, with the spacing of the grid the data were made on) and the update from
+    the UFF file reaches the re-solve's moduli as the CSV file's does."""
+    from mace_fmu.updating.files import (
+        read_frequency_response,
+        write_frequency_response,
+    )
+
+    folder, fmu, data = frame
+    uff = write_frequency_response(read_frequency_response(data), folder / "resolved.uff")
+    code, _, err = run_cli(capsys, ["update", "fmu", str(fmu), "--data", str(uff), "--cost", "log-frf",
+                                    "--band-hz", "4", "32", "--update", UPDATE, "-o", str(folder / "out_uff"),
+                                    "--workers", "1"])
+    assert code == 0, err
+    said = re.search(r"resolved\.uff: 897 lines from 4 to 32 Hz put on the grid k x (\S+) Hz", err)
+    assert said and float(said.group(1)) == pytest.approx(0.03125, rel=1e-6), err
+    values = tomllib.loads((folder / "out_uff" / "parameters.toml").read_text())["values"]
+    for name, truth in TRUTH.items():
+        assert values[name] == pytest.approx(truth, rel=2e-3), name
 
 
 @pytest.mark.parametrize("extra, message", [
