@@ -1,7 +1,14 @@
 """The FMUs' parameter route against full re-solves, and what it costs (issue 32: FMU parameters exact on every channel).
 
-Run by hand: ``python benchmarks/bench_parameter_route.py [--runs 21] [--skip-accuracy]``; results go into
-benchmarks/RESULTS.md.
+Run by hand: ``python benchmarks/bench_parameter_route.py [--runs 21] [--skip-accuracy] [--random]``; results go
+into benchmarks/RESULTS.md.
+
+``--random`` (issue 50): the error as a user meets it, every physical parameter changed at once: 20 seeded
+points, each parameter uniform in +-w of nominal (w = 5, 10, 15, 20 %) and over its declared range, every
+input driven by 0.5-60 Hz noise for 10 s at 2 ms; each output's RMS difference from the full re-solve (which
+continues the nominal modes, as ``export --parameters`` does) over its RMS, the worst output's per point;
+the worst, median and 90th percentile of the 20, for the 1-g model with the large and the linear preload
+and the 0-g model.
 
 Accuracy, per physical parameter of both MACE models (the reference: tests/support/resolves.py, the deck with
 the parameter built in and solved again, each mode keeping its nominal damping): 10 s at 2 ms of band-limited
@@ -82,6 +89,42 @@ def accuracy(configuration: str) -> list[str]:
     return rows
 
 
+def random_points(configuration: str, preload: str, width: float | None, *, seed: int = 50) -> str:
+    """One table row: the worst output's RMS difference over its RMS at 20 seeded points (module docstring)."""
+    from mace_fmu.fe.modes import compute_modes
+    from mace_fmu.iomodel.parametric import ParametricSystem
+    from mace_fmu.iomodel.parametric_data import parametric_arrays
+    from mace_fmu.iomodel.volts import volts_model
+    from mace_fmu.parameters.sets import ParameterSet
+    from mace_fmu.updating.fmu.truth import band_limited_noise
+
+    model = volts_model(compute_modes(configuration=configuration, preload=preload))
+    system = ParametricSystem(parametric_arrays(model))
+    u = np.column_stack([band_limited_noise(samples=5000, step_s=2e-3, band_hz=(0.5, 60.0), seed=1 + k)
+                         for k in range(len(system.inputs))])
+    rng = np.random.default_rng(seed)
+    worst = []
+    for _ in range(20):
+        params, point = system.nominal.copy(), {}
+        for name in (str(n) for n in system.data["physical_names"]):
+            k = system.index(name)
+            low, high = system.minimum[k], system.maximum[k]
+            if width is not None:
+                low, high = max(low, system.nominal[k] * (1 - width)), min(high, system.nominal[k] * (1 + width))
+            params[k] = point[name] = float(rng.uniform(low, high))
+        resolved = volts_model(compute_modes(configuration=configuration, preload=preload,
+                                             parameters=ParameterSet(point), continue_from=model.structure_modes))
+        reference = ParametricSystem(parametric_arrays(resolved, physical=False))
+        y, y_ref = zoh_response(system.build(params), u), zoh_response(reference.build(reference.nominal), u)
+        rms = np.sqrt(np.mean(y_ref**2, axis=0))
+        errors = np.sqrt(np.mean((y - y_ref) ** 2, axis=0)) / np.where(rms > 0, rms, 1.0)
+        worst.append((float(errors.max()), system.outputs[int(errors.argmax())]))
+    values = 100 * np.array([w for w, _ in worst])
+    box = "declared range" if width is None else f"+-{100 * width:g} %"
+    return (f"| {configuration} | {preload if configuration == '1g' else '-'} | {box} | {values.max():.3f} "
+            f"({max(worst)[1]}) | {np.median(values):.3f} | {np.percentile(values, 90):.3f} |")
+
+
 def costs(configuration: str, runs: int, folder: Path) -> str:
     """Export, initialisation and step times of ``configuration``'s native FMU."""
     import fmpy
@@ -144,6 +187,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=21)
     parser.add_argument("--skip-accuracy", action="store_true")
+    parser.add_argument("--random", action="store_true", help="only the all-at-once random points (issue 50)")
     args = parser.parse_args()
     import os
 
@@ -152,6 +196,14 @@ def main() -> None:
     print(machine_line(fmpy=fmpy.__version__))
     print(f"- date: {time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}, load average before: "
           f"{os.getloadavg()[0]:.1f}")
+    if args.random:
+        print("\n| model | preload | box | worst [% of RMS] (output) | median | 90th percentile |")
+        print("|---|---|---|---|---|---|")
+        for configuration, preload in (("1g", "large"), ("1g", "linear"), ("0g", "large")):
+            for width in (0.05, 0.10, 0.15, 0.20, None):
+                print(random_points(configuration, preload, width), flush=True)
+        print(f"- load average after: {os.getloadavg()[0]:.1f}")
+        return
     print("\n| model | physical parameters | static corrections | arrays at export [s] | initialise, nominal [ms] "
           "| initialise, a modulus changed [ms] | doStep 2 ms, nominal [us] | doStep, changed [us] |")
     print("|---|---|---|---|---|---|---|---|")

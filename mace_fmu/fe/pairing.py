@@ -95,8 +95,9 @@ def continue_modes(reference: Modes, reference_model: FEModel, other: Modes, *, 
     its order and with its labels: mode k of the result is the physical mode reference mode k became.
 
     The zero-frequency cluster (rigid bodies, mechanisms: a basis of their span, labelled by motion, whatever
-    the stiffness) is the re-solve's own; each flexible mode is the re-solve's mode of the one-to-one pairing
-    with the largest total MAC (mass-weighted by the reference). An FMU's parameter route pairs its re-analysed
+    the stiffness) is the re-solve's own, each of its motions in the place of the reference's it resembles
+    most; each flexible mode is the re-solve's mode of the one-to-one pairing with the largest total MAC
+    (mass-weighted by the reference). An FMU's parameter route pairs its re-analysed
     modes the same way (:func:`~mace_fmu.iomodel.reanalysis.ritz_reanalysis`), and keys its per-mode data
     (damping ratios, frequency scales) by the index of the mode continued: a re-solve in frequency order with
     fresh labels handed them to other modes wherever two modes crossed (a violin and a bending mode, two
@@ -139,11 +140,13 @@ def continue_modes(reference: Modes, reference_model: FEModel, other: Modes, *, 
     if len(flex_other) < len(flex_ref):
         raise MaceError(f"the re-solve found {len(flex_other)} flexible modes, fewer than the {len(flex_ref)} it "
                         "must continue")
-    mac = mac_matrix(reference, reference_model, other)[np.ix_(flex_ref, flex_other)]
-    rows, cols = linear_sum_assignment(-mac)
+    mac = mac_matrix(reference, reference_model, other)
     order = np.empty(len(reference), dtype=int)
-    order[np.flatnonzero(zero_ref)] = np.flatnonzero(zero_other)
-    order[flex_ref[rows]] = flex_other[cols]
+    # each cluster paired within itself: the zero cluster's named motions (a reaction wheel's spin) in the
+    # reference's places, the flexible modes by the largest total MAC
+    for ref, oth in ((np.flatnonzero(zero_ref), np.flatnonzero(zero_other)), (flex_ref, flex_other)):
+        rows, cols = linear_sum_assignment(-mac[np.ix_(ref, oth)])
+        order[ref[rows]] = oth[cols]
     labels = list(other.labels[k] for k in order) if other.labels else [""] * len(order)
     for i in flex_ref:
         labels[i] = reference.labels[i] if reference.labels else labels[i]

@@ -10,6 +10,13 @@ Before the static corrections (mace_fmu/iomodel/stiffness_route.py) the nominal 
 strain gauge on the active strut 31-85 % wrong: ``test_each_channel_follows_the_resolve_at_the_nominal_point``
 failed for every strut modulus on strain_strut2_z (0.82 of the re-solve's change off, 0-g center), and
 ``test_an_fmu_with_a_modulus_set_equals_the_fmu_exported_with_it`` by 7 to 12 % of strain_strut2_z's range.
+
+The error is measured as a user meets it: each output's RMS difference over the output's RMS, every input
+driven with band-limited noise at once, every physical parameter changed at once. Until the re-solve
+continued the nominal modes (``compute_modes(..., continue_from="nominal")``) it labelled its modes afresh
+and handed damping ratios to other modes where two crossed: the FMU exported with E_cable_1 x 1.1 was 2.7 %
+off the nominal FMU with that value set, x 1.2 34 %; ``test_a_cable_modulus_up_10_percent_keeps_each_mode_s
+_damping`` fails on that route.
 """
 
 from __future__ import annotations
@@ -25,7 +32,7 @@ from mace_fmu.fe.modes import compute_modes
 from mace_fmu.iomodel.parametric import ParametricSystem
 from mace_fmu.iomodel.parametric_data import parametric_arrays
 from mace_fmu.iomodel.volts import volts_model
-from mace_fmu.parameters.sets import deck_values
+from mace_fmu.parameters.sets import ParameterSet, deck_values
 from mace_fmu.structure.file import bundled_deck_path
 
 pytestmark = pytest.mark.slow  # each test compares against full re-solves of the 1-g structure
@@ -40,7 +47,8 @@ CASES = [("1g", "E_active_strut_center", 20), ("1g", "E_active_strut_piezo", 20)
 #: route is not hidden by another's response)
 DRIVEN = (("gimbal",), ("active_strut",))
 STEP = 0.02  #: +-2 %, the relative step of the derivatives
-LARGE = 0.2  #: +-20 %
+#: the large change checked per configuration: the 1-g route's first-order preload holds to 0.1 % within +-10 %
+LARGE = {"1g": 0.1, "0g": 0.2}
 
 
 @pytest.fixture(scope="module")
@@ -60,7 +68,7 @@ def test_each_channel_follows_the_resolve_at_the_nominal_point_and_at_20_percent
                                                                                   moved):
     """d y / d ln p within 2 % of the re-solve's on every output whose change is at least 2 % of its response
     (norm of the difference over the norm of the re-solve's change, 10 s at 2 ms, each experiment), and at
-    +-20 % every output within 1 % of its range of the re-solve's."""
+    +-10 % (1-g) or +-20 % (0-g) every output's RMS difference from the re-solve within 0.1 % of its RMS."""
     model, system, values = nominal[configuration]
     u_sets = [band_limited_inputs(system.inputs, driven) for driven in DRIVEN]
     y0 = [zoh_response(system.build(system.nominal), u) for u in u_sets]
@@ -86,67 +94,192 @@ def test_each_channel_follows_the_resolve_at_the_nominal_point_and_at_20_percent
             error = np.linalg.norm(d_route[:, j] - d_resolve[:, j]) / change
             assert error <= 0.02, f"{name}, {DRIVEN[k][0]} inputs: d {output} / d ln p {error:.1%} off the re-solve's"
     assert checked >= moved, "the parameter must move these channels, or this proves nothing"
-    for rel in (LARGE, -LARGE):
+    for rel in (LARGE[configuration], -LARGE[configuration]):
         for k, (yr, ye) in enumerate(zip(route(rel), resolve(rel))):
-            span = np.ptp(y0[k], axis=0)
-            worst = np.max(np.abs(yr - ye), axis=0) / span
-            j = int(np.argmax(worst))
-            assert worst[j] <= 0.01, (f"{name} x {1 + rel:g}, {DRIVEN[k][0]} inputs: {system.outputs[j]} "
-                                      f"{worst[j]:.2%} of its range off the re-solve")
+            errors = _rms_error(yr, ye)
+            j = int(np.argmax(errors))
+            assert errors[j] <= 0.001, (f"{name} x {1 + rel:g}, {DRIVEN[k][0]} inputs: {system.outputs[j]} "
+                                        f"{errors[j]:.3%} of its RMS off the re-solve")
 
 
-#: two physical parameters at once, at the edges the route must hold: the strut section under the gauges and
-#: a suspension cable (the 1-g preload's redistribution)
-BUILT_IN = {"E_active_strut_center": 1.2, "E_cable_2": 0.8}
+def _all_inputs(system, *, seed: int = 1) -> np.ndarray:
+    """(SAMPLES, n_inputs) independent 0.5-60 Hz noise [V] on every input."""
+    from mace_fmu.updating.fmu.truth import band_limited_noise
+    from support.resolves import SAMPLES, STEP_S
+
+    return np.column_stack([band_limited_noise(samples=SAMPLES, step_s=STEP_S, band_hz=(0.5, 60.0), seed=seed + k)
+                            for k in range(len(system.inputs))])
+
+
+def _rms_error(y: np.ndarray, reference: np.ndarray) -> np.ndarray:
+    """Each output's RMS difference over the reference output's RMS."""
+    rms = np.sqrt(np.mean(reference**2, axis=0))
+    return np.sqrt(np.mean((y - reference) ** 2, axis=0)) / np.where(rms > 0, rms, 1.0)
+
+
+def _random_point(system, rng, *, within: float | None) -> dict[str, float]:
+    """Every physical parameter uniform over its declared range, or within +-``within`` of nominal."""
+    point = {}
+    for name in (str(n) for n in system.data["physical_names"]):
+        k = system.index(name)
+        nominal, low, high = system.nominal[k], system.minimum[k], system.maximum[k]
+        if within is not None:
+            low, high = max(low, nominal * (1 - within)), min(high, nominal * (1 + within))
+        point[name] = float(rng.uniform(low, high))
+    return point
+
+
+def _route_and_resolve(nominal_entry, configuration: str, point: dict[str, float], u: np.ndarray):
+    """(route's response, re-solve's response) to inputs u, the re-solve continuing the nominal modes."""
+    model, system, _ = nominal_entry
+    params = system.nominal.copy()
+    for name, value in point.items():
+        params[system.index(name)] = value
+    resolved = volts_model(compute_modes(configuration=configuration, parameters=ParameterSet(point),
+                                         continue_from=model.structure_modes))
+    reference = ParametricSystem(parametric_arrays(resolved, physical=False))
+    return zoh_response(system.build(params), u), zoh_response(reference.build(reference.nominal), u)
+
+
+#: (configuration, half-width of the box about nominal (None: the declared ranges), limit of every output's RMS
+#: difference over its RMS, measured worst of the 20 points): the 1-g route carries the preload's redistribution
+#: to first order, exact within +-10 % of nominal; over the declared 0.7-1.5 it is not (up to 7.8 % of an
+#: output's RMS at these points, benchmarks/bench_parameter_route.py and RESULTS.md)
+RANDOM = [("1g", 0.10, 0.001, "0.062 %"), ("0g", None, 0.002, "0.132 %")]
+
+
+@pytest.mark.parametrize("configuration, within, limit, measured", RANDOM,
+                         ids=["1g-within-10-percent", "0g-declared-range"])
+def test_the_route_follows_the_re_solve_at_20_random_points_all_parameters_at_once(nominal, configuration, within,
+                                                                                    limit, measured):
+    """20 seeded points, every physical parameter (10 moduli, 3 springs) drawn at once; every input driven by
+    0.5-60 Hz noise for 10 s at 2 ms: every output's RMS difference from the full re-solve within ``limit`` of
+    its RMS. The first five points also drive each input alone (every output that input moves by 1 % of its
+    RMS under all inputs)."""
+    model, system, _ = nominal[configuration]
+    u = _all_inputs(system)
+    rng = np.random.default_rng(50)
+    worst = 0.0
+    for k in range(20):
+        point = _random_point(system, rng, within=within)
+        y, reference = _route_and_resolve(nominal[configuration], configuration, point, u)
+        errors = _rms_error(y, reference)
+        worst = max(worst, float(errors.max()))
+        assert errors.max() <= limit, (f"point {k}: {system.outputs[int(errors.argmax())]} {errors.max():.3%} off "
+                                       f"the re-solve (measured worst {measured})")
+        if k < 5:
+            everything = np.sqrt(np.mean(reference**2, axis=0))
+            for j in range(len(system.inputs)):
+                alone = np.zeros_like(u)
+                alone[:, j] = u[:, j]
+                y, reference = _route_and_resolve(nominal[configuration], configuration, point, alone)
+                moved = np.sqrt(np.mean(reference**2, axis=0)) >= 0.1 * everything
+                errors = _rms_error(y, reference)[moved]
+                assert errors.max(initial=0.0) <= limit, (f"point {k}, {system.inputs[j]} alone: {errors.max():.3%}")
+    assert worst > limit / 100, "the points must move the outputs, or this proves nothing"
+
+
+def test_a_cable_modulus_up_10_percent_keeps_each_mode_s_damping(nominal):
+    """E_cable_1 x 1.1: the FMU's route keeps each physical mode's damping ratio; the re-solve, which labelled
+    its modes afresh, gave the 3rd in-plane violins of cables 1 and 3 each other's (2.7 % of strain_strut1_y's
+    RMS off). Continuing the nominal modes, within 0.1 %; the change itself moves the outputs by far more."""
+    model, system, values = nominal["1g"]
+    u = _all_inputs(system)
+    point = {"E_cable_1": 1.1 * values["E_cable_1"]}
+    y, reference = _route_and_resolve(nominal["1g"], "1g", point, u)
+    assert _rms_error(y, reference).max() <= 0.001
+    continued = volts_model(compute_modes(configuration="1g", parameters=ParameterSet(point)))
+    assert continued.structure_modes.labels == model.structure_modes.labels
+    assert dict(zip(continued.plant.labels, continued.plant.damping)) == dict(zip(model.plant.labels,
+                                                                               model.plant.damping))
+    fresh = ParametricSystem(parametric_arrays(volts_model(compute_modes(
+        configuration="1g", parameters=ParameterSet(point), continue_from=None)), physical=False))
+    assert _rms_error(y, zoh_response(fresh.build(fresh.nominal), u)).max() > 0.02  # the earlier re-export: 2.7 %
+    y0 = zoh_response(system.build(system.nominal), u)
+    assert _rms_error(y0, reference).max() > 0.01  # the change is seen
+
+
+#: the issue's point: the 8 kept moduli 2-6 % off nominal at once
+POINT_A = {"E_lexan_center": 1.037, "E_lexan_end": 0.978, "E_active_strut_end": 1.051, "E_active_strut_piezo": 0.982,
+           "E_active_strut_center": 1.029, "E_cable_1": 1.06, "E_cable_2": 0.96, "E_cable_3": 1.025}
 
 
 @pytest.fixture(scope="module")
 def reexported(nominal, tmp_path_factory):
-    """(nominal 1-g model, re-solved model with BUILT_IN, folders of: its native FMU and the nominal native
-    and pythonfmu FMUs), extracted."""
+    """(nominal 1-g model, the re-solve at POINT_A, folders of: its native FMU and the nominal native FMI 2,
+    native FMI 3 and pythonfmu FMUs), extracted."""
     import fmpy
 
     from mace_fmu.fmu.export import export_fmu
-    from mace_fmu.parameters.sets import ParameterSet
 
     model, _, values = nominal["1g"]
     resolved = volts_model(compute_modes(configuration="1g", parameters=ParameterSet({n: values[n] * f for n,
-                                                                                      f in BUILT_IN.items()})))
+                                                                                      f in POINT_A.items()})))
     folder = tmp_path_factory.mktemp("route_fmus")
     fmus = {"resolved": export_fmu(resolved, out_dir=folder, name="MACE_1g_resolved", runtime="native"),
             "native": export_fmu(model, out_dir=folder, name="MACE_1g_native", runtime="native"),
+            "native-fmi3": export_fmu(model, out_dir=folder, name="MACE_1g_native3", runtime="native", fmi_version=3),
             "pythonfmu": export_fmu(model, out_dir=folder, name="MACE_1g_python", runtime="pythonfmu")}
     return model, resolved, {k: fmpy.extract(str(v), unzipdir=str(folder / k)) for k, v in fmus.items()}
 
 
-@pytest.mark.parametrize("kind", ["native", "pythonfmu"])
+def _run_fmi3(model, folder: str, start: dict[str, float], t: np.ndarray, u: np.ndarray) -> np.ndarray:
+    """y[output, k] of an FMI 3 co-simulation FMU initialised with ``start``, u[input, k] held over each step."""
+    import fmpy
+    from fmpy.fmi3 import FMU3Slave
+
+    md = fmpy.read_model_description(folder)
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    fmu = FMU3Slave(guid=md.guid, unzipDirectory=folder, modelIdentifier=md.coSimulation.modelIdentifier)
+    fmu.instantiate()
+    fmu.enterInitializationMode(startTime=0.0)
+    fmu.setFloat64([vr[k] for k in start], list(start.values()))
+    fmu.exitInitializationMode()
+    ins = [vr[n] for n in model.system.input_labels]
+    outs = [vr[n] for n in model.system.output_labels]
+    y = [fmu.getFloat64(outs)]
+    for k in range(len(t) - 1):
+        fmu.setFloat64(ins, list(u[:, k]))
+        fmu.doStep(currentCommunicationPoint=t[k], communicationStepSize=t[k + 1] - t[k])
+        y.append(fmu.getFloat64(outs))
+    fmu.terminate()
+    fmu.freeInstance()
+    return np.array(y).T
+
+
+@pytest.mark.parametrize("kind", ["native", "native-fmi3", "pythonfmu"])
 def test_an_fmu_with_moduli_set_equals_the_fmu_exported_with_them(reexported, kind):
-    """The nominal FMU with E_active_strut_center x 1.2 and E_cable_2 x 0.8 set through FMI against the FMU
-    exported from the re-solve with them built in (each mode's nominal damping set through FMI too), 10 s at
-    2 ms, gimbal commands and piezo patches driven at once: every output within 1 % of its range."""
+    """The nominal FMU with the 8 moduli at POINT_A set through FMI against the FMU exported from the re-solve
+    with them built in (``export 1g --parameters``: nothing set through FMI), 10 s at 2 ms, every input driven
+    by 0.5-60 Hz noise at once: every output's RMS difference within 0.1 % of its RMS. Measured: 0.006 %; the
+    issue's 1.64 % was the re-export handing damping ratios to other modes."""
     from support.fmu_checks import initialised_slave, run_steps
-    from support.resolves import SAMPLES, STEP_S, held_damping
+    from support.resolves import SAMPLES, STEP_S
 
     model, resolved, folders = reexported
     t = np.arange(SAMPLES) * STEP_S
-    u = band_limited_inputs(list(model.system.input_labels), ("gimbal", "active_strut")).T
+    u = _all_inputs(ParametricSystem(parametric_arrays(model, physical=False))).T
     values = deck_values(read_deck(bundled_deck_path()))
-    route = initialised_slave(model, folders[kind], {n: values[n] * f for n, f in BUILT_IN.items()})
-    reference = initialised_slave(resolved, folders["resolved"], held_damping(model, resolved))
-    y_route, y_ref = run_steps(model, route, folders[kind], t, u), run_steps(resolved, reference, folders["resolved"], t, u)
-    for fmu in (route, reference):
-        fmu.terminate()
-        fmu.freeInstance()
+    start = {n: values[n] * f for n, f in POINT_A.items()}
+    if kind == "native-fmi3":
+        y_route = _run_fmi3(model, folders[kind], start, t, u)
+    else:
+        route = initialised_slave(model, folders[kind], start)
+        y_route = run_steps(model, route, folders[kind], t, u)
+        route.terminate()
+        route.freeInstance()
+    reference = initialised_slave(resolved, folders["resolved"], {})
+    y_ref = run_steps(resolved, reference, folders["resolved"], t, u)
+    reference.terminate()
+    reference.freeInstance()
     nominal_fmu = initialised_slave(model, folders["native"], {})
     y_nominal = run_steps(model, nominal_fmu, folders["native"], t, u)
     nominal_fmu.freeInstance()
-    span = np.ptp(y_ref, axis=1)
-    worst = np.max(np.abs(y_route - y_ref), axis=1) / span
+    errors = _rms_error(y_route.T, y_ref.T)
     outputs = list(model.system.output_labels)
-    assert np.max(worst) <= 0.01, f"{outputs[int(np.argmax(worst))]}: {np.max(worst):.2%} of its range"
-    # the change is seen: strain_strut2_z moves by far more than the tolerance
-    moved = np.max(np.abs(y_ref - y_nominal), axis=1) / span
-    assert moved[outputs.index("strain_strut2_z")] > 0.1 and np.max(moved) > 10 * np.max(worst)
+    assert errors.max() <= 0.001, f"{outputs[int(errors.argmax())]}: {errors.max():.3%} of its RMS"
+    moved = _rms_error(y_nominal.T, y_ref.T)  # the change is seen, far above the tolerance
+    assert moved.max() > 30 * errors.max() and moved.max() > 0.01
 
 
 GYROS = ("gyro_payload_x", "gyro_payload_z", "gyro_bus_x", "gyro_bus_y", "gyro_bus_z")
@@ -157,21 +290,22 @@ GYROS = ("gyro_payload_x", "gyro_payload_z", "gyro_bus_x", "gyro_bus_y", "gyro_b
 def test_an_update_on_data_of_the_fmu_exported_with_the_truth_finds_every_modulus_in_its_interval(reexported,
                                                                                                   tmp_path, outputs):
     """The issue's check, from a full re-solve: the 8 kept moduli 2-6 % away from the nominal FMU's, built into
-    a re-exported FMU (each mode's nominal damping set through FMI), a 20 s gimbal test at 2 ms with 2 % output
-    noise; the nominal FMU updated on those data converges on the noise floor and every modulus's truth lies
-    inside its reported 95 % interval (gyros alone: the strut's sections with wide intervals; with the
-    gauges: all within 0.2 %). Before the static corrections, gyros alone put lexan and cables 1 and 3 outside
-    intervals of about +-0.05 % (cable 3 6.0 % off): the FMU's model error was larger than the precision it
-    reported."""
-    from support.resolves import held_damping
+    a re-exported FMU (nothing set through FMI), a 20 s gimbal test at 2 ms with 2 % output noise; the nominal
+    FMU updated on those data converges and the model explains the data to their noise; every modulus's truth
+    lies inside its reported 95 % interval, lexan and cables within 1 %, and every reported standard deviation
+    is within 10 % of what the full re-solves' Fisher information about the truth predicts for this test (gyros alone: the
+    strut's sections poorly fixed; with the gauges all of them). Before the static corrections, gyros alone
+    put lexan and cables 1 and 3 outside intervals of about +-0.05 % (cable 3 6.0 % off): the FMU's model
+    error was larger than the precision it reported."""
+    from support.resolves import fisher_standard_deviations
 
     from mace_fmu.fmu.export import export_fmu
-    from mace_fmu.parameters.sets import ParameterSet
     from mace_fmu.updating.engine.convergence import convergence_report, noise_floor
     from mace_fmu.updating.engine.costs import TimeResponseCost
     from mace_fmu.updating.engine.measured import TimeHistory
     from mace_fmu.updating.engine.uncertainty import stage_uncertainty
     from mace_fmu.updating.fmu.model import fmu_family
+    from mace_fmu.updating.fmu.planning import TestDesign
     from mace_fmu.updating.fmu.truth import band_limited_noise
     from mace_fmu.updating.fmu.update import update_fmu
     from mace_fmu.updating.mace.update import THESIS_KEPT
@@ -181,8 +315,7 @@ def test_an_update_on_data_of_the_fmu_exported_with_the_truth_finds_every_modulu
     offsets = (0.04, -0.03, 0.06, -0.02, 0.05, -0.04, 0.03, 0.02)
     truth = {n: values[n] * (1 + d) for n, d in zip(THESIS_KEPT, offsets)}
     resolved = volts_model(compute_modes(configuration="1g", parameters=ParameterSet(truth)))
-    truth_fmu = fmu_family(export_fmu(resolved, out_dir=tmp_path, name="MACE_1g_truth", runtime="native"),
-                           fixed=held_damping(model, resolved))
+    truth_fmu = fmu_family(export_fmu(resolved, out_dir=tmp_path, name="MACE_1g_truth", runtime="native"))
     nominal_fmu = fmu_family(Path(folders["native"]).parent / "MACE_1g_native.fmu")
     gimbals = [i for i in model.system.input_labels if i.startswith("gimbal")]
     outputs = list(outputs)
@@ -194,10 +327,15 @@ def test_an_update_on_data_of_the_fmu_exported_with_the_truth_finds_every_modulu
     result = update_fmu(family=nominal_fmu, cost=cost, start={n: values[n] for n in THESIS_KEPT},
                         stages=[list(THESIS_KEPT)])
     floor = noise_floor(cost)
-    report = convergence_report(result, noise_floor=floor)
-    assert report.converged and abs(floor.sigmas_above(result.final_cost)) < 3.0, report.reasons
+    report = convergence_report(result, noise_floor=floor, cost=cost)
+    assert report.verdict == "explained", report.summary()
     (stage,) = stage_uncertainty(result, noise_variance=floor.expected_cost / result.final_residual.size)
+    fisher = fisher_standard_deviations("1g", list(THESIS_KEPT), [
+        TestDesign(name="gimbal", seconds=20.0, inputs=tuple(gimbals), outputs=tuple(outputs))], about=truth)
     for name in THESIS_KEPT:
         error = 100 * (result.values[name] / truth[name] - 1)
         sd = stage.standard_deviation_percent[name]
         assert abs(error) <= 1.96 * sd, f"{name}: {error:+.3f} % off the truth, reported sd {sd:.3f} %"
+        assert abs(sd / fisher[name] - 1) < 0.10, f"{name}: reported sd {sd:.4f} %, the re-solves' {fisher[name]:.4f} %"
+        if not name.startswith("E_active_strut"):
+            assert abs(error) < 1.0, f"{name}: {error:+.3f} % off the truth"

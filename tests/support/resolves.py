@@ -1,11 +1,9 @@
 """Full re-solves as the independent reference of the FMUs' parameter route.
 
 A re-solve (the deck with the parameter built in, the FE model, preload and modes solved again) knows
-nothing of the reanalysis it checks. Its modes are labelled afresh, and the structure file gives damping
-ratios by label, so a stiffness change that renames a mode ("4th Y bending" becoming "3rd Y bending")
-would also move a damping ratio to another mode: :func:`held_damping` keeps each physical mode's
-nominal damping (modes paired by their mass-weighted MAC), so that the comparison sees the stiffness
-alone.
+nothing of the reanalysis it checks. It continues the nominal modes (``compute_modes``'s default for a
+parameter set: mode k is the physical mode the nominal mode k became, with its label and damping ratio),
+as ``export --parameters`` does, so the comparison is the one a user makes.
 """
 
 from __future__ import annotations
@@ -14,7 +12,6 @@ import functools
 
 import numpy as np
 from scipy.linalg import expm
-from scipy.optimize import linear_sum_assignment
 from scipy.signal import butter, lfilter
 
 from mace_fmu.fe.modes import compute_modes
@@ -53,24 +50,13 @@ def zoh_response(system: tuple[np.ndarray, ...], u: np.ndarray, step_s: float = 
     return y
 
 
-def held_damping(nominal, resolved) -> dict[str, float]:
-    """``damping_mode_<k>`` values for ``resolved`` (a VoltsModel) that give each of its modes the damping of the
-    nominal mode it continues (largest mass-weighted MAC, one to one)."""
-    mass = nominal.structure_modes.model.mass
-    a, b = nominal.plant.shapes, resolved.plant.shapes
-    mac = (a.T @ (mass @ b)) ** 2 / np.outer(np.einsum("ik,ik->k", a, mass @ a), np.einsum("ik,ik->k", b, mass @ b))
-    rows, cols = linear_sum_assignment(-mac)
-    return {f"damping_mode_{j + 1}": float(nominal.plant.damping[i]) for i, j in zip(rows, cols)}
-
-
 def resolved_system(configuration: str, values: dict[str, float], nominal) -> tuple[np.ndarray, ...]:
-    """(A, B, C, D) of a full re-solve with moduli and springs ``values`` [Pa, N/m], damping held per mode."""
-    model = volts_model(compute_modes(configuration=configuration, parameters=ParameterSet(values)))
+    """(A, B, C, D) of a full re-solve with moduli and springs ``values`` [Pa, N/m], continuing the modes of
+    ``nominal`` (its VoltsModel)."""
+    model = volts_model(compute_modes(configuration=configuration, parameters=ParameterSet(values),
+                                      continue_from=nominal.structure_modes))
     system = ParametricSystem(parametric_arrays(model, physical=False))
-    params = system.nominal.copy()
-    for name, value in held_damping(nominal, model).items():
-        params[system.index(name)] = value
-    return system.build(params)
+    return system.build(system.nominal)
 
 
 @functools.lru_cache(maxsize=4)
@@ -80,27 +66,31 @@ def _nominal(configuration: str):
 
 
 @functools.lru_cache(maxsize=64)
-def _resolved(configuration: str, name: str, factor: float) -> tuple[np.ndarray, ...]:
-    """The re-solve with the deck's ``name`` times ``factor`` (cached: several plans share their re-solves)."""
+def _resolved(configuration: str, name: str, factor: float,
+              about: tuple[tuple[str, float], ...] = ()) -> tuple[np.ndarray, ...]:
+    """The re-solve with ``name`` times ``factor``, the others at ``about`` (name, value) or the deck's (cached:
+    several plans share their re-solves)."""
     from mace_fmu.deck.reader import read_deck
     from mace_fmu.parameters.sets import deck_values
     from mace_fmu.structure.file import bundled_deck_path
 
-    values = deck_values(read_deck(bundled_deck_path()))
+    values = {**deck_values(read_deck(bundled_deck_path())), **dict(about)}
     return resolved_system(configuration, {**values, name: values[name] * factor}, _nominal(configuration)[0])
 
 
 def fisher_standard_deviations(configuration: str, names: list[str], tests, *, relative_step: float = 0.01,
-                               seed: int = 0) -> dict[str, float]:
+                               seed: int = 0, about: dict[str, float] | None = None) -> dict[str, float]:
     """The standard deviations [%] of ``names`` (and of the recorded outputs' gains a test knows only to a
     percentage, as ``gain:<output>``) that an update on ``tests`` (planning.TestDesign) would report, from the
     Fisher information of full re-solves: d y / d ln p by central differences of re-solved models, each
     output in units of its noise (``noise_rms_percent`` of its RMS), the tests' excitations as plan-test
-    draws them (``seed + 1000 k + j``), a gain's prior as one more row. Nothing of the reanalysis enters."""
+    draws them (``seed + 1000 k + j``), a gain's prior as one more row, about the deck's values or the point
+    ``about`` (name -> value, the others the deck's). Nothing of the reanalysis enters."""
     from mace_fmu.updating.fmu.truth import band_limited_noise
 
     _, base = _nominal(configuration)
-    systems = {(name, sign): _resolved(configuration, name, 1 + sign * relative_step)
+    point = tuple(sorted((about or {}).items()))
+    systems = {(name, sign): _resolved(configuration, name, 1 + sign * relative_step, point)
                for name in names for sign in (1, -1)}
     gains = [(k, o) for k, t in enumerate(tests) for o in t.gain_uncertainty_percent]
     rows, priors = [], []
@@ -115,7 +105,8 @@ def fisher_standard_deviations(configuration: str, names: list[str], tests, *, r
         def response(built, u=u, picked=picked, step=test.sample_time_s):
             return zoh_response(built, u, step)[:, picked]
 
-        y0 = response(base.build(base.nominal))
+        y0 = response(base.build(base.nominal)) if not point else \
+            0.5 * (response(systems[names[0], 1]) + response(systems[names[0], -1]))  # the response at the point
         noise = test.noise_rms_percent / 100 * np.sqrt(np.mean(y0**2, axis=0))
         columns = [((response(systems[nm, 1]) - response(systems[nm, -1])) / (2 * relative_step) / noise).T.ravel()
                    for nm in names]
