@@ -354,9 +354,9 @@ def _solved_modes(struct: Structure, *, mass: MassKind, preload: PreloadKind, ma
         stiffness = pre.tangent_stiffness
     if not np.any(model.mass.data):  # K phi = lambda M phi with M = 0 has no finite root: say why, not "no modes"
         removed_some = struct.spec.suspension_grids or struct.spec.suspension_elements
-        what = "the 0-g structure (the deck without its suspension) has" if configuration == "0g" and removed_some \
-            else "the deck has"
-        raise MaceError(f"{deck.path}: {what} no mass: no CONM1, CONM2, CMASS1, CMASS2 or PMASS card and no density "
+        what = "the 0-g structure (the deck without its suspension) has" if struct.configuration == "0g" \
+            and removed_some else "the deck has"
+        raise MaceError(f"{struct.deck.path}: {what} no mass: no CONM1, CONM2, CMASS1, CMASS2 or PMASS card and no density "
                         "(RHO) on its MAT1 cards nor non-structural mass (NSM) on its properties, so it has no "
                         "vibration modes (expected RHO on the MAT1 cards, or mass elements)")
     modal = build_constraints(struct.deck, model.dofs, model.cd_frames, spc_set=struct.modal.spc,
