@@ -11,9 +11,10 @@ from typing import Sequence
 from mace_fmu.cli import (build, controller, data, export, model, modes, params, plan, predict, report, study, update,
                           view)
 from mace_fmu.cli.preflight import run_checks
+from mace_fmu.cli.renamed import removed_spelling
 from mace_fmu.errors import MaceError
 
-__all__ = ["build_parser", "main"]
+__all__ = ["build_parser", "main", "package_version"]
 
 #: command modules in the order ``mace-fmu --help`` lists them; each has register(subparsers)
 COMMANDS = (modes, model, export, controller, report, view, build, update, plan, predict, study, data, params)
@@ -29,12 +30,41 @@ def build_parser() -> argparse.ArgumentParser:
     """
     parser = argparse.ArgumentParser(prog="mace-fmu", description="Finite-element deck of the MACE structure to "
                                      "validated input-output models and FMUs.")
+    parser.add_argument("--version", action="version", version=f"%(prog)s {package_version()}",
+                        help="print the package's version and exit")
     parser.add_argument("--verbose", action="store_true", help="with an error whose message had to be short (a "
                         "deck's unknown cards), the whole list")
     sub = parser.add_subparsers(dest="command", required=True)
     for command in COMMANDS:
         command.register(sub)
     return parser
+
+
+def package_version() -> str:
+    """The installed package's version (its metadata: the version pyproject.toml gave the build).
+
+    Returns
+    -------
+    str
+        E.g. "0.1.0", or "(source tree, not installed)" when the package runs from a folder without metadata.
+    """
+    from importlib import metadata
+
+    try:
+        return metadata.version("mace-fmu")
+    except metadata.PackageNotFoundError:
+        return "(source tree, not installed)"
+
+
+def _refuse_removed_spellings(parser: argparse.ArgumentParser, argv: Sequence[str]) -> None:
+    """An earlier spelling (``--kind``, ``update --fmu``) is refused by name, as argparse refuses: usage, one
+    line, status 2 (not "unrecognized arguments", nor read as something else)."""
+    found = removed_spelling(argv)
+    if found is None:
+        return
+    command, message = found
+    sub = next(action for action in parser._actions if isinstance(action, argparse._SubParsersAction))
+    sub.choices[command].error(message)
 
 
 def _terminated(signum: int, frame: object) -> None:
@@ -56,7 +86,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         written and a ``--scheduler`` where no Dask scheduler answers are found before any work), 3 an update
         that did not converge (its results written), 130 interrupted.
     """
-    args = build_parser().parse_args(argv)
+    parser = build_parser()
+    _refuse_removed_spellings(parser, sys.argv[1:] if argv is None else argv)
+    args = parser.parse_args(argv)
+    return _run(args)
+
+
+def _run(args: argparse.Namespace) -> int:
+    """The parsed command, run: its status, errors in the input as one line, an interruption as one line."""
     in_main_thread = threading.current_thread() is threading.main_thread()  # signal handlers live there only
     previous = signal.signal(signal.SIGTERM, _terminated) if in_main_thread else None
     try:

@@ -99,6 +99,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     parameters_option(p)
     output_option(p, "-o", "--out", kind="folder", default="fmus",
                   help="where to write the FMUs: MACE_<1g|0g>_native.fmu (FMI 2.0), MACE_<1g|0g>_native_fmi3.fmu, "
-                  "MACE_<1g|0g>_pythonfmu.fmu (default ./fmus); with --parameters P.toml MACE_1g_native_P.fmu "
-                  "and so on, never the plain model's names")
+                  "MACE_<1g|0g>_pythonfmu.fmu (default ./fmus); with --parameters P.toml "
+                  "MACE_1g_native_P_<digest>.fmu and so on (6 hex digits of the set's values), never the plain "
+                  "model's names nor another set's")
     p.set_defaults(func=cmd_build)

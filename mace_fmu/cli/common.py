@@ -19,9 +19,15 @@ BUNDLED_DECK = str(Path(__file__).resolve().parents[1] / "data" / "mace_em.bdf")
 
 
 def model_variant(args: argparse.Namespace) -> str:
-    """What sets this FMU's model apart from the plain one, for its name: the parameter set's file stem
-    and "bounded" with frequency bounds ("" for the plain model, which keeps the plain name)."""
-    parts = [Path(args.parameters).stem] if getattr(args, "parameters", None) else []
+    """What sets this FMU's model apart from the plain one, for its name: the parameter set (its file's
+    stem, its folder's name for an update's ``parameters.toml``, and a digest of its values:
+    :func:`~mace_fmu.fmu.naming.parameter_set_variant`) and "bounded" with frequency bounds ("" for the plain
+    model, which keeps the plain name)."""
+    from mace_fmu.fmu.naming import parameter_set_variant
+    from mace_fmu.parameters.sets import ParameterSet
+
+    path = getattr(args, "parameters", None)
+    parts = [parameter_set_variant(ParameterSet.read(path), path=path)] if path else []
     if getattr(args, "frequency_bounds", None):
         parts.append("bounded")
     return "_".join(parts)

@@ -58,7 +58,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--lqg", action="store_true",
                    help="the Appendix A LQG compensator of the 0-g loop (payload gyro Z -> primary gimbal Z)")
     p.add_argument("--step", type=float, default=0.002, help="sample time of --lqg [s] (default 0.002)")
-    p.add_argument("--name", default="controller", help="model identifier and file name (default: controller)")
+    p.add_argument("--name", default=None, help="model identifier and file name (default: controller; with "
+                   "--fmi-version 3 controller_fmi3, so that it never replaces the FMI 2 export)")
     p.add_argument("--fmi-version", type=int, choices=[2, 3], default=2, help="FMI version (default 2)")
     output_option(p, "-o", "--out", kind="folder", default=".", help="output directory")
     platforms_option(p)

@@ -97,8 +97,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     deck_option(p)
     output_option(p, "-o", "--out", kind="folder", default=".", used=lambda args: not args.ssp,
                   help="output directory (writes e.g. MACE_1g_native.fmu; with --motion-grids "
-                  "MACE_1g_native_motion.fmu; with --parameters P.toml MACE_1g_native_P.fmu, with "
-                  "--frequency-bounds too MACE_0g_native_P_bounded.fmu: never the plain model's name)")
+                  "MACE_1g_native_motion.fmu; with --parameters P.toml MACE_1g_native_P_<digest>.fmu, the first "
+                  "6 hex digits of the set's values (an update's DIR/parameters.toml: "
+                  "MACE_1g_native_DIR_parameters_<digest>.fmu), with --frequency-bounds too "
+                  "MACE_0g_native_P_<digest>_bounded.fmu: never the plain model's name, nor another set's)")
     p.add_argument("--runtime", choices=["native", "pythonfmu"], default="native",
                    help="native: C runtime, no Python needed in the host, FMI 2.0 co-simulation and model exchange "
                         "(default); pythonfmu: FMI 2.0 co-simulation through Python")

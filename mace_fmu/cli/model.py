@@ -37,7 +37,7 @@ def cmd_model(args: argparse.Namespace) -> int:
         print()
         return 0
     print(f"{args.configuration} volts-volts model: {sys_.nstates} states, {sys_.ninputs} inputs, "
-          f"{sys_.noutputs} outputs ({model.electronics.describe()})")
+          f"{sys_.noutputs} outputs ({model.electronics.describe(instruments=model.instruments)})")
     for state, reason in model.plant.removed_states:
         print(f"  removed: {state}: {reason}")
     if args.poles:

@@ -11,6 +11,7 @@ from mace_fmu.cli.preflight import output_option, scheduler_options
 from mace_fmu.errors import MaceError
 from mace_fmu.util.atomic import write_text_atomic
 
+#: the epilog: printed as written (argparse expands %-formats in the options' help only, so "%" is one "%" here)
 _EXAMPLE = """\
 a test plan (TOML):
   [[test]]
@@ -20,8 +21,8 @@ a test plan (TOML):
   seconds = 20              # record length [s]          (default 8)
   sample_time_s = 0.002     # [s]                        (default 0.002)
   band_hz = [0.5, 60]       # white-noise excitation     (default [0.5, 60])
-  noise_rms_percent = 2     # output noise, %% of RMS     (default 2)
-  gain_uncertainty_percent = { gyro_bus_x = 1 }   # sensor gains known to 1 %% (default: exact)
+  noise_rms_percent = 2     # output noise, % of RMS      (default 2)
+  gain_uncertainty_percent = { gyro_bus_x = 1 }   # sensor gains known to 1 % (default: exact)
 
   [[candidate]]             # optional: tests one update takes together (default: each test alone)
   name = "gimbal + strut"

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 from pathlib import Path
 
 import numpy as np
@@ -151,23 +152,20 @@ def cmd_robust_0g(args: argparse.Namespace) -> int:
     weights = LqgWeights(rho=args.rho, theta=args.theta)
     model, bounds, source = _bounds(args)
     out = Path(args.out)
-    runner = map
-    if not args.serial:
-        from mace_fmu.util.runner import DaskRunner
+    with contextlib.ExitStack() as stack:  # the runner closes quietly when the run is interrupted
+        runner = map
+        if not args.serial:
+            from mace_fmu.util.runner import DaskRunner
 
-        runner = DaskRunner(scheduler=args.scheduler, workers=args.workers, task="closed-loop runs",
-                            connect_timeout_s=args.scheduler_timeout)
-        progress(f"Dask: {runner.workers} workers" + (f" at {args.scheduler}" if args.scheduler else " (local)"))
-    try:
+            runner = stack.enter_context(DaskRunner(scheduler=args.scheduler, workers=args.workers,
+                                                    task="closed-loop runs", connect_timeout_s=args.scheduler_timeout))
+            progress(f"Dask: {runner.workers} workers" + (f" at {args.scheduler}" if args.scheduler else " (local)"))
         with progress_bar() as bar:
             if not args.serial:
                 runner.progress = bar
             study = robust_0g_study(model, frequency_bounds=bounds, out_dir=out, loop=loop, weights=weights,
                                     reduced_states=args.states, samples=args.samples, seed=args.seed,
                                     critical_count=args.critical, runner=runner, progress=None)
-    finally:
-        if not args.serial:
-            runner.close()
     summary = "\n".join([f"Robustness of the LQG compensator on {study.fmu.name} (bounds: {source})",
                          format_summary(study.sweep, study.design),
                          format_cross_checks(study.cross_checks, study.sweep)])

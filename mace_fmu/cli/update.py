@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from pathlib import Path
 
@@ -88,6 +89,25 @@ def _gain_uncertainty(groups: list[list[tuple[str, float]]]) -> dict[str, float]
     return out
 
 
+def local_workers(workers: int | None) -> str:
+    """Where the FMU runs go without a scheduler, in words: "2 local worker processes (one per core)".
+
+    Parameters
+    ----------
+    workers : int or None
+        ``--workers`` (None: as many as the machine has cores, as :class:`~mace_fmu.util.runner.DaskRunner`
+        starts).
+
+    Returns
+    -------
+    str
+        The count and what it is, e.g. "3 local worker processes", "1 local worker process (one per core)".
+    """
+    count = workers or os.cpu_count() or 1
+    text = f"{count} local worker process" + ("es" if count != 1 else "")
+    return text if workers else f"{text} (one per core)"
+
+
 def cmd_fmu_update(args: argparse.Namespace) -> int:
     """``update fmu FILE``: update FMU parameters against measured-data files. argparse checks each option,
     ``fmu_problem`` the files and names together: all before any run."""
@@ -106,8 +126,7 @@ def cmd_fmu_update(args: argparse.Namespace) -> int:
                           frf_floor=None if args.frf_floor_percent is None else args.frf_floor_percent / 100.0)
     for note in problem.notes:
         _say(note)
-    where = f"the Dask cluster at {args.scheduler}" if args.scheduler else \
-        f"{args.workers or 'one per core'} local worker processes"
+    where = f"the Dask cluster at {args.scheduler}" if args.scheduler else local_workers(args.workers)
     gains = len(problem.family.gain_outputs)
     _say(f"updating {len(problem.names) - gains} parameter(s)" + (f" and {gains} sensor gain(s)" if gains else "")
          + f" of {Path(args.fmu).name} on the {args.cost} cost; FMU runs on {where}")

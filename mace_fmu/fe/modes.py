@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import contextlib
+import math
 import os
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Literal
+from typing import Iterator, Literal
 
 import numpy as np
 
@@ -21,7 +23,9 @@ from mace_fmu.fe.labels import label_modes, rigid_body_vectors
 from mace_fmu.fe.modal import Modes, ModesView, solve_modes
 from mace_fmu.fe.pairing import continue_modes
 from mace_fmu.fe.preload import Preload, PreloadKind, large_displacement_preload, linear_preload
-from mace_fmu.parameters.sets import ParameterSet, deck_fingerprint, fe_overrides, naming_the_file, parameter_names
+from mace_fmu.parameters.kinds import MASS, MODULUS, SPRING, declared_range
+from mace_fmu.parameters.sets import (ParameterNames, ParameterSet, deck_fingerprint, deck_values, fe_overrides,
+                                      naming_the_file, parameter_names, parameter_unit)
 from mace_fmu.structure.build import Structure, build_structure
 from mace_fmu.structure.file import Configuration, StructureFile, bundled_deck_path, structure_file_for
 from mace_fmu.util.collector import collector_paused
@@ -301,19 +305,69 @@ def compute_modes(deck: Deck | str | os.PathLike | None = None, *, configuration
     if not isinstance(deck, Deck):
         deck = read_deck(deck if deck is not None else bundled_deck_path())
     file = structure_file_for(deck, structure_file)
-    overrides = None
+    overrides, names = None, None
     if parameters is not None:
         with naming_the_file(parameters):
             check_parameters_deck(parameters, deck)
-            overrides = fe_overrides(parameters, parameter_names(deck, file))
+            names = parameter_names(deck, file)
+            overrides = fe_overrides(parameters, names)
     struct = build_structure(deck, configuration=configuration, overrides=overrides, structure_file=file)
+    if struct.preload is not None:  # the deck's own limit, before a set could be blamed for it
+        _check_preload_elements(struct.deck)
+    reference = None
+    if overrides and continue_from is not None:
+        reference = continue_from if isinstance(continue_from, StructureModes) else compute_modes(
+            deck, configuration=configuration, preload=preload, mass=mass, max_hz=max_hz, structure_file=file,
+            continue_from=None)
+    with _failure_blamed_on_the_set(parameters, deck=deck, names=names):
+        return _solved_modes(struct, mass=mass, preload=preload, max_hz=max_hz, progress=progress,
+                             parameters=parameters, reference=reference)
+
+
+@contextlib.contextmanager
+def _failure_blamed_on_the_set(parameters: ParameterSet | None, *, deck: Deck,
+                               names: ParameterNames | None) -> Iterator[None]:
+    """A model that cannot be solved with a set's modulus, spring or mass far outside the deck's names the set.
+
+    The solution's own message speaks of the model (a singular stiffness, a preload beyond small strains),
+    which reads as a broken deck; a set with a modulus 1e-6 x the deck's is what broke it. The values outside
+    the range the FMUs take (:func:`~mace_fmu.parameters.kinds.declared_range`, 0.7-1.5 x nominal) are named
+    with their file, farthest first; a set within that range leaves the message as it is.
+    """
+    try:
+        yield
+    except MaceError as exc:
+        if parameters is None or names is None:
+            raise
+        nominal = deck_values(deck, names)
+        outside = []
+        for name, value in parameters.of_kind(MODULUS.name, SPRING.name, MASS.name).items():
+            if nominal.get(name, 0.0) > 0.0 and value > 0.0:
+                low, high = declared_range(name, nominal[name])
+                if not low <= value <= high:
+                    outside.append((abs(math.log(value / nominal[name])), name, value, nominal[name], low, high))
+        if not outside:
+            raise
+        _, name, value, deck_value, low, high = max(outside)
+        unit = parameter_unit(name)
+        others = f" (and {len(outside) - 1} more outside theirs)" if len(outside) > 1 else ""
+        raise MaceError(f"{parameters.source or 'the parameter set'}: {name} = {value:g} {unit} is "
+                        f"{value / deck_value:.3g} x the deck's {deck_value:g} {unit}, outside the range the FMUs "
+                        f"take ({low / deck_value:.3g}-{high / deck_value:.3g} x){others}; with it the model cannot "
+                        f"be solved ({exc})") from None
+
+
+def _solved_modes(struct: Structure, *, mass: MassKind, preload: PreloadKind, max_hz: float | None,
+                  progress: ProgressCallback | None, parameters: ParameterSet | None,
+                  reference: StructureModes | None) -> StructureModes:
+    """The rest of :func:`compute_modes`: assembly, the 1-g preload, the modal constraints and the solution;
+    ``reference``: the modes the solution continues (None: its own)."""
     model = assemble(struct.deck, mass=mass)
     props = mass_properties(model, struct.deck)
     stiffness, pre = model.stiffness, None
     auto = autospc_enabled(struct.deck)
     removed: tuple[tuple[int, int], ...] = ()
     if struct.preload is not None:
-        _check_preload_elements(struct.deck)
         static = build_constraints(struct.deck, model.dofs, model.cd_frames, spc_set=struct.preload.spc,
                                    mpc_set=struct.preload.mpc)
         if auto:  # statics: a DOF without stiffness is singular whatever its mass
@@ -329,9 +383,9 @@ def compute_modes(deck: Deck | str | os.PathLike | None = None, *, configuration
         stiffness = pre.tangent_stiffness
     if not np.any(model.mass.data):  # K phi = lambda M phi with M = 0 has no finite root: say why, not "no modes"
         removed_some = struct.spec.suspension_grids or struct.spec.suspension_elements
-        what = "the 0-g structure (the deck without its suspension) has" if configuration == "0g" and removed_some \
-            else "the deck has"
-        raise MaceError(f"{deck.path}: {what} no mass: no CONM1, CONM2, CMASS1, CMASS2 or PMASS card and no density "
+        what = "the 0-g structure (the deck without its suspension) has" if struct.configuration == "0g" \
+            and removed_some else "the deck has"
+        raise MaceError(f"{struct.deck.path}: {what} no mass: no CONM1, CONM2, CMASS1, CMASS2 or PMASS card and no density "
                         "(RHO) on its MAT1 cards nor non-structural mass (NSM) on its properties, so it has no "
                         "vibration modes (expected RHO on the MAT1 cards, or mass elements)")
     modal = build_constraints(struct.deck, model.dofs, model.cd_frames, spc_set=struct.modal.spc,
@@ -339,11 +393,6 @@ def compute_modes(deck: Deck | str | os.PathLike | None = None, *, configuration
     if auto:
         modal, removed_modal = constrain_singular_dofs(modal, stiffness, model.mass)
         removed = tuple(dict.fromkeys(removed + removed_modal))
-    reference = None
-    if overrides and continue_from is not None:
-        reference = continue_from if isinstance(continue_from, StructureModes) else compute_modes(
-            deck, configuration=configuration, preload=preload, mass=mass, max_hz=max_hz, structure_file=file,
-            continue_from=None)
     wanted_hz, wanted_count = _modes_to_find(struct.deck, struct, max_hz)
     if reference is not None:  # the continuations may have moved above the range: look further
         wanted_hz = _CONTINUATION_REACH * float(np.max(np.abs(reference.frequencies_hz)))

@@ -135,7 +135,7 @@ def _variables(controller: DiscreteController) -> list[FmuVariable]:
     return out
 
 
-def export_controller_fmu(controller: DiscreteController, *, out_dir: str | Path = ".", name: str = "controller",
+def export_controller_fmu(controller: DiscreteController, *, out_dir: str | Path = ".", name: str | None = None,
                           fmi_version: Literal[2, 3] = 2, platforms: Sequence[str] | None = None,
                           progress: ProgressCallback | None = None) -> Path:
     """Write ``out_dir/<name>.fmu``, the controller as a native co-simulation FMU, and return its path.
@@ -147,7 +147,9 @@ def export_controller_fmu(controller: DiscreteController, *, out_dir: str | Path
     out_dir
         Folder of the FMU.
     name
-        Model identifier (a C identifier; names the binary too).
+        Model identifier (a C identifier; names the binary too). Default ``controller`` for FMI 2 and
+        ``controller_fmi3`` for FMI 3, as the plant FMUs' names carry ``_fmi3``: the two versions of one
+        controller never replace each other in one folder.
     fmi_version
         2 or 3 (co-simulation either way).
     platforms
@@ -162,6 +164,8 @@ def export_controller_fmu(controller: DiscreteController, *, out_dir: str | Path
     Path
         ``out_dir/<name>.fmu``.
     """
+    if name is None:
+        name = "controller_fmi3" if fmi_version == 3 else "controller"
     if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", name):
         raise MaceError(f"FMU name must be a C identifier (it names the model and its binary), got {name!r}")
     if fmi_version not in (2, 3):

@@ -2,10 +2,22 @@
 
 from __future__ import annotations
 
+import os
 from collections.abc import Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from mace_fmu.parameters.sets import ParameterSet
 
 #: Up to this many motion grids are spelled out in the name; more are counted.
 LISTED_GRIDS = 6
+
+#: hexadecimal digits of a parameter set's digest in the name of an FMU built from it
+SET_DIGEST_DIGITS = 6
+
+#: the file name every update writes its set to: such a set is named by its folder too
+UPDATE_SET_NAME = "parameters"
 
 
 def fmu_model_name(configuration: str, *, runtime: str | None = None, fmi_version: int = 2,
@@ -16,7 +28,7 @@ def fmu_model_name(configuration: str, *, runtime: str | None = None, fmi_versio
 
     The runtime ("native", "pythonfmu") and FMI 3 come first; then no motion outputs: nothing; the
     motion of every grid in ``all_grids``: ``_motion``; a few grids: their IDs; more than
-    ``LISTED_GRIDS``: ``_motion_<count>_grids``. ``variant`` (e.g. the stem of the parameter set the model
+    ``LISTED_GRIDS``: ``_motion_<count>_grids``. ``variant`` (e.g. :func:`parameter_set_variant` of the set the model
     was built from) follows the runtime, so that an FMU of a changed model never takes the plain model's name.
     ``prefix``: "MACE" for the bundled structure, another deck's file stem for its FMUs.
 
@@ -33,7 +45,7 @@ def fmu_model_name(configuration: str, *, runtime: str | None = None, fmi_versio
     all_grids : sequence of int
         Every grid of the structure (to say "all of them" as ``_motion``).
     variant : str
-        Names a changed model, e.g. the parameter set's file stem.
+        Names a changed model, e.g. :func:`parameter_set_variant` of its parameter set.
     prefix : str
         "MACE", or another deck's file stem.
 
@@ -68,7 +80,7 @@ def model_fmu_name(model, *, runtime: str | None = None, fmi_version: int = 2, v
     fmi_version : int
         2 or 3 (3 adds ``_fmi3``).
     variant : str
-        Names a changed model, e.g. the parameter set's file stem.
+        Names a changed model, e.g. :func:`parameter_set_variant` of its parameter set.
 
     Returns
     -------
@@ -82,8 +94,6 @@ def model_fmu_name(model, *, runtime: str | None = None, fmi_version: int = 2, v
 
 def model_prefix(model) -> str:
     """"MACE" for the bundled deck's models, else the deck's file stem (an FMU of another structure is not MACE's)."""
-    from pathlib import Path
-
     from mace_fmu.iomodel.modal_source import ModalStructure
     from mace_fmu.structure.file import is_bundled_deck
 
@@ -99,3 +109,36 @@ def variant_identifier(text: str) -> str:
     while "__" in out:
         out = out.replace("__", "_")
     return out or "variant"
+
+
+def parameter_set_variant(parameters: ParameterSet, *, path: str | os.PathLike | None = None) -> str:
+    """The part of an FMU's name that says which parameter set its model was built from.
+
+    The set file's stem, with its folder's name before it when the stem is ``parameters`` (the name every
+    ``mace-fmu update`` writes), then the first :data:`SET_DIGEST_DIGITS` hexadecimal digits of the set's
+    values (:meth:`~mace_fmu.parameters.sets.ParameterSet.digest`): ``lexan.toml`` gives ``lexan_3fa2c1``,
+    ``run_a/parameters.toml`` ``run_a_parameters_9e0d4b``. Two sets with different values do not give one
+    name (two updates written into folders of one name, a set edited and exported again: one chance in 16
+    million that two digests share their first six digits), and a set's copy of the same name gives the same
+    name.
+
+    Parameters
+    ----------
+    parameters : ParameterSet
+        The set the model was built from.
+    path : str or path-like, optional
+        Its file (default: the file it was read from, ``parameters.source``; "set" for one made in memory).
+
+    Returns
+    -------
+    str
+        A C-identifier fragment, e.g. ``run_a_parameters_9e0d4b``.
+    """
+    source = Path(os.fspath(path)) if path is not None else (Path(parameters.source) if parameters.source else None)
+    if source is None:
+        label = "set"
+    elif source.stem == UPDATE_SET_NAME:
+        label = f"{source.absolute().parent.name}_{source.stem}"
+    else:
+        label = source.stem
+    return f"{variant_identifier(label)}_{parameters.digest()[:SET_DIGEST_DIGITS]}"

@@ -12,13 +12,21 @@ blocks they belong to).
 Stepping is an exact zero-order hold: over a communication step h with the inputs u held,
 [x(t+h); u] = expm([[A, B], [0, 0]] h) [x(t); u], cached per step size.
 
-Misuse never raises: pythonfmu turns any Python exception into fmi2Fatal and then frees the
-instance's Python objects twice, which corrupts the heap ("corrupted double-linked list" at exit).
-Instead every misuse is logged with status fmi2Error and a refused step returns False, which
-pythonfmu reports as fmi2Discard with the state unchanged (last successful time = the start of the
-step). Invalid parameters at initialisation, a fixed parameter set after it and unknown value
-references make every later step refused with the same reason. pythonfmu forwards the log to the
-host only when the host enabled debug logging (loggingOn).
+A parameter value outside its declared range (or not finite) is refused where it is set, by
+fmi2SetReal, with the reason logged at status fmi2Error, and nothing is set; the call returns
+fmi2Fatal, the one failing status pythonfmu's wrapper can return for a call other than fmi2DoStep
+(it turns a Python exception into fmi2Fatal), so that a host stops there: fmpy's simulate_fmu
+raises, as it does for the native FMU's fmi2Error. The wrapper releases the instance's three Python
+objects (its class, the instance, its log queue) once when it catches the exception and once more
+when the instance is freed, which corrupted the heap ("corrupted double-linked list" at exit):
+:meth:`MaceSlave._refuse` takes one reference more to each first, so that each is released exactly
+once. Every later step is refused with the same reason, for a host that goes on regardless.
+
+Other misuse is logged with status fmi2Error and a refused step returns False, which pythonfmu
+reports as fmi2Discard with the state unchanged (last successful time = the start of the step): a
+fixed parameter set after initialisation and unknown value references make every later step
+refused with the same reason. pythonfmu forwards the log to the host only when the host enabled
+debug logging (loggingOn).
 """
 
 from __future__ import annotations
@@ -33,6 +41,10 @@ from pythonfmu.enums import Fmi2Status
 from scipy.linalg import expm
 
 from mace_fmu.iomodel.parametric import ParametricSystem  # fmu: inlined
+
+
+class RefusedCall(Exception):
+    """Raised out of an FMI call the slave refuses: pythonfmu's wrapper returns fmi2Fatal for it."""
 
 
 class MaceSlave(Fmi2Slave):
@@ -83,6 +95,8 @@ class MaceSlave(Fmi2Slave):
                              if v.causality == Fmi2Causality.input}
         self._output_of_vr = {vr: self._outputs.index(v.name) for vr, v in self.vars.items()
                               if v.causality == Fmi2Causality.output}
+        self._param_of_vr = {vr: self._param_names.index(v.name) for vr, v in self.vars.items()
+                             if v.causality == Fmi2Causality.parameter}
         self._index_cache: dict[tuple, np.ndarray | None] = {}
         self._last_step: tuple[float, tuple[np.ndarray, np.ndarray]] | None = None
 
@@ -115,6 +129,14 @@ class MaceSlave(Fmi2Slave):
     def set_real(self, vrs, values):
         index = self._indices(vrs, self._input_of_vr, "in")
         if index is None:
+            # every parameter value is checked before any is set: a refused call leaves the instance as it was
+            for vr, value in zip(vrs, values):
+                k = self._param_of_vr.get(vr)
+                if k is not None and self._phase in ("instantiated", "initialization"):
+                    problem = self._system.parameter_problem(k, float(value))
+                    if problem is not None:
+                        self._refuse(f"fmi2SetReal: invalid parameter: {problem}; not set")
+                        return
             for vr, value in zip(vrs, values):
                 var = self.vars.get(vr)
                 if not isinstance(var, Real) or var.setter is None:
@@ -133,6 +155,35 @@ class MaceSlave(Fmi2Slave):
         """Log ``reason`` at error level; every later step is refused with it (FMI: fmi2Error ends the run)."""
         self.log(reason, status=Fmi2Status.error)
         self._refusal = self._refusal or reason
+
+    def _refuse(self, reason: str) -> None:
+        """Log ``reason`` at error level and fail the call (fmi2Fatal); every later step is refused with it.
+
+        Without a reference of our own to give pythonfmu's wrapper for its second release, the call is not
+        failed (the heap would be), and only the steps are refused.
+        """
+        self._misuse(reason)
+        if self._held_for_the_wrapper():
+            raise RefusedCall(reason)
+
+    def _held_for_the_wrapper(self) -> bool:
+        """One reference more to each object pythonfmu's wrapper releases twice after an exception.
+
+        Its ``handle_py_exception`` (PySlaveInstance.cpp, 0.6.4 to 0.7.0) calls ``Py_XDECREF`` on the slave's
+        class, the slave and the log queue it got from ``_get_log_queue`` without forgetting them, and its
+        destructor (fmi2FreeInstance; fmi2Reset for the instance and the queue) releases them again. Held once
+        more here, each is released exactly once in all; a host that never frees the instance leaks it.
+        """
+        try:
+            import ctypes
+
+            increment = ctypes.pythonapi.Py_IncRef
+        except (ImportError, AttributeError):  # an interpreter whose C API ctypes cannot reach
+            return False
+        increment.argtypes, increment.restype = [ctypes.py_object], None
+        for held in (type(self), self, self._get_log_queue()):
+            increment(held)
+        return True
 
     def _refuse_step(self, current_time: float, reason: str) -> bool:
         self.log(f"fmi2DoStep at t = {current_time} s refused: {reason}", status=Fmi2Status.error)
@@ -189,11 +240,11 @@ class MaceSlave(Fmi2Slave):
 
     def exit_initialization_mode(self):
         self._phase = "stepping"
-        problems = self._system.parameter_problems(self._params)
-        for problem in problems:
+        problems = self._system.parameter_problems(self._params)  # fmi2SetReal refuses them: values set otherwise
+        for problem in problems[1:]:
             self.log(f"invalid parameter: {problem}", status=Fmi2Status.error)
         if problems:
-            self._refusal = self._refusal or "invalid parameter(s): " + "; ".join(problems)
+            self._refuse(f"invalid parameter: {problems[0]}")
             return
         try:
             self._build()

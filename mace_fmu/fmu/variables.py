@@ -40,7 +40,7 @@ def model_summary(model: VoltsModel) -> str:
         built = f"; parameter set {model.parameters.describe()}" if model.parameters is not None else ""
         return (f"{model.structure_modes.name} modes volts-volts model (NASTRAN's modes of "
                 f"{model.structure_modes.source.name}; modal parameters only): {model.system.nstates} states; "
-                f"{model.electronics.describe()}{built}")
+                f"{model.electronics.describe(instruments=model.instruments)}{built}")
     structure, sys_ = model.structure_modes.structure, model.system
     kind = structure.configuration
     # "<label> <kind>": hosts and `view response --fmu` read which structure and configuration it is
@@ -48,4 +48,5 @@ def model_summary(model: VoltsModel) -> str:
 
     who = structure_label(structure.deck)
     built = f"; parameter set {model.parameters.describe()}" if model.parameters is not None else ""
-    return f"{who} {kind} volts-volts model: {sys_.nstates} states; {model.electronics.describe()}{built}"
+    electronics = model.electronics.describe(instruments=model.instruments)
+    return f"{who} {kind} volts-volts model: {sys_.nstates} states; {electronics}{built}"

@@ -8,11 +8,14 @@ records. Each record checks itself when it is made, so a bad choice is refused b
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Literal, Sequence
+from typing import TYPE_CHECKING, Literal, Sequence
 
 import numpy as np
 
 from mace_fmu.errors import MaceError
+
+if TYPE_CHECKING:
+    from mace_fmu.iomodel.instruments import Instruments
 
 BesselKind = Literal["full", "delay", "none"]
 BESSEL_KINDS: tuple[str, ...] = ("full", "delay", "none")
@@ -57,10 +60,32 @@ class ModelledElectronics:
                 or not 1 <= self.pade_order <= MAX_PADE_ORDER:
             raise MaceError(f"pade_order must be an integer from 1 to {MAX_PADE_ORDER}, got {self.pade_order!r}")
 
-    def describe(self) -> str:
-        """One line for reports and FMU descriptions, e.g. "servos closed, Bessel filters full, delays on"."""
-        return (f"servos {'closed' if self.servos else 'open'}, Bessel filters {self.bessel}, "
-                f"delays {'on' if self.delays else 'off'}")
+    def describe(self, *, instruments: Instruments | None = None) -> str:
+        """One line for reports and FMU descriptions, e.g. "servos closed, Bessel filters full, delays on".
+
+        Parameters
+        ----------
+        instruments : Instruments, optional
+            The structure's instruments, loops and electronics: a part the structure file does not declare is
+            said to be absent ("no servos", "no anti-aliasing filters", "no delays"), whatever the choice for
+            it, and the filters are named by their kind (Bessel, Butterworth). Without them: the choices alone.
+
+        Returns
+        -------
+        str
+            E.g. "servos closed, Bessel filters full, delays on" (MACE) or "no servos, no anti-aliasing
+            filters, no delays" (a structure file with sensors and actuators only).
+        """
+        if instruments is None:
+            return (f"servos {'closed' if self.servos else 'open'}, Bessel filters {self.bessel}, "
+                    f"delays {'on' if self.delays else 'off'}")
+        el, loops = instruments.electronics, instruments.servos
+        servos = f"servos {'closed' if self.servos else 'open'}" if loops.wheels or loops.gimbals else "no servos"
+        filtered = el.filter_order > 0 and bool(el.analog_sensors)
+        filters = f"{el.filter_kind.capitalize()} filters {self.bessel}" if filtered else "no anti-aliasing filters"
+        delayed = bool(el.actuator_delays_s) or bool(el.sensor_delays_s)
+        delays = f"delays {'on' if self.delays else 'off'}" if delayed else "no delays"
+        return f"{servos}, {filters}, {delays}"
 
 
 @dataclass(frozen=True)

@@ -55,14 +55,18 @@ class ParametricSystem:
     def parameter_problems(self, params: np.ndarray) -> list[str]:
         """Why parameter values cannot be used, one sentence each (empty when all can): not finite, or
         outside the declared [min, max] (the ranges carry every limit: mace_fmu.parameters.kinds)."""
-        problems = []
-        for name, value, low, high in zip(self.parameter_names, np.asarray(params, dtype=np.float64),
-                                          self.minimum, self.maximum):
-            if not np.isfinite(value):
-                problems.append(f"{name} = {value} is not a finite number")
-            elif value < low or value > high:
-                problems.append(f"{name} = {value:.17g} is outside its declared range [{low:.15g}, {high:.15g}]")
-        return problems
+        values = np.asarray(params, dtype=np.float64)
+        return [problem for k in range(len(self.parameter_names))
+                if (problem := self.parameter_problem(k, float(values[k]))) is not None]
+
+    def parameter_problem(self, k: int, value: float) -> str | None:
+        """Why ``value`` cannot be parameter ``k`` (its position in the parameter vector), or None if it can."""
+        name, low, high = self.parameter_names[k], self.minimum[k], self.maximum[k]
+        if not np.isfinite(value):
+            return f"{name} = {value} is not a finite number"
+        if value < low or value > high:
+            return f"{name} = {value:.17g} is outside its declared range [{low:.15g}, {high:.15g}]"
+        return None
 
     def index(self, name: str) -> int:
         """Position of parameter ``name`` in the parameter vector."""

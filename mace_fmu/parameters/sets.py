@@ -139,6 +139,23 @@ class ParameterSet:
             parts.append(f"created {p.created} by {p.tool}")
         return ", ".join(parts)
 
+    def digest(self) -> str:
+        """SHA-256 (hex) of the values alone, name by name in sorted order and each to the bit.
+
+        Two sets with the same values have the same digest whatever their provenance, file or order; any
+        other value, or another name, gives another digest. It names the FMUs built from a set
+        (:func:`mace_fmu.fmu.naming.parameter_set_variant`).
+
+        Returns
+        -------
+        str
+            64 hexadecimal digits.
+        """
+        h = hashlib.sha256()
+        for name in sorted(self.values):
+            h.update(f"{name}={float(self.values[name]).hex()}\n".encode())
+        return h.hexdigest()
+
     def of_kind(self, *kinds: KindName) -> dict[str, float]:
         """The values whose names are of the given kinds."""
         return {n: v for n, v in self.values.items() if parameter_kind(n) in kinds}

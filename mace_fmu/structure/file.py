@@ -182,9 +182,9 @@ def _spec_of(path: Path, text: str, data: Mapping[str, Any]) -> StructureSpec:
 
 
 @functools.lru_cache(maxsize=16)
-def _load_structure_file(path: str, mtime_ns: int, size: int) -> StructureFile:
-    del mtime_ns, size  # cache keys: a file changed on disk is read again
-    file = Path(path)
+def _load_structure_file(path: str, resolved: str, mtime_ns: int, size: int) -> StructureFile:
+    del resolved, mtime_ns, size  # cache keys: another file under the same name, or a changed one, is read again
+    file = Path(path)  # as the user gave it: messages and the model's provenance name it so
     text = read_text(file, what="structure")
     try:
         data = tomllib.loads(text)
@@ -221,7 +221,7 @@ def load_structure_file(path: str | os.PathLike) -> StructureFile:
         st = file.stat()
     except OSError:
         raise MaceError(f"{file}: no such structure file") from None
-    return _load_structure_file(str(file.resolve()), st.st_mtime_ns, st.st_size)
+    return _load_structure_file(str(file), str(file.resolve()), st.st_mtime_ns, st.st_size)
 
 
 def load_spec(path: str | os.PathLike | None = None) -> StructureSpec:

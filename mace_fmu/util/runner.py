@@ -11,10 +11,16 @@ workers of a cluster need not see the client's files.
 
 from __future__ import annotations
 
+import contextlib
+import logging
 import os
+import signal
+import sys
+import threading
 import uuid
+import warnings
 from pathlib import Path
-from typing import Any, Callable, Iterable
+from typing import Any, Callable, Iterable, Iterator
 
 from mace_fmu.errors import MaceError
 from mace_fmu.util.progress import ProgressCallback, Step
@@ -22,6 +28,10 @@ from mace_fmu.util.progress import ProgressCallback, Step
 #: how long a scheduler address is given to answer [s]: a cluster's scheduler answers in milliseconds, a
 #: loaded one in seconds; what does not answer by then is not going to
 DEFAULT_CONNECT_TIMEOUT_S = 20.0
+
+#: longest wait for an interrupted run's workers to close [s]; a worker inside a long task is then terminated
+#: by its nanny, and Ctrl-C answers within seconds, not after the task
+_INTERRUPTED_CLOSE_S = 5.0
 
 #: the exchange after the connection gets this much longer than the connection [s], so that when the
 #: connection is the problem, Dask's own timeout fires first with its reason (refused, unresolvable)
@@ -139,6 +149,10 @@ class DaskRunner:
         except ImportError as exc:  # dask[distributed] is a dependency; say what is missing if it is not there
             raise MaceError(f"the Dask runner needs dask[distributed]: {exc}") from None
         self._own_cluster = None
+        self._stderr: _WorkersStderr | None = None
+        self.client = None
+        self._shipped: dict[str, str] = {}  # SHA-256 -> the name of the plugin that ships it
+        self._id = uuid.uuid4().hex[:12]  # plugin names of this runner's own: closing it leaves other clients' alone
         self._own_client = client is None
         if client is not None:
             self.client = client
@@ -153,15 +167,34 @@ class DaskRunner:
             n = workers or os.cpu_count() or 1
             if n < 1:
                 raise MaceError(f"workers must be >= 1, got {n}")
-            self._own_cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                                             dashboard_address=None, silence_logs=40,
-                                             env={"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1",
-                                                  "MKL_NUM_THREADS": "1"})
-            self.client = Client(self._own_cluster)
+            self._stderr = _WorkersStderr.made()
+            started_before = set(_started_clusters())
+            try:
+                with self._stderr.given_to_new_processes() if self._stderr else contextlib.nullcontext():
+                    # no dashboard; the scheduler's HTTP routes on a free port: the default 8787 taken by
+                    # another cluster printed a three-line warning into every run
+                    self._own_cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
+                                                     dashboard_address=None, silence_logs=40,
+                                                     scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
+                                                     preload=[__name__],
+                                                     env={"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1",
+                                                          "MKL_NUM_THREADS": "1"})
+                    self.client = Client(self._own_cluster)
+            except (KeyboardInterrupt, SystemExit):  # Ctrl-C while the workers started: nothing left, nothing shown
+                # the cluster whose constructor was interrupted: closed here, else Dask's exit handler tries
+                # again and prints its half-started workers' AssertionError
+                self._own_cluster = next((c for c in _started_clusters() if c not in started_before), None)
+                self.close(quiet=True)
+                raise
+            except BaseException:
+                if self._stderr:
+                    self._stderr.release()  # why the workers did not start
+                self.close(quiet=True)
+                raise
+            if self._stderr:
+                self._stderr.release()
         self.progress = progress
         self.task = task
-        self._shipped: dict[str, str] = {}  # SHA-256 -> the name of the plugin that ships it
-        self._id = uuid.uuid4().hex[:12]  # plugin names of this runner's own: closing it leaves other clients' alone
 
     def ship(self, path: str | os.PathLike, *, sha256: str | None = None) -> str:
         """Send the bytes of the file at ``path`` to every worker of the cluster, now and joining later, once.
@@ -228,21 +261,173 @@ class DaskRunner:
         """Number of workers the cluster has now."""
         return len(self.client.scheduler_info()["workers"])
 
-    def close(self) -> None:
-        """Free the scheduler's copies of the shipped files and close what this runner started."""
+    def close(self, *, quiet: bool = False) -> None:
+        """Free the scheduler's copies of the shipped files and close the client and the cluster this runner
+        started (a given client or cluster stays open).
+
+        Parameters
+        ----------
+        quiet : bool
+            For a run that is being interrupted (Ctrl-C, SIGTERM): Dask's loggers are silenced and the workers
+            are given :data:`_INTERRUPTED_CLOSE_S` seconds, so that the interruption ends in the caller's one
+            line and not in the cancelled tasks' tracebacks; a second Ctrl-C meanwhile is ignored (the close is
+            bounded) rather than leaving workers behind.
+        """
+        if not quiet:
+            self._close()
+            return
+        if self._stderr:
+            self._stderr.mute()
+        with _dask_silenced(), _interrupts_ignored():
+            try:
+                self._close(timeout_s=_INTERRUPTED_CLOSE_S)
+            except Exception:  # noqa: BLE001 - an interrupted run's cluster may be half started or half gone
+                pass
+            # what could not be closed is left to the worker processes' own finalisers, not to Dask's exit
+            # handler, which would print the same failure again
+            if self._own_cluster is not None:
+                _started_clusters().discard(self._own_cluster)
+
+    def _close(self, *, timeout_s: float | None = None) -> None:
         for name in self._shipped.values():
             try:  # the workers keep their copies until they stop; a cluster already gone needs nothing freed
                 self.client.unregister_worker_plugin(name)
-            except Exception:
+            except Exception:  # noqa: BLE001
                 pass
         self._shipped.clear()
-        if self._own_client:
-            self.client.close()
+        bounded = {} if timeout_s is None else {"timeout": timeout_s}  # else Dask's own defaults
+        if self._own_client and self.client is not None:
+            self.client.close(**bounded)
         if self._own_cluster is not None:
-            self._own_cluster.close()
+            self._own_cluster.close(**bounded)
 
     def __enter__(self) -> DaskRunner:
         return self
 
-    def __exit__(self, *exc) -> None:
-        self.close()
+    def __exit__(self, exc_type, exc, traceback) -> None:
+        self.close(quiet=exc_type is not None and issubclass(exc_type, (KeyboardInterrupt, SystemExit)))
+
+
+def _started_clusters():
+    """Dask's registry of the clusters this process started (closed by its exit handler if still open)."""
+    from distributed.deploy.spec import SpecCluster
+
+    return SpecCluster._instances
+
+
+class _WorkersStderr:
+    """The standard error of the processes a local cluster starts: a pipe this process forwards to its own.
+
+    Ctrl-C signals the terminal's whole process group, Dask's worker processes included, and each printed the
+    KeyboardInterrupt of its event loop (35-68 lines of tracebacks before the command's own line). A worker
+    ignores SIGINT from its start on (:func:`dask_setup`); what one prints before that, while Python and Dask
+    are being imported, is held here until the cluster has started (then shown) or the start was interrupted
+    (then dropped), and what the workers print while an interrupted run closes them is dropped too.
+    Processes started later (a worker restarted after a crash) write to this process's stderr directly.
+    """
+
+    @classmethod
+    def made(cls) -> _WorkersStderr | None:
+        """One, or None where fd 2 cannot be passed on so (Windows; a process without a stderr)."""
+        if os.name != "posix":
+            return None
+        try:
+            return cls()
+        except OSError:
+            return None
+
+    def __init__(self) -> None:
+        self._target = os.dup(2)
+        read, self._write = os.pipe()
+        self._lock = threading.Lock()
+        self._held: list[bytes] | None = []  # None once released: forwarded as it comes
+        self._muted = False
+        threading.Thread(target=self._forward, args=(read,), name="mace-fmu workers' stderr", daemon=True).start()
+
+    @contextlib.contextmanager
+    def given_to_new_processes(self) -> Iterator[None]:
+        """fd 2 is the pipe meanwhile: processes started now inherit it (this process's own lines pass too)."""
+        sys.stderr.flush()
+        saved = os.dup(2)
+        os.dup2(self._write, 2)
+        try:
+            yield
+        finally:
+            sys.stderr.flush()
+            os.dup2(saved, 2)
+            os.close(saved)
+            os.close(self._write)  # the children hold theirs: the pipe ends when the last of them has exited
+
+    def release(self) -> None:
+        """Show what was held, and from now on what comes."""
+        with self._lock:
+            held, self._held = self._held or [], None
+            if not self._muted:
+                self._write_all(b"".join(held))
+
+    def mute(self) -> None:
+        """Drop what was held and whatever comes."""
+        with self._lock:
+            self._muted, self._held = True, None
+
+    def _forward(self, read: int) -> None:
+        with os.fdopen(read, "rb", buffering=0) as pipe:
+            while chunk := pipe.read(65536):
+                with self._lock:
+                    if self._muted:
+                        continue
+                    if self._held is not None:
+                        self._held.append(chunk)
+                    else:
+                        self._write_all(chunk)
+        os.close(self._target)
+
+    def _write_all(self, data: bytes) -> None:
+        while data:
+            try:
+                data = data[os.write(self._target, data):]
+            except OSError:  # stderr closed: nothing left to show it on
+                return
+
+
+def dask_setup(worker: Any) -> None:
+    """Dask's preload hook of the local cluster's workers: SIGINT ignored in the worker process.
+
+    Ctrl-C is for the process that started the cluster, which closes the workers: a worker interrupted by the
+    terminal printed its event loop's traceback and died under its nanny. Runs in the worker process's main
+    thread (its event loop's), before the worker registers with the scheduler, so every worker of a started
+    cluster ignores SIGINT.
+    """
+    del worker  # the hook's argument; nothing of the worker is needed
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+@contextlib.contextmanager
+def _interrupts_ignored() -> Iterator[None]:
+    """SIGINT ignored meanwhile (main thread only: elsewhere Python does not deliver it)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+@contextlib.contextmanager
+def _dask_silenced() -> Iterator[None]:
+    """Dask's (and its event loop's) log records and warnings dropped meanwhile: the cancelled tasks and closing
+    comms of an interrupted run are the interruption itself, not news."""
+    loggers = [logging.getLogger(name) for name in ("distributed", "tornado", "asyncio")]
+    levels = [logger.level for logger in loggers]
+    for logger in loggers:
+        logger.setLevel(logging.CRITICAL + 1)
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            yield
+    finally:
+        for logger, level in zip(loggers, levels):
+            logger.setLevel(level)

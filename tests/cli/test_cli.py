@@ -158,8 +158,9 @@ def test_export_writes_the_kind_it_is_asked_for_under_a_name_that_says_so(capsys
 
 
 def test_an_fmu_of_a_parameter_set_is_named_after_it_and_says_where_it_comes_from(capsys, tmp_path):
-    """``export --parameters fitted.toml`` writes MACE_0g_native_fitted.fmu (never the plain model's name) and
-    its description names the set, what it was fitted to and when; ``build`` names its FMUs the same way."""
+    """``export --parameters fitted.toml`` writes MACE_0g_native_fitted_<digest>.fmu (never the plain model's name,
+    nor another set's) and its description names the set, what it was fitted to and when; ``build`` names its
+    FMUs the same way."""
     import fmpy
 
     from mace_fmu.cli import build_parser
@@ -169,15 +170,18 @@ def test_an_fmu_of_a_parameter_set_is_named_after_it_and_says_where_it_comes_fro
         'data = "gimbal.csv"\ncost = "time"\n\n[values]\nE_lexan_center = 2.4e9\n')
     code, out, _ = _run(capsys, ["export", "0g", "-o", str(tmp_path), "--max-hz", "20", "--parameters",
                                  str(tmp_path / "fitted.toml")])
+    from mace_fmu.parameters.sets import ParameterSet
+
+    digest = ParameterSet.read(tmp_path / "fitted.toml").digest()[:6]
     path = out.strip().splitlines()[-1].removeprefix("wrote ")
-    assert code == 0 and path.endswith("MACE_0g_native_fitted.fmu")
+    assert code == 0 and path.endswith(f"MACE_0g_native_fitted_{digest}.fmu"), path
     description = fmpy.read_model_description(path).description
     assert description.endswith("; parameter set fitted.toml, fitted to MACE_0g_native.fmu, data gimbal.csv, time "
                                 "cost, created 2026-11-27T21:00:00Z by mace-fmu 0.1.0"), description
     from mace_fmu.cli.common import model_variant
 
-    args = build_parser().parse_args(["build", "--parameters", "fitted.toml"])
-    assert model_variant(args) == "fitted"
+    args = build_parser().parse_args(["build", "--parameters", str(tmp_path / "fitted.toml")])
+    assert model_variant(args) == f"fitted_{digest}"
 
 
 def test_export_refuses_fmi3_for_pythonfmu(capsys, tmp_path):

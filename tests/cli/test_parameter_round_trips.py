@@ -84,9 +84,10 @@ def exported(folder):
     return out
 
 
-def test_the_howto_exports_its_updates_set_with_the_sets_values(exported):
+def test_the_howto_exports_its_updates_set_with_the_sets_values(exported, folder):
     start = _start_values(exported["number"])
-    assert exported["number"].name == "frame_1g_native_parameters.fmu"
+    digest = ParameterSet.read(folder / "frame_update" / "parameters.toml").digest()[:6]
+    assert exported["number"].name == f"frame_1g_native_frame_update_parameters_{digest}.fmu"
     assert start["damping_mode_2"] == ZETA and start["E_storey_1"] == PHYSICAL["E_storey_1"]
     assert start["m_floor_2"] == PHYSICAL["m_floor_2"]
     assert start["damping_mode_1"] == start["damping_mode_3"] == 0.002  # the frame's table, untouched
@@ -103,7 +104,8 @@ def test_a_pythonfmu_export_takes_the_fmu_updates_set(folder, capsys):
     code, _, err = run_cli(capsys, ["export", "1g", *DECK, "--parameters", str(folder / "frame_update" / "parameters.toml"),
                                     "--runtime", "pythonfmu", "-o", str(folder / "pythonfmu")])
     assert code == 0, err
-    start = _start_values(folder / "pythonfmu" / "frame_1g_pythonfmu_parameters.fmu")
+    digest = ParameterSet.read(folder / "frame_update" / "parameters.toml").digest()[:6]
+    start = _start_values(folder / "pythonfmu" / f"frame_1g_pythonfmu_frame_update_parameters_{digest}.fmu")
     assert start["damping_mode_2"] == ZETA and start["E_storey_1"] == PHYSICAL["E_storey_1"]
     assert start["m_floor_2"] == PHYSICAL["m_floor_2"]
 

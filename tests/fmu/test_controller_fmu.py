@@ -122,14 +122,25 @@ def test_any_step_size_runs_the_samples_whose_instants_it_passes(exported, tmp_p
     slave.freeInstance()
 
 
-@pytest.mark.parametrize("step_s", [1e20, 1e6, 2.1e3])
-def test_a_step_beyond_a_calls_bounded_work_is_refused_at_once(exported, tmp_path, step_s):
+@pytest.mark.parametrize("step_s", [1e20, 1e6, 2.1e3, 0.0])
+def test_a_refused_step_leaves_the_instance_usable(exported, tmp_path, step_s):
     """One call runs at most a million samples (2000 s at 2 ms): doStep(h = 1e20) returned OK without stepping
-    (the sample count overflowed) and h = 1e6 ran 250 s; both are refused before any work."""
+    (the sample count overflowed) and h = 1e6 ran 250 s; both are refused before any work. A refused step is
+    an invalid argument, as h = 0 is: an error that leaves the instance as it was, so the next step runs and
+    gives the discrete system's next sample (the over-long step left it in its error state, every later step
+    refused)."""
     system, fmu, version = exported
     slave, vr = _slave(fmu, version, tmp_path)
-    with pytest.raises(FMICallException):
+    set_, get = (slave.setReal, slave.getReal) if version == 2 else (slave.setFloat64, slave.getFloat64)
+    ins, outs = [vr[n] for n in system.input_labels], [vr[n] for n in system.output_labels]
+    u = np.array([[0.3], [-0.7]])
+    set_(ins, list(u[:, 0]))
+    with pytest.raises(FMICallException) as refused:
         slave.doStep(currentCommunicationPoint=0.0, communicationStepSize=step_s)
+    assert refused.value.status == 3  # an error, not fatal
+    slave.doStep(currentCommunicationPoint=0.0, communicationStepSize=STEP)
+    ref = ct.forced_response(system, T=np.arange(2) * STEP, U=np.hstack([u, u])).outputs
+    assert np.allclose(get(outs), ref[:, 1], rtol=0, atol=1e-12 * np.max(np.abs(ref)))
     slave.freeInstance()
 
 

@@ -240,6 +240,41 @@ def test_continuous_states_are_set_in_continuous_time_mode_only(fmus):
     me.freeInstance()
 
 
+@pytest.mark.parametrize("first", ["getReal", "getDerivatives"])
+def test_states_beyond_what_the_outputs_hold_are_refused_by_get_real_as_by_get_derivatives(fmus, first):
+    """Continuous states of 1e307 are finite and are set, and the outputs C x overflow: GetReal returned inf and
+    NaN with fmi2OK where GetDerivatives refused the same state. Both refuse it now with the reason, whichever
+    comes first, and leave the instance in its error state (the model cannot go on from it), where a reset
+    makes it usable again."""
+    messages = Messages()
+    me = _model(fmus, messages)
+    me.setupExperiment(startTime=0.0)
+    me.enterInitializationMode()
+    me.exitInitializationMode()
+    me.newDiscreteStates()
+    me.enterContinuousTimeMode()
+    n = fmus.model.system.nstates
+    me.setContinuousStates((ctypes.c_double * n)(*([1e307] * n)), n)
+    _, outs = _io(fmus, fmus.dir2)
+    dx = (ctypes.c_double * n)()
+    calls = {"getReal": lambda: me.getReal(outs), "getDerivatives": lambda: me.getDerivatives(dx, n)}
+    assert _status(calls[first]) == ERROR
+    said = messages.errors()[-1]
+    if first == "getReal":
+        assert said.startswith("fmi2GetReal: output ") and "at t = 0 s: the inputs or states are beyond what the " \
+                                                              "model can represent" in said, said
+    else:
+        assert "the inputs or states are beyond what the model can represent" in said, said
+    assert _status(me.setContinuousStates, (ctypes.c_double * n)(*([0.0] * n)), n) == ERROR  # the error state
+    assert "must not be called in error" in messages.errors()[-1], messages.errors()[-1]
+    me.reset()
+    me.setupExperiment(startTime=0.0)
+    me.enterInitializationMode()
+    me.exitInitializationMode()
+    assert np.all(np.isfinite(me.getReal(outs)))
+    me.freeInstance()
+
+
 def test_only_declared_value_references_are_variables(fmus):
     messages = Messages()
     fmu = _ready(fmus, messages)

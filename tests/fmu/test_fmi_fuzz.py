@@ -68,8 +68,9 @@ def test_the_controller_fmu_s_random_call_sequences_follow_the_state_machine_wit
     """The controller FMU (FMI 2 and 3 co-simulation) under the same fuzz, with the steps that once went wrong:
     a step that is no whole number of samples (it was refused and left the instance in its error state), a
     step of 1e20 s (its sample count overflowed and it returned OK without stepping) and of 1e6 s (it ran 250 s):
-    a step beyond the million samples one call runs is refused, at once, as a failed step. Foreign states
-    come from the plant FMU (a controller has no model exchange)."""
+    a step beyond the million samples one call runs is refused, at once, as an invalid argument that leaves
+    the instance as it was (it was a failed step, into the error state). Foreign states come from the plant
+    FMU (a controller has no model exchange)."""
     import control as ct
     import numpy as np
 
@@ -88,7 +89,10 @@ def test_the_controller_fmu_s_random_call_sequences_follow_the_state_machine_wit
                        extra=("--interfaces", "cs2,cs3", "--peer", folders["fmi2"], "--sample-s", "0.002"))
     assert summary["mismatches"] == [], json.dumps(summary["mismatches"][:5], indent=1)
     assert summary["sequences"] == 2 * SEEDS and summary["ok"] > 0.3 * summary["calls"]
-    assert any(state.endswith(" error") for state in summary["by_state"])  # sequences reached the error state
+    # a controller has no parameters to refuse and every refused call is an invalid argument: no sequence
+    # reaches the error state (the over-long steps took them there), and the refusals are many
+    assert not any(state.endswith(" error") for state in summary["by_state"]), summary["by_state"]
+    assert summary["error"] > 0.1 * summary["calls"]
 
 
 def test_random_call_sequences_from_c_are_clean_under_valgrind(folders, tmp_path):

@@ -5,10 +5,13 @@ API with a logger, so the statuses and messages are those any host sees. What th
 - a step it cannot take (NaN or infinite input, not initialised, terminated, negative or
   non-finite step size) returns fmi2Discard with the state unchanged and the last successful time
   at the start of the step; the reason is logged with status fmi2Error;
-- an error that ends the run (invalid parameters at initialisation, a fixed parameter set after
-  it, an unknown value reference) is logged with status fmi2Error when it happens, and every later
-  step is refused (fmi2Discard) with the same reason. pythonfmu cannot return fmi2Error itself: a
-  Python exception becomes fmi2Fatal and corrupts the heap (see mace_fmu/fmu/slave.py);
+- a parameter value outside its declared range is refused by fmi2SetReal, logged with status fmi2Error and
+  failed with fmi2Fatal (the one failing status pythonfmu's wrapper can return there: a Python exception,
+  whose objects the slave keeps alive for the wrapper's second release, see mace_fmu/fmu/slave.py), so that
+  fmpy's simulate_fmu raises; every later step is refused (fmi2Discard) with the same reason;
+- other errors that end the run (a fixed parameter set after initialisation, an unknown value reference)
+  are logged with status fmi2Error when they happen, and every later step is refused (fmi2Discard) with
+  the same reason;
 - getReal after fmi2Terminate returns the final values (the standard allows it).
 Extreme step sizes and 10^6 steps are exact against the state-space zero-order hold.
 """
@@ -39,7 +42,7 @@ from mace_fmu.iomodel.volts import volts_model
 pytestmark = pytest.mark.slow  # a million steps and misuse in subprocesses
 
 WORKER = SUPPORT / "fmu_misuse_worker.py"
-OK, DISCARD, ERROR = 0, 2, 3
+OK, DISCARD, ERROR, FATAL = 0, 2, 3, 4
 
 
 @pytest.fixture(scope="module")
@@ -97,11 +100,32 @@ def test_step_before_initialisation_is_refused(fmu_0g) -> None:
     ("E_lexan_center", "1634000000.0", "E_lexan_center = 1634000000 is outside its declared range [1634500000, "
                                        "3502500000]"),
 ])
-def test_invalid_parameters_are_refused_at_initialisation(fmu_0g, name: str, value: str, reason: str) -> None:
+def test_invalid_parameters_are_refused_where_they_are_set(fmu_0g, name: str, value: str, reason: str) -> None:
+    """Refused by fmi2SetReal with an error in the log and a failing status (they were logged at initialisation
+    and only the steps were refused: fmpy's simulate_fmu returned two rows ending at t = 0, no exception)."""
     r = run(fmu_0g[2], f"parameter:{name}:{value}")
-    assert messages(r, "exitInitializationMode") == [(ERROR, f"invalid parameter: {reason}")]
-    assert statuses(r, "doStep") == [DISCARD, DISCARD]
+    assert statuses(r, "setReal") == [FATAL]
+    assert messages(r, "setReal")[0] == (ERROR, f"fmi2SetReal: invalid parameter: {reason}; not set")
+    assert statuses(r, "doStep") == [DISCARD, DISCARD]  # a host that goes on regardless
     assert all(reason in text for _, text in messages(r, "doStep"))
+
+
+def test_fmpy_simulate_raises_for_an_invalid_parameter_and_the_process_goes_on(fmu_0g) -> None:
+    r = run(fmu_0g[2], "simulate:E_lexan_center:2400")
+    for debug in ("False", "True"):
+        assert r[f"raised_{debug}"] == "fmi2SetReal failed with status 4 (fatal).", r
+    reason = "E_lexan_center = 2400 is outside its declared range [1634500000, 3502500000]"
+    assert [ERROR, f"fmi2SetReal: invalid parameter: {reason}; not set"] in r["log"]  # with debug logging
+    assert r["rows_after"] == 6
+
+
+def test_a_refused_call_releases_the_slave_exactly_once(fmu_0g) -> None:
+    """pythonfmu's wrapper releases the slave after the exception and again when the instance is freed: alive
+    after the refusal, gone after the free (without the slave's extra reference it was freed at the refusal,
+    and the free released freed memory)."""
+    r = run(fmu_0g[2], "lifetime:E_lexan_center:2400")
+    assert statuses(r, "setReal") == [FATAL]
+    assert r["alive"] == [1, 1, 0]
 
 
 def test_declared_ranges_are_in_the_model_description(fmu_0g) -> None:

@@ -195,8 +195,7 @@ class Reference:
             if abs(t - m.time) > TIME_TOLERANCE * max(1.0, abs(m.time)) or self.past_stop(t + h):
                 return ERROR
             if self.sample_s is not None and h / self.sample_s > MAX_SAMPLES_PER_CALL + 1:
-                m.phase = ERR  # refused before any work, as a failed step: the instance is in its error state
-                return ERROR
+                return ERROR  # an invalid argument, refused before any work: the instance stays as it was
             m.time = t + h
             return OK
         if call in ("getRealStatus", "getBooleanStatus"):

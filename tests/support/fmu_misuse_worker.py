@@ -91,6 +91,42 @@ elif scenario.startswith("parameter:"):
     initialise(**{name: float(value)})
     call("doStep", 0.0, 0.002)
     call("doStep", 0.002, 0.002)
+elif scenario.startswith("simulate:"):  # simulate:NAME:VALUE: fmpy's own loop, as a user runs an FMU
+    _, name, value = scenario.split(":")
+    fmu.freeInstance()  # this scenario's FMUs are simulate_fmu's own
+    for debug in (False, True):
+        try:
+            fmpy.simulate_fmu(folder, stop_time=0.01, step_size=0.002, start_values={name: float(value)},
+                              debug_logging=debug, logger=logger)
+            result[f"raised_{debug}"] = ""
+        except FMICallException as exc:
+            result[f"raised_{debug}"] = str(exc)
+    result["log"] = log
+    # the process goes on: a run with the FMU's own values is whole
+    result["rows_after"] = len(fmpy.simulate_fmu(folder, stop_time=0.01, step_size=0.002))
+    print(json.dumps({"calls": calls, "outputs": outputs, **result}), flush=True)
+    sys.stderr.flush()
+    os._exit(0)
+elif scenario.startswith("lifetime:"):  # lifetime:NAME:VALUE: the slave object across a refused call and the free
+    import gc
+
+    _, name, value = scenario.split(":")
+
+    def slaves() -> int:
+        gc.collect()
+        return sum(type(o).__name__ == description.coSimulation.modelIdentifier for o in gc.get_objects())
+
+    result["alive"] = [slaves()]
+    call("setReal", [vr[name]], [float(value)])
+    result["alive"].append(slaves())  # pythonfmu's wrapper has released it once: still held by the wrapper
+    fmu.freeInstance()
+    result["alive"].append(slaves())  # released again by the free: gone, exactly once
+    for _ in range(3):  # a heap the double release damaged fails in allocations after it
+        _ = [list(range(100)) for _ in range(50_000)]
+        gc.collect()
+    print(json.dumps({"calls": calls, "outputs": outputs, **result}), flush=True)
+    sys.stderr.flush()
+    os._exit(0)
 elif scenario == "fixed_after_init":
     initialise()
     call("doStep", 0.0, 0.002)

@@ -298,8 +298,11 @@ def test_export_with_the_nominal_set_and_bounds_gives_the_same_fmu_variables(run
                  str(out / "table_5_3.toml"), "-o", str(tmp_path)]) == 0
     # named after the set and its bounds, never the plain model's MACE_0g_native.fmu (which `build` writes)
     assert not (tmp_path / "MACE_0g_native.fmu").exists()
+    from mace_fmu.parameters.sets import ParameterSet
+
+    digest = ParameterSet.read(out / "zero_g_nominal.toml").digest()[:6]
     exported = {v.name: v for v in fmpy.read_model_description(
-        str(tmp_path / "MACE_0g_native_zero_g_nominal_bounded.fmu")).modelVariables}
+        str(tmp_path / f"MACE_0g_native_zero_g_nominal_{digest}_bounded.fmu")).modelVariables}
     predicted = {v.name: v for v in fmpy.read_model_description(
         str(out / "MACE_0g_native_nominal.fmu")).modelVariables}
     assert exported.keys() == predicted.keys()

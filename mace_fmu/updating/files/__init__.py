@@ -1,7 +1,8 @@
 """Measured data files test labs write: time histories (CSV, npz), frequency responses (CSV, UFF 58), H1.
 
-Signals are named as the model's (volts at the model boundary); a channel map translates a data
-acquisition's channel names and states each channel's unit. Bad data raise ``MaceError`` naming
+Signals are named as the model's and are in its units at the boundary (volts for MACE, N or m/s^2
+for a force input or an accelerometer without a gain); a channel map translates a data acquisition's
+channel names and states each channel's unit. Bad data raise ``MaceError`` naming
 the file, the channel and the row.
 """
 

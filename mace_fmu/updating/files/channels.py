@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import difflib
 import math
 import re
 from dataclasses import dataclass
@@ -187,8 +188,10 @@ def resolve(label: Label, *, channel_map: ChannelMap | None, where: str) -> tupl
         return label.name, label.role, label.unit  # the unit travels with the data, checked against the model's
     row = channel_map.find(label.name)
     if row is None:
+        close = difflib.get_close_matches(label.name, [ch.channel for ch in channel_map.channels], n=3)
+        hint = f"did you mean {' or '.join(map(repr, close))}? Else add it" if close else "add it"
         raise MaceError(f"{where}: channel {label.name!r} is not in the channel map {channel_map.source} "
-                        "(add it, with role 'ignore' to skip it)")
+                        f"({hint}, with role 'ignore' to skip it)")
     if row.role == "ignore":
         return row.signal, row.role, row.unit  # skipped: neither its role nor its unit matters
     if label.role is not None and label.role != row.role:

@@ -20,12 +20,13 @@ STEP_RTOL = 1e-6
 
 def read_time_history(path: str | Path, *, channel_map: ChannelMap | None = None,
                       sample_time_s: float | None = None) -> TimeHistory:
-    """Measured inputs and outputs from ``.csv`` or ``.npz``; times [s], signals in the units the map (or V) states.
+    """Measured inputs and outputs from ``.csv`` or ``.npz``; times [s], signals in the units their labels state.
 
     The first column (CSV) or array (npz) is ``time [s]``; each other one is labelled
     ``name [unit]``. Without a channel map the name carries the role, ``in:<signal>`` or
-    ``out:<signal>``, and the unit must be V; with a map the name is the data channel and the map
-    gives signal, role and unit. ``sample_time_s``, when given, must be the file's time step.
+    ``out:<signal>``, and the unit travels with the data, to be checked against the model's where
+    they meet it (an FMU update: the FMU's units); with a map the name is the data channel and the
+    map gives signal, role and unit. ``sample_time_s``, when given, must be the file's time step.
     Errors name the file, the channel and the row (CSV: the line; npz: the 0-based sample).
 
     Parameters

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import ctypes
 import dataclasses
+import difflib
 import functools
 import hashlib
 import os
@@ -124,8 +125,8 @@ class FmuInterface:
                       units: Mapping[str, str] | None = None) -> None:
         """MaceError naming every input and output channel of ``where`` the FMU does not have and, with the
         data's ``units``, every one whose unit is not the one the FMU declares for it."""
-        bad = [f"input {n!r}" for n in inputs if n not in self.inputs] + \
-            [f"output {n!r}" for n in outputs if n not in self.outputs]
+        bad = [_unknown_signal("input", n, self.inputs) for n in inputs if n not in self.inputs] + \
+            [_unknown_signal("output", n, self.outputs) for n in outputs if n not in self.outputs]
         if bad:
             raise MaceError(f"{where}: channel(s) {', '.join(bad)} not in {self.path} (inputs: "
                             f"{', '.join(self.inputs)}; outputs: {', '.join(self.outputs)})")
@@ -135,6 +136,13 @@ class FmuInterface:
                 role = "input" if name in self.inputs else "output"
                 raise MaceError(f"{where}: channel {name!r}: unit {given!r}, but the FMU's {role} {name} is in "
                                 f"{declared!r}: the data must be in the FMU's units")
+
+
+def _unknown_signal(role: str, name: str, known: Sequence[str]) -> str:
+    """``output 'gyro_bus_xx' (did you mean 'gyro_bus_x'?)``: a misspelt channel is named with the FMU's closest
+    signals first, ahead of the FMU's whole list (fifty names and more for MACE)."""
+    close = difflib.get_close_matches(name, list(known), n=3)
+    return f"{role} {name!r}" + (f" (did you mean {' or '.join(map(repr, close))}?)" if close else "")
 
 
 def read_fmu_interface(path: str | os.PathLike) -> FmuInterface:

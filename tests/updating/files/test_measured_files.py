@@ -428,8 +428,8 @@ def test_unknown_channel_names_file_line_and_channel(tmp_path):
     cmap = _write_map(tmp_path / "map.csv", "ai0,gimbal_primary_x,input,V\n")
     path = _csv(tmp_path, "# logger v2\ntime [s],ai0 [V],ai9 [V]\n0,1,2\n0.01,1,2\n")
     assert _error(lambda: read_time_history(path, channel_map=cmap)) == (
-        f"{path}:2: channel 'ai9' is not in the channel map {tmp_path / 'map.csv'} (add it, with role 'ignore' "
-        "to skip it)")
+        f"{path}:2: channel 'ai9' is not in the channel map {tmp_path / 'map.csv'} (did you mean 'ai0'? Else add "
+        "it, with role 'ignore' to skip it)")
 
 
 def test_wrong_unit_names_file_channel_and_map_row(tmp_path):

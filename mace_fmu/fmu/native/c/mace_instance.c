@@ -137,6 +137,19 @@ static const char *group_name(MaceGroup g) {
     }
 }
 
+/* A variable for messages: "output gyro_bus_x", "continuous state 12" (k: its index in its group). */
+static void variable_text(const MiInstance *inst, MaceGroup g, size_t k, char *text, size_t size) {
+    switch (g) {
+        case MACE_VAR_INPUT: snprintf(text, size, "input %s", mace_name(inst->model, g, k)); break;
+        case MACE_VAR_OUTPUT: snprintf(text, size, "output %s", mace_name(inst->model, g, k)); break;
+        case MACE_VAR_PARAMETER: snprintf(text, size, "parameter %s", mace_name(inst->model, g, k)); break;
+        case MACE_VAR_FREQUENCY: snprintf(text, size, "frequency_mode_%lu", (unsigned long)k + 1); break;
+        case MACE_VAR_STATE: snprintf(text, size, "continuous state %lu", (unsigned long)k + 1); break;
+        case MACE_VAR_DERIVATIVE: snprintf(text, size, "derivative of state %lu", (unsigned long)k + 1); break;
+        default: snprintf(text, size, "time"); break;
+    }
+}
+
 /* Whether a variable group is declared in this FMU's model description (model_description.py):
  * FMI 2 declares no time variable (time is implicit), FMI 3 declares no continuous states or
  * derivatives (co-simulation only). A value reference the FMU's own description does not declare is
@@ -193,6 +206,16 @@ MiStatus mi_get_reals(MiInstance *inst, const unsigned int *vr, size_t n, double
             return mi_error(inst, "%s%s: value reference %u is not a variable of this FMU", inst->api, fn, vr[i]);
         if (mace_get(inst->model, g, k, &values[i], inst->err) != 0)
             return mi_error(inst, "%s%s: %s", inst->api, fn, inst->err);
+        /* finite inputs and states can still give an output beyond a double (states of 1e307 set through
+           SetContinuousStates): refused as GetDerivatives refuses the same state, never passed on as a
+           number with fmiOK */
+        if (!isfinite(values[i])) {
+            char what[96];
+            variable_text(inst, g, k, what, sizeof what);
+            if (inst->phase != PH_INITIALIZATION) inst->phase = PH_ERROR;  /* as GetDerivatives */
+            return mi_error(inst, "%s%s: %s is %g at t = %g s: the inputs or states are beyond what the model can "
+                            "represent", inst->api, fn, what, values[i], mace_time(inst->model));
+        }
     }
     return MI_OK;
 }
@@ -280,6 +303,11 @@ MiStatus mi_do_step(MiInstance *inst, double t, double h, const char *fn) {
     if (past_stop(inst, t + h))
         return mi_error(inst, "%s%s: the step to t = %.17g s passes the stop time %.17g s given at the set-up of the "
                         "experiment", inst->api, fn, t + h, inst->stop_time);
+    /* a step the model refuses as an argument (the controller's bound on one call's samples) is refused
+       like the checks above: an error that leaves the instance as it was (FMI 3.0 section 2.2.3: illegal
+       arguments return fmi3Error; nothing was computed, so nothing needs the error state's reset) */
+    if (mace_step_check(inst->model, t, h, inst->err) != 0)
+        return mi_error(inst, "%s%s: %s", inst->api, fn, inst->err);
     if (mace_do_step(inst->model, t, h, inst->err) != 0) {
         inst->phase = PH_ERROR;
         return mi_error(inst, "%s%s: %s", inst->api, fn, inst->err);

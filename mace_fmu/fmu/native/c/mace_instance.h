@@ -3,12 +3,13 @@
  *
  * Calls out of order (outside the states the FMI 2.0.x / 3.0 state tables allow them in, or of the
  * other interface) and invalid arguments (a value reference the FMU's own model description does
- * not declare, a non-finite input, a step that does not start at the FMU's time or is not > 0, an
- * FMU state of another FMU, interface or FMI version, or a damaged one) return an error with a
- * logged reason and leave the instance as it was; a
- * failure of the model (invalid parameters) logs the reason and puts the
- * instance into the error state, from which only getting values, restoring an FMU state,
- * reset and freeing are possible. Error messages are logged whether debug logging is on or not.
+ * not declare, a non-finite input, a step that does not start at the FMU's time or is not > 0, a
+ * step longer than the model takes in one call (the controller's bound), an FMU state of another
+ * FMU, interface or FMI version, or a damaged one) return an error with a logged reason and leave
+ * the instance as it was; a failure of the model (invalid parameters, derivatives or values beyond
+ * what a double holds) logs the reason and puts the instance into the error state, from which only
+ * getting values, restoring an FMU state, reset and freeing are possible. Error messages are logged
+ * whether debug logging is on or not.
  */
 #ifndef MACE_INSTANCE_H
 #define MACE_INSTANCE_H

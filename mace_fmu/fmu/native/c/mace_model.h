@@ -61,6 +61,11 @@ int mace_fast_form(const MaceModel *m);
 /* Condition number of the decoupled modal form's transformation (1 for the dense form). */
 double mace_fast_form_condition(const MaceModel *m);
 
+/* Co-simulation: whether the model takes a step from t over h seconds (t and h finite, h > 0: the
+ * instance layer's checks). 0 if it does; -1 and the reason in err for a step it refuses as an invalid
+ * argument (the controller's bound on the samples of one call), which leaves everything as it was: the
+ * instance refuses the call and stays usable, as for a step of 0 s. */
+int mace_step_check(const MaceModel *m, double t, double h, char *err);
 /* Co-simulation: the exact zero-order-hold step from t over h seconds with the held inputs. */
 int mace_do_step(MaceModel *m, double t, double h, char *err);
 double mace_time(const MaceModel *m);

@@ -213,9 +213,11 @@ static double samples_by(const MaceModel *m, double t) {
     return floor(k + STEP_TOLERANCE * (fabs(k) > 1.0 ? fabs(k) : 1.0));
 }
 
-int mace_do_step(MaceModel *m, double t, double h, char *err) {
+/* A step too long for one call is an invalid argument, checked before any work (mace_model.h): the
+ * instance refuses it and stays usable, as it does a step of 0 s; it was refused inside mace_do_step,
+ * which left the instance in its error state, usable only after a reset. */
+int mace_step_check(const MaceModel *m, double t, double h, char *err) {
     double samples;
-    size_t n, s, i, k;
     if (!(isfinite(t) && isfinite(h) && h >= 0.0)) {
         snprintf(err, MACE_ERR_LEN, "step from t = %g s over %g s: need a finite time and a step >= 0", t, h);
         return -1;
@@ -227,6 +229,14 @@ int mace_do_step(MaceModel *m, double t, double h, char *err) {
                  MAX_SAMPLES_PER_CALL);
         return -1;
     }
+    return 0;
+}
+
+int mace_do_step(MaceModel *m, double t, double h, char *err) {
+    double samples;
+    size_t n, s, i, k;
+    if (mace_step_check(m, t, h, err) != 0) return -1; /* for callers that did not ask first */
+    samples = samples_by(m, t + h) - samples_by(m, t);
     for (k = 0; k < m->n_in; k++) {
         if (!isfinite(m->u[k])) {
             snprintf(err, MACE_ERR_LEN, "non-finite input %s = %g at t = %g s", m->names[k], m->u[k], t);
