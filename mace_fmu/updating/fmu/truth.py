@@ -5,8 +5,9 @@ The bundled deck holds the updated moduli of Table 4.4 and the FMU the updated d
 to band-limited white noise on the four gimbal inputs (the thesis's update inputs), recorded at the
 five rate gyros with white output noise of a given fraction of each gyro's RMS, and written to a
 CSV time history and a UFF 58 (and CSV) frequency response, as a user's data would arrive. The
-model being updated is the same FMU file started elsewhere through FMI (e.g. at the pre-update
-moduli): the truth is never read back except from the files.
+model being updated is another FMU, exported at other moduli (the pre-update ones: a full re-solve),
+which its parameter route must bring to the truth: the truth is never read back except from the
+files, and never the updated FMU's own route.
 """
 
 from __future__ import annotations

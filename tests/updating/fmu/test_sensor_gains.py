@@ -41,15 +41,15 @@ def _band_limited(rng, n: int) -> np.ndarray:
 
 @pytest.fixture(scope="module")
 def lab(tmp_path_factory):
-    """(folder, FMU, family, truth moduli, the strut test's file)."""
-    from mace_fmu.fe.modes import compute_modes
-    from mace_fmu.fmu.export import export_fmu
-    from mace_fmu.iomodel.volts import volts_model
+    """(folder, the model's FMU: the strut moduli 3 % off built in, the data's family, truth moduli, the strut test's
+    file). The data come from the deck's own FMU (another full re-solve), with the gauges' gains."""
+    from support.reexported import fmu_with
+
     from mace_fmu.updating.fmu.model import fmu_family
 
     folder = tmp_path_factory.mktemp("gains")
-    fmu = export_fmu(volts_model(compute_modes(configuration="1g")), out_dir=folder, name="MACE_1g_native")
-    family = fmu_family(fmu)
+    family = fmu_family(fmu_with(folder, factors={}, name="MACE_1g_truth"))
+    fmu = fmu_with(folder, factors=dict(zip(STRUT, (1.03, 0.97, 1.03))), name="MACE_1g_native")
     rng = np.random.default_rng(3)
     t = np.arange(int(round(SECONDS / STEP)) + 1) * STEP
     u = {name: _band_limited(rng, t.size) for name in INPUTS}
@@ -59,15 +59,12 @@ def lab(tmp_path_factory):
     path = write_time_history(TimeHistory(t, u, {o: y[:, j] for j, o in enumerate(OUTPUTS)}, source="strut test"),
                               folder / "strut.csv")
     truth = {n: family.interface.parameters[n] for n in STRUT}
-    start = folder / "start.toml"
-    start.write_text("[values]\n" + "".join(f"{n} = {v * f!r}\n" for (n, v), f in zip(truth.items(),
-                                                                                       (1.03, 0.97, 1.03))))
-    return folder, fmu, family, truth, path, start
+    return folder, fmu, family, truth, path
 
 
 def _update(lab, out, *extra):
-    folder, fmu, _, truth, data, start = lab
-    code = main(["update", "fmu", str(fmu), "--update", ",".join(STRUT), "--start", str(start), "--data", str(data),
+    folder, fmu, _, truth, data = lab
+    code = main(["update", "fmu", str(fmu), "--update", ",".join(STRUT), "--data", str(data),
                  "--hold-input", HELD, "--workers", "1", "-o", str(out), *extra])
     values = tomllib.loads((out / "parameters.toml").read_text())
     stage = tomllib.loads((out / "uncertainty.toml").read_text())["stage"][0]
