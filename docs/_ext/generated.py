@@ -29,7 +29,7 @@ PACKAGES = ("mace_fmu", "mace_fmu.deck", "mace_fmu.deck.parsers", "mace_fmu.stru
             "mace_fmu.fe", "mace_fmu.nastran_modes", "mace_fmu.iomodel", "mace_fmu.fmu", "mace_fmu.fmu.native",
             "mace_fmu.ssp",
             "mace_fmu.updating", "mace_fmu.updating.engine", "mace_fmu.updating.files", "mace_fmu.updating.mace",
-            "mace_fmu.updating.fmu", "mace_fmu.updating.sample", "mace_fmu.control_studies", "mace_fmu.zero_g",
+            "mace_fmu.updating.fmu", "mace_fmu.updating.modal", "mace_fmu.updating.sample", "mace_fmu.control_studies", "mace_fmu.zero_g",
             "mace_fmu.zero_g.robust", "mace_fmu.util", "mace_fmu.cli")
 
 #: the commands whose printed tables stand beside the thesis: (title, argv, what it shows)
