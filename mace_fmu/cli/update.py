@@ -205,10 +205,11 @@ def cmd_mace_update(args: argparse.Namespace) -> int:
     """``update mace``: the thesis's modal update of the bundled MACE deck's moduli."""
     from mace_fmu.deck.reader import read_deck
     if args.structure_file is not None:
-        raise MaceError(f"--structure {args.structure_file}: the modal update is the thesis's MACE update (its "
-                        "candidate moduli, Table 4.4 "
-                        "start and Table 4.7 data) and reads MACE's structure file; to update your own structure, "
-                        "export its FMU and update that against test data: mace-fmu update fmu FILE --data ...")
+        raise MaceError(f"--structure {args.structure_file}: update mace is the thesis's MACE update (its "
+                        "candidate moduli, Table 4.4 start and Table 4.7 data) and reads MACE's structure file; to "
+                        "update your own structure against its measured modes: mace-fmu update modal --deck D "
+                        "--structure S --modes modes.toml --update NAMES -o DIR (or its FMU against the test data: "
+                        "mace-fmu update fmu FILE --data ...)")
     if args.out is None:
         raise MaceError("say where to write the updated parameter set and the report: -o DIR "
                         "(or run: mace-fmu update sample-problem)")
@@ -410,7 +411,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                        epilog=_EXIT_STATUS)
     modes = p.add_subparsers(dest="update_mode", metavar="{mace,modal,fmu,sample-problem}", required=True)
 
-    m = modes.add_parser("mace", help="the thesis's modal update of the bundled MACE deck's moduli (chapter 4)",
+    m = modes.add_parser("mace", help="the thesis's modal update of the bundled MACE deck's moduli against Table 4.7 "
+                         "(chapter 4; the modal route's sequence on the closed-loop model)",
                          formatter_class=argparse.RawDescriptionHelpFormatter, epilog=_EXIT_STATUS)
     deck_option(m)
     _out_option(m)
