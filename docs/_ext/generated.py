@@ -251,7 +251,8 @@ def example_argv(gallery_conf, script_vars) -> list[str]:
     """The command-line arguments of an example run by sphinx-gallery (its ``reset_argv``): the examples that
     write files by default into the folder they run in write them under ``docs/_build/examples`` instead."""
     name = Path(script_vars["src_file"]).stem
-    return [str(DOCS / "_build" / "examples" / name)] if name in ("own_structure", "nastran_plate") else []
+    writes_files = ("own_structure", "nastran_plate", "modal_test_three_storey_frame")
+    return [str(DOCS / "_build" / "examples" / name)] if name in writes_files else []
 
 
 def generate(app, config) -> None:

@@ -55,8 +55,8 @@ MAX_DAMPING = 0.3
 class IdentifiedMode:
     """One identified mode at the measured DOFs (the FRFs' outputs)."""
 
-    frequency_hz: float  #: undamped natural frequency |lambda| / 2 pi [Hz]
-    damping: float  #: damping ratio -Re(lambda) / |lambda|
+    frequency_hz: float  #: undamped natural frequency abs(lambda) / (2 pi) [Hz]
+    damping: float  #: damping ratio -Re(lambda) / abs(lambda)
     order: int  #: the model order (number of poles of the LSCF denominator) the pole was taken at
     modal_constants: np.ndarray  #: complex C_jk (output, input) = 2 i Im(lambda) A_jk; NaN where not measured
     shape_complex: np.ndarray  #: complex shape at the outputs, its largest component 1
@@ -104,7 +104,7 @@ class Identification:
 
     @property
     def fit_error(self) -> float:
-        """||H_measured - H_model|| / ||H_measured|| over the fitted lines and pairs (NaN pairs left out)."""
+        """norm(H_measured - H_model) / norm(H_measured) over the fitted lines and pairs (unmeasured pairs left out)."""
         ok = np.isfinite(self.measured)
         return float(np.linalg.norm((self.measured - self.synthesised)[ok]) / np.linalg.norm(self.measured[ok]))
 

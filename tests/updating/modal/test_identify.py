@@ -142,5 +142,19 @@ def test_the_frame_s_three_modes_are_within_0_3_percent_of_its_measured_resonanc
     # the first mode: every floor in phase, growing with height; the driving-point mass line (1/m) is the scale
     first = modes.modes[0].shape_mass_normalised
     assert np.all(np.diff(first) > 0) and np.all(first > 0)
-    assert sum(float(m.shape_mass_normalised @ m.shape_mass_normalised) for m in modes.modes) == pytest.approx(
-        3 / 5.201 * 0.95, rel=0.2)  # sum over modes of phi_j^2: about the inverse floor masses
+    # three floors, three modes: the modes are complete at the floors, sum_r phi_r phi_r^T = M^-1, so the sum of the
+    # squared shapes is the sum of the inverse floor masses: 3 / 5.201 kg stated (0.577 / kg); measured 0.604
+    inverse_masses = sum(float(m.shape_mass_normalised @ m.shape_mass_normalised) for m in modes.modes)
+    assert inverse_masses == pytest.approx(3 / 5.201, rel=0.1)
+
+
+def test_lscf_alone_misses_1e_4_on_the_noisy_data_which_is_why_the_poles_are_refined(known):
+    """sdypy-EMA's LSCF is a linear least-squares estimator, biased by the noise: its third pole is about 2e-4 off
+    on the same data; the nonlinear refinement on the pole-residue model brings every pole within 1e-4."""
+    found, poles, _, frfs = known
+    raw = identify_modes(frfs, band_hz=(3.0, 48.0), max_order=20, driving_points=dict(zip(INPUTS, OUTPUTS)),
+                         refine=False)
+    errors = [abs(m.pole - p) / abs(p) for m, p in zip(raw.modes, poles)]
+    assert max(errors) > 1e-4
+    assert max(abs(m.pole - p) / abs(p) for m, p in zip(found.modes, poles)) < 0.25 * max(errors)
+    assert "refined" not in raw.method and "refined" in found.method
