@@ -117,3 +117,30 @@ def test_the_gallery_example_runs_and_its_identified_frequencies_sit_at_the_meas
     assert all(abs(p["model_hz"] / p["measured_hz"] - 1) < 1e-3 and p["mac"] > 0.995 for p in summary["after"])
     for path in summary["figures"]:
         assert (tmp_path / path.rsplit("/", 1)[-1]).stat().st_size > 10_000
+
+
+def test_the_export_and_update_fmu_start_take_the_modal_route_s_set(route, tmp_path):
+    """parameters.toml of update modal: export re-solves its moduli and masses and takes its damping ratios (by mode
+    label) as the FMU's start values; update fmu --start reads the same set by the FMU's names."""
+    import zipfile
+    from xml.etree import ElementTree as ET
+
+    from mace_fmu.cli import main
+    from mace_fmu.cli.update import _read_start
+
+    _, folder = route
+    params = ParameterSet.read(folder / "parameters.toml")
+    assert main(["export", "1g", "--deck", str(FRAME / "frame.bdf"), "--structure", str(FRAME / "frame.toml"),
+                 "--parameters", str(folder / "parameters.toml"), "-o", str(tmp_path)]) == 0
+    fmu = next(tmp_path.glob("*.fmu"))
+    with zipfile.ZipFile(fmu) as z:
+        root = ET.fromstring(z.read("modelDescription.xml"))
+    start = {v.get("name"): float(v.find("Real").get("start")) for v in root.iter("ScalarVariable")
+             if v.find("Real") is not None and v.find("Real").get("start") is not None}
+    for name in UPDATE.split(","):
+        assert start[name] == pytest.approx(params[name], rel=1e-12), name
+    for k, label in enumerate(("1st", "2nd", "3rd"), start=1):
+        assert start[f"damping_mode_{k}"] == pytest.approx(params[f"damping:{label} bending about Y"], rel=1e-12)
+    by_fmu_name = _read_start(str(folder / "parameters.toml"), str(fmu))
+    assert by_fmu_name["damping_mode_2"] == params["damping:2nd bending about Y"]
+    assert by_fmu_name["m_floor_3"] == params["m_floor_3"]
