@@ -29,7 +29,7 @@ PACKAGES = ("mace_fmu", "mace_fmu.deck", "mace_fmu.deck.parsers", "mace_fmu.stru
             "mace_fmu.fe", "mace_fmu.nastran_modes", "mace_fmu.iomodel", "mace_fmu.fmu", "mace_fmu.fmu.native",
             "mace_fmu.ssp",
             "mace_fmu.updating", "mace_fmu.updating.engine", "mace_fmu.updating.files", "mace_fmu.updating.mace",
-            "mace_fmu.updating.fmu", "mace_fmu.updating.sample", "mace_fmu.control_studies", "mace_fmu.zero_g",
+            "mace_fmu.updating.fmu", "mace_fmu.updating.modal", "mace_fmu.updating.sample", "mace_fmu.control_studies", "mace_fmu.zero_g",
             "mace_fmu.zero_g.robust", "mace_fmu.util", "mace_fmu.cli")
 
 #: the commands whose printed tables stand beside the thesis: (title, argv, what it shows)
@@ -251,7 +251,8 @@ def example_argv(gallery_conf, script_vars) -> list[str]:
     """The command-line arguments of an example run by sphinx-gallery (its ``reset_argv``): the examples that
     write files by default into the folder they run in write them under ``docs/_build/examples`` instead."""
     name = Path(script_vars["src_file"]).stem
-    return [str(DOCS / "_build" / "examples" / name)] if name in ("own_structure", "nastran_plate") else []
+    writes_files = ("own_structure", "nastran_plate", "modal_test_three_storey_frame")
+    return [str(DOCS / "_build" / "examples" / name)] if name in writes_files else []
 
 
 def generate(app, config) -> None:

@@ -20,11 +20,11 @@ command line::
     mace-fmu export 0g --deck spacecraft.bdf --structure spacecraft.toml -o fmus   # fmus/spacecraft_0g_native.fmu
     mace-fmu view modes 0g --deck spacecraft.bdf --structure spacecraft.toml --html modes.html
 
-What the updating engine and ``predict-0g`` need from this structure: the modal update
-(``mace-fmu update mace``) is the thesis's, with MACE's candidate moduli and Table 4.7's data, so it
-stays MACE-only; ``predict-0g`` takes this structure with its own 1-g measurement model
-(``--measured FILE``); ``mace-fmu update fmu spacecraft_0g_native.fmu --data ...`` updates this
-structure's FMU from its own test data.
+What the updating engine and ``predict-0g`` need from this structure: its modal test's FRFs
+give its modes (``ema``), and ``update modal`` with this deck and structure file updates its moduli, springs
+and masses against them (``update mace`` is the same route on MACE's deck with Table 4.7's data);
+``predict-0g`` takes this structure with its own 1-g measurement model (``--measured FILE``);
+``mace-fmu update fmu spacecraft_0g_native.fmu --data ...`` updates this structure's FMU from its own test data.
 """
 
 from __future__ import annotations

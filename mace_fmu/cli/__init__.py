@@ -8,8 +8,8 @@ import sys
 import threading
 from typing import Sequence
 
-from mace_fmu.cli import (build, controller, data, export, model, modes, params, plan, predict, report, study, update,
-                          view)
+from mace_fmu.cli import (build, controller, correlate, data, ema, export, model, modes, params, plan, predict, report,
+                          study, update, view)
 from mace_fmu.cli.preflight import run_checks
 from mace_fmu.cli.renamed import removed_spelling
 from mace_fmu.errors import MaceError
@@ -17,7 +17,8 @@ from mace_fmu.errors import MaceError
 __all__ = ["build_parser", "main", "package_version"]
 
 #: command modules in the order ``mace-fmu --help`` lists them; each has register(subparsers)
-COMMANDS = (modes, model, export, controller, report, view, build, update, plan, predict, study, data, params)
+COMMANDS = (modes, model, export, controller, report, view, build, ema, correlate, update, plan, predict, study, data,
+            params)
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -8,7 +8,8 @@ import os
 import sys
 from pathlib import Path
 
-from mace_fmu.cli.common import deck_option, positive_integer, positive_number, progress_bar
+from mace_fmu.cli.common import deck_option, parameters_option, positive_integer, positive_number, progress_bar
+from mace_fmu.cli.correlate import structure_options
 from mace_fmu.cli.preflight import output_option, scheduler_options
 from mace_fmu.errors import MaceError
 from mace_fmu.util.atomic import output_folder, write_text_atomic
@@ -87,6 +88,17 @@ def _gain_uncertainty(groups: list[list[tuple[str, float]]]) -> dict[str, float]
             raise MaceError(f"--gain-uncertainty: {name!r} given twice")
         out[name] = fraction
     return out
+
+
+def _non_negative(text: str) -> float:
+    """argparse type of a weight: a finite number >= 0."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = -1.0
+    if not (0.0 <= value < float("inf")):
+        raise argparse.ArgumentTypeError(f"expected a finite number >= 0, got {text!r}")
+    return value
 
 
 def local_workers(workers: int | None) -> str:
@@ -193,10 +205,11 @@ def cmd_mace_update(args: argparse.Namespace) -> int:
     """``update mace``: the thesis's modal update of the bundled MACE deck's moduli."""
     from mace_fmu.deck.reader import read_deck
     if args.structure_file is not None:
-        raise MaceError(f"--structure {args.structure_file}: the modal update is the thesis's MACE update (its "
-                        "candidate moduli, Table 4.4 "
-                        "start and Table 4.7 data) and reads MACE's structure file; to update your own structure, "
-                        "export its FMU and update that against test data: mace-fmu update fmu FILE --data ...")
+        raise MaceError(f"--structure {args.structure_file}: update mace is the thesis's MACE update (its "
+                        "candidate moduli, Table 4.4 start and Table 4.7 data) and reads MACE's structure file; to "
+                        "update your own structure against its measured modes: mace-fmu update modal --deck D "
+                        "--structure S --modes modes.toml --update NAMES -o DIR (or its FMU against the test data: "
+                        "mace-fmu update fmu FILE --data ...)")
     if args.out is None:
         raise MaceError("say where to write the updated parameter set and the report: -o DIR "
                         "(or run: mace-fmu update sample-problem)")
@@ -233,6 +246,72 @@ def cmd_mace_update(args: argparse.Namespace) -> int:
     print(format_uncertainty(uncertainty))
     paths += [write_text_atomic(out / "convergence.toml", report.to_toml()),
               write_text_atomic(out / "uncertainty.toml", uncertainty_toml(uncertainty))]
+    for path in paths:
+        print(f"wrote {path}")
+    _say(report.summary())
+    return NOT_CONVERGED if report.failed else 0
+
+
+def cmd_modal_update(args: argparse.Namespace) -> int:
+    """``update modal``: a deck's structure-file parameters against measured modes (modes.toml)."""
+    from mace_fmu.cli.common import parameters
+    from mace_fmu.cli.correlate import family_of
+    from mace_fmu.updating.engine.convergence import convergence_report
+    from mace_fmu.updating.engine.selection import plot_selection
+    from mace_fmu.updating.engine.solve import UpdateSettings
+    from mace_fmu.updating.engine.uncertainty import format_uncertainty, stage_uncertainty, uncertainty_toml
+    from mace_fmu.updating.modal.correlation import DEFAULT_MIN_MAC
+    from mace_fmu.updating.modal.figures import plot_mac
+    from mace_fmu.updating.modal.update import MODAL_SETTINGS, mode_table, run_modal_update, summary
+
+    names = [n.strip() for part in args.update for n in part.split(",") if n.strip()]
+    measured, family = family_of(args, base=parameters(args))
+    family.check_names(names)
+    settings = UpdateSettings(method=args.method, perturbation="full", penalty=args.penalty, rounds=args.rounds,
+                              max_outer=MODAL_SETTINGS.max_outer)
+    scaled = {"auto": None, "mass-normalised": True, "mac": False}[args.shapes]
+    _say(f"updating {len(names)} candidate parameter(s) of {family.where} against {len(measured.modes)} measured "
+         f"mode(s) of {args.modes}")
+    with progress_bar(task_lines=True) as bar:
+        outcome = run_modal_update(family=family, measured=measured, names=names, settings=settings,
+                                   keep_all=args.keep_all, shape_weight=args.shape_weight, scaled=scaled,
+                                   min_mac=args.min_mac or DEFAULT_MIN_MAC, progress=bar)
+    res = outcome.result
+    report = convergence_report(res, strict=args.strict, cost=outcome.cost)
+    uncertainty = stage_uncertainty(res)
+    out = output_folder(Path(args.out))
+    text = [f"Modal update of {family.where} ({family.configuration}) against {args.modes}", "",
+            "Parameter selection (orthogonality and strength tests, eq. 4.15-4.16):", outcome.selection.table(), "",
+            "Measured modes against the model (paired by MAC):", mode_table(outcome), "",
+            f"Cost j^T j: {res.initial_cost:.6g} -> {res.final_cost:.6g} ({100 * res.reduction:.1f} % lower)", "",
+            format_uncertainty(uncertainty), "", report.summary()]
+    labels = lambda c: [f"{lab} {f:.2f} Hz" for lab, f in zip(c.model_labels, c.model_hz)]  # noqa: E731
+    measured_labels = [f"{m.label} {m.frequency_hz:.2f} Hz" for m in measured.modes]
+    paths = [outcome.parameters.write(out / "parameters.toml"),
+             write_text_atomic(out / "convergence.toml", report.to_toml()),
+             write_text_atomic(out / "uncertainty.toml", uncertainty_toml(uncertainty)),
+             write_text_atomic(out / "report.txt", "\n".join(text) + "\n"),
+             write_text_atomic(out / "summary.json", json.dumps({**summary(outcome), **report.to_json()}, indent=1,
+                                                                default=float) + "\n"),
+             plot_mac(outcome.before.mac, measured=measured_labels, model=labels(outcome.before),
+                      path=out / "mac_before.png", title="MAC before the update"),
+             plot_mac(outcome.after.mac, measured=measured_labels, model=labels(outcome.after),
+                      path=out / "mac_after.png", title="MAC after the update"),
+             *plot_selection(outcome.selection, orthogonality_png=out / "orthogonality.png",
+                             strength_png=out / "strength.png", title="modal cost")]
+    print(mode_table(outcome))
+    print()
+    print(f"kept {len(outcome.selection.keep)} of {len(outcome.selection.names)} candidates: "
+          f"{', '.join(outcome.selection.keep)}")
+    print(f"{'parameter':<28} {'start':>14} {'updated':>14}  change")
+    for n in outcome.selection.keep:
+        v0, v = res.start[n], res.values[n]
+        print(f"{n:<28} {v0:>14.6g} {v:>14.6g}  {100 * (v / v0 - 1):+.2f} %")
+    for n, z in outcome.damping.items():
+        print(f"{n:<28} {'(measured)':>14} {z:>14.6g}")
+    print(f"cost {res.initial_cost:.5g} -> {res.final_cost:.5g} ({100 * res.reduction:.1f} % lower) in "
+          f"{res.seconds:.1f} s, {len(res.history)} outer iterations, {family.solves} FE solves")
+    print(format_uncertainty(uncertainty))
     for path in paths:
         print(f"wrote {path}")
     _say(report.summary())
@@ -321,15 +400,19 @@ def _fmu_options(p: argparse.ArgumentParser) -> None:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("update", help="model updating (thesis ch. 4): the MACE update, an FMU against test data, or "
-                       "the sample problem", formatter_class=argparse.RawDescriptionHelpFormatter,
-                       description="Three updates, one subcommand each: 'mace' (the thesis's modal update of the "
-                                   "bundled deck's moduli), 'fmu' (any FMI 2.0 FMU's parameters against measured "
-                                   "data files), 'sample-problem' (the two-mass problem of thesis 4.3).",
+    p = sub.add_parser("update", help="model updating (thesis ch. 4): the MACE update, any deck against measured "
+                       "modes, an FMU against test data, or the sample problem",
+                       formatter_class=argparse.RawDescriptionHelpFormatter,
+                       description="Four updates, one subcommand each: 'mace' (the thesis's modal update of the "
+                                   "bundled deck's moduli against Table 4.7), 'modal' (any deck's structure-file "
+                                   "parameters against measured modes: mace-fmu ema's modes.toml), 'fmu' (any FMI "
+                                   "2.0 FMU's parameters against measured data files), 'sample-problem' (the "
+                                   "two-mass problem of thesis 4.3).",
                        epilog=_EXIT_STATUS)
-    modes = p.add_subparsers(dest="update_mode", metavar="{mace,fmu,sample-problem}", required=True)
+    modes = p.add_subparsers(dest="update_mode", metavar="{mace,modal,fmu,sample-problem}", required=True)
 
-    m = modes.add_parser("mace", help="the thesis's modal update of the bundled MACE deck's moduli (chapter 4)",
+    m = modes.add_parser("mace", help="the thesis's modal update of the bundled MACE deck's moduli against Table 4.7 "
+                         "(chapter 4; the modal route's sequence on the closed-loop model)",
                          formatter_class=argparse.RawDescriptionHelpFormatter, epilog=_EXIT_STATUS)
     deck_option(m)
     _out_option(m)
@@ -345,6 +428,39 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "FMU's own start values)")
     _fmu_options(f)
     f.set_defaults(func=cmd_fmu_update)
+
+    d = modes.add_parser("modal", help="the thesis's modal update of any deck: a structure file's moduli, springs "
+                         "and masses against measured modes (modes.toml from mace-fmu ema)",
+                         formatter_class=argparse.RawDescriptionHelpFormatter, epilog=_EXIT_STATUS,
+                         description="Measured modes paired with the deck's by MAC at the measured DOFs; the cost: "
+                                     "relative frequency errors (thesis eq. 4.2) and the paired shapes' differences "
+                                     "(mass-normalised where the modes file has them, else 1 - MAC), shape weight "
+                                     "--shape-weight; the candidates judged by the orthogonality and strength tests "
+                                     "(eq. 4.15-4.16), those kept updated by the cost-sensitivity method on full "
+                                     "re-solves (eq. 4.12-4.13); the damping ratios taken from the measured modes. "
+                                     "Writes parameters.toml (for export --parameters and update fmu --start), "
+                                     "convergence.toml, uncertainty.toml, report.txt, summary.json and figures.")
+    structure_options(d)
+    parameters_option(d)
+    _out_option(d, required=True)
+    d.add_argument("--update", metavar="NAME[,NAME...]", action="append", required=True,
+                   help="candidate parameters: moduli, springs and masses the structure file's [parameters] names "
+                        "(E_<material>, k_<spring>, m_<mass>; repeatable)")
+    d.add_argument("--keep-all", action="store_true", help="update every candidate whatever the selection tests say "
+                   "(they are still reported)")
+    d.add_argument("--shapes", choices=["auto", "mass-normalised", "mac"], default="auto",
+                   help="how shapes enter the cost: their mass-normalised difference (needs a driving point: it tells "
+                        "masses from stiffnesses), or 1 - MAC (scale-free); default auto: mass-normalised where the "
+                        "modes file has them")
+    d.add_argument("--shape-weight", type=_non_negative, default=0.1, metavar="W",
+                   help="weight of the shape residuals against the relative frequency errors (default 0.1: a 10 %% "
+                        "shape difference counts like a 1 %% frequency error; 0: frequencies alone, eq. 4.2)")
+    d.add_argument("--method", choices=["cost-sensitivity", "full"], default="cost-sensitivity",
+                   help="how the parameters enter the cost (default: the thesis's cost-sensitivity method)")
+    d.add_argument("--rounds", type=positive_integer, default=2, help="repeats of the update (default 2)")
+    d.add_argument("--penalty", action="store_true", help="augment the cost with the changes (thesis eq. 4.18: a "
+                   "10 %% change of a modulus or mass costs 1 %% of the initial cost); default off")
+    d.set_defaults(func=cmd_modal_update)
 
     s = modes.add_parser("sample-problem", help="the two-mass sample problem (thesis 4.3): Tables 4.2 and 4.3 "
                          "beside the thesis")

@@ -2,12 +2,14 @@
 
 - :mod:`mace_fmu.updating.engine`: measured data, costs (modal, frequency response, time response),
   sensitivities, selection, the staged update, convergence tests, uncertainty and identifiability;
+- :mod:`mace_fmu.updating.modal`: the modal-test route: modes identified from measured FRFs, paired by MAC,
+  and the modal update of any deck's structure-file parameters (thesis 4.2);
 - :mod:`mace_fmu.updating.mace`: the MACE update of thesis 4.5;
 - :mod:`mace_fmu.updating.fmu`: the update of any FMU against measured data files, and test planning;
 - :mod:`mace_fmu.updating.sample`: the two-mass sample problem of thesis 4.3;
 - :mod:`mace_fmu.updating.files`: measured-data files (time histories, FRFs, channel maps).
 
-The engine knows nothing of the other four; the public names of all of them are here."""
+The engine knows nothing of the others; the public names of all of them are here."""
 
 from __future__ import annotations
 
@@ -25,6 +27,8 @@ if TYPE_CHECKING:  # what editors and type checkers follow; at run time a name i
     from mace_fmu.updating.fmu.problem import FmuProblem
     from mace_fmu.updating.fmu.update import fmu_parameters, update_fmu
     from mace_fmu.updating.mace.update import MaceUpdate, run_mace_update
+    from mace_fmu.updating.modal.identify import Identification, identify_modes
+    from mace_fmu.updating.modal.update import ModalUpdate, run_modal_update
     from mace_fmu.updating.sample.problem import run_sample_problem
     from mace_fmu.updating.sample.two_mass import TwoMassSystem
 
@@ -40,6 +44,10 @@ __all__, __getattr__, __dir__ = lazy_exports(__name__, {
     "FmuProblem": "fmu.problem",
     "run_mace_update": "mace.update",
     "MaceUpdate": "mace.update",
+    "identify_modes": "modal.identify",
+    "Identification": "modal.identify",
+    "run_modal_update": "modal.update",
+    "ModalUpdate": "modal.update",
     "run_sample_problem": "sample.problem",
     "convergence_report": "engine.convergence",
     "ConvergenceReport": "engine.convergence",

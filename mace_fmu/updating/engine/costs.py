@@ -101,6 +101,80 @@ class ModalCost:
 
 
 @dataclass(frozen=True)
+class ModeShapeCost:
+    """Frequencies (eq. 4.2), damping and the shapes of measured modes paired with the model's.
+
+    j = [ModalCost's residual ; c_phi w_i r_i for each measured mode i], r_i its shape residual at the measured
+    DOFs (u_i measured, v_i the model's mass-normalised shape there, s_i = sign(u_i . v_i)):
+
+    - ``scaled`` (mass-normalised measured shapes, from a driving point): r_i = (u_i - s_i v_i) / ||u_i||, the
+      shape's relative difference, its scale included (what sets masses apart from stiffnesses: frequencies and
+      unscaled shapes are the same for a structure whose every mass and stiffness is doubled);
+    - otherwise: r_i = u^_i - (u^_i . v^_i) v^_i with unit vectors u^, v^, whose squared length is 1 - MAC.
+
+    The thesis prints no shape term (it cites [24] for updating with mode shapes); c_phi (``shape_weight``, 0.1
+    by default) makes a 10 % shape difference, or a MAC of 0.99, count like a 1 % frequency error, as the
+    damping term's default does for a 10 % damping error. The model must give its shapes at the measured DOFs
+    (:class:`~mace_fmu.updating.engine.modal_model.ModalModel`); measured modes are paired with poles as in
+    :class:`ModalCost` (``pattern``: the paired model mode's label).
+    """
+
+    measured: tuple[MeasuredMode, ...]
+    shapes: np.ndarray  #: (DOF, measured mode) measured shapes at ``dofs``
+    dofs: tuple[str, ...]
+    scaled: bool = False  #: the measured shapes are mass-normalised (compare with their scale)
+    shape_weight: float = 0.1
+    damping_weight: float = 0.0  #: of the frequency part (ModalCost's c_zeta)
+    name: str = "modal + shapes"
+
+    def __post_init__(self) -> None:
+        shapes = np.asarray(self.shapes, dtype=float)
+        object.__setattr__(self, "shapes", shapes)
+        if shapes.shape != (len(self.dofs), len(self.measured)):
+            raise MaceError(f"mode-shape cost: shapes of shape {shapes.shape}, expected ({len(self.dofs)}, "
+                            f"{len(self.measured)}) (DOF, measured mode)")
+        if not (np.isfinite(self.shape_weight) and self.shape_weight >= 0):
+            raise MaceError(f"mode-shape cost: shape weight must be >= 0, got {self.shape_weight!r}")
+
+    @property
+    def modal(self) -> ModalCost:
+        """The frequency (and damping) part."""
+        return ModalCost(measured=self.measured, damping_weight=self.damping_weight)
+
+    def model_shapes(self, model) -> np.ndarray:
+        """The model's shapes at the measured DOFs, one column per measured mode (its paired mode's)."""
+        dofs = tuple(getattr(model, "dofs", ()))
+        if dofs != self.dofs:
+            raise MaceError(f"the model's shapes are at {', '.join(dofs) or 'no DOF'}, the measured ones at "
+                            f"{', '.join(self.dofs)}")
+        poles = model.poles()
+        return np.column_stack([model.shapes[:, poles[i].mode] for i in self.modal.pairs(model)])
+
+    def residual(self, model) -> np.ndarray:
+        freq = self.modal.residual(model)
+        v = self.model_shapes(model)
+        u = self.shapes
+        w = np.array([m.weight for m in self.measured])
+        if self.scaled:
+            s = np.sign(np.sum(u * v, axis=0))
+            r = (u - s * v) / np.linalg.norm(u, axis=0)
+        else:
+            uu = u / np.linalg.norm(u, axis=0)
+            vv = v / np.maximum(np.linalg.norm(v, axis=0), 1e-300)
+            r = uu - np.sum(uu * vv, axis=0) * vv
+        return np.concatenate([freq, (self.shape_weight * w * r).T.ravel()])
+
+    def mac(self, model) -> np.ndarray:
+        """MAC of each measured mode with its paired model mode."""
+        v = self.model_shapes(model)
+        u = self.shapes
+        return np.sum(u * v, axis=0) ** 2 / (np.sum(u * u, axis=0) * np.sum(v * v, axis=0))
+
+    def entry_labels(self) -> list[str]:
+        return self.modal.entry_labels() + [f"shape {m.label} {d}" for m in self.measured for d in self.dofs]
+
+
+@dataclass(frozen=True)
 class FrequencyResponseCost:
     """Frequency-response errors over every measured channel and frequency.
 

@@ -1,10 +1,12 @@
-"""The MACE update of thesis 4.5: from the pre-update moduli to an updated 1-g model.
+"""The MACE update of thesis 4.5: from the pre-update moduli to an updated 1-g model, by the modal route
+(:func:`~mace_fmu.updating.modal.update.select_and_update`) on the bundled deck.
 
 Start: the "engineering insight" model, whose moduli follow from Table 4.4 as E_updated /
 (1 + change); the bundled deck holds the updated ones. Data: the measurement-model column of
 Table 4.7 (frequencies and damping ratios, the only measured numbers the thesis prints). Cost:
 the modal cost (eq. 4.2 plus a damping term) on the closed-loop (servoed) volts-volts model, modes
-paired by label and frequency. Candidates: the 13 of section 4.5, judged by the orthogonality and
+paired by label and frequency (Table 4.7 prints no mode shapes, so the MAC pairing and the shape terms of the
+modal route have nothing to work on). Candidates: the 13 of section 4.5, judged by the orthogonality and
 strength tests. Sequence: physical parameters, then the gimbal servo delays, then the damping
 ratios, twice.
 """
@@ -21,13 +23,13 @@ from mace_fmu.fe.preload import PreloadKind
 from mace_fmu.parameters.kinds import DAMPING, MODULUS
 from mace_fmu.parameters.sets import ParameterSet, Provenance, deck_fingerprint, now_utc, tool_version
 from mace_fmu.thesis import thesis_data
-from mace_fmu.updating.engine.bounds import default_bounds
 from mace_fmu.updating.engine.costs import ModalCost
 from mace_fmu.updating.engine.measured import MeasuredMode
-from mace_fmu.updating.engine.selection import Selection, SelectionRule, select_parameters
-from mace_fmu.updating.engine.sensitivity import CostSensitivities, cost_sensitivities
-from mace_fmu.updating.engine.solve import Stage, UpdateResult, UpdateSettings, update
+from mace_fmu.updating.engine.selection import Selection, SelectionRule
+from mace_fmu.updating.engine.sensitivity import CostSensitivities
+from mace_fmu.updating.engine.solve import Stage, UpdateResult, UpdateSettings
 from mace_fmu.updating.mace.family import MaceFamily
+from mace_fmu.updating.modal.update import select_and_update
 from mace_fmu.util.progress import ProgressCallback, begin_stage
 from mace_fmu.util.threads import single_blas_thread
 
@@ -156,35 +158,23 @@ def run_mace_update(*, start: ParameterSet | None = None, measured: Sequence[Mea
     cost.pairs(family.full(family.base.values))  # a mode no pole can be: say so before any work
     seconds["start model"] = time.perf_counter() - t0
 
-    t0 = time.perf_counter()
-    begin_stage(progress, f"parameter selection: cost sensitivities of {len(candidates)} candidates", number=2,
-                stages=3)
-    values = family.current_values(candidates)
-    base = family.base.updated(values).values
-    perturbed = family.full if settings.perturbation == "full" else family.basis(base).model
-    sens = cost_sensitivities(cost, base_model=family.full(base), perturbed=perturbed, base=base, names=candidates,
-                              relative_step=settings.relative_step, perturbation=settings.perturbation, runner=runner,
-                              progress=progress)
     rule = rule if rule is not None else SelectionRule(groups=(ACTIVE_STRUT,))
-    selection = select_parameters(sens, rule=rule)
-    seconds["selection"] = time.perf_counter() - t0
-
-    t0 = time.perf_counter()
     damp = tuple(DAMPING.set_name(label) for label in damping_labels(family))
     # stiffness dominates the closed-loop frequencies, damping ratios and servo delays the damping
     # (thesis 4.3): the stiffness stage sees the frequency errors only
     frequencies_only = ModalCost(measured=cost.measured, damping_weight=0.0)
-    stages = [Stage("physical", selection.keep, cost=frequencies_only), Stage("delays", SERVO_DELAYS),
-              Stage("damping", damp)]
-    names = [n for s in stages for n in s.parameters]
-    values = {**base, **family.current_values(names)}
-    begin_stage(progress, f"update: {', '.join(f'{s.name} ({len(s.parameters)})' for s in stages)}, "
-                          f"{settings.rounds} rounds", number=3, stages=3)
-    result = update(family, cost, start=values, stages=stages, bounds=default_bounds(names, values), settings=settings,
-                    runner=runner, progress=progress)
-    seconds["update"] = time.perf_counter() - t0
-    for k, v in result.stage_seconds.items():
-        seconds[f"update: {k}"] = v
+
+    def stages_of(selection: Selection) -> list[Stage]:
+        return [Stage("physical", selection.keep, cost=frequencies_only), Stage("delays", SERVO_DELAYS),
+                Stage("damping", damp)]
+
+    # the modal route's sequence (updating.modal): cost sensitivities of the candidates, the selection tests,
+    # the staged update on what they keep
+    selected = select_and_update(family, cost, candidates=candidates, rule=rule, stages_of=stages_of,
+                                 settings=settings, runner=runner, progress=progress)
+    seconds.update(selected.seconds)
+    sens, selection, result = selected.sensitivities, selected.selection, selected.result
+    stages = stages_of(selection)
     deck_path = family.deck.path
     prov = Provenance(created=now_utc(), tool=tool_version(), deck=str(deck_path).rsplit("/", 1)[-1],
                       deck_sha256=deck_fingerprint(deck_path), configuration="1g",
