@@ -45,6 +45,12 @@ def family_of(args: argparse.Namespace, *, base=None):
     from mace_fmu.updating.modal.family import StructureFamily
     from mace_fmu.updating.modal.modes_file import read_modes_file
 
+    from mace_fmu.deck.reader import read_deck
+    from mace_fmu.structure.build import build_structure
+
+    # the structure file against the deck first (cheap, no FE): a file of another structure is the cause to name,
+    # before its sensors are asked where the measured DOFs are
+    build_structure(read_deck(args.deck), configuration=args.configuration, structure_file=args.structure_file)
     measured = read_modes_file(args.modes)
     sensors, _ = structure_instruments(args.structure_file)
     dof_map = read_dof_map(args.dof_map) if args.dof_map else None

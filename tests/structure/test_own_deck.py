@@ -347,7 +347,25 @@ STRUCTURE_COMMANDS = {
     "view modes": ["view", "modes", "0g", "--html", "{tmp}/v.html"],
     "view pairs": ["view", "pairs", "--html", "{tmp}/v.html"],
     "view response": ["view", "response", "0g", "--input", "gimbal_secondary_z", "--html", "{tmp}/v.html"],
+    "correlate": ["correlate", "--deck", "{deck}", "--modes", "{tmp}/modes.toml", "-o", "{tmp}"],
+    "update modal": ["update", "modal", "--deck", "{deck}", "--modes", "{tmp}/modes.toml", "--update",
+                     "E_lexan_end", "-o", "{tmp}/out"],
 }
+#: commands that take --structure without a deck (a measured data file's channel names), so nothing to mismatch
+NO_DECK = {"ema"}
+#: a measured mode of one DOF: enough for the commands that read measured modes to reach the structure file
+MODES_FILE = """[identification]
+method = "by hand"
+
+[[dofs]]
+name = "gyro_payload_x"
+
+[[modes]]
+label = "mode 1"
+frequency_hz = 2.0
+damping = 0.01
+shape_real = [1.0]
+"""
 
 
 def _commands_with_option(parser, option: str, prefix: str = "") -> list[str]:
@@ -369,9 +387,13 @@ def test_no_command_ignores_the_structure_file_it_is_given(command, tmp_path, ca
     that takes --structure reads it and stops on the mismatch, or says why it does not take one."""
     from mace_fmu.cli import build_parser
 
-    assert sorted(_commands_with_option(build_parser(), "--structure")) == sorted(STRUCTURE_COMMANDS)
+    from mace_fmu.structure.file import bundled_deck_path
+
+    assert sorted(_commands_with_option(build_parser(), "--structure")) == sorted(set(STRUCTURE_COMMANDS) | NO_DECK)
     spacecraft = EXAMPLES / "own_structure" / "spacecraft.toml"
-    argv = [a.replace("{tmp}", str(tmp_path)) for a in STRUCTURE_COMMANDS[command]]
+    (tmp_path / "modes.toml").write_text(MODES_FILE)
+    argv = [a.replace("{tmp}", str(tmp_path)).replace("{deck}", str(bundled_deck_path()))
+            for a in STRUCTURE_COMMANDS[command]]
     assert main([*argv, "--structure", str(spacecraft)]) == 2
     err = capsys.readouterr().err
     assert "spacecraft.toml" in err, err

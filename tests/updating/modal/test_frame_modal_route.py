@@ -16,7 +16,6 @@ import re
 
 import numpy as np
 import pytest
-from support.cli import run_cli
 from support.paths import DOCS, EXAMPLES
 from support.printed import printed_in
 
