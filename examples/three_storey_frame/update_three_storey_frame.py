@@ -30,11 +30,14 @@ files to within a few hundredths of a per cent, the two the fit did not see incl
 half-power bands to 0.9-1.2 dB on the fitted file and 0.3-1.7 dB on the other two (with the stated 5.201 kg
 floors and the moduli alone: up to 2.6 dB and 6.9 dB). The floors come out lighter than stated (5.30, 4.45 and
 4.65 kg), the moduli 52-58 GPa. Whether the data tell the masses apart from the moduli: within one file, by
-its intervals, yes; between driving points, no. Fitted to each file alone the floor masses move by up to 7 %
-and a storey's modulus by up to 8 %, many times their standard deviations (0.3-0.6 %), while the total mass agrees to about 1 %: the
-three files see one structure, but a model error the planar sway model cannot absorb (the small peaks at 42
-and 76.8 Hz are a motion it does not have) decides how the mass is shared. The damping ratios scatter by 4-7
-% between the files; the first mode's half-power band (0.02 Hz) is narrower than the analyser's bins, where
+its intervals, yes; between driving points, only as far as a model error allows. Fitted to each file alone
+the floor masses move by up to 7 % and a storey's modulus by up to 8 %, while the total mass agrees to about
+1 %: the three files see one structure, but a model error the planar sway model cannot absorb (the small peaks
+at 42 and 76.8 Hz are a motion it does not have) decides how the mass is shared. That is many times the
+standard deviations the noise would give (0.3-0.7 %), and within those the update reports, from each file's
+residuals (0.6-3.3 %; the files carry no coherence, so the fit is "untested"): the three estimates of the nine
+parameters agree pairwise in 25 of 27 pairs (benchmarks/RESULTS.md). The damping ratios scatter by 4-7 %
+between the files; the first mode's half-power band (0.02 Hz) is narrower than the analyser's bins, where
 its peaks also break reciprocity by about 10 % (data/README.md).
 """
 
