@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 import signal
 import sys
 import threading
@@ -85,12 +86,34 @@ def main(argv: Sequence[str] | None = None) -> int:
     int
         The exit status: 0 done, 2 bad input (one line on stderr, nothing written; an output that cannot be
         written and a ``--scheduler`` where no Dask scheduler answers are found before any work), 3 an update
-        that did not converge (its results written), 130 interrupted.
+        that did not converge (its results written), 130 interrupted, 141 stdout closed early (``mace-fmu params
+        list FMU | head``: the rest of the output is dropped, quietly, as ``head`` asked).
     """
-    parser = build_parser()
-    _refuse_removed_spellings(parser, sys.argv[1:] if argv is None else argv)
-    args = parser.parse_args(argv)
-    return _run(args)
+    try:
+        parser = build_parser()
+        _refuse_removed_spellings(parser, sys.argv[1:] if argv is None else argv)
+        args = parser.parse_args(argv)
+        status = _run(args)
+        sys.stdout.flush()  # a reader that left shows here, not as the interpreter's "Exception ignored" at exit
+        return status
+    except BrokenPipeError:
+        _drop_stdout()
+        return PIPE_CLOSED
+
+
+#: the exit status of a command whose reader closed stdout early: a shell's for a process ended by SIGPIPE
+PIPE_CLOSED = 128 + 13
+
+
+def _drop_stdout() -> None:
+    """stdout to /dev/null: what is left in its buffer (flushed again at exit) goes nowhere, without a traceback
+    (Python's recipe for SIGPIPE, docs.python.org/3/library/signal.html#note-on-sigpipe)."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (AttributeError, OSError, ValueError):  # a stdout without a file descriptor (captured in a test)
+        pass
 
 
 def _run(args: argparse.Namespace) -> int:

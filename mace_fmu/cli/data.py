@@ -61,8 +61,9 @@ def cmd_h1(args: argparse.Namespace) -> int:
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("data", help="measured data files: check one, or estimate H1 from a time history")
     commands = p.add_subparsers(dest="data_command", required=True)
-    check = commands.add_parser("check", help="read a time history (.csv, .npz) or frequency response (.csv, .uff, "
-                                ".unv) and summarise it; bad data end with one line naming file, channel and row")
+    check = commands.add_parser("check", help="read a time history (.csv, .npz, LabVIEW .lvm) or frequency response "
+                                "(.csv, .uff, .unv) and summarise it; bad data end with one line naming file, channel "
+                                "and row")
     h1 = commands.add_parser("h1", help="H1 frequency response (Welch) of a time history, written as .csv or .uff")
     for q in (check, h1):
         q.add_argument("file", help="the measured data file")

@@ -5,10 +5,11 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from pathlib import Path
 
 import numpy as np
 
-from mace_fmu.cli.common import CONFIGURATIONS, deck_option, model_options, volts
+from mace_fmu.cli.common import BUNDLED_DECK, CONFIGURATIONS, deck_option, model_options, volts
 from mace_fmu.cli.preflight import output_option
 from mace_fmu.util.atomic import atomic_path, write_text_atomic
 
@@ -40,12 +41,16 @@ def cmd_model(args: argparse.Namespace) -> int:
           f"{sys_.noutputs} outputs ({model.electronics.describe(instruments=model.instruments)})")
     for state, reason in model.plant.removed_states:
         print(f"  removed: {state}: {reason}")
+    if args.parameters:
+        print(f"parameter set: {args.parameters}")
     if args.poles:
-        one_g = args.configuration == "1g"
-        rows = table_4_7_comparison(poles) if one_g else table_5_2_comparison(poles, column="g0")
-        title = "Table 4.7, FE columns (closed loop)" if one_g else "Table 5.2, 0-g column (closed loop)"
-        print(format_pole_rows(rows, title=title))
-        print()
+        # the thesis's tables are MACE's: beside another deck's poles they would be rows of "no match"
+        if args.configuration in ("1g", "0g") and Path(args.deck).resolve() == Path(BUNDLED_DECK).resolve():
+            one_g = args.configuration == "1g"
+            rows = table_4_7_comparison(poles) if one_g else table_5_2_comparison(poles, column="g0")
+            title = "Table 4.7, FE columns (closed loop)" if one_g else "Table 5.2, 0-g column (closed loop)"
+            print(format_pole_rows(rows, title=title))
+            print()
         print(f"all closed-loop poles up to {args.list_max_hz} Hz")
         for p in poles:
             if p.frequency_hz <= args.list_max_hz:
@@ -59,7 +64,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="the deck's 1-g or 0-g structure, or 'modes': NASTRAN's modes, named by --structure FILE's "
                         "[modes] table")
     deck_option(p)
-    p.add_argument("--poles", action="store_true", help="closed-loop poles next to Table 4.7 (1g) or 5.2 (0g)")
+    p.add_argument("--poles", action="store_true", help="closed-loop poles (the bundled deck's next to Table 4.7 "
+                   "(1g) or 5.2 (0g)); with --parameters, an update's")
     p.add_argument("--list-max-hz", type=float, default=60.0, help="with --poles: list all poles up to this [Hz]")
     p.add_argument("--json", action="store_true", help="states, signal names and poles as JSON")
     output_option(p, "--npz", kind="file", metavar="FILE", help="write A, B, C, D and the signal names to FILE (.npz)")

@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from mace_fmu.cli.common import deck_option, positive_hz, progress_bar
+from mace_fmu.cli.common import deck_option, parameters, parameters_option, positive_hz, progress_bar
 from mace_fmu.util.frequency import DEFAULT_MAX_HZ, ZERO_HZ, hz_text
 
 if TYPE_CHECKING:
@@ -70,16 +70,54 @@ def _print_modes(result: StructureModes) -> None:
 def cmd_modes(args: argparse.Namespace) -> int:
     from mace_fmu.deck.reader import read_deck
     from mace_fmu.fe.modes import compute_modes
+    from mace_fmu.iomodel.volts import scale_frequencies
+
     deck = read_deck(args.deck)
+    parameter_set = parameters(args)  # a set made for the other structure, or for another deck: refused here
     with progress_bar() as bar:
         result = compute_modes(deck, configuration=args.configuration, preload=args.preload, mass=args.mass,
-                               max_hz=args.max_hz, progress=bar, structure_file=args.structure_file)
+                               max_hz=args.max_hz, progress=bar, structure_file=args.structure_file,
+                               parameters=parameter_set)
+    # an update's frequency scales move the modes the FMU has: the same frequencies here
+    result = scale_frequencies(result, parameter_set, configuration=args.configuration)
     if args.json:
-        json.dump(_modes_json(result), sys.stdout, indent=1)
+        payload = _modes_json(result)
+        payload["parameters"] = _parameters_json(args.parameters, parameter_set)
+        json.dump(payload, sys.stdout, indent=1)
         print()
     else:
         _print_modes(result)
+        if parameter_set is not None:
+            print(_parameters_line(args.parameters, parameter_set))
     return 0
+
+
+def _what_the_set_moves(parameter_set) -> dict[str, list[str]]:
+    """The set's names by what they do to the modes: re-solved (moduli, springs, masses), scaled (frequency
+    scales), and the rest (damping, delays, gains: the input-output model's, not the modes')."""
+    kinds = {"re-solved": ("modulus", "spring", "mass"), "scaled": ("frequency_scale",)}
+    out = {what: list(parameter_set.of_kind(*names)) for what, names in kinds.items()}
+    moved = {n for names in out.values() for n in names}
+    out["not in the modes"] = [n for n in parameter_set.values if n not in moved]
+    return out
+
+
+def _parameters_json(path: str | None, parameter_set) -> dict | None:
+    if parameter_set is None:
+        return None
+    return {"file": path, **{what.replace(" ", "_").replace("-", "_"): names
+                             for what, names in _what_the_set_moves(parameter_set).items()}}
+
+
+def _parameters_line(path: str, parameter_set) -> str:
+    parts = _what_the_set_moves(parameter_set)
+    said = [f"{len(parts['re-solved'])} moduli, springs and masses re-solved"]
+    if parts["scaled"]:
+        said.append(f"{len(parts['scaled'])} frequency scales applied")
+    if parts["not in the modes"]:
+        said.append(f"{len(parts['not in the modes'])} others (damping ratios, delays, gains) are the input-output "
+                    "model's: mace-fmu model --poles")
+    return f"parameter set: {path} ({'; '.join(said)})"
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -92,4 +130,5 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="1-g gravity preload: large displacement (SOL 106, default) or linear")
     p.add_argument("--mass", choices=["lumped", "consistent"], default="lumped", help="bar mass matrix")
     p.add_argument("--json", action="store_true", help="machine-readable output")
+    parameters_option(p)
     p.set_defaults(func=cmd_modes)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import sys
 from pathlib import Path
@@ -37,9 +38,10 @@ def cmd_sample(args: argparse.Namespace) -> int:
     return 0
 
 
-def _read_start(path: str, fmu: str) -> dict[str, float]:
-    """Start values from a parameter TOML file ([values] table) by the FMU's names: a set of ``update mace``
-    names its damping ratios and frequency scales by mode label, which the FMU's parameters say."""
+def _read_start(path: str, fmu: str) -> tuple[dict[str, float], dict[str, tuple[float | None, float | None]]]:
+    """Start values from a parameter TOML file ([values] table) by the FMU's names, and the bounds of its optional
+    [bounds] table (name = [LOW, HIGH], either side "" for its default): a set of ``update mace`` names its damping
+    ratios and frequency scales by mode label, which the FMU's parameters say."""
     from mace_fmu.updating.fmu.model import read_fmu_interface
 
     table = read_toml(path, what="start-value")
@@ -47,7 +49,61 @@ def _read_start(path: str, fmu: str) -> dict[str, float]:
     if not isinstance(values, dict) or not all(isinstance(v, (int, float)) and not isinstance(v, bool)
                                                for v in values.values()):
         raise MaceError(f"{path}: expected a [values] table of numbers (name = value)")
-    return read_fmu_interface(fmu).values_by_fmu_name({k: float(v) for k, v in values.items()}, source=path)
+    interface = read_fmu_interface(fmu)
+    bounds = table.get("bounds", {})
+    if not isinstance(bounds, dict):
+        raise MaceError(f"{path}: [bounds] must be a table of name = [LOW, HIGH]")
+    given: dict[str, tuple[float | None, float | None]] = {}
+    for name, pair in bounds.items():
+        sides = pair if isinstance(pair, list) and len(pair) == 2 else None
+        if sides is None or not all(side == "" or (isinstance(side, (int, float)) and not isinstance(side, bool))
+                                    for side in sides):
+            raise MaceError(f"{path}: [bounds] {name} = {pair!r}: expected [LOW, HIGH], numbers in the "
+                            "parameter's unit (\"\" keeps that side's default), e.g. [0.001, 0.05]")
+        given[name] = tuple(None if side == "" else float(side) for side in sides)  # type: ignore[assignment]
+    by_fmu_name = _bounds_by_fmu_name(interface, given, source=f"{path}: [bounds]")
+    return interface.values_by_fmu_name({k: float(v) for k, v in values.items()}, source=path), by_fmu_name
+
+
+def _bounds_by_fmu_name(interface, given: dict[str, tuple[float | None, float | None]], *,
+                        source: str) -> dict[str, tuple[float | None, float | None]]:
+    """``given`` (name -> (low, high)) by the FMU's names: a per-mode name by label becomes every such mode's."""
+    out: dict[str, tuple[float | None, float | None]] = {}
+    for name, (low, high) in given.items():
+        for fmu_name in interface.values_by_fmu_name({name: 0.0}, source=source):
+            out[fmu_name] = (low, high)
+    return out
+
+
+def _bound(text: str) -> tuple[str, float | None, float | None]:
+    """argparse type of ``--bounds NAME=LOW:HIGH``: (name, low, high) [the parameter's unit]; an empty side keeps
+    its default."""
+    name, eq, sides = text.partition("=")
+    low_text, colon, high_text = sides.partition(":")
+    expected = (f"{text!r}: expected NAME=LOW:HIGH in the parameter's unit, either side empty for its default "
+                "(e.g. damping_mode_2=0.001:0.05, E_cable_1=:2.2e11)")
+    if not name.strip() or not eq or not colon or (not low_text.strip() and not high_text.strip()):
+        raise argparse.ArgumentTypeError(expected)
+    try:
+        low = float(low_text) if low_text.strip() else None
+        high = float(high_text) if high_text.strip() else None
+    except ValueError:
+        raise argparse.ArgumentTypeError(expected) from None
+    if any(v is not None and not math.isfinite(v) for v in (low, high)) or \
+            (low is not None and high is not None and not low < high):
+        raise argparse.ArgumentTypeError(f"{text!r}: expected finite LOW < HIGH")
+    return name.strip(), low, high
+
+
+def _window(text: str) -> float:
+    """argparse type of each number of ``--window START END`` [s]."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"expected a time [s], got {text!r}")
+    return value
 
 
 def _gain_priors(text: str) -> list[tuple[str, float]]:
@@ -127,15 +183,28 @@ def cmd_fmu_update(args: argparse.Namespace) -> int:
     from mace_fmu.updating.fmu.update import update_fmu
     from mace_fmu.util.runner import DaskRunner
 
+    from mace_fmu.updating.fmu.model import read_fmu_interface
+
     noise_fraction = None if args.noise_rms_percent is None else args.noise_rms_percent / 100.0
+    start, bounds = _read_start(args.start, args.fmu) if args.start else (None, {})
+    source = {name: f"{args.start}: [bounds]" for name in bounds}
+    given = _bounds_by_fmu_name(read_fmu_interface(args.fmu), {name: (low, high) for name, low, high in args.bounds},
+                                source="--bounds") if args.bounds else {}
+    twice = [name for name, _, _ in args.bounds if [n for n, _, _ in args.bounds].count(name) > 1]
+    if twice:
+        raise MaceError(f"--bounds: {twice[0]!r} given twice (state each parameter's bounds once)")
+    bounds.update(given)  # the command line over the start file
+    source.update({name: "--bounds" for name in given})
     problem = fmu_problem(fmu=args.fmu, data=args.data,
                           names=[n.strip() for part in args.update for n in part.split(",") if n.strip()],
-                          cost=args.cost, start=_read_start(args.start, args.fmu) if args.start else None,
+                          cost=args.cost, start=start,
                           channel_map=args.map, segment_s=args.segment_s, weighting=args.weighting,
                           held_inputs=[name for group in args.hold_input for name in group],
                           noise_rms_fraction=noise_fraction, gain_uncertainty=_gain_uncertainty(args.gain_uncertainty),
                           bands_hz=[tuple(band) for band in args.band_hz], averages=args.averages,
-                          frf_floor=None if args.frf_floor_percent is None else args.frf_floor_percent / 100.0)
+                          frf_floor=None if args.frf_floor_percent is None else args.frf_floor_percent / 100.0,
+                          window_s=tuple(args.window) if args.window else None, bounds=bounds,
+                          bounds_source=source)
     for note in problem.notes:
         _say(note)
     where = f"the Dask cluster at {args.scheduler}" if args.scheduler else local_workers(args.workers)
@@ -146,7 +215,7 @@ def cmd_fmu_update(args: argparse.Namespace) -> int:
         with DaskRunner(scheduler=args.scheduler, workers=args.workers, progress=bar, task="FMU runs",
                         connect_timeout_s=args.scheduler_timeout) as runner:
             result = update_fmu(family=problem.family, cost=problem.cost, start=problem.start, stages=[problem.names],
-                                runner=runner, progress=bar)
+                                runner=runner, progress=bar, bounds=problem.bounds)
     report = _write_fmu_update(problem, result, out=Path(args.out), noise_fraction=noise_fraction, strict=args.strict)
     _say(report.summary())
     for line in report.misfit_lines()[:8]:
@@ -160,7 +229,8 @@ def _write_fmu_update(problem, result, *, out: Path, noise_fraction: float | Non
     from mace_fmu.updating.engine.convergence import (blocks_with_noise, convergence_report, missing_noise_floor,
                                                       noise_floor)
     from mace_fmu.updating.engine.residuals import residual_figure
-    from mace_fmu.updating.engine.uncertainty import format_uncertainty, stage_uncertainty, uncertainty_toml
+    from mace_fmu.updating.engine.uncertainty import (format_uncertainty, one_sided_at_bounds, stage_uncertainty,
+                                                      uncertainty_toml)
     from mace_fmu.updating.fmu.update import fmu_parameters
 
     floor = noise_floor(problem.cost, noise_rms_fraction=noise_fraction)
@@ -176,13 +246,15 @@ def _write_fmu_update(problem, result, *, out: Path, noise_fraction: float | Non
     blocks = blocks_with_noise(problem.cost, floor) if from_residuals else None
     uncertainty = stage_uncertainty(result, noise_variance=sigma2, residual_blocks=blocks,
                                     noise_source=f"from the noise floor ({floor.source})" if floor else "")
+    uncertainty = one_sided_at_bounds(uncertainty, result.at_bounds)  # as the verdict says: one-sided there
     figure = residual_figure(report.residuals, out / "residuals.png") if report.residuals is not None else None
     summary = {"fmu": str(problem.family.interface.path), "data": list(problem.data_files), "cost": problem.cost.name,
                "start": dict(problem.start), "values": dict(result.values), "initial_cost": result.initial_cost,
                "seconds": result.seconds, **report.to_json(),
                "uncertainty": [{"stage": st.stage, "method": st.method, "method_text": st.method_text,
                                 "standard_deviation_percent": st.standard_deviation_percent,
-                                "interval_95": {n: list(v) for n, v in st.interval_95.items()}} for st in uncertainty]}
+                                "interval_95": {n: list(v) for n, v in st.interval_95.items()},
+                                "interval_95_at_bound": dict(st.at_bound)} for st in uncertainty]}
     written = [params.write(out / "parameters.toml"), write_text_atomic(out / "convergence.toml", report.to_toml()),
                write_text_atomic(out / "uncertainty.toml", uncertainty_toml(uncertainty)),
                write_text_atomic(out / "summary.json", json.dumps(summary, indent=1, default=float) + "\n")]
@@ -239,10 +311,11 @@ def cmd_mace_update(args: argparse.Namespace) -> int:
           f"{res.seconds:.1f} s; RMS frequency error (zeta < 10 %) {s.rms_light_before:.2f} -> {s.rms_light_after:.2f} % "
           f"(thesis {s.rms_light_thesis:.2f} %)")
     from mace_fmu.updating.engine.convergence import convergence_report
-    from mace_fmu.updating.engine.uncertainty import format_uncertainty, stage_uncertainty, uncertainty_toml
+    from mace_fmu.updating.engine.uncertainty import (format_uncertainty, one_sided_at_bounds, stage_uncertainty,
+                                                      uncertainty_toml)
 
     report = convergence_report(res, strict=args.strict)
-    uncertainty = stage_uncertainty(res)
+    uncertainty = one_sided_at_bounds(stage_uncertainty(res), res.at_bounds)
     print(format_uncertainty(uncertainty))
     paths += [write_text_atomic(out / "convergence.toml", report.to_toml()),
               write_text_atomic(out / "uncertainty.toml", uncertainty_toml(uncertainty))]
@@ -356,7 +429,8 @@ def _mace_options(p: argparse.ArgumentParser) -> None:
 
 def _fmu_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--data", metavar="FILE", action="append", required=True,
-                   help=("measured data: a time history (CSV/npz; its inputs drive the FMU), one per test (repeat "
+                   help=("measured data: a time history (CSV, npz or LabVIEW's .lvm, its channels and units from "
+                             "its header; its inputs drive the FMU), one per test (repeat "
                              "the option: several tests are summed, each in units of its own noise) and, with one "
                              "test and --cost log-frf, optionally a frequency response (UFF 58/CSV); or, with "
                              "--cost log-frf, measured frequency responses alone, one file per test"))
@@ -371,11 +445,25 @@ def _fmu_options(p: argparse.ArgumentParser) -> None:
                        help=("local worker processes (default: one per core)"))
     p.add_argument("--map", metavar="FILE", help=("channel map: data channel names and units to the FMU's signals"))
     p.add_argument("--band-hz", type=float, nargs=2, metavar=("LOW", "HIGH"), action="append", default=[],
-                   help=("measured frequency responses given alone (an analyser's UFF 58 or CSV files, --cost "
-                         "log-frf): a band they are compared over [Hz] (repeatable, e.g. one about each "
-                         "resonance; default: all their frequencies)"))
+                   help=("[Hz] time histories, --cost time: the same zero-phase band-pass on the measured and the "
+                         "FMU's outputs (the FMU driven by the measured inputs as they are), the noise read outside "
+                         "the band; --cost log-frf: the H1 estimate's band (default 0.5-60 Hz, or the lines of a "
+                         "periodic excitation). Measured frequency responses given alone (an analyser's UFF 58 or "
+                         "CSV files): a band they are compared over (repeatable, e.g. one about each resonance; "
+                         "default: all their frequencies)"))
+    p.add_argument("--window", type=_window, nargs=2, metavar=("START", "END"), default=None,
+                   help=("time histories: compare from START to END [s, the record's time axis]; the FMU is driven "
+                         "from the record's first sample, so START sees the structure's state (START past the "
+                         "transient of a record that begins mid-stream); default: the whole record"))
     p.add_argument("--segment-s", type=positive_number, default=None,
-                   help=("time histories: H1 segment length [s] of the log-frf cost (default 2)"))
+                   help=("time histories: H1 segment length [s] of the log-frf cost (default 2; periodic inputs: "
+                         "the shortest whole number of periods, a given length refused, with the lengths that would "
+                         "do, unless every line falls on its bins)"))
+    p.add_argument("--bounds", metavar="NAME=LOW:HIGH", type=_bound, action="append", default=[],
+                   help=("the range a parameter may take [its unit] (repeatable; an empty side keeps its default; "
+                         "also a [bounds] table of the --start file, name = [LOW, HIGH]). Default, relative to the "
+                         "start value: moduli and masses x0.5-1.5, springs x0.2-5, delays x0.2-3, damping ratios "
+                         "x0.1-4 (at most 0.95), others x0.2-5, within the range the FMU declares"))
     p.add_argument("--hold-input", metavar="NAME=0[,NAME=0...]", type=_held_inputs, action="append", default=[],
                    help=("FMU inputs the data have no channel for, held at 0 V (repeatable); any other missing "
                              "input is an error"))
@@ -425,7 +513,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     f.add_argument("fmu", metavar="FILE", help="the FMU whose parameters are updated (set through FMI)")
     _out_option(f, required=True)
     f.add_argument("--start", metavar="FILE", help="parameter values to start from (TOML [values]; default: the "
-                   "FMU's own start values)")
+                   "FMU's own start values) and, optionally, their bounds ([bounds]: name = [LOW, HIGH])")
     _fmu_options(f)
     f.set_defaults(func=cmd_fmu_update)
 

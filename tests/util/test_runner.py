@@ -96,3 +96,32 @@ def test_a_scheduler_passes_the_check_and_a_worker_is_named_for_what_it_is(runne
         check_scheduler(worker, timeout_s=5.0, name=f"--scheduler {worker}")
     with pytest.raises(MaceError, match=r"^http://host:8786: not a Dask address \(unknown address scheme 'http'"):
         check_scheduler("http://host:8786")
+
+
+@pytest.mark.slow  # a local cluster started in a subprocess
+def test_a_second_cluster_on_the_machine_prints_no_port_warning():
+    """Dask's dashboard port, 8787, held (by another engineer's update, or here by a socket): the runner's local
+    cluster starts without Dask's "Port 8787 is already in use" warning reaching the user (issue 48, item 5; the
+    dashboard is off and the scheduler's HTTP routes take a free port)."""
+    import contextlib
+    import os
+    import socket
+    import subprocess
+    import sys
+
+    from support.paths import ROOT
+
+    script = ("from mace_fmu.util.runner import DaskRunner\n"
+              "with DaskRunner(workers=1) as run:\n"
+              "    assert list(run(abs, [-1, -2])) == [1, 2]\n")
+    with contextlib.ExitStack() as held:
+        try:  # Dask binds the dashboard on every interface
+            server = held.enter_context(socket.create_server(("", 8787)))
+            server.listen()
+        except OSError:
+            pass  # already held by someone else on this machine: the condition itself
+        run = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=180, cwd=ROOT,
+                             env={**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT),
+                                                                              os.environ.get("PYTHONPATH", "")])})
+    assert run.returncode == 0, run.stderr
+    assert "8787" not in run.stderr and "already in use" not in run.stderr, run.stderr

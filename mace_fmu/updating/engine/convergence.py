@@ -60,10 +60,19 @@ class NoiseFloor:
         return (cost - self.expected_cost) / self.standard_deviation if self.standard_deviation > 0 else math.inf
 
 
-def time_noise_floor(cost: TimeResponseCost, *, noise_rms_fraction: float | None = None) -> NoiseFloor | None:
+def time_noise_floor(cost: TimeResponseCost, *, noise_rms_fraction: float | None = None,
+                     band_hz: tuple[float, float] | None = None) -> NoiseFloor | None:
     """The noise floor of a time cost: from ``noise_rms_fraction`` (noise RMS / output RMS, every output)
     when given, else estimated above the inputs' band; None when the inputs fill the band (no quiet
-    part of the spectrum to measure the noise in)."""
+    part of the spectrum to measure the noise in). With a band-pass, ``band_hz`` (default: the cost's own,
+    ``cost.band_hz``), the noise is that of the filtered error, read outside the band
+    (:func:`~mace_fmu.updating.engine.band.band_noise_floor`)."""
+    band = band_hz if band_hz is not None else cost.band_hz
+    if band is not None:
+        from mace_fmu.updating.engine.band import band_noise_floor
+
+        found = band_noise_floor(cost, band_hz=band, noise_rms_fraction=noise_rms_fraction)
+        return None if found is None else NoiseFloor(**found)
     data = cost.compared
     outputs = list(data.outputs)
     n = len(data.times_s)
@@ -121,6 +130,10 @@ def missing_noise_floor(cost, *, noise_rms_fraction: float | None = None) -> str
     if not all(isinstance(c, TimeResponseCost) for c in tests):
         return ""
     for c in tests:
+        if time_noise_floor(c) is None and c.band_hz is not None:
+            return (f"noise-floor test not made: outside the band {c.band_hz[0]:g}-{c.band_hz[1]:g} Hz the record "
+                    "leaves too few frequencies to read the outputs' noise in; give the noise (--noise-rms-percent "
+                    "P: its RMS as P % of each output's RMS) so that the fit can be held to it")
         if time_noise_floor(c) is None:
             _, edge, fs = _input_band(c)
             nyquist = fs / 2

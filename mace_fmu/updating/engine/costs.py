@@ -231,49 +231,88 @@ class TimeResponseCost:
     on, so that a part of a record (its second half, a window) is compared with the structure in the
     state the record's earlier part left it in, and a record that starts mid-stream (the structure
     already moving, which the model at rest cannot know) is compared after its start's transient.
+
+    With ``band_hz`` the errors are those of the measured and the model's outputs through one zero-phase
+    band-pass (:mod:`~mace_fmu.updating.engine.band`), s_o the filtered output's RMS: the model is still
+    driven by the measured inputs as they are, and what lies outside the band (a shaker's broadband force
+    noise, a drift) is not compared. The residual analysis correlates the errors with the inputs through the
+    same filter.
     """
 
     data: TimeHistory
     normalise: bool = True
     name: str = "time"
     compare_from_s: float = 0.0  #: errors before this time [s] are not compared (the simulation still runs)
+    band_hz: tuple[float, float] | None = None  #: the zero-phase band-pass of both outputs [Hz] (None: none)
 
     def __post_init__(self) -> None:
         t = self.data.times_s
         if not (np.isfinite(self.compare_from_s) and t[0] <= self.compare_from_s <= t[-2]):
             raise MaceError(f"{self.data.source}: comparison from {self.compare_from_s!r} s, expected a time in "
                             f"[{t[0]:g}, {t[-2]:g}] s (the record's)")
+        if self.band_hz is not None:
+            from mace_fmu.updating.engine.band import check_band
+
+            object.__setattr__(self, "band_hz", check_band(self.band_hz, sample_time_s=self.data.sample_time_s,
+                                                           where=f"{self.data.source}: band"))
+
+    def _filtered(self, values: np.ndarray) -> np.ndarray:
+        """``values`` (samples along the first axis) through the band's filter; unchanged without a band."""
+        if self.band_hz is None:
+            return np.asarray(values, dtype=float)
+        from mace_fmu.updating.engine.band import band_filtered
+
+        return band_filtered(values, self.band_hz, self.data.sample_time_s)
+
+    @property
+    def _first(self) -> int:
+        """The first sample compared."""
+        return int(np.searchsorted(self.data.times_s, self.compare_from_s - 1e-9 * self.data.sample_time_s))
 
     @property
     def compared(self) -> TimeHistory:
-        """The part of the record the errors are taken over."""
-        keep = self.data.times_s >= self.compare_from_s - 1e-9 * self.data.sample_time_s
-        if keep.all():
+        """The part of the record the errors are taken over, through the band's filter where there is one
+        (the whole record filtered, then cut: the filter's start sees the record before the window)."""
+        keep = slice(self._first, None)
+        if self.band_hz is None and self._first == 0:
             return self.data
-        return TimeHistory(self.data.times_s[keep], {k: v[keep] for k, v in self.data.inputs.items()},
-                           {k: v[keep] for k, v in self.data.outputs.items()},
-                           source=f"{self.data.source} (from {self.compare_from_s:g} s)", units=self.data.units)
+        return TimeHistory(self.data.times_s[keep], {k: self._filtered(v)[keep] for k, v in self.data.inputs.items()},
+                           {k: self._filtered(v)[keep] for k, v in self.data.outputs.items()},
+                           source=f"{self.data.source} ({self._part()})", units=self.data.units)
+
+    def _part(self) -> str:
+        parts = [f"from {self.compare_from_s:g} s"] if self._first else []
+        if self.band_hz is not None:
+            parts.append(f"{self.band_hz[0]:g}-{self.band_hz[1]:g} Hz")
+        return ", ".join(parts)
 
     def residual(self, model: LinearModel) -> np.ndarray:
         outs = list(self.data.outputs)
-        y = model.time_response(self.data.times_s, self.data.inputs, outputs=outs)
-        compared = self.compared
-        y = y[y.shape[0] - compared.times_s.size:]
+        y = self._filtered(model.time_response(self.data.times_s, self.data.inputs, outputs=outs))
+        first = self._first
         err = []
         for k, name in enumerate(outs):
-            measured = compared.outputs[name]
+            measured = self._measured(name)
             scale = float(np.sqrt(np.mean(measured**2))) if self.normalise else 1.0
-            err.append((measured - y[:, k]) / (scale if scale > 0 else 1.0))
+            err.append((measured - y[first:, k]) / (scale if scale > 0 else 1.0))
         return np.concatenate(err)
 
+    def _measured(self, name: str) -> np.ndarray:
+        """The measured output ``name`` as compared (filtered, from the first sample compared); kept once made."""
+        cache = self.__dict__.setdefault("_compared_outputs", {})
+        if name not in cache:
+            cache[name] = self._filtered(self.data.outputs[name])[self._first:]
+        return cache[name]
+
     def residual_blocks(self) -> tuple[ResidualBlock, ...]:
-        """One block per output, its error samples over the output's RMS (or 1)."""
+        """One block per output, its error samples over the output's RMS (or 1); the inputs they are correlated
+        with through the band's filter."""
         compared = self.compared
         return time_blocks(outputs=tuple(compared.outputs), times_s=compared.times_s, inputs=compared.inputs)
 
     def entry_labels(self) -> list[str]:
-        compared = self.compared
-        return [f"{o} t={t:.4g} s" for o in compared.outputs for t in compared.times_s]
+        t = self.data.times_s[self._first:]
+        return [f"{o} t={x:.4g} s" for o in self.data.outputs for x in t]
 
 
 @dataclass(frozen=True)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Sequence
+
 import numpy as np
 from scipy import signal
 
@@ -10,7 +12,8 @@ from mace_fmu.updating.engine.measured import FrequencyResponseData, TimeHistory
 
 
 def h1_estimate(history: TimeHistory, *, segment_length: int, window: str = "hann", overlap: float = 0.5,
-                band_hz: tuple[float, float] | None = None, inputs_held: bool = False) -> FrequencyResponseData:
+                band_hz: tuple[float, float] | None = None, inputs_held: bool = False,
+                lines_hz: Sequence[float] | None = None) -> FrequencyResponseData:
     """H1 = S_yu S_uu^-1 [output unit / input unit] at the Welch frequencies [Hz], with multiple coherence.
 
     Cross spectra by ``scipy.signal.csd`` (``segment_length`` samples per segment, ``window``,
@@ -19,6 +22,8 @@ def h1_estimate(history: TimeHistory, *, segment_length: int, window: str = "han
     correlated. ``band_hz`` keeps [low, high] (inclusive); without it every frequency above 0 Hz.
     The settings are stated in the result's ``source``, the number of segments averaged in its
     ``averages`` (what the coherence's variance needs, :mod:`~mace_fmu.updating.engine.frf_noise`).
+    ``lines_hz`` keeps only the bins of those frequencies: a periodic excitation's lines, where the inputs
+    have power (between them S_uu holds nothing to invert).
 
     A record whose inputs were held over each sample (a simulation's: an FMU holds each input value
     for the step; a record that logs a DAC's commands rather than the measured signal) has the
@@ -41,6 +46,8 @@ def h1_estimate(history: TimeHistory, *, segment_length: int, window: str = "han
         [low, high] [Hz] to keep (inclusive).
     inputs_held : bool
         The inputs were held over each sample: divide the hold's response out (above).
+    lines_hz : sequence of float, optional
+        Keep only the bins nearest these frequencies [Hz] (each within half a bin of one).
 
     Returns
     -------
@@ -69,6 +76,9 @@ def h1_estimate(history: TimeHistory, *, segment_length: int, window: str = "han
     except ValueError as exc:
         raise MaceError(f"H1 estimate of {history.source}: {exc}") from None
     keep = (f > 0) if band_hz is None else (f >= band_hz[0]) & (f <= band_hz[1])
+    if lines_hz is not None:
+        resolution = fs / segment_length
+        keep &= np.isin(np.rint(f / resolution), np.rint(np.asarray(lines_hz, dtype=float) / resolution))
     if not np.any(keep):
         raise MaceError(f"H1 estimate of {history.source}: no Welch frequency in {band_hz} Hz (resolution "
                         f"{fs / segment_length:.6g} Hz up to {fs / 2:.6g} Hz)")

@@ -34,6 +34,7 @@ more than :attr:`MultisineProbe.max_rate_doublings` doublings is refused, naming
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field, replace
 from typing import Sequence
 
@@ -168,6 +169,8 @@ class MultisineProbe:
             self._periods[0] = 2 * periods
 
 
+#: the finest grid tried is the smallest gap between lines over this (a period this many times its gaps' longest)
+MAX_DIVISOR = 1000
 #: the floor of every line's tolerance, in steps of the grid: the round-off of frequencies computed as k x spacing
 #: (CSV '%.17g', an estimate in memory), which earlier versions held every file to
 GRID_FLOOR = 1e-6
@@ -251,22 +254,41 @@ def _grid(f: np.ndarray, precision: float) -> tuple[float, np.ndarray, bool]:
     high = float(np.min((gaps + gap_tolerance)[one_step]))
 
     def refuse(detail: str) -> MaceError:
-        return MaceError(f"frequencies from {f[0]:g} to {f[-1]:g} Hz are not whole multiples of {smallest:g} Hz: no "
-                         f"periodic signal has all of them ({detail}; give the data on a uniform grid)")
+        return MaceError(f"frequencies from {f[0]:g} to {f[-1]:g} Hz are not whole multiples of one spacing (the "
+                         f"smallest gap {smallest:g} Hz, nor any fraction of it down to {smallest / divisor:g} Hz): "
+                         f"no periodic signal has all of them ({detail}; give the data on a uniform grid)")
 
-    found = _multiples(f, tolerance, low, high)
-    several = isinstance(found, tuple) and found[0] == "several"
-    if several:  # the lowest line's multiple decides the rest: the smallest that fits every line
-        fewest, most = (int(v) for v in found[1:])
-        for k0 in range(fewest, min(most, fewest + 100_000) + 1):
-            tried = _multiples(f, tolerance, max(low, (f[0] - tolerance[0]) / k0),
-                               min(high, (f[0] + tolerance[0]) / k0))
-            if isinstance(tried, np.ndarray):
-                found = tried
-                break
+    def fit(low: float, high: float):
+        found = _multiples(f, tolerance, low, high)
+        several = isinstance(found, tuple) and found[0] == "several"
+        if several:  # the lowest line's multiple decides the rest: the smallest that fits every line
+            fewest, most = (int(v) for v in found[1:])
+            for k0 in range(fewest, min(most, fewest + 100_000) + 1):
+                tried = _multiples(f, tolerance, max(low, (f[0] - tolerance[0]) / k0),
+                                   min(high, (f[0] + tolerance[0]) / k0))
+                if isinstance(tried, np.ndarray):
+                    return tried, several
+        return found, several
+
+    # the smallest gap is one step, or a whole number of them: lines at 100, 120 and 150 Hz are multiples of 10 Hz
+    # (two and three steps apart), not of 20 Hz; the coarsest grid that fits is the multisine's. A line off every
+    # grid fits the n-th fraction's by chance with probability about 2 n t / gap (t its tolerance), so the fractions
+    # tried stop where the chances summed over them reach 1 %: t n^2 / gap = 0.01
+    most = int(min(MAX_DIVISOR, max(1.0, math.sqrt(0.01 * smallest / float(tolerance.max())))))
+    divisor, first = 1, None
+    while True:
+        found, several = fit(low / divisor, high / divisor)
+        first = found if first is None else first
+        if isinstance(found, np.ndarray) and divisor > 1 and \
+                np.max((f - tolerance) / found) > np.min((f + tolerance) / found):
+            found = ("none", int(np.argmax((f - tolerance) / found)))  # each line has a multiple, but no one spacing
+        if isinstance(found, np.ndarray) or divisor >= most:
+            break
+        divisor += 1
     if not isinstance(found, np.ndarray):
+        found = first
         line = int(found[1]) if found[0] == "none" else 0
-        detail = (f"{f[line]:g} Hz is {f[line] / (0.5 * (low + high)):.4f} steps"
+        detail = (f"{f[line]:g} Hz is {f[line] / (0.5 * (low + high)):.4f} steps of {smallest:g} Hz"
                   + (f", more than its precision {precision:g} allows" if precision else "")
                   if found[0] == "none" else "no one spacing fits every line within its precision")
         raise refuse(detail)

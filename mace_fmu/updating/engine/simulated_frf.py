@@ -24,17 +24,19 @@ from mace_fmu.updating.engine.measured import FrequencyResponseData, TimeHistory
 class H1Estimator:
     """The settings of :func:`~mace_fmu.updating.files.h1_estimate` (H1 = S_yu S_uu^-1, all inputs at once):
     ``segment_length`` samples per segment, ``window``, ``overlap`` (fraction), ``band_hz`` [Hz] (None: every bin
-    above 0 Hz). One object for the measured data and the model's simulated response alike."""
+    above 0 Hz), ``lines_hz`` (None: every bin; else a periodic excitation's lines, each on a bin). One object for
+    the measured data and the model's simulated response alike."""
 
     segment_length: int
     window: str = "hann"
     overlap: float = 0.5
     band_hz: tuple[float, float] | None = None
+    lines_hz: tuple[float, ...] | None = None
 
     def __call__(self, history: TimeHistory) -> FrequencyResponseData:
         """The frequency response estimated from ``history`` (inputs and outputs in their units)."""
         return h1_estimate(history, segment_length=self.segment_length, window=self.window, overlap=self.overlap,
-                           band_hz=self.band_hz)
+                           band_hz=self.band_hz, lines_hz=self.lines_hz)
 
 
 def log_h1_weights(history: TimeHistory, estimate: FrequencyResponseData, *, segment_length: int,
@@ -76,7 +78,9 @@ class SimulatedFrequencyResponseCost:
     frequencies, G_model the H1 estimate of the model's simulated response to ``excitation``'s inputs.
 
     ``data`` is usually ``estimator(excitation)`` itself; data from elsewhere (e.g. a UFF file) at
-    other frequencies are compared with the model's estimate interpolated to them.
+    other frequencies are compared with the model's estimate interpolated to them. The model is driven from
+    the excitation's first sample, at rest; its estimate is taken from ``compare_from_s`` [s] on, as the
+    data's (a window of a record: the structure in the state the record's earlier part left it in).
     """
 
     data: FrequencyResponseData
@@ -85,6 +89,7 @@ class SimulatedFrequencyResponseCost:
     pairs: tuple[tuple[str, str], ...] = ()  #: (input, output) channels compared; () means every pair
     weights: np.ndarray | None = None  #: w[k, output, input] multiplying each log error (None: 1, eq. 4.17)
     name: str = "log-frf"
+    compare_from_s: float = 0.0  #: the model's response before this time [s] is not estimated from
 
     def __post_init__(self) -> None:
         pairs = measured_pairs(self.data, self.pairs)
@@ -97,8 +102,10 @@ class SimulatedFrequencyResponseCost:
         """The H1 estimate of ``model``'s response to the excitation, at the estimator's bins."""
         outs = sorted({o for _, o in self.pairs}, key=self.data.outputs.index)
         y = model.time_response(self.excitation.times_s, self.excitation.inputs, outputs=outs)
-        simulated = TimeHistory(self.excitation.times_s, self.excitation.inputs,
-                                {o: y[:, k] for k, o in enumerate(outs)}, source="the model's simulated response")
+        t = self.excitation.times_s
+        first = int(np.searchsorted(t, self.compare_from_s - 1e-9 * self.excitation.sample_time_s))
+        simulated = TimeHistory(t[first:], {k: v[first:] for k, v in self.excitation.inputs.items()},
+                                {o: y[first:, k] for k, o in enumerate(outs)}, source="the model's simulated response")
         return self.estimator(simulated)
 
     def residual(self, model) -> np.ndarray:

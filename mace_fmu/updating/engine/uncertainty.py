@@ -21,7 +21,8 @@ eigenvectors. Every stage names the method it used (``method``).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
+from typing import Sequence
 
 import numpy as np
 
@@ -30,6 +31,7 @@ from mace_fmu.updating.engine.residual_covariance import residual_covariance
 from mace_fmu.updating.engine.solve import UpdateResult
 
 Z95 = 1.959963984540054  #: two-sided 95 % quantile of the normal distribution
+Z95_ONE_SIDED = 1.6448536269514722  #: one-sided 95 % quantile: the interval of a parameter at a bound
 #: a parameter (or a combination) whose standard deviation exceeds this [%] is "not fixed by these data"
 DEFAULT_TOLERANCE_PERCENT = 5.0
 
@@ -68,6 +70,9 @@ class StageUncertainty:
     tolerance_percent: float  #: standard deviation below which a parameter counts as determined [%]
     method: str = "noise"  #: how the covariance was found: "noise" (sigma^2 (J^T J)^-1) or "residuals" (sandwich)
     method_text: str = ""  #: the method in words, for the report
+    #: name -> "lower" or "upper": a parameter the fit ended at that bound, its interval one-sided
+    #: (:func:`one_sided_at_bounds`)
+    at_bound: dict = field(default_factory=dict)
 
     @property
     def not_fixed(self) -> tuple[str, ...]:
@@ -168,6 +173,41 @@ def linearised_uncertainty(*, stage: str, names, values: dict, jacobian: np.ndar
                             method=method, method_text=method_text)
 
 
+def one_sided_at_bounds(stages: tuple[StageUncertainty, ...],
+                        at_bounds: Sequence[tuple[str, str]]) -> tuple[StageUncertainty, ...]:
+    """``stages`` with the interval of each parameter that ended at a bound made one-sided, as the verdict says.
+
+    The data ask for a value beyond the bound, so the value is the bound and no two-sided interval about it
+    holds: at a lower bound the 95 % interval runs from the bound to value x (1 + 1.645 sd), at an upper bound
+    from value x (1 - 1.645 sd) to the bound (the one-sided 95 % quantile of the same standard deviation).
+
+    Parameters
+    ----------
+    stages : tuple of StageUncertainty
+        From :func:`stage_uncertainty`.
+    at_bounds : sequence of (str, str)
+        (parameter, "lower" or "upper"): :attr:`~mace_fmu.updating.engine.solve.UpdateResult.at_bounds`.
+
+    Returns
+    -------
+    tuple of StageUncertainty
+        The same stages, each such parameter's ``interval_95`` one-sided and named in ``at_bound``.
+    """
+    sides = dict(at_bounds)
+    out = []
+    for st in stages:
+        here = {n: side for n, side in sides.items() if n in st.names}
+        if not here:
+            out.append(st)
+            continue
+        interval = dict(st.interval_95)
+        for n, side in here.items():
+            v, reach = st.values[n], abs(st.values[n]) * Z95_ONE_SIDED * st.standard_deviation_percent[n] / 100
+            interval[n] = (v, v + reach) if side == "lower" else (v - reach, v)
+        out.append(replace(st, interval_95=interval, at_bound={**st.at_bound, **here}))
+    return tuple(out)
+
+
 def format_uncertainty(stages: tuple[StageUncertainty, ...]) -> str:
     """The terminal table: value, standard deviation, 95 % interval, and what the data do not fix."""
     lines = []
@@ -182,6 +222,8 @@ def format_uncertainty(stages: tuple[StageUncertainty, ...]) -> str:
         lines.append(f"  {'parameter':<{width}} {'value':>13} {'sd %':>8}  95 % interval")
         for n in st.names:
             flag = "  not fixed by these data" if n in st.not_fixed else ""
+            if n in st.at_bound:
+                flag = f"  one-sided: at its {st.at_bound[n]} bound{flag}"
             lo, hi = st.interval_95[n]
             lines.append(f"  {n:<{width}} {st.values[n]:>13.6g} {st.standard_deviation_percent[n]:>8.3g}  "
                          f"[{lo:.6g}, {hi:.6g}]{flag}")
@@ -210,6 +252,8 @@ def uncertainty_toml(stages: tuple[StageUncertainty, ...]) -> str:
                   + "]",
                   "interval_95_low = [" + ", ".join(num(st.interval_95[n][0]) for n in st.names) + "]",
                   "interval_95_high = [" + ", ".join(num(st.interval_95[n][1]) for n in st.names) + "]",
+                  # "" two-sided; "lower"/"upper": the parameter ended at that bound, its interval one-sided from it
+                  "interval_95_at_bound = [" + ", ".join(q(st.at_bound.get(n, "")) for n in st.names) + "]",
                   "singular_values = [" + ", ".join(num(x) for x in st.singular_values) + "]",
                   "correlation = [" + ", ".join("[" + ", ".join(num(x) for x in row) + "]" for row in st.correlation)
                   + "]",

@@ -1,4 +1,5 @@
-"""Measured data files test labs write: time histories (CSV, npz), frequency responses (CSV, UFF 58), H1.
+"""Measured data files test labs write: time histories (CSV, npz, LabVIEW's lvm), frequency responses (CSV, UFF 58),
+H1.
 
 Signals are named as the model's and are in its units at the boundary (volts for MACE, N or m/s^2
 for a force input or an accelerometer without a gain); a channel map translates a data acquisition's
@@ -25,12 +26,13 @@ __all__ = ["Channel", "ChannelMap", "read_channel_map", "read_time_history", "wr
 
 def read_measured_data(path: str | Path, *, channel_map: ChannelMap | None = None,
                        sample_time_s: float | None = None) -> TimeHistory | FrequencyResponseData:
-    """A time history (``.npz``, CSV from ``time [s]``) or a frequency response (UFF, CSV from ``frequency [Hz]``).
+    """A time history (``.npz``, LabVIEW's ``.lvm``, CSV from ``time [s]``) or a frequency response (UFF, CSV from
+    ``frequency [Hz]``).
 
     Parameters
     ----------
     path : path
-        ``.npz``, ``.uff``, ``.unv`` or ``.csv`` (its first column says which).
+        ``.npz``, ``.lvm``, ``.uff``, ``.unv`` or ``.csv`` (its first column says which).
     channel_map : ChannelMap, optional
         Data channel -> model signal, role and unit.
     sample_time_s : float, optional
@@ -45,7 +47,7 @@ def read_measured_data(path: str | Path, *, channel_map: ChannelMap | None = Non
     suffix = path.suffix.lower()
     if suffix in (".uff", ".unv"):
         return read_frequency_response(path, channel_map=channel_map)
-    if suffix == ".npz":
+    if suffix in (".npz", ".lvm"):
         return read_time_history(path, channel_map=channel_map, sample_time_s=sample_time_s)
     if suffix == ".csv":
         if _first_label(path).startswith("frequency"):

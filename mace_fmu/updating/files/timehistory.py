@@ -4,35 +4,40 @@ from __future__ import annotations
 
 import csv
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 
 from mace_fmu.errors import MaceError
 from mace_fmu.updating.engine.measured import DataError, TimeHistory
-from mace_fmu.updating.files.channels import ChannelMap, check_present, format_label, parse_label, resolve
+from mace_fmu.updating.files.channels import ChannelMap, Label, check_present, format_label, parse_label, resolve
 from mace_fmu.util.atomic import atomic_path
 from mace_fmu.util.textfile import read_text
 
-TIME_SUFFIXES = (".csv", ".npz")
+TIME_SUFFIXES = (".csv", ".npz", ".lvm")
+#: what write_time_history writes (a LabVIEW measurement file is read only)
+WRITTEN_SUFFIXES = (".csv", ".npz")
 #: relative tolerance on the time step: the same as TimeHistory's uniform-spacing check
 STEP_RTOL = 1e-6
 
 
 def read_time_history(path: str | Path, *, channel_map: ChannelMap | None = None,
                       sample_time_s: float | None = None) -> TimeHistory:
-    """Measured inputs and outputs from ``.csv`` or ``.npz``; times [s], signals in the units their labels state.
+    """Measured inputs and outputs from ``.csv``, ``.npz`` or LabVIEW's ``.lvm``; times [s], signals in the units
+    their labels state.
 
     The first column (CSV) or array (npz) is ``time [s]``; each other one is labelled
     ``name [unit]``. Without a channel map the name carries the role, ``in:<signal>`` or
     ``out:<signal>``, and the unit travels with the data, to be checked against the model's where
     they meet it (an FMU update: the FMU's units); with a map the name is the data channel and the
     map gives signal, role and unit. ``sample_time_s``, when given, must be the file's time step.
-    Errors name the file, the channel and the row (CSV: the line; npz: the 0-based sample).
+    Errors name the file, the channel and the row (CSV: the line; npz: the 0-based sample). A LabVIEW
+    measurement file names its channels and units in its header (:mod:`~mace_fmu.updating.files.lvm`).
 
     Parameters
     ----------
     path : path
-        A ``.csv`` or ``.npz`` file.
+        A ``.csv``, ``.npz`` or ``.lvm`` file.
     channel_map : ChannelMap, optional
         Data channel -> model signal, role and unit.
     sample_time_s : float, optional
@@ -50,6 +55,10 @@ def read_time_history(path: str | Path, *, channel_map: ChannelMap | None = None
     """
     path = Path(path)
     suffix = path.suffix.lower()
+    if suffix == ".lvm":
+        from mace_fmu.updating.files.lvm import read_lvm_time_history
+
+        return read_lvm_time_history(path, channel_map=channel_map, sample_time_s=sample_time_s)
     if suffix == ".csv":
         labels, columns, lines, header_line = read_csv_columns(path)
         row_at = lambda sample: f"{path}:{lines[sample]}"  # noqa: E731
@@ -66,28 +75,39 @@ def read_time_history(path: str | Path, *, channel_map: ChannelMap | None = None
         raise MaceError(f"{header_at}: the first column is {labels[0]!r}, expected 'time [s]'")
     if time_label.unit != "s":
         raise MaceError(f"{header_at}: channel 'time': unit {time_label.unit!r}, expected 's'")
+    return history_of_columns(path, [parse_label(text, where=header_at) for text in labels[1:]], columns[0],
+                              columns[1:], channel_map=channel_map, sample_time_s=sample_time_s, header_at=header_at,
+                              row_at=row_at)
+
+
+def history_of_columns(path: Path, labels: list[Label], times_s: np.ndarray, columns: list[np.ndarray], *,
+                       channel_map: ChannelMap | None, sample_time_s: float | None,
+                       header_at: str | Callable[[str], str], row_at: Callable[[int], str]) -> TimeHistory:
+    """A file's channels (their parsed labels and columns) as a TimeHistory: each resolved through the channel
+    map (or its role prefix), the map's channels checked present, bad samples located by ``row_at`` (sample ->
+    the file and its line) and header errors by ``header_at`` (a place, or channel name -> place)."""
+    where = header_at if callable(header_at) else (lambda channel: header_at)  # noqa: E731
     inputs: dict[str, np.ndarray] = {}
     outputs: dict[str, np.ndarray] = {}
     units: dict[str, str] = {}
     found: set[str] = set()
     channel_of: dict[str, str] = {}
-    for text, values in zip(labels[1:], columns[1:]):
-        label = parse_label(text, where=header_at)
+    for label, values in zip(labels, columns):
         if label.name in found:
-            raise MaceError(f"{header_at}: channel {label.name!r} appears twice")
+            raise MaceError(f"{where(label.name)}: channel {label.name!r} appears twice")
         found.add(label.name)
-        signal, role, unit = resolve(label, channel_map=channel_map, where=header_at)
+        signal, role, unit = resolve(label, channel_map=channel_map, where=where(label.name))
         if role == "ignore":
             continue
         if signal in inputs or signal in outputs:
-            raise MaceError(f"{header_at}: signal {signal!r} comes from two channels ({channel_of[signal]!r} and "
-                            f"{label.name!r})")
+            raise MaceError(f"{where(label.name)}: signal {signal!r} comes from two channels ({channel_of[signal]!r} "
+                            f"and {label.name!r})")
         (inputs if role == "input" else outputs)[signal] = values
         units[signal] = unit
         channel_of[signal] = label.name
-    check_present(found, channel_map=channel_map, where=header_at)
+    check_present(found, channel_map=channel_map, where=where(""))
     try:
-        history = TimeHistory(columns[0], inputs, outputs, source=str(path), units=units)
+        history = TimeHistory(times_s, inputs, outputs, source=str(path), units=units)
     except DataError as exc:
         channel = "time" if exc.channel is None else channel_of.get(exc.channel, exc.channel)
         raise MaceError(f"{row_at(exc.row)}: channel {channel!r}: {exc.what}") from None
@@ -190,9 +210,9 @@ def write_time_history(history: TimeHistory, path: str | Path) -> Path:
     """
     path = Path(path)
     suffix = path.suffix.lower()
-    if suffix not in TIME_SUFFIXES:
-        raise MaceError(f"{path}: unknown time-history format {path.suffix!r} (expected one of "
-                        f"{', '.join(TIME_SUFFIXES)})")
+    if suffix not in WRITTEN_SUFFIXES:
+        raise MaceError(f"{path}: cannot write a time history as {path.suffix!r} (expected one of "
+                        f"{', '.join(WRITTEN_SUFFIXES)})")
     labels, columns = _labelled_columns(history)
     with atomic_path(path) as tmp:
         if suffix == ".csv":

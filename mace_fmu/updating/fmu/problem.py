@@ -9,16 +9,21 @@ from __future__ import annotations
 
 import math
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Mapping, Sequence
+
+import numpy as np
 
 from mace_fmu.errors import MaceError
 from mace_fmu.updating.engine.costs import Cost, WithPriors
 from mace_fmu.updating.engine.measured import FrequencyResponseData, TimeHistory
+from mace_fmu.updating.engine.periodic import periodic_excitation
 from mace_fmu.updating.engine.simulated_frf import H1Estimator
+from mace_fmu.updating.engine.solve import Bounds
 from mace_fmu.updating.fmu.model import FmuFamily, gain_parameter, read_fmu_interface
-from mace_fmu.updating.fmu.update import COST_KINDS, WEIGHTINGS, CostKind, Weighting, fmu_cost
+from mace_fmu.updating.fmu.update import (COST_KINDS, WEIGHTINGS, CostKind, Weighting, declared_bounds, fmu_cost,
+                                          record_from)
 
 
 @dataclass(frozen=True)
@@ -36,6 +41,8 @@ class FmuProblem:
     responses: tuple[FrequencyResponseData, ...] = ()  #: every measured frequency response, in the band
     #: what was made of the data before the update, said where it runs (a file's lines put on the analyser's grid)
     notes: tuple[str, ...] = ()
+    #: each updated parameter's range [FMU units]: the defaults by kind within the FMU's declared range, or given
+    bounds: Mapping[str, Bounds] = field(default_factory=dict)
 
 
 def fmu_problem(*, fmu: str | os.PathLike, data: Sequence[str | os.PathLike], names: Sequence[str],
@@ -44,7 +51,9 @@ def fmu_problem(*, fmu: str | os.PathLike, data: Sequence[str | os.PathLike], na
                 held_inputs: Sequence[str] = (), noise_rms_fraction: float | None = None,
                 gain_uncertainty: Mapping[str, float] | None = None,
                 bands_hz: Sequence[tuple[float, float]] = (), averages: int | None = None,
-                frf_floor: float | None = None) -> FmuProblem:
+                frf_floor: float | None = None, window_s: tuple[float, float] | None = None,
+                bounds: Mapping[str, tuple[float | None, float | None]] | None = None,
+                bounds_source: Mapping[str, str] | None = None) -> FmuProblem:
     """Read and check everything an FMU update needs; no simulation runs.
 
     Parameters
@@ -68,7 +77,9 @@ def fmu_problem(*, fmu: str | os.PathLike, data: Sequence[str | os.PathLike], na
         CSV mapping the data's channels to the FMU's signals (with units and, optionally, a
         ``gain_uncertainty_percent`` column).
     segment_s : float, optional
-        Time histories: H1 segment length [s] of the log-FRF cost (default 2 s).
+        Time histories: H1 segment length [s] of the log-FRF cost (default 2 s; for periodic inputs, the
+        shortest segment of whole periods that puts every line on a bin,
+        :mod:`~mace_fmu.updating.engine.periodic`).
     weighting : {"noise", "none"}, optional
         Log-FRF: each bin over its noise standard deviation (the default), or eq. 4.17 as printed. The
         noise of a time history's H1 is estimated from the record; that of a measured frequency response
@@ -84,13 +95,23 @@ def fmu_problem(*, fmu: str | os.PathLike, data: Sequence[str | os.PathLike], na
         of mean 1, so the stated uncertainty of the parameters includes the gains'.
     bands_hz : sequence of (float, float)
         Measured frequency responses alone: the bands [Hz] the cost compares, e.g. one about each
-        resonance (default: every frequency of the files).
+        resonance (default: every frequency of the files). Time histories: one band, the time cost's
+        zero-phase band-pass of the measured and the FMU's outputs (the FMU still driven by the measured
+        inputs as they are), or the log-FRF cost's H1 band.
     averages : int, optional
         Measured frequency responses alone: the averages behind their estimates, where the files do not
         state them (the coherence's noise needs them).
     frf_floor : float, optional
         Measured frequency responses alone: the error floor, a fraction of each output's response
         (default :data:`~mace_fmu.updating.engine.frf_noise.DEFAULT_FLOOR`).
+    window_s : (float, float), optional
+        Time histories: (START, END) [s] on each record's time axis. The FMU is driven from the record's first
+        sample to END, and compared (time) or estimated (log-frf) from START on: a record that starts
+        mid-stream (the structure already moving, which the FMU at rest cannot know) is compared from a START
+        past that transient.
+    bounds : mapping of str to (float or None, float or None), optional
+        name -> (low, high) [FMU units] replacing the default bounds (None keeps that side's);
+        ``bounds_source`` names where each came from (the option, the file) in errors.
 
     Returns
     -------
@@ -135,7 +156,8 @@ def fmu_problem(*, fmu: str | os.PathLike, data: Sequence[str | os.PathLike], na
         # what shapes an H1 estimate or a time record's noise has no meaning here: refused, never ignored
         unused = {"segment_s (--segment-s)": segment_s,
                   "noise_rms_fraction (--noise-rms-percent)": noise_rms_fraction,
-                  "held_inputs (--hold-input)": tuple(held_inputs) or None}
+                  "held_inputs (--hold-input)": tuple(held_inputs) or None,
+                  "window_s (--window)": window_s}
         given = [option for option, value in unused.items() if value is not None]
         if given:
             raise MaceError(f"{', '.join(given)}: for time histories; measured frequency responses given alone are "
@@ -143,17 +165,23 @@ def fmu_problem(*, fmu: str | os.PathLike, data: Sequence[str | os.PathLike], na
                             "each input is driven alone, so this has no effect: leave it out")
         return _frequency_response_problem(interface, responses, names=names, start=start, cost=cost,
                                            bands_hz=bands_hz, gain_uncertainty=gain_uncertainty, data=data,
-                                           weighting=weighting, averages=averages, floor=frf_floor)
+                                           weighting=weighting, averages=averages, floor=frf_floor,
+                                           bounds=bounds, bounds_source=bounds_source)
     frf_only = {"averages (--averages)": averages, "frf_floor (--frf-floor-percent)": frf_floor}
     given = [option for option, value in frf_only.items() if value is not None]
     if given:
         raise MaceError(f"{', '.join(given)}: for measured frequency responses given alone (the noise of a time "
                         "history's H1 is estimated from the record itself): leave it out")
-    segment_s = 2.0 if segment_s is None else segment_s
     weighting = "noise" if weighting is None else weighting
-    if bands_hz:
-        raise MaceError("a band (--band-hz) selects the frequencies of measured frequency responses given alone; "
-                        "with time histories the H1 estimate's band is the inputs'")
+    if len(bands_hz) > 1:
+        raise MaceError(f"--band-hz given {len(bands_hz)} times: with time histories one band (the time cost's "
+                        "band-pass, the log-FRF cost's H1 band); several bands select lines of frequency responses "
+                        "given alone")
+    band = tuple(float(x) for x in bands_hz[0]) if bands_hz else None
+    if band is not None:
+        from mace_fmu.updating.engine.band import check_band
+
+        band = check_band(band, sample_time_s=histories[0].sample_time_s, where="--band-hz")
     if len(responses) > 1 or (responses and len(histories) > 1):
         raise MaceError(f"give one or more time histories (each a test whose measured inputs drive the FMU) and, with "
                         f"a single one, at most one frequency response, or frequency responses alone; got "
@@ -182,7 +210,18 @@ def fmu_problem(*, fmu: str | os.PathLike, data: Sequence[str | os.PathLike], na
             raise MaceError(f"{test.source}: no channel for the FMU input(s) {', '.join(absent)}; record them, or "
                             "hold each at 0 explicitly (--hold-input NAME=0)")
     gains = _gain_priors(gain_uncertainty or {}, mapping, histories)
-    costs = [_test_cost(cost, test, frd, segment_s=segment_s, weighting=weighting) for test in histories]
+    windowed = [_windowed(test, window_s) for test in histories]
+    histories = [test for test, _ in windowed]
+    history = histories[0]
+    notes: list[str] = []
+    if window_s is not None:
+        notes += [f"{test.source}: compared from {start_s:g} s (the FMU driven from the record's first sample, "
+                  f"{test.times_s[0]:g} s)" for test, start_s in windowed]
+    if band is not None and cost == "time":
+        notes.append(f"the measured and the FMU's outputs band-passed to {band[0]:g}-{band[1]:g} Hz (zero phase; "
+                     "the FMU driven by the measured inputs as they are)")
+    costs = [_test_cost(cost, test, frd, segment_s=segment_s, weighting=weighting, compare_from_s=start_s,
+                        band_hz=band, notes=notes) for test, start_s in windowed]
     the_cost = costs[0] if len(costs) == 1 else _several_tests(costs, histories, noise_rms_fraction)
     family = FmuFamily(interface=interface, fixed=start, gain_outputs=tuple(gains))
     values = {n: start.get(n, interface.parameters[n]) for n in names}
@@ -193,14 +232,41 @@ def fmu_problem(*, fmu: str | os.PathLike, data: Sequence[str | os.PathLike], na
         values.update({g: 1.0 for g in family.gain_parameters})
     return FmuProblem(family=family, names=names, start=values, history=history,
                       frequency_data=frd, cost=the_cost, data_files=tuple(os.fspath(p) for p in data),
-                      histories=tuple(histories))
+                      histories=tuple(histories), notes=tuple(notes),
+                      bounds=declared_bounds(family, names, values, bounds, bounds_source))
+
+
+def _windowed(history: TimeHistory, window_s: tuple[float, float] | None) -> tuple[TimeHistory, float]:
+    """(the record cut after END, START) of ``--window START END``; (the record, its first time) without one.
+    A window outside the record, or of fewer than two samples, is refused naming the record's times."""
+    t = history.times_s
+    if window_s is None:
+        return history, float(t[0])
+    start_s, end_s = (float(x) for x in window_s)
+    span = f"{history.source}: the record runs from {t[0]:.9g} to {t[-1]:.9g} s"
+    if not (math.isfinite(start_s) and math.isfinite(end_s) and start_s < end_s):
+        raise MaceError(f"--window {start_s:g} {end_s:g}: expected START < END [s] on the record's time axis")
+    tiny = 1e-9 * history.sample_time_s
+    if start_s < t[0] - tiny or end_s > t[-1] + tiny:
+        raise MaceError(f"--window {start_s:g} {end_s:g}: {span}; the window must lie within it")
+    keep = t <= end_s + tiny
+    if np.count_nonzero(keep & (t >= start_s - tiny)) < 2:
+        raise MaceError(f"--window {start_s:g} {end_s:g}: fewer than two samples in it ({span}, sample time "
+                        f"{history.sample_time_s:g} s)")
+    if keep.all():
+        return history, start_s
+    return TimeHistory(t[keep], {k: v[keep] for k, v in history.inputs.items()},
+                       {k: v[keep] for k, v in history.outputs.items()},
+                       source=f"{history.source} (to {end_s:g} s)", units=history.units), start_s
 
 
 def _frequency_response_problem(interface, responses: list[FrequencyResponseData], *, names: tuple[str, ...],
                                 start: dict[str, float], cost: CostKind, bands_hz: Sequence[tuple[float, float]],
                                 gain_uncertainty: Mapping[str, float] | None,
                                 data: Sequence[str | os.PathLike], weighting: Weighting | None,
-                                averages: int | None, floor: float | None) -> FmuProblem:
+                                averages: int | None, floor: float | None,
+                                bounds: Mapping[str, tuple[float | None, float | None]] | None,
+                                bounds_source: Mapping[str, str] | None) -> FmuProblem:
     """An update on measured frequency responses alone: each file's FRFs in the band against the FMU's, from
     periodic runs at exactly the files' frequencies, each log error over its noise (``weighting`` "noise": from
     the coherence and the averages, :mod:`~mace_fmu.updating.engine.frf_noise`) or unweighted ("none"); by
@@ -233,10 +299,12 @@ def _frequency_response_problem(interface, responses: list[FrequencyResponseData
     the_cost = costs[0] if len(costs) == 1 else SeveralTests(tests=tuple(costs), weights=(1.0,) * len(costs),
                                                                labels=tuple(frd.source for frd in in_band))
     family = FmuFamily(interface=interface, fixed=start)
-    return FmuProblem(family=family, names=names, start={n: start.get(n, interface.parameters[n]) for n in names},
+    values = {n: start.get(n, interface.parameters[n]) for n in names}
+    return FmuProblem(family=family, names=names, start=values,
                       history=None, frequency_data=in_band[0], cost=the_cost,
                       data_files=tuple(os.fspath(p) for p in data), responses=tuple(in_band),
-                      notes=tuple(f"{frd.source}: {probe.note}" for frd, probe in zip(in_band, probes) if probe.note))
+                      notes=tuple(f"{frd.source}: {probe.note}" for frd, probe in zip(in_band, probes) if probe.note),
+                      bounds=declared_bounds(family, names, values, bounds, bounds_source))
 
 
 def _in_bands(frd: FrequencyResponseData, bands_hz: Sequence[tuple[float, float]]) -> FrequencyResponseData:
@@ -298,20 +366,44 @@ def _noise_per_residual(cost: Cost, history: TimeHistory, noise_rms_fraction: fl
         if floor is None:
             raise MaceError(f"{history.source}: a gain prior weighs against the measurement noise, which cannot be "
                             "estimated from this test (its inputs fill the band): give --noise-rms-percent")
-        return math.sqrt(floor.expected_cost / sum(len(v) for v in history.outputs.values()))
+        return math.sqrt(floor.expected_cost / sum(len(v) for v in cost.compared.outputs.values()))
     raise MaceError("a gain prior weighs against the measurement noise: use the time cost or the noise-weighted "
                     "log-frf cost (--weighting noise)")
 
 
-def _test_cost(cost: CostKind, history: TimeHistory, frd: FrequencyResponseData | None, *, segment_s: float,
-               weighting: Weighting) -> Cost:
-    """The cost of one test (its time history, and a measured frequency response if given)."""
-    estimator = H1Estimator(segment_length=int(round(segment_s / history.sample_time_s)),
+def _test_cost(cost: CostKind, history: TimeHistory, frd: FrequencyResponseData | None, *, segment_s: float | None,
+               weighting: Weighting, compare_from_s: float, band_hz: tuple[float, float] | None,
+               notes: list[str]) -> Cost:
+    """The cost of one test (its time history, and a measured frequency response if given), compared from
+    ``compare_from_s`` [s]; ``band_hz``: the time cost's band-pass, the log-FRF cost's H1 band. A periodic
+    excitation's H1 is taken at its lines with segments of whole periods (said in ``notes``)."""
+    if cost == "time":
+        return fmu_cost(cost, history=history, compare_from_s=compare_from_s, band_hz=band_hz)
+    dt = history.sample_time_s
+    estimator = H1Estimator(segment_length=int(round((2.0 if segment_s is None else segment_s) / dt)),
                             band_hz=(float(frd.frequencies_hz[0]), float(frd.frequencies_hz[-1])) if frd is not None
                             else None)
-    if cost == "log-frf" and frd is None:
-        estimator = H1Estimator(segment_length=estimator.segment_length, band_hz=_default_band(history))
-    return fmu_cost(cost, history=history, frequency_data=frd, estimator=estimator,
+    if frd is None:
+        periodic = periodic_excitation(record_from(history, compare_from_s))
+        if periodic is not None:
+            length = periodic.segment(given_s=segment_s, where=f"{history.source}: ")
+            lines = periodic.lines_hz if band_hz is None else periodic.lines_hz[
+                (periodic.lines_hz >= band_hz[0]) & (periodic.lines_hz <= band_hz[1])]
+            if lines.size == 0:
+                raise MaceError(f"--band-hz {band_hz[0]:g} {band_hz[1]:g}: none of the excitation's lines in it "
+                                f"({periodic.describe()})")
+            estimator = H1Estimator(segment_length=length, window="boxcar", overlap=0.0,
+                                    lines_hz=tuple(float(x) for x in lines))
+            notes.append(f"{history.source}: periodic inputs, {periodic.describe()}: H1 at the lines, "
+                         f"{length}-sample segments ({length * dt:.6g} s, {length / periodic.period_samples:.4g} "
+                         "periods), rectangular window")
+        else:
+            estimator = H1Estimator(segment_length=estimator.segment_length,
+                                    band_hz=band_hz if band_hz is not None else _default_band(history))
+    elif band_hz is not None:
+        raise MaceError("--band-hz: with a measured frequency response beside the time history its frequencies are "
+                        "the band; leave --band-hz out")
+    return fmu_cost(cost, history=history, frequency_data=frd, estimator=estimator, compare_from_s=compare_from_s,
                     weighting=weighting if frd is None or _same_bins(frd, history, estimator) else "none")
 
 
@@ -329,7 +421,7 @@ def _several_tests(costs: list[Cost], histories: list[TimeHistory], noise_rms_fr
             if floor is None:
                 raise MaceError(f"{test.source}: the noise of this test cannot be estimated (its inputs fill the "
                                 "band); several tests are weighed by their noise: give --noise-rms-percent")
-            n = sum(len(v) for v in test.outputs.values())
+            n = sum(len(v) for v in c.compared.outputs.values())
             weights.append(1.0 / (floor.expected_cost / n) ** 0.5)
         else:
             weights.append(1.0)

@@ -17,6 +17,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, Literal, Mapping, Sequence
 
+import numpy as np
+
 from mace_fmu.errors import MaceError
 from mace_fmu.parameters.sets import Provenance, now_utc, toml_key, toml_value, tool_version
 from mace_fmu.updating.engine.bounds import default_bounds
@@ -44,22 +46,30 @@ FMU_SETTINGS = UpdateSettings(method="cost-sensitivity", perturbation="full", pe
 
 def fmu_cost(kind: CostKind, *, history: TimeHistory, frequency_data: FrequencyResponseData | None = None,
              estimator: H1Estimator | None = None, pairs: Sequence[tuple[str, str]] = (),
-             weighting: Weighting = "noise") -> Cost:
+             weighting: Weighting = "noise", compare_from_s: float | None = None,
+             band_hz: tuple[float, float] | None = None) -> Cost:
     """The cost ``kind`` of an FMU against ``history`` (measured inputs and outputs).
 
-    ``time``: outputs normalised by their RMS (eq. 4.3). ``log-frf``: ``frequency_data`` (default: the
-    ``estimator``'s H1 of ``history``) against the same estimator's H1 of the FMU's response to the
+    ``time``: outputs normalised by their RMS (eq. 4.3), through the zero-phase band-pass ``band_hz`` where
+    given (:class:`~mace_fmu.updating.engine.costs.TimeResponseCost`). ``log-frf``: ``frequency_data`` (default:
+    the ``estimator``'s H1 of ``history``) against the same estimator's H1 of the FMU's response to the
     measured inputs, over ``pairs`` (default: the principal pairs, same axis and X to Y, where the names
     say the axis; else every pair). ``weighting``
     "noise" divides each log error by its standard deviation estimated from ``history`` (bins where
-    the measurement noise buries the response weigh little), "none" is eq. 4.17 as printed.
+    the measurement noise buries the response weigh little), "none" is eq. 4.17 as printed. The FMU is
+    driven from the record's first sample; the errors (time) or the estimates (log-frf) are taken from
+    ``compare_from_s`` [s] on (default: the first sample).
     """
+    start_s = float(history.times_s[0]) if compare_from_s is None else float(compare_from_s)
     if kind == "time":
-        return TimeResponseCost(history)
+        return TimeResponseCost(history, compare_from_s=start_s, band_hz=band_hz)
     if kind != "log-frf":
         raise MaceError(f"cost must be one of {', '.join(COST_KINDS)}, got {kind!r}")
+    if band_hz is not None:
+        raise MaceError("a band-pass is the time cost's; the log-FRF cost compares the estimator's band")
     if estimator is None:
         raise MaceError("the log-FRF cost needs an H1 estimator (segment length, window, band)")
+    whole, history = history, record_from(history, start_s)
     data = frequency_data if frequency_data is not None else estimator(history)
     chosen = tuple(pairs) or principal_pairs(data.inputs, data.outputs) or \
         tuple((i, o) for i in data.inputs for o in data.outputs)
@@ -69,13 +79,23 @@ def fmu_cost(kind: CostKind, *, history: TimeHistory, frequency_data: FrequencyR
     if weighting == "noise":
         weights = log_h1_weights(history, data, segment_length=estimator.segment_length, window=estimator.window,
                                  overlap=estimator.overlap)
-    return SimulatedFrequencyResponseCost(data=data, excitation=history, estimator=estimator, pairs=chosen,
-                                          weights=weights)
+    return SimulatedFrequencyResponseCost(data=data, excitation=whole, estimator=estimator, pairs=chosen,
+                                          weights=weights, compare_from_s=start_s)
+
+
+def record_from(history: TimeHistory, start_s: float) -> TimeHistory:
+    """The samples of ``history`` from ``start_s`` [s] on (itself when that is its first)."""
+    first = int(np.searchsorted(history.times_s, start_s - 1e-9 * history.sample_time_s))
+    if first == 0:
+        return history
+    return TimeHistory(history.times_s[first:], {k: v[first:] for k, v in history.inputs.items()},
+                       {k: v[first:] for k, v in history.outputs.items()},
+                       source=f"{history.source} (from {start_s:g} s)", units=history.units)
 
 
 def update_fmu(*, family: FmuFamily, cost: Cost, start: Mapping[str, float], stages: Sequence[Sequence[str]],
                settings: UpdateSettings = FMU_SETTINGS, runner: Callable = map,
-               progress: ProgressCallback | None = None) -> UpdateResult:
+               progress: ProgressCallback | None = None, bounds: Mapping[str, Bounds] | None = None) -> UpdateResult:
     """Update the FMU parameters of ``stages`` from ``start`` to lower ``cost``, stage after stage.
 
     Parameters
@@ -95,6 +115,8 @@ def update_fmu(*, family: FmuFamily, cost: Cost, start: Mapping[str, float], sta
         :class:`~mace_fmu.util.runner.DaskRunner`).
     progress : callable, optional
         Called with a progress step after each outer iteration.
+    bounds : mapping of str to Bounds, optional
+        The range of each parameter (default, and for any name it leaves out: :func:`declared_bounds`).
 
     Returns
     -------
@@ -104,8 +126,9 @@ def update_fmu(*, family: FmuFamily, cost: Cost, start: Mapping[str, float], sta
 
     Notes
     -----
-    Bounds by kind of name: moduli x0.5-1.5, delays x0.2-3, others x0.2-5, each within the range the FMU
-    declares for the parameter.
+    Default bounds by kind of name (:func:`~mace_fmu.updating.engine.bounds.default_bounds`, relative to the
+    start value): moduli and masses x0.5-1.5, springs x0.2-5, delays x0.2-3, damping ratios x0.1-4 (at most
+    0.95), others x0.2-5, each within the range the FMU declares for the parameter.
     """
     names = [n for s in stages for n in s]
     if not names:
@@ -131,18 +154,41 @@ def update_fmu(*, family: FmuFamily, cost: Cost, start: Mapping[str, float], sta
                         + "; ".join(outside))
     ship_fmu(family.interface, runner)  # the workers read the FMU's bytes, not the client's path
     plan = [Stage(name=f"stage {k + 1}", parameters=tuple(s)) for k, s in enumerate(stages)]
-    return update(family, cost, start=dict(start), stages=plan, bounds=declared_bounds(family, names, start),
-                  settings=settings, runner=runner, progress=progress)
+    chosen = {**declared_bounds(family, names, start), **{n: b for n, b in (bounds or {}).items() if n in names}}
+    return update(family, cost, start=dict(start), stages=plan, bounds=chosen, settings=settings, runner=runner,
+                  progress=progress)
 
 
-def declared_bounds(family: FmuFamily, names: Sequence[str], start: Mapping[str, float]) -> dict[str, Bounds]:
+def declared_bounds(family: FmuFamily, names: Sequence[str], start: Mapping[str, float],
+                    given: Mapping[str, tuple[float | None, float | None]] | None = None,
+                    where: Mapping[str, str] | None = None) -> dict[str, Bounds]:
     """:func:`~mace_fmu.updating.engine.bounds.default_bounds` within the FMU's declared ranges: a step never
     asks the FMU for a value it refuses (a MACE FMU's moduli and springs: 0.7 to 1.5 x nominal, where its
-    parameter route was validated against full re-solves)."""
+    parameter route was validated against full re-solves).
+
+    ``given``: name -> (low, high) [FMU units] a user states instead (None keeps that side's default); each
+    must hold the start value strictly inside and lie within the FMU's declared range, else a MaceError naming
+    ``where[name]`` (the option or file that gave it)."""
     out = {}
     for name, bound in default_bounds(names, start).items():
         low, high = family.interface.ranges.get(name, (-math.inf, math.inf))
         out[name] = dataclasses.replace(bound, lower=max(bound.lower, low), upper=min(bound.upper, high))
+    for name, (lower, upper) in (given or {}).items():
+        at = (where or {}).get(name, "bounds")
+        if name not in out:
+            raise MaceError(f"{at}: {name!r} is not updated (the parameters updated: {', '.join(names)})")
+        low, high = family.interface.ranges.get(name, (-math.inf, math.inf))
+        lower = out[name].lower if lower is None else float(lower)
+        upper = out[name].upper if upper is None else float(upper)
+        unit = family.interface.units.get(name, "")
+        if not lower < start[name] < upper:
+            raise MaceError(f"{at}: {name} bounds [{lower:.6g}, {upper:.6g}] {unit} do not hold its start value "
+                            f"{start[name]:.6g} strictly inside")
+        if lower < low or upper > high:
+            raise MaceError(f"{at}: {name} bounds [{lower:.6g}, {upper:.6g}] {unit} leave the range "
+                            f"[{low:.6g}, {high:.6g}] {family.interface.path} declares for it (the FMU refuses "
+                            "values outside)")
+        out[name] = dataclasses.replace(out[name], lower=lower, upper=upper)
     return out
 
 

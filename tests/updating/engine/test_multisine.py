@@ -48,8 +48,21 @@ def test_the_probe_gives_the_state_space_response_at_every_line(frame):
 
 
 def test_frequencies_no_period_holds_are_refused():
-    with pytest.raises(MaceError, match=r"not whole multiples of 0.1 Hz: no periodic signal has all of them"):
-        multisine_probe(np.array([1.0, 1.1, 1.25]))
+    with pytest.raises(MaceError, match=r"not whole multiples of one spacing \(the smallest gap 0.1 Hz, nor any "
+                                        r"fraction of it down to .* Hz\): no periodic signal has all of them"):
+        multisine_probe(np.array([1.0, 1.1, 1.2 + 0.01 * np.sqrt(2.0)]))
+
+
+@pytest.mark.parametrize("precision", [0.0, 5e-6])
+def test_lines_whose_smallest_gap_is_several_steps_are_a_multisine_of_the_finer_step(precision):
+    """A 10 Hz multisine's lines at 100, 120 and 150 Hz (issue 48): multiples of 10 Hz, two and three steps apart;
+    the old code took the smallest gap, 20 Hz, for the step and refused 150 Hz. 1.0, 1.1 and 1.25 Hz likewise
+    are multiples of 0.05 Hz (a 20 s period)."""
+    for lines, step in (([100.0, 120.0, 150.0], 10.0), ([1.0, 1.1, 1.25], 0.05)):
+        probe = multisine_probe(np.array(lines), precision=precision)
+        assert probe.period_s == pytest.approx(1.0 / step, rel=1e-9)
+        np.testing.assert_array_equal(probe.bins, np.rint(np.array(lines) / step).astype(int))
+        np.testing.assert_allclose(probe.frequencies_hz, lines, rtol=1e-12)
 
 
 def test_an_h1_estimate_read_back_from_uff_58_is_probed_on_the_analyser_s_grid(tmp_path):
@@ -86,7 +99,8 @@ def test_lines_off_the_grid_by_more_than_their_precision_are_still_refused():
     grid = np.arange(6, 308) * 0.1953125
     stated = np.array([float(f"{x:13.5e}") for x in grid])
     stated[150] *= 1 + 2e-5  # four times what six digits can do
-    with pytest.raises(MaceError, match=r"not whole multiples of 0.19\d* Hz: no periodic signal has all of them "
+    with pytest.raises(MaceError, match=r"not whole multiples of one spacing \(the smallest gap 0.19\d* Hz, nor any "
+                                        r"fraction .*\): no periodic signal has all of them "
                                         r"\(.*more than its precision 5e-06 allows; give the data on a uniform grid\)"):
         multisine_probe(stated, precision=5e-6)
     assert multisine_probe(grid).note == ""  # lines on the grid are taken as they are

@@ -583,7 +583,7 @@ def test_uff_incomplete_or_inconsistent_matrices_name_dataset_and_channels(tmp_p
 
 def test_unknown_formats_and_missing_files_are_named(tmp_path):
     assert _error(lambda: read_time_history(tmp_path / "run.mat")) == \
-        f"{tmp_path / 'run.mat'}: unknown time-history format '.mat' (expected one of .csv, .npz)"
+        f"{tmp_path / 'run.mat'}: unknown time-history format '.mat' (expected one of .csv, .npz, .lvm)"
     assert _error(lambda: read_measured_data(tmp_path / "run.tdms")).startswith(
         f"{tmp_path / 'run.tdms'}: unknown measured-data format '.tdms'")
     assert _error(lambda: read_time_history(tmp_path / "gone.csv")) == f"{tmp_path / 'gone.csv'}: no such file"
