@@ -1,5 +1,5 @@
 """CHOLMOD's factorisation and solves, and the eigen-solution they serve, on a 100k-DOF lattice: with the BLAS
-cvxopt's wheels link (``--blas shipped``) and with the one ``mace_fmu.fe.cholmod`` chooses (``--blas chosen``).
+cvxopt's wheels link (``--blas shipped``) and with the one ``mace_fmu.sparse.cholmod`` chooses (``--blas chosen``).
 
 Run by hand: ``python benchmarks/bench_cholmod.py [--size wide100k] [--eigen]``; each BLAS in its own process
 (the choice is made once, when CHOLMOD loads). Paste the tables into benchmarks/RESULTS.md with the machine,
@@ -9,7 +9,7 @@ bench_fe_scale.py), clamped base, sigma as the modal solution takes it.
 Columns: the factorisation [s]; ms per right-hand-side column for blocks of 1, 8, 16 and 32 columns solved in
 one ``cholmod_l_solve`` call, the same blocks shared between two threads (16 and 32), and cvxopt's own
 ``cholmod.solve`` (column by column) on 16; the same matrix as two substructures on two cores
-(mace_fmu.fe.substructures, forced: their analyses, factors and interface [s], ms a column for 16, and the
+(mace_fmu.sparse.substructures, forced: their analyses, factors and interface [s], ms a column for 16, and the
 largest difference of their solution from the whole factor's, relative to its largest entry); with ``--eigen`` the 50 lowest modes by the block Lanczos and by
 ARPACK's single-vector Lanczos on the same factor (columns solved, seconds, largest relative difference of
 the eigenvalues).
@@ -55,11 +55,11 @@ def run_one(size: str, blas: str, eigen: bool) -> dict:
     """In this process: the timings for one BLAS."""
     import numpy as np
 
-    from mace_fmu.fe import cholmod
+    from mace_fmu.sparse import cholmod
 
     if blas == "shipped":
         cholmod._prepare_blas = lambda: None  # CHOLMOD on the BLAS its wheel links
-    from mace_fmu.fe.ordering import _symbolic, analyse
+    from mace_fmu.sparse.ordering import _symbolic, analyse
 
     shifted, k, m, sigma, grids = shifted_matrix(size)
     out = {"size": size, "blas": blas, "rows": shifted.shape[0]}
@@ -81,7 +81,7 @@ def run_one(size: str, blas: str, eigen: bool) -> dict:
     out["one_call_ms"] = {w: per_column_ms(lambda b: solve._solve_block(b, solve._commons[0]), w) for w in (1, 8, 16, 32)}
     out["two_threads_ms"] = {w: per_column_ms(solve, w) for w in (16, 32)}
     out["cvxopt_ms"] = per_column_ms(solve._cvxopt_solve, 16)
-    from mace_fmu.fe.substructures import substructured_cholesky
+    from mace_fmu.sparse.substructures import substructured_cholesky
 
     t0 = time.perf_counter()
     halves = substructured_cholesky(shifted, analysis, min_factor_entries=0)
@@ -93,8 +93,8 @@ def run_one(size: str, blas: str, eigen: bool) -> dict:
     if eigen:
         from scipy.sparse.linalg import LinearOperator, eigsh
 
-        from mace_fmu.fe.lanczos import lowest_modes
         from mace_fmu.fe.modal import LANCZOS_TOLERANCE
+        from mace_fmu.sparse.lanczos import lowest_modes
 
         t0 = time.perf_counter()
         block = lowest_modes(stiffness=k, mass=m, solve=solve, shift=sigma, count=50, tolerance=LANCZOS_TOLERANCE,

@@ -75,7 +75,7 @@ def write_deck(size: str, kind: str, folder: Path) -> Path:
 
 def rcm_only() -> None:
     """Make the factorisations take reverse Cuthill-McKee's order whatever the matrix (the core before issue 35)."""
-    from mace_fmu.fe import factor, ordering
+    from mace_fmu.sparse import factor, ordering
 
     chosen = factor.analyse
 
@@ -91,9 +91,9 @@ def fill_of(deck: object, kind: str) -> dict:
     """The ordering the factorisation of K - sigma M takes and each candidate's factor entries per DOF."""
     import numpy as np
 
-    from mace_fmu.fe import factor
     from mace_fmu.fe.assembly import assemble
     from mace_fmu.fe.constraints import build_constraints
+    from mace_fmu.sparse import factor
 
     model = assemble(deck)
     constraints = build_constraints(deck, model.dofs, model.cd_frames, spc_set=1, mpc_set=None)

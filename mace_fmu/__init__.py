@@ -27,7 +27,8 @@ The packages follow the same flow, each with its own ``__all__``: :mod:`mace_fmu
 :mod:`mace_fmu.iomodel` (volts-volts state-space models), :mod:`mace_fmu.fmu` and :mod:`mace_fmu.ssp`
 (FMUs and SSP packages), :mod:`mace_fmu.updating` (models updated from test data), :mod:`mace_fmu.zero_g`
 (the 0-g prediction and its robustness), :mod:`mace_fmu.control_studies` (thesis Appendix A),
-:mod:`mace_fmu.cli` (the ``mace-fmu`` command); :mod:`mace_fmu.util` holds what they share.
+:mod:`mace_fmu.cli` (the ``mace-fmu`` command); :mod:`mace_fmu.sparse` is the sparse solver (linear algebra
+only: factors and the lowest eigenpairs of large matrices) and :mod:`mace_fmu.util` holds what they share.
 """
 
 from __future__ import annotations

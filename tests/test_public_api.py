@@ -21,9 +21,10 @@ def test_importing_the_package_loads_no_heavy_dependency():
 
 
 #: the packages in the order of the data flow: each may import only from packages before it (the
-#: command line, last, from all). util and errors are shared by every stage.
-STAGES = ("errors", "util", "deck", "structure", "parameters", "fe", "nastran_modes", "iomodel", "thesis", "fmu",
-          "ssp", "updating", "control_studies", "zero_g", "cli")
+#: command line, last, from all). util and errors are shared by every stage; sparse, the sparse solver, is
+#: linear algebra that needs neither decks nor elements.
+STAGES = ("errors", "util", "sparse", "deck", "structure", "parameters", "fe", "nastran_modes", "iomodel", "thesis",
+          "fmu", "ssp", "updating", "control_studies", "zero_g", "cli")
 
 
 def _imports_between_stages() -> list[tuple[str, str, str]]:
@@ -56,6 +57,18 @@ def test_every_stage_imports_only_earlier_stages():
     assert backwards == []
 
 
+def test_the_sparse_solver_is_reached_through_its_public_names_only():
+    """mace_fmu.sparse is a boundary: the other stages import what its ``__all__`` declares (``factorize``,
+    ``lowest_modes``) from the package, never one of its modules, so that its inside (CHOLMOD's structures,
+    the orderings, the substructures) can change without them."""
+    import mace_fmu.sparse
+
+    edges = [(a, b) for a, b in _imports_between_stages() if _stage(b) == "sparse" and _stage(a) != "sparse"]
+    assert {a for a, _ in edges} >= {"mace_fmu.fe.modal", "mace_fmu.fe.preload"}
+    assert [(a, b) for a, b in edges if b != "mace_fmu.sparse"] == []
+    assert set(mace_fmu.sparse.__all__) == {"factorize", "lowest_modes", "LanczosModes"}
+
+
 def test_every_package_lists_its_public_names_and_each_resolves():
     import importlib
     import pkgutil
@@ -63,7 +76,8 @@ def test_every_package_lists_its_public_names_and_each_resolves():
     import mace_fmu
 
     packages = ["mace_fmu"] + [m.name for m in pkgutil.walk_packages(mace_fmu.__path__, "mace_fmu.") if m.ispkg]
-    assert {"mace_fmu.fe", "mace_fmu.updating", "mace_fmu.zero_g.robust", "mace_fmu.fmu.native"} <= set(packages)
+    assert {"mace_fmu.fe", "mace_fmu.sparse", "mace_fmu.updating", "mace_fmu.zero_g.robust",
+            "mace_fmu.fmu.native"} <= set(packages)
     for name in packages:
         package = importlib.import_module(name)
         assert package.__doc__ and package.__all__, name

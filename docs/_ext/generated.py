@@ -30,7 +30,7 @@ PACKAGES = ("mace_fmu", "mace_fmu.deck", "mace_fmu.deck.parsers", "mace_fmu.stru
             "mace_fmu.ssp",
             "mace_fmu.updating", "mace_fmu.updating.engine", "mace_fmu.updating.files", "mace_fmu.updating.mace",
             "mace_fmu.updating.fmu", "mace_fmu.updating.modal", "mace_fmu.updating.sample", "mace_fmu.control_studies", "mace_fmu.zero_g",
-            "mace_fmu.zero_g.robust", "mace_fmu.util", "mace_fmu.cli")
+            "mace_fmu.zero_g.robust", "mace_fmu.sparse", "mace_fmu.util", "mace_fmu.cli")
 
 #: the commands whose printed tables stand beside the thesis: (title, argv, what it shows)
 THESIS_COMMANDS = (
@@ -69,8 +69,9 @@ def api_pages() -> None:
     index = [_title("API reference"), "",
              "Every package lists its public names in ``__all__``; these pages are generated from those lists. "
              "The packages follow the data flow: deck, structure, parameters, finite elements, input-output "
-             "models, FMUs and SSP packages, updating, Appendix A studies, the 0-g prediction; ``util`` holds what "
-             "they share.", "", ".. toctree::", "   :maxdepth: 1", ""]
+             "models, FMUs and SSP packages, updating, Appendix A studies, the 0-g prediction; ``sparse`` is the "
+             "sparse solver the finite elements use, ``util`` holds what they share.", "",
+             ".. toctree::", "   :maxdepth: 1", ""]
     home = {}  # public name -> the package whose page documents it: the deepest that exports it
     stubs = set()  # the autosummary stubs the pages ask for: "package.Name"
     for name in sorted(PACKAGES, key=lambda package: package.count(".")):

@@ -23,8 +23,7 @@ from scipy import sparse
 from mace_fmu.errors import MaceError
 from mace_fmu.fe.constraints import Constraints
 from mace_fmu.fe.dofs import DofMap
-from mace_fmu.fe.factor import factorize
-from mace_fmu.fe.lanczos import lowest_modes
+from mace_fmu.sparse import factorize, lowest_modes
 
 MASSLESS_RELATIVE_TOLERANCE = 1e-12
 #: Largest number of independent DOFs solved densely (every mode at once); above it the sparse route.
@@ -210,7 +209,7 @@ def _positive_definite(m: np.ndarray) -> bool:
 
 def _sparse_modes(k: sparse.csr_array, m: sparse.csr_array, constraints: Constraints, *, massive: int,
                   up_to_hz: float | None, count: int | None) -> tuple[np.ndarray, np.ndarray] | None:
-    """The lowest modes by block shift-invert Lanczos (mace_fmu.fe.lanczos) about a small negative shift:
+    """The lowest modes by block shift-invert Lanczos (mace_fmu.sparse.lanczos) about a small negative shift:
     (K - sigma M)^-1 M maps every eigenvalue above the shift, rigid-body modes included, to a large one
     in order, and the massless DOFs' infinite eigenvalues to zero, so they need no condensation. With
     ``count`` that many are found at least; the Krylov space grows until one lies above ``up_to_hz`` too.

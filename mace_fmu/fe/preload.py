@@ -24,8 +24,8 @@ from mace_fmu.fe.assembly import FEModel
 from mace_fmu.fe.constraints import Constraints
 from mace_fmu.fe.corotational import (BarState, bar_dof_indices, deformation_jacobian, internal_force, material_tangent,
                                       rotation_matrix, tangent, tangent_parts)
-from mace_fmu.fe.factor import factorize
 from mace_fmu.fe.modal import DENSE_MAX_DOF
+from mace_fmu.sparse import factorize
 from mace_fmu.util.progress import ProgressCallback, Step
 
 PreloadKind = Literal["large", "linear"]

@@ -46,7 +46,6 @@ from mace_fmu.errors import MaceError
 from mace_fmu.fe.assembly import FEModel, bar_section, conm2_mass
 from mace_fmu.fe.beam import natural_stiffness
 from mace_fmu.fe.corotational import BarState, material_tangent
-from mace_fmu.fe.factor import factorize
 from mace_fmu.fe.modal import Modes
 from mace_fmu.fe.modes import gravity_field
 from mace_fmu.fe.preload import (Preload, geometric_stiffness, linear_preload_solver, linear_tangent_sensitivity,
@@ -55,6 +54,7 @@ from mace_fmu.iomodel.modal_ss import modal_data
 from mace_fmu.iomodel.volts import VoltsModel
 from mace_fmu.parameters.kinds import MASS, MODULUS, SPRING
 from mace_fmu.parameters.sets import parameter_names
+from mace_fmu.sparse import factorize
 from mace_fmu.util.frequency import ZERO_HZ
 
 _RELATIVE_STEP = 1e-3  # the material stiffness is linear in E and k: the difference quotient is exact

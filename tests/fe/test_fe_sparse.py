@@ -112,8 +112,8 @@ def test_the_cholesky_and_the_lu_solve_alike_and_an_indefinite_matrix_falls_back
     """CHOLMOD's L L^T (in the ordering chosen by fill) and SuperLU's LU give the same x to rounding; a matrix that is
     not positive definite is refused by the Cholesky and solved by the LU all the same."""
     pytest.importorskip("cvxopt")
-    from mace_fmu.fe.factor import _cholesky, factorize
-    from mace_fmu.fe.ordering import analyse
+    from mace_fmu.sparse.factor import _cholesky, factorize
+    from mace_fmu.sparse.ordering import analyse
 
     definite = _tower_matrix(-1.0)
     b = np.random.default_rng(3).standard_normal(definite.shape[0])

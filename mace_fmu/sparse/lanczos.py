@@ -9,11 +9,10 @@ the M inner product) gives Ritz values theta = 1 / (lambda - sigma) and their re
 further solve.
 
 Why blocks: at 100k DOFs a solve is a pass over a factor of up to a gigabyte, and its cost is the
-reading, not the arithmetic. CHOLMOD solving 16 columns in one pass costs 15 ms a column on the wide
-lattice against 110 ms for one column alone (mace_fmu.fe.cholmod). A block Krylov space needs more
-vectors than ARPACK's single-vector one for the same modes (288 columns against 128 for the wide
-lattice's 50, both to a residual of 1e-8), but they cost a seventh each: 4 s of solves against 14 s
-(benchmarks/RESULTS.md, "A BLAS for CHOLMOD and block solves").
+reading, not the arithmetic: CHOLMOD solves a block of columns in one pass (mace_fmu.sparse.cholmod).
+A block Krylov space needs more vectors than ARPACK's single-vector one for the same modes, about
+twice as many, but each costs a fraction of a lone column's (benchmarks/RESULTS.md, "A BLAS for
+CHOLMOD and block solves" and "The sparse solver's figures, by module").
 
 The massless DOFs' infinite eigenvalues are W's zeros: every vector is an image of W (the start
 block too), so they never enter the basis. A block of ``block_size`` finds eigenvalues of that
@@ -27,9 +26,9 @@ cost after the solves, reads half as much. The other rows of each image W Q_j ar
 gives them, and the Ritz vectors are returned as W x / theta = (W V y) / theta: one more step of
 inverse iteration, whose massless DOFs carry the static response of the massive ones exactly.
 
-Memory: there is no restart, so the basis keeps every vector, about five per mode wanted (256 vectors,
-205 MB, for the 100k-DOF wide lattice's 50 modes to mace_fmu.fe.modal's tolerance); hundreds of modes at
-100k DOFs take gigabytes.
+Memory: there is no restart, so the basis keeps every vector, about five per mode wanted (at 100k DOFs
+a few hundred megabytes for 50 modes to the modal solution's tolerance); hundreds of modes at 100k DOFs
+take gigabytes.
 """
 
 from __future__ import annotations
@@ -44,15 +43,16 @@ from threadpoolctl import threadpool_limits
 
 from mace_fmu.util.threads import usable_cores
 
-#: Vectors in a block: CHOLMOD's solve shares 16 columns between two cores (mace_fmu.fe.cholmod), and
-#: 16 gave the fewest seconds of solves on the wide lattice (8: 216 columns at 30 ms, 32: 416 at 12 ms).
+#: Vectors in a block: CHOLMOD's solve shares 16 columns between two cores (mace_fmu.sparse.cholmod), and
+#: 16 gave the fewest seconds of solves on the wide lattice: fewer columns cost more each, more columns more
+#: of them (benchmarks/RESULTS.md, "The sparse solver's figures, by module").
 BLOCK_SIZE = 16
 #: A direction whose M-norm after reorthogonalisation is below this fraction of the largest Ritz value
 #: (of the block's largest vector for a fresh block) is dropped: the Gram matrix that orthonormalises a
 #: block resolves norms down to the square root of the rounding (1e-8), and a direction that small
 #: means the space is all but invariant there.
 DEFLATION_TOLERANCE = 1e-7
-#: From this many basis entries (32 MB) the Gram-Schmidt's products run on every usable core (_SharedRows);
+#: From this many basis entries the Gram-Schmidt's products run on every usable core (_SharedRows);
 #: below, the threads would cost more than they share out (mace_fmu.util.threads).
 SHARED_GRAM_SCHMIDT_ENTRIES = 1 << 22
 
@@ -154,7 +154,7 @@ def lowest_modes(*, stiffness: sparse.sparray, mass: sparse.sparray, solve: Call
 class _MassRows:
     """M on the DOFs it touches (``rows``, a row or column with a nonzero entry), and the coordinates the iteration
     takes on those rows: for a positive diagonal M (lumped masses) x~ = M^(1/2) x, in which M is the identity and
-    no M product is needed (109 products, 0.18 s of the wide lattice's Lanczos), for any other M x itself.
+    no M product is needed (a hundred of them in a Lanczos at 100k DOFs), for any other M x itself.
 
     ``touched @ x`` is M in the iteration's coordinates."""
 
@@ -192,7 +192,7 @@ class _Space:
     def __init__(self, rows: int, other_rows: int, capacity: int, limit: int):
         self.size, self.limit = 0, limit
         # row-major: a block's columns land as a short run in each row, the order the solve's images come in
-        # (column-major storage took 0.1 s more to fill on the wide lattice)
+        # (column-major storage took longer to fill)
         self._vectors = np.empty((rows, capacity))
         self._images = np.empty((other_rows, capacity))
         self._projection = np.zeros((capacity, capacity))
@@ -245,9 +245,8 @@ class _SharedRows:
     context manager: its threads end with it).
 
     The basis is read twice a pass: at 100k DOFs a hundred megabytes and more, which every core reads faster
-    than one (the wide lattice's Gram-Schmidt: 0.89-1.08 s on one thread, 0.65-0.73 s on two). The threads
-    are ours, not BLAS's: OpenBLAS's wait for more work by spinning, and that spinning took the cores from
-    the substructures' sweeps in the solve that follows (0.35-0.4 s of the wide lattice's 4.6 s of solves).
+    than one. The threads are ours, not BLAS's: OpenBLAS's wait for more work by spinning, and that spinning
+    took the cores from the substructures' sweeps in the solve that follows.
     """
 
     def __init__(self, rows: int):

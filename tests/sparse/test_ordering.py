@@ -16,9 +16,9 @@ from mace_fmu.deck.reader import read_deck_text
 from mace_fmu.fe import modal
 from mace_fmu.fe.assembly import assemble
 from mace_fmu.fe.constraints import build_constraints
-from mace_fmu.fe.factor import factorize
 from mace_fmu.fe.modes import compute_modes
-from mace_fmu.fe.ordering import (
+from mace_fmu.sparse.factor import factorize
+from mace_fmu.sparse.ordering import (
     AMD,
     NESTED_DISSECTION,
     RCM,
@@ -69,7 +69,7 @@ def test_an_irregular_graph_takes_cholmods_own_amd_and_is_solved():
     """A random sparse graph (600 rows, 1,500 random links) has no band and no small separators: CHOLMOD's own
     AMD fills least (counted through ctypes beside the other candidates), the analysis carries cvxopt's AMD
     symbolic factor of the same size, and the Cholesky in it solves A x = b."""
-    from mace_fmu.fe.ordering import _entries
+    from mace_fmu.sparse.ordering import _entries
 
     rng = np.random.default_rng(0)
     rows, cols = rng.integers(0, 600, 1500), rng.integers(0, 600, 1500)
@@ -89,9 +89,9 @@ def test_the_chosen_orderings_factor_is_the_one_the_analysis_sized(monkeypatch):
     """The symbolic factor a Cholesky is computed in is the one the choice was made with, not a second analysis
     of the same order: a wide lattice (nested dissection), a slender one (RCM) and a thin one (AMD), each factor's
     size the chosen candidate's, and its Cholesky solving A x = b to 1e-10."""
-    from mace_fmu.fe import ordering
-    from mace_fmu.fe.factor import _cholesky
-    from mace_fmu.fe.ordering import _entries
+    from mace_fmu.sparse import ordering
+    from mace_fmu.sparse.factor import _cholesky
+    from mace_fmu.sparse.ordering import _entries
 
     monkeypatch.setattr(ordering, "symbolic_of_lower", lambda *args: pytest.fail("the order was analysed again"))
     for shape, method in (((10, 10, 3), NESTED_DISSECTION), ((3, 3, 40), RCM), ((2, 2, 40), AMD)):
@@ -109,7 +109,7 @@ def test_the_lus_ordering_reuses_the_choice_a_cholesky_analysis_made(monkeypatch
     """A matrix expected positive definite that is not goes from CHOLMOD to the LU: the LU's permutation is the
     one the Cholesky's analysis of the same pattern chose (nested dissection here, the least fill with AMD
     analysed too, so also without it), not a second round of orderings and analyses."""
-    from mace_fmu.fe import ordering
+    from mace_fmu.sparse import ordering
 
     matrix, grids = _lattice(10, 10, 3)
     chosen = analyse(matrix, groups=grids)

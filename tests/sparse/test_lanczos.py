@@ -13,10 +13,10 @@ import pytest
 import scipy.linalg as sla
 from scipy import sparse
 
-from mace_fmu.fe import lanczos
-from mace_fmu.fe.factor import factorize
-from mace_fmu.fe.lanczos import lowest_modes
 from mace_fmu.fe.modal import LANCZOS_TOLERANCE
+from mace_fmu.sparse import lanczos
+from mace_fmu.sparse.factor import factorize
+from mace_fmu.sparse.lanczos import lowest_modes
 
 
 def _chain(masses: int, *, k_n_per_m: float = 1.0e4, m_kg: float = 2.0) -> tuple[sparse.csr_array, sparse.csr_array]:

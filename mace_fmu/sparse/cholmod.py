@@ -2,24 +2,27 @@
 right-hand sides in one pass over the factor.
 
 Two things in cvxopt's Linux wheels (1.3.x, CHOLMOD 3.0.6) cost the 100k-DOF lattices most of their
-time (benchmarks/RESULTS.md, "A BLAS for CHOLMOD and block solves"):
+time (benchmarks/RESULTS.md, "A BLAS for CHOLMOD and block solves"; the figures by module in "The sparse
+solver's figures, by module"):
 
 * Their CHOLMOD is linked against a serial reference-grade ATLAS (``libsatlas``), although the wheels
   carry an OpenBLAS for cvxopt's own BLAS module, and that OpenBLAS (0.3.15) does not know recent
-  processors and falls back to its Prescott (SSE3) kernels: a 2000 x 2000 product at 16 GFLOP/s where
-  the processor's AVX-512 kernels reach 78. CHOLMOD's supernodal factorisation is dense BLAS 3 on its
-  supernodes: on the wide lattice it took 12.3 s on ATLAS and takes 4.5 s on OpenBLAS's SkylakeX
-  kernels. :func:`load` therefore has OpenBLAS select its kernels again with the processor's name
+  processors and falls back to its Prescott (SSE3) kernels, a fraction of the speed of the processor's
+  AVX-512 ones. CHOLMOD's supernodal factorisation is dense BLAS 3 on its supernodes, so its time is the
+  BLAS's. :func:`load` therefore has OpenBLAS select its kernels again with the processor's name
   for them (AVX-512: SkylakeX, AVX2 and FMA: Haswell) unless the user named them
   (``OPENBLAS_CORETYPE``), and makes the OpenBLAS that cvxopt loaded the one CHOLMOD's BLAS calls
   bind to (RTLD_GLOBAL, before CHOLMOD is loaded). Both only where they apply: Linux, CHOLMOD not
   loaded before, the libraries found; otherwise CHOLMOD runs as shipped, slower, with the same results.
 * cvxopt's ``cholmod.solve`` solves the columns of a right-hand side one after another, each a full
-  pass over the factor (850 MB on the wide lattice). CHOLMOD's own ``cholmod_l_solve`` takes them
-  together, in dense blocks: 16 columns cost 25 ms a column instead of 110. :class:`CholeskySolve`
-  calls it through ctypes on the factor cvxopt computed, after checking that the factor's layout is
-  the one expected; two halves of a wide block go to the two cores (the call releases the GIL, and
-  cvxopt's OpenBLAS runs one thread), 15 ms a column for 16.
+  pass over the factor (hundreds of megabytes at 100k DOFs), and a solve's cost is that reading.
+  CHOLMOD's own ``cholmod_l_solve`` takes them together, in dense blocks, in one pass.
+  :class:`CholeskySolve` calls it through ctypes on the factor cvxopt computed, after checking that the
+  factor's layout is the one expected; two halves of a wide block go to the two cores (the call releases
+  the GIL, and cvxopt's OpenBLAS runs one thread).
+
+CHOLMOD's structures are read and written through their declarations in
+:mod:`mace_fmu.sparse.cholmod_structs`, never by offset.
 """
 
 from __future__ import annotations
@@ -40,13 +43,13 @@ from types import ModuleType
 import numpy as np
 from scipy import sparse
 
-#: Columns below which a block is solved on one core: two threads on 8 columns gained nothing
-#: (30 ms a column either way on the wide lattice), on 16 a third.
+from mace_fmu.sparse.cholmod_structs import (CHOLMOD_A, CHOLMOD_AUTO, CHOLMOD_DOUBLE, CHOLMOD_LONG, CHOLMOD_REAL,
+                                             CHOLMOD_SUPERNODAL, CholmodCommon, CholmodDense, CholmodFactor,
+                                             CholmodSparse)
+
+#: Columns below which a block is solved on one core: on fewer the two threads' overhead ate what the second core
+#: saved (benchmarks/RESULTS.md, "The sparse solver's figures, by module").
 PARALLEL_MIN_COLUMNS = 16
-#: The size in bytes set aside for a cholmod_common: CHOLMOD 3's is about 2.5 kB, version 5's under 8 kB.
-_COMMON_BYTES = 1 << 16
-_CHOLMOD_A = 0  # cholmod_solve's system A x = b
-_CHOLMOD_LONG, _CHOLMOD_REAL, _CHOLMOD_DOUBLE = 2, 1, 0
 
 
 def load() -> ModuleType | None:
@@ -129,12 +132,8 @@ def _wheel_libraries(package: Path, stem: str) -> list[Path]:
 
 @dataclass(frozen=True)
 class FactorLayout:
-    """The leading fields of a cholmod_factor, read from the structure cvxopt holds.
-
-    The fields kept their order from CHOLMOD 1 to 5: n, minor, then three pointers, nzmax, seven
-    pointers, nsuper, ssize, xsize, maxcsize, maxesize and four pointers, each one machine word,
-    then the ints ordering, is_ll, is_super, is_monotonic, itype, xtype, dtype.
-    """
+    """What a cholmod_factor (:class:`~mace_fmu.sparse.cholmod_structs.CholmodFactor`) says of itself: where it
+    lies, its order and size, and the types of its integers and values."""
 
     address: int  #: where the cholmod_factor lies
     rows: int  #: its order n
@@ -179,37 +178,17 @@ def factor_layout(symbolic: object, rows: int) -> FactorLayout | None:
 
 
 def _layout_at(address: int, rows: int) -> FactorLayout | None:
-    words = (ctypes.c_size_t * 22).from_address(address)
-    flags = (ctypes.c_int * 7).from_address(address + 22 * ctypes.sizeof(ctypes.c_size_t))
-    n, xsize = int(words[0]), int(words[15])
-    if n != rows or not rows <= xsize <= rows * (rows + 1):
+    factor = CholmodFactor.from_address(address)
+    if factor.n != rows or not rows <= factor.xsize <= rows * (rows + 1):
         return None
-    return FactorLayout(address, n, xsize, int(flags[4]), int(flags[5]), int(flags[6]),
-                        supernodal_ll=bool(flags[1]) and bool(flags[2]))
-
-
-def _factor_words(address: int) -> ctypes.Array:
-    """The 22 machine words that open a cholmod_factor (see :class:`FactorLayout`)."""
-    return (ctypes.c_size_t * 22).from_address(address)
+    return FactorLayout(address, factor.n, factor.xsize, factor.itype, factor.xtype, factor.dtype,
+                        supernodal_ll=bool(factor.is_ll) and bool(factor.is_super))
 
 
 def _long_array(address: int, count: int) -> np.ndarray:
     """A copy of ``count`` 64-bit integers at ``address`` (an array a cholmod_l_* factor holds)."""
     return np.ctypeslib.as_array((ctypes.c_int64 * count).from_address(address)).copy() if count else \
         np.zeros(0, dtype=np.int64)
-
-
-class _Sparse(ctypes.Structure):
-    _fields_ = [("nrow", ctypes.c_size_t), ("ncol", ctypes.c_size_t), ("nzmax", ctypes.c_size_t),
-                ("p", ctypes.c_void_p), ("i", ctypes.c_void_p), ("nz", ctypes.c_void_p), ("x", ctypes.c_void_p),
-                ("z", ctypes.c_void_p), ("stype", ctypes.c_int), ("itype", ctypes.c_int), ("xtype", ctypes.c_int),
-                ("dtype", ctypes.c_int), ("sorted", ctypes.c_int), ("packed", ctypes.c_int)]
-
-
-class _Dense(ctypes.Structure):
-    _fields_ = [("nrow", ctypes.c_size_t), ("ncol", ctypes.c_size_t), ("nzmax", ctypes.c_size_t),
-                ("d", ctypes.c_size_t), ("x", ctypes.c_void_p), ("z", ctypes.c_void_p),
-                ("xtype", ctypes.c_int), ("dtype", ctypes.c_int)]
 
 
 @functools.cache
@@ -232,39 +211,31 @@ def _cholmod_library() -> ctypes.CDLL | None:
         except (OSError, AttributeError):
             continue
         factorize.restype = ctypes.c_int
-        factorize.argtypes = [ctypes.POINTER(_Sparse), ctypes.c_void_p, ctypes.c_void_p]
+        common = ctypes.POINTER(CholmodCommon)  # a factor goes by its address, cvxopt's capsule's or CHOLMOD's
+        factorize.argtypes = [ctypes.POINTER(CholmodSparse), ctypes.c_void_p, common]
         analyze.restype = analyze_p.restype = ctypes.c_void_p
-        analyze.argtypes = [ctypes.POINTER(_Sparse), ctypes.c_void_p]
-        analyze_p.argtypes = [ctypes.POINTER(_Sparse), ctypes.c_void_p, ctypes.c_void_p, ctypes.c_size_t,
-                              ctypes.c_void_p]
-        free_factor.argtypes = [ctypes.POINTER(ctypes.c_void_p), ctypes.c_void_p]
+        analyze.argtypes = [ctypes.POINTER(CholmodSparse), common]
+        analyze_p.argtypes = [ctypes.POINTER(CholmodSparse), ctypes.c_void_p, ctypes.c_void_p, ctypes.c_size_t, common]
+        free_factor.argtypes = [ctypes.POINTER(ctypes.c_void_p), common]
         for sweep in sweeps:
             sweep.restype = ctypes.c_int
-            sweep.argtypes = [ctypes.c_void_p, ctypes.POINTER(_Dense), ctypes.POINTER(_Dense), ctypes.c_void_p]
-        solve.restype = ctypes.POINTER(_Dense)
-        solve.argtypes = [ctypes.c_int, ctypes.c_void_p, ctypes.POINTER(_Dense), ctypes.c_void_p]
-        free.argtypes = [ctypes.POINTER(ctypes.POINTER(_Dense)), ctypes.c_void_p]
-        start.argtypes = finish.argtypes = [ctypes.c_void_p]
+            sweep.argtypes = [ctypes.c_void_p, ctypes.POINTER(CholmodDense), ctypes.POINTER(CholmodDense), common]
+        solve.restype = ctypes.POINTER(CholmodDense)
+        solve.argtypes = [ctypes.c_int, ctypes.c_void_p, ctypes.POINTER(CholmodDense), common]
+        free.argtypes = [ctypes.POINTER(ctypes.POINTER(CholmodDense)), common]
+        start.argtypes = finish.argtypes = [common]
         return library
     return None
 
 
-#: Where cholmod_common keeps ``supernodal_switch`` (a double, 40.0 after cholmod_l_start), ``supernodal`` (an int,
-#: CHOLMOD_AUTO = 1), ``print`` (3) and ``nmethods`` (0): the order of cholmod_core.h in every CHOLMOD 3 (dbound,
-#: grow0, grow1, grow2, maxrank, supernodal_switch, supernodal, the final_* flags, zrelax, nrelax, four prefer
-#: and quick flags, print, precise, try_catch, error_handler, nmethods)
-_SWITCH_OFFSET, _SUPERNODAL_OFFSET, _PRINT_OFFSET, _NMETHODS_OFFSET = 40, 48, 144, 168
-_CHOLMOD_AUTO, _CHOLMOD_SUPERNODAL = 1, 2
-
-
-def _lower_triangle(lower: sparse.csc_array) -> tuple[_Sparse, tuple[np.ndarray, ...]]:
+def _lower_triangle(lower: sparse.csc_array) -> tuple[CholmodSparse, tuple[np.ndarray, ...]]:
     """``lower`` as CHOLMOD's sparse matrix (stype -1: the lower triangle of a symmetric one), and the arrays it
     points into, which must outlive CHOLMOD's use of it."""
     n = lower.shape[0]
     indptr, indices = lower.indptr.astype(np.int64), lower.indices.astype(np.int64)
     values = np.ascontiguousarray(lower.data, dtype=float)
-    matrix = _Sparse(n, n, len(values), indptr.ctypes.data, indices.ctypes.data, None, values.ctypes.data, None,
-                     -1, _CHOLMOD_LONG, _CHOLMOD_REAL, _CHOLMOD_DOUBLE, 1, 1)
+    matrix = CholmodSparse(n, n, len(values), indptr.ctypes.data, indices.ctypes.data, None, values.ctypes.data,
+                           None, -1, CHOLMOD_LONG, CHOLMOD_REAL, CHOLMOD_DOUBLE, 1, 1)
     return matrix, (indptr, indices, values)
 
 
@@ -283,9 +254,8 @@ def symbolic_factor(lower: sparse.csc_array, permutation: np.ndarray | None = No
 
     The factor ``cvxopt.cholmod.symbolic`` makes with cvxopt's options (supernodal; with a permutation, that one
     only), without holding the lock: the candidate orderings' analyses run beside each other and beside the
-    nested dissection's ordering (mace_fmu.fe.ordering; on the wide lattice AMD's takes 0.25-0.35 s, RCM's and
-    nested dissection's 0.06-0.08 s), and two substructures' side by side (mace_fmu.fe.substructures), where
-    cvxopt's made the second wait for the first.
+    nested dissection's ordering (mace_fmu.sparse.ordering; AMD's the longest), and two substructures' side by
+    side (mace_fmu.sparse.substructures), where cvxopt's made the second wait for the first.
 
     Parameters
     ----------
@@ -304,19 +274,19 @@ def symbolic_factor(lower: sparse.csc_array, permutation: np.ndarray | None = No
         return None
     matrix, _arrays = _lower_triangle(lower)
     order = None if permutation is None else np.ascontiguousarray(permutation, dtype=np.int64)
-    common = ctypes.create_string_buffer(_COMMON_BYTES)
+    common = CholmodCommon()
     library.cholmod_l_start(common)
     try:
-        supernodal = ctypes.c_int.from_buffer(common, _SUPERNODAL_OFFSET)
-        methods = ctypes.c_int.from_buffer(common, _NMETHODS_OFFSET)
-        if (ctypes.c_double.from_buffer(common, _SWITCH_OFFSET).value != 40.0 or supernodal.value != _CHOLMOD_AUTO
-                or ctypes.c_int.from_buffer(common, _PRINT_OFFSET).value != 3 or methods.value != 0):
-            return None  # not the layout expected: leave it to cvxopt
-        supernodal.value = _CHOLMOD_SUPERNODAL  # as cvxopt's analyses, whatever the matrix's size
+        # cholmod_l_start's defaults, from the first field read to the last: a CHOLMOD whose cholmod_common is not
+        # laid out as declared (another version) is left to cvxopt
+        if (common.supernodal_switch != 40.0 or common.supernodal != CHOLMOD_AUTO or common.print != 3
+                or common.nmethods != 0 or common.itype != CHOLMOD_LONG or common.dtype != CHOLMOD_DOUBLE):
+            return None
+        common.supernodal = CHOLMOD_SUPERNODAL  # as cvxopt's analyses, whatever the matrix's size
         if order is None:
             address = library.cholmod_l_analyze(ctypes.byref(matrix), common)
         else:
-            methods.value = 1  # the given order only, as cvxopt's analysis with a permutation
+            common.nmethods = 1  # the given order only, as cvxopt's analysis with a permutation
             address = library.cholmod_l_analyze_p(ctypes.byref(matrix), order.ctypes.data, None, 0, common)
         return SymbolicFactor(library, address) if address else None
     finally:
@@ -324,7 +294,7 @@ def symbolic_factor(lower: sparse.csc_array, permutation: np.ndarray | None = No
 
 
 def _free_factor(library: ctypes.CDLL, address: int) -> None:
-    common = ctypes.create_string_buffer(_COMMON_BYTES)
+    common = CholmodCommon()
     library.cholmod_l_start(common)
     library.cholmod_l_free_factor(ctypes.byref(ctypes.c_void_p(address)), common)
     library.cholmod_l_finish(common)
@@ -334,7 +304,7 @@ def numeric(symbolic: object, lower: sparse.csc_array) -> bool | None:
     """CHOLMOD's numeric factorisation of ``lower``'s matrix into the ``symbolic`` factor, through ctypes.
 
     What ``cvxopt.cholmod.numeric`` does, but with the GIL released while CHOLMOD works, so that two
-    factors can be computed on two cores at once (mace_fmu.fe.substructures).
+    factors can be computed on two cores at once (mace_fmu.sparse.substructures).
 
     Parameters
     ----------
@@ -352,10 +322,10 @@ def numeric(symbolic: object, lower: sparse.csc_array) -> bool | None:
     n = lower.shape[0]
     layout = factor_layout(symbolic, n)
     library = _cholmod_library()
-    if library is None or layout is None or layout.index_type != _CHOLMOD_LONG:
+    if library is None or layout is None or layout.index_type != CHOLMOD_LONG:
         return None
     matrix, _arrays = _lower_triangle(lower)
-    common = ctypes.create_string_buffer(_COMMON_BYTES)
+    common = CholmodCommon()
     library.cholmod_l_start(common)
     try:
         done = library.cholmod_l_factorize(ctypes.byref(matrix), layout.address, common)
@@ -363,7 +333,7 @@ def numeric(symbolic: object, lower: sparse.csc_array) -> bool | None:
         library.cholmod_l_finish(common)
     if not done:
         return None
-    return int(_factor_words(layout.address)[1]) == n  # minor: the column where a non-positive pivot stopped it
+    return CholmodFactor.from_address(layout.address).minor == n  # minor: where a non-positive pivot stopped it
 
 
 class CholeskySolve:
@@ -383,13 +353,14 @@ class CholeskySolve:
         self.rows = rows
         layout = factor_layout(factor, rows)
         library = _cholmod_library()
-        self._direct = (library is not None and layout is not None and layout.index_type == _CHOLMOD_LONG
-                        and layout.value_type == _CHOLMOD_REAL and layout.precision == _CHOLMOD_DOUBLE)
+        self._direct = (library is not None and layout is not None and layout.index_type == CHOLMOD_LONG
+                        and layout.value_type == CHOLMOD_REAL and layout.precision == CHOLMOD_DOUBLE)
         if not self._direct:
             return
         self._library, self._address = library, layout.address
+        self._fields = CholmodFactor.from_address(layout.address)  # read in place: what CHOLMOD holds now
         # one cholmod_common (CHOLMOD's workspace) for each of the two threads a block is shared between
-        self._commons = [ctypes.create_string_buffer(_COMMON_BYTES) for _ in range(2)]
+        self._commons = [CholmodCommon() for _ in range(2)]
         self._busy = threading.Lock()
         for common in self._commons:
             library.cholmod_l_start(common)
@@ -442,7 +413,7 @@ class CholeskySolve:
     def sweep_workspace(self, columns: int) -> np.ndarray:
         """The workspace :meth:`sweep` needs for ``columns`` right-hand sides (the largest supernode's rows below
         its columns, times ``columns``)."""
-        return np.empty(max(columns * int(_factor_words(self._address)[17]), 1))  # maxesize
+        return np.empty(max(columns * self._fields.maxesize, 1))
 
     def sweep(self, x: np.ndarray, *, transpose: bool, workspace: np.ndarray) -> None:
         """Solve L x = b (or L^T x = b) in place: ``x`` holds b, in the factor's order, and is overwritten by x.
@@ -461,14 +432,14 @@ class CholeskySolve:
         """
         rows, width = x.shape
         if (rows != self.rows or x.dtype != np.float64 or not x.flags.f_contiguous or workspace.dtype != np.float64
-                or not workspace.flags.c_contiguous or workspace.size < width * int(_factor_words(self._address)[17])):
+                or not workspace.flags.c_contiguous or workspace.size < width * self._fields.maxesize):
             raise ValueError("sweep needs a column-major float64 array of the factor's rows and a large enough "
                              "workspace (sweep_workspace)")
         if not self.supernodal_ll:
             raise ValueError("only a supernodal L L^T factor has the sweeps")
-        solution = _Dense(rows, width, rows * width, rows, x.ctypes.data, None, _CHOLMOD_REAL, _CHOLMOD_DOUBLE)
-        scratch = _Dense(workspace.size, 1, workspace.size, workspace.size, workspace.ctypes.data, None, _CHOLMOD_REAL,
-                         _CHOLMOD_DOUBLE)
+        solution = CholmodDense(rows, width, rows * width, rows, x.ctypes.data, None, CHOLMOD_REAL, CHOLMOD_DOUBLE)
+        scratch = CholmodDense(workspace.size, 1, workspace.size, workspace.size, workspace.ctypes.data, None,
+                               CHOLMOD_REAL, CHOLMOD_DOUBLE)
         sweep = self._library.cholmod_l_super_ltsolve if transpose else self._library.cholmod_l_super_lsolve
         with self._busy:  # the status CHOLMOD writes into the cholmod_common
             done = sweep(self._address, ctypes.byref(solution), ctypes.byref(scratch), self._commons[0])
@@ -477,7 +448,7 @@ class CholeskySolve:
 
     def permutation(self) -> np.ndarray:
         """The factor's ordering P: row j of the factor is row ``permutation()[j]`` of the matrix."""
-        return _long_array(int(_factor_words(self._address)[2]), self.rows)
+        return _long_array(self._fields.Perm, self.rows)
 
     def trailing_block(self, size: int) -> np.ndarray:
         """The last ``size`` rows and columns of the supernodal factor L, a dense lower triangle.
@@ -492,15 +463,15 @@ class CholeskySolve:
         numpy.ndarray
             Shape (size, size), in the factor's order.
         """
-        words = _factor_words(self._address)
-        supernodes, first = int(words[13]), self.rows - size
-        bounds = _long_array(int(words[18]), supernodes + 1)  # super: each supernode's first column
-        row_start = _long_array(int(words[19]), supernodes + 1)  # pi: where its row indices start in s
-        value_start = _long_array(int(words[20]), supernodes + 1)  # px: where its values start in x
+        factor = self._fields
+        supernodes, first = factor.nsuper, self.rows - size
+        bounds = _long_array(factor.super, supernodes + 1)  # each supernode's first column
+        row_start = _long_array(factor.pi, supernodes + 1)  # where its row indices start in s
+        value_start = _long_array(factor.px, supernodes + 1)  # where its values start in x
         last = int(np.searchsorted(bounds, first, side="right")) - 1  # the supernode that holds column ``first``
         # s: the row indices of those supernodes only (all of them are millions of entries)
-        rows_of = _long_array(int(words[21]) + 8 * int(row_start[last]), int(row_start[-1] - row_start[last]))
-        values = np.ctypeslib.as_array((ctypes.c_double * int(words[15])).from_address(int(words[8])))
+        rows_of = _long_array(factor.s + 8 * int(row_start[last]), int(row_start[-1] - row_start[last]))
+        values = np.ctypeslib.as_array((ctypes.c_double * factor.xsize).from_address(factor.x))
         block = np.zeros((size, size))
         # a supernode is a dense column-major block: its columns, and every row below them that they reach
         for k in range(last, supernodes):
@@ -515,11 +486,11 @@ class CholeskySolve:
                 block[at, c0 - first:k2 - first] = dense[below:, c0 - k1:]
         return np.tril(block)
 
-    def _solve_block(self, columns: np.ndarray, common: ctypes.Array) -> np.ndarray:
+    def _solve_block(self, columns: np.ndarray, common: CholmodCommon) -> np.ndarray:
         rhs = np.asfortranarray(columns)
         rows, width = rhs.shape
-        dense = _Dense(rows, width, rows * width, rows, rhs.ctypes.data, None, _CHOLMOD_REAL, _CHOLMOD_DOUBLE)
-        solution = self._library.cholmod_l_solve(_CHOLMOD_A, self._address, ctypes.byref(dense), common)
+        dense = CholmodDense(rows, width, rows * width, rows, rhs.ctypes.data, None, CHOLMOD_REAL, CHOLMOD_DOUBLE)
+        solution = self._library.cholmod_l_solve(CHOLMOD_A, self._address, ctypes.byref(dense), common)
         if not solution and isinstance(self._factor, SymbolicFactor):  # cvxopt cannot solve with it
             raise MemoryError("CHOLMOD could not allocate the workspace of a solve")
         if not solution:  # CHOLMOD could not allocate its workspace: the slower route has its own
@@ -540,6 +511,6 @@ class CholeskySolve:
         return np.asarray(x)
 
 
-def _finish(library: ctypes.CDLL, commons: list[ctypes.Array]) -> None:
+def _finish(library: ctypes.CDLL, commons: list[CholmodCommon]) -> None:
     for common in commons:
         library.cholmod_l_finish(common)

@@ -2,22 +2,18 @@
 
 A structure's stiffness is as banded as its numbering lets it be; decks number grids as their
 authors please. The DOFs are renumbered first, in the ordering that fills least for this matrix
-(mace_fmu.fe.ordering): reverse Cuthill-McKee on a slender structure, nested dissection on a wide
-one, each measured by CHOLMOD's symbolic analysis before any number is factored. On a 10k-DOF
-lattice tower RCM gives a third fewer nonzeros in the factors than SuperLU's default column
-ordering and half its factor time, with the deck's numbering or a random one alike; on a 100k-DOF
-lattice 20 x 20 grids wide nested dissection's factor is 0.6 times RCM's (benchmarks/RESULTS.md,
-"FE core at scale").
+(mace_fmu.sparse.ordering): reverse Cuthill-McKee on a slender structure, nested dissection on a wide
+one, each measured by CHOLMOD's symbolic analysis before any number is factored. Either fills less
+than SuperLU's default column ordering, with the deck's numbering or a random one alike, and on a wide
+structure nested dissection less than RCM.
 
 A positive definite matrix (K - sigma M below every eigenvalue, the modal solution's) is factored
 by CHOLMOD's supernodal Cholesky in that order: half the storage of an LU and dense blocks in the
-triangular solves. A shift-invert eigen-solution is mostly solves, and at 100k DOFs (the tower) one
-takes 41 ms instead of SuperLU's 88 ms, the factorisation 0.5 s instead of 2.7 s. CHOLMOD comes
-with cvxopt's wheels (mace_fmu.fe.cholmod loads it on OpenBLAS and solves many right-hand sides in
-one pass over the factor: on the wide lattice 16 columns cost 15 ms a column, one alone 110 ms).
-From a factor of 50 million entries up it is factored as two substructures joined at their
-interface, one on each core (mace_fmu.fe.substructures: the wide lattice's factorisation in 3.0 s
-instead of 4.5 s, benchmarks/RESULTS.md).
+triangular solves, which a shift-invert eigen-solution is mostly made of. CHOLMOD comes with cvxopt's
+wheels (mace_fmu.sparse.cholmod loads it on OpenBLAS and solves many right-hand sides in one pass over
+the factor). From a factor of 50 million entries up it is factored as two substructures joined at
+their interface, one on each core (mace_fmu.sparse.substructures). The figures are in
+benchmarks/RESULTS.md, "The sparse solver's figures, by module".
 Any other matrix (a tangent stiffness that is indefinite on the way to a stable state), or one
 that turns out not to be positive definite, goes to SuperLU with threshold pivoting, in the
 ordering chosen the same way (AMD excepted: CHOLMOD keeps its permutation to itself).
@@ -31,10 +27,10 @@ import numpy as np
 from scipy import sparse
 from scipy.sparse.linalg import splu
 
-from mace_fmu.fe.cholmod import CholeskySolve, SymbolicFactor, numeric
-from mace_fmu.fe.cholmod import load as load_cholmod
-from mace_fmu.fe.ordering import Analysis, analyse, least_fill_permutation
-from mace_fmu.fe.substructures import NotPositiveDefinite, substructured_cholesky
+from mace_fmu.sparse.cholmod import CholeskySolve, SymbolicFactor, numeric
+from mace_fmu.sparse.cholmod import load as load_cholmod
+from mace_fmu.sparse.ordering import Analysis, analyse, least_fill_permutation
+from mace_fmu.sparse.substructures import NotPositiveDefinite, substructured_cholesky
 
 Solve = Callable[[np.ndarray], np.ndarray]
 
@@ -68,7 +64,7 @@ def factorize(matrix: sparse.sparray | np.ndarray, *, positive_definite: bool = 
     a = sparse.csr_array(matrix)
     if positive_definite:
         analysis = analyse(a, groups=groups)
-        # two substructures on two cores where the matrix is large (mace_fmu.fe.substructures), else the whole
+        # two substructures on two cores where the matrix is large (mace_fmu.sparse.substructures), else the whole
         try:
             solve = substructured_cholesky(a, analysis) or _cholesky(analysis, a.shape[0])
         except NotPositiveDefinite:  # the whole would fail as well: to the LU at once

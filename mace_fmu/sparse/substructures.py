@@ -1,16 +1,16 @@
 """A large positive definite matrix factored as two substructures on two cores, joined at their interface.
 
 CHOLMOD's supernodal factorisation runs on one core here: cvxopt's wheels carry a single-threaded
-OpenBLAS, and ``cvxopt.cholmod.numeric`` holds the GIL. On the 100k-DOF wide lattice the factorisation
-is the largest single step of the eigen-solution (4.5-7 s of one core, benchmarks/RESULTS.md). The
-fill-reducing ordering already cuts the structure in two: nested dissection numbers one half, then
-the other, then the separator between them; reverse Cuthill-McKee's band can be cut anywhere along
-its length. :func:`bisect` finds where the ordering's frontier (the rows after a cut that touch a row
+OpenBLAS, and ``cvxopt.cholmod.numeric`` holds the GIL. On a 100k-DOF wide lattice the factorisation
+is the largest single step of the eigen-solution (benchmarks/RESULTS.md, "The sparse solver's figures,
+by module"). The fill-reducing ordering already cuts the structure in two: nested dissection numbers
+one half, then the other, then the separator between them; reverse Cuthill-McKee's band can be cut
+anywhere along its length. :func:`bisect` finds where the ordering's frontier (the rows after a cut that touch a row
 before it) is narrowest near the middle; those rows are the interface I, the rest the two
 substructures 1 and 2, which share no entry.
 
 Each substructure is factored with the interface last, in the ordering's own order, through
-CHOLMOD on its own core (mace_fmu.fe.cholmod.numeric releases the GIL; the wheel's OpenBLAS, although
+CHOLMOD on its own core (mace_fmu.sparse.cholmod.numeric releases the GIL; the wheel's OpenBLAS, although
 single-threaded, takes a lock around its buffer allocation, so two threads may call it at once):
 
     [A_11  A_1I]   [L_11  0   ] [L_11  0   ]^T
@@ -25,9 +25,9 @@ substructures' factors together hold what the whole matrix's factor in the same 
 interface's dense block twice), so the work is about the same, on two cores instead of one.
 
 Only where it pays: two cores or more, a factor of at least :data:`MIN_FACTOR_ENTRIES` entries in the
-ordering chosen (mace_fmu.fe.ordering, which measures it), an ordering that CHOLMOD did not keep to itself,
+ordering chosen (mace_fmu.sparse.ordering, which measures it), an ordering that CHOLMOD did not keep to itself,
 an interface of at most :data:`MAX_INTERFACE` rows. Otherwise, and wherever CHOLMOD cannot be reached
-through ctypes, mace_fmu.fe.factor factors the whole matrix. A substructure or a Schur complement that is
+through ctypes, mace_fmu.sparse.factor factors the whole matrix. A substructure or a Schur complement that is
 not positive definite proves the whole is not (:class:`NotPositiveDefinite`): the caller goes to its LU.
 """
 
@@ -42,18 +42,18 @@ from scipy import linalg as sla
 from scipy import sparse
 from threadpoolctl import threadpool_limits
 
-from mace_fmu.fe.cholmod import CholeskySolve, numeric
-from mace_fmu.fe.ordering import Analysis, symbolic_of_lower
+from mace_fmu.sparse.cholmod import CholeskySolve, numeric
+from mace_fmu.sparse.ordering import Analysis, symbolic_of_lower
 from mace_fmu.util.threads import usable_cores
 
 #: The factor size [entries] below which the whole matrix is factored. Below it the factorisation is quick
 #: and the substructures' set-up (their symbolic analyses, the interface) and their solves' overhead cost
-#: what the second core saves: the 100k-DOF tower's factor (26 million entries in RCM's order) takes
-#: 0.9 s whole and 1.6 s as substructures; the wide lattice's (106 million) 7.0 s whole and 3.5 s as
-#: substructures, on the same machine.
+#: what the second core saves: the 100k-DOF tower's factor, half this size, is slower as substructures, the
+#: wide lattice's, twice this size, twice as fast (benchmarks/RESULTS.md, "The sparse solver's figures, by
+#: module").
 MIN_FACTOR_ENTRIES = 50_000_000
-#: The largest interface taken [rows]: its Schur complement is dense (a 6,000-row one: 0.3 GB, 70 GFLOP
-#: to factor).
+#: The largest interface taken [rows]: its Schur complement is dense, its memory and its factorisation's work
+#: growing with the square and the cube of its rows.
 MAX_INTERFACE = 6_000
 #: Where the cut may fall, as fractions of the rows: two substructures of about equal work.
 BALANCE = (0.35, 0.65)
@@ -125,7 +125,7 @@ class _Substructure:
         lower.sort_indices()
         del self._block
         # through ctypes, Python's lock released: the two substructures' analyses run side by side (cvxopt's held
-        # the lock, so one waited for the other: 0.15 s each on the wide lattice, 0.03 s through ctypes)
+        # the lock, so one waited for the other)
         self._symbolic = symbolic_of_lower(lower, np.arange(self.size))
         if self._symbolic is None:
             return None
@@ -172,7 +172,7 @@ class _Substructure:
 
     def _swept(self, columns: int) -> np.ndarray:
         """The array the sweeps work in, kept from one solve to the next (column-major, as CHOLMOD reads it):
-        fresh arrays of 6 MB and CHOLMOD's own copies in and out cost the wide lattice 8-17 ms a solve."""
+        fresh arrays and CHOLMOD's own copies in and out cost each solve the time of allocating and copying."""
         if self._y is None or self._y.shape[1] != columns:
             self._y = np.empty((self.size, columns), order="F")
             self._workspace = self.solve.sweep_workspace(columns)
@@ -209,7 +209,7 @@ class NotPositiveDefinite(ArithmeticError):
     """The matrix is not positive definite, as a substructure's factorisation shows: each substructure with the
     interface is a principal submatrix and the interface's Schur complement is the Schur complement of one,
     and both are positive definite when the whole matrix is. A Cholesky factorisation of the whole would fail
-    too, so the caller goes to its LU at once (at 100k DOFs the whole's factorisation is 4.5 s)."""
+    too, so the caller goes to its LU at once (at 100k DOFs the whole's factorisation takes seconds)."""
 
 
 def substructured_cholesky(matrix: sparse.sparray, analysis: Analysis, *,
@@ -221,7 +221,7 @@ def substructured_cholesky(matrix: sparse.sparray, analysis: Analysis, *,
     matrix : scipy.sparse array
         Symmetric, expected positive definite.
     analysis : Analysis
-        mace_fmu.fe.ordering's analysis of the matrix: the ordering cut, and its factor's size.
+        mace_fmu.sparse.ordering's analysis of the matrix: the ordering cut, and its factor's size.
     min_factor_entries : int, optional
         The factor size [entries] from which substructures are taken; :data:`MIN_FACTOR_ENTRIES` when absent.
 

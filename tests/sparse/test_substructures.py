@@ -1,4 +1,4 @@
-"""Two substructures factored on two cores and joined at their interface (mace_fmu.fe.substructures): the
+"""Two substructures factored on two cores and joined at their interface (mace_fmu.sparse.substructures): the
 cut is a true separation, and the solutions, the factor's pieces and the modes equal a second solver's
 (SciPy's SuperLU, LAPACK's dense Cholesky, ARPACK on SuperLU)."""
 
@@ -12,12 +12,12 @@ from scipy.sparse.linalg import eigsh, splu
 from support.decks import frame_tower
 
 from mace_fmu.deck.reader import read_deck_text
-from mace_fmu.fe import factor, substructures
 from mace_fmu.fe.assembly import assemble
-from mace_fmu.fe.cholmod import CholeskySolve, SymbolicFactor, numeric, symbolic_factor
 from mace_fmu.fe.constraints import build_constraints
-from mace_fmu.fe import cholmod as cholmod_module
-from mace_fmu.fe.ordering import NESTED_DISSECTION, RCM, _lower_spmatrix, _symbolic, analyse, symbolic_of_lower
+from mace_fmu.sparse import cholmod as cholmod_module
+from mace_fmu.sparse import factor, substructures
+from mace_fmu.sparse.cholmod import CholeskySolve, SymbolicFactor, numeric, symbolic_factor
+from mace_fmu.sparse.ordering import NESTED_DISSECTION, RCM, _lower_spmatrix, _symbolic, analyse, symbolic_of_lower
 
 pytest.importorskip("cvxopt")
 
@@ -167,8 +167,8 @@ def test_the_lowest_modes_through_substructures_equal_arpacks(wide, monkeypatch,
     """The modal solution's shift-invert Lanczos on substructures (forced on the 4,800-DOF lattice), with its
     Gram-Schmidt on one BLAS thread or (forced, as from 32 MB of basis) on every core: its 12 lowest
     eigenvalues equal ARPACK's (scipy's eigsh, shift-invert on SuperLU) within 1e-10."""
-    from mace_fmu.fe import lanczos
-    from mace_fmu.fe.lanczos import lowest_modes
+    from mace_fmu.sparse import lanczos
+    from mace_fmu.sparse.lanczos import lowest_modes
 
     k, m, grids = wide
     monkeypatch.setattr(substructures, "MIN_FACTOR_ENTRIES", 0)
@@ -213,8 +213,8 @@ def test_analyses_on_two_threads_leave_cholmods_options_as_they_were(wide):
     import sys
     import threading
 
-    from mace_fmu.fe.cholmod import load
-    from mace_fmu.fe.ordering import _lower_spmatrix, _symbolic
+    from mace_fmu.sparse.cholmod import load
+    from mace_fmu.sparse.ordering import _lower_spmatrix, _symbolic
 
     cholmod = load()
     k, m, _ = wide

@@ -16,10 +16,10 @@ from scipy.sparse.linalg import splu
 from support.decks import frame_tower
 
 from mace_fmu.deck.reader import read_deck_text
-from mace_fmu.fe import cholmod
 from mace_fmu.fe.assembly import assemble
 from mace_fmu.fe.constraints import build_constraints
-from mace_fmu.fe.factor import factorize
+from mace_fmu.sparse import cholmod
+from mace_fmu.sparse.factor import factorize
 
 cvxopt = pytest.importorskip("cvxopt")
 
@@ -51,7 +51,7 @@ def test_block_solves_equal_scipys_lu(lattice, width):
 def test_cvxopts_column_by_column_solve_gives_the_same(lattice):
     """The fallback (cvxopt's own solve, where the factor's layout is not the one expected: a factor cvxopt made,
     as where CHOLMOD cannot be reached through ctypes) agrees to 1e-13."""
-    from mace_fmu.fe.ordering import _symbolic, analyse
+    from mace_fmu.sparse.ordering import _symbolic, analyse
 
     matrix, grids = lattice
     b = np.random.default_rng(0).standard_normal((matrix.shape[0], 5))
@@ -68,7 +68,7 @@ def test_the_factor_layout_is_read_and_checked(lattice):
     """The cholmod_factor's order, 64-bit indices, a pattern after the symbolic analysis and real doubles after
     the numeric factorisation; an object that is not a factor, or a factor of another order, gives None."""
     matrix, grids = lattice
-    from mace_fmu.fe.ordering import _symbolic, analyse
+    from mace_fmu.sparse.ordering import _symbolic, analyse
 
     analysis = analyse(matrix, groups=grids)
     symbolic = _symbolic(cholmod.load(), analysis.lower, analysis.permutation)  # cvxopt's capsule
@@ -100,7 +100,7 @@ def test_cholmods_blas_is_openblas_with_the_processors_kernels():
     code = ("import ctypes, os\n"
             "import control\n"
             "from pathlib import Path\n"
-            "from mace_fmu.fe import cholmod\n"
+            "from mace_fmu.sparse import cholmod\n"
             "cholmod.load()\n"
             "import cvxopt\n"
             "lib = ctypes.CDLL(str(cholmod._wheel_libraries(Path(cvxopt.__file__).parent, 'libopenblas')[0]))\n"
@@ -127,7 +127,7 @@ def test_cholmods_analyses_through_ctypes_size_the_factor_as_cvxopts(shape):
     size the same supernodal factor as cvxopt.cholmod.symbolic: CHOLMOD's own order (AMD) and each candidate's
     given order, on lattices of 72 (where CHOLMOD's default would take a simplicial factor), 576 and 1,800
     DOFs."""
-    from mace_fmu.fe.ordering import _entries, _lower_spmatrix, _symbolic, candidate_permutations
+    from mace_fmu.sparse.ordering import _entries, _lower_spmatrix, _symbolic, candidate_permutations
 
     deck = read_deck_text(frame_tower(nx=shape[0], ny=shape[1], levels=shape[2]), name="lattice.bdf")
     model = assemble(deck)

@@ -6,15 +6,14 @@ wide too, and nested dissection (METIS, through pymetis) fills less: cutting the
 small separators, it leaves a factor that grows with the separators' size instead of the
 cross-section's. CHOLMOD's approximate minimum degree (AMD) is the third candidate (the analyses run
 through ctypes on two threads, beside the nested dissection's ordering). The choice is
-made from the matrix, not from its shape: CHOLMOD's symbolic analysis of each candidate (a fraction
-of a second at 100k DOFs, no numbers factored) gives the size of the factor it would store, and the
-smallest wins. Measured on 100k-DOF lattices (benchmarks/RESULTS.md, "Wide structures: the ordering
-chosen by fill"): on a 6 x 6-grid tower RCM's factor is the smallest (263 entries per DOF; nested
-dissection 346, AMD 843); on a 20 x 20-grid one nested dissection's (1242 against RCM's 2072).
+made from the matrix, not from its shape: CHOLMOD's symbolic analysis of each candidate (no numbers
+factored) gives the size of the factor it would store, and the smallest wins. On 100k-DOF lattices
+(benchmarks/RESULTS.md, "Wide structures: the ordering chosen by fill") RCM's factor is the smallest on
+a slender tower, nested dissection's on a wide lattice.
 
 Nested dissection orders the graph of the grids, not of the DOFs, when the caller says which DOFs
-share a grid: a sixth of the vertices, the same separators, ten times faster (0.3 s against 3.6 s
-at 100k DOFs) and no more fill. Without pymetis the candidates are RCM and AMD.
+share a grid: a sixth of the vertices, the same separators, a fraction of the time and no more fill
+(benchmarks/RESULTS.md, "The sparse solver's figures, by module"). Without pymetis the candidates are RCM and AMD.
 """
 
 from __future__ import annotations
@@ -29,8 +28,8 @@ import numpy as np
 from scipy import sparse
 from scipy.sparse.csgraph import reverse_cuthill_mckee
 
-from mace_fmu.fe.cholmod import factor_layout, symbolic_factor
-from mace_fmu.fe.cholmod import load as load_cholmod
+from mace_fmu.sparse.cholmod import factor_layout, symbolic_factor
+from mace_fmu.sparse.cholmod import load as load_cholmod
 
 #: Names of the orderings, as reports and benchmarks print them.
 RCM = "reverse Cuthill-McKee"
@@ -159,8 +158,7 @@ def analyse(matrix: sparse.sparray, *, groups: np.ndarray | None = None, with_am
     if known:  # the choice made for this pattern before
         return Analysis(known[0], known[1], lower)
     # CHOLMOD's analyses through ctypes release Python's lock: AMD's, the longest, runs while the nested
-    # dissection orders the grids, then RCM's and nested dissection's side by side (the wide lattice's
-    # analyses: 0.44-0.66 s, against 0.55-0.96 s with those two through cvxopt)
+    # dissection orders the grids, then RCM's and nested dissection's side by side
     with ThreadPoolExecutor(max_workers=2) as threads:
         analysing = {AMD: threads.submit(symbolic_factor, lower)} if with_amd else {}
         permutations: dict[str, np.ndarray | None] = dict(candidate_permutations(a, groups=groups))
@@ -186,9 +184,9 @@ def analyse(matrix: sparse.sparray, *, groups: np.ndarray | None = None, with_am
 def symbolic_of_lower(lower: sparse.csc_array, permutation: np.ndarray | None) -> object | None:
     """CHOLMOD's supernodal symbolic analysis of the matrix whose lower triangle is ``lower``, in the order
     ``permutation`` (None: CHOLMOD's AMD): through ctypes with Python's lock released
-    (:func:`mace_fmu.fe.cholmod.symbolic_factor`, so that the two substructures' analyses run side by side), or
+    (:func:`mace_fmu.sparse.cholmod.symbolic_factor`, so that the two substructures' analyses run side by side), or
     cvxopt's where CHOLMOD cannot be reached that way. Either factor goes to
-    :func:`mace_fmu.fe.cholmod.numeric` and :class:`mace_fmu.fe.cholmod.CholeskySolve`.
+    :func:`mace_fmu.sparse.cholmod.numeric` and :class:`mace_fmu.sparse.cholmod.CholeskySolve`.
 
     Parameters
     ----------
@@ -200,7 +198,7 @@ def symbolic_of_lower(lower: sparse.csc_array, permutation: np.ndarray | None) -
     Returns
     -------
     object or None
-        A :class:`mace_fmu.fe.cholmod.SymbolicFactor` or cvxopt.cholmod's symbolic factor; None without cvxopt.
+        A :class:`mace_fmu.sparse.cholmod.SymbolicFactor` or cvxopt.cholmod's symbolic factor; None without cvxopt.
     """
     cholmod = load_cholmod()  # first: it readies the BLAS CHOLMOD binds to
     if cholmod is None:
