@@ -50,7 +50,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
     if args.at is not None:
         from mace_fmu.cli.update import _read_start
 
-        values = _read_start(args.at, args.fmu)
+        values, _ = _read_start(args.at, args.fmu)  # a plan predicts at values; bounds do not apply
         interface.check_parameters(list(values))
     for c in candidates:  # every signal checked before the first simulation
         for t in c.tests:

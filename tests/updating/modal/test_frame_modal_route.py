@@ -140,6 +140,6 @@ def test_the_export_and_update_fmu_start_take_the_modal_route_s_set(route, tmp_p
         assert start[name] == pytest.approx(params[name], rel=1e-12), name
     for k, label in enumerate(("1st", "2nd", "3rd"), start=1):
         assert start[f"damping_mode_{k}"] == pytest.approx(params[f"damping:{label} bending about Y"], rel=1e-12)
-    by_fmu_name = _read_start(str(folder / "parameters.toml"), str(fmu))
+    by_fmu_name, _ = _read_start(str(folder / "parameters.toml"), str(fmu))
     assert by_fmu_name["damping_mode_2"] == params["damping:2nd bending about Y"]
     assert by_fmu_name["m_floor_3"] == params["m_floor_3"]
