@@ -31,6 +31,7 @@ import dataclasses
 import datetime
 import hashlib
 import math
+import os
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -281,7 +282,7 @@ def parameter_names(deck, structure_file=None) -> ParameterNames:
     deck : Deck
         The deck.
     structure_file : StructureFile or path, optional
-        Its structure file (default: the bundled one for the bundled deck).
+        Its structure file, or the path of one (default: none, every MAT1 and CELAS2 card named by its ID).
 
     Returns
     -------
@@ -291,8 +292,13 @@ def parameter_names(deck, structure_file=None) -> ParameterNames:
     Raises
     ------
     MaceError
-        A ``masses`` entry naming no CONM2 of the deck (the file and the key named).
+        A ``masses`` entry naming no CONM2 of the deck (the file and the key named), or a structure file that
+        cannot be read.
     """
+    if isinstance(structure_file, (str, os.PathLike)):
+        from mace_fmu.structure.file import load_structure_file
+
+        structure_file = load_structure_file(structure_file)
     for key, name in (structure_file.tables.get("parameters", {}).get("masses", {}).items()
                       if structure_file is not None else ()):  # before names_of_table's int(key)
         if not key.strip().isdigit() or int(key) not in deck.conm2s:
