@@ -7,7 +7,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from mace_fmu.deck.cards import CBar, Cord1R, Cord2R, Deck
-from mace_fmu.errors import DeckError
+from mace_fmu.errors import DeckError, MaceError
 
 Frame = tuple[np.ndarray, np.ndarray]  #: (origin (3,), R (3, 3) with the unit axes as columns)
 
@@ -15,13 +15,13 @@ _COLLINEAR_TOL = 1e-12  #: relative size of |AB x AC| below which C counts as ly
 
 
 def axes_from_points(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
-    """CORD2R axes as columns [x y z]: z along A->B, x in the plane of A, B, C; ValueError if degenerate."""
+    """CORD2R axes as columns [x y z]: z along A->B, x in the plane of A, B, C; MaceError if degenerate."""
     z = b - a
     ac = c - a
     if np.linalg.norm(z) <= _COLLINEAR_TOL * max(np.linalg.norm(a), np.linalg.norm(b)):
-        raise ValueError("points A and B coincide (expected B on the z-axis, away from the origin A)")
+        raise MaceError("points A and B coincide (expected B on the z-axis, away from the origin A)")
     if np.linalg.norm(np.cross(z, ac)) <= _COLLINEAR_TOL * np.linalg.norm(z) * np.linalg.norm(ac):
-        raise ValueError("point C lies on the line AB (expected C off the z-axis, in the x-z plane)")
+        raise MaceError("point C lies on the line AB (expected C off the z-axis, in the x-z plane)")
     z = z / np.linalg.norm(z)
     x = ac - (ac @ z) * z
     x = x / np.linalg.norm(x)

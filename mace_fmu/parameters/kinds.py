@@ -41,6 +41,7 @@ from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Literal, Mapping
 
+from mace_fmu.errors import MaceError
 from mace_fmu.util.frequency import ZERO_HZ  # the zero-frequency cluster's edge [Hz]
 
 KindName = Literal["modulus", "spring", "mass", "delay", "gain", "damping", "frequency_scale"]
@@ -77,20 +78,20 @@ class ParameterKind:
     def fmu_name(self, mode: int) -> str:
         """FMU name of this per-mode kind for 1-based mode number ``mode``."""
         if not self.per_mode:
-            raise ValueError(f"{self.name} parameters are not per mode")
+            raise MaceError(f"{self.name} parameters are not per mode")
         return f"{self.fmu_prefix}{mode}"
 
     def set_name(self, label: str) -> str:
         """Parameter-set name of this per-mode kind for the modes labelled ``label``."""
         if not self.per_mode:
-            raise ValueError(f"{self.name} parameters are not per mode")
+            raise MaceError(f"{self.name} parameters are not per mode")
         return f"{self.set_prefix}{label}"
 
     def named(self, element: str) -> str:
         """The name (set's and FMU's alike) of this kind's parameter of a named element: ``MODULUS.named("lexan_end")``
         -> ``E_lexan_end``, ``DELAY.named("gyro_bus_y")`` -> ``delay_gyro_bus_y``."""
         if self.per_mode or not self.set_prefix or self.set_prefix != self.fmu_prefix:
-            raise ValueError(f"{self.name} parameters are not named after an element")
+            raise MaceError(f"{self.name} parameters are not named after an element")
         return f"{self.set_prefix}{element}"
 
 
@@ -229,7 +230,7 @@ def mode_number(name: str) -> int:
     """1-based mode number of a per-mode FMU parameter name (``frequency_scale_mode_7`` -> 7)."""
     kind = kind_of_fmu_name(name)
     if kind is None or not kind.per_mode:
-        raise ValueError(f"{name!r} is not a per-mode FMU parameter name")
+        raise MaceError(f"{name!r} is not a per-mode FMU parameter name")
     return int(name[len(kind.fmu_prefix):])
 
 
@@ -237,7 +238,7 @@ def mode_label(name: str) -> str:
     """Mode label of a per-mode parameter-set name (``damping:1st Z bending`` -> ``1st Z bending``)."""
     kind = kind_of_set_name(name)
     if kind is None or not kind.per_mode:
-        raise ValueError(f"{name!r} is not a per-mode parameter-set name")
+        raise MaceError(f"{name!r} is not a per-mode parameter-set name")
     return name[len(kind.set_prefix):]
 
 
