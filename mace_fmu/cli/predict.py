@@ -37,9 +37,9 @@ def cmd_predict(args: argparse.Namespace) -> int:
                                     deck=deck, structure_file=args.structure_file, source=source, progress=bar)
     paths = {}
     if args.fmu:  # first: an export that fails leaves no tables behind
-        from mace_fmu.fmu.naming import fmu_model_name, model_prefix
+        from mace_fmu.fmu.naming import model_fmu_name
 
-        name = fmu_model_name("0g", runtime=args.runtime, prefix=model_prefix(prediction.model)) + "_nominal"
+        name = model_fmu_name(prediction.model, runtime=args.runtime, variant="nominal")
         say(f"{args.runtime} FMU {name}.fmu with the frequency bounds")
         from mace_fmu.fmu.export import export_fmu
 

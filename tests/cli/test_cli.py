@@ -347,3 +347,49 @@ def test_a_refusal_of_many_cards_is_short_and_verbose_gives_the_whole_list(capsy
     assert len(err) < 800 + len(str(deck)) and "CGAP" not in err
     code, _, err = _run(capsys, ["--verbose", "modes", "0g", "--deck", str(deck)])
     assert code == 2 and all(f"  {n}: 1 card(s), first at " in err for n in names)
+
+
+def test_build_names_the_fmus_of_another_deck_as_export_does(capsys, tmp_path, monkeypatch):
+    """``build`` of another deck names its FMUs by the deck (frame_1g_native, ...), with the one naming function
+    ``export`` uses (the FMUs themselves are not written here: the names are what is asked)."""
+    from support.paths import EXAMPLES
+
+    import mace_fmu.cli.build
+    import mace_fmu.fmu.export
+
+    names = []
+    for tables in ("thesis_tables", "low_modes"):  # the thesis's tables are MACE's: not what is tested here
+        monkeypatch.setattr(mace_fmu.cli.build, tables, lambda *_: "")
+    monkeypatch.setattr(mace_fmu.fmu.export, "export_fmu",
+                        lambda model, *, name, out_dir, fmi_version=2, **_: names.append(name) or tmp_path / name)
+    frame = EXAMPLES / "three_storey_frame"
+    code, _, err = _run(capsys, ["build", "--deck", str(frame / "frame.bdf"), "--structure", str(frame / "frame.toml"),
+                                 "-o", str(tmp_path)])
+    assert code == 0, err
+    assert names == [f"frame_{c}_{r}" for c in ("1g", "0g") for r in ("native", "native_fmi3", "pythonfmu")]
+
+
+def test_no_command_names_an_fmu_by_hand():
+    """Every command names its FMUs and SSP systems by the model (model_fmu_name: the deck, the configuration,
+    the motion outputs), never with a fixed "MACE" or from the configuration alone."""
+    from support.paths import ROOT
+
+    for path in sorted((ROOT / "mace_fmu" / "cli").glob("*.py")):
+        text = path.read_text(encoding="utf-8")
+        assert "fmu_model_name(" not in text and 'name=f"MACE' not in text, path.name
+
+
+@pytest.mark.slow  # a model of the frame and its FMU: about 4 s
+def test_an_ssp_package_names_its_system_after_the_model(capsys, tmp_path):
+    import xml.etree.ElementTree as ET
+    import zipfile
+
+    from support.paths import EXAMPLES
+
+    frame = EXAMPLES / "three_storey_frame"
+    code, _, err = _run(capsys, ["export", "1g", "--deck", str(frame / "frame.bdf"), "--structure",
+                                 str(frame / "frame.toml"), "--runtime", "pythonfmu", "--ssp", str(tmp_path / "f.ssp")])
+    assert code == 0, err
+    with zipfile.ZipFile(tmp_path / "f.ssp") as z:
+        root = ET.fromstring(z.read("SystemStructure.ssd"))
+    assert root.get("name") == "frame_1g" and root[0].get("name") == "frame_1g"
