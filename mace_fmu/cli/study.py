@@ -119,13 +119,16 @@ def _bounds(args: argparse.Namespace) -> tuple[object, dict[int, float], str]:
 
         return model, read_frequency_bounds(args.frequency_bounds, mode_labels=model.plant.labels), args.frequency_bounds
     if args.bound:
+        from mace_fmu.parameters.frequency_bounds import relative_bound
+
         bounds = {}
         for text in args.bound:
             try:
                 mode, percent = text.split("=")
-                bounds[int(mode)] = float(percent) / 100.0
+                mode, percent = int(mode), float(percent)
             except ValueError:
                 raise MaceError(f"--bound takes MODE=PERCENT (e.g. 17=2.5 for mode 17 within +-2.5 %), got {text!r}") from None
+            bounds[mode] = relative_bound(percent / 100.0, what=f"--bound {text}")
         return model, bounds, "--bound"
     if args.parameters:
         raise MaceError("--parameters needs its bounds: --frequency-bounds table_5_3.toml or --bound MODE=PERCENT")

@@ -56,7 +56,7 @@ class RobustStudy:
 def prediction_bounds(prediction) -> dict[int, float]:
     """1-based open-loop mode -> relative frequency bound of a ``zero_g.ZeroGPrediction`` (Table 5.3's rows
     that fall on a flexible mode; the gimbal pendulum rows are servo poles, not modes the FMU can scale)."""
-    return {row.mode: row.bound for row in prediction.rows if row.mode is not None}
+    return prediction.frequency_bounds
 
 
 def cross_check(model: VoltsModel, sweep: SweepResult, design: RobustDesign, *, point: int) -> CrossCheck:
