@@ -9,7 +9,8 @@ import os
 import sys
 from pathlib import Path
 
-from mace_fmu.cli.common import deck_option, parameters_option, positive_integer, positive_number, progress_bar
+from mace_fmu.cli.common import (deck_option, parameters_option, positive_integer, positive_number, progress,
+                                 progress_bar)
 from mace_fmu.cli.correlate import structure_options
 from mace_fmu.cli.preflight import output_option, scheduler_options
 from mace_fmu.errors import MaceError
@@ -20,15 +21,11 @@ from mace_fmu.util.textfile import read_toml
 NOT_CONVERGED = 3
 
 
-def _say(message: str) -> None:
-    print(f"  {message}", file=sys.stderr, flush=True)
-
-
 def cmd_sample(args: argparse.Namespace) -> int:
     from mace_fmu.updating.sample.problem import as_json, format_tables, run_sample_problem
 
     if not args.json:
-        _say("sample problem: 'experiment', measurement model, 7 updates")
+        progress("sample problem: 'experiment', measurement model, 7 updates")
     problem = run_sample_problem()
     if args.json:
         json.dump(as_json(problem), sys.stdout, indent=1)
@@ -206,10 +203,10 @@ def cmd_fmu_update(args: argparse.Namespace) -> int:
                           window_s=tuple(args.window) if args.window else None, bounds=bounds,
                           bounds_source=source)
     for note in problem.notes:
-        _say(note)
+        progress(note)
     where = f"the Dask cluster at {args.scheduler}" if args.scheduler else local_workers(args.workers)
     gains = len(problem.family.gain_outputs)
-    _say(f"updating {len(problem.names) - gains} parameter(s)" + (f" and {gains} sensor gain(s)" if gains else "")
+    progress(f"updating {len(problem.names) - gains} parameter(s)" + (f" and {gains} sensor gain(s)" if gains else "")
          + f" of {Path(args.fmu).name} on the {args.cost} cost; FMU runs on {where}")
     with progress_bar() as bar:
         with DaskRunner(scheduler=args.scheduler, workers=args.workers, progress=bar, task="FMU runs",
@@ -217,9 +214,9 @@ def cmd_fmu_update(args: argparse.Namespace) -> int:
             result = update_fmu(family=problem.family, cost=problem.cost, start=problem.start, stages=[problem.names],
                                 runner=runner, progress=bar, bounds=problem.bounds)
     report = _write_fmu_update(problem, result, out=Path(args.out), noise_fraction=noise_fraction, strict=args.strict)
-    _say(report.summary())
+    progress(report.summary())
     for line in report.misfit_lines()[:8]:
-        _say(f"  {line}")
+        progress(f"  {line}")
     return NOT_CONVERGED if report.failed else 0
 
 
@@ -299,7 +296,7 @@ def cmd_mace_update(args: argparse.Namespace) -> int:
     with progress_bar(task_lines=True) as bar:
         outcome = run_mace_update(start=start, measured=measured, preload=args.preload, settings=settings, deck=deck,
                                   progress=bar)
-    _say(f"writing the report to {out}/")
+    progress(f"writing the report to {out}/")
     paths = write_report(outcome, out)
     s = scores(mode_rows(outcome))
     res = outcome.result
@@ -321,7 +318,7 @@ def cmd_mace_update(args: argparse.Namespace) -> int:
               write_text_atomic(out / "uncertainty.toml", uncertainty_toml(uncertainty))]
     for path in paths:
         print(f"wrote {path}")
-    _say(report.summary())
+    progress(report.summary())
     return NOT_CONVERGED if report.failed else 0
 
 
@@ -343,7 +340,7 @@ def cmd_modal_update(args: argparse.Namespace) -> int:
     settings = UpdateSettings(method=args.method, perturbation="full", penalty=args.penalty, rounds=args.rounds,
                               max_outer=MODAL_SETTINGS.max_outer)
     scaled = {"auto": None, "mass-normalised": True, "mac": False}[args.shapes]
-    _say(f"updating {len(names)} candidate parameter(s) of {family.where} against {len(measured.modes)} measured "
+    progress(f"updating {len(names)} candidate parameter(s) of {family.where} against {len(measured.modes)} measured "
          f"mode(s) of {args.modes}")
     with progress_bar(task_lines=True) as bar:
         outcome = run_modal_update(family=family, measured=measured, names=names, settings=settings,
@@ -387,7 +384,7 @@ def cmd_modal_update(args: argparse.Namespace) -> int:
     print(format_uncertainty(uncertainty))
     for path in paths:
         print(f"wrote {path}")
-    _say(report.summary())
+    progress(report.summary())
     return NOT_CONVERGED if report.failed else 0
 
 

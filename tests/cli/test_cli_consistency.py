@@ -201,3 +201,25 @@ def test_a_modulus_far_outside_the_decks_is_blamed_on_the_set(tmp_path, capsys, 
     assert line.startswith("mace-fmu: error: tiny.toml: E_lexan_center = 2400 Pa is 1.03e-06 x the deck's "
                            "2.335e+09 Pa, outside the range the FMUs take (0.7-1.5 x); with it the model cannot be "
                            "solved ("), line
+
+
+# ---- one way to write a progress line -------------------------------------------------------------------------
+
+def test_every_progress_line_goes_through_progress():
+    """A progress line (two spaces, on stderr) is written by mace_fmu.cli.common.progress alone, so that every
+    command's lines look alike and change together; no command has a printer of its own beside it."""
+    import ast
+
+    found = []
+    for path in sorted((ROOT / "mace_fmu" / "cli").glob("*.py")):
+        if path.name in ("common.py", "__init__.py"):  # progress itself; an error's indented details
+            continue
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.Call) and getattr(node.func, "id", "") == "print" and node.args \
+                    and any(k.arg == "file" and ast.unparse(k.value) == "sys.stderr" for k in node.keywords):
+                first = node.args[0]
+                text = first.value if isinstance(first, ast.Constant) else \
+                    getattr(first.values[0], "value", "") if isinstance(first, ast.JoinedStr) and first.values else ""
+                if isinstance(text, str) and text.startswith("  "):
+                    found.append(f"{path.name}:{node.lineno}")
+    assert found == []
