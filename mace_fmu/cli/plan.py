@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from mace_fmu.cli.common import positive_integer, progress, progress_bar
+from mace_fmu.cli.common import non_negative_integer, positive_integer, progress, progress_bar
 from mace_fmu.cli.preflight import output_option, scheduler_options
 from mace_fmu.errors import MaceError
 from mace_fmu.util.atomic import write_text_atomic
@@ -83,7 +83,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "update's parameters.toml; default: the FMU's start values). The predictions hold near these "
                    "values only: the cable moduli's predicted sd halved between the start values and a point 2-3 %% "
                    "away")
-    p.add_argument("--seed", type=int, default=0, help="seed of the excitation's white noise (default 0)")
+    p.add_argument("--seed", type=non_negative_integer, default=0,
+                   help="seed of the excitation's white noise (default 0)")
     scheduler_options(p, scheduler_help="run the FMU simulations on this Dask cluster")
     p.add_argument("--workers", type=positive_integer, default=None, help="local worker processes (default: one per core)")
     output_option(p, "-o", "--out", kind="file", metavar="FILE",

@@ -9,8 +9,8 @@ import os
 import sys
 from pathlib import Path
 
-from mace_fmu.cli.common import (deck_option, parameters_option, positive_integer, positive_number, progress,
-                                 progress_bar)
+from mace_fmu.cli.common import (deck_option, non_negative_hz, non_negative_number, parameters_option,
+                                 positive_integer, positive_number, progress, progress_bar)
 from mace_fmu.cli.correlate import structure_options
 from mace_fmu.cli.preflight import output_option, scheduler_options
 from mace_fmu.errors import MaceError
@@ -141,17 +141,6 @@ def _gain_uncertainty(groups: list[list[tuple[str, float]]]) -> dict[str, float]
             raise MaceError(f"--gain-uncertainty: {name!r} given twice")
         out[name] = fraction
     return out
-
-
-def _non_negative(text: str) -> float:
-    """argparse type of a weight: a finite number >= 0."""
-    try:
-        value = float(text)
-    except ValueError:
-        value = -1.0
-    if not (0.0 <= value < float("inf")):
-        raise argparse.ArgumentTypeError(f"expected a finite number >= 0, got {text!r}")
-    return value
 
 
 def local_workers(workers: int | None) -> str:
@@ -441,7 +430,7 @@ def _fmu_options(p: argparse.ArgumentParser) -> None:
     where.add_argument("--workers", type=positive_integer, default=None,
                        help=("local worker processes (default: one per core)"))
     p.add_argument("--map", metavar="FILE", help=("channel map: data channel names and units to the FMU's signals"))
-    p.add_argument("--band-hz", type=float, nargs=2, metavar=("LOW", "HIGH"), action="append", default=[],
+    p.add_argument("--band-hz", type=non_negative_hz, nargs=2, metavar=("LOW", "HIGH"), action="append", default=[],
                    help=("[Hz] time histories, --cost time: the same zero-phase band-pass on the measured and the "
                          "FMU's outputs (the FMU driven by the measured inputs as they are), the noise read outside "
                          "the band; --cost log-frf: the H1 estimate's band (default 0.5-60 Hz, or the lines of a "
@@ -537,7 +526,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="how shapes enter the cost: their mass-normalised difference (needs a driving point: it tells "
                         "masses from stiffnesses), or 1 - MAC (scale-free); default auto: mass-normalised where the "
                         "modes file has them")
-    d.add_argument("--shape-weight", type=_non_negative, default=0.1, metavar="W",
+    d.add_argument("--shape-weight", type=non_negative_number, default=0.1, metavar="W",
                    help="weight of the shape residuals against the relative frequency errors (default 0.1: a 10 %% "
                         "shape difference counts like a 1 %% frequency error; 0: frequencies alone, eq. 4.2)")
     d.add_argument("--method", choices=["cost-sensitivity", "full"], default="cost-sensitivity",

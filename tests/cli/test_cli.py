@@ -220,8 +220,7 @@ def test_view_response_checks_its_signals_before_any_work(capsys, tmp_path):
             (["--input", "rwa_z", "--output", "gyro_payload_q"], "--output 'gyro_payload_q' is not an output of the "
                                                                  "0g model: use a sensor (encoder_primary_x, "),
             (["--input", "rwa_z", "--output", "grid_64_tx"], "grid_<id>_<tx|ty|tz|rx|ry|rz> for one of its 79 grids"),
-            (["--input", "rwa_z", "--duration", "0.1", "--step", "0.003"], "not a whole number of 0.003 s steps"),
-            (["--input", "rwa_z", "--signal", "chirp", "--chirp-hz", "-1", "5"], "chirp frequencies must be >= 0 Hz")):
+            (["--input", "rwa_z", "--duration", "0.1", "--step", "0.003"], "not a whole number of 0.003 s steps")):
         code, out, err = _run(capsys, ["view", "response", "0g", *argv, "--html", page])
         assert code == 2 and message in err, err
         assert out == "" and list(tmp_path.iterdir()) == []  # no FMU, page or plot

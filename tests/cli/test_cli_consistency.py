@@ -223,3 +223,38 @@ def test_every_progress_line_goes_through_progress():
                 if isinstance(text, str) and text.startswith("  "):
                     found.append(f"{path.name}:{node.lineno}")
     assert found == []
+
+
+# ---- every number an option takes is checked as it is parsed --------------------------------------------------
+
+def test_no_option_takes_a_plain_float_or_int():
+    """``type=float`` lets nan, inf and -5 through to fail later, or not at all; each option has a type that says
+    what it expects (mace_fmu.cli.common: positive_number, positive_hz, fraction, percent, ...), in one line."""
+    import ast
+
+    plain = []
+    for path in sorted((ROOT / "mace_fmu" / "cli").glob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.Call) and getattr(node.func, "attr", "") == "add_argument":
+                keywords = {k.arg: k.value for k in node.keywords}
+                kind = getattr(keywords.get("type"), "id", "")
+                if kind == "float" or (kind == "int" and "choices" not in keywords):
+                    plain.append(f"{path.name}:{node.lineno}")
+    assert plain == []
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["view", "response", "0g", "--chirp-hz", "-1", "5"], "argument --chirp-hz: expected a finite frequency >= 0 Hz, "
+                                                          "got '-1'"),
+    (["view", "response", "0g", "--duration", "nan"], "argument --duration: expected a finite number > 0, got 'nan'"),
+    (["data", "h1", "x.csv", "--segment", "0"], "argument --segment: expected an integer >= 1, got '0'"),
+    (["data", "h1", "x.csv", "--segment", "8", "--overlap", "1"], "argument --overlap: expected a fraction in [0, 1), "
+                                                                  "got '1'"),
+    (["model", "0g", "--list-max-hz", "-5"], "argument --list-max-hz: expected a finite frequency > 0 Hz, got '-5'"),
+    (["study", "robust-0g", "--seed", "-1"], "argument --seed: expected an integer >= 0, got '-1'"),
+])
+def test_a_bad_number_is_one_line_naming_the_option_and_what_it_expects(capsys, argv, message):
+    with pytest.raises(SystemExit) as stopped:
+        main(argv)
+    assert stopped.value.code == 2
+    assert _error_line(capsys).endswith(f"error: {message}")
