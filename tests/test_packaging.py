@@ -6,7 +6,7 @@ whose dependencies come from this environment's site-packages (a path entry, so 
 ``.pth`` files, and with them no editable install of mace-fmu, is active). ``mace-fmu build`` then
 runs from an unrelated folder, with the bundled deck and data read from the installed package, as on a
 fresh machine: zig's cache and the runtime cache empty. The wheel carries the native runtime's binaries
-(compiled by setup.py when it was built), so that build compiles nothing (issue 51, item 8).
+(compiled by setup.py when it was built), so that build compiles nothing.
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""The command line says the same things the same way (issue 51, item 11): each finding, as it was seen.
+"""The command line says the same things the same way: each finding, as it was seen.
 
 Removed spellings refused by name, ``--version``, an FMI 3 controller beside the FMI 2 one, FMUs of two
 updates' parameter sets beside each other, the user's own paths in errors, help text without ``%%``, the

@@ -1,4 +1,4 @@
-"""Bounds (issue 48, item 3): the defaults by kind whatever the spelling of the name, and a parameter that ends at
+"""Bounds: the defaults by kind whatever the spelling of the name, and a parameter that ends at
 a bound reported one-sided in the uncertainty table and uncertainty.toml, as the verdict says it is."""
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ from mace_fmu.updating.sample.two_mass import TwoMassSystem
 
 @pytest.mark.parametrize("name", ["damping_mode_3", "damping:1st Z bending"])
 def test_a_damping_ratio_is_bounded_at_0_1_to_4_times_its_start_in_either_spelling(name):
-    """The issue's damping ratio stopped at 5x its start: an FMU's name, damping_mode_3, was read as a parameter
+    """A damping ratio that stopped at 5x its start: an FMU's name, damping_mode_3, was read as a parameter
     set's, had no kind, and took the others' x0.2-5."""
     bound = default_bounds([name], {name: 0.01})[name]
     assert (bound.lower, bound.upper) == pytest.approx((0.001, 0.04))

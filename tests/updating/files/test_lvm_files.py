@@ -1,4 +1,4 @@
-"""LabVIEW measurement files (.lvm) read as they come (issue 48, item 3): channel names and units from the header,
+"""LabVIEW measurement files (.lvm) read as they come: channel names and units from the header,
 through the channel map, times from the header's X0 and Delta_X; errors that name the file, the line and the
 channel.
 
