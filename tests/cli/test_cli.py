@@ -348,24 +348,30 @@ def test_a_refusal_of_many_cards_is_short_and_verbose_gives_the_whole_list(capsy
     assert code == 2 and all(f"  {n}: 1 card(s), first at " in err for n in names)
 
 
-def test_build_names_the_fmus_of_another_deck_as_export_does(capsys, tmp_path, monkeypatch):
-    """``build`` of another deck names its FMUs by the deck (frame_1g_native, ...), with the one naming function
-    ``export`` uses (the FMUs themselves are not written here: the names are what is asked)."""
+def test_build_of_another_deck_lists_its_modes_and_names_its_fmus_as_export_does(capsys, tmp_path, monkeypatch):
+    """``build`` of another deck lists that deck's modes in place of the thesis's tables (which pair MACE's own
+    modes: on the frame they stopped the job with StopIteration) and names its FMUs by the deck (frame_1g_native,
+    ...), with the one naming function ``export`` uses (the FMUs themselves are not written here)."""
     from support.paths import EXAMPLES
 
-    import mace_fmu.cli.build
     import mace_fmu.fmu.export
+    from mace_fmu.deck.reader import read_deck
+    from mace_fmu.fe.modes import compute_modes
 
     names = []
-    for tables in ("thesis_tables", "low_modes"):  # the thesis's tables are MACE's: not what is tested here
-        monkeypatch.setattr(mace_fmu.cli.build, tables, lambda *_: "")
     monkeypatch.setattr(mace_fmu.fmu.export, "export_fmu",
                         lambda model, *, name, out_dir, fmi_version=2, **_: names.append(name) or tmp_path / name)
     frame = EXAMPLES / "three_storey_frame"
-    code, _, err = _run(capsys, ["build", "--deck", str(frame / "frame.bdf"), "--structure", str(frame / "frame.toml"),
-                                 "-o", str(tmp_path)])
+    code, out, err = _run(capsys, ["build", "--deck", str(frame / "frame.bdf"), "--structure",
+                                   str(frame / "frame.toml"), "-o", str(tmp_path)])
     assert code == 0, err
     assert names == [f"frame_{c}_{r}" for c in ("1g", "0g") for r in ("native", "native_fmi3", "pythonfmu")]
+    assert "Table 5.1" not in out and "0-g modes up to 250 Hz" in out
+    first = compute_modes(read_deck(frame / "frame.bdf"), configuration="0g",
+                          structure_file=frame / "frame.toml").modes.frequencies_hz
+    table = out.split("0-g modes up to 250 Hz")[1].split("\n\n")[0]
+    printed = [float(line.split()[1]) for line in table.splitlines()[1:]]
+    assert printed[:3] == pytest.approx(first[:3], abs=5e-4)  # printed to 3 decimals
 
 
 def test_no_command_names_an_fmu_by_hand():
