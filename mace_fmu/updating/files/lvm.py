@@ -59,8 +59,10 @@ def read_lvm_time_history(path: str | Path, *, channel_map: ChannelMap | None = 
     Each channel is named by the line of names over its data and has the unit of its ``Y_Unit_Label``
     (an SI symbol for LabVIEW's unit names: "Volts" is read as "V"). Without a channel map a channel's name
     carries its role, ``in:<signal>`` or ``out:<signal>``, as a CSV file's labels do; with one the map
-    gives signal, role and unit, and the header's unit, where it states one, must be the map's. Times are
-    X0 + k Delta_X of the header (the X column, where written, must agree to half a sample).
+    gives signal, role and unit, and the header's unit, where it states one, must be the map's or one that
+    converts to it (:data:`CONVERSIONS`: "Pounds" to N, "g" to m/s^2). Times are X0 + k Delta_X of the header
+    (the X column, where written, must agree to half a sample), or the X column's own uniform clock where the
+    header's ``Samples`` is not the segment's number of rows (a file resampled after LabVIEW wrote it).
 
     Parameters
     ----------
