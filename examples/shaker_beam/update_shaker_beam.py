@@ -57,8 +57,21 @@ WINDOWS = {"first_half": ("4", "11.8"), "second_half": ("11.9", "19.7")}
 
 
 def accelerance_at_lines(times_s: np.ndarray, force: np.ndarray, acc: np.ndarray) -> np.ndarray:
-    """The record's acceleration over force at each line: the ratio of their Fourier coefficients at the line
-    over the whole record (the lines are far apart, so the record's length resolves them)."""
+    """The record's acceleration over force at each line of :data:`LINES_HZ`: the ratio of their Fourier
+    coefficients at the line over the whole record (the lines are far apart, so the record's length resolves them).
+
+    Parameters
+    ----------
+    times_s : ndarray
+        Sample times [s].
+    force, acc : ndarray
+        The force [N] and the acceleration [m/s^2] at those times.
+
+    Returns
+    -------
+    ndarray
+        Complex accelerance [(m/s^2)/N], one per line.
+    """
     out = []
     for hz in LINES_HZ:
         w = np.exp(-2j * np.pi * hz * times_s)
@@ -67,20 +80,31 @@ def accelerance_at_lines(times_s: np.ndarray, force: np.ndarray, acc: np.ndarray
 
 
 def main(out: Path) -> dict:
-    """Every step of the module docstring into ``out``; returns the numbers it prints."""
-    from mace_fmu.updating.files import read_channel_map, read_time_history
+    """Every step of the module docstring, its files written into ``out``.
+
+    Parameters
+    ----------
+    out : Path
+        The folder for the FMU, the two updates' files and their figures.
+
+    Returns
+    -------
+    dict
+        ``measured`` and ``model``: the accelerance at the lines [(m/s^2)/N], complex; per half of the record
+        (``first_half``, ``second_half``): ``code`` (the exit status), ``verdict`` (convergence.toml) and
+        ``stage`` (uncertainty.toml's first stage).
+    """
     from mace_fmu.deck.reader import read_deck
     from mace_fmu.fe.modes import compute_modes
     from mace_fmu.iomodel.volts import volts_model
+    from mace_fmu.updating.files import read_channel_map, read_time_history
 
     out.mkdir(parents=True, exist_ok=True)
-    # %%
     # 1. The raw file: three channels, the header's units (pounds, g) converted by the channel map
     history = read_time_history(RECORD, channel_map=read_channel_map(MAP))
     t, force, acc = history.times_s, history.inputs["force_shaker"], history.outputs["acc_beam"]
     print(f"{RECORD.name}: {t.size} samples, {t[1] - t[0]:.4g} s apart, {t[-1]:.4g} s; force mean "
           f"{force.mean():.3g} N, RMS about it {force.std():.3g} N; acceleration RMS {acc.std():.3g} m/s^2")
-    # %%
     # 2. The beam's FMU, and its accelerance at the lines beside the record's
     assert mace_fmu(["export", "0g", "--deck", str(DECK), "--structure", str(STRUCTURE), "-o", str(out / "fmus")]) == 0
     fmu = out / "fmus" / "shaker_beam_0g_native.fmu"
@@ -102,7 +126,6 @@ def main(out: Path) -> dict:
     ax_h.set_ylabel("|acceleration / force| [(m/s^2)/N]")
     ax_h.legend(fontsize=8)
     fig.tight_layout()
-    # %%
     # 3. The update on the record's first half and, for the intervals, on its second
     numbers = {"measured": measured, "model": model}
     for name, (start, end) in WINDOWS.items():
@@ -121,13 +144,11 @@ def main(out: Path) -> dict:
         print(f"{p}: first half {first['values'][k]:.4g} [{first['interval_95_low'][k]:.4g}, "
               f"{first['interval_95_high'][k]:.4g}], second half {second['values'][k]:.4g}: "
               f"{'inside' if inside else 'OUTSIDE'}")
-    # %%
     # 4. The residual figure of the first half
     image = plt.imread(out / "first_half" / "residuals.png")
     fig = plt.figure(figsize=(10, 2.6))
     plt.imshow(image)
     plt.axis("off")
-    # %%
     # 5. The updated frequencies against the owners' impact test
     assert mace_fmu(["modes", "0g", "--deck", str(DECK), "--structure", str(STRUCTURE)]) == 0
     assert mace_fmu(["modes", "0g", "--deck", str(DECK), "--structure", str(STRUCTURE), "--parameters",

@@ -11,8 +11,9 @@ Every number the how-to quotes is checked here against what the commands print, 
 
 from __future__ import annotations
 
+import contextlib
+import io
 import re
-import tomllib
 
 import numpy as np
 import pytest
@@ -37,12 +38,13 @@ def _example():
 
 
 def _blocks(kind: str) -> list[str]:
-    """The how-to's fenced blocks of ``kind`` (``text``), continuation lines joined."""
-    return re.findall(rf"```{kind}\n(.*?)```", HOWTO.read_text(), flags=re.S)
+    """The how-to's fenced blocks of ``kind`` (``text``)."""
+    return re.findall(rf"```{kind}\n(.*?)```", HOWTO.read_text(), flags=re.DOTALL)
 
 
 def _frequencies(text: str) -> np.ndarray:
-    return np.array([float(m) for m in re.findall(r"^\s+\d+\s+([\d.]+)\s+\S", text, flags=re.M)])
+    """The frequencies [Hz] of ``mace-fmu modes``' table."""
+    return np.array([float(m) for m in re.findall(r"^\s+\d+\s+([\d.]+)\s+\S", text, flags=re.MULTILINE)])
 
 
 @pytest.fixture(scope="module")
@@ -52,9 +54,6 @@ def run(tmp_path_factory):
 
     matplotlib.use("Agg")
     folder = tmp_path_factory.mktemp("shaker_beam")
-    import contextlib
-    import io
-
     out = io.StringIO()
     with contextlib.redirect_stdout(out):
         numbers = _example().main(folder)
@@ -67,6 +66,8 @@ def test_the_record_is_read_in_si_units_on_its_time_column_s_clock(capsys):
     assert code == 0, err
     shown = _blocks("text")[0].replace("data/data_set_1", str(BEAM / "data" / "data_set_1"))
     assert printed_in(shown, out), out
+    channel_map = [line for line in (BEAM / "data" / "channels.csv").read_text().splitlines() if line[0] != "#"]
+    assert [line.strip() for line in _blocks("text")[1].strip().splitlines()] == channel_map
 
 
 def test_the_stated_beam_misses_the_record_s_accelerance_by_7_to_180_times(run):
