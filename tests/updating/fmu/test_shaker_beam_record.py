@@ -21,7 +21,7 @@ from support.cli import run_cli
 from support.paths import EXAMPLES, ROOT
 from support.printed import printed_in
 
-pytestmark = pytest.mark.slow  # an FMU export and two updates of the 7881-sample record: about 25 s
+pytestmark = pytest.mark.slow  # an FMU export and three updates of 3100-6300 samples: about 35 s
 
 BEAM = EXAMPLES / "shaker_beam"
 HOWTO = ROOT / "docs" / "howto" / "update_from_a_shaker_record.md"
@@ -88,16 +88,18 @@ def test_the_verdict_is_model_error_and_the_intervals_hold_on_the_other_half(run
     a noise of about 1 % (below 3 %); every parameter of the second half inside the first half's intervals, the
     mass and the damping ratio at their upper bounds with one-sided intervals within the FMU's range."""
     numbers = run[0]
-    for name in ("first_half", "second_half"):
+    for name in ("first_half", "second_half", "test_2"):
         half = numbers[name]
         assert half["code"] == 0
         assert half["verdict"]["verdict"] == "model error", half["verdict"]["headline"]
         (channel,) = half["verdict"]["channel"]
         assert 20 < channel["rms"] < 40 and channel["noise_rms"] < 0.03, channel
         assert half["verdict"]["at_bounds"] == {"m_shaker": "upper", "damping_mode_3": "upper"}
-    first, second = numbers["first_half"]["stage"], numbers["second_half"]["stage"]
-    for k, name in enumerate(first["parameters"]):
-        assert first["interval_95_low"][k] <= second["values"][k] <= first["interval_95_high"][k], name
+    first = numbers["first_half"]["stage"]
+    for other in ("second_half", "test_2"):
+        for k, name in enumerate(first["parameters"]):
+            value = numbers[other]["stage"]["values"][k]
+            assert first["interval_95_low"][k] <= value <= first["interval_95_high"][k], (other, name)
     assert first["interval_95_low"][1] == pytest.approx(0.07) and first["interval_95_low"][2] == 0.0
     assert "misfit in 100-122 Hz" in numbers["first_half"]["verdict"]["channel"][0]["text"]
 
@@ -110,6 +112,19 @@ def test_the_how_to_s_tables_are_what_the_commands_print(run):
         for line in block.strip().splitlines():  # each line on its own: the table's indentation is the terminal's
             assert printed_in(line.strip(), printed), line
     assert run[0]["second_half"]["stage"]["values"][0] == pytest.approx(2.379e11, abs=0.001e11)
+    assert run[0]["test_2"]["stage"]["values"][0] == pytest.approx(2.394e11, abs=0.001e11)
+
+
+def test_test_2_s_channel_name_is_refused_with_test_1_s_map_naming_the_close_one(run, capsys, tmp_path):
+    """Test 2's file names its acceleration channel in full; test 1's map (Acceleratio) stops the command before
+    any run, exit 2, with the name it may mean, as the how-to quotes."""
+    data = BEAM / "data"
+    fmu = run[2] / "fmus" / "shaker_beam_0g_native.fmu"
+    code, _, err = run_cli(capsys, ["update", "fmu", str(fmu), "--data",
+                                    str(data / "data_set_2_downsampled_by_128.lvm"), "--map", str(data / "channels.csv"),
+                                    "--update", "E_beam", "-o", str(tmp_path / "out")])
+    assert code == 2 and "channel 'Acceleration' is not in the channel map" in err and "did you mean 'Acceleratio'?" \
+        in err, err
 
 
 def test_the_updated_frequencies_move_away_from_the_owners(run, capsys):
