@@ -120,11 +120,11 @@ def test_test_2_s_channel_name_is_refused_with_test_1_s_map_naming_the_close_one
     any run, exit 2, with the name it may mean, as the how-to quotes."""
     data = BEAM / "data"
     fmu = run[2] / "fmus" / "shaker_beam_0g_native.fmu"
-    code, _, err = run_cli(capsys, ["update", "fmu", str(fmu), "--data",
-                                    str(data / "data_set_2_downsampled_by_128.lvm"), "--map", str(data / "channels.csv"),
-                                    "--update", "E_beam", "-o", str(tmp_path / "out")])
-    assert code == 2 and "channel 'Acceleration' is not in the channel map" in err and "did you mean 'Acceleratio'?" \
-        in err, err
+    record = data / "data_set_2_downsampled_by_128.lvm"
+    code, _, err = run_cli(capsys, ["update", "fmu", str(fmu), "--data", str(record), "--map",
+                                    str(data / "channels.csv"), "--update", "E_beam", "-o", str(tmp_path / "out")])
+    assert code == 2 and "channel 'Acceleration' is not in the channel map" in err, err
+    assert "did you mean 'Acceleratio'?" in err and not (tmp_path / "out").exists()
 
 
 def test_the_updated_frequencies_move_away_from_the_owners(run, capsys):
@@ -164,3 +164,20 @@ def test_the_force_s_distortion_lines_are_what_the_how_to_says():
     assert at[100] == pytest.approx(7.6, abs=0.1)
     others = {hz: a for hz, a in at.items() if hz not in (100, 120, 150)}
     assert max(others, key=others.get) == 80 and others[80] == pytest.approx(0.84, abs=0.01)
+
+
+def test_the_declared_ranges_and_a_bound_outside_them_are_as_the_how_to_says(run, capsys, tmp_path):
+    """The FMU declares m_shaker 0.07-0.15 kg and E_beam 140-300 GPa; --bounds m_shaker=0.05:0.3 is refused before
+    any run, exit 2, naming the range."""
+    from mace_fmu.updating.fmu.model import read_fmu_interface
+
+    fmu = run[2] / "fmus" / "shaker_beam_0g_native.fmu"
+    ranges = read_fmu_interface(fmu).ranges
+    assert ranges["m_shaker"] == pytest.approx((0.07, 0.15)) and ranges["E_beam"] == pytest.approx((1.4e11, 3e11))
+    data = BEAM / "data"
+    record = data / "data_set_1_downsampled_by_128.lvm"
+    code, _, err = run_cli(capsys, ["update", "fmu", str(fmu), "--data", str(record),
+                                    "--map", str(data / "channels.csv"), "--update", "E_beam,m_shaker",
+                                    "--bounds", "m_shaker=0.05:0.3", "-o", str(tmp_path / "out")])
+    assert code == 2 and "m_shaker bounds [0.05, 0.3] kg leave the range [0.07, 0.15]" in err, err
+    assert "the FMU refuses values outside" in err and not (tmp_path / "out").exists()
