@@ -252,7 +252,7 @@ def example_argv(gallery_conf, script_vars) -> list[str]:
     """The command-line arguments of an example run by sphinx-gallery (its ``reset_argv``): the examples that
     write files by default into the folder they run in write them under ``docs/_build/examples`` instead."""
     name = Path(script_vars["src_file"]).stem
-    writes_files = ("own_structure", "nastran_plate", "modal_test_three_storey_frame")
+    writes_files = ("own_structure", "nastran_plate", "modal_test_three_storey_frame", "update_shaker_beam")
     return [str(DOCS / "_build" / "examples" / name)] if name in writes_files else []
 
 

@@ -232,7 +232,8 @@ def _write_fmu_update(problem, result, *, out: Path, noise_fraction: float | Non
     blocks = blocks_with_noise(problem.cost, floor) if from_residuals else None
     uncertainty = stage_uncertainty(result, noise_variance=sigma2, residual_blocks=blocks,
                                     noise_source=f"from the noise floor ({floor.source})" if floor else "")
-    uncertainty = one_sided_at_bounds(uncertainty, result.at_bounds)  # as the verdict says: one-sided there
+    uncertainty = one_sided_at_bounds(uncertainty, result.at_bounds,  # as the verdict says: one-sided there
+                                      ranges=problem.family.interface.ranges)
     figure = residual_figure(report.residuals, out / "residuals.png") if report.residuals is not None else None
     summary = {"fmu": str(problem.family.interface.path), "data": list(problem.data_files), "cost": problem.cost.name,
                "start": dict(problem.start), "values": dict(result.values), "initial_cost": result.initial_cost,

@@ -62,3 +62,22 @@ def test_a_parameter_at_a_bound_has_a_one_sided_interval_in_the_table_and_the_fi
     written = tomllib.loads(uncertainty_toml((stage,)))["stage"][0]
     assert written["interval_95_at_bound"] == ["", "upper"]
     assert written["interval_95_high"][1] == value
+
+
+def test_a_one_sided_interval_stays_within_the_declared_range():
+    """The shaker beam's tip mass ended at its upper bound 0.15 kg with a standard deviation of 162 %: its one-sided
+    interval ran to -0.25 kg. Held within the FMU's declared range (here 0.07-0.15 kg), it is [0.07, 0.15]; a
+    reach that stays inside the range is unchanged, and so is the other side's."""
+    from mace_fmu.updating.engine.uncertainty import StageUncertainty
+
+    stage = StageUncertainty(stage="s", names=("m_shaker", "E_beam"), values={"m_shaker": 0.15, "E_beam": 1.4e11},
+                             residuals=100, noise_variance=1.0,
+                             standard_deviation_percent={"m_shaker": 162.0, "E_beam": 10.0},
+                             correlation=None, interval_95={"m_shaker": (-0.33, 0.63), "E_beam": (1.1e11, 1.7e11)},
+                             singular_values=None, weak_directions=(), tolerance_percent=5.0)
+    ranges = {"m_shaker": (0.07, 0.15), "E_beam": (1.4e11, 3.0e11)}
+    (clipped,) = one_sided_at_bounds((stage,), (("m_shaker", "upper"), ("E_beam", "lower")), ranges=ranges)
+    assert clipped.interval_95["m_shaker"] == (0.07, 0.15)
+    assert clipped.interval_95["E_beam"] == pytest.approx((1.4e11, 1.4e11 * (1 + Z95_ONE_SIDED * 0.10)))
+    (free,) = one_sided_at_bounds((stage,), (("m_shaker", "upper"),))
+    assert free.interval_95["m_shaker"][0] == pytest.approx(0.15 * (1 - Z95_ONE_SIDED * 1.62))
