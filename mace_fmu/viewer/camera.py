@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from mace_fmu.errors import MaceError
-from viewer.scene import Scene
+from mace_fmu.viewer.scene import Scene
 
 #: Camera views: unit direction from the article's centre towards the camera, deck axes (Y up).
 #: "iso" looks from 30 deg above the X-Z plane and 30 deg round from +Z, so the bus (along X)

@@ -33,7 +33,7 @@ def render_page(page: str | os.PathLike, *, png: str | os.PathLike, width_px: in
     Parameters
     ----------
     page : path
-        The standalone HTML page (:func:`~viewer.html.write_animation_html`).
+        The standalone HTML page (:func:`~mace_fmu.viewer.html.write_animation_html`).
     png : path
         The picture to write (replaced atomically).
     width_px, height_px : int

@@ -71,11 +71,11 @@ def tube_outer_radius_m(area_m2: float, inertia_m4: float) -> float:
 
 def build_scene(structure_modes: StructureModes | ModalStructure, *, segments_per_bar: int = 4) -> Scene:
     """Bodies of a computed structure: each CBAR in ``segments_per_bar`` pieces, each CONM2 a sphere; for
-    NASTRAN's modes (a ModalStructure) the grids and the geometry deck's element edges (viewer.outline)."""
+    NASTRAN's modes (a ModalStructure) the grids and the geometry deck's element edges (mace_fmu.viewer.outline)."""
     if segments_per_bar < 1:
         raise ValueError(f"segments_per_bar must be >= 1, got {segments_per_bar}")
     if isinstance(structure_modes, ModalStructure):
-        from viewer.outline import outline_scene
+        from mace_fmu.viewer.outline import outline_scene
 
         return outline_scene(structure_modes)
     deck = structure_modes.structure.deck

@@ -6,8 +6,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from viewer.kinematics import points_along_bars
-from viewer.scene import Scene
+from mace_fmu.viewer.kinematics import points_along_bars
+from mace_fmu.viewer.scene import Scene
 
 
 @dataclass(frozen=True)

@@ -8,9 +8,9 @@ import umsgpack
 from meshcat.commands import SetObject, SetProperty, SetTransform
 from meshcat.path import Path
 
-from viewer.camera import camera_position
-from viewer.frames import BodyMotion, Frames, body_motion
-from viewer.scene import Scene, component_colour
+from mace_fmu.viewer.camera import camera_position
+from mace_fmu.viewer.frames import BodyMotion, Frames, body_motion
+from mace_fmu.viewer.scene import Scene, component_colour
 
 ROOT = Path(("meshcat", "mace"))
 #: Deck basic axes have Y up (gravity -Y, thesis Fig. 3.1); meshcat has Z up: turn +90 deg about X.

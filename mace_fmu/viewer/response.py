@@ -15,9 +15,9 @@ from mace_fmu.errors import MaceError
 from mace_fmu.fe.modes import StructureModes
 from mace_fmu.iomodel.motion import MOTION_COMPONENTS, motion_output_name
 from mace_fmu.util.atomic import save_figure_atomic
-from viewer.frames import Clip, Frames
-from viewer.html import ShownInline
-from viewer.scene import Scene, build_scene
+from mace_fmu.viewer.frames import Clip, Frames
+from mace_fmu.viewer.html import ShownInline
+from mace_fmu.viewer.scene import Scene, build_scene
 
 if TYPE_CHECKING:  # fmpy is imported only where an FMU runs
     from mace_fmu.fmu.simulate import FmuRun

@@ -10,9 +10,9 @@ import numpy as np
 from mace_fmu.errors import MaceError
 from mace_fmu.fe.modes import StructureModes
 from mace_fmu.util.frequency import hz_text
-from viewer.frames import Clip, Frames
-from viewer.html import ShownInline
-from viewer.scene import Scene, build_scene
+from mace_fmu.viewer.frames import Clip, Frames
+from mace_fmu.viewer.html import ShownInline
+from mace_fmu.viewer.scene import Scene, build_scene
 
 
 @dataclass(frozen=True)

@@ -1,14 +1,14 @@
 """meshcat views of the MACE structure: mode shapes and FMU time responses, as standalone HTML or live."""
 
-from viewer.camera import CAMERA_VIEWS, camera_position
-from viewer.frames import BodyMotion, Clip, Frames, body_motion
-from viewer.html import standalone_html, write_html
-from viewer.meshcat_scene import scene_commands, send_to_visualizer
-from viewer.modes import ModeAnimation, animate_mode, animate_modes, mode_index
-from viewer.pairs import ModePair, PairAnimation, animate_pairs, pair_commands, table_5_1_pairs
-from viewer.response import ResponseAnimation, animate_response, grid_motion, plot_response
-from viewer.scene import Scene, build_scene
-from viewer.still import chromium_executable, render_page, write_still
+from mace_fmu.viewer.camera import CAMERA_VIEWS, camera_position
+from mace_fmu.viewer.frames import BodyMotion, Clip, Frames, body_motion
+from mace_fmu.viewer.html import standalone_html, write_html
+from mace_fmu.viewer.meshcat_scene import scene_commands, send_to_visualizer
+from mace_fmu.viewer.modes import ModeAnimation, animate_mode, animate_modes, mode_index
+from mace_fmu.viewer.pairs import ModePair, PairAnimation, animate_pairs, pair_commands, table_5_1_pairs
+from mace_fmu.viewer.response import ResponseAnimation, animate_response, grid_motion, plot_response
+from mace_fmu.viewer.scene import Scene, build_scene
+from mace_fmu.viewer.still import chromium_executable, render_page, write_still
 
 __all__ = ["CAMERA_VIEWS", "BodyMotion", "Clip", "Frames", "ModeAnimation", "ModePair", "PairAnimation",
            "ResponseAnimation", "Scene", "animate_mode", "animate_modes", "animate_pairs", "animate_response",

@@ -20,12 +20,12 @@ from mace_fmu.fe.modes import StructureModes
 from mace_fmu.fe.pairing import mac_matrix
 from mace_fmu.thesis import table_5_1_0g, table_5_1_1g
 from mace_fmu.util.frequency import hz_text
-from viewer.camera import camera_axes, framing_position
-from viewer.frames import Clip, Frames
-from viewer.html import ShownInline
-from viewer.meshcat_scene import (ROOT, Y_UP_TO_Z_UP, body_animations, body_commands, set_animation,
+from mace_fmu.viewer.camera import camera_axes, framing_position
+from mace_fmu.viewer.frames import Clip, Frames
+from mace_fmu.viewer.html import ShownInline
+from mace_fmu.viewer.meshcat_scene import (ROOT, Y_UP_TO_Z_UP, body_animations, body_commands, set_animation,
                                   surroundings_commands)
-from viewer.modes import ModeAnimation, animate_modes
+from mace_fmu.viewer.modes import ModeAnimation, animate_modes
 
 #: Gap between the two copies' article boxes, in article lengths.
 PAIR_GAP = 0.25

@@ -11,7 +11,7 @@ import meshcat
 import umsgpack
 
 from mace_fmu.util.atomic import write_text_atomic
-from viewer.frames import Clip
+from mace_fmu.viewer.frames import Clip
 
 _VIEWER_JS = FilePath(meshcat.__file__).parent / "viewer" / "dist" / "main.min.js"
 
@@ -78,7 +78,7 @@ class ShownInline:
     standalone page in an iframe, so nothing needs a server or a meshcat process."""
 
     def _repr_html_(self) -> str:
-        from viewer import animation_commands  # the package knows every animation kind
+        from mace_fmu.viewer import animation_commands  # the package knows every animation kind
 
         page = standalone_html(animation_commands(self), title=type(self).__name__, clips=self.frames.clips)
         return (f'<iframe srcdoc="{html_text.escape(page, quote=True)}" '

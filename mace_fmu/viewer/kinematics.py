@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from viewer.scene import Scene
+from mace_fmu.viewer.scene import Scene
 
 
 def points_along_bars(scene: Scene, displacements: np.ndarray, s: np.ndarray, row_a: np.ndarray,
