@@ -43,6 +43,18 @@ def camera_position(scene: Scene, view: str = "iso") -> np.ndarray:
     The distance is the smallest at which every corner of the article's bounding box projects
     within ``FRAME_FILL`` of the half-width and half-height of a ``FRAMED_ASPECT`` picture, and
     the box's nearest face is ``NEAR_CLEARANCE`` article lengths away or more.
+
+    Parameters
+    ----------
+    scene : Scene
+        The drawn structure (its test article's box).
+    view : str
+        A ``CAMERA_VIEWS`` key.
+
+    Returns
+    -------
+    numpy.ndarray
+        (3,) camera position [m].
     """
     return framing_position(scene.extent_m, length_m=scene.length_m, view=view)
 

@@ -50,7 +50,22 @@ setInterval(markClip, 100);
 
 
 def standalone_html(commands: list, *, title: str, clips: tuple[Clip, ...] = ()) -> str:
-    """The page: meshcat's viewer, each command as a base64 msgpack blob, a legend of the clips."""
+    """The page: meshcat's viewer, each command as a base64 msgpack blob, a legend of the clips.
+
+    Parameters
+    ----------
+    commands : list
+        meshcat commands, in the order the page replays them.
+    title : str
+        The page's title.
+    clips : tuple of Clip
+        The legend's rows.
+
+    Returns
+    -------
+    str
+        The standalone HTML page (meshcat's JavaScript included).
+    """
     blobs = ",\n".join('"' + base64.b64encode(umsgpack.packb(cmd.lower())).decode("ascii") + '"'
                        for cmd in commands)
     return f"""<!DOCTYPE html>
@@ -86,7 +101,24 @@ class ShownInline:
 
 
 def write_html(path: str | os.PathLike, commands: list, *, title: str, clips: tuple[Clip, ...] = ()) -> int:
-    """Write the standalone page to ``path``; returns its size in bytes."""
+    """Write the standalone page to ``path``; returns its size in bytes.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The HTML file to write (replaced atomically).
+    commands : list
+        meshcat commands, in the order the page replays them.
+    title : str
+        The page's title.
+    clips : tuple of Clip
+        The legend's rows.
+
+    Returns
+    -------
+    int
+        The page's size [bytes].
+    """
     text = standalone_html(commands, title=title, clips=clips)
     write_text_atomic(path, text)  # an interrupted run leaves the previous page, not half of a new one
     return len(text.encode("utf-8"))

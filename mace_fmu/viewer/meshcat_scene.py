@@ -131,11 +131,34 @@ def animation_command(scene: Scene, frames: Frames, motion: BodyMotion | None = 
 
 
 def scene_commands(scene: Scene, frames: Frames, *, camera: str = "iso") -> list:
-    """All commands: the drawn structure seen from ``camera`` (a CAMERA_VIEWS key), then its animation."""
+    """All commands: the drawn structure seen from ``camera`` (a CAMERA_VIEWS key), then its animation.
+
+    Parameters
+    ----------
+    scene : Scene
+        The drawn bodies.
+    frames : Frames
+        Their key frames.
+    camera : str
+        A ``CAMERA_VIEWS`` key.
+
+    Returns
+    -------
+    list
+        meshcat commands, in the order they are to be sent.
+    """
     return static_commands(scene, camera=camera) + [animation_command(scene, frames)]
 
 
 def send_to_visualizer(visualizer, commands: list) -> None:
-    """Replay commands on a live ``meshcat.Visualizer`` (for interactive work)."""
+    """Replay commands on a live ``meshcat.Visualizer`` (for interactive work).
+
+    Parameters
+    ----------
+    visualizer : meshcat.Visualizer
+        A running visualizer.
+    commands : list
+        meshcat commands, for example from :func:`scene_commands`.
+    """
     for cmd in commands:
         visualizer.window.send(cmd)

@@ -24,7 +24,7 @@ from mace_fmu.viewer.camera import camera_axes, framing_position
 from mace_fmu.viewer.frames import Clip, Frames
 from mace_fmu.viewer.html import ShownInline
 from mace_fmu.viewer.meshcat_scene import (ROOT, Y_UP_TO_Z_UP, body_animations, body_commands, set_animation,
-                                  surroundings_commands)
+                                           surroundings_commands)
 from mace_fmu.viewer.modes import ModeAnimation, animate_modes
 
 #: Gap between the two copies' article boxes, in article lengths.
@@ -40,8 +40,8 @@ class ModePair:
     label: str  #: Table 5.1's name
     index_1g: int  #: 1-based, as ``mace-fmu modes 1g`` numbers it
     index_0g: int  #: 1-based, as ``mace-fmu modes 0g`` numbers it
-    hz_1g: float
-    hz_0g: float
+    hz_1g: float  #: the 1-g mode's frequency [Hz]
+    hz_0g: float  #: the 0-g mode's frequency [Hz]
     mac: float  #: mass-weighted MAC of the two shapes on their common grids
     sign: float  #: +1 or -1: the 0-g shape as drawn, so that it moves in phase with the 1-g one
 
@@ -64,7 +64,7 @@ class PairAnimation(ShownInline):
 
     one_g: ModeAnimation  #: 1-g copy (its clips are those of ``frames``)
     zero_g: ModeAnimation  #: 0-g copy, shapes turned by each pair's sign
-    pairs: tuple[ModePair, ...]
+    pairs: tuple[ModePair, ...]  #: the pairs shown, one clip each, in order
     frames: Frames  #: the shared timeline: times and clips (displacements: the 1-g copy's)
     offsets_m: dict[str, np.ndarray]  #: "1g"/"0g": shift [m] of that copy's article centre, deck axes
     extent_m: np.ndarray  #: (3,) size of the box holding both articles, deck axes, centred on the origin
@@ -73,7 +73,18 @@ class PairAnimation(ShownInline):
 
 
 def table_5_1_pairs(one_g: StructureModes, zero_g: StructureModes) -> tuple[ModePair, ...]:
-    """Table 5.1's rows as 1-g/0-g mode pairs, paired as ``mace-fmu build`` prints them (MAC)."""
+    """Table 5.1's rows as 1-g/0-g mode pairs, paired as ``mace-fmu build`` prints them (MAC).
+
+    Parameters
+    ----------
+    one_g, zero_g : StructureModes
+        The modes of the 1-g (suspended) and of the 0-g (free) structure.
+
+    Returns
+    -------
+    tuple of ModePair
+        One pair per row of Table 5.1, in its order.
+    """
     rows_0g = table_5_1_0g(zero_g)
     rows_1g = table_5_1_1g(one_g, zero_g)
     mac = mac_matrix(zero_g.modes, zero_g.model, one_g.modes)
@@ -104,6 +115,33 @@ def animate_pairs(one_g: StructureModes, zero_g: StructureModes, *, labels: list
 
     Each copy's shape is scaled so that its largest translation is ``fraction_of_length`` of the
     article's size; both play ``seconds_per_cycle`` per cycle whatever their frequency.
+
+    Parameters
+    ----------
+    one_g, zero_g : StructureModes
+        The modes of the 1-g (suspended) and of the 0-g (free) structure.
+    labels : list of str, optional
+        The starts of the Table 5.1 labels to show (default: every pair).
+    view : str
+        The camera view (a ``CAMERA_VIEWS`` key) the two copies are stacked for: one above the other in it.
+    fraction_of_length : float
+        Largest drawn translation of each shape, as a fraction of the article's size.
+    cycles : int
+        Vibration cycles per pair.
+    frames_per_cycle : int
+        Key frames per cycle.
+    seconds_per_cycle : float
+        Playback time of one cycle [s].
+
+    Returns
+    -------
+    PairAnimation
+        Both copies on one timeline, one clip per pair.
+
+    Raises
+    ------
+    MaceError
+        A label that starts no Table 5.1 mode.
     """
     pairs = table_5_1_pairs(one_g, zero_g)
     if labels:
@@ -150,7 +188,18 @@ def _placement(animation: ModeAnimation, offset_m: np.ndarray) -> np.ndarray:
 def pair_commands(animation: PairAnimation, *, camera: str | None = None) -> list:
     """Both copies, the floor under them, the camera framing both, and one animation of every body.
 
-    ``camera`` defaults to the view the copies were stacked for; another view may show them overlapping.
+    Parameters
+    ----------
+    animation : PairAnimation
+        The pairs, from :func:`animate_pairs`.
+    camera : str, optional
+        A ``CAMERA_VIEWS`` key; by default the view the copies were stacked for (another view may show them
+        overlapping).
+
+    Returns
+    -------
+    list
+        meshcat commands, in the order they are to be sent.
     """
     camera = animation.view if camera is None else camera
     cmds: list = [SetTransform(Y_UP_TO_Z_UP, ROOT)]  # the pair's box is centred on the orbit target

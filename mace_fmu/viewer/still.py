@@ -16,7 +16,13 @@ CHROMIUM_NAMES = ("chromium", "chromium-browser", "google-chrome")
 
 
 def chromium_executable() -> str | None:
-    """Path of a Chromium on PATH, or None."""
+    """Path of a Chromium on PATH, or None.
+
+    Returns
+    -------
+    str or None
+        The first of ``CHROMIUM_NAMES`` found on PATH.
+    """
     return next((found for name in CHROMIUM_NAMES if (found := shutil.which(name))), None)
 
 
