@@ -35,13 +35,18 @@ import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import MappingProxyType
-from typing import Any, Iterator, Mapping
+from typing import TYPE_CHECKING, Any, Iterator, Mapping
 
 from mace_fmu.errors import MaceError
 from mace_fmu.parameters.kinds import (DAMPING, FREQUENCY_SCALE, MASS, MODULUS, SERVO_GAINS, SPRING, KindName,
                                        kind_of_name, kind_of_set_name, unit_of)
 from mace_fmu.util.atomic import write_text_atomic
 from mace_fmu.util.textfile import read_text
+
+if TYPE_CHECKING:
+    from mace_fmu.deck.cards import Deck
+    from mace_fmu.structure.file import StructureFile
+
 
 def parameter_kind(name: str) -> KindName:
     """What a parameter-set name refers to (:mod:`mace_fmu.parameters.kinds`); a MaceError for a name of no
@@ -269,7 +274,7 @@ def names_of_table(tables: Mapping[str, Any]) -> ParameterNames:
                           masses={name: int(eid) for eid, name in table.get("masses", {}).items()})
 
 
-def parameter_names(deck, structure_file=None) -> ParameterNames:
+def parameter_names(deck: Deck, structure_file: StructureFile | None = None) -> ParameterNames:
     """The ``E_``, ``k_`` and ``m_`` names of a deck: its structure file's ``[parameters]`` names, and for every MAT1
     and CELAS2 card that table does not name (or every card, without a structure file) ``mat<ID>`` and
     ``celas<ID>`` (``E_mat2``, ``k_celas138``): a name never reaches a card of another deck. Masses are
@@ -280,7 +285,7 @@ def parameter_names(deck, structure_file=None) -> ParameterNames:
     ----------
     deck : Deck
         The deck.
-    structure_file : StructureFile or path, optional
+    structure_file : StructureFile, optional
         Its structure file (default: the bundled one for the bundled deck).
 
     Returns
@@ -293,8 +298,9 @@ def parameter_names(deck, structure_file=None) -> ParameterNames:
     MaceError
         A ``masses`` entry naming no CONM2 of the deck (the file and the key named).
     """
-    for key, name in (structure_file.tables.get("parameters", {}).get("masses", {}).items()
-                      if structure_file is not None else ()):  # before names_of_table's int(key)
+    masses = structure_file.tables.get("parameters", {}).get("masses", {}) if structure_file is not None else {}
+    for key, name in masses.items():  # before names_of_table's int(key)
+        assert structure_file is not None
         if not key.strip().isdigit() or int(key) not in deck.conm2s:
             raise MaceError(f"{structure_file.path}: [parameters] masses: key {key!r} ({name!r}) is no CONM2 element "
                             f"ID of {deck.path}; expected one of {sorted(deck.conm2s)[:12]}")
@@ -309,7 +315,7 @@ def parameter_names(deck, structure_file=None) -> ParameterNames:
     return ParameterNames(materials=materials, springs=springs, masses=named.masses, mass_cards=cards)
 
 
-def deck_values(deck, names: ParameterNames | None = None) -> dict[str, float]:
+def deck_values(deck: Deck, names: ParameterNames | None = None) -> dict[str, float]:
     """The ``E_``, ``k_`` and ``m_`` values [Pa, N/m, kg] a deck has for every named material, spring and mass it
     contains."""
     names = names if names is not None else load_parameter_names()
@@ -348,6 +354,7 @@ def fe_overrides(parameters: ParameterSet | None, names: ParameterNames | None =
     what = {"MAT1": "material", "CELAS2": "spring", "CONM2": "mass"}
     for name, value in parameters.of_kind("modulus", "spring", "mass").items():
         kind = kind_of_set_name(name)
+        assert kind is not None  # of_kind returns names of those kinds only
         table, card, key = {MODULUS.name: (names.materials, "MAT1", "e"), SPRING.name: (names.springs, "CELAS2", "k"),
                             MASS.name: (names.masses, "CONM2", "mass")}[kind.name]
         short = name.removeprefix(kind.set_prefix)

@@ -198,7 +198,7 @@ def _load_structure_file(path: str, resolved: str, mtime_ns: int, size: int) -> 
     return StructureFile(path=file, tables=MappingProxyType(data), spec=_spec_of(file, text, data))
 
 
-def load_structure_file(path: str | os.PathLike) -> StructureFile:
+def load_structure_file(path: str | os.PathLike[str]) -> StructureFile:
     """Read and check a structure file: what a deck does not say (suspension, components, instruments).
 
     Parameters
@@ -224,7 +224,7 @@ def load_structure_file(path: str | os.PathLike) -> StructureFile:
     return _load_structure_file(str(file), str(file.resolve()), st.st_mtime_ns, st.st_size)
 
 
-def load_spec(path: str | os.PathLike | None = None) -> StructureSpec:
+def load_spec(path: str | os.PathLike[str] | None = None) -> StructureSpec:
     """The structure part of a structure file (default: the bundled ``mace_em.toml``)."""
     return load_structure_file(path if path is not None else bundled_structure_path()).spec
 
@@ -243,7 +243,9 @@ def _file_sha256(path: str, mtime_ns: int, size: int) -> str:
 def deck_units(deck: Deck, file: "StructureFile | None") -> tuple[str, str] | None:
     """(mass, length) unit labels of a deck: its structure file's ``[units]``, kg and m for the bundled deck, else
     None: a deck states no units (NASTRAN takes whatever it is written in), so they are the deck's own."""
-    units = dict(file.tables.get("units", {})) if file is not None else {}
+    if file is None:
+        return ("kg", "m") if is_bundled_deck(deck) else None
+    units = dict(file.tables.get("units", {}))
     unknown = sorted(set(units) - {"mass", "length"})
     if unknown:
         raise MaceError(f"{file.path}: [units] has unknown key(s) {unknown} (expected mass and length)")
@@ -269,7 +271,7 @@ def structure_label(deck: Deck) -> str:
     return "MACE" if is_bundled_deck(deck) else Path(deck.path).stem
 
 
-def structure_file_for(deck: Deck, structure_file: StructureFile | str | os.PathLike | None = None
+def structure_file_for(deck: Deck, structure_file: StructureFile | str | os.PathLike[str] | None = None
                        ) -> StructureFile | None:
     """The structure file that goes with ``deck``: the one given, else the bundled one for the bundled
     deck, else None (the deck's own meaning, nothing added or removed).
