@@ -60,7 +60,8 @@ NON_STRUCTURAL = STATIC_LOADS | AERODYNAMIC | frozenset({
 _ELEMENTS = ("CBAR", "CELAS1", "CELAS2", "CBEAM", "CROD", "CONROD", "CMASS1", "CMASS2", "RBAR", "RBE2", "RBE3")
 
 
-def bulk_tables(raw_cards: list[RawCard], file: str) -> tuple[dict[str, dict[Any, Any]], tuple[tuple[str, int, str], ...]]:
+def bulk_tables(raw_cards: list[RawCard], file: str
+                ) -> tuple[dict[str, dict[Any, Any]], tuple[tuple[str, int, str], ...]]:
     """Cards keyed by ID (MPC and SPC1 by set ID), with duplicates rejected, and the non-structural cards read past.
 
     Parameters

@@ -191,7 +191,7 @@ def large_displacement_preload(model: FEModel, constraints: Constraints, load: n
         u_start = u.copy()
         u = u + last_increment
         previous, refresh = np.inf, geometric is None
-        for it in range(1, max_iterations + 1):
+        for it in range(1, max_iterations + 1):  # noqa: B007  (read after the loop: the count it took)
             # Full Newton from the unstressed state (the cables have no lateral stiffness yet) and when
             # an iteration stops contracting. Elsewhere the iteration matrix is the material stiffness
             # at the current state (first derivatives: cheap) plus the last full tangent's geometric

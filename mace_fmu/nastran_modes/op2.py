@@ -69,7 +69,8 @@ def read_op2_modes(path: Path, *, subcase: int | None) -> FileModes:
     """
     records = Op2Records(path, path.read_bytes())
     endian = records.endian
-    blocks: dict[int, list[tuple[Any, ...]]] = {}  # subcase -> (table, record, mode, eigenvalue, IDs, types, values) per mode
+    # subcase -> (table, record, mode, eigenvalue, IDs, types, values) per mode
+    blocks: dict[int, list[tuple[Any, ...]]] = {}
     summaries: list[np.ndarray] = []
     grids: dict[int, tuple[int, tuple[float, float, float], int]] = {}
     coords: dict[int, CoordCard] = {}
@@ -312,7 +313,7 @@ def _assemble(path: Path, subcase: int, vectors: list[tuple[Any, ...]], summarie
     skipped = tuple(int(i) for i in ids[~keep])
     grid_ids = ids[keep]
     modes, eigenvalues, columns = [], [], []
-    for name, where, mode, eigenvalue, ids_m, types_m, values in vectors:
+    for name, where, mode, eigenvalue, ids_m, _, values in vectors:
         if not np.array_equal(ids_m, ids):
             raise MaceError(f"{path}: table {name}, {where}: the points of mode {mode} differ from those of the "
                             f"first mode (expected the same {len(ids)} points in every mode)")

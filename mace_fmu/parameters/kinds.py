@@ -37,9 +37,10 @@ physical limits plus the reach of the models behind them:
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
-from typing import Literal, Mapping
+from typing import Literal
 
 from mace_fmu.util.frequency import ZERO_HZ  # the zero-frequency cluster's edge [Hz]
 

@@ -32,10 +32,11 @@ import datetime
 import hashlib
 import math
 import tomllib
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import MappingProxyType
-from typing import TYPE_CHECKING, Any, Iterator, Mapping
+from typing import TYPE_CHECKING, Any
 
 from mace_fmu.errors import MaceError
 from mace_fmu.parameters.kinds import (DAMPING, FREQUENCY_SCALE, MASS, MODULUS, SERVO_GAINS, SPRING, KindName,
@@ -102,7 +103,7 @@ def tool_version() -> str:
 
 
 def now_utc() -> str:
-    return datetime.datetime.now(datetime.timezone.utc).replace(microsecond=0).isoformat()
+    return datetime.datetime.now(datetime.UTC).replace(microsecond=0).isoformat()
 
 
 @dataclass(frozen=True)
@@ -205,7 +206,8 @@ class ParameterSet:
             allowed = {f.name for f in dataclasses.fields(Provenance)}
             extra = set(data["provenance"]) - allowed
             if extra:
-                raise MaceError(f"{source}: [provenance] has unknown key(s) {sorted(extra)}; allowed: {sorted(allowed)}")
+                raise MaceError(f"{source}: [provenance] has unknown key(s) {sorted(extra)}; "
+                                f"allowed: {sorted(allowed)}")
             if "created" not in data["provenance"] or "tool" not in data["provenance"]:
                 raise MaceError(f"{source}: [provenance] needs 'created' and 'tool'")
             prov = Provenance(**data["provenance"])
@@ -359,8 +361,8 @@ def fe_overrides(parameters: ParameterSet | None, names: ParameterNames | None =
                             MASS.name: (names.masses, "CONM2", "mass")}[kind.name]
         short = name.removeprefix(kind.set_prefix)
         if short not in table:
-            raise MaceError(f"parameter {name!r}: no such {what[card]}; known: "
-                            f"{', '.join(kind.set_prefix + n for n in table) or 'none (name one in the structure file)'}")
+            known = ", ".join(kind.set_prefix + n for n in table) or "none (name one in the structure file)"
+            raise MaceError(f"parameter {name!r}: no such {what[card]}; known: {known}")
         if value <= 0.0:
             raise MaceError(f"parameter {name!r} must be > 0, got {value}")
         if kind is MASS:

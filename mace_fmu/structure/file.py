@@ -15,11 +15,12 @@ import functools
 import hashlib
 import os
 import tomllib
+from collections.abc import Mapping
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
 from types import MappingProxyType
-from typing import Any, Literal, Mapping
+from typing import Any, Literal
 
 from mace_fmu.deck.card_tables import ELEMENT_TABLES
 from mace_fmu.deck.cards import Deck
@@ -240,7 +241,7 @@ def _file_sha256(path: str, mtime_ns: int, size: int) -> str:
     return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
 
-def deck_units(deck: Deck, file: "StructureFile | None") -> tuple[str, str] | None:
+def deck_units(deck: Deck, file: StructureFile | None) -> tuple[str, str] | None:
     """(mass, length) unit labels of a deck: its structure file's ``[units]``, kg and m for the bundled deck, else
     None: a deck states no units (NASTRAN takes whatever it is written in), so they are the deck's own."""
     if file is None:

@@ -19,8 +19,9 @@ import sys
 import threading
 import uuid
 import warnings
+from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
-from typing import Any, Callable, Iterable, Iterator
+from typing import Any
 
 from mace_fmu.errors import MaceError
 from mace_fmu.util.progress import ProgressCallback, Step
