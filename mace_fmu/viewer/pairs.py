@@ -10,6 +10,7 @@ swing together.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from meshcat.commands import SetTransform
@@ -150,8 +151,8 @@ def animate_pairs(one_g: StructureModes, zero_g: StructureModes, *, labels: list
             raise MaceError(f"no Table 5.1 mode starts with {', '.join(map(repr, unknown))}; the modes are "
                             + ", ".join(p.label for p in pairs))
         pairs = tuple(p for p in pairs if any(p.label.startswith(lab) for lab in labels))
-    options = dict(fraction_of_length=fraction_of_length, cycles=cycles, frames_per_cycle=frames_per_cycle,
-                   seconds_per_cycle=seconds_per_cycle)
+    options: dict[str, Any] = dict(fraction_of_length=fraction_of_length, cycles=cycles,
+                                   frames_per_cycle=frames_per_cycle, seconds_per_cycle=seconds_per_cycle)
     anim_1g = animate_modes(one_g, [p.index_1g for p in pairs], **options)
     anim_0g = animate_modes(zero_g, [p.index_0g for p in pairs], **options)
     per_mode = cycles * frames_per_cycle
