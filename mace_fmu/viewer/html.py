@@ -93,8 +93,8 @@ class ShownInline:
     standalone page in an iframe, so nothing needs a server or a meshcat process."""
 
     def _repr_html_(self) -> str:
-        from mace_fmu.viewer import (ModeAnimation, PairAnimation, ResponseAnimation,  # the package knows every
-                                     animation_commands)  # animation kind
+        from mace_fmu.viewer.animation import (ModeAnimation, PairAnimation, ResponseAnimation,  # every kind
+                                               animation_commands)
 
         assert isinstance(self, (ModeAnimation, ResponseAnimation, PairAnimation))  # the mixin's classes
         page = standalone_html(animation_commands(self), title=type(self).__name__, clips=self.frames.clips)
