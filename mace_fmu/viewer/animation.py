@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+from typing import Any
 
 from mace_fmu.viewer.html import write_html
 from mace_fmu.viewer.meshcat_scene import scene_commands
@@ -11,7 +12,8 @@ from mace_fmu.viewer.pairs import PairAnimation, pair_commands
 from mace_fmu.viewer.response import ResponseAnimation
 
 
-def animation_commands(animation: ModeAnimation | ResponseAnimation | PairAnimation, *, camera: str = "iso") -> list:
+def animation_commands(animation: ModeAnimation | ResponseAnimation | PairAnimation, *,
+                       camera: str = "iso") -> list[Any]:
     """The meshcat commands of any of the viewer's animations, seen from ``camera``.
 
     Parameters

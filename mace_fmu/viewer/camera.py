@@ -71,4 +71,4 @@ def framing_position(extent_m: np.ndarray, *, length_m: float, view: str) -> np.
     distance = max(np.max(corners @ towards + np.abs(corners @ right) / tan_h),
                    np.max(corners @ towards + np.abs(corners @ up) / tan_v),
                    np.max(corners @ towards) + NEAR_CLEARANCE * length_m)
-    return distance * towards
+    return float(distance) * towards

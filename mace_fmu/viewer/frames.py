@@ -50,7 +50,8 @@ def _quaternions_from_y(directions: np.ndarray) -> np.ndarray:
     # antiparallel: any axis normal to Y; X is one
     flipped = w < 1e-12
     q[flipped] = np.array([1.0, 0.0, 0.0, 0.0])
-    return q / np.linalg.norm(q, axis=-1, keepdims=True)
+    unit: np.ndarray = q / np.linalg.norm(q, axis=-1, keepdims=True)
+    return unit
 
 
 def body_motion(scene: Scene, frames: Frames) -> BodyMotion:

@@ -6,6 +6,7 @@ import base64
 import html as html_text
 import os
 from pathlib import Path as FilePath
+from typing import Any
 
 import meshcat
 import umsgpack
@@ -49,7 +50,7 @@ setInterval(markClip, 100);
 """
 
 
-def standalone_html(commands: list, *, title: str, clips: tuple[Clip, ...] = ()) -> str:
+def standalone_html(commands: list[Any], *, title: str, clips: tuple[Clip, ...] = ()) -> str:
     """The page: meshcat's viewer, each command as a base64 msgpack blob, a legend of the clips.
 
     Parameters
@@ -93,8 +94,10 @@ class ShownInline:
     standalone page in an iframe, so nothing needs a server or a meshcat process."""
 
     def _repr_html_(self) -> str:
-        from mace_fmu.viewer.animation import (ModeAnimation, PairAnimation, ResponseAnimation,  # every kind
-                                               animation_commands)
+        from mace_fmu.viewer.animation import animation_commands  # the module that knows every kind
+        from mace_fmu.viewer.modes import ModeAnimation
+        from mace_fmu.viewer.pairs import PairAnimation
+        from mace_fmu.viewer.response import ResponseAnimation
 
         assert isinstance(self, (ModeAnimation, ResponseAnimation, PairAnimation))  # the mixin's classes
         page = standalone_html(animation_commands(self), title=type(self).__name__, clips=self.frames.clips)
@@ -102,7 +105,7 @@ class ShownInline:
                 'style="width: 100%; height: 480px; border: 0;"></iframe>')
 
 
-def write_html(path: str | os.PathLike, commands: list, *, title: str, clips: tuple[Clip, ...] = ()) -> int:
+def write_html(path: str | os.PathLike[str], commands: list[Any], *, title: str, clips: tuple[Clip, ...] = ()) -> int:
     """Write the standalone page to ``path``; returns its size in bytes.
 
     Parameters

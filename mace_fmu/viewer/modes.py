@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -137,7 +138,7 @@ def animate_modes(structure_modes: StructureModes, modes: Sequence[int | str], *
 
 
 def animate_mode(structure_modes: StructureModes, mode: int | str, *, scale: float | None = None,
-                 cycles: int = 3, **options) -> ModeAnimation:
+                 cycles: int = 3, **options: Any) -> ModeAnimation:
     """Key frames of one mode (by 1-based index or label).
 
     Parameters

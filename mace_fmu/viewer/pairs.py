@@ -186,7 +186,7 @@ def _placement(animation: ModeAnimation, offset_m: np.ndarray) -> np.ndarray:
     return t
 
 
-def pair_commands(animation: PairAnimation, *, camera: str | None = None) -> list:
+def pair_commands(animation: PairAnimation, *, camera: str | None = None) -> list[Any]:
     """Both copies, the floor under them, the camera framing both, and one animation of every body.
 
     Parameters
@@ -203,8 +203,8 @@ def pair_commands(animation: PairAnimation, *, camera: str | None = None) -> lis
         meshcat commands, in the order they are to be sent.
     """
     camera = animation.view if camera is None else camera
-    cmds: list = [SetTransform(Y_UP_TO_Z_UP, ROOT)]  # the pair's box is centred on the orbit target
-    tracks: list[dict] = []
+    cmds: list[Any] = [SetTransform(Y_UP_TO_Z_UP, ROOT)]  # the pair's box is centred on the orbit target
+    tracks: list[dict[str, Any]] = []
     for kind, anim in (("1g", animation.one_g), ("0g", animation.zero_g)):
         path: Path = COPY_PATHS[kind]
         cmds += body_commands(anim.scene, root=path, placement=_placement(anim, animation.offsets_m[kind]))

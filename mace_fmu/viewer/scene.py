@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -128,7 +129,7 @@ def article_rows(structure_modes: StructureModes) -> np.ndarray:
     spec = structure_modes.structure.spec
     ids = structure_modes.model.dofs.grid_ids
 
-    def rows(keep) -> np.ndarray:
+    def rows(keep: Callable[[str], bool]) -> np.ndarray:
         grids = frozenset().union(*(g for name, g in spec.components.items() if keep(name)))
         return np.flatnonzero([g in grids for g in ids])
 
