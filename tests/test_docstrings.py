@@ -125,29 +125,24 @@ def _public_callables():
 #: remove it here)
 METHODS_WITHOUT_PARAMETERS = frozenset({
     "mace_fmu.DiscreteController.from_statespace", "mace_fmu.DiscreteController.read_npz",
-    "mace_fmu.DiscreteController.write_npz", "mace_fmu.ParameterSet.of_kind", "mace_fmu.ParameterSet.updated",
-    "mace_fmu.ParameterSet.from_toml", "mace_fmu.ParameterSet.write", "mace_fmu.ParameterSet.read",
-    "mace_fmu.fe.Constraints.reduce", "mace_fmu.fe.Constraints.reduce_sparse", "mace_fmu.fe.DofMap.grid_index",
-    "mace_fmu.fe.DofMap.grid_indices", "mace_fmu.fe.DofMap.index", "mace_fmu.fe.DofMap.indices",
-    "mace_fmu.fe.DofMap.label", "mace_fmu.fe.Modes.shape", "mace_fmu.fe.Modes.grid_motion",
-    "mace_fmu.iomodel.Instruments.actuator", "mace_fmu.iomodel.Instruments.sensor",
+    "mace_fmu.DiscreteController.write_npz", "mace_fmu.fe.Constraints.reduce",
+    "mace_fmu.fe.Constraints.reduce_sparse", "mace_fmu.fe.DofMap.grid_index", "mace_fmu.fe.DofMap.grid_indices",
+    "mace_fmu.fe.DofMap.index", "mace_fmu.fe.DofMap.indices", "mace_fmu.fe.DofMap.label", "mace_fmu.fe.Modes.shape",
+    "mace_fmu.fe.Modes.grid_motion", "mace_fmu.iomodel.Instruments.actuator", "mace_fmu.iomodel.Instruments.sensor",
     "mace_fmu.iomodel.ParametricSystem.parameter_problems", "mace_fmu.iomodel.ParametricSystem.parameter_problem",
     "mace_fmu.iomodel.ParametricSystem.index", "mace_fmu.iomodel.ParametricSystem.relative_changes",
     "mace_fmu.iomodel.ParametricSystem.modes", "mace_fmu.iomodel.ParametricSystem.structure",
     "mace_fmu.iomodel.ParametricSystem.build", "mace_fmu.iomodel.VoltsModel.frequency_response",
-    "mace_fmu.parameters.ParameterKind.range_for", "mace_fmu.parameters.ParameterKind.fmu_name",
-    "mace_fmu.parameters.ParameterKind.set_name", "mace_fmu.parameters.ParameterKind.named",
-    "mace_fmu.structure.StructureFile.has", "mace_fmu.structure.StructureSpec.empty",
-    "mace_fmu.structure.StructureSpec.component_of", "mace_fmu.updating.FrequencyResponseData.lines",
-    "mace_fmu.updating.FrequencyResponseData.unit", "mace_fmu.updating.ModelFamily.full",
-    "mace_fmu.updating.ModelFamily.basis", "mace_fmu.updating.TimeHistory.unit", "mace_fmu.updating.TimeHistory.head",
-    "mace_fmu.updating.TwoMassSystem.state_space", "mace_fmu.updating.files.ChannelMap.find",
-    "mace_fmu.updating.files.ChannelMap.where", "mace_fmu.updating.modal.StructureFamily.physical_values",
-    "mace_fmu.updating.modal.StructureFamily.check_names", "mace_fmu.updating.modal.StructureFamily.solve",
-    "mace_fmu.updating.modal.StructureFamily.full", "mace_fmu.updating.modal.StructureFamily.basis",
-    "mace_fmu.updating.modal.StructureFamily.current_values", "mace_fmu.updating.modal.StructureFamily.fresh_labels",
-    "mace_fmu.zero_g.BoundRule.bound", "mace_fmu.zero_g.robust.ParameterBox.label",
-    "mace_fmu.zero_g.robust.SweepResult.costs", "mace_fmu.zero_g.robust.SweepResult.stable"
+    "mace_fmu.updating.FrequencyResponseData.lines", "mace_fmu.updating.FrequencyResponseData.unit",
+    "mace_fmu.updating.ModelFamily.full", "mace_fmu.updating.ModelFamily.basis", "mace_fmu.updating.TimeHistory.unit",
+    "mace_fmu.updating.TimeHistory.head", "mace_fmu.updating.TwoMassSystem.state_space",
+    "mace_fmu.updating.files.ChannelMap.find", "mace_fmu.updating.files.ChannelMap.where",
+    "mace_fmu.updating.modal.StructureFamily.physical_values", "mace_fmu.updating.modal.StructureFamily.check_names",
+    "mace_fmu.updating.modal.StructureFamily.solve", "mace_fmu.updating.modal.StructureFamily.full",
+    "mace_fmu.updating.modal.StructureFamily.basis", "mace_fmu.updating.modal.StructureFamily.current_values",
+    "mace_fmu.updating.modal.StructureFamily.fresh_labels", "mace_fmu.zero_g.BoundRule.bound",
+    "mace_fmu.zero_g.robust.ParameterBox.label", "mace_fmu.zero_g.robust.SweepResult.costs",
+    "mace_fmu.zero_g.robust.SweepResult.stable"
 })
 
 

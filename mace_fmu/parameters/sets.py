@@ -163,11 +163,35 @@ class ParameterSet:
         return h.hexdigest()
 
     def of_kind(self, *kinds: KindName) -> dict[str, float]:
-        """The values whose names are of the given kinds."""
+        """The values whose names are of the given kinds.
+
+        Parameters
+        ----------
+        *kinds : str
+            Parameter kinds (:data:`~mace_fmu.parameters.kinds.KindName`), e.g. ``"modulus"``.
+
+        Returns
+        -------
+        dict of str to float
+            Name -> value of every entry of those kinds.
+        """
         return {n: v for n, v in self.values.items() if parameter_kind(n) in kinds}
 
     def updated(self, values: Mapping[str, float], *, provenance: Provenance | None = None) -> ParameterSet:
-        """A new set with ``values`` replacing or adding entries (provenance replaced when given)."""
+        """A new set with ``values`` replacing or adding entries (provenance replaced when given).
+
+        Parameters
+        ----------
+        values : mapping of str to float
+            The entries to replace or add.
+        provenance : Provenance, optional
+            The new set's provenance (default: this set's).
+
+        Returns
+        -------
+        ParameterSet
+            The new set, read from the same source.
+        """
         return ParameterSet({**self.values, **values}, provenance if provenance is not None else self.provenance,
                             source=self.source)
 
@@ -189,7 +213,25 @@ class ParameterSet:
 
     @classmethod
     def from_toml(cls, text: str, *, source: str = "<string>") -> ParameterSet:
-        """Parse :meth:`to_toml`'s format; errors name ``source`` and the offending entry."""
+        """Parse :meth:`to_toml`'s format; errors name ``source`` and the offending entry.
+
+        Parameters
+        ----------
+        text : str
+            The TOML text.
+        source : str
+            Where the text came from, for messages.
+
+        Returns
+        -------
+        ParameterSet
+            The set.
+
+        Raises
+        ------
+        MaceError
+            Text that is no parameter set (not TOML, an unknown table or key, a value that is wrong), named.
+        """
         try:
             data = tomllib.loads(text)
         except tomllib.TOMLDecodeError as exc:
@@ -217,12 +259,34 @@ class ParameterSet:
             raise MaceError(f"{source}: {exc}") from None
 
     def write(self, path: str | Path) -> Path:
-        """Write the TOML atomically (a reader never sees half a file)."""
+        """Write the TOML atomically (a reader never sees half a file).
+
+        Parameters
+        ----------
+        path : str or pathlib.Path
+            The file to write.
+
+        Returns
+        -------
+        pathlib.Path
+            The file written.
+        """
         return write_text_atomic(path, self.to_toml())
 
     @classmethod
     def read(cls, path: str | Path) -> ParameterSet:
-        """Read a parameter set written by :meth:`write` (or by hand)."""
+        """Read a parameter set written by :meth:`write` (or by hand).
+
+        Parameters
+        ----------
+        path : str or pathlib.Path
+            The TOML file.
+
+        Returns
+        -------
+        ParameterSet
+            The set, its messages naming ``path``.
+        """
         return cls.from_toml(read_text(path, what="parameter"), source=str(path))
 
 

@@ -94,12 +94,34 @@ class StructureSpec:
 
     @classmethod
     def empty(cls, source: str = "no structure file") -> StructureSpec:
-        """Nothing beyond the deck: no suspension, no components, no mechanisms (NASTRAN's meaning)."""
+        """Nothing beyond the deck: no suspension, no components, no mechanisms (NASTRAN's meaning).
+
+        Parameters
+        ----------
+        source : str
+            What messages name as the spec's source.
+
+        Returns
+        -------
+        StructureSpec
+            The empty spec.
+        """
         return cls(suspension_grids=frozenset(), suspension_elements=frozenset(), components={}, mechanisms=(),
                    source=source)
 
     def component_of(self, *grids: int) -> str | None:
-        """Name of the component that contains every one of ``grids`` (None when none does)."""
+        """Name of the component that contains every one of ``grids`` (None when none does).
+
+        Parameters
+        ----------
+        *grids : int
+            Grid IDs.
+
+        Returns
+        -------
+        str or None
+            The first component (in the file's order) that holds them all.
+        """
         for name, members in self.components.items():
             if all(g in members for g in grids):
                 return name
@@ -119,7 +141,18 @@ class StructureFile:
     spec: StructureSpec  #: its suspension, components and mechanisms
 
     def has(self, table: str) -> bool:
-        """Whether the file holds ``table`` (e.g. "actuators")."""
+        """Whether the file holds ``table`` (e.g. "actuators").
+
+        Parameters
+        ----------
+        table : str
+            A table's name.
+
+        Returns
+        -------
+        bool
+            True when the file has that table.
+        """
         return table in self.tables
 
 
