@@ -10,7 +10,7 @@ from mace_fmu.cli.common import (CONFIGURATIONS, deck_option, finite_number, mod
 from mace_fmu.cli.preflight import output_option
 from mace_fmu.errors import MaceError
 
-#: viewer.camera.CAMERA_VIEWS, spelled out so that `mace-fmu --help` does not import meshcat
+#: mace_fmu.viewer.camera.CAMERA_VIEWS, spelled out so that `mace-fmu --help` does not import meshcat
 CAMERA_CHOICES = ("iso", "x", "y", "z")
 
 
@@ -18,7 +18,7 @@ def _show(animation, args: argparse.Namespace, *, title: str) -> None:
     """Write the animation to --html, a still of it to --png, and/or serve it live until Ctrl-C."""
     import tempfile
 
-    from viewer import animation_commands, send_to_visualizer, write_animation_html, write_still  # meshcat only here
+    from mace_fmu.viewer import animation_commands, send_to_visualizer, write_animation_html, write_still  # meshcat only here
 
     if args.html:
         size = write_animation_html(animation, args.html, title=title, camera=args.camera)
@@ -47,7 +47,7 @@ def _show(animation, args: argparse.Namespace, *, title: str) -> None:
 
 def _need_target(args: argparse.Namespace) -> None:
     """An output is named, and a still can be taken (before any work is done)."""
-    from viewer import chromium_executable
+    from mace_fmu.viewer import chromium_executable
 
     if not (args.html or args.png or args.live):
         raise MaceError("say where to show the animation: --html OUT.html, --png OUT.png, --live, or several")
@@ -124,7 +124,7 @@ def cmd_view_response(args: argparse.Namespace) -> int:
     from mace_fmu.fmu.export import export_fmu
     from mace_fmu.fmu.simulate import simulate_input_response
     from mace_fmu.structure.file import structure_label
-    from viewer import animate_response, plot_response
+    from mace_fmu.viewer import animate_response, plot_response
 
     _need_target(args)
     if args.configuration == "modes":  # NASTRAN's modes: the scene from the [modes] table's geometry deck
@@ -178,7 +178,7 @@ def cmd_view(args: argparse.Namespace) -> int:
     from mace_fmu.deck.reader import read_deck
     from mace_fmu.fe.modes import compute_modes
     from mace_fmu.structure.file import structure_label
-    from viewer import animate_modes
+    from mace_fmu.viewer import animate_modes
 
     _need_target(args)
     if args.configuration == "modes":  # NASTRAN's modes: every mode of the file, drawn on the geometry deck's edges
@@ -205,7 +205,7 @@ def cmd_view(args: argparse.Namespace) -> int:
 def cmd_view_pairs(args: argparse.Namespace) -> int:
     from mace_fmu.deck.reader import read_deck
     from mace_fmu.fe.modes import compute_modes
-    from viewer import animate_pairs
+    from mace_fmu.viewer import animate_pairs
 
     _need_target(args)
     deck = read_deck(args.deck)

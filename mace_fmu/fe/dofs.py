@@ -82,5 +82,6 @@ def scalar_element_entries(dofs: DofMap, cd_frames: np.ndarray, g1: int, c1: int
     idx, coefficients = cd_component_entries(dofs, cd_frames, g1, c1)
     if g2 is None:
         return idx, coefficients
+    assert c2 is not None  # a second grid comes with its component
     idx2, coefficients2 = cd_component_entries(dofs, cd_frames, g2, c2)
     return np.concatenate([idx, idx2]), np.concatenate([coefficients, -coefficients2])

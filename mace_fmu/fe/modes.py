@@ -5,9 +5,10 @@ from __future__ import annotations
 import contextlib
 import math
 import os
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Iterator, Literal
+from typing import Any, Literal
 
 import numpy as np
 
@@ -230,7 +231,8 @@ def check_parameters_deck(parameters: ParameterSet, deck: Deck) -> None:
 def _check_preload_elements(deck: Deck) -> None:
     """The gravity preload's tangent stiffness holds CBAR (corotational) and CELAS2 terms only: a deck with
     CBEAM or rod elements would lose their stiffness there, so it is refused rather than solved wrongly."""
-    others = [(name, table) for name, table in (("CBEAM", deck.beams), ("CROD/CONROD", deck.rods)) if table]
+    others: list[tuple[str, Mapping[int, Any]]] = [(name, table) for name, table in (("CBEAM", deck.beams),
+                                                                             ("CROD/CONROD", deck.rods)) if table]
     if others:
         listed = ", ".join(f"{len(table)} {name} (first {next(iter(table.values())).source})" for name, table in others)
         raise MaceError(f"{deck.path}: the 1-g gravity preload models CBAR and CELAS2 elements only, and this deck "
@@ -372,6 +374,7 @@ def _solved_modes(struct: Structure, *, mass: MassKind, preload: PreloadKind, ma
                                    mpc_set=struct.preload.mpc)
         if auto:  # statics: a DOF without stiffness is singular whatever its mass
             static, removed = constrain_singular_dofs(static, model.stiffness)
+        assert struct.preload.load is not None  # the preload subcase is the first with a LOAD (structure.build)
         load = gravity_load(struct.deck, model, struct.preload.load)
         if preload == "linear":
             pre = linear_preload(model, static, load)
@@ -396,7 +399,7 @@ def _solved_modes(struct: Structure, *, mass: MassKind, preload: PreloadKind, ma
     wanted_hz, wanted_count = _modes_to_find(struct.deck, struct, max_hz)
     if reference is not None:  # the continuations may have moved above the range: look further
         wanted_hz = _CONTINUATION_REACH * float(np.max(np.abs(reference.frequencies_hz)))
-        wanted_count = _CONTINUATION_REACH * len(reference.frequencies_hz)
+        wanted_count = math.ceil(_CONTINUATION_REACH * len(reference.frequencies_hz))
     modes = solve_modes(stiffness, model.mass, modal, model.dofs, model.cd_frames, wanted_hz=wanted_hz,
                         wanted_count=wanted_count)
     if reference is None:

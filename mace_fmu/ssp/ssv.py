@@ -19,7 +19,7 @@ import math
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Mapping
+from typing import Any, Mapping
 
 from mace_fmu.errors import MaceError
 from mace_fmu.parameters.frequency_bounds import FrequencyBound
@@ -224,7 +224,8 @@ def parameter_set_from_ssv(text: str, *, source: str = "<string>") -> SsvContent
             unknown = set(prov.attrib) - set(kinds)
             if unknown:
                 raise MaceError(f"{source}: provenance annotation: unknown attribute(s) {sorted(unknown)}")
-            provenance = Provenance(**{k: (float(v) if "float" in str(kinds[k]) else v) for k, v in prov.attrib.items()})
+            given: dict[str, Any] = {k: (float(v) if "float" in str(kinds[k]) else v) for k, v in prov.attrib.items()}
+            provenance = Provenance(**given)
         for mode in ann.iterfind(f"{{{MACE}}}ParameterSet/{{{MACE}}}FrequencyBounds/{{{MACE}}}Mode"):
             try:
                 bounds.append(FrequencyBound(mode=int(mode.get("number", "")), mode_label=mode.get("label", ""),

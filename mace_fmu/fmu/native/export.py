@@ -27,7 +27,7 @@ from mace_fmu.fmu.naming import model_fmu_name
 from mace_fmu.fmu.native import compile as runtime
 from mace_fmu.fmu.native.model_description import (JacobianPattern, fmi2_model_description, fmi3_build_description,
                                                    fmi3_model_description, fmu_variables)
-from mace_fmu.fmu.native.platforms import binary_entries, select_platforms
+from mace_fmu.fmu.native.platforms import Platform, binary_entries, select_platforms
 from mace_fmu.fmu.native.resource import count_of, resource_bytes, runtime_arrays
 from mace_fmu.fmu.variables import model_summary
 from mace_fmu.iomodel.parametric import ParametricSystem
@@ -40,7 +40,7 @@ FmiVersion = Literal[2, 3]
 RESOURCE_NAME = "mace_model.bin"
 
 
-def runtime_token(data: dict, *, salt: str, sources: list[Path]) -> str:
+def runtime_token(data: Mapping[str, np.ndarray | list[str]], *, salt: str, sources: list[Path]) -> str:
     """A GUID / instantiation token that changes with the model data, ``salt`` (FMI version, FMU kind), the runtime."""
     h = hashlib.sha256(salt.encode())
     for path in sources:
@@ -49,8 +49,8 @@ def runtime_token(data: dict, *, salt: str, sources: list[Path]) -> str:
     return "{" + str(uuid.UUID(bytes=h.digest()[:16])) + "}"
 
 
-def write_native_fmu(final: Path, *, name: str, fmi_version: int, description: bytes, data: dict,
-                     binaries: dict, sources: list[Path], c_files: tuple[str, ...]) -> Path:
+def write_native_fmu(final: Path, *, name: str, fmi_version: int, description: bytes,
+                     data: Mapping[str, np.ndarray | list[str]], binaries: dict[Platform, bytes], sources: list[Path], c_files: tuple[str, ...]) -> Path:
     """Zip a native FMU atomically: its model description, runtime data, binaries and C sources.
 
     Parameters
@@ -107,11 +107,12 @@ def jacobian_pattern(system: ParametricSystem, *, samples: int = 2, seed: int = 
     for _ in range(samples):
         step = np.where(nominal != 0.0, 0.1 * nominal, 0.01 * span) * rng.uniform(0.5, 1.0, len(nominal))
         sets.append(np.clip(nominal + step * rng.choice([-1.0, 1.0], len(nominal)), low, high))
-    patterns = None
+    patterns: list[np.ndarray] | None = None
     for params in sets:
         nonzero = [np.asarray(m) != 0.0 for m in system.build(params)]
         patterns = nonzero if patterns is None else [p | q for p, q in zip(patterns, nonzero)]
     system.build(nominal)  # leave the system as built at its nominal parameters
+    assert patterns is not None  # sets holds the nominal parameters at least
     return JacobianPattern(*patterns)
 
 

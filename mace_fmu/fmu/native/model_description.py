@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any
 from xml.etree import ElementTree as ET
 
 import numpy as np
@@ -59,7 +60,7 @@ def fmu_variables(arrays: Mapping[str, np.ndarray], state_names: Sequence[str]) 
     out: list[FmuVariable] = []
     units = signal_units(arrays)
 
-    def add(**kw) -> None:
+    def add(**kw: Any) -> None:
         name, causality = kw["name"], kw["causality"]
         out.append(FmuVariable(value_reference=len(out), unit=variable_unit(name, causality, signal_units=units),
                                **kw))
@@ -139,11 +140,19 @@ class JacobianPattern:
     d: np.ndarray
 
 
+def _document(root: ET.Element) -> bytes:
+    """The XML document of ``root``, indented, UTF-8 with its declaration."""
+    ET.indent(root)
+    text: bytes = ET.tostring(root, encoding="UTF-8", xml_declaration=True)
+    return text
+
+
 def _dependencies(element: ET.Element, states: Sequence[int], inputs: Sequence[int], on_states: np.ndarray,
                   on_inputs: np.ndarray) -> None:
     """The dependencies of one unknown (FMI 2.0.x section 2.2.8): the states and inputs it depends on,
     each with the factor's kind "fixed" (a linear model: a constant set at initialisation)."""
-    known = sorted([states[j] for j in np.flatnonzero(on_states)] + [inputs[j] for j in np.flatnonzero(on_inputs)])
+    known = sorted([states[j] for j in np.flatnonzero(on_states).tolist()]
+                   + [inputs[j] for j in np.flatnonzero(on_inputs).tolist()])
     element.set("dependencies", " ".join(map(str, known)))
     element.set("dependenciesKind", " ".join(["fixed"] * len(known)))
 
@@ -202,8 +211,7 @@ def fmi2_model_description(variables: Sequence[FmuVariable], *, model_identifier
     for v in variables:
         if v.causality in ("output", "calculatedParameter", "local"):
             ET.SubElement(initial, "Unknown", index=str(index[v.value_reference]))
-    ET.indent(root)
-    return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
+    return _document(root)
 
 
 def fmi3_model_description(variables: Sequence[FmuVariable], *, model_identifier: str, token: str, description: str,
@@ -229,8 +237,7 @@ def fmi3_model_description(variables: Sequence[FmuVariable], *, model_identifier
     for v in scalars:
         if v.causality in ("output", "calculatedParameter"):
             ET.SubElement(structure, "InitialUnknown", valueReference=str(v.value_reference))
-    ET.indent(root)
-    return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
+    return _document(root)
 
 
 def fmi3_build_description(*, model_identifier: str, source_files: Sequence[str]) -> bytes:
@@ -240,5 +247,4 @@ def fmi3_build_description(*, model_identifier: str, source_files: Sequence[str]
     files = ET.SubElement(configuration, "SourceFileSet", language="C99")
     for name in source_files:
         ET.SubElement(files, "SourceFile", name=name)
-    ET.indent(root)
-    return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
+    return _document(root)

@@ -125,7 +125,9 @@ def _blocks(arrays: Mapping[str, np.ndarray], *, index: Mapping[str, int], clust
     """Each block's row of ``block_info`` (kind code, states, inputs, outputs, its parameters' indices), the
     constant blocks' matrices, and the names of the parameters that are delays."""
     n_states_structure = int(cluster["keep_disp"].sum() + cluster["keep_rate"].sum())
-    info, blocks, delay_params = [], {}, set()
+    rows: list[list[int]] = []
+    blocks: dict[str, np.ndarray] = {}
+    delay_params: set[str] = set()
     for i, (kind, param) in enumerate(zip((str(k) for k in arrays["block_kinds"]),
                                           (str(p) for p in arrays["block_params"]))):
         p0 = p1 = -1
@@ -146,8 +148,8 @@ def _blocks(arrays: Mapping[str, np.ndarray], *, index: Mapping[str, int], clust
                 blocks[f"block{i}_{m}"] = np.asarray(arrays[f"block{i}_{m}"], dtype=float).reshape(shape)
         else:
             raise MaceError(f"native FMU: block {i} has the unknown kind {kind!r}")
-        info.append([BLOCK_KINDS[kind], n_x, n_u, n_y, p0, p1])
-    info = np.array(info, dtype=np.int64).reshape(-1, 6)
+        rows.append([BLOCK_KINDS[kind], n_x, n_u, n_y, p0, p1])
+    info = np.array(rows, dtype=np.int64).reshape(-1, 6)
     if info[:, 2].sum() != arrays["wiring"].shape[0] or info[:, 3].sum() != arrays["wiring"].shape[1]:
         raise MaceError("native FMU: block inputs/outputs do not match the wiring matrix")
     return info, blocks, delay_params
@@ -213,7 +215,7 @@ def runtime_arrays(arrays: Mapping[str, np.ndarray]) -> dict[str, np.ndarray | l
     return out
 
 
-def count_of(data: Mapping[str, np.ndarray], name: str) -> int:
+def count_of(data: Mapping[str, np.ndarray | list[str]], name: str) -> int:
     """One entry of a runtime data file's ``counts`` by its name (:data:`COUNTS`), e.g. ``count_of(data, "states")``."""
     return int(np.asarray(data["counts"])[COUNTS.index(name)])
 

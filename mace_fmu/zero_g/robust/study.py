@@ -114,7 +114,7 @@ def robust_0g_study(model: VoltsModel, *, frequency_bounds: Mapping[int, float],
     """
     from mace_fmu.fmu.export import export_fmu
 
-    fmu = export_fmu(model, runtime="native", out_dir=out_dir, name=FMU_NAME, frequency_bounds=dict(frequency_bounds),
+    fmu = export_fmu(model, runtime="native", out_dir=Path(out_dir), name=FMU_NAME, frequency_bounds=dict(frequency_bounds),
                      progress=progress)
     design = design_compensator(model.system, loop=loop, weights=weights, reduced_states=reduced_states)
     sweep = robust_sweep(fmu, compensator=design.compensator, loop=loop, samples=samples, seed=seed,

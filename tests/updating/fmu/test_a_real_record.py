@@ -55,7 +55,7 @@ def rig(tmp_path_factory):
     y = run.time_response(t, {"force_floor_1": force}, outputs=list(OUTPUTS))
     kept = t >= BEFORE_S - 1e-9  # the record starts mid-stream
     channels = {"Dev1/ai0": ("Newtons", force[kept])}
-    for k, name in enumerate(OUTPUTS):
+    for k in range(len(OUTPUTS)):
         clean = y[kept, k]
         noise = 0.02 * np.sqrt(np.mean(clean**2)) * rng.standard_normal(clean.size)
         channels[f"Dev1/ai{k + 1}"] = ("m/s^2", clean + noise)

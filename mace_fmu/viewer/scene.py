@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -55,9 +56,9 @@ class Scene:
     """Everything the viewer draws, with undeformed grid positions [m] (deck basic axes, Y up)."""
 
     positions_m: np.ndarray  #: (n_grid, 3)
-    grid_ids: tuple[int, ...]
-    segments: tuple[BarSegment, ...]
-    masses: tuple[MassBody, ...]
+    grid_ids: tuple[int, ...]  #: the grid of each row of ``positions_m``
+    segments: tuple[BarSegment, ...]  #: the bars, in pieces
+    masses: tuple[MassBody, ...]  #: the lumped masses
     centre_m: np.ndarray  #: (3,) centre of the test article's bounding box (bus, gimbals, wheels)
     extent_m: np.ndarray  #: (3,) size of that box along X, Y, Z
     length_m: float  #: largest extent of the test article, for scaling deflections
@@ -71,11 +72,24 @@ def tube_outer_radius_m(area_m2: float, inertia_m4: float) -> float:
 
 def build_scene(structure_modes: StructureModes | ModalStructure, *, segments_per_bar: int = 4) -> Scene:
     """Bodies of a computed structure: each CBAR in ``segments_per_bar`` pieces, each CONM2 a sphere; for
-    NASTRAN's modes (a ModalStructure) the grids and the geometry deck's element edges (viewer.outline)."""
+    NASTRAN's modes (a ModalStructure) the grids and the geometry deck's element edges (mace_fmu.viewer.outline).
+
+    Parameters
+    ----------
+    structure_modes : StructureModes or ModalStructure
+        Computed modes of a deck, or NASTRAN's modes with their geometry deck.
+    segments_per_bar : int
+        Pieces each bar is drawn in (1 or more).
+
+    Returns
+    -------
+    Scene
+        The drawable bodies and the undeformed grid positions.
+    """
     if segments_per_bar < 1:
         raise ValueError(f"segments_per_bar must be >= 1, got {segments_per_bar}")
     if isinstance(structure_modes, ModalStructure):
-        from viewer.outline import outline_scene
+        from mace_fmu.viewer.outline import outline_scene
 
         return outline_scene(structure_modes)
     deck = structure_modes.structure.deck
@@ -115,7 +129,7 @@ def article_rows(structure_modes: StructureModes) -> np.ndarray:
     spec = structure_modes.structure.spec
     ids = structure_modes.model.dofs.grid_ids
 
-    def rows(keep) -> np.ndarray:
+    def rows(keep: Callable[[str], bool]) -> np.ndarray:
         grids = frozenset().union(*(g for name, g in spec.components.items() if keep(name)))
         return np.flatnonzero([g in grids for g in ids])
 

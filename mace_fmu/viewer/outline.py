@@ -11,7 +11,7 @@ import numpy as np
 
 from mace_fmu.errors import MaceError
 from mace_fmu.iomodel.modal_source import ModalStructure
-from viewer.scene import BarSegment, MassBody, Scene
+from mace_fmu.viewer.scene import BarSegment, MassBody, Scene
 
 #: edge radius and grid-sphere radius as fractions of the structure's largest extent
 EDGE_RADIUS_FRACTION = 0.002
