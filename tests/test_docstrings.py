@@ -120,8 +120,8 @@ def _public_callables():
                     yield f"{name}.{public}.{attr}", value
 
 
-#: public methods that take arguments and document them in a sentence, without a Parameters section (issue 49,
-#: item 5): the baseline of the test below, which fails for a new one and for one that gets its section (then
+#: public methods that take arguments and document them in a sentence, without a Parameters section: the
+#: baseline of the test below, which fails for a new one and for one that gets its section (then
 #: remove it here)
 METHODS_WITHOUT_PARAMETERS = frozenset({
     "mace_fmu.DiscreteController.from_statespace", "mace_fmu.DiscreteController.read_npz",

@@ -7,6 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from mace_fmu.errors import MaceError
 from mace_fmu.fe.modes import StructureModes
 from mace_fmu.iomodel.modal_source import ModalStructure
 
@@ -87,7 +88,7 @@ def build_scene(structure_modes: StructureModes | ModalStructure, *, segments_pe
         The drawable bodies and the undeformed grid positions.
     """
     if segments_per_bar < 1:
-        raise ValueError(f"segments_per_bar must be >= 1, got {segments_per_bar}")
+        raise MaceError(f"segments_per_bar must be >= 1, got {segments_per_bar}")
     if isinstance(structure_modes, ModalStructure):
         from mace_fmu.viewer.outline import outline_scene
 

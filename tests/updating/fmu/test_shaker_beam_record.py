@@ -1,4 +1,4 @@
-"""A how-to from a real record (issue 48, item 4): Dataset-4's steel cantilever on a shaker, its LabVIEW file as it
+"""A how-to from a real record: Dataset-4's steel cantilever on a shaker, its LabVIEW file as it
 comes (pounds and g, a header that is the 51200 Hz original's over every 128th row), through the commands of
 docs/howto/update_from_a_shaker_record.md, which the gallery's examples/shaker_beam/update_shaker_beam.py runs.
 
