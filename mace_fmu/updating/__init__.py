@@ -20,7 +20,7 @@ from mace_fmu.util.lazy import lazy_exports
 if TYPE_CHECKING:  # what editors and type checkers follow; at run time a name is imported on first use
     from mace_fmu.updating.engine.convergence import ConvergenceReport, convergence_report
     from mace_fmu.updating.engine.inclusion import ModelFamily
-    from mace_fmu.updating.engine.measured import FrequencyResponseData, TimeHistory, read_measured_modes
+    from mace_fmu.updating.engine.measured import MeasuredFrf, TimeHistory, read_measured_modes
     from mace_fmu.updating.engine.solve import Bounds, Stage, UpdateResult, UpdateSettings, update
     from mace_fmu.updating.engine.uncertainty import StageUncertainty, stage_uncertainty
     from mace_fmu.updating.fmu.planning import Candidate, TestDesign, plan_tests, read_test_plan
@@ -59,6 +59,6 @@ __all__, __getattr__, __dir__ = lazy_exports(__name__, {
     "StageUncertainty": "engine.uncertainty",
     "read_measured_modes": "engine.measured",
     "TimeHistory": "engine.measured",
-    "FrequencyResponseData": "engine.measured",
+    "MeasuredFrf": "engine.measured",
     "TwoMassSystem": "sample.two_mass",
 })

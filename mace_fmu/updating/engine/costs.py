@@ -16,7 +16,7 @@ import numpy as np
 from mace_fmu.errors import MaceError
 from mace_fmu.iomodel.pole_pairing import pair_poles
 from mace_fmu.updating.engine.linear_model import LinearModel
-from mace_fmu.updating.engine.measured import FrequencyResponseData, MeasuredMode, TimeHistory
+from mace_fmu.updating.engine.measured import MeasuredFrf, MeasuredMode, TimeHistory
 from mace_fmu.updating.engine.residual_blocks import ResidualBlock, frequency_blocks, time_blocks
 
 
@@ -184,7 +184,7 @@ class FrequencyResponseCost:
     difference is the principal value (within +-180 deg), as the complex logarithm gives it.
     """
 
-    data: FrequencyResponseData
+    data: MeasuredFrf
     kind: str = "log"
     name: str = "log-frf"
 

@@ -43,7 +43,7 @@ import numpy as np
 from mace_fmu.errors import MaceError
 from mace_fmu.updating.engine.frf_noise import FrfNoise
 from mace_fmu.updating.engine.residual_blocks import ResidualBlock, frequency_blocks
-from mace_fmu.updating.engine.measured import FrequencyResponseData
+from mace_fmu.updating.engine.measured import MeasuredFrf
 from mace_fmu.updating.engine.simulated_frf import log_ratio_labels, log_ratio_residual, measured_pairs
 
 
@@ -329,7 +329,7 @@ class ProbedFrequencyResponseCost:
     simulation. ``noise``: the data's noise (:func:`~mace_fmu.updating.engine.frf_noise.frf_noise`), w its
     weights, each log error in units of its noise; None: w = 1 (eq. 4.17 as printed)."""
 
-    data: FrequencyResponseData
+    data: MeasuredFrf
     probe: MultisineProbe
     pairs: tuple[tuple[str, str], ...] = ()  #: (input, output) channels compared; () means every pair
     noise: FrfNoise | None = None

@@ -17,7 +17,7 @@ import numpy as np
 
 from mace_fmu.errors import MaceError
 from mace_fmu.updating.engine.costs import Cost, WithPriors
-from mace_fmu.updating.engine.measured import FrequencyResponseData, TimeHistory
+from mace_fmu.updating.engine.measured import MeasuredFrf, TimeHistory
 from mace_fmu.updating.engine.periodic import periodic_excitation
 from mace_fmu.updating.engine.simulated_frf import H1Estimator
 from mace_fmu.updating.engine.solve import Bounds
@@ -34,11 +34,11 @@ class FmuProblem:
     names: tuple[str, ...]  #: parameters to update
     start: Mapping[str, float]  #: their start values [FMU units]
     history: TimeHistory | None  #: the measured time history of the first test (None: frequency responses only)
-    frequency_data: FrequencyResponseData | None  #: measured frequency responses (None: a time cost)
+    frequency_data: MeasuredFrf | None  #: measured frequency responses (None: a time cost)
     cost: Cost  #: the cost the update minimises
     data_files: tuple[str, ...]  #: the measured data files read
     histories: tuple[TimeHistory, ...] = ()  #: every test's time history (``history`` is the first)
-    responses: tuple[FrequencyResponseData, ...] = ()  #: every measured frequency response, in the band
+    responses: tuple[MeasuredFrf, ...] = ()  #: every measured frequency response, in the band
     #: what was made of the data before the update, said where it runs (a file's lines put on the analyser's grid)
     notes: tuple[str, ...] = ()
     #: each updated parameter's range [FMU units]: the defaults by kind within the FMU's declared range, or given
@@ -260,7 +260,7 @@ def _windowed(history: TimeHistory, window_s: tuple[float, float] | None) -> tup
                        source=f"{history.source} (to {end_s:g} s)", units=history.units), start_s
 
 
-def _frequency_response_problem(interface, responses: list[FrequencyResponseData], *, names: tuple[str, ...],
+def _frequency_response_problem(interface, responses: list[MeasuredFrf], *, names: tuple[str, ...],
                                 start: dict[str, float], cost: CostKind, bands_hz: Sequence[tuple[float, float]],
                                 gain_uncertainty: Mapping[str, float] | None,
                                 data: Sequence[str | os.PathLike], weighting: Weighting | None,
@@ -307,7 +307,7 @@ def _frequency_response_problem(interface, responses: list[FrequencyResponseData
                       bounds=declared_bounds(family, names, values, bounds, bounds_source))
 
 
-def _in_bands(frd: FrequencyResponseData, bands_hz: Sequence[tuple[float, float]]) -> FrequencyResponseData:
+def _in_bands(frd: MeasuredFrf, bands_hz: Sequence[tuple[float, float]]) -> MeasuredFrf:
     """The lines of ``frd`` in any of ``bands_hz`` (all of them without a band)."""
     import numpy as np
 
@@ -371,7 +371,7 @@ def _noise_per_residual(cost: Cost, history: TimeHistory, noise_rms_fraction: fl
                     "log-frf cost (--weighting noise)")
 
 
-def _test_cost(cost: CostKind, history: TimeHistory, frd: FrequencyResponseData | None, *, segment_s: float | None,
+def _test_cost(cost: CostKind, history: TimeHistory, frd: MeasuredFrf | None, *, segment_s: float | None,
                weighting: Weighting, compare_from_s: float, band_hz: tuple[float, float] | None,
                notes: list[str]) -> Cost:
     """The cost of one test (its time history, and a measured frequency response if given), compared from
@@ -433,7 +433,7 @@ def _default_band(history: TimeHistory) -> tuple[float, float]:
     return 0.5, min(60.0, 0.4 / history.sample_time_s)
 
 
-def _same_bins(frd: FrequencyResponseData, history: TimeHistory, estimator: H1Estimator) -> bool:
+def _same_bins(frd: MeasuredFrf, history: TimeHistory, estimator: H1Estimator) -> bool:
     """Whether ``frd`` sits on the estimator's bins (the noise weights are computed there)."""
     import numpy as np
 

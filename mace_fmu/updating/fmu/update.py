@@ -23,7 +23,7 @@ from mace_fmu.errors import MaceError
 from mace_fmu.parameters.sets import Provenance, now_utc, toml_key, toml_value, tool_version
 from mace_fmu.updating.engine.bounds import default_bounds
 from mace_fmu.updating.engine.costs import Cost, TimeResponseCost
-from mace_fmu.updating.engine.measured import FrequencyResponseData, TimeHistory
+from mace_fmu.updating.engine.measured import MeasuredFrf, TimeHistory
 from mace_fmu.updating.engine.simulated_frf import H1Estimator, SimulatedFrequencyResponseCost, log_h1_weights, principal_pairs
 from mace_fmu.updating.engine.solve import Bounds, Stage, UpdateResult, UpdateSettings, update
 from mace_fmu.updating.fmu.model import FmuFamily, ship_fmu
@@ -44,7 +44,7 @@ FMU_SETTINGS = UpdateSettings(method="cost-sensitivity", perturbation="full", pe
                               relative_step=1e-3, difference="central", initial_radius=0.1)
 
 
-def fmu_cost(kind: CostKind, *, history: TimeHistory, frequency_data: FrequencyResponseData | None = None,
+def fmu_cost(kind: CostKind, *, history: TimeHistory, frequency_data: MeasuredFrf | None = None,
              estimator: H1Estimator | None = None, pairs: Sequence[tuple[str, str]] = (),
              weighting: Weighting = "noise", compare_from_s: float | None = None,
              band_hz: tuple[float, float] | None = None) -> Cost:
