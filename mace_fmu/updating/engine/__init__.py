@@ -16,6 +16,7 @@ if TYPE_CHECKING:  # what editors and type checkers follow; at run time a name i
     from mace_fmu.updating.engine.convergence import ConvergenceReport, convergence_report
     from mace_fmu.updating.engine.inclusion import ModelFamily
     from mace_fmu.updating.engine.measured import MeasuredFrf, TimeHistory, read_measured_modes
+    from mace_fmu.updating.engine.models import PoleModel, SimulatedModel
     from mace_fmu.updating.engine.solve import Bounds, Stage, UpdateResult, UpdateSettings, update
     from mace_fmu.updating.engine.uncertainty import StageUncertainty, stage_uncertainty
 
@@ -26,6 +27,8 @@ __all__, __getattr__, __dir__ = lazy_exports(__name__, {
     "MeasuredFrf": "measured",
     "TimeHistory": "measured",
     "read_measured_modes": "measured",
+    "SimulatedModel": "models",
+    "PoleModel": "models",
     "Bounds": "solve",
     "Stage": "solve",
     "UpdateResult": "solve",

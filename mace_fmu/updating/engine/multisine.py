@@ -44,6 +44,7 @@ from mace_fmu.errors import MaceError
 from mace_fmu.updating.engine.frf_noise import FrfNoise
 from mace_fmu.updating.engine.residual_blocks import ResidualBlock, frequency_blocks
 from mace_fmu.updating.engine.measured import MeasuredFrf
+from mace_fmu.updating.engine.models import SimulatedModel
 from mace_fmu.updating.engine.simulated_frf import log_ratio_labels, log_ratio_residual, measured_pairs
 
 
@@ -98,7 +99,7 @@ class MultisineProbe:
         """The zero-order hold's gain at each line, sinc(w T / 2) (numpy's sinc is sin(pi x) / (pi x))."""
         return np.sinc(self.frequencies_hz * self.sample_time_s)
 
-    def response(self, model, *, inputs: Sequence[str], outputs: Sequence[str]) -> np.ndarray:
+    def response(self, model: SimulatedModel, *, inputs: Sequence[str], outputs: Sequence[str]) -> np.ndarray:
         """H[line, output, input] of ``model`` (anything with ``time_response(times, {input: values},
         outputs=...)`` that starts at rest, as an FMU does), in its outputs' units per its inputs' units.
 
@@ -115,7 +116,7 @@ class MultisineProbe:
             h[:, :, j] = self._resolved(model, name, list(outputs))
         return h
 
-    def _resolved(self, model, name: str, outputs: list[str]) -> np.ndarray:
+    def _resolved(self, model: SimulatedModel, name: str, outputs: list[str]) -> np.ndarray:
         """One input's response at a sample rate that resolves it: checked once per input against twice the
         rate (and raised until the two agree); later calls run at the rate found."""
         rates = self._cache.setdefault("rates", {})
@@ -137,14 +138,14 @@ class MultisineProbe:
                         "outputs read of the input at once passes through dynamics faster than that (a delay in "
                         "front of a feedthrough); compare it with a time record instead (--cost time)")
 
-    def _feedthrough(self, model, name: str, outputs: list[str]) -> np.ndarray:
+    def _feedthrough(self, model: SimulatedModel, name: str, outputs: list[str]) -> np.ndarray:
         """D[output] of ``name``: the first sample of a unit input less that of none (the state is the same)."""
         times = np.array([0.0, self.sample_time_s])
         pulse = np.asarray(model.time_response(times, {name: np.array([1.0, 0.0])}, outputs=outputs), dtype=float)
         rest = np.asarray(model.time_response(times, {name: np.zeros(2)}, outputs=outputs), dtype=float)
         return pulse[0] - rest[0]
 
-    def _one_input(self, model, name: str, outputs: list[str], *, d: np.ndarray | None = None) -> np.ndarray:
+    def _one_input(self, model: SimulatedModel, name: str, outputs: list[str], *, d: np.ndarray | None = None) -> np.ndarray:
         """``name``'s response H[line, output]; ``d``: its feedthrough (:meth:`_feedthrough`) where known."""
         n = self.samples_per_period
         # the feedthrough sees the held value at the sample, half a sample after the multisine's middle: its
@@ -348,11 +349,11 @@ class ProbedFrequencyResponseCost:
             raise MaceError(f"{self.data.source}: the probe's lines are not the data's frequencies")
         object.__setattr__(self, "pairs", tuple(pairs))
 
-    def model_response(self, model) -> np.ndarray:
+    def model_response(self, model: SimulatedModel) -> np.ndarray:
         """H[k, output, input] of ``model`` at the data's frequencies, over the data's inputs and outputs."""
         return self.probe.response(model, inputs=self.data.inputs, outputs=self.data.outputs)
 
-    def residual(self, model) -> np.ndarray:
+    def residual(self, model: SimulatedModel) -> np.ndarray:
         return log_ratio_residual(self.data, self.model_response(model), pairs=self.pairs, weights=self.weights)
 
     def residual_blocks(self) -> tuple[ResidualBlock, ...]:

@@ -18,6 +18,7 @@ from mace_fmu.errors import MaceError
 from mace_fmu.updating.engine.h1 import h1_estimate
 from mace_fmu.updating.engine.residual_blocks import ResidualBlock, frequency_blocks
 from mace_fmu.updating.engine.measured import MeasuredFrf, TimeHistory
+from mace_fmu.updating.engine.models import SimulatedModel
 
 
 @dataclass(frozen=True)
@@ -98,7 +99,7 @@ class SimulatedFrequencyResponseCost:
             raise MaceError(f"{self.excitation.source}: the excitation lacks the measured input(s) {missing}")
         object.__setattr__(self, "pairs", tuple(pairs))
 
-    def model_response(self, model) -> MeasuredFrf:
+    def model_response(self, model: SimulatedModel) -> MeasuredFrf:
         """The H1 estimate of ``model``'s response to the excitation, at the estimator's bins."""
         outs = sorted({o for _, o in self.pairs}, key=self.data.outputs.index)
         y = model.time_response(self.excitation.times_s, self.excitation.inputs, outputs=outs)
@@ -108,7 +109,7 @@ class SimulatedFrequencyResponseCost:
                                 {o: y[first:, k] for k, o in enumerate(outs)}, source="the model's simulated response")
         return self.estimator(simulated)
 
-    def residual(self, model) -> np.ndarray:
+    def residual(self, model: SimulatedModel) -> np.ndarray:
         est = self.model_response(model)
         f = self.data.frequencies_hz
         same = est.frequencies_hz.shape == f.shape and np.allclose(est.frequencies_hz, f, rtol=1e-9, atol=0.0)
