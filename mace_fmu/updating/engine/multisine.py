@@ -34,6 +34,7 @@ more than :attr:`MultisineProbe.max_rate_doublings` doublings is refused, naming
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field, replace
 from typing import Sequence
@@ -48,10 +49,20 @@ from mace_fmu.updating.engine.models import SimulatedModel
 from mace_fmu.updating.engine.simulated_frf import log_ratio_labels, log_ratio_residual, measured_pairs
 
 
+@dataclass
+class ProbeLearning:
+    """What a :class:`MultisineProbe` learns as it runs a model, kept for its later runs: how many periods the
+    free response takes to die out, and the sample rate each input needs (module docstring)."""
+
+    periods: int = 2  #: the periods of the next run (doubled until the last two agree)
+    #: input -> the probe at the sample rate its response needs (this one or a finer one, each learning its own)
+    rates: dict[str, MultisineProbe] = field(default_factory=dict)
+
+
 @dataclass(frozen=True)
 class MultisineProbe:
     """The periodic runs that give a simulated model's response at ``frequencies_hz`` (multiples of
-    1 / ``period_s``)."""
+    1 / ``period_s``); what the runs teach it is in ``learnt``, the record itself never changes."""
 
     frequencies_hz: np.ndarray  #: the lines [Hz], each a whole multiple of 1 / period_s
     period_s: float  #: the multisine's period [s]
@@ -64,8 +75,8 @@ class MultisineProbe:
     #: the lines as the data state them, before :func:`multisine_probe` put them on the grid (None: the same)
     given_hz: np.ndarray | None = None
     note: str = ""  #: how the lines were put on the grid, when any moved by more than round-off ("": none did)
-    _periods: list = field(default_factory=lambda: [2], repr=False, compare=False)  #: learnt run length
-    _cache: dict = field(default_factory=dict, repr=False, compare=False)  #: one period of the input
+    #: the run length and sample rates learnt from the runs so far
+    learnt: ProbeLearning = field(default_factory=ProbeLearning, repr=False, compare=False)
 
     @property
     def sample_time_s(self) -> float:
@@ -80,19 +91,22 @@ class MultisineProbe:
         """(times [s], held input values, complex amplitude of each line): ``periods`` periods of the
         multisine, Schroeder phases (a low crest factor), unit amplitude per line before the hold's
         correction."""
-        if "period" not in self._cache:
-            k = np.arange(len(self.frequencies_hz))
-            lines = np.exp(-1j * np.pi * k * (k + 1) / max(len(k), 1))
-            w = 2 * np.pi * self.frequencies_hz
-            amplitude = lines / self._hold_gain  # the staircase's component at each line is then ``lines``
-            middle = (np.arange(self.samples_per_period) + 0.5) * self.sample_time_s
-            values = np.zeros(self.samples_per_period)
-            for start in range(0, len(w), 64):  # a block of lines at a time: the (n x lines) table stays small
-                block = slice(start, start + 64)
-                values += np.real(np.exp(1j * np.outer(middle, w[block])) @ amplitude[block])
-            self._cache["period"] = (values, lines)
-        values, lines = self._cache["period"]
+        values, lines = self._one_period
         return np.arange(periods * self.samples_per_period) * self.sample_time_s, np.tile(values, periods), lines
+
+    @functools.cached_property
+    def _one_period(self) -> tuple[np.ndarray, np.ndarray]:
+        """(held input values of one period, complex amplitude of each line): made once, from the record alone."""
+        k = np.arange(len(self.frequencies_hz))
+        lines = np.exp(-1j * np.pi * k * (k + 1) / max(len(k), 1))
+        w = 2 * np.pi * self.frequencies_hz
+        amplitude = lines / self._hold_gain  # the staircase's component at each line is then ``lines``
+        middle = (np.arange(self.samples_per_period) + 0.5) * self.sample_time_s
+        values = np.zeros(self.samples_per_period)
+        for start in range(0, len(w), 64):  # a block of lines at a time: the (n x lines) table stays small
+            block = slice(start, start + 64)
+            values += np.real(np.exp(1j * np.outer(middle, w[block])) @ amplitude[block])
+        return values, lines
 
     @property
     def _hold_gain(self) -> np.ndarray:
@@ -119,14 +133,14 @@ class MultisineProbe:
     def _resolved(self, model: SimulatedModel, name: str, outputs: list[str]) -> np.ndarray:
         """One input's response at a sample rate that resolves it: checked once per input against twice the
         rate (and raised until the two agree); later calls run at the rate found."""
-        rates = self._cache.setdefault("rates", {})
+        rates = self.learnt.rates
         if name in rates:
             return rates[name]._one_input(model, name, outputs)
         d = self._feedthrough(model, name, outputs)  # the first sample's: the same at every sample rate
         probe, h = self, self._one_input(model, name, outputs, d=d)
         for _ in range(self.max_rate_doublings + 1):
-            finer = replace(probe, samples_per_period=2 * probe.samples_per_period, _periods=list(probe._periods),
-                            _cache={})
+            finer = replace(probe, samples_per_period=2 * probe.samples_per_period,
+                            learnt=ProbeLearning(periods=probe.learnt.periods))
             h_finer = finer._one_input(model, name, outputs, d=d)
             change = np.max(np.abs(h_finer - h)) / max(np.max(np.abs(h_finer)), np.finfo(float).tiny)
             if change <= self.rate_tolerance:
@@ -154,7 +168,7 @@ class MultisineProbe:
         if d is None:
             d = self._feedthrough(model, name, outputs)
         while True:
-            periods = self._periods[0]
+            periods = self.learnt.periods
             times, values, lines = self.excitation(periods)
             y = np.asarray(model.time_response(times, {name: values}, outputs=outputs), dtype=float)
             last, before = (np.fft.rfft(y[len(y) - (m + 1) * n:len(y) - m * n], axis=0)[self.bins] for m in (0, 1))
@@ -167,7 +181,7 @@ class MultisineProbe:
                 raise MaceError(f"the model's response to a periodic input on {name} still changes by {change:.1e} "
                                 f"after {periods} periods of {self.period_s:g} s: it is unstable or so lightly "
                                 "damped that its free response outlasts the run")
-            self._periods[0] = 2 * periods
+            self.learnt.periods = 2 * periods
 
 
 #: the finest grid tried is the smallest gap between lines over this (a period this many times its gaps' longest)
