@@ -293,8 +293,8 @@ class _StageProblem:
         return {**values, **{n: float(v) for n, v in zip(self.names, self.start_values * (1.0 + x))}}
 
 
-def _run_stage(problem: _StageProblem, values: dict[str, float], model, history: list[Iteration]
-               ) -> tuple[dict[str, float], object, StageOutcome]:
+def _run_stage(problem: _StageProblem, values: dict[str, float], model: Any, history: list[Iteration]
+               ) -> tuple[dict[str, float], Any, StageOutcome]:
     """The outer loop of one stage from ``values`` (``model``: the full model there); returns the new
     values, the full model at them and how the loop ended."""
     family, cost, stage, settings = problem.family, problem.cost, problem.stage, problem.settings
