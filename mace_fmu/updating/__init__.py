@@ -24,7 +24,7 @@ if TYPE_CHECKING:  # what editors and type checkers follow; at run time a name i
     from mace_fmu.updating.engine.solve import Bounds, Stage, UpdateResult, UpdateSettings, update
     from mace_fmu.updating.engine.uncertainty import StageUncertainty, stage_uncertainty
     from mace_fmu.updating.fmu.planning import Candidate, TestDesign, plan_tests, read_test_plan
-    from mace_fmu.updating.fmu.problem import FmuProblem
+    from mace_fmu.updating.fmu.problem import FmuProblem, FmuUpdateRequest
     from mace_fmu.updating.fmu.update import fmu_parameters, update_fmu
     from mace_fmu.updating.mace.update import MaceUpdate, run_mace_update
     from mace_fmu.updating.modal.identify import Identification, identify_modes
@@ -42,6 +42,7 @@ __all__, __getattr__, __dir__ = lazy_exports(__name__, {
     "update_fmu": "fmu.update",
     "fmu_parameters": "fmu.update",
     "FmuProblem": "fmu.problem",
+    "FmuUpdateRequest": "fmu.problem",
     "run_mace_update": "mace.update",
     "MaceUpdate": "mace.update",
     "identify_modes": "modal.identify",
