@@ -236,7 +236,6 @@ class _Data:
     histories: tuple[TimeHistory, ...]
     responses: tuple[MeasuredFrf, ...]
 
-    @property
     def kind(self) -> DataKind:
         """What the data are; MaceError for frequency responses beside several time histories, or several
         beside one."""
@@ -263,7 +262,7 @@ class _Test:
 
 
 #: the cost of one test: (the request, the test, the notes to add to) -> its cost
-TestCost = Callable[[FmuUpdateRequest, _Test, list], FmuCost]
+TestCost = Callable[[FmuUpdateRequest, _Test, list[str]], FmuCost]
 
 
 def problem_of(request: FmuUpdateRequest) -> FmuProblem:
@@ -276,7 +275,7 @@ def problem_of(request: FmuUpdateRequest) -> FmuProblem:
         As :func:`fmu_problem`.
     """
     found = _read_data(request)
-    kind = found.kind
+    kind = found.kind()
     request.check_options(kind)
     test_cost = TEST_COSTS.get((kind, request.cost))
     if test_cost is None:
