@@ -16,8 +16,8 @@ route exactly: they are blocks of the input-output model.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
 from typing import Any, Literal, Protocol, TypeVar, runtime_checkable
 
 import numpy as np
@@ -52,7 +52,6 @@ class ModalBasis(Protocol[M_co]):
         ...
 
 
-@runtime_checkable
 class ModelFamily(Protocol[M_co]):
     """A parametrised model: what the engine asks of the MACE model, the sample problem, an FMU or a user's.
 
