@@ -11,10 +11,10 @@ from mace_fmu.cli.common import fraction, non_negative_hz, positive_integer, pos
 from mace_fmu.cli.preflight import output_option
 
 if TYPE_CHECKING:
-    from mace_fmu.updating.engine.measured import FrequencyResponseData, TimeHistory
+    from mace_fmu.updating.engine.measured import MeasuredFrf, TimeHistory
 
 
-def _summary(data: TimeHistory | FrequencyResponseData) -> list[str]:
+def _summary(data: TimeHistory | MeasuredFrf) -> list[str]:
     from mace_fmu.updating.engine.measured import TimeHistory
     signals = lambda names: ", ".join(f"{n} [{data.unit(n)}]" for n in names) or "none"  # noqa: E731
     if isinstance(data, TimeHistory):

@@ -20,11 +20,11 @@ from mace_fmu.util.lazy import lazy_exports
 if TYPE_CHECKING:  # what editors and type checkers follow; at run time a name is imported on first use
     from mace_fmu.updating.engine.convergence import ConvergenceReport, convergence_report
     from mace_fmu.updating.engine.inclusion import ModelFamily
-    from mace_fmu.updating.engine.measured import FrequencyResponseData, TimeHistory, read_measured_modes
+    from mace_fmu.updating.engine.measured import MeasuredFrf, TimeHistory, read_measured_modes
     from mace_fmu.updating.engine.solve import Bounds, Stage, UpdateResult, UpdateSettings, update
     from mace_fmu.updating.engine.uncertainty import StageUncertainty, stage_uncertainty
     from mace_fmu.updating.fmu.planning import Candidate, TestDesign, plan_tests, read_test_plan
-    from mace_fmu.updating.fmu.problem import FmuProblem
+    from mace_fmu.updating.fmu.problem import FmuProblem, FmuUpdateRequest
     from mace_fmu.updating.fmu.update import fmu_parameters, update_fmu
     from mace_fmu.updating.mace.update import MaceUpdate, run_mace_update
     from mace_fmu.updating.modal.identify import Identification, identify_modes
@@ -42,6 +42,7 @@ __all__, __getattr__, __dir__ = lazy_exports(__name__, {
     "update_fmu": "fmu.update",
     "fmu_parameters": "fmu.update",
     "FmuProblem": "fmu.problem",
+    "FmuUpdateRequest": "fmu.problem",
     "run_mace_update": "mace.update",
     "MaceUpdate": "mace.update",
     "identify_modes": "modal.identify",
@@ -59,6 +60,6 @@ __all__, __getattr__, __dir__ = lazy_exports(__name__, {
     "StageUncertainty": "engine.uncertainty",
     "read_measured_modes": "engine.measured",
     "TimeHistory": "engine.measured",
-    "FrequencyResponseData": "engine.measured",
+    "MeasuredFrf": "engine.measured",
     "TwoMassSystem": "sample.two_mass",
 })

@@ -289,7 +289,7 @@ def frf_control(seed: int) -> FrfFit:
     times exp(complex white noise of FRF_NOISE), fitted on the log-FRF cost (lines unweighted, as a file
     without coherence is)."""
     from mace_fmu.updating.engine.costs import FrequencyResponseCost
-    from mace_fmu.updating.engine.measured import FrequencyResponseData
+    from mace_fmu.updating.engine.measured import MeasuredFrf
     from mace_fmu.updating.engine.residual_covariance import residual_covariance
 
     family = TwoMassFamily(masses=TwoMassSystem())
@@ -297,7 +297,7 @@ def frf_control(seed: int) -> FrfFit:
     h = family.full({**ACTUAL, **damping}).frequency_response(CONTROL_LINES_HZ)
     rng = np.random.default_rng(seed)
     noise = FRF_NOISE * (rng.standard_normal(h.shape) + 1j * rng.standard_normal(h.shape))
-    data = FrequencyResponseData(CONTROL_LINES_HZ, ("force_1",), ("displacement_1",), h * np.exp(noise),
+    data = MeasuredFrf(CONTROL_LINES_HZ, ("force_1",), ("displacement_1",), h * np.exp(noise),
                                  source=f"control, seed {seed}")
     cost = FrequencyResponseCost(data)
     start = {"k_1": 0.99 * ACTUAL["k_1"], "k_2": 1.01 * ACTUAL["k_2"], **damping}

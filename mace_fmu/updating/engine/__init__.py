@@ -15,7 +15,8 @@ from mace_fmu.util.lazy import lazy_exports
 if TYPE_CHECKING:  # what editors and type checkers follow; at run time a name is imported on first use
     from mace_fmu.updating.engine.convergence import ConvergenceReport, convergence_report
     from mace_fmu.updating.engine.inclusion import ModelFamily
-    from mace_fmu.updating.engine.measured import FrequencyResponseData, TimeHistory, read_measured_modes
+    from mace_fmu.updating.engine.measured import MeasuredFrf, TimeHistory, read_measured_modes
+    from mace_fmu.updating.engine.models import PoleModel, SimulatedModel
     from mace_fmu.updating.engine.solve import Bounds, Stage, UpdateResult, UpdateSettings, update
     from mace_fmu.updating.engine.uncertainty import StageUncertainty, stage_uncertainty
 
@@ -23,9 +24,11 @@ __all__, __getattr__, __dir__ = lazy_exports(__name__, {
     "ConvergenceReport": "convergence",
     "convergence_report": "convergence",
     "ModelFamily": "inclusion",
-    "FrequencyResponseData": "measured",
+    "MeasuredFrf": "measured",
     "TimeHistory": "measured",
     "read_measured_modes": "measured",
+    "SimulatedModel": "models",
+    "PoleModel": "models",
     "Bounds": "solve",
     "Stage": "solve",
     "UpdateResult": "solve",

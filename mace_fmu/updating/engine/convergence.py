@@ -126,8 +126,9 @@ def missing_noise_floor(cost, *, noise_rms_fraction: float | None = None) -> str
     if noise_rms_fraction is not None:
         return ""
     inner = cost.cost if isinstance(cost, WithPriors) else cost
-    tests = inner.tests if isinstance(inner, SeveralTests) else (inner,)
-    if not all(isinstance(c, TimeResponseCost) for c in tests):
+    given = inner.tests if isinstance(inner, SeveralTests) else (inner,)
+    tests = [c for c in given if isinstance(c, TimeResponseCost)]
+    if len(tests) != len(given):
         return ""
     for c in tests:
         if time_noise_floor(c) is None and c.band_hz is not None:
@@ -162,9 +163,12 @@ def noise_floor(cost, *, noise_rms_fraction: float | None = None) -> NoiseFloor 
                           source=f"{inner.source}; {k} prior(s)")
     if isinstance(cost, TimeResponseCost):
         return time_noise_floor(cost, noise_rms_fraction=noise_rms_fraction)
-    if not isinstance(cost, SeveralTests) or not all(isinstance(c, TimeResponseCost) for c in cost.tests):
+    if not isinstance(cost, SeveralTests):
         return None
-    floors = [time_noise_floor(c, noise_rms_fraction=noise_rms_fraction) for c in cost.tests]
+    tests = [c for c in cost.tests if isinstance(c, TimeResponseCost)]
+    if len(tests) != len(cost.tests):
+        return None
+    floors = [time_noise_floor(c, noise_rms_fraction=noise_rms_fraction) for c in tests]
     if any(f is None for f in floors):
         return None
     percent = {f"{label}: {o}": v for f, label in zip(floors, cost.labels) for o, v in f.noise_rms_percent.items()}

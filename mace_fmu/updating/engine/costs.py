@@ -1,31 +1,43 @@
 """Costs as residual vectors j (thesis eq. 4.11): the scalar cost is j^T j.
 
-Each cost maps a :class:`~mace_fmu.updating.engine.linear_model.LinearModel` to one real vector, stacked over
-modes, or over actuator/sensor pairs and frequencies or times, so the cost-sensitivity method
-(eq. 4.12-4.13) and least squares see the same thing. A user adds a cost by writing a class with
-``name``, ``residual(model)`` and ``entry_labels()``.
+Each cost maps a model to one real vector, stacked over modes, or over actuator/sensor pairs and frequencies or
+times, so the cost-sensitivity method (eq. 4.12-4.13) and least squares see the same thing. A cost is a
+``Cost[M]`` of the models it reads (:mod:`~mace_fmu.updating.engine.models`): the modal costs read poles
+(:class:`~mace_fmu.updating.engine.models.PoleModel`), the time cost simulates
+(:class:`~mace_fmu.updating.engine.models.SimulatedModel`: the state-space model and an FMU alike). A user adds a
+cost by writing a class with ``name``, ``residual(model)`` and ``entry_labels()``.
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Protocol
+from typing import Generic, Protocol, TypeVar
 
 import numpy as np
 
 from mace_fmu.errors import MaceError
 from mace_fmu.iomodel.pole_pairing import pair_poles
 from mace_fmu.updating.engine.linear_model import LinearModel
-from mace_fmu.updating.engine.measured import FrequencyResponseData, MeasuredMode, TimeHistory
+from mace_fmu.updating.engine.measured import MeasuredFrf, MeasuredMode, TimeHistory
+from mace_fmu.updating.engine.modal_model import ModalModel
+from mace_fmu.updating.engine.models import PoleModel, SimulatedModel
 from mace_fmu.updating.engine.residual_blocks import ResidualBlock, frequency_blocks, time_blocks
 
+M = TypeVar("M")  #: the models a cost reads
+M_contra = TypeVar("M_contra", contravariant=True)
 
-class Cost(Protocol):
-    """What the updating engine needs of a cost."""
 
-    name: str
+class Cost(Protocol[M_contra]):
+    """What the updating engine needs of a cost of models ``M_contra`` (a cost of any
+    :class:`~mace_fmu.updating.engine.models.SimulatedModel` is one of the linear model and of an FMU)."""
 
-    def residual(self, model: LinearModel) -> np.ndarray:
+    @property
+    def name(self) -> str:
+        """What the cost is called in reports ("time", "log-frf", ...)."""
+        ...
+
+    def residual(self, model: M_contra) -> np.ndarray:
         """The residual vector j of ``model`` (real, fixed length)."""
         ...
 
@@ -68,7 +80,7 @@ class ModalCost:
     damping_floor: float = 0.001  #: z0: damping errors of nearly undamped modes stay bounded
     name: str = "modal"
 
-    def pairs(self, model: LinearModel) -> list[int]:
+    def pairs(self, model: PoleModel) -> list[int]:
         """Index into ``model.poles()`` of each measured mode's pole; UnpairedModeError names the first
         that has none."""
         poles = model.poles()
@@ -82,7 +94,7 @@ class ModalCost:
                     + ")")
         return [int(i) for i in found]
 
-    def residual(self, model: LinearModel) -> np.ndarray:
+    def residual(self, model: PoleModel) -> np.ndarray:
         poles = model.poles()
         idx = self.pairs(model)
         w = np.array([m.weight for m in self.measured])
@@ -141,7 +153,7 @@ class ModeShapeCost:
         """The frequency (and damping) part."""
         return ModalCost(measured=self.measured, damping_weight=self.damping_weight)
 
-    def model_shapes(self, model) -> np.ndarray:
+    def model_shapes(self, model: ModalModel) -> np.ndarray:
         """The model's shapes at the measured DOFs, one column per measured mode (its paired mode's)."""
         dofs = tuple(getattr(model, "dofs", ()))
         if dofs != self.dofs:
@@ -150,7 +162,7 @@ class ModeShapeCost:
         poles = model.poles()
         return np.column_stack([model.shapes[:, poles[i].mode] for i in self.modal.pairs(model)])
 
-    def residual(self, model) -> np.ndarray:
+    def residual(self, model: ModalModel) -> np.ndarray:
         freq = self.modal.residual(model)
         v = self.model_shapes(model)
         u = self.shapes
@@ -164,7 +176,7 @@ class ModeShapeCost:
             r = uu - np.sum(uu * vv, axis=0) * vv
         return np.concatenate([freq, (self.shape_weight * w * r).T.ravel()])
 
-    def mac(self, model) -> np.ndarray:
+    def mac(self, model: ModalModel) -> np.ndarray:
         """MAC of each measured mode with its paired model mode."""
         v = self.model_shapes(model)
         u = self.shapes
@@ -184,7 +196,7 @@ class FrequencyResponseCost:
     difference is the principal value (within +-180 deg), as the complex logarithm gives it.
     """
 
-    data: FrequencyResponseData
+    data: MeasuredFrf
     kind: str = "log"
     name: str = "log-frf"
 
@@ -286,7 +298,7 @@ class TimeResponseCost:
             parts.append(f"{self.band_hz[0]:g}-{self.band_hz[1]:g} Hz")
         return ", ".join(parts)
 
-    def residual(self, model: LinearModel) -> np.ndarray:
+    def residual(self, model: SimulatedModel) -> np.ndarray:
         outs = list(self.data.outputs)
         y = self._filtered(model.time_response(self.data.times_s, self.data.inputs, outputs=outs))
         first = self._first
@@ -316,19 +328,19 @@ class TimeResponseCost:
 
 
 @dataclass(frozen=True)
-class SeveralTests:
+class SeveralTests(Generic[M]):
     """The costs of several tests of one structure (a gimbal test, an active-strut test, ...) as one cost.
 
     j = [w_1 j_1; w_2 j_2; ...]: each test's residual times its weight, 1 / (its noise standard
     deviation per residual) when known, so that every test counts in units of its own noise.
     """
 
-    tests: tuple  #: the tests' costs
+    tests: tuple[Cost[M], ...]  #: the tests' costs
     weights: tuple[float, ...]  #: one per test
     labels: tuple[str, ...]  #: one per test (its data file)
     name: str = "several tests"
 
-    def residual(self, model: LinearModel) -> np.ndarray:
+    def residual(self, model: M) -> np.ndarray:
         return np.concatenate([w * c.residual(model) for c, w in zip(self.tests, self.weights)])
 
     def residual_blocks(self) -> tuple[ResidualBlock, ...]:
@@ -348,7 +360,7 @@ class SeveralTests:
 
 
 @dataclass(frozen=True)
-class WithPriors:
+class WithPriors(Generic[M]):
     """A cost with Gaussian prior knowledge of some parameters (a sensor gain calibrated to 1 %).
 
     j = [j_data; s (p_k - mean_k) / sd_k]: ``s``, the noise standard deviation per residual of
@@ -357,8 +369,8 @@ class WithPriors:
     its parameter values (``model.parameter_values``, as an FMU model does).
     """
 
-    cost: object  #: the data's cost
-    priors: dict  #: parameter -> (mean, standard deviation) [the parameter's units]
+    cost: Cost[M]  #: the data's cost
+    priors: Mapping[str, tuple[float, float]]  #: parameter -> (mean, standard deviation) [the parameter's units]
     noise_sd: float  #: s: noise standard deviation per residual of ``cost``
     name: str = ""
 
@@ -370,8 +382,8 @@ class WithPriors:
             raise MaceError(f"noise standard deviation per residual must be positive, got {self.noise_sd!r}")
         object.__setattr__(self, "name", self.name or f"{self.cost.name} with priors")
 
-    def residual(self, model) -> np.ndarray:
-        values = getattr(model, "parameter_values", None)
+    def residual(self, model: M) -> np.ndarray:
+        values: Mapping[str, float] | None = getattr(model, "parameter_values", None)
         if values is None:
             raise MaceError(f"priors on {', '.join(self.priors)} need a model that says its parameter values")
         missing = [n for n in self.priors if n not in values]

@@ -39,7 +39,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from mace_fmu.errors import MaceError
-from mace_fmu.updating.engine.measured import FrequencyResponseData
+from mace_fmu.updating.engine.measured import MeasuredFrf
 
 #: the default floor: 1 % of an output's whole response (see the module docstring)
 DEFAULT_FLOOR = 0.01
@@ -60,12 +60,12 @@ class FrfNoise:
         return 1.0 / self.standard_deviation
 
 
-def frf_noise(data: FrequencyResponseData, *, averages: int | None = None, floor: float = DEFAULT_FLOOR) -> FrfNoise:
+def frf_noise(data: MeasuredFrf, *, averages: int | None = None, floor: float = DEFAULT_FLOOR) -> FrfNoise:
     """The noise of log H of ``data`` from its coherence (module docstring).
 
     Parameters
     ----------
-    data : FrequencyResponseData
+    data : MeasuredFrf
         A measured frequency response with its multiple coherence.
     averages : int, optional
         n_d, the averages behind the estimate, where the file does not say (``data.averages``); a number

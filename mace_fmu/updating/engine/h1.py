@@ -8,12 +8,12 @@ import numpy as np
 from scipy import signal
 
 from mace_fmu.errors import MaceError
-from mace_fmu.updating.engine.measured import FrequencyResponseData, TimeHistory
+from mace_fmu.updating.engine.measured import MeasuredFrf, TimeHistory
 
 
 def h1_estimate(history: TimeHistory, *, segment_length: int, window: str = "hann", overlap: float = 0.5,
                 band_hz: tuple[float, float] | None = None, inputs_held: bool = False,
-                lines_hz: Sequence[float] | None = None) -> FrequencyResponseData:
+                lines_hz: Sequence[float] | None = None) -> MeasuredFrf:
     """H1 = S_yu S_uu^-1 [output unit / input unit] at the Welch frequencies [Hz], with multiple coherence.
 
     Cross spectra by ``scipy.signal.csd`` (``segment_length`` samples per segment, ``window``,
@@ -51,7 +51,7 @@ def h1_estimate(history: TimeHistory, *, segment_length: int, window: str = "han
 
     Returns
     -------
-    FrequencyResponseData
+    MeasuredFrf
         H1 at the Welch frequencies [Hz], each output's multiple coherence, the settings in ``source``.
     """
     inputs, outputs = list(history.inputs), list(history.outputs)
@@ -106,7 +106,7 @@ def h1_estimate(history: TimeHistory, *, segment_length: int, window: str = "han
     settings = (f"Welch: {segment_length}-sample segments ({segment_length * history.sample_time_s:.6g} s, "
                 f"{fs / segment_length:.6g} Hz resolution), {window} window, {overlap:.0%} overlap, {averages} "
                 f"averages" + (", the inputs' hold divided out" if inputs_held else ""))
-    return FrequencyResponseData(f[keep], tuple(inputs), tuple(outputs), response,
+    return MeasuredFrf(f[keep], tuple(inputs), tuple(outputs), response,
                                  source=f"H1 estimate of {history.source} ({settings})",
                                  units={name: history.unit(name) for name in inputs + outputs},
                                  coherence=coherence, averages=averages)

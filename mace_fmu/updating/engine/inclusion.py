@@ -16,27 +16,33 @@ route exactly: they are blocks of the input-output model.
 
 from __future__ import annotations
 
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Callable, Literal, Mapping, Protocol, Sequence
+from typing import Any, Literal, Protocol, TypeVar, runtime_checkable
 
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from mace_fmu.errors import MaceError
-from mace_fmu.updating.engine.linear_model import LinearModel
 
 Inclusion = Literal["full", "reanalysis", "modal-sensitivity"]
 Values = Mapping[str, float]
-Evaluator = Callable[[Values], LinearModel]
+M = TypeVar("M")  #: the models a family makes
+M_co = TypeVar("M_co", covariant=True)
+#: values -> model (bare: a model of any kind)
+Evaluator = Callable[[Values], M]
 
 
-class ModalBasis(Protocol):
+class ModalBasis(Protocol[M_co]):
     """The modes of one base point and what a model needs besides them."""
 
-    physical: tuple[str, ...]  #: parameter names that act through the modes (moduli, springs)
+    @property
+    def physical(self) -> tuple[str, ...]:
+        """Parameter names that act through the modes (moduli, springs)."""
+        ...
 
     def model(self, values: Values, *, frequencies_hz: np.ndarray | None = None,
-              phi_r: np.ndarray | None = None) -> LinearModel:
+              phi_r: np.ndarray | None = None) -> M_co:
         """The model at ``values``: base modes re-analysed (default) or replaced by
         ``frequencies_hz`` [Hz] and ``phi_r`` (new modes in base-mode coordinates, Phi = Phi0 Phi_R)."""
         ...
@@ -46,14 +52,24 @@ class ModalBasis(Protocol):
         ...
 
 
-class ModelFamily(Protocol):
-    """A parametrised model: what the engine asks of the MACE model, the sample problem or a user's."""
+class ModelFamily(Protocol[M_co]):
+    """A parametrised model: what the engine asks of the MACE model, the sample problem, an FMU or a user's.
 
-    def full(self, values: Values) -> LinearModel:
+    A family that can also reanalyse about a base point is a :class:`ReanalysisFamily`; one that cannot (an FMU,
+    whose "reanalysis" is its own initialisation) makes every model by :meth:`full`.
+    """
+
+    def full(self, values: Values) -> M_co:
         """The model at ``values`` by a complete re-solve."""
         ...
 
-    def basis(self, values: Values) -> ModalBasis:
+
+@runtime_checkable
+class ReanalysisFamily(ModelFamily[M_co], Protocol[M_co]):
+    """A family with a modal basis to reanalyse on (the capability the ``reanalysis`` and ``modal-sensitivity``
+    inclusions use): the MACE model and the sample problem."""
+
+    def basis(self, values: Values) -> ModalBasis[M_co]:
         """The modal basis about ``values`` (a complete solve plus what reanalysis needs)."""
         ...
 
@@ -78,21 +94,21 @@ class ModalSensitivity:
     x_i is the relative change of physical parameter i from the base (p_i / p_i0 - 1).
     """
 
-    basis: ModalBasis
+    basis: ModalBasis[Any]
     base: Mapping[str, float]
     names: tuple[str, ...]  #: the physical parameters differenced
     f0: np.ndarray
     df: np.ndarray  #: (n_names, n_modes) [Hz per unit relative change]
     dt: np.ndarray  #: (n_names, n_modes, n_modes)
 
-    def __call__(self, values: Values) -> LinearModel:
+    def __call__(self, values: Values) -> Any:
         x = np.array([values[n] / self.base[n] - 1.0 for n in self.names])
         f = self.f0 + x @ self.df
         phi_r = np.eye(len(self.f0)) + np.tensordot(x, self.dt, axes=1)
         return self.basis.model(values, frequencies_hz=f, phi_r=phi_r)
 
 
-def modal_sensitivity(basis: ModalBasis, base: Values, names: Sequence[str], *, relative_step: float,
+def modal_sensitivity(basis: ModalBasis[Any], base: Values, names: Sequence[str], *, relative_step: float,
                       runner: Callable = map) -> ModalSensitivity:
     """Finite-difference frequency and mode-shape sensitivities about ``base`` for the physical ``names``."""
     physical = tuple(n for n in names if n in basis.physical)
@@ -109,13 +125,33 @@ def modal_sensitivity(basis: ModalBasis, base: Values, names: Sequence[str], *, 
                             df=np.array(df).reshape(len(physical), n), dt=np.array(dt).reshape(len(physical), n, n))
 
 
-def evaluator(family: ModelFamily, inclusion: Inclusion, base: Values, names: Sequence[str], *,
-              relative_step: float = 1e-2, runner: Callable = map) -> Evaluator:
-    """values -> model by ``inclusion``, valid about ``base`` (exact everywhere for ``full``)."""
-    if inclusion == "full":
+def evaluator(family: ModelFamily[M], inclusion: Inclusion, base: Values, names: Sequence[str], *,
+              relative_step: float = 1e-2, runner: Callable = map) -> Evaluator[M]:
+    """values -> model by ``inclusion``, valid about ``base`` (exact everywhere for ``full``).
+
+    A family without a modal basis (not a :class:`ReanalysisFamily`: an FMU) reanalyses by a full solve, and
+    has no modal sensitivities (:func:`check_inclusion` says so before any run).
+    """
+    check_inclusion(family, inclusion)
+    if inclusion == "full" or (inclusion == "reanalysis" and not isinstance(family, ReanalysisFamily)):
         return family.full
+    assert isinstance(family, ReanalysisFamily)  # check_inclusion refused the rest
     if inclusion == "reanalysis":
         return family.basis(base).model
-    if inclusion == "modal-sensitivity":
-        return modal_sensitivity(family.basis(base), base, names, relative_step=relative_step, runner=runner)
-    raise MaceError(f"inclusion must be 'full', 'reanalysis' or 'modal-sensitivity', got {inclusion!r}")
+    return modal_sensitivity(family.basis(base), base, names, relative_step=relative_step, runner=runner)
+
+
+def check_inclusion(family: ModelFamily[Any], inclusion: str) -> None:
+    """MaceError for an unknown ``inclusion``, or modal sensitivities of a family without a modal basis.
+
+    Raises
+    ------
+    MaceError
+        ``inclusion`` is not one of "full", "reanalysis" and "modal-sensitivity", or it is "modal-sensitivity"
+        and ``family`` has no modes to difference (no :class:`ReanalysisFamily`: an FMU).
+    """
+    if inclusion not in ("full", "reanalysis", "modal-sensitivity"):
+        raise MaceError(f"inclusion must be 'full', 'reanalysis' or 'modal-sensitivity', got {inclusion!r}")
+    if inclusion == "modal-sensitivity" and not isinstance(family, ReanalysisFamily):
+        raise MaceError(f"{type(family).__name__} gives no modes (an FMU has none): update its parameters with the "
+                        "cost-sensitivity method or 'full'")

@@ -126,8 +126,11 @@ def _units(units: Mapping[str, str], signals: tuple[str, ...], source: str) -> d
 
 
 @dataclass(frozen=True)
-class FrequencyResponseData:
-    """Measured H[k, output, input] at ``frequencies_hz`` [Hz], signals named as the model's."""
+class MeasuredFrf:
+    """Measured H[k, output, input] at ``frequencies_hz`` [Hz], signals named as the model's.
+
+    Frequency first: not python-control's ``FrequencyResponseData``, whose responses are (output, input, k).
+    """
 
     frequencies_hz: np.ndarray  #: frequencies [Hz]
     inputs: tuple[str, ...]  #: input names of the columns
@@ -180,9 +183,9 @@ class FrequencyResponseData:
             raise MaceError(f"{self.source}: averages {self.averages!r}, expected a whole number >= 1 (the Welch "
                             "segments or analyser averages behind the estimate)")
 
-    def lines(self, keep: np.ndarray) -> FrequencyResponseData:
+    def lines(self, keep: np.ndarray) -> MeasuredFrf:
         """The same data at the lines ``keep`` (a boolean mask or indices), coherence and averages kept."""
-        return FrequencyResponseData(self.frequencies_hz[keep], self.inputs, self.outputs, self.response[keep],
+        return MeasuredFrf(self.frequencies_hz[keep], self.inputs, self.outputs, self.response[keep],
                                      source=self.source, units=self.units,
                                      coherence=None if self.coherence is None else self.coherence[keep],
                                      averages=self.averages, frequency_precision=self.frequency_precision)

@@ -34,6 +34,7 @@ more than :attr:`MultisineProbe.max_rate_doublings` doublings is refused, naming
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field, replace
 from typing import Sequence
@@ -43,14 +44,25 @@ import numpy as np
 from mace_fmu.errors import MaceError
 from mace_fmu.updating.engine.frf_noise import FrfNoise
 from mace_fmu.updating.engine.residual_blocks import ResidualBlock, frequency_blocks
-from mace_fmu.updating.engine.measured import FrequencyResponseData
+from mace_fmu.updating.engine.measured import MeasuredFrf
+from mace_fmu.updating.engine.models import SimulatedModel
 from mace_fmu.updating.engine.simulated_frf import log_ratio_labels, log_ratio_residual, measured_pairs
+
+
+@dataclass
+class ProbeLearning:
+    """What a :class:`MultisineProbe` learns as it runs a model, kept for its later runs: how many periods the
+    free response takes to die out, and the sample rate each input needs (module docstring)."""
+
+    periods: int = 2  #: the periods of the next run (doubled until the last two agree)
+    #: input -> the probe at the sample rate its response needs (this one or a finer one, each learning its own)
+    rates: dict[str, MultisineProbe] = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
 class MultisineProbe:
     """The periodic runs that give a simulated model's response at ``frequencies_hz`` (multiples of
-    1 / ``period_s``)."""
+    1 / ``period_s``); what the runs teach it is in ``learnt``, the record itself never changes."""
 
     frequencies_hz: np.ndarray  #: the lines [Hz], each a whole multiple of 1 / period_s
     period_s: float  #: the multisine's period [s]
@@ -63,8 +75,8 @@ class MultisineProbe:
     #: the lines as the data state them, before :func:`multisine_probe` put them on the grid (None: the same)
     given_hz: np.ndarray | None = None
     note: str = ""  #: how the lines were put on the grid, when any moved by more than round-off ("": none did)
-    _periods: list = field(default_factory=lambda: [2], repr=False, compare=False)  #: learnt run length
-    _cache: dict = field(default_factory=dict, repr=False, compare=False)  #: one period of the input
+    #: the run length and sample rates learnt from the runs so far
+    learnt: ProbeLearning = field(default_factory=ProbeLearning, repr=False, compare=False)
 
     @property
     def sample_time_s(self) -> float:
@@ -79,26 +91,29 @@ class MultisineProbe:
         """(times [s], held input values, complex amplitude of each line): ``periods`` periods of the
         multisine, Schroeder phases (a low crest factor), unit amplitude per line before the hold's
         correction."""
-        if "period" not in self._cache:
-            k = np.arange(len(self.frequencies_hz))
-            lines = np.exp(-1j * np.pi * k * (k + 1) / max(len(k), 1))
-            w = 2 * np.pi * self.frequencies_hz
-            amplitude = lines / self._hold_gain  # the staircase's component at each line is then ``lines``
-            middle = (np.arange(self.samples_per_period) + 0.5) * self.sample_time_s
-            values = np.zeros(self.samples_per_period)
-            for start in range(0, len(w), 64):  # a block of lines at a time: the (n x lines) table stays small
-                block = slice(start, start + 64)
-                values += np.real(np.exp(1j * np.outer(middle, w[block])) @ amplitude[block])
-            self._cache["period"] = (values, lines)
-        values, lines = self._cache["period"]
+        values, lines = self._one_period
         return np.arange(periods * self.samples_per_period) * self.sample_time_s, np.tile(values, periods), lines
+
+    @functools.cached_property
+    def _one_period(self) -> tuple[np.ndarray, np.ndarray]:
+        """(held input values of one period, complex amplitude of each line): made once, from the record alone."""
+        k = np.arange(len(self.frequencies_hz))
+        lines = np.exp(-1j * np.pi * k * (k + 1) / max(len(k), 1))
+        w = 2 * np.pi * self.frequencies_hz
+        amplitude = lines / self._hold_gain  # the staircase's component at each line is then ``lines``
+        middle = (np.arange(self.samples_per_period) + 0.5) * self.sample_time_s
+        values = np.zeros(self.samples_per_period)
+        for start in range(0, len(w), 64):  # a block of lines at a time: the (n x lines) table stays small
+            block = slice(start, start + 64)
+            values += np.real(np.exp(1j * np.outer(middle, w[block])) @ amplitude[block])
+        return values, lines
 
     @property
     def _hold_gain(self) -> np.ndarray:
         """The zero-order hold's gain at each line, sinc(w T / 2) (numpy's sinc is sin(pi x) / (pi x))."""
         return np.sinc(self.frequencies_hz * self.sample_time_s)
 
-    def response(self, model, *, inputs: Sequence[str], outputs: Sequence[str]) -> np.ndarray:
+    def response(self, model: SimulatedModel, *, inputs: Sequence[str], outputs: Sequence[str]) -> np.ndarray:
         """H[line, output, input] of ``model`` (anything with ``time_response(times, {input: values},
         outputs=...)`` that starts at rest, as an FMU does), in its outputs' units per its inputs' units.
 
@@ -115,17 +130,17 @@ class MultisineProbe:
             h[:, :, j] = self._resolved(model, name, list(outputs))
         return h
 
-    def _resolved(self, model, name: str, outputs: list[str]) -> np.ndarray:
+    def _resolved(self, model: SimulatedModel, name: str, outputs: list[str]) -> np.ndarray:
         """One input's response at a sample rate that resolves it: checked once per input against twice the
         rate (and raised until the two agree); later calls run at the rate found."""
-        rates = self._cache.setdefault("rates", {})
+        rates = self.learnt.rates
         if name in rates:
             return rates[name]._one_input(model, name, outputs)
         d = self._feedthrough(model, name, outputs)  # the first sample's: the same at every sample rate
         probe, h = self, self._one_input(model, name, outputs, d=d)
         for _ in range(self.max_rate_doublings + 1):
-            finer = replace(probe, samples_per_period=2 * probe.samples_per_period, _periods=list(probe._periods),
-                            _cache={})
+            finer = replace(probe, samples_per_period=2 * probe.samples_per_period,
+                            learnt=ProbeLearning(periods=probe.learnt.periods))
             h_finer = finer._one_input(model, name, outputs, d=d)
             change = np.max(np.abs(h_finer - h)) / max(np.max(np.abs(h_finer)), np.finfo(float).tiny)
             if change <= self.rate_tolerance:
@@ -137,14 +152,14 @@ class MultisineProbe:
                         "outputs read of the input at once passes through dynamics faster than that (a delay in "
                         "front of a feedthrough); compare it with a time record instead (--cost time)")
 
-    def _feedthrough(self, model, name: str, outputs: list[str]) -> np.ndarray:
+    def _feedthrough(self, model: SimulatedModel, name: str, outputs: list[str]) -> np.ndarray:
         """D[output] of ``name``: the first sample of a unit input less that of none (the state is the same)."""
         times = np.array([0.0, self.sample_time_s])
         pulse = np.asarray(model.time_response(times, {name: np.array([1.0, 0.0])}, outputs=outputs), dtype=float)
         rest = np.asarray(model.time_response(times, {name: np.zeros(2)}, outputs=outputs), dtype=float)
         return pulse[0] - rest[0]
 
-    def _one_input(self, model, name: str, outputs: list[str], *, d: np.ndarray | None = None) -> np.ndarray:
+    def _one_input(self, model: SimulatedModel, name: str, outputs: list[str], *, d: np.ndarray | None = None) -> np.ndarray:
         """``name``'s response H[line, output]; ``d``: its feedthrough (:meth:`_feedthrough`) where known."""
         n = self.samples_per_period
         # the feedthrough sees the held value at the sample, half a sample after the multisine's middle: its
@@ -153,7 +168,7 @@ class MultisineProbe:
         if d is None:
             d = self._feedthrough(model, name, outputs)
         while True:
-            periods = self._periods[0]
+            periods = self.learnt.periods
             times, values, lines = self.excitation(periods)
             y = np.asarray(model.time_response(times, {name: values}, outputs=outputs), dtype=float)
             last, before = (np.fft.rfft(y[len(y) - (m + 1) * n:len(y) - m * n], axis=0)[self.bins] for m in (0, 1))
@@ -166,7 +181,7 @@ class MultisineProbe:
                 raise MaceError(f"the model's response to a periodic input on {name} still changes by {change:.1e} "
                                 f"after {periods} periods of {self.period_s:g} s: it is unstable or so lightly "
                                 "damped that its free response outlasts the run")
-            self._periods[0] = 2 * periods
+            self.learnt.periods = 2 * periods
 
 
 #: the finest grid tried is the smallest gap between lines over this (a period this many times its gaps' longest)
@@ -329,7 +344,7 @@ class ProbedFrequencyResponseCost:
     simulation. ``noise``: the data's noise (:func:`~mace_fmu.updating.engine.frf_noise.frf_noise`), w its
     weights, each log error in units of its noise; None: w = 1 (eq. 4.17 as printed)."""
 
-    data: FrequencyResponseData
+    data: MeasuredFrf
     probe: MultisineProbe
     pairs: tuple[tuple[str, str], ...] = ()  #: (input, output) channels compared; () means every pair
     noise: FrfNoise | None = None
@@ -348,11 +363,11 @@ class ProbedFrequencyResponseCost:
             raise MaceError(f"{self.data.source}: the probe's lines are not the data's frequencies")
         object.__setattr__(self, "pairs", tuple(pairs))
 
-    def model_response(self, model) -> np.ndarray:
+    def model_response(self, model: SimulatedModel) -> np.ndarray:
         """H[k, output, input] of ``model`` at the data's frequencies, over the data's inputs and outputs."""
         return self.probe.response(model, inputs=self.data.inputs, outputs=self.data.outputs)
 
-    def residual(self, model) -> np.ndarray:
+    def residual(self, model: SimulatedModel) -> np.ndarray:
         return log_ratio_residual(self.data, self.model_response(model), pairs=self.pairs, weights=self.weights)
 
     def residual_blocks(self) -> tuple[ResidualBlock, ...]:

@@ -3,15 +3,16 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Callable, Mapping, Sequence
+from typing import Callable, Mapping, Sequence, TypeVar
 
 import numpy as np
 
 from mace_fmu.errors import MaceError
 from mace_fmu.updating.engine.costs import Cost
 from mace_fmu.updating.engine.inclusion import Evaluator
-from mace_fmu.updating.engine.linear_model import LinearModel
 from mace_fmu.util.progress import ProgressCallback, Step
+
+M = TypeVar("M")  #: the models the cost reads
 
 
 @dataclass(frozen=True)
@@ -30,7 +31,7 @@ class CostSensitivities:
         return self.j0 + self.matrix @ x
 
 
-def cost_sensitivities(cost: Cost, *, base_model: LinearModel, perturbed: Evaluator, base: Mapping[str, float],
+def cost_sensitivities(cost: Cost[M], *, base_model: M, perturbed: Evaluator[M], base: Mapping[str, float],
                        names: Sequence[str], relative_step: float = 1e-2, perturbation: str = "",
                        runner: Callable = map, progress: ProgressCallback | None = None,
                        difference: str = "forward",

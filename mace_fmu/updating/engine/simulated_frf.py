@@ -17,7 +17,8 @@ import scipy.signal as signal
 from mace_fmu.errors import MaceError
 from mace_fmu.updating.engine.h1 import h1_estimate
 from mace_fmu.updating.engine.residual_blocks import ResidualBlock, frequency_blocks
-from mace_fmu.updating.engine.measured import FrequencyResponseData, TimeHistory
+from mace_fmu.updating.engine.measured import MeasuredFrf, TimeHistory
+from mace_fmu.updating.engine.models import SimulatedModel
 
 
 @dataclass(frozen=True)
@@ -33,13 +34,13 @@ class H1Estimator:
     band_hz: tuple[float, float] | None = None
     lines_hz: tuple[float, ...] | None = None
 
-    def __call__(self, history: TimeHistory) -> FrequencyResponseData:
+    def __call__(self, history: TimeHistory) -> MeasuredFrf:
         """The frequency response estimated from ``history`` (inputs and outputs in their units)."""
         return h1_estimate(history, segment_length=self.segment_length, window=self.window, overlap=self.overlap,
                            band_hz=self.band_hz, lines_hz=self.lines_hz)
 
 
-def log_h1_weights(history: TimeHistory, estimate: FrequencyResponseData, *, segment_length: int,
+def log_h1_weights(history: TimeHistory, estimate: MeasuredFrf, *, segment_length: int,
                    window: str = "hann", overlap: float = 0.5) -> np.ndarray:
     """w[k, output, input] = 1 / (standard deviation of log H1): |H| / sqrt(S_nn [S_uu^-1]_ii / n_avg).
 
@@ -83,7 +84,7 @@ class SimulatedFrequencyResponseCost:
     data's (a window of a record: the structure in the state the record's earlier part left it in).
     """
 
-    data: FrequencyResponseData
+    data: MeasuredFrf
     excitation: TimeHistory  #: the measured inputs the model is driven with
     estimator: H1Estimator
     pairs: tuple[tuple[str, str], ...] = ()  #: (input, output) channels compared; () means every pair
@@ -98,7 +99,7 @@ class SimulatedFrequencyResponseCost:
             raise MaceError(f"{self.excitation.source}: the excitation lacks the measured input(s) {missing}")
         object.__setattr__(self, "pairs", tuple(pairs))
 
-    def model_response(self, model) -> FrequencyResponseData:
+    def model_response(self, model: SimulatedModel) -> MeasuredFrf:
         """The H1 estimate of ``model``'s response to the excitation, at the estimator's bins."""
         outs = sorted({o for _, o in self.pairs}, key=self.data.outputs.index)
         y = model.time_response(self.excitation.times_s, self.excitation.inputs, outputs=outs)
@@ -108,7 +109,7 @@ class SimulatedFrequencyResponseCost:
                                 {o: y[first:, k] for k, o in enumerate(outs)}, source="the model's simulated response")
         return self.estimator(simulated)
 
-    def residual(self, model) -> np.ndarray:
+    def residual(self, model: SimulatedModel) -> np.ndarray:
         est = self.model_response(model)
         f = self.data.frequencies_hz
         same = est.frequencies_hz.shape == f.shape and np.allclose(est.frequencies_hz, f, rtol=1e-9, atol=0.0)
@@ -135,7 +136,7 @@ class SimulatedFrequencyResponseCost:
         return log_ratio_labels(self.data, self.pairs)
 
 
-def measured_pairs(data: FrequencyResponseData, pairs: Sequence[tuple[str, str]]) -> tuple[tuple[str, str], ...]:
+def measured_pairs(data: MeasuredFrf, pairs: Sequence[tuple[str, str]]) -> tuple[tuple[str, str], ...]:
     """``pairs`` (input, output), every pair of the data where empty; a MaceError for a pair without a
     measured response."""
     chosen = tuple(pairs) or tuple((i, o) for i in data.inputs for o in data.outputs)
@@ -146,7 +147,7 @@ def measured_pairs(data: FrequencyResponseData, pairs: Sequence[tuple[str, str]]
     return chosen
 
 
-def log_ratio_residual(data: FrequencyResponseData, model_response: np.ndarray, *,
+def log_ratio_residual(data: MeasuredFrf, model_response: np.ndarray, *,
                        pairs: Sequence[tuple[str, str]], weights: np.ndarray | None) -> np.ndarray:
     """j = w [Re log(G_data / G_model), Im log(G_data / G_model)] over ``pairs`` (input, output) and the data's
     frequencies (thesis eq. 4.17): log magnitude ratios, then phase differences [rad]. ``model_response``:
@@ -164,7 +165,7 @@ def log_ratio_residual(data: FrequencyResponseData, model_response: np.ndarray, 
     return np.concatenate([e.real, e.imag])
 
 
-def log_ratio_labels(data: FrequencyResponseData, pairs: Sequence[tuple[str, str]]) -> list[str]:
+def log_ratio_labels(data: MeasuredFrf, pairs: Sequence[tuple[str, str]]) -> list[str]:
     """What each entry of :func:`log_ratio_residual` is."""
     one = [f"{i} -> {o} {f:.4g} Hz" for i, o in pairs for f in data.frequencies_hz]
     return [f"log|G| {x}" for x in one] + [f"phase {x}" for x in one]

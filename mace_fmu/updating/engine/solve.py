@@ -35,19 +35,20 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field
-from typing import Callable, Literal, Mapping, Sequence
+from typing import Any, Callable, Literal, Mapping, Sequence, TypeVar
 
 import numpy as np
 from scipy.optimize import least_squares
 
 from mace_fmu.errors import MaceError
 from mace_fmu.updating.engine.costs import Cost, scalar_cost
-from mace_fmu.updating.engine.inclusion import ModelFamily, evaluator
+from mace_fmu.updating.engine.inclusion import ModelFamily, check_inclusion, evaluator
 from mace_fmu.updating.engine.sensitivity import CostSensitivities, cost_sensitivities
 from mace_fmu.util.progress import ProgressCallback, Step
 from mace_fmu.util.threads import single_blas_thread
 
 Method = Literal["cost-sensitivity", "full", "reanalysis", "modal-sensitivity"]
+M = TypeVar("M")  #: the models the family makes and the cost reads
 
 
 @dataclass(frozen=True)
@@ -69,7 +70,7 @@ class Stage:
 
     name: str  #: stage name in reports
     parameters: tuple[str, ...]  #: parameters this stage updates
-    cost: Cost | None = None  #: the cost of this stage (None: the update's)
+    cost: Cost[Any] | None = None  #: the cost of this stage (None: the update's)
 
 
 @dataclass(frozen=True)
@@ -180,7 +181,7 @@ def _check(names: Sequence[str], start: Mapping[str, float], bounds: Mapping[str
 
 
 @single_blas_thread
-def update(family: ModelFamily, cost: Cost, *, start: Mapping[str, float], stages: Sequence[Stage],
+def update(family: ModelFamily[M], cost: Cost[M], *, start: Mapping[str, float], stages: Sequence[Stage],
            bounds: Mapping[str, Bounds], settings: UpdateSettings = UpdateSettings(), runner: Callable = map,
            progress: ProgressCallback | None = None) -> UpdateResult:
     """Update ``start`` (every parameter value the family needs) stage by stage to lower ``cost``.
@@ -188,9 +189,12 @@ def update(family: ModelFamily, cost: Cost, *, start: Mapping[str, float], stage
     Parameters
     ----------
     family : ModelFamily
-        Parameter values -> model (the FE model, the sample problem, an FMU).
+        Parameter values -> model (the FE model, the sample problem, an FMU); the ``reanalysis`` perturbations
+        and inclusion of a family without a modal basis (not a
+        :class:`~mace_fmu.updating.engine.inclusion.ReanalysisFamily`) are full solves.
     cost : Cost
-        The residual vector j whose j^T j is lowered (modal, frequency response, time response, ...).
+        The residual vector j whose j^T j is lowered (modal, frequency response, time response, ...), of the
+        family's models.
     start : mapping of str to float
         Every parameter value the family needs [SI]; the stages' parameters move from these, in
         relative terms.
@@ -215,13 +219,15 @@ def update(family: ModelFamily, cost: Cost, *, start: Mapping[str, float], stage
     ------
     MaceError
         A stage parameter without a start value or bounds, a start outside its bounds or zero, an
-        unknown method.
+        unknown method, modal sensitivities of a family without modes.
     """
     t_start = time.perf_counter()
     names_all = sorted({n for s in stages for n in s.parameters})
     _check(names_all, start, bounds)
     if settings.method not in ("cost-sensitivity", "full", "reanalysis", "modal-sensitivity"):
         raise MaceError(f"method must be cost-sensitivity, full, reanalysis or modal-sensitivity, got {settings.method!r}")
+    if settings.method != "cost-sensitivity":
+        check_inclusion(family, settings.method)
     model = family.full(start)
     j_start = cost.residual(model)
     initial = scalar_cost(j_start)
@@ -252,8 +258,8 @@ class _StageProblem:
     """What stays fixed while one stage runs: the family, cost and settings, the stage's parameters and
     their box in relative changes x = value / start - 1."""
 
-    family: ModelFamily
-    cost: Cost
+    family: ModelFamily[Any]
+    cost: Cost[Any]
     stage: Stage
     round: int
     settings: UpdateSettings
@@ -266,7 +272,7 @@ class _StageProblem:
     gamma: np.ndarray  #: eq. 4.18's plausible relative change of each parameter
 
     @classmethod
-    def of(cls, *, family: ModelFamily, cost: Cost, stage: Stage, round: int, start: Mapping[str, float],
+    def of(cls, *, family: ModelFamily[Any], cost: Cost[Any], stage: Stage, round: int, start: Mapping[str, float],
            bounds: Mapping[str, Bounds], settings: UpdateSettings, runner: Callable,
            progress: ProgressCallback | None) -> _StageProblem:
         names = tuple(stage.parameters)
@@ -287,8 +293,8 @@ class _StageProblem:
         return {**values, **{n: float(v) for n, v in zip(self.names, self.start_values * (1.0 + x))}}
 
 
-def _run_stage(problem: _StageProblem, values: dict[str, float], model, history: list[Iteration]
-               ) -> tuple[dict[str, float], object, StageOutcome]:
+def _run_stage(problem: _StageProblem, values: dict[str, float], model: Any, history: list[Iteration]
+               ) -> tuple[dict[str, float], Any, StageOutcome]:
     """The outer loop of one stage from ``values`` (``model``: the full model there); returns the new
     values, the full model at them and how the loop ended."""
     family, cost, stage, settings = problem.family, problem.cost, problem.stage, problem.settings
@@ -390,7 +396,7 @@ def _linearise(problem: _StageProblem, values: dict[str, float], model, x_base: 
     family, cost, stage, settings = problem.family, problem.cost, problem.stage, problem.settings
     names, runner, progress = list(problem.names), problem.runner, problem.progress
     if settings.method == "cost-sensitivity":
-        perturbed = family.full if settings.perturbation == "full" else family.basis(values).model
+        perturbed = evaluator(family, settings.perturbation, values, names)
         limits = {n: (float(s * (1.0 + a)), float(s * (1.0 + b)))
                   for n, s, a, b in zip(names, problem.start_values, problem.lower, problem.upper)}
         sens = cost_sensitivities(cost, base_model=model, perturbed=perturbed, base=values, names=names,

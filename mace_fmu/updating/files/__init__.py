@@ -13,7 +13,7 @@ from pathlib import Path
 
 from mace_fmu.errors import MaceError
 from mace_fmu.updating.engine.h1 import h1_estimate
-from mace_fmu.updating.engine.measured import FrequencyResponseData, TimeHistory
+from mace_fmu.updating.engine.measured import MeasuredFrf, TimeHistory
 from mace_fmu.updating.files.channels import Channel, ChannelMap, read_channel_map
 from mace_fmu.updating.files.frequency import FRF_SUFFIXES, read_frequency_response, write_frequency_response
 from mace_fmu.updating.files.signals import check_model_signals
@@ -25,7 +25,7 @@ __all__ = ["Channel", "ChannelMap", "read_channel_map", "read_time_history", "wr
 
 
 def read_measured_data(path: str | Path, *, channel_map: ChannelMap | None = None,
-                       sample_time_s: float | None = None) -> TimeHistory | FrequencyResponseData:
+                       sample_time_s: float | None = None) -> TimeHistory | MeasuredFrf:
     """A time history (``.npz``, LabVIEW's ``.lvm``, CSV from ``time [s]``) or a frequency response (UFF, CSV from
     ``frequency [Hz]``).
 
@@ -40,7 +40,7 @@ def read_measured_data(path: str | Path, *, channel_map: ChannelMap | None = Non
 
     Returns
     -------
-    TimeHistory or FrequencyResponseData
+    TimeHistory or MeasuredFrf
         What the file holds.
     """
     path = Path(path)

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from mace_fmu.errors import MaceError
-from mace_fmu.updating.engine.measured import DataError, FrequencyResponseData
+from mace_fmu.updating.engine.measured import DataError, MeasuredFrf
 from mace_fmu.updating.files.channels import ChannelMap, Label, check_present, format_label, parse_label, resolve
 from mace_fmu.updating.files.timehistory import read_csv_columns
 from mace_fmu.util.atomic import atomic_path
@@ -57,7 +57,7 @@ def _pair_units(text: str, *, at: str, label: str) -> tuple[str, str]:
     return out_unit.strip(), in_unit.strip()
 
 
-def _read_csv(path: Path, channel_map: ChannelMap | None) -> FrequencyResponseData:
+def _read_csv(path: Path, channel_map: ChannelMap | None) -> MeasuredFrf:
     labels, columns, lines, header_line = read_csv_columns(path, dtype=complex)
     at = f"{path}:{header_line}"
     averages = None
@@ -148,8 +148,8 @@ def _signal(label: Label, channel_map: ChannelMap | None, at: str, role: str) ->
 
 
 def _frd(f, inputs, outputs, response, units, *, source, row_at, channel_of, coherence=None,
-         averages=None, frequency_precision=0.0) -> FrequencyResponseData:
-    # The response's NaN check, located per channel pair (FrequencyResponseData only knows the row).
+         averages=None, frequency_precision=0.0) -> MeasuredFrf:
+    # The response's NaN check, located per channel pair (MeasuredFrf only knows the row).
     for i, out in enumerate(outputs):
         for j, inp in enumerate(inputs):
             bad = np.flatnonzero(~np.isfinite(response[:, i, j]))
@@ -157,14 +157,14 @@ def _frd(f, inputs, outputs, response, units, *, source, row_at, channel_of, coh
                 raise MaceError(f"{row_at(int(bad[0]))}: channel {channel_of[out]!r}/{channel_of[inp]!r}: the "
                                 f"response is NaN or inf ({bad.size} of {len(f)} rows)")
     try:
-        return FrequencyResponseData(f, tuple(inputs), tuple(outputs), response, source=source, units=units,
+        return MeasuredFrf(f, tuple(inputs), tuple(outputs), response, source=source, units=units,
                                      coherence=coherence, averages=averages, frequency_precision=frequency_precision)
     except DataError as exc:
         channel = "frequency" if exc.channel is None else channel_of.get(exc.channel, exc.channel)
         raise MaceError(f"{row_at(exc.row)}: channel {channel!r}: {exc.what}") from None
 
 
-def _write_csv(frd: FrequencyResponseData, path: Path) -> None:
+def _write_csv(frd: MeasuredFrf, path: Path) -> None:
     labels = ["frequency [Hz]"]
     columns = [frd.frequencies_hz]
     for i, out in enumerate(frd.outputs):
@@ -299,7 +299,7 @@ def _check_uff_response(f: np.ndarray, h: np.ndarray, *, first: tuple[int, np.nd
         raise MaceError(f"{at}: the response is NaN or inf at row {int(bad[0])} ({bad.size} of {h.size} rows)")
 
 
-def _read_uff(path: Path, channel_map: ChannelMap | None) -> FrequencyResponseData:
+def _read_uff(path: Path, channel_map: ChannelMap | None) -> MeasuredFrf:
     signals = _UffSignals(channel_map)
     pairs: dict[tuple[str, str], tuple[int, np.ndarray]] = {}
     first: tuple[int, np.ndarray] | None = None  # the first kept dataset: its frequencies are everyone's
@@ -345,7 +345,7 @@ def _uff_abscissa(f: np.ndarray) -> np.ndarray:
     return np.array([float(f"{x:13.5e}") for x in f])
 
 
-def _write_uff(frd: FrequencyResponseData, path: Path) -> None:
+def _write_uff(frd: MeasuredFrf, path: Path) -> None:
     import pyuff
 
     stored = _uff_abscissa(frd.frequencies_hz)
@@ -381,7 +381,7 @@ def _write_uff(frd: FrequencyResponseData, path: Path) -> None:
 
 # --- public -------------------------------------------------------------------------------------
 
-def read_frequency_response(path: str | Path, *, channel_map: ChannelMap | None = None) -> FrequencyResponseData:
+def read_frequency_response(path: str | Path, *, channel_map: ChannelMap | None = None) -> MeasuredFrf:
     """A measured frequency response H[k, output, input] from ``.csv`` or UFF dataset 58 (``.uff``/``.unv``).
 
     CSV: ``frequency [Hz]``, then ``re:<output>/<input> [<unit>/<unit>]`` and ``im:...`` columns
@@ -400,7 +400,7 @@ def read_frequency_response(path: str | Path, *, channel_map: ChannelMap | None 
 
     Returns
     -------
-    FrequencyResponseData
+    MeasuredFrf
         Frequencies [Hz] and H[k, output, input].
 
     Raises
@@ -418,7 +418,7 @@ def read_frequency_response(path: str | Path, *, channel_map: ChannelMap | None 
                     f"{', '.join(FRF_SUFFIXES)})")
 
 
-def write_frequency_response(frd: FrequencyResponseData, path: str | Path) -> Path:
+def write_frequency_response(frd: MeasuredFrf, path: str | Path) -> Path:
     """Write ``frd`` to ``.csv`` ('%.17g': exact) or UFF dataset 58 ASCII (``.uff``/``.unv``), atomically.
 
     UFF 58 keeps six significant digits of each frequency (E13.5) and twelve of each real and
@@ -426,7 +426,7 @@ def write_frequency_response(frd: FrequencyResponseData, path: str | Path) -> Pa
 
     Parameters
     ----------
-    frd : FrequencyResponseData
+    frd : MeasuredFrf
         The frequency response.
     path : path
         A ``.csv``, ``.uff`` or ``.unv`` file.

@@ -6,10 +6,10 @@ import difflib
 from typing import Sequence
 
 from mace_fmu.errors import MaceError
-from mace_fmu.updating.engine.measured import FrequencyResponseData, TimeHistory
+from mace_fmu.updating.engine.measured import MeasuredFrf, TimeHistory
 
 
-def check_model_signals(data: TimeHistory | FrequencyResponseData, *, model_inputs: Sequence[str],
+def check_model_signals(data: TimeHistory | MeasuredFrf, *, model_inputs: Sequence[str],
                         model_outputs: Sequence[str]) -> None:
     """Raise ``MaceError`` naming the data's source and signal when a measured input or output is not the model's.
 
@@ -18,7 +18,7 @@ def check_model_signals(data: TimeHistory | FrequencyResponseData, *, model_inpu
 
     Parameters
     ----------
-    data : TimeHistory or FrequencyResponseData
+    data : TimeHistory or MeasuredFrf
         The measured data.
     model_inputs, model_outputs : sequence of str
         The model's signal names.

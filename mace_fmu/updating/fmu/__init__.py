@@ -11,7 +11,7 @@ from mace_fmu.util.lazy import lazy_exports
 
 if TYPE_CHECKING:  # what editors and type checkers follow; at run time a name is imported on first use
     from mace_fmu.updating.fmu.planning import Candidate, TestDesign, plan_tests, read_test_plan
-    from mace_fmu.updating.fmu.problem import FmuProblem
+    from mace_fmu.updating.fmu.problem import FmuProblem, FmuUpdateRequest
     from mace_fmu.updating.fmu.update import fmu_parameters, update_fmu
 
 __all__, __getattr__, __dir__ = lazy_exports(__name__, {
@@ -20,6 +20,7 @@ __all__, __getattr__, __dir__ = lazy_exports(__name__, {
     "plan_tests": "planning",
     "read_test_plan": "planning",
     "FmuProblem": "problem",
+    "FmuUpdateRequest": "problem",
     "fmu_parameters": "update",
     "update_fmu": "update",
 })

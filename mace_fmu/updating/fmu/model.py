@@ -423,22 +423,11 @@ class FmuModel:
 
 
 @dataclass(frozen=True)
-class _NoBasis:
-    """An FMU has no modal basis to reanalyse on: its "reanalysis" is its own initialisation."""
-
-    family: FmuFamily
-    physical: tuple[str, ...] = ()
-
-    def model(self, values: Mapping[str, float], **_: object) -> FmuModel:
-        return self.family.full(values)
-
-    def modes_of(self, values: Mapping[str, float]):
-        raise MaceError("an FMU gives no modes: update FMU parameters with the cost-sensitivity method or 'full'")
-
-
-@dataclass(frozen=True)
 class FmuFamily:
     """Parameter values -> the FMU with them set (the engine's ModelFamily); ``fixed`` values are set on every run.
+
+    No :class:`~mace_fmu.updating.engine.inclusion.ReanalysisFamily`: an FMU has no modal basis to reanalyse on,
+    its "reanalysis" is its own initialisation (the engine's reanalysis of it is :meth:`full`).
 
     ``gain_outputs``: outputs whose sensor gain is a parameter too, named "gain:<output>" (default 1:
     the data are gain x the FMU's output). ``runner``: where the runs of a pythonfmu FMU go from this
@@ -474,9 +463,6 @@ class FmuFamily:
         gains = {o: float(merged.pop(gain_parameter(o), 1.0)) for o in self.gain_outputs}
         self.interface.check_parameters(list(merged))
         return FmuModel(interface=self.interface, values=merged, runner=self.runner, gains=gains)
-
-    def basis(self, values: Mapping[str, float]) -> _NoBasis:
-        return _NoBasis(self)
 
 
 def fmu_family(path: str | os.PathLike, *, fixed: Mapping[str, float] | None = None) -> FmuFamily:

@@ -28,8 +28,9 @@ from typing import Callable, Mapping, Sequence
 import numpy as np
 
 from mace_fmu.errors import MaceError
-from mace_fmu.updating.engine.costs import SeveralTests, TimeResponseCost, WithPriors
+from mace_fmu.updating.engine.costs import Cost, SeveralTests, TimeResponseCost, WithPriors
 from mace_fmu.updating.engine.measured import TimeHistory
+from mace_fmu.updating.engine.models import SimulatedModel
 from mace_fmu.updating.engine.sensitivity import cost_sensitivities
 from mace_fmu.updating.engine.uncertainty import StageUncertainty, linearised_uncertainty
 from mace_fmu.updating.fmu.model import FmuFamily, gain_parameter, read_fmu_interface, ship_fmu
@@ -120,7 +121,8 @@ def predict_uncertainty(*, family: FmuFamily, parameters: Sequence[str], candida
         history = TimeHistory(t, u, {o: y[:, j] for j, o in enumerate(test.outputs)}, source=test.name)
         costs.append(TimeResponseCost(history))
         weights.append(1.0 / (test.noise_rms_percent / 100.0))  # each test in units of its noise
-    cost = SeveralTests(tests=tuple(costs), weights=tuple(weights), labels=tuple(t.name for t in candidate.tests))
+    cost: Cost[SimulatedModel] = SeveralTests(tests=tuple(costs), weights=tuple(weights),
+                                              labels=tuple(t.name for t in candidate.tests))
     if gains:
         cost = WithPriors(cost, priors={gain_parameter(o): (1.0, sd) for o, sd in gains.items()}, noise_sd=1.0)
     all_names = names + tuple(gain_parameter(o) for o in gains)

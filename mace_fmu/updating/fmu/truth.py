@@ -20,7 +20,7 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from mace_fmu.errors import MaceError
-from mace_fmu.updating.engine.measured import FrequencyResponseData, TimeHistory
+from mace_fmu.updating.engine.measured import MeasuredFrf, TimeHistory
 from mace_fmu.updating.engine.simulated_frf import H1Estimator
 from mace_fmu.updating.fmu.model import FmuFamily, FmuModel
 from mace_fmu.util.atomic import output_folder
@@ -53,7 +53,7 @@ class TestArticle:
     """The measured data of the truth FMU and where they were written."""
 
     history: TimeHistory  #: inputs [V] and noisy rate-gyro outputs [V]
-    frequency_response: FrequencyResponseData  #: H1 of ``history`` within the band
+    frequency_response: MeasuredFrf  #: H1 of ``history`` within the band
     files: tuple[Path, ...]  #: time history (CSV), frequency response (UFF 58, CSV)
     noise_fraction: float
     seed: int

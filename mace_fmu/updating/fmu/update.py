@@ -23,7 +23,8 @@ from mace_fmu.errors import MaceError
 from mace_fmu.parameters.sets import Provenance, now_utc, toml_key, toml_value, tool_version
 from mace_fmu.updating.engine.bounds import default_bounds
 from mace_fmu.updating.engine.costs import Cost, TimeResponseCost
-from mace_fmu.updating.engine.measured import FrequencyResponseData, TimeHistory
+from mace_fmu.updating.engine.measured import MeasuredFrf, TimeHistory
+from mace_fmu.updating.engine.models import SimulatedModel
 from mace_fmu.updating.engine.simulated_frf import H1Estimator, SimulatedFrequencyResponseCost, log_h1_weights, principal_pairs
 from mace_fmu.updating.engine.solve import Bounds, Stage, UpdateResult, UpdateSettings, update
 from mace_fmu.updating.fmu.model import FmuFamily, ship_fmu
@@ -44,21 +45,17 @@ FMU_SETTINGS = UpdateSettings(method="cost-sensitivity", perturbation="full", pe
                               relative_step=1e-3, difference="central", initial_radius=0.1)
 
 
-def fmu_cost(kind: CostKind, *, history: TimeHistory, frequency_data: FrequencyResponseData | None = None,
+def fmu_cost(kind: CostKind, *, history: TimeHistory, frequency_data: MeasuredFrf | None = None,
              estimator: H1Estimator | None = None, pairs: Sequence[tuple[str, str]] = (),
              weighting: Weighting = "noise", compare_from_s: float | None = None,
-             band_hz: tuple[float, float] | None = None) -> Cost:
+             band_hz: tuple[float, float] | None = None) -> Cost[SimulatedModel]:
     """The cost ``kind`` of an FMU against ``history`` (measured inputs and outputs).
 
     ``time``: outputs normalised by their RMS (eq. 4.3), through the zero-phase band-pass ``band_hz`` where
-    given (:class:`~mace_fmu.updating.engine.costs.TimeResponseCost`). ``log-frf``: ``frequency_data`` (default:
-    the ``estimator``'s H1 of ``history``) against the same estimator's H1 of the FMU's response to the
-    measured inputs, over ``pairs`` (default: the principal pairs, same axis and X to Y, where the names
-    say the axis; else every pair). ``weighting``
-    "noise" divides each log error by its standard deviation estimated from ``history`` (bins where
-    the measurement noise buries the response weigh little), "none" is eq. 4.17 as printed. The FMU is
-    driven from the record's first sample; the errors (time) or the estimates (log-frf) are taken from
-    ``compare_from_s`` [s] on (default: the first sample).
+    given (:class:`~mace_fmu.updating.engine.costs.TimeResponseCost`). ``log-frf``: :func:`log_frf_cost`, which
+    documents ``frequency_data``, ``estimator``, ``pairs`` and ``weighting``. The FMU is driven from the record's
+    first sample; the errors (time) or the estimates (log-frf) are taken from ``compare_from_s`` [s] on (default:
+    the first sample).
     """
     start_s = float(history.times_s[0]) if compare_from_s is None else float(compare_from_s)
     if kind == "time":
@@ -69,6 +66,43 @@ def fmu_cost(kind: CostKind, *, history: TimeHistory, frequency_data: FrequencyR
         raise MaceError("a band-pass is the time cost's; the log-FRF cost compares the estimator's band")
     if estimator is None:
         raise MaceError("the log-FRF cost needs an H1 estimator (segment length, window, band)")
+    return log_frf_cost(history=history, frequency_data=frequency_data, estimator=estimator, pairs=pairs,
+                        weighting=weighting, compare_from_s=start_s)
+
+
+def log_frf_cost(*, history: TimeHistory, estimator: H1Estimator, frequency_data: MeasuredFrf | None = None,
+                 pairs: Sequence[tuple[str, str]] = (), weighting: Weighting = "noise",
+                 compare_from_s: float | None = None) -> SimulatedFrequencyResponseCost:
+    """The log-FRF cost (eq. 4.5/4.17) of an FMU driven by ``history``'s measured inputs.
+
+    Parameters
+    ----------
+    history : TimeHistory
+        The measured inputs (and outputs) of one test; the FMU is driven from its first sample.
+    estimator : H1Estimator
+        The H1 estimator of the FMU's response (and of ``history``'s, without ``frequency_data``).
+    frequency_data : MeasuredFrf, optional
+        The measured frequency response compared (default: the ``estimator``'s H1 of ``history``).
+    pairs : sequence of (str, str), optional
+        (input, output) pairs compared (default: the principal pairs, same axis and X to Y, where the names say
+        the axis; else every pair).
+    weighting : {"noise", "none"}
+        "noise" divides each log error by its standard deviation estimated from ``history`` (bins where the
+        measurement noise buries the response weigh little), "none" is eq. 4.17 as printed.
+    compare_from_s : float, optional
+        The estimates are taken from this time [s] on (default: the record's first sample).
+
+    Returns
+    -------
+    SimulatedFrequencyResponseCost
+        The cost, of any :class:`~mace_fmu.updating.engine.models.SimulatedModel`.
+
+    Raises
+    ------
+    MaceError
+        An unknown ``weighting``, or data the estimator cannot weigh.
+    """
+    start_s = float(history.times_s[0]) if compare_from_s is None else float(compare_from_s)
     whole, history = history, record_from(history, start_s)
     data = frequency_data if frequency_data is not None else estimator(history)
     chosen = tuple(pairs) or principal_pairs(data.inputs, data.outputs) or \
@@ -93,7 +127,7 @@ def record_from(history: TimeHistory, start_s: float) -> TimeHistory:
                        source=f"{history.source} (from {start_s:g} s)", units=history.units)
 
 
-def update_fmu(*, family: FmuFamily, cost: Cost, start: Mapping[str, float], stages: Sequence[Sequence[str]],
+def update_fmu(*, family: FmuFamily, cost: Cost[SimulatedModel], start: Mapping[str, float], stages: Sequence[Sequence[str]],
                settings: UpdateSettings = FMU_SETTINGS, runner: Callable = map,
                progress: ProgressCallback | None = None, bounds: Mapping[str, Bounds] | None = None) -> UpdateResult:
     """Update the FMU parameters of ``stages`` from ``start`` to lower ``cost``, stage after stage.

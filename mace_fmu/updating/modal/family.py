@@ -132,13 +132,11 @@ class StructureFamily:
 
     # --- the ModelFamily interface -------------------------------------------------------------
     def full(self, values: Values) -> ModalModel:
-        """The modal model at ``values`` by a complete FE re-solve (cached by the physical values)."""
-        return self.solve(values)[1]
+        """The modal model at ``values`` by a complete FE re-solve (cached by the physical values).
 
-    def basis(self, values: Values) -> _FullBasis:
-        """No reanalysis here: the perturbed models of the cost-sensitivity method are full re-solves (thesis
-        4.2.1: "this method uses the perturbed finite element models")."""
-        return _FullBasis(self)
+        The family has no modal basis (no ``basis``): the perturbed models of the cost-sensitivity method are
+        full re-solves (thesis 4.2.1: "this method uses the perturbed finite element models")."""
+        return self.solve(values)[1]
 
     def current_values(self, names: Sequence[str]) -> dict[str, float]:
         """Values [SI] of ``names`` at the base point."""
@@ -154,14 +152,3 @@ class StructureFamily:
         relabelled = carry_labels(fresh.modes, fresh.model, carried.modes)
         return dict(zip(carried.labels, relabelled.labels))
 
-
-@dataclasses.dataclass(frozen=True)
-class _FullBasis:
-    family: StructureFamily
-
-    @property
-    def physical(self) -> tuple[str, ...]:
-        return self.family.physical
-
-    def model(self, values: Values, **_) -> ModalModel:
-        return self.family.full(values)

@@ -35,7 +35,7 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from mace_fmu.errors import MaceError
-from mace_fmu.updating.engine.measured import FrequencyResponseData
+from mace_fmu.updating.engine.measured import MeasuredFrf
 
 #: output unit -> FRF form, for a response per N or N m (SI); the form fixes how residues are fitted
 _FORMS = {"m/s^2": "accelerance", "m/s2": "accelerance", "rad/s^2": "accelerance", "rad/s2": "accelerance",
@@ -109,7 +109,7 @@ class Identification:
         return float(np.linalg.norm((self.measured - self.synthesised)[ok]) / np.linalg.norm(self.measured[ok]))
 
 
-def frf_form_of(frd: FrequencyResponseData) -> str:
+def frf_form_of(frd: MeasuredFrf) -> str:
     """The FRF form its units say: m/s^2 per N is an accelerance, m/s per N a mobility, m per N a receptance."""
     forms = {_FORMS.get(frd.unit(o).replace(" ", "")) for o in frd.outputs}
     if len(forms) != 1 or None in forms:
@@ -132,7 +132,7 @@ class _Stacked:
     units: dict
 
 
-def _stack(frfs: Sequence[FrequencyResponseData]) -> _Stacked:
+def _stack(frfs: Sequence[MeasuredFrf]) -> _Stacked:
     if not frfs:
         raise MaceError("no FRF files to identify modes from")
     first = frfs[0]
@@ -306,14 +306,14 @@ def _mass_normalised(constants: np.ndarray, driving: Mapping[int, int], referenc
     return phi if phi @ reference >= 0 else -phi
 
 
-def identify_modes(frfs: Sequence[FrequencyResponseData], *, band_hz: tuple[float, float] | None = None,
+def identify_modes(frfs: Sequence[MeasuredFrf], *, band_hz: tuple[float, float] | None = None,
                    max_order: int = 40, frf_form: str | None = None, driving_points: Mapping[str, str] | None = None,
                    near_hz: Sequence[float] | None = None, refine: bool = True) -> Identification:
     """Identify modes from measured FRFs: LSCF poles, automatic stable-pole selection, refinement, LSFD shapes.
 
     Parameters
     ----------
-    frfs : sequence of FrequencyResponseData
+    frfs : sequence of MeasuredFrf
         One per file (driving point); every file measures the same outputs, at the same lines.
     band_hz : (float, float), optional
         The band fitted [Hz] (default: all lines above 0 Hz).
@@ -408,7 +408,7 @@ def identify_modes(frfs: Sequence[FrequencyResponseData], *, band_hz: tuple[floa
                           frequencies_hz=f[band], measured=measured_h, synthesised=synthesised, notes=tuple(notes))
 
 
-def peak_frequencies_hz(frd: FrequencyResponseData, *, output: str, input: str, near_hz: Sequence[float],
+def peak_frequencies_hz(frd: MeasuredFrf, *, output: str, input: str, near_hz: Sequence[float],
                         window: float = 0.05) -> np.ndarray:
     """The frequency line of the largest |H| of one pair within ``window`` (relative) of each of ``near_hz`` [Hz]:
     the resonances an analyser's cursor reads, independent of any fit."""

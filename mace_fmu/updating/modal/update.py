@@ -21,6 +21,7 @@ from mace_fmu.parameters.kinds import DAMPING
 from mace_fmu.parameters.sets import ParameterSet, Provenance, deck_fingerprint, now_utc, tool_version
 from mace_fmu.updating.engine.bounds import default_bounds
 from mace_fmu.updating.engine.costs import ModeShapeCost
+from mace_fmu.updating.engine.inclusion import evaluator
 from mace_fmu.updating.engine.measured import MeasuredMode
 from mace_fmu.updating.engine.selection import Selection, SelectionRule, select_parameters
 from mace_fmu.updating.engine.sensitivity import CostSensitivities, cost_sensitivities
@@ -65,7 +66,8 @@ def select_and_update(family, cost, *, candidates: Sequence[str], rule: Selectio
     Parameters
     ----------
     family : ModelFamily
-        The model (``full``, ``basis``, ``base``, ``current_values``).
+        The model (``full``, ``base``, ``current_values``; ``basis`` when it reanalyses, a
+        :class:`~mace_fmu.updating.engine.inclusion.ReanalysisFamily`).
     cost : Cost
         The cost the candidates are judged on and the update lowers (a stage may carry its own).
     candidates : sequence of str
@@ -96,7 +98,7 @@ def select_and_update(family, cost, *, candidates: Sequence[str], rule: Selectio
                 number=stage_numbers[0], stages=stage_numbers[2])
     values = family.current_values(candidates)
     base = family.base.updated(values).values
-    perturbed = family.full if settings.perturbation == "full" else family.basis(base).model
+    perturbed = evaluator(family, settings.perturbation, base, candidates)
     sens = cost_sensitivities(cost, base_model=family.full(base), perturbed=perturbed, base=base, names=candidates,
                               relative_step=settings.relative_step, perturbation=settings.perturbation, runner=runner,
                               progress=progress)

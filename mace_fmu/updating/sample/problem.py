@@ -23,7 +23,7 @@ from mace_fmu.errors import MaceError
 from mace_fmu.thesis import thesis_data
 from mace_fmu.updating.engine.costs import Cost, FrequencyResponseCost, ModalCost, TimeResponseCost
 from mace_fmu.updating.engine.linear_model import simulate_discrete, zoh_transition
-from mace_fmu.updating.engine.measured import FrequencyResponseData, MeasuredMode, TimeHistory
+from mace_fmu.updating.engine.measured import MeasuredFrf, MeasuredMode, TimeHistory
 from mace_fmu.updating.engine.solve import Bounds, Stage, UpdateResult, UpdateSettings, update
 from mace_fmu.updating.files import h1_estimate
 from mace_fmu.updating.sample.family import MODE_LABELS, TwoMassFamily
@@ -62,7 +62,7 @@ class SampleData:
 
     actual: TwoMassSystem
     time: TimeHistory
-    frf: FrequencyResponseData
+    frf: MeasuredFrf
     measurement_model: MeasurementModel
     settings: SampleSettings
 
@@ -84,7 +84,7 @@ def generate_data(settings: SampleSettings = SampleSettings(), actual: TwoMassSy
                       settings=settings)
 
 
-def fit_measurement_model(frf: FrequencyResponseData, approx_hz: np.ndarray) -> MeasurementModel:
+def fit_measurement_model(frf: MeasuredFrf, approx_hz: np.ndarray) -> MeasurementModel:
     """Natural frequencies [Hz] and damping ratios from an LSCF fit (sdypy-EMA) near ``approx_hz``.
 
     The fit runs on a time axis scaled by 1000 (frequencies in mHz): sdypy-EMA's pole search

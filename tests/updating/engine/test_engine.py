@@ -20,7 +20,7 @@ from mace_fmu.structure.build import apply_overrides
 from mace_fmu.structure.file import bundled_deck_path
 from mace_fmu.updating.engine.costs import FrequencyResponseCost, ModalCost, TimeResponseCost, UnpairedModeError
 from mace_fmu.updating.engine.inclusion import modal_sensitivity, track_modes
-from mace_fmu.updating.engine.measured import FrequencyResponseData, MeasuredMode, TimeHistory
+from mace_fmu.updating.engine.measured import MeasuredFrf, MeasuredMode, TimeHistory
 from mace_fmu.updating.engine.selection import SelectionRule, select_parameters
 from mace_fmu.updating.engine.sensitivity import CostSensitivities, cost_sensitivities
 from mace_fmu.updating.engine.solve import Bounds, Stage, UpdateSettings, update
@@ -98,14 +98,14 @@ def test_costs_vanish_on_the_model_that_made_the_data_and_see_a_known_error():
     assert np.abs(ModalCost(measured=measured).residual(model)).max() < 1e-12
     f = np.linspace(0.02, 0.4, 50)
     h = model.frequency_response(f)
-    data = FrequencyResponseData(f, ("force_1",), ("displacement_1",), h)
+    data = MeasuredFrf(f, ("force_1",), ("displacement_1",), h)
     assert np.abs(FrequencyResponseCost(data).residual(model)).max() < 1e-12
     # data twice the model: log|G_d/G_m| = ln 2 at every line, no phase error (eq. 4.5)
-    doubled = FrequencyResponseCost(FrequencyResponseData(f, data.inputs, data.outputs, 2 * h))
+    doubled = FrequencyResponseCost(MeasuredFrf(f, data.inputs, data.outputs, 2 * h))
     j = doubled.residual(model)
     np.testing.assert_allclose(j[:50], math.log(2.0), atol=1e-12)
     np.testing.assert_allclose(j[50:], 0.0, atol=1e-12)
-    magnitude = FrequencyResponseCost(FrequencyResponseData(f, data.inputs, data.outputs, 2 * h), kind="magnitude")
+    magnitude = FrequencyResponseCost(MeasuredFrf(f, data.inputs, data.outputs, 2 * h), kind="magnitude")
     np.testing.assert_allclose(magnitude.residual(model)[:50], h[:, 0, 0].real, atol=1e-15)
     t = 0.5 * np.arange(400)
     u = np.random.default_rng(3).standard_normal(400)

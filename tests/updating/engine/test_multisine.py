@@ -44,7 +44,7 @@ def test_the_probe_gives_the_state_space_response_at_every_line(frame):
     assert error[peaks].max() < 1e-6  # where a measured FRF says most
     assert np.median(error) < 1e-5
     assert error.max() < 2e-3  # at the antiresonances: the hold's images, folded back by the sampling
-    assert probe._periods[0] >= 4  # 0.2 % damping: the free response needed more than the first two periods
+    assert probe.learnt.periods >= 4  # 0.2 % damping: the free response needed more than the first two periods
 
 
 def test_frequencies_no_period_holds_are_refused():

@@ -14,7 +14,7 @@ from scipy import signal
 from support.paths import EXAMPLES
 
 from mace_fmu.errors import MaceError
-from mace_fmu.updating.engine.measured import FrequencyResponseData, TimeHistory
+from mace_fmu.updating.engine.measured import MeasuredFrf, TimeHistory
 from mace_fmu.updating.files import (Channel, ChannelMap, h1_estimate, read_channel_map, read_frequency_response,
                                      read_measured_data, read_time_history, write_frequency_response,
                                      write_time_history)
@@ -31,11 +31,11 @@ def _history(n: int = 200, *, seed: int = 0) -> TimeHistory:
                        source="simulated")
 
 
-def _frd(seed: int = 0) -> FrequencyResponseData:
+def _frd(seed: int = 0) -> MeasuredFrf:
     rng = np.random.default_rng(seed)
     f = np.sort(rng.uniform(0.1, 40.0, 37))
     h = rng.standard_normal((37, 2, 3)) + 1j * rng.standard_normal((37, 2, 3))
-    return FrequencyResponseData(f, ("gimbal_primary_x", "gimbal_primary_z", "gimbal_secondary_z"),
+    return MeasuredFrf(f, ("gimbal_primary_x", "gimbal_primary_z", "gimbal_secondary_z"),
                                  ("gyro_bus_x", "gyro_payload_z"), h * np.logspace(-6, 2, 37)[:, None, None])
 
 
@@ -77,7 +77,7 @@ def test_frequency_response_csv_round_trip_is_exact(tmp_path):
     assert (back.inputs, back.outputs, back.units) == (frd.inputs, frd.outputs, frd.units)
     assert path.read_text().splitlines()[0].split(",")[:3] == [
         "frequency [Hz]", "re:gyro_bus_x/gimbal_primary_x [V/V]", "im:gyro_bus_x/gimbal_primary_x [V/V]"]
-    assert isinstance(read_measured_data(path), FrequencyResponseData)
+    assert isinstance(read_measured_data(path), MeasuredFrf)
 
 
 def test_h1_with_coherence_round_trips_through_csv(tmp_path):
@@ -123,11 +123,11 @@ def test_frequency_response_uff58_round_trip_to_the_digits_the_format_keeps(tmp_
     datasets = pyuff.UFF(str(path)).read_sets()
     assert len(datasets) == 6 and {d["func_type"] for d in datasets} == {4}
     assert (datasets[1]["id4"], datasets[1]["id5"]) == ("output: gyro_bus_x", "input: gimbal_primary_z")
-    assert isinstance(read_measured_data(path), FrequencyResponseData)
+    assert isinstance(read_measured_data(path), MeasuredFrf)
 
 
 def test_uff_writer_refuses_frequencies_the_format_would_merge(tmp_path):
-    frd = FrequencyResponseData(np.array([1.0, 1.000001, 2.0]), ("u",), ("y",), np.ones((3, 1, 1)))
+    frd = MeasuredFrf(np.array([1.0, 1.000001, 2.0]), ("u",), ("y",), np.ones((3, 1, 1)))
     with pytest.raises(MaceError, match=r"frf.uff: frequencies 1.0 and 1.000001 Hz \(rows 0, 1\)"):
         write_frequency_response(frd, tmp_path / "frf.uff")
     assert not (tmp_path / "frf.uff").exists()

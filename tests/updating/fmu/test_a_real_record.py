@@ -140,12 +140,12 @@ def test_a_damping_ratio_held_at_a_bound_is_one_sided_in_the_table_and_the_file_
 def test_an_analyser_s_lines_that_are_no_neighbours_are_one_multisine(rig, capsys, tmp_path):
     """An FRF file at lines of 0.1 Hz steps whose smallest gap is 0.2 Hz (6.0, 6.3, 6.5, ...): the old code took
     0.2 Hz for the step and refused 6.3 Hz; the lines are one multisine of 0.1 Hz, and the moduli come back."""
-    from mace_fmu.updating.engine.measured import FrequencyResponseData
+    from mace_fmu.updating.engine.measured import MeasuredFrf
     from mace_fmu.updating.files import write_frequency_response
 
     truth = rig[6]
     f = np.array([6.0, 6.3, 6.5, 6.7, 7.0, 18.0, 18.3, 18.5, 18.7, 19.0, 26.8, 27.1, 27.3, 27.5, 27.8])
-    data = FrequencyResponseData(f, ("force_floor_1",), OUTPUTS, truth.frequency_response(f)[:, :3, :1],
+    data = MeasuredFrf(f, ("force_floor_1",), OUTPUTS, truth.frequency_response(f)[:, :3, :1],
                                  units={"force_floor_1": "N", **{o: "m/s^2" for o in OUTPUTS}})
     path = write_frequency_response(data, tmp_path / "lines.csv")
     code, _, err = run_cli(capsys, ["update", "fmu", str(rig[1]), "--data", str(path), "--cost", "log-frf",

@@ -18,7 +18,7 @@ import pytest
 from support.cli import run_cli
 from support.paths import EXAMPLES
 
-from mace_fmu.updating.engine.measured import FrequencyResponseData
+from mace_fmu.updating.engine.measured import MeasuredFrf
 
 pytestmark = pytest.mark.slow  # an FMU export and an update of six parameters (about 20 s)
 
@@ -45,7 +45,7 @@ def frame(tmp_path_factory):
                                          parameters=ParameterSet(TRUTH)))
     f = np.arange(1, 1025) * 0.03125  # the analyser's grid of the real data, to 32 Hz
     h = resolved.frequency_response(f)[:, :3, :1]
-    data = FrequencyResponseData(f, ("force_floor_1",), ("acc_floor_1", "acc_floor_2", "acc_floor_3"), h,
+    data = MeasuredFrf(f, ("force_floor_1",), ("acc_floor_1", "acc_floor_2", "acc_floor_3"), h,
                                  units={"force_floor_1": "N", **{f"acc_floor_{k}": "m/s^2" for k in (1, 2, 3)}})
     return folder, fmu, write_frequency_response(data, folder / "resolved.csv")
 

@@ -26,7 +26,7 @@ def test_an_fmu_of_nastran_s_modes_gets_its_damping_ratio_back_from_an_frf_file(
     from mace_fmu.iomodel.modal_source import modal_structure
     from mace_fmu.iomodel.volts import volts_model
     from mace_fmu.parameters.sets import ParameterSet
-    from mace_fmu.updating.engine.measured import FrequencyResponseData
+    from mace_fmu.updating.engine.measured import MeasuredFrf
     from mace_fmu.updating.files import write_frequency_response
 
     structure = modal_structure(PLATE)
@@ -38,7 +38,7 @@ def test_an_fmu_of_nastran_s_modes_gets_its_damping_ratio_back_from_an_frf_file(
     h = truth.frequency_response(f)
     rows = [list(truth.system.output_labels).index(o) for o in outputs]
     data = write_frequency_response(
-        FrequencyResponseData(f, ("shaker",), outputs, h[:, rows, :], source="plate test",
+        MeasuredFrf(f, ("shaker",), outputs, h[:, rows, :], source="plate test",
                               units={"shaker": "V", "acc_corner": "V", "acc_middle": "V"}),
         tmp_path / "plate_frf.csv")
     code, _, err = run_cli(capsys, ["update", "fmu", str(fmu), "--data", str(data), "--cost", "log-frf",

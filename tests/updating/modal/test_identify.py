@@ -15,7 +15,7 @@ from support.cli import run_cli
 from support.paths import EXAMPLES
 
 from mace_fmu.errors import MaceError
-from mace_fmu.updating.engine.measured import FrequencyResponseData
+from mace_fmu.updating.engine.measured import MeasuredFrf
 from mace_fmu.updating.files import read_frequency_response, write_frequency_response
 from mace_fmu.updating.modal.identify import identify_modes, peak_frequencies_hz
 from mace_fmu.updating.modal.modes_file import read_modes_file
@@ -50,7 +50,7 @@ def known():
     h = np.array([cc @ np.linalg.solve(2j * np.pi * fk * np.eye(6) - a, b) + d for fk in f])  # (line, out, in)
     rng = np.random.default_rng(7)
     noisy = h + 0.01 * np.abs(h) * (rng.standard_normal(h.shape) + 1j * rng.standard_normal(h.shape)) / np.sqrt(2)
-    frfs = [FrequencyResponseData(f, (INPUTS[j],), OUTPUTS, noisy[:, :, j:j + 1], source=f"known {INPUTS[j]}",
+    frfs = [MeasuredFrf(f, (INPUTS[j],), OUTPUTS, noisy[:, :, j:j + 1], source=f"known {INPUTS[j]}",
                                   units={**{o: "m/s^2" for o in OUTPUTS}, INPUTS[j]: "N"}) for j in range(3)]
     found = identify_modes(frfs, band_hz=(3.0, 48.0), max_order=20, driving_points=dict(zip(INPUTS, OUTPUTS)))
     poles = np.linalg.eigvals(a)
@@ -114,7 +114,7 @@ def test_bad_requests_end_with_one_line_and_nothing_written(known, tmp_path, cap
 
 def test_files_that_do_not_measure_the_same_dofs_are_refused(known):
     _, _, _, frfs = known
-    other = FrequencyResponseData(frfs[1].frequencies_hz, frfs[1].inputs, ("x1", "x2", "x9"), frfs[1].response,
+    other = MeasuredFrf(frfs[1].frequencies_hz, frfs[1].inputs, ("x1", "x2", "x9"), frfs[1].response,
                                   source="other.csv", units={"x1": "m/s^2", "x2": "m/s^2", "x9": "m/s^2", "f2": "N"})
     with pytest.raises(MaceError, match="other.csv: outputs x1, x2, x9, known f1 has x1, x2, x3"):
         identify_modes([frfs[0], other])
