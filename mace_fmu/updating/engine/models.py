@@ -58,5 +58,11 @@ class PoleModel(Protocol):
     """A model with labelled poles (what the modal costs pair measured modes with)."""
 
     def poles(self, *, max_hz: float | None = None) -> list[ClosedLoopPole]:
-        """Poles with Im >= 0 up to ``max_hz`` [Hz] (default: all), labelled by the modes they live in."""
+        """Poles with Im >= 0 up to ``max_hz`` [Hz] (default: all), labelled by the modes they live in.
+
+        Parameters
+        ----------
+        max_hz : float, optional
+            The highest pole frequency kept [Hz]; None keeps every pole.
+        """
         ...

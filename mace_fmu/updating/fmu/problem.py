@@ -109,7 +109,13 @@ class FmuUpdateRequest:
             raise MaceError(f"{repeated[0]}: given twice as --data (each test once)")
 
     def check_options(self, kind: DataKind) -> None:
-        """MaceError naming the options that have no meaning for data of ``kind``: refused, never ignored."""
+        """MaceError naming the options that have no meaning for data of ``kind``: refused, never ignored.
+
+        Parameters
+        ----------
+        kind : DataKind
+            The kind of the request's data files, as ``problem_of`` read them.
+        """
         if kind == "frequency responses":
             # what shapes an H1 estimate or a time record's noise has no meaning here
             unused = {"segment_s (--segment-s)": self.segment_s,
