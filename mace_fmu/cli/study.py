@@ -203,8 +203,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     o = studies.add_parser("robust-0g", help="LQG on the nominal 0-g model closed around the 0-g FMU over its frequency "
                            "bounds: corners and a Monte Carlo sample on Dask (PNG, CSV and a summary)")
     output_option(o, "-o", "--out", kind="folder", default="study", help="output directory (default ./study)")
-    o.add_argument("--samples", type=positive_integer, default=100,
-                   help="Monte Carlo samples, uniform in the bounds (default 100)")
+    o.add_argument("--samples", type=non_negative_integer, default=100,
+                   help="Monte Carlo samples, uniform in the bounds (default 100; 0 runs the corners alone)")
     o.add_argument("--seed", type=non_negative_integer, default=1, help="seed of the sample (default 1)")
     o.add_argument("--critical", type=non_negative_integer, default=4,
                    help="parameters whose 2^N corners are run: the N that move the "

@@ -286,8 +286,10 @@ def test_cli_study_reduced_order_writes_figures_and_table(tmp_path, capsys):
     table = (out / "table_A1.txt").read_text()
     assert "rho = theta = 3.864e-10" in table and "balanced" in table
     capsys.readouterr()
-    assert main(["study", "reduced-order", "--out", str(out), "--max-iterations", "-1"]) == 2
-    assert "--max-iterations" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as refused:  # refused as it is parsed, in one line naming the option
+        main(["study", "reduced-order", "--out", str(out), "--max-iterations", "-1"])
+    assert refused.value.code == 2
+    assert "argument --max-iterations: expected an integer >= 1, got '-1'" in capsys.readouterr().err
 
 
 def test_failed_riccati_solution_is_one_clear_error():
