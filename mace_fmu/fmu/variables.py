@@ -26,12 +26,6 @@ def variable_unit(name: str, causality: str, *, signal_units: Mapping[str, str] 
     return "Hz" if is_frequency_output(name) else None
 
 
-def signal_units(arrays: Mapping[str, object]) -> dict[str, str]:
-    """Input and output name -> unit at the model boundary, from a ParametricSystem's arrays
-    (:func:`~mace_fmu.iomodel.parametric_data.parametric_arrays`)."""
-    return {str(n): str(u) for key in ("input", "output") for n, u in zip(arrays[f"{key}s"], arrays[f"{key}_units"])}
-
-
 def model_summary(model: VoltsModel) -> str:
     """One-line description of a volts-volts model for an FMU's model description."""
     built = f"; parameter set {model.parameters.describe()}" if model.parameters is not None else ""

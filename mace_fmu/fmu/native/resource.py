@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import struct
 from collections.abc import Mapping
+from dataclasses import dataclass, fields
 
 import numpy as np
 
@@ -42,8 +43,32 @@ _FLOAT, _INT, _TEXT = 1, 2, 3
 ROW_DISPLACEMENT, ROW_RATE, ROW_ACCELERATION = 0, 1, 2  #: struct_row_kind: what a structure output reads
 
 
-def _zero_cluster_reduced(arrays: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
-    """Modal input rows, structure output rows and kept states after the nominal zero-cluster reduction."""
+@dataclass(frozen=True)
+class ZeroCluster:
+    """The modal inputs, structure output rows and kept states after the nominal zero-cluster reduction (the
+    runtime's entries of these names, in this order)."""
+
+    modal_b: np.ndarray  #: (n_modes, n_modal_inputs) modal input rows, the cluster rotated
+    struct_rows: np.ndarray  #: (n_structure_outputs, n_modes) what each structure output reads of the modes
+    struct_row_kind: np.ndarray  #: per structure output: ROW_DISPLACEMENT, ROW_RATE or ROW_ACCELERATION
+    keep_disp: np.ndarray  #: per mode: 1 where its displacement is a state
+    keep_rate: np.ndarray  #: per mode: 1 where its rate is a state
+    flexible: np.ndarray  #: the flexible modes' indices
+
+
+def zero_cluster_reduced(arrays: Mapping[str, np.ndarray]) -> ZeroCluster:
+    """The zero-frequency cluster of a ParametricSystem's ``arrays`` reduced at the nominal parameters.
+
+    Parameters
+    ----------
+    arrays : mapping
+        A ParametricSystem's arrays (:func:`~mace_fmu.iomodel.parametric_data.parametric_arrays`).
+
+    Returns
+    -------
+    ZeroCluster
+        Modal input rows, structure output rows and kept states after the reduction.
+    """
     freq = np.asarray(arrays["frequencies_hz"], dtype=float)
     n = len(freq)
     zero = np.flatnonzero(np.abs(freq) < ZERO_HZ)
@@ -70,15 +95,15 @@ def _zero_cluster_reduced(arrays: Mapping[str, np.ndarray]) -> dict[str, np.ndar
         else:
             rows.append(rate[name])
             row_kind.append(ROW_RATE)
-    return {"modal_b": modal_b, "struct_rows": np.array(rows).reshape(len(rows), n),
-            "struct_row_kind": np.array(row_kind, dtype=np.int64), "keep_disp": keep_disp,
-            "keep_rate": keep_rate, "flexible": np.flatnonzero(np.abs(freq) >= ZERO_HZ).astype(np.int64)}
+    return ZeroCluster(modal_b=modal_b, struct_rows=np.array(rows).reshape(len(rows), n),
+                       struct_row_kind=np.array(row_kind, dtype=np.int64), keep_disp=keep_disp, keep_rate=keep_rate,
+                       flexible=np.flatnonzero(np.abs(freq) >= ZERO_HZ).astype(np.int64))
 
 
 def _kind_of_rows(arrays: Mapping[str, np.ndarray]) -> list[tuple[str, int]]:
     """For each structure output: which row kind holds it (``acc``, ``disp``, ``motion``, ``rate``) and where."""
     where = {}
-    for kind in ("rate", "motion", "disp", "acc"):  # later kinds win, as in _zero_cluster_reduced
+    for kind in ("rate", "motion", "disp", "acc"):  # later kinds win, as in zero_cluster_reduced
         for k, name in enumerate(arrays.get(f"{kind}_names", [])):
             where[str(name)] = (kind, k)
     return [where[str(name)] for name in arrays["structure_outputs"]]
@@ -120,17 +145,17 @@ def _corrections(arrays: Mapping[str, np.ndarray], flexible: np.ndarray) -> dict
     }
 
 
-def _blocks(arrays: Mapping[str, np.ndarray], *, index: Mapping[str, int], cluster: Mapping[str, np.ndarray],
+def _blocks(arrays: Mapping[str, np.ndarray], *, index: Mapping[str, int], cluster: ZeroCluster,
             pade_order: int) -> tuple[np.ndarray, dict[str, np.ndarray], set[str]]:
     """Each block's row of ``block_info`` (kind code, states, inputs, outputs, its parameters' indices), the
     constant blocks' matrices, and the names of the parameters that are delays."""
-    n_states_structure = int(cluster["keep_disp"].sum() + cluster["keep_rate"].sum())
+    n_states_structure = int(cluster.keep_disp.sum() + cluster.keep_rate.sum())
     info, blocks, delay_params = [], {}, set()
     for i, (kind, param) in enumerate(zip((str(k) for k in arrays["block_kinds"]),
                                           (str(p) for p in arrays["block_params"]))):
         p0 = p1 = -1
         if kind == "structure":
-            n_x, n_u, n_y = n_states_structure, cluster["modal_b"].shape[1], len(arrays["structure_outputs"])
+            n_x, n_u, n_y = n_states_structure, cluster.modal_b.shape[1], len(arrays["structure_outputs"])
         elif kind == "delay":
             n_x, n_u, n_y, p0 = pade_order, 1, 1, index[param]
             delay_params.add(param)
@@ -169,15 +194,17 @@ def _parameter_codes(names: list[str], *, physical: list[str], delays: set[str])
     return table[:, 0].copy(), table[:, 1].copy()
 
 
-def runtime_arrays(arrays: Mapping[str, np.ndarray]) -> dict[str, np.ndarray | list[str]]:
-    """The C runtime's arrays (see the module docstring) from a ParametricSystem's ``arrays``."""
+def runtime_arrays(arrays: Mapping[str, np.ndarray], *,
+                   cluster: ZeroCluster | None = None) -> dict[str, np.ndarray | list[str]]:
+    """The C runtime's arrays (see the module docstring) from a ParametricSystem's ``arrays``, with their
+    zero-frequency cluster reduced (default: reduced here, :func:`zero_cluster_reduced`)."""
     names = [str(x) for x in arrays["param_names"]]
     physical = [str(x) for x in arrays["physical_names"]]
     pade_order = int(arrays["pade_order"])
     if not 1 <= pade_order <= MAX_PADE_ORDER:
         raise MaceError(f"native FMU: Pade order must be 1..{MAX_PADE_ORDER}, got {pade_order}")
-    cluster = _zero_cluster_reduced(arrays)
-    flexible = cluster["flexible"]
+    cluster = zero_cluster_reduced(arrays) if cluster is None else cluster
+    flexible = cluster.flexible
     info, blocks, delays = _blocks(arrays, index={name: k for k, name in enumerate(names)}, cluster=cluster,
                                    pade_order=pade_order)
     par_kind, par_index = _parameter_codes(names, physical=physical, delays=delays)
@@ -185,7 +212,7 @@ def runtime_arrays(arrays: Mapping[str, np.ndarray]) -> dict[str, np.ndarray | l
     counts = {"in": len(arrays["inputs"]), "out": len(arrays["outputs"]), "par": len(names),
               "modes": len(arrays["frequencies_hz"]), "flex": len(flexible), "blocks": len(info), "pade": pade_order,
               "states": int(info[:, 1].sum()), "so": len(arrays["structure_outputs"]),
-              "ms": cluster["modal_b"].shape[1], "phys": len(physical), "ub": arrays["wiring"].shape[0],
+              "ms": cluster.modal_b.shape[1], "phys": len(physical), "ub": arrays["wiring"].shape[0],
               "yb": arrays["wiring"].shape[1], "corr": corrections["correction_stiffness"].shape[0],
               "massive": int(arrays["correction_massive"]) if "correction_massive" in arrays else 0}
     dk = np.asarray(arrays["physical_dk"], dtype=float)[:, flexible][:, :, flexible]
@@ -207,7 +234,7 @@ def runtime_arrays(arrays: Mapping[str, np.ndarray]) -> dict[str, np.ndarray | l
         "param_names": names,
     }
     out["me_order"] = model_exchange_order(info)
-    out.update(cluster)
+    out.update((f.name, getattr(cluster, f.name)) for f in fields(cluster))
     out.update(corrections)
     out.update(blocks)
     return out
