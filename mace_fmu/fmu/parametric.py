@@ -61,6 +61,7 @@ class ParametricModel:
     #: without mass parameters)
     mass_sensitivities: np.ndarray | None
     mode_labels: tuple[str, ...]  #: one label per retained mode (the calculated frequencies' descriptions)
+    frequencies_hz: np.ndarray  #: the retained modes' nominal frequencies [Hz], before reanalysis and scales
     state_names: tuple[str, ...]  #: "block.state" of the system built at the nominal parameters
     #: the ParametricSystem's arrays (blocks, wiring, modal rows, the physical parameters' sensitivities), as a
     #: pythonfmu FMU stores them (``resources/model.npz``) and the native runtime's data is made from
@@ -130,7 +131,9 @@ def parametric_model(model: VoltsModel, *, arrays: Mapping[str, np.ndarray] | No
                            stiffness_sensitivities=np.asarray(arrays["physical_dk"], dtype=float),
                            mass_sensitivities=np.asarray(arrays["physical_dm"], dtype=float)
                            if "physical_dm" in arrays else None,
-                           mode_labels=system.mode_labels, state_names=tuple(system.state_names),
+                           mode_labels=system.mode_labels, frequencies_hz=np.asarray(arrays["frequencies_hz"],
+                                                                                     dtype=float),
+                           state_names=tuple(system.state_names),
                            arrays=MappingProxyType(arrays), cluster=zero_cluster_reduced(arrays))
 
 

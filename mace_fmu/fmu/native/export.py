@@ -127,7 +127,7 @@ def export_native_fmu(model: ParametricModel, *, name: str, out_dir: str | Path 
     if fmi_version not in (2, 3):
         raise MaceError(f"native FMUs are FMI 2 or FMI 3, got FMI version {fmi_version!r}")
     targets = select_platforms(platforms)
-    data = runtime_arrays(model.arrays, cluster=model.cluster)
+    data = runtime_arrays(model)
     if count_of(data, "states") != len(model.state_names):
         raise MaceError(f"native FMU: the runtime data describe {count_of(data, 'states')} states, the model has "
                         f"{len(model.state_names)}")

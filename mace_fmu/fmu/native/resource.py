@@ -17,6 +17,7 @@ from __future__ import annotations
 import struct
 from collections.abc import Mapping
 from dataclasses import dataclass, fields
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -25,6 +26,9 @@ from mace_fmu.iomodel.modal_core import reduce_zero_cluster
 from mace_fmu.iomodel.model_options import MAX_PADE_ORDER as MAX_ORDER
 from mace_fmu.parameters.kinds import kind_of_fmu_name, mode_number
 from mace_fmu.util.frequency import ZERO_HZ
+
+if TYPE_CHECKING:  # the record holds this module's ZeroCluster
+    from mace_fmu.fmu.parametric import ParametricModel
 
 MAGIC = b"MACEFMU1"
 FORMAT_VERSION = 1  #: the file layout (shared with the controller FMU's data)
@@ -194,43 +198,58 @@ def _parameter_codes(names: list[str], *, physical: list[str], delays: set[str])
     return table[:, 0].copy(), table[:, 1].copy()
 
 
-def runtime_arrays(arrays: Mapping[str, np.ndarray], *,
-                   cluster: ZeroCluster | None = None) -> dict[str, np.ndarray | list[str]]:
-    """The C runtime's arrays (see the module docstring) from a ParametricSystem's ``arrays``, with their
-    zero-frequency cluster reduced (default: reduced here, :func:`zero_cluster_reduced`)."""
-    names = [str(x) for x in arrays["param_names"]]
-    physical = [str(x) for x in arrays["physical_names"]]
+def runtime_arrays(model: ParametricModel) -> dict[str, np.ndarray | list[str]]:
+    """The C runtime's arrays (see the module docstring) of what a model's FMUs carry.
+
+    Parameters
+    ----------
+    model : ParametricModel
+        The record (:func:`~mace_fmu.fmu.parametric.parametric_model`): its parameters, signals, sensitivities
+        and reduced zero-frequency cluster, and the ParametricSystem's arrays of its blocks and corrections.
+
+    Returns
+    -------
+    dict
+        Name -> float64 or int64 array, or list of strings, in the order :func:`resource_bytes` writes them.
+
+    Raises
+    ------
+    MaceError
+        A Pade order the runtime does not take, a block of unknown kind, blocks that do not match the wiring.
+    """
+    arrays, cluster = model.arrays, model.cluster
+    names = [p.name for p in model.parameters]
+    physical = list(model.physical_names)
     pade_order = int(arrays["pade_order"])
     if not 1 <= pade_order <= MAX_PADE_ORDER:
         raise MaceError(f"native FMU: Pade order must be 1..{MAX_PADE_ORDER}, got {pade_order}")
-    cluster = zero_cluster_reduced(arrays) if cluster is None else cluster
     flexible = cluster.flexible
     info, blocks, delays = _blocks(arrays, index={name: k for k, name in enumerate(names)}, cluster=cluster,
                                    pade_order=pade_order)
     par_kind, par_index = _parameter_codes(names, physical=physical, delays=delays)
     corrections = _corrections(arrays, flexible)
-    counts = {"in": len(arrays["inputs"]), "out": len(arrays["outputs"]), "par": len(names),
-              "modes": len(arrays["frequencies_hz"]), "flex": len(flexible), "blocks": len(info), "pade": pade_order,
+    counts = {"in": len(model.inputs), "out": len(model.outputs), "par": len(names),
+              "modes": len(model.frequencies_hz), "flex": len(flexible), "blocks": len(info), "pade": pade_order,
               "states": int(info[:, 1].sum()), "so": len(arrays["structure_outputs"]),
               "ms": cluster.modal_b.shape[1], "phys": len(physical), "ub": arrays["wiring"].shape[0],
               "yb": arrays["wiring"].shape[1], "corr": corrections["correction_stiffness"].shape[0],
               "massive": int(arrays["correction_massive"]) if "correction_massive" in arrays else 0}
-    dk = np.asarray(arrays["physical_dk"], dtype=float)[:, flexible][:, :, flexible]
-    dm = np.asarray(arrays.get("physical_dm", np.zeros_like(arrays["physical_dk"])), dtype=float)[:, flexible][:, :,
-                                                                                                             flexible]
+    dk = model.stiffness_sensitivities[:, flexible][:, :, flexible]
+    dm = (model.mass_sensitivities if model.mass_sensitivities is not None
+          else np.zeros_like(model.stiffness_sensitivities))[:, flexible][:, :, flexible]
     out: dict[str, np.ndarray | list[str]] = {
         "format_version": np.array([MODEL_FORMAT], dtype=np.int64),
         "counts": np.array([counts[name] for name in COUNTS], dtype=np.int64),
-        "param_nominal": np.asarray(arrays["param_values"], dtype=float),
-        "param_min": np.asarray(arrays["param_min"], dtype=float),
-        "param_max": np.asarray(arrays["param_max"], dtype=float),
+        "param_nominal": np.array([p.nominal for p in model.parameters], dtype=float),
+        "param_min": np.array([p.minimum for p in model.parameters], dtype=float),
+        "param_max": np.array([p.maximum for p in model.parameters], dtype=float),
         "param_kind": par_kind, "param_index": par_index,
-        "frequencies_hz": np.asarray(arrays["frequencies_hz"], dtype=float),
+        "frequencies_hz": model.frequencies_hz,
         "physical_dk": dk.reshape(len(physical), len(flexible), len(flexible)),
         "physical_dm": dm.reshape(len(physical), len(flexible), len(flexible)),
         "block_info": info, "wiring": np.asarray(arrays["wiring"], dtype=float),
         "entry": np.asarray(arrays["entry"], dtype=float), "exit": np.asarray(arrays["exit"], dtype=float),
-        "input_names": [str(x) for x in arrays["inputs"]], "output_names": [str(x) for x in arrays["outputs"]],
+        "input_names": [s.name for s in model.inputs], "output_names": [s.name for s in model.outputs],
         "param_names": names,
     }
     out["me_order"] = model_exchange_order(info)
