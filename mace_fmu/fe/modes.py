@@ -102,7 +102,7 @@ class StructureModes(ModesView):
 
     @property
     def name(self) -> str:
-        """"MACE" for the bundled deck's modes, else the deck file's stem: what their models and FMUs are named after."""
+        """"MACE" for the bundled deck's modes, else the deck file's stem: their models and FMUs are named after it."""
         return structure_label(self.deck)
 
     @property
@@ -177,7 +177,8 @@ class StructureModes(ModesView):
         """None: a deck's modes have no static correction (every mode up to the model's is computed)."""
 
     def drawing(self) -> Drawing:
-        """Each CBAR a tube, each CONM2 a sphere, framed on the test article (:func:`mace_fmu.fe.drawing.deck_drawing`)."""
+        """Each CBAR a tube, each CONM2 a sphere, framed on the test article
+        (:func:`mace_fmu.fe.drawing.deck_drawing`)."""
         return deck_drawing(self)
 
 

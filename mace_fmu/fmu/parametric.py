@@ -14,6 +14,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from functools import cached_property
 from types import MappingProxyType
+from typing import Literal, cast
 
 import numpy as np
 
@@ -45,6 +46,23 @@ class FmuParameter:
     description: str  #: what it is, with its unit
 
 
+#: how the FMUs rebuild a block: the modal structure, a constant block, or the parameters' delay, gain or PD
+BlockKind = Literal["structure", "const", "delay", "gain", "pd"]
+
+
+@dataclass(frozen=True)
+class FmuBlock:
+    """A block of the model's diagram as its FMUs rebuild it for new parameter values."""
+
+    name: str  #: the diagram's block name
+    kind: BlockKind  #: how it is rebuilt
+    parameters: tuple[str, ...]  #: the parameters it takes (a delay's or a gain's one, a PD's two; none otherwise)
+    a: np.ndarray  #: A of the block at the nominal parameters (a constant block's for good)
+    b: np.ndarray  #: B
+    c: np.ndarray  #: C
+    d: np.ndarray  #: D
+
+
 @dataclass(frozen=True)
 class ParametricModel:
     """A volts-volts model as its FMUs carry it (module docstring): built by :func:`parametric_model`."""
@@ -67,6 +85,12 @@ class ParametricModel:
     #: pythonfmu FMU stores them (``resources/model.npz``) and the native runtime's data is made from
     arrays: Mapping[str, np.ndarray]
     cluster: ZeroCluster  #: the zero-frequency cluster reduced at the nominal parameters (the native runtime's)
+    blocks: tuple[FmuBlock, ...]  #: the diagram's blocks, in the wiring's order
+    wiring: np.ndarray  #: (block inputs, block outputs) 0/1: which block output feeds which block input
+    entry: np.ndarray  #: (block inputs, model inputs) 0/1: which model input feeds which block input
+    exit: np.ndarray  #: (model outputs, block outputs) 0/1: which block output is which model output
+    pade_order: int  #: order of every delay's Pade approximation
+    structure_outputs: tuple[str, ...]  #: the modal structure block's outputs, in its order
 
     @property
     def signal_units(self) -> dict[str, str]:
@@ -134,7 +158,23 @@ def parametric_model(model: VoltsModel, *, arrays: Mapping[str, np.ndarray] | No
                            mode_labels=system.mode_labels, frequencies_hz=np.asarray(arrays["frequencies_hz"],
                                                                                      dtype=float),
                            state_names=tuple(system.state_names),
-                           arrays=MappingProxyType(arrays), cluster=zero_cluster_reduced(arrays))
+                           arrays=MappingProxyType(arrays), cluster=zero_cluster_reduced(arrays),
+                           blocks=_blocks(arrays), wiring=np.asarray(arrays["wiring"], dtype=float),
+                           entry=np.asarray(arrays["entry"], dtype=float), exit=np.asarray(arrays["exit"], dtype=float),
+                           pade_order=int(arrays["pade_order"]),
+                           structure_outputs=tuple(str(x) for x in arrays["structure_outputs"]))
+
+
+def _blocks(arrays: Mapping[str, np.ndarray]) -> tuple[FmuBlock, ...]:
+    """The blocks of a ParametricSystem's ``arrays`` (``block_kinds``, ``block_params``, ``block<i>_A`` ...)."""
+    def matrix(i: int, m: str) -> np.ndarray:
+        return np.asarray(arrays[f"block{i}_{m}"], dtype=float)
+
+    return tuple(FmuBlock(name=str(name), kind=cast(BlockKind, str(kind)),
+                          parameters=tuple(str(param).split(",")) if str(param) else (),
+                          a=matrix(i, "A"), b=matrix(i, "B"), c=matrix(i, "C"), d=matrix(i, "D"))
+                 for i, (name, kind, param) in enumerate(zip(arrays["block_names"], arrays["block_kinds"],
+                                                             arrays["block_params"])))
 
 
 def jacobian_pattern(system: ParametricSystem, *, samples: int = 2, seed: int = 0) -> JacobianPattern:

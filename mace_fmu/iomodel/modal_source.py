@@ -217,8 +217,8 @@ def check_instrument_grids(file: StructureFile, modes: Modes, *, source: Path) -
     """A MaceError naming the instrument and the grid when an instrument sits on a grid whose eigenvectors
     are not in the modes file, and the output request that puts them there."""
     have = set(modes.dofs.grid_ids)
-    for what, name, grid in ((what, name, g) for what, name, grids in instrument_grids(file) for g in grids):
-        if grid not in have:
+    for what, name, grids in instrument_grids(file):
+        for grid in (g for g in grids if g not in have):
             raise MaceError(f"{file.path}: {what} {name!r} sits on grid {grid}, whose eigenvectors are not in "
                             f"{source}: request them in the SOL 103 case control (DISPLACEMENT(PLOT) = ALL, or "
                             f"SET n = ..., {grid} with DISPLACEMENT(PLOT) = n) and run NASTRAN again")

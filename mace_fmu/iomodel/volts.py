@@ -500,7 +500,8 @@ def scale_frequencies(modes: _Source, parameters: ParameterSet | None, *, config
     for name, value in resolve_mode_names(scales, mode_labels=modes.labels, model=f"{configuration} structure",
                                           source=parameters.source).items():
         frequencies[mode_number(name) - 1] *= value
-    return replace(modes, modes=replace(modes.modes, frequencies_hz=frequencies))  # type: ignore[type-var]  # a dataclass
+    scaled = replace(modes.modes, frequencies_hz=frequencies)
+    return replace(modes, modes=scaled)  # type: ignore[type-var]  # every modal source is a dataclass
 
 
 def select_signals(system: ct.StateSpace, *, inputs: Sequence[str] | None = None,

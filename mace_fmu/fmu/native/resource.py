@@ -1,8 +1,9 @@
-"""The data a native FMU's C runtime reads (``resources/mace_model.bin``), made from a model's arrays.
+"""The data a native FMU's C runtime reads (``resources/mace_model.bin``), made from a model's record.
 
-The contract is the array set of :func:`mace_fmu.iomodel.parametric_data.parametric_arrays`,
-which :class:`~mace_fmu.iomodel.parametric.ParametricSystem` turns into (A, B, C, D). The runtime
-repeats that rebuild in C with one step done here, once: the zero-frequency cluster (rigid
+The record (:class:`~mace_fmu.fmu.parametric.ParametricModel`) carries the array set of
+:func:`mace_fmu.iomodel.parametric_data.parametric_arrays`, which
+:class:`~mace_fmu.iomodel.parametric.ParametricSystem` turns into (A, B, C, D). The runtime
+repeats that rebuild in C with one step done once, when the record is built: the zero-frequency cluster (rigid
 bodies, mechanisms) is rotated and reduced by the rules of :mod:`mace_fmu.iomodel.modal_core`.
 A stiffness change cannot move those modes (their sensitivities are zero in the arrays), so the
 reduction the reference recomputes at every build is the same each time.
@@ -149,35 +150,35 @@ def _corrections(arrays: Mapping[str, np.ndarray], flexible: np.ndarray) -> dict
     }
 
 
-def _blocks(arrays: Mapping[str, np.ndarray], *, index: Mapping[str, int], cluster: ZeroCluster,
-            pade_order: int) -> tuple[np.ndarray, dict[str, np.ndarray], set[str]]:
+def _blocks(model: ParametricModel, *, index: Mapping[str, int]) -> tuple[np.ndarray, dict[str, np.ndarray], set[str]]:
     """Each block's row of ``block_info`` (kind code, states, inputs, outputs, its parameters' indices), the
     constant blocks' matrices, and the names of the parameters that are delays."""
+    cluster = model.cluster
     n_states_structure = int(cluster.keep_disp.sum() + cluster.keep_rate.sum())
     info, blocks, delay_params = [], {}, set()
-    for i, (kind, param) in enumerate(zip((str(k) for k in arrays["block_kinds"]),
-                                          (str(p) for p in arrays["block_params"]))):
+    for i, block in enumerate(model.blocks):
         p0 = p1 = -1
-        if kind == "structure":
-            n_x, n_u, n_y = n_states_structure, cluster.modal_b.shape[1], len(arrays["structure_outputs"])
-        elif kind == "delay":
-            n_x, n_u, n_y, p0 = pade_order, 1, 1, index[param]
-            delay_params.add(param)
-        elif kind == "gain":
-            n_x, n_u, n_y, p0 = 0, 1, 1, index[param]
-        elif kind == "pd":
+        if block.kind == "structure":
+            n_x, n_u, n_y = n_states_structure, cluster.modal_b.shape[1], len(model.structure_outputs)
+        elif block.kind == "delay":
+            n_x, n_u, n_y, p0 = model.pade_order, 1, 1, index[block.parameters[0]]
+            delay_params.add(block.parameters[0])
+        elif block.kind == "gain":
+            n_x, n_u, n_y, p0 = 0, 1, 1, index[block.parameters[0]]
+        elif block.kind == "pd":
             n_x, n_u, n_y = 0, 2, 1
-            p0, p1 = (index[p] for p in param.split(","))
-        elif kind == "const":
-            n_y, n_u = np.asarray(arrays[f"block{i}_D"]).shape
-            n_x = int(np.asarray(arrays[f"block{i}_A"]).shape[0])
-            for m, shape in zip("ABCD", ((n_x, n_x), (n_x, n_u), (n_y, n_x), (n_y, n_u))):
-                blocks[f"block{i}_{m}"] = np.asarray(arrays[f"block{i}_{m}"], dtype=float).reshape(shape)
+            p0, p1 = (index[p] for p in block.parameters)
+        elif block.kind == "const":
+            n_y, n_u = block.d.shape
+            n_x = int(block.a.shape[0])
+            for m, matrix, shape in zip("ABCD", (block.a, block.b, block.c, block.d),
+                                        ((n_x, n_x), (n_x, n_u), (n_y, n_x), (n_y, n_u))):
+                blocks[f"block{i}_{m}"] = matrix.reshape(shape)
         else:
-            raise MaceError(f"native FMU: block {i} has the unknown kind {kind!r}")
-        info.append([BLOCK_KINDS[kind], n_x, n_u, n_y, p0, p1])
+            raise MaceError(f"native FMU: block {i} has the unknown kind {block.kind!r}")
+        info.append([BLOCK_KINDS[block.kind], n_x, n_u, n_y, p0, p1])
     info = np.array(info, dtype=np.int64).reshape(-1, 6)
-    if info[:, 2].sum() != arrays["wiring"].shape[0] or info[:, 3].sum() != arrays["wiring"].shape[1]:
+    if info[:, 2].sum() != model.wiring.shape[0] or info[:, 3].sum() != model.wiring.shape[1]:
         raise MaceError("native FMU: block inputs/outputs do not match the wiring matrix")
     return info, blocks, delay_params
 
@@ -220,19 +221,18 @@ def runtime_arrays(model: ParametricModel) -> dict[str, np.ndarray | list[str]]:
     arrays, cluster = model.arrays, model.cluster
     names = [p.name for p in model.parameters]
     physical = list(model.physical_names)
-    pade_order = int(arrays["pade_order"])
+    pade_order = model.pade_order
     if not 1 <= pade_order <= MAX_PADE_ORDER:
         raise MaceError(f"native FMU: Pade order must be 1..{MAX_PADE_ORDER}, got {pade_order}")
     flexible = cluster.flexible
-    info, blocks, delays = _blocks(arrays, index={name: k for k, name in enumerate(names)}, cluster=cluster,
-                                   pade_order=pade_order)
+    info, blocks, delays = _blocks(model, index={name: k for k, name in enumerate(names)})
     par_kind, par_index = _parameter_codes(names, physical=physical, delays=delays)
     corrections = _corrections(arrays, flexible)
     counts = {"in": len(model.inputs), "out": len(model.outputs), "par": len(names),
               "modes": len(model.frequencies_hz), "flex": len(flexible), "blocks": len(info), "pade": pade_order,
-              "states": int(info[:, 1].sum()), "so": len(arrays["structure_outputs"]),
-              "ms": cluster.modal_b.shape[1], "phys": len(physical), "ub": arrays["wiring"].shape[0],
-              "yb": arrays["wiring"].shape[1], "corr": corrections["correction_stiffness"].shape[0],
+              "states": int(info[:, 1].sum()), "so": len(model.structure_outputs),
+              "ms": cluster.modal_b.shape[1], "phys": len(physical), "ub": model.wiring.shape[0],
+              "yb": model.wiring.shape[1], "corr": corrections["correction_stiffness"].shape[0],
               "massive": int(arrays["correction_massive"]) if "correction_massive" in arrays else 0}
     dk = model.stiffness_sensitivities[:, flexible][:, :, flexible]
     dm = (model.mass_sensitivities if model.mass_sensitivities is not None
@@ -247,8 +247,7 @@ def runtime_arrays(model: ParametricModel) -> dict[str, np.ndarray | list[str]]:
         "frequencies_hz": model.frequencies_hz,
         "physical_dk": dk.reshape(len(physical), len(flexible), len(flexible)),
         "physical_dm": dm.reshape(len(physical), len(flexible), len(flexible)),
-        "block_info": info, "wiring": np.asarray(arrays["wiring"], dtype=float),
-        "entry": np.asarray(arrays["entry"], dtype=float), "exit": np.asarray(arrays["exit"], dtype=float),
+        "block_info": info, "wiring": model.wiring, "entry": model.entry, "exit": model.exit,
         "input_names": [s.name for s in model.inputs], "output_names": [s.name for s in model.outputs],
         "param_names": names,
     }
