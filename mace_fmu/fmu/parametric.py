@@ -19,7 +19,7 @@ from typing import Literal, cast
 import numpy as np
 
 from mace_fmu.fmu.native.model_description import JacobianPattern
-from mace_fmu.fmu.native.resource import ZeroCluster, zero_cluster_reduced
+from mace_fmu.fmu.native.resource import Corrections, ZeroCluster, corrections_of, zero_cluster_reduced
 from mace_fmu.fmu.variables import model_summary
 from mace_fmu.iomodel.parametric import ParametricSystem
 from mace_fmu.iomodel.parametric_data import parametric_arrays, with_frequency_bounds
@@ -85,6 +85,7 @@ class ParametricModel:
     #: pythonfmu FMU stores them (``resources/model.npz``) and the native runtime's data is made from
     arrays: Mapping[str, np.ndarray]
     cluster: ZeroCluster  #: the zero-frequency cluster reduced at the nominal parameters (the native runtime's)
+    corrections: Corrections  #: the reanalysis's static corrections and the preload's shape changes
     blocks: tuple[FmuBlock, ...]  #: the diagram's blocks, in the wiring's order
     wiring: np.ndarray  #: (block inputs, block outputs) 0/1: which block output feeds which block input
     entry: np.ndarray  #: (block inputs, model inputs) 0/1: which model input feeds which block input
@@ -159,6 +160,7 @@ def parametric_model(model: VoltsModel, *, arrays: Mapping[str, np.ndarray] | No
                                                                                      dtype=float),
                            state_names=tuple(system.state_names),
                            arrays=MappingProxyType(arrays), cluster=zero_cluster_reduced(arrays),
+                           corrections=corrections_of(arrays),
                            blocks=_blocks(arrays), wiring=np.asarray(arrays["wiring"], dtype=float),
                            entry=np.asarray(arrays["entry"], dtype=float), exit=np.asarray(arrays["exit"], dtype=float),
                            pade_order=int(arrays["pade_order"]),

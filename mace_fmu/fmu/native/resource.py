@@ -114,11 +114,38 @@ def _kind_of_rows(arrays: Mapping[str, np.ndarray]) -> list[tuple[str, int]]:
     return [where[str(name)] for name in arrays["structure_outputs"]]
 
 
-def _corrections(arrays: Mapping[str, np.ndarray], flexible: np.ndarray) -> dict[str, np.ndarray]:
-    """The static corrections and preload shape changes over the flexible modes, rows in structure-output order
-    (zeros of the right sizes for arrays without them)."""
+@dataclass(frozen=True)
+class Corrections:
+    """The reanalysis's static-correction vectors and the 1-g preload's first-order shape changes, over every retained
+    mode, rows in structure-output order (zeros of the right sizes for a model without them)."""
+
+    stiffness: np.ndarray  #: (n_w, n_w) the correction vectors' projected stiffness
+    dk: np.ndarray  #: (n_physical, n_w, n_w) each physical parameter's change of it
+    coupling: np.ndarray  #: (n_physical, n_w, n_modes) each physical parameter's coupling of them to the modes
+    b: np.ndarray  #: (n_w, n_modal_inputs) their modal inputs
+    rows: np.ndarray  #: (n_structure_outputs, n_w) what each structure output reads of them
+    preload_rows: np.ndarray  #: (n_physical, n_structure_outputs, n_modes) the preload's change of the output rows
+    preload_b: np.ndarray  #: (n_physical, n_modes, n_modal_inputs) its change of the modal inputs
+    dm: np.ndarray  #: (n_physical, n_w, n_w) each mass parameter's change of their mass
+    mass_coupling: np.ndarray  #: (n_physical, n_w, n_modes) each mass parameter's coupling of them to the modes
+    massive: int  #: how many of the correction vectors carry mass
+
+
+def corrections_of(arrays: Mapping[str, np.ndarray]) -> Corrections:
+    """The static corrections and preload shape changes of a ParametricSystem's ``arrays``.
+
+    Parameters
+    ----------
+    arrays : mapping
+        A ParametricSystem's arrays (:func:`~mace_fmu.iomodel.parametric_data.parametric_arrays`).
+
+    Returns
+    -------
+    Corrections
+        Over every retained mode, rows in structure-output order; zeros of the right sizes where the arrays have none.
+    """
     n_phys, n_in = len(arrays["physical_names"]), np.shape(arrays["modal_b"])[1]
-    n_flex, outputs = len(flexible), _kind_of_rows(arrays)
+    n_modes, outputs = len(arrays["frequencies_hz"]), _kind_of_rows(arrays)
     n_w = np.shape(arrays["correction_stiffness"])[0] if "correction_stiffness" in arrays else 0
 
     def table(suffix: str, width: int) -> np.ndarray:
@@ -129,24 +156,39 @@ def _corrections(arrays: Mapping[str, np.ndarray], flexible: np.ndarray) -> dict
 
     def preload(kind_k: tuple[str, int]) -> np.ndarray:
         kind, k = kind_k
-        return np.asarray(arrays[f"{kind}_preload"], dtype=float)[:, k][:, flexible]
+        return np.asarray(arrays[f"{kind}_preload"], dtype=float)[:, k]
 
-    return {
-        "correction_stiffness": np.asarray(arrays.get("correction_stiffness", np.zeros((0, 0))), dtype=float),
-        "correction_dk": np.asarray(arrays.get("correction_dk", np.zeros((n_phys, 0, 0))), dtype=float),
-        "correction_coupling": np.asarray(arrays.get("correction_coupling", np.zeros((n_phys, 0, len(
-            arrays["frequencies_hz"])))), dtype=float)[:, :, flexible].reshape(n_phys, n_w, n_flex),
-        "correction_b": np.asarray(arrays.get("correction_b", np.zeros((0, n_in))), dtype=float).reshape(n_w, n_in),
-        "correction_rows": table("correction", n_w),
-        "preload_rows": (np.stack([preload(o) for o in outputs], axis=1) if "disp_preload" in arrays and outputs
-                         else np.zeros((n_phys, len(outputs), n_flex))).reshape(n_phys, len(outputs), n_flex),
-        "preload_b": (np.asarray(arrays["preload_b"], dtype=float)[:, flexible] if "preload_b" in arrays
-                      else np.zeros((n_phys, n_flex, n_in))).reshape(n_phys, n_flex, n_in),
+    return Corrections(
+        stiffness=np.asarray(arrays.get("correction_stiffness", np.zeros((0, 0))), dtype=float),
+        dk=np.asarray(arrays.get("correction_dk", np.zeros((n_phys, 0, 0))), dtype=float),
+        coupling=np.asarray(arrays.get("correction_coupling", np.zeros((n_phys, 0, n_modes))), dtype=float),
+        b=np.asarray(arrays.get("correction_b", np.zeros((0, n_in))), dtype=float).reshape(n_w, n_in),
+        rows=table("correction", n_w),
+        preload_rows=(np.stack([preload(o) for o in outputs], axis=1) if "disp_preload" in arrays and outputs
+                      else np.zeros((n_phys, len(outputs), n_modes))).reshape(n_phys, len(outputs), n_modes),
+        preload_b=(np.asarray(arrays["preload_b"], dtype=float) if "preload_b" in arrays
+                   else np.zeros((n_phys, n_modes, n_in))),
         # the mass parameters' (zeros for a stiffness parameter, and without mass parameters)
-        "correction_dm": np.asarray(arrays.get("correction_dm", np.zeros((n_phys, n_w, n_w))),
-                                    dtype=float).reshape(n_phys, n_w, n_w),
-        "correction_mass_coupling": np.asarray(arrays.get("correction_mass_coupling", np.zeros((n_phys, n_w, len(
-            arrays["frequencies_hz"])))), dtype=float)[:, :, flexible].reshape(n_phys, n_w, n_flex),
+        dm=np.asarray(arrays.get("correction_dm", np.zeros((n_phys, n_w, n_w))), dtype=float).reshape(n_phys, n_w, n_w),
+        mass_coupling=np.asarray(arrays.get("correction_mass_coupling", np.zeros((n_phys, n_w, n_modes))), dtype=float),
+        massive=int(arrays["correction_massive"]) if "correction_massive" in arrays else 0)
+
+
+def _corrections(corrections: Corrections, flexible: np.ndarray) -> dict[str, np.ndarray]:
+    """The runtime's correction entries: ``corrections`` over the flexible modes."""
+    c = corrections
+    n_phys, n_outputs = len(c.dk), len(c.rows)
+    n_w, n_in, n_flex = len(c.stiffness), c.b.shape[1], len(flexible)
+    return {
+        "correction_stiffness": c.stiffness,
+        "correction_dk": c.dk,
+        "correction_coupling": c.coupling[:, :, flexible].reshape(n_phys, n_w, n_flex),
+        "correction_b": c.b,
+        "correction_rows": c.rows,
+        "preload_rows": c.preload_rows[:, :, flexible].reshape(n_phys, n_outputs, n_flex),
+        "preload_b": c.preload_b[:, flexible].reshape(n_phys, n_flex, n_in),
+        "correction_dm": c.dm,
+        "correction_mass_coupling": c.mass_coupling[:, :, flexible].reshape(n_phys, n_w, n_flex),
     }
 
 
@@ -218,7 +260,7 @@ def runtime_arrays(model: ParametricModel) -> dict[str, np.ndarray | list[str]]:
     MaceError
         A Pade order the runtime does not take, a block of unknown kind, blocks that do not match the wiring.
     """
-    arrays, cluster = model.arrays, model.cluster
+    cluster = model.cluster
     names = [p.name for p in model.parameters]
     physical = list(model.physical_names)
     pade_order = model.pade_order
@@ -227,13 +269,13 @@ def runtime_arrays(model: ParametricModel) -> dict[str, np.ndarray | list[str]]:
     flexible = cluster.flexible
     info, blocks, delays = _blocks(model, index={name: k for k, name in enumerate(names)})
     par_kind, par_index = _parameter_codes(names, physical=physical, delays=delays)
-    corrections = _corrections(arrays, flexible)
+    corrections = _corrections(model.corrections, flexible)
     counts = {"in": len(model.inputs), "out": len(model.outputs), "par": len(names),
               "modes": len(model.frequencies_hz), "flex": len(flexible), "blocks": len(info), "pade": pade_order,
               "states": int(info[:, 1].sum()), "so": len(model.structure_outputs),
               "ms": cluster.modal_b.shape[1], "phys": len(physical), "ub": model.wiring.shape[0],
               "yb": model.wiring.shape[1], "corr": corrections["correction_stiffness"].shape[0],
-              "massive": int(arrays["correction_massive"]) if "correction_massive" in arrays else 0}
+              "massive": model.corrections.massive}
     dk = model.stiffness_sensitivities[:, flexible][:, :, flexible]
     dm = (model.mass_sensitivities if model.mass_sensitivities is not None
           else np.zeros_like(model.stiffness_sensitivities))[:, flexible][:, :, flexible]
