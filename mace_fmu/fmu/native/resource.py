@@ -132,12 +132,13 @@ class Corrections:
 
 
 def corrections_of(arrays: Mapping[str, np.ndarray]) -> Corrections:
-    """The static corrections and preload shape changes of a ParametricSystem's ``arrays``.
+    """The static corrections and preload shape changes that ``arrays`` hold, read once for the record.
 
     Parameters
     ----------
     arrays : mapping
-        A ParametricSystem's arrays (:func:`~mace_fmu.iomodel.parametric_data.parametric_arrays`).
+        The model's parametric arrays, :func:`~mace_fmu.iomodel.parametric_data.parametric_arrays` (the keys
+        ``correction_*``, ``<kind>_correction``, ``<kind>_preload``, ``preload_b``).
 
     Returns
     -------
