@@ -27,7 +27,7 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 sys.path[:0] = [str(HERE.parent), str(HERE.parent / "tests")]
 
-from bench_fe_scale import SIZES  # the benchmarks' shapes (after the path above)
+from bench_fe_scale import SIZES  # noqa: E402  (the benchmarks' shapes, importable after the path above)
 
 
 def shifted_matrix(size: str):

@@ -161,10 +161,10 @@ def frf_control_table(seeds: int) -> list[str]:
     lines = ["| quantity | k_1 | k_2 |", "|---|---|---|"]
     for method in ("sandwich", "sandwich, two lines"):
         lines.append(f"| {method} sd / noise's sd: median (min-max) | " + " | ".join(
-            "{:.3f} ({:.2f}-{:.2f})".format(statistics.median(r), min(r), max(r)) for r in
+            f"{statistics.median(r):.3f} ({min(r):.2f}-{max(r):.2f})" for r in
             ([f.sd[method][n] / f.sd["noise"][n] for f in fits] for n in NAMES)) + " |")
     lines.append("| sandwich sd / two-line sandwich's sd: median (min-max) | " + " | ".join(
-        "{:.3f} ({:.2f}-{:.2f})".format(statistics.median(r), min(r), max(r)) for r in
+        f"{statistics.median(r):.3f} ({min(r):.2f}-{max(r):.2f})" for r in
         ([f.sd["sandwich"][n] / f.sd["sandwich, two lines"][n] for f in fits] for n in NAMES)) + " |")
     for method in ("noise", "sandwich", "sandwich, two lines"):
         lines.append(f"| truth inside the {method} 95 % interval | " + " | ".join(

@@ -12,7 +12,7 @@ import tempfile
 from common import machine_line, timed
 
 from mace_fmu.fe.modes import compute_modes
-from viewer import animate_modes, write_animation_html
+from mace_fmu.viewer import animate_modes, write_animation_html
 
 
 def main(repeats: int = 7) -> None:

@@ -58,7 +58,7 @@ sphinx_gallery_conf = {
     "examples_dirs": [str(HERE.parent / "examples")],
     "gallery_dirs": ["auto_examples"],
     "filename_pattern": os.environ.get("MACE_DOCS_RUN",
-                                       r"(measured_data|lqg_model_error|own_structure|nastran_plate|"
+                                       r"(measured_data|lqg_model_error|own_structure|nastran_plate|update_shaker_beam|"
                                        r"modal_test_three_storey_frame)\.py$"),
     "reset_argv": "generated.example_argv",  # own_structure.py writes its files under docs/_build/examples
     "ignore_pattern": r"__init__\.py",

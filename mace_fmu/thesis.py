@@ -149,7 +149,8 @@ def table_4_7_comparison(poles) -> list[PoleRow]:
 
 def table_5_2_comparison(poles, *, column: str) -> list[PoleRow]:
     """Closed-loop poles against Table 5.2's "g1" or "g0" column (damping not tabulated)."""
-    rows = [(r["label"], r["ours"], r[column], None, r["heavy"]) for r in thesis_data()["table_5_2"]]
+    rows: list[tuple[str, str, float, float | None, bool]] = [(r["label"], r["ours"], r[column], None, r["heavy"])
+                                                               for r in thesis_data()["table_5_2"]]
     return _pair_poles(rows, poles)
 
 

@@ -22,9 +22,10 @@ def test_importing_the_package_loads_no_heavy_dependency():
 
 #: the packages in the order of the data flow: each may import only from packages before it (the
 #: command line, last, from all). util and errors are shared by every stage; sparse, the sparse solver, is
-#: linear algebra that needs neither decks nor elements.
+#: linear algebra that needs neither decks nor elements; the viewer draws modes and FMU runs and is drawn
+#: by the command line only (which imports it lazily: `mace-fmu --help` does not load meshcat).
 STAGES = ("errors", "util", "sparse", "deck", "structure", "parameters", "fe", "nastran_modes", "iomodel", "thesis",
-          "fmu", "ssp", "updating", "control_studies", "zero_g", "cli")
+          "fmu", "viewer", "ssp", "updating", "control_studies", "zero_g", "cli")
 
 
 def _imports_between_stages() -> list[tuple[str, str, str]]:

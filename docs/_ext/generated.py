@@ -27,6 +27,7 @@ DOCS = Path(__file__).resolve().parents[1]
 #: the packages of the API reference, in the order of the data flow (tests/test_public_api.py's STAGES)
 PACKAGES = ("mace_fmu", "mace_fmu.deck", "mace_fmu.deck.parsers", "mace_fmu.structure", "mace_fmu.parameters",
             "mace_fmu.fe", "mace_fmu.nastran_modes", "mace_fmu.iomodel", "mace_fmu.fmu", "mace_fmu.fmu.native",
+            "mace_fmu.viewer",
             "mace_fmu.ssp",
             "mace_fmu.updating", "mace_fmu.updating.engine", "mace_fmu.updating.files", "mace_fmu.updating.mace",
             "mace_fmu.updating.fmu", "mace_fmu.updating.modal", "mace_fmu.updating.sample", "mace_fmu.control_studies", "mace_fmu.zero_g",
@@ -169,7 +170,7 @@ def data_flow_page() -> None:
 
 def viewer_pages() -> None:
     """The viewer's standalone pages of the first 0-g and 1-g modes, embedded by the viewer guide."""
-    from viewer import animate_modes, write_animation_html
+    from mace_fmu.viewer import animate_modes, write_animation_html
 
     from mace_fmu.fe.modes import compute_modes
 
@@ -187,7 +188,7 @@ def viewer_still() -> None:
     The viewer guide includes ``guide/_viewer_still.md``; the still is taken again only when the page is
     newer than it.
     """
-    from viewer.still import chromium_executable, write_still
+    from mace_fmu.viewer.still import chromium_executable, write_still
 
     from mace_fmu.errors import MaceError
 
@@ -254,7 +255,7 @@ def example_argv(gallery_conf, script_vars) -> list[str]:
     """The command-line arguments of an example run by sphinx-gallery (its ``reset_argv``): the examples that
     write files by default into the folder they run in write them under ``docs/_build/examples`` instead."""
     name = Path(script_vars["src_file"]).stem
-    writes_files = ("own_structure", "nastran_plate", "modal_test_three_storey_frame")
+    writes_files = ("own_structure", "nastran_plate", "modal_test_three_storey_frame", "update_shaker_beam")
     return [str(DOCS / "_build" / "examples" / name)] if name in writes_files else []
 
 

@@ -85,7 +85,7 @@ def main(out: Path) -> dict:
     from mace_fmu.iomodel.modal_source import modal_structure
     from mace_fmu.iomodel.volts import volts_model
     from mace_fmu.parameters.sets import ParameterSet
-    from viewer import animate_modes, write_animation_html
+    from mace_fmu.viewer import animate_modes, write_animation_html
 
     out.mkdir(parents=True, exist_ok=True)
     structure = modal_structure(STRUCTURE)

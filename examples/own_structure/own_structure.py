@@ -67,7 +67,7 @@ def main(out: Path) -> dict:
     from mace_fmu.fe.modes import compute_modes
     from mace_fmu.fmu.export import export_fmu
     from mace_fmu.iomodel.volts import volts_model
-    from viewer import animate_modes, write_animation_html
+    from mace_fmu.viewer import animate_modes, write_animation_html
 
     out.mkdir(parents=True, exist_ok=True)
     deck = read_deck(DECK)

@@ -208,7 +208,7 @@ def animate(values: dict, path: Path) -> Path:
     from mace_fmu.deck.reader import read_deck
     from mace_fmu.fe.modes import compute_modes
     from mace_fmu.parameters.sets import ParameterSet
-    from viewer import animate_modes, write_animation_html
+    from mace_fmu.viewer import animate_modes, write_animation_html
 
     physical = ParameterSet({name: value for name, value in values.items() if name.startswith(("E_", "m_"))})
     modes = compute_modes(read_deck(DECK), configuration="1g", structure_file=STRUCTURE, parameters=physical)

@@ -32,19 +32,22 @@ def cmd_build(args: argparse.Namespace) -> int:
         with progress_bar() as bar:
             results[preload] = compute_modes(deck, configuration="1g", preload=preload, max_hz=DEFAULT_MAX_HZ,
                                              progress=bar, parameters=params, structure_file=args.structure_file)
-    print(thesis_tables(m0, results))
+    from mace_fmu.structure.file import is_bundled_deck
+
+    # the thesis's tables pair and compare MACE's own modes; another deck gets its modes listed instead
+    print(thesis_tables(m0, results) if is_bundled_deck(deck) else modes_text(m0, results))
     print()
     for configuration, modes in (("1g", results["large"]), ("0g", m0)):
         progress(f"{configuration} volts-volts model and its parametric arrays")
         from mace_fmu.fmu.export import export_fmu
-        from mace_fmu.fmu.naming import fmu_model_name
+        from mace_fmu.fmu.naming import model_fmu_name
         from mace_fmu.fmu.parametric import parametric_model
         from mace_fmu.iomodel.volts import volts_model
 
         model = volts_model(modes, parameters=params)
         parametric = parametric_model(model)  # what every runtime's FMU carries: computed once
         for runtime, fmi_version in (("native", 2), ("native", 3), ("pythonfmu", 2)):
-            name = fmu_model_name(configuration, runtime=runtime, fmi_version=fmi_version, variant=model_variant(args))
+            name = model_fmu_name(model, runtime=runtime, fmi_version=fmi_version, variant=model_variant(args))
             progress(f"{runtime} FMU (FMI {fmi_version}) {name}.fmu")
             path = export_fmu(model, runtime=runtime, fmi_version=fmi_version, out_dir=args.out, name=name,
                               parametric=parametric, progress=step_lines)
@@ -79,6 +82,18 @@ def thesis_tables(m0, results) -> str:
         format_side_by_side({kind: table_5_1_1g(m1, m0) for kind, m1 in results.items()},
                             title="Table 5.1, 1-g column (structural modes paired with the 0-g ones by MAC)"),
         format_mass_rows(table_3_15_comparison(m0), title="Table 3.15, free-free mass properties about the centre node")])
+
+
+def modes_text(m0, results, *, max_hz: float = 250.0) -> str:
+    """The modes of a deck that is not MACE's, as ``build`` prints them in place of the thesis's tables: the 0-g
+    and the large-preload 1-g modes up to ``max_hz`` [Hz], each with its label."""
+    blocks = []
+    for title, modes in (("0-g modes", m0.modes), ("1-g modes (large-displacement preload)", results["large"].modes)):
+        lines = [f"{title} up to {max_hz:g} Hz"]
+        lines += [f"{i + 1:3d} {hz_text(f, decimals=3):>9s}  {label}"
+                  for i, (f, label) in enumerate(zip(modes.frequencies_hz, modes.labels)) if f <= max_hz]
+        blocks.append("\n".join(lines))
+    return "\n\n".join(blocks)
 
 
 def low_modes(results) -> str:

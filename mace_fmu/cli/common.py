@@ -103,6 +103,37 @@ def positive_hz(text: str) -> float:
                     expected="a finite frequency > 0 Hz")
 
 
+def non_negative_number(text: str) -> float:
+    """argparse type of an option that may be 0 (a weight): a finite number >= 0."""
+    return _checked(text, convert=float, valid=lambda v: math.isfinite(v) and v >= 0, expected="a finite number >= 0")
+
+
+def finite_number(text: str) -> float:
+    """argparse type of a signed option (an amplitude): a finite number (nan or inf would reach the solver)."""
+    return _checked(text, convert=float, valid=math.isfinite, expected="a finite number")
+
+
+def non_negative_hz(text: str) -> float:
+    """argparse type of a frequency that may be 0 (a band's or a chirp's lower end): a finite number >= 0 [Hz]."""
+    return _checked(text, convert=float, valid=lambda v: math.isfinite(v) and v >= 0,
+                    expected="a finite frequency >= 0 Hz")
+
+
+def fraction(text: str) -> float:
+    """argparse type of a fraction (an overlap, a damping ratio): a number in [0, 1)."""
+    return _checked(text, convert=float, valid=lambda v: 0 <= v < 1, expected="a fraction in [0, 1)")
+
+
+def percent(text: str) -> float:
+    """argparse type of a percentage (a bound): a number in [0, 100)."""
+    return _checked(text, convert=float, valid=lambda v: 0 <= v < 100, expected="a percentage in [0, 100)")
+
+
+def non_negative_integer(text: str) -> int:
+    """argparse type of a seed or a count that may be 0: an integer >= 0."""
+    return _checked(text, convert=int, valid=lambda v: v >= 0, expected="an integer >= 0")
+
+
 def deck_option(p: argparse.ArgumentParser) -> None:
     p.add_argument("--deck", default=BUNDLED_DECK, help="NASTRAN bulk deck (default: bundled MACE deck)")
     p.add_argument("--structure", metavar="FILE", default=None, dest="structure_file",
@@ -119,7 +150,8 @@ def model_options(p: argparse.ArgumentParser, *, motion: bool = True) -> None:
                    help="Bessel filters as 8-pole filters, as their 2.44 ms Pade delay, or left out")
     p.add_argument("--no-servos", action="store_true", help="leave the wheel speed loops and gimbal servos open")
     p.add_argument("--no-delays", action="store_true", help="leave out the actuator and gyro time delays")
-    p.add_argument("--pade-order", type=int, default=3, help="order of the Pade delay approximations (default 3)")
+    p.add_argument("--pade-order", type=positive_integer, default=3,
+                   help="order of the Pade delay approximations (default 3)")
     p.add_argument("--preload", choices=["large", "linear"], default="large", help="1-g gravity preload")
     parameters_option(p)
     if motion:

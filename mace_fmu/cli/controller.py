@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from mace_fmu.cli.common import progress, step_lines
+from mace_fmu.cli.common import positive_number, progress, step_lines
 from mace_fmu.cli.export import platforms_option, toolchain_warnings_as_lines
 from mace_fmu.cli.preflight import output_option
 from mace_fmu.errors import MaceError
@@ -57,7 +57,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--npz", metavar="FILE", help="controller arrays: A, B, C, D, sample_time_s, inputs, outputs")
     p.add_argument("--lqg", action="store_true",
                    help="the Appendix A LQG compensator of the 0-g loop (payload gyro Z -> primary gimbal Z)")
-    p.add_argument("--step", type=float, default=0.002, help="sample time of --lqg [s] (default 0.002)")
+    p.add_argument("--step", type=positive_number, default=0.002, help="sample time of --lqg [s] (default 0.002)")
     p.add_argument("--name", default=None, help="model identifier and file name (default: controller; with "
                    "--fmi-version 3 controller_fmi3, so that it never replaces the FMI 2 export)")
     p.add_argument("--fmi-version", type=int, choices=[2, 3], default=2, help="FMI version (default 2)")

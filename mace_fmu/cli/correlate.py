@@ -3,9 +3,8 @@
 from __future__ import annotations
 
 import argparse
-import sys
 
-from mace_fmu.cli.common import parameters_option
+from mace_fmu.cli.common import parameters_option, progress
 from mace_fmu.cli.preflight import output_option
 from mace_fmu.errors import MaceError
 
@@ -83,7 +82,7 @@ def cmd_correlate(args: argparse.Namespace) -> int:
                     path=out / "mac.png")
     print(f"wrote {path}")
     if found.unpaired_measured:
-        print(f"  {len(found.unpaired_measured)} measured mode(s) unpaired", file=sys.stderr)
+        progress(f"{len(found.unpaired_measured)} measured mode(s) unpaired")
     return 0
 
 

@@ -7,6 +7,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from mace_fmu.cli.common import fraction, non_negative_hz, positive_integer, positive_number
 from mace_fmu.cli.preflight import output_option
 
 if TYPE_CHECKING:
@@ -69,11 +70,13 @@ def register(sub: argparse._SubParsersAction) -> None:
         q.add_argument("file", help="the measured data file")
         q.add_argument("--map", metavar="CSV", help="channel map: columns channel, signal, role (input|output|"
                        "ignore), unit")
-        q.add_argument("--sample-time", type=float, metavar="S", help="expected sample time [s] of a time history")
-    h1.add_argument("--segment", type=int, required=True, metavar="N", help="samples per Welch segment")
+        q.add_argument("--sample-time", type=positive_number, metavar="S",
+                       help="expected sample time [s] of a time history")
+    h1.add_argument("--segment", type=positive_integer, required=True, metavar="N", help="samples per Welch segment")
     h1.add_argument("--window", default="hann", help="scipy.signal window name (default hann)")
-    h1.add_argument("--overlap", type=float, default=0.5, help="overlap of segments, a fraction (default 0.5)")
-    h1.add_argument("--band", type=float, nargs=2, metavar=("LOW", "HIGH"), help="keep frequencies in [LOW, HIGH] Hz")
+    h1.add_argument("--overlap", type=fraction, default=0.5, help="overlap of segments, a fraction (default 0.5)")
+    h1.add_argument("--band", type=non_negative_hz, nargs=2, metavar=("LOW", "HIGH"),
+                    help="keep frequencies in [LOW, HIGH] Hz")
     h1.add_argument("--inputs-held", action="store_true",
                     help="the record's inputs were held over each sample (a simulation's record, e.g. an FMU's; "
                     "DAC commands logged instead of the measured signal): divide the hold's half-sample delay and "

@@ -3,9 +3,8 @@
 from __future__ import annotations
 
 import argparse
-import sys
 
-from mace_fmu.cli.common import positive_hz
+from mace_fmu.cli.common import positive_hz, progress
 from mace_fmu.cli.preflight import output_option
 from mace_fmu.errors import MaceError
 
@@ -57,9 +56,8 @@ def cmd_ema(args: argparse.Namespace) -> int:
     outputs = frfs[0].outputs
     inputs = [name for frd in frfs for name in frd.inputs]
     driving = driving_points(inputs, outputs, actuators=actuators, sensors=sensors)
-    print(f"  identifying modes in {len(frfs)} file(s): {len(outputs)} output(s), {len(inputs)} input(s)"
-          + (f", driving points {', '.join(f'{o}/{i}' for i, o in driving.items())}" if driving else ""),
-          file=sys.stderr, flush=True)
+    progress(f"identifying modes in {len(frfs)} file(s): {len(outputs)} output(s), {len(inputs)} input(s)"
+             + (f", driving points {', '.join(f'{o}/{i}' for i, o in driving.items())}" if driving else ""))
     found = identify_modes(frfs, band_hz=tuple(args.band_hz) if args.band_hz else None, max_order=args.order,
                            frf_form=args.frf_form, driving_points=driving, near_hz=args.near_hz)
     dofs = [MeasuredDof(n, found.units.get(n, ""), tuple(sensors.get(n) or dofs_of_name(n) or ())) for n in outputs]
@@ -82,7 +80,7 @@ def cmd_ema(args: argparse.Namespace) -> int:
                 print(f"{k:>4} " + ", ".join(f"{n:>{width}s} {v:+.4f}" for n, v in zip(outputs, m.shape_mass_normalised)))
     print(f"fit error ||H - H_modal|| / ||H|| over the band: {100 * found.fit_error:.2f} %")
     for note in found.notes:
-        print(f"  {note}", file=sys.stderr)
+        progress(note)
     for path in paths:
         print(f"wrote {path}")
     return 0

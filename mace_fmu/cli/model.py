@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from mace_fmu.cli.common import BUNDLED_DECK, CONFIGURATIONS, deck_option, model_options, volts
+from mace_fmu.cli.common import BUNDLED_DECK, CONFIGURATIONS, deck_option, model_options, positive_hz, volts
 from mace_fmu.cli.preflight import output_option
 from mace_fmu.util.atomic import atomic_path, write_text_atomic
 
@@ -66,7 +66,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     deck_option(p)
     p.add_argument("--poles", action="store_true", help="closed-loop poles (the bundled deck's next to Table 4.7 "
                    "(1g) or 5.2 (0g)); with --parameters, an update's")
-    p.add_argument("--list-max-hz", type=float, default=60.0, help="with --poles: list all poles up to this [Hz]")
+    p.add_argument("--list-max-hz", type=positive_hz, default=60.0, help="with --poles: list all poles up to this [Hz]")
     p.add_argument("--json", action="store_true", help="states, signal names and poles as JSON")
     output_option(p, "--npz", kind="file", metavar="FILE", help="write A, B, C, D and the signal names to FILE (.npz)")
     output_option(p, "--modelica", kind="file", metavar="FILE", help="write the model as Modelica source (.mo)")

@@ -8,45 +8,17 @@ from pathlib import Path
 from mace_fmu.cli.preflight import output_option
 from mace_fmu.errors import MaceError
 
-
-def _read_bounds_table(path: str):
-    """The (mode, mode label, relative bound) rows of a table_5_3.toml of ``mace-fmu predict-0g``."""
-    from mace_fmu.ssp import FrequencyBound
-    from mace_fmu.util.textfile import read_toml
-
-    rows = read_toml(path, what="frequency-bounds").get("mode")
-    if not isinstance(rows, list) or not rows:
-        raise MaceError(f"{path}: no [[mode]] rows (expected the table_5_3.toml of mace-fmu predict-0g)")
-    out = []
-    for k, row in enumerate(rows, start=1):
-        if "mode" not in row:
-            continue  # a servo mechanism: no FMU mode, no bound to carry
-        mode, label, percent = row.get("mode"), row.get("mode_label"), row.get("bound_percent")
-        if isinstance(mode, bool) or not isinstance(mode, int) or mode < 1 or not isinstance(label, str) \
-                or isinstance(percent, bool) or not isinstance(percent, (int, float)) or not 0.0 <= percent < 100.0:
-            raise MaceError(f"{path}: [[mode]] {k}: expected mode >= 1, mode_label and bound_percent in [0, 100), "
-                            f"got mode = {mode!r}, mode_label = {label!r}, bound_percent = {percent!r}")
-        out.append(FrequencyBound(mode=mode, mode_label=label, bound_percent=float(percent)))
-    return tuple(out)
-
-
-def _bounds_toml(bounds) -> str:
-    """The bounds as [[mode]] rows that ``--frequency-bounds`` of export and to-ssv read back."""
-    from mace_fmu.parameters.sets import toml_value
-
-    lines = ["# frequency bounds of the open-loop modes (from an SSV file; mace-fmu params from-ssv)", ""]
-    for b in bounds:
-        lines += ["[[mode]]", f"mode = {b.mode}", f"mode_label = {toml_value(b.mode_label)}",
-                  f"bound_percent = {toml_value(b.bound_percent)}", ""]
-    return "\n".join(lines)
+#: the first line of the bounds ``params from-ssv`` writes
+FROM_SSV = "frequency bounds of the open-loop modes (from an SSV file; mace-fmu params from-ssv)"
 
 
 def cmd_to_ssv(args: argparse.Namespace) -> int:
+    from mace_fmu.parameters.frequency_bounds import read_bounds
     from mace_fmu.parameters.sets import ParameterSet
     from mace_fmu.ssp import SsvContent, write_parameter_ssv
 
     parameters = ParameterSet.read(args.parameters)
-    bounds = _read_bounds_table(args.frequency_bounds) if args.frequency_bounds else ()
+    bounds = read_bounds(args.frequency_bounds) if args.frequency_bounds else ()
     out = Path(args.out) if args.out else Path(args.parameters).with_suffix(".ssv")
     path = write_parameter_ssv(SsvContent(parameters=parameters, frequency_bounds=bounds), out)
     print(f"wrote {path} ({len(parameters)} parameters{f', {len(bounds)} frequency bounds' if bounds else ''})")
@@ -54,6 +26,7 @@ def cmd_to_ssv(args: argparse.Namespace) -> int:
 
 
 def cmd_from_ssv(args: argparse.Namespace) -> int:
+    from mace_fmu.parameters.frequency_bounds import bounds_toml
     from mace_fmu.ssp import read_parameter_ssv
     from mace_fmu.util.atomic import write_text_atomic
 
@@ -65,7 +38,8 @@ def cmd_from_ssv(args: argparse.Namespace) -> int:
     path = content.parameters.write(out)
     print(f"wrote {path} ({len(content.parameters)} parameters)")
     if content.frequency_bounds:
-        print(f"wrote {write_text_atomic(args.frequency_bounds_out, _bounds_toml(content.frequency_bounds))} "
+        text = bounds_toml(content.frequency_bounds, comment=FROM_SSV)
+        print(f"wrote {write_text_atomic(args.frequency_bounds_out, text)} "
               f"({len(content.frequency_bounds)} frequency bounds)")
     return 0
 

@@ -3,10 +3,9 @@
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
-from mace_fmu.cli.common import positive_integer, progress_bar
+from mace_fmu.cli.common import non_negative_integer, positive_integer, progress, progress_bar
 from mace_fmu.cli.preflight import output_option, scheduler_options
 from mace_fmu.errors import MaceError
 from mace_fmu.util.atomic import write_text_atomic
@@ -55,8 +54,7 @@ def cmd_plan(args: argparse.Namespace) -> int:
     for c in candidates:  # every signal checked before the first simulation
         for t in c.tests:
             interface.check_signals(inputs=t.inputs, outputs=t.outputs, where=f"{args.tests}: test {t.name!r}")
-    print(f"  planning {len(candidates)} candidate(s) for {len(names)} parameter(s) of {Path(args.fmu).name}",
-          file=sys.stderr, flush=True)
+    progress(f"planning {len(candidates)} candidate(s) for {len(names)} parameter(s) of {Path(args.fmu).name}")
     with progress_bar() as bar:
         with DaskRunner(scheduler=args.scheduler, workers=args.workers, progress=bar, task="FMU runs",
                         connect_timeout_s=args.scheduler_timeout) as runner:
@@ -85,7 +83,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "update's parameters.toml; default: the FMU's start values). The predictions hold near these "
                    "values only: the cable moduli's predicted sd halved between the start values and a point 2-3 %% "
                    "away")
-    p.add_argument("--seed", type=int, default=0, help="seed of the excitation's white noise (default 0)")
+    p.add_argument("--seed", type=non_negative_integer, default=0,
+                   help="seed of the excitation's white noise (default 0)")
     scheduler_options(p, scheduler_help="run the FMU simulations on this Dask cluster")
     p.add_argument("--workers", type=positive_integer, default=None, help="local worker processes (default: one per core)")
     output_option(p, "-o", "--out", kind="file", metavar="FILE",

@@ -7,7 +7,8 @@ import json
 import sys
 from pathlib import Path
 
-from mace_fmu.cli.common import deck_option, parameters, parameters_option, progress, progress_bar, step_lines
+from mace_fmu.cli.common import (deck_option, fraction, non_negative_number, parameters, parameters_option, percent,
+                                 progress, progress_bar, step_lines)
 from mace_fmu.cli.preflight import output_option
 from mace_fmu.errors import MaceError
 
@@ -37,9 +38,9 @@ def cmd_predict(args: argparse.Namespace) -> int:
                                     deck=deck, structure_file=args.structure_file, source=source, progress=bar)
     paths = {}
     if args.fmu:  # first: an export that fails leaves no tables behind
-        from mace_fmu.fmu.naming import fmu_model_name, model_prefix
+        from mace_fmu.fmu.naming import model_fmu_name
 
-        name = fmu_model_name("0g", runtime=args.runtime, prefix=model_prefix(prediction.model)) + "_nominal"
+        name = model_fmu_name(prediction.model, runtime=args.runtime, variant="nominal")
         say(f"{args.runtime} FMU {name}.fmu with the frequency bounds")
         from mace_fmu.fmu.export import export_fmu
 
@@ -79,13 +80,13 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="what runs inside the FMU: native (C, default) or pythonfmu")
     p.add_argument("--json", action="store_true", help="print the rows as JSON (label, nominal_hz, damping, "
                    "bound_percent, ...) instead of the table")
-    p.add_argument("--heavy-damping", type=float, default=0.10,
+    p.add_argument("--heavy-damping", type=fraction, default=0.10,
                    help="measured 1-g damping ratio from which a mode is heavily damped (default 0.10)")
-    p.add_argument("--minimum-bound-percent", type=float, default=1.0,
+    p.add_argument("--minimum-bound-percent", type=percent, default=1.0,
                    help="smallest bound of a lightly damped mode [%%] (default 1)")
-    p.add_argument("--error-fraction", type=float, default=0.5,
+    p.add_argument("--error-fraction", type=non_negative_number, default=0.5,
                    help="lightly damped modes: bound = this times the |residual 1-g error| when larger (default 0.5)")
-    p.add_argument("--heavy-bound-percent", type=float, default=2.5,
+    p.add_argument("--heavy-bound-percent", type=percent, default=2.5,
                    help="bound of heavily damped modes [%%] (default 2.5)")
     p.add_argument("--correct-heavy", action="store_true",
                    help="also take the residual errors out of heavily damped modes (the thesis does not)")

@@ -50,7 +50,8 @@ def export_ssp(args: argparse.Namespace) -> int:
             controller = SspComponent(name="controller", fmu=Path(args.controller))
             wires = wiring_by_name(plant=plant, controller=controller)
             components.append(controller)
-        path = write_ssp(args.ssp, components=components, connections=wires, system_name=f"MACE_{args.configuration}")
+        path = write_ssp(args.ssp, components=components, connections=wires,
+                         system_name=model_fmu_name(model, variant=model_variant(args)))
     loop = f", closed by {Path(args.controller).name} through {len(wires)} connections" if args.controller else ""
     print(f"wrote {path} (plant {name}.fmu, {len(start)} start values bound{loop})")
     return 0

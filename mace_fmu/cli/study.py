@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from mace_fmu.cli.common import positive_integer, progress
+from mace_fmu.cli.common import non_negative_integer, positive_integer, positive_number, progress
 from mace_fmu.cli.preflight import output_option, scheduler_options
 from mace_fmu.errors import MaceError
 
@@ -119,13 +119,16 @@ def _bounds(args: argparse.Namespace) -> tuple[object, dict[int, float], str]:
 
         return model, read_frequency_bounds(args.frequency_bounds, mode_labels=model.plant.labels), args.frequency_bounds
     if args.bound:
+        from mace_fmu.parameters.frequency_bounds import relative_bound
+
         bounds = {}
         for text in args.bound:
             try:
                 mode, percent = text.split("=")
-                bounds[int(mode)] = float(percent) / 100.0
+                mode, percent = int(mode), float(percent)
             except ValueError:
                 raise MaceError(f"--bound takes MODE=PERCENT (e.g. 17=2.5 for mode 17 within +-2.5 %), got {text!r}") from None
+            bounds[mode] = relative_bound(percent / 100.0, what=f"--bound {text}")
         return model, bounds, "--bound"
     if args.parameters:
         raise MaceError("--parameters needs its bounds: --frequency-bounds table_5_3.toml or --bound MODE=PERCENT")
@@ -184,34 +187,40 @@ def register(sub: argparse._SubParsersAction) -> None:
     output_option(s, "--out", kind="folder", default="study", help="output directory (default ./study)")
     s.add_argument("--k1", default="0.1:3.0:0.05", help="design k1 grid START:STOP:STEP [N/m] (default 0.1:3.0:0.05)")
     s.add_argument("--k2", default="0.1:2.0:0.05", help="design k2 grid START:STOP:STEP [N/m] (default 0.1:2.0:0.05)")
-    s.add_argument("--theta", type=float, default=None, help="sensor noise intensity for all authorities (default 1)")
+    s.add_argument("--theta", type=positive_number, default=None,
+                   help="sensor noise intensity for all authorities (default 1)")
     s.add_argument("--quiet", action="store_true", help="print only the written paths")
     s.set_defaults(func=cmd_lqg_sensitivity)
     r = studies.add_parser("reduced-order", help="A.2: LQG on balanced and updated 4-mode models of a cantilever "
                            "(Table A.1, Figs. A.6-A.8)")
     output_option(r, "--out", kind="folder", default="study", help="output directory (default ./study)")
-    r.add_argument("--max-iterations", type=int, default=200, help="BFGS iterations of the update (default 200)")
-    r.add_argument("--rho", type=float, default=None,
+    r.add_argument("--max-iterations", type=positive_integer, default=200,
+                   help="BFGS iterations of the update (default 200)")
+    r.add_argument("--rho", type=positive_number, default=None,
                    help="rho = theta (default: the value giving the thesis's J_full = 7.58e-6)")
     r.add_argument("--quiet", action="store_true", help="print only the written paths")
     r.set_defaults(func=cmd_reduced_order)
     o = studies.add_parser("robust-0g", help="LQG on the nominal 0-g model closed around the 0-g FMU over its frequency "
                            "bounds: corners and a Monte Carlo sample on Dask (PNG, CSV and a summary)")
     output_option(o, "-o", "--out", kind="folder", default="study", help="output directory (default ./study)")
-    o.add_argument("--samples", type=int, default=100, help="Monte Carlo samples, uniform in the bounds (default 100)")
-    o.add_argument("--seed", type=int, default=1, help="seed of the sample (default 1)")
-    o.add_argument("--critical", type=int, default=4, help="parameters whose 2^N corners are run: the N that move the "
-                   "cost most alone (default 4; all corners if there are at most N)")
+    o.add_argument("--samples", type=positive_integer, default=100,
+                   help="Monte Carlo samples, uniform in the bounds (default 100)")
+    o.add_argument("--seed", type=non_negative_integer, default=1, help="seed of the sample (default 1)")
+    o.add_argument("--critical", type=non_negative_integer, default=4,
+                   help="parameters whose 2^N corners are run: the N that move the "
+                        "cost most alone (default 4; all corners if there are at most N)")
     o.add_argument("--bound", action="append", metavar="MODE=PERCENT",
                    help="frequency bound of a mode, e.g. 17=2.5; repeat (default: Table 5.3's, updated nominal model)")
     o.add_argument("--frequency-bounds", metavar="FILE", help="table_5_3.toml of mace-fmu predict-0g: its bounds")
     o.add_argument("--parameters", metavar="FILE", help="parameter set of the 0-g model, e.g. zero_g_nominal.toml of "
                    "mace-fmu predict-0g (with --frequency-bounds or --bound; default with neither: predict it)")
-    o.add_argument("--rho", type=float, default=0.01, help="LQG control weighting (default 0.01)")
-    o.add_argument("--theta", type=float, default=0.1, help="LQG sensor noise intensity (default 0.1)")
-    o.add_argument("--states", type=int, default=30, help="states of the reduced design model (default 30)")
-    o.add_argument("--duration", type=float, default=4.0, help="simulated time of each run [s]: 1 s of disturbance, "
-                   "then settling (default 4)")
+    o.add_argument("--rho", type=positive_number, default=0.01, help="LQG control weighting (default 0.01)")
+    o.add_argument("--theta", type=positive_number, default=0.1, help="LQG sensor noise intensity (default 0.1)")
+    o.add_argument("--states", type=positive_integer, default=30,
+                   help="states of the reduced design model (default 30)")
+    o.add_argument("--duration", type=positive_number, default=4.0,
+                   help="simulated time of each run [s]: 1 s of disturbance, "
+                        "then settling (default 4)")
     scheduler_options(o, used=lambda args: not args.serial,
                       scheduler_help="address of a Dask scheduler, e.g. tcp://host:8786 (default: a local cluster)")
     o.add_argument("--workers", type=positive_integer, default=None, help="local cluster workers (default: the machine's cores)")

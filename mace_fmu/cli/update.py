@@ -9,7 +9,8 @@ import os
 import sys
 from pathlib import Path
 
-from mace_fmu.cli.common import deck_option, parameters_option, positive_integer, positive_number, progress_bar
+from mace_fmu.cli.common import (deck_option, non_negative_hz, non_negative_number, parameters_option,
+                                 positive_integer, positive_number, progress, progress_bar)
 from mace_fmu.cli.correlate import structure_options
 from mace_fmu.cli.preflight import output_option, scheduler_options
 from mace_fmu.errors import MaceError
@@ -20,15 +21,11 @@ from mace_fmu.util.textfile import read_toml
 NOT_CONVERGED = 3
 
 
-def _say(message: str) -> None:
-    print(f"  {message}", file=sys.stderr, flush=True)
-
-
 def cmd_sample(args: argparse.Namespace) -> int:
     from mace_fmu.updating.sample.problem import as_json, format_tables, run_sample_problem
 
     if not args.json:
-        _say("sample problem: 'experiment', measurement model, 7 updates")
+        progress("sample problem: 'experiment', measurement model, 7 updates")
     problem = run_sample_problem()
     if args.json:
         json.dump(as_json(problem), sys.stdout, indent=1)
@@ -146,17 +143,6 @@ def _gain_uncertainty(groups: list[list[tuple[str, float]]]) -> dict[str, float]
     return out
 
 
-def _non_negative(text: str) -> float:
-    """argparse type of a weight: a finite number >= 0."""
-    try:
-        value = float(text)
-    except ValueError:
-        value = -1.0
-    if not (0.0 <= value < float("inf")):
-        raise argparse.ArgumentTypeError(f"expected a finite number >= 0, got {text!r}")
-    return value
-
-
 def local_workers(workers: int | None) -> str:
     """Where the FMU runs go without a scheduler, in words: "2 local worker processes (one per core)".
 
@@ -206,10 +192,10 @@ def cmd_fmu_update(args: argparse.Namespace) -> int:
                           window_s=tuple(args.window) if args.window else None, bounds=bounds,
                           bounds_source=source)
     for note in problem.notes:
-        _say(note)
+        progress(note)
     where = f"the Dask cluster at {args.scheduler}" if args.scheduler else local_workers(args.workers)
     gains = len(problem.family.gain_outputs)
-    _say(f"updating {len(problem.names) - gains} parameter(s)" + (f" and {gains} sensor gain(s)" if gains else "")
+    progress(f"updating {len(problem.names) - gains} parameter(s)" + (f" and {gains} sensor gain(s)" if gains else "")
          + f" of {Path(args.fmu).name} on the {args.cost} cost; FMU runs on {where}")
     with progress_bar() as bar:
         with DaskRunner(scheduler=args.scheduler, workers=args.workers, progress=bar, task="FMU runs",
@@ -217,9 +203,9 @@ def cmd_fmu_update(args: argparse.Namespace) -> int:
             result = update_fmu(family=problem.family, cost=problem.cost, start=problem.start, stages=[problem.names],
                                 runner=runner, progress=bar, bounds=problem.bounds)
     report = _write_fmu_update(problem, result, out=Path(args.out), noise_fraction=noise_fraction, strict=args.strict)
-    _say(report.summary())
+    progress(report.summary())
     for line in report.misfit_lines()[:8]:
-        _say(f"  {line}")
+        progress(f"  {line}")
     return NOT_CONVERGED if report.failed else 0
 
 
@@ -246,7 +232,8 @@ def _write_fmu_update(problem, result, *, out: Path, noise_fraction: float | Non
     blocks = blocks_with_noise(problem.cost, floor) if from_residuals else None
     uncertainty = stage_uncertainty(result, noise_variance=sigma2, residual_blocks=blocks,
                                     noise_source=f"from the noise floor ({floor.source})" if floor else "")
-    uncertainty = one_sided_at_bounds(uncertainty, result.at_bounds)  # as the verdict says: one-sided there
+    uncertainty = one_sided_at_bounds(uncertainty, result.at_bounds,  # as the verdict says: one-sided there
+                                      ranges=problem.family.interface.ranges)
     figure = residual_figure(report.residuals, out / "residuals.png") if report.residuals is not None else None
     summary = {"fmu": str(problem.family.interface.path), "data": list(problem.data_files), "cost": problem.cost.name,
                "start": dict(problem.start), "values": dict(result.values), "initial_cost": result.initial_cost,
@@ -299,7 +286,7 @@ def cmd_mace_update(args: argparse.Namespace) -> int:
     with progress_bar(task_lines=True) as bar:
         outcome = run_mace_update(start=start, measured=measured, preload=args.preload, settings=settings, deck=deck,
                                   progress=bar)
-    _say(f"writing the report to {out}/")
+    progress(f"writing the report to {out}/")
     paths = write_report(outcome, out)
     s = scores(mode_rows(outcome))
     res = outcome.result
@@ -321,7 +308,7 @@ def cmd_mace_update(args: argparse.Namespace) -> int:
               write_text_atomic(out / "uncertainty.toml", uncertainty_toml(uncertainty))]
     for path in paths:
         print(f"wrote {path}")
-    _say(report.summary())
+    progress(report.summary())
     return NOT_CONVERGED if report.failed else 0
 
 
@@ -343,7 +330,7 @@ def cmd_modal_update(args: argparse.Namespace) -> int:
     settings = UpdateSettings(method=args.method, perturbation="full", penalty=args.penalty, rounds=args.rounds,
                               max_outer=MODAL_SETTINGS.max_outer)
     scaled = {"auto": None, "mass-normalised": True, "mac": False}[args.shapes]
-    _say(f"updating {len(names)} candidate parameter(s) of {family.where} against {len(measured.modes)} measured "
+    progress(f"updating {len(names)} candidate parameter(s) of {family.where} against {len(measured.modes)} measured "
          f"mode(s) of {args.modes}")
     with progress_bar(task_lines=True) as bar:
         outcome = run_modal_update(family=family, measured=measured, names=names, settings=settings,
@@ -387,7 +374,7 @@ def cmd_modal_update(args: argparse.Namespace) -> int:
     print(format_uncertainty(uncertainty))
     for path in paths:
         print(f"wrote {path}")
-    _say(report.summary())
+    progress(report.summary())
     return NOT_CONVERGED if report.failed else 0
 
 
@@ -444,7 +431,7 @@ def _fmu_options(p: argparse.ArgumentParser) -> None:
     where.add_argument("--workers", type=positive_integer, default=None,
                        help=("local worker processes (default: one per core)"))
     p.add_argument("--map", metavar="FILE", help=("channel map: data channel names and units to the FMU's signals"))
-    p.add_argument("--band-hz", type=float, nargs=2, metavar=("LOW", "HIGH"), action="append", default=[],
+    p.add_argument("--band-hz", type=non_negative_hz, nargs=2, metavar=("LOW", "HIGH"), action="append", default=[],
                    help=("[Hz] time histories, --cost time: the same zero-phase band-pass on the measured and the "
                          "FMU's outputs (the FMU driven by the measured inputs as they are), the noise read outside "
                          "the band; --cost log-frf: the H1 estimate's band (default 0.5-60 Hz, or the lines of a "
@@ -540,7 +527,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="how shapes enter the cost: their mass-normalised difference (needs a driving point: it tells "
                         "masses from stiffnesses), or 1 - MAC (scale-free); default auto: mass-normalised where the "
                         "modes file has them")
-    d.add_argument("--shape-weight", type=_non_negative, default=0.1, metavar="W",
+    d.add_argument("--shape-weight", type=non_negative_number, default=0.1, metavar="W",
                    help="weight of the shape residuals against the relative frequency errors (default 0.1: a 10 %% "
                         "shape difference counts like a 1 %% frequency error; 0: frequencies alone, eq. 4.2)")
     d.add_argument("--method", choices=["cost-sensitivity", "full"], default="cost-sensitivity",

@@ -5,11 +5,12 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from mace_fmu.cli.common import CONFIGURATIONS, deck_option, model_options, progress, progress_bar, volts
+from mace_fmu.cli.common import (CONFIGURATIONS, deck_option, finite_number, model_options, non_negative_hz,
+                                 positive_hz, positive_integer, positive_number, progress, progress_bar, volts)
 from mace_fmu.cli.preflight import output_option
 from mace_fmu.errors import MaceError
 
-#: viewer.camera.CAMERA_VIEWS, spelled out so that `mace-fmu --help` does not import meshcat
+#: mace_fmu.viewer.camera.CAMERA_VIEWS, spelled out so that `mace-fmu --help` does not import meshcat
 CAMERA_CHOICES = ("iso", "x", "y", "z")
 
 
@@ -17,7 +18,7 @@ def _show(animation, args: argparse.Namespace, *, title: str) -> None:
     """Write the animation to --html, a still of it to --png, and/or serve it live until Ctrl-C."""
     import tempfile
 
-    from viewer import animation_commands, send_to_visualizer, write_animation_html, write_still  # meshcat only here
+    from mace_fmu.viewer import animation_commands, send_to_visualizer, write_animation_html, write_still  # meshcat only here
 
     if args.html:
         size = write_animation_html(animation, args.html, title=title, camera=args.camera)
@@ -46,7 +47,7 @@ def _show(animation, args: argparse.Namespace, *, title: str) -> None:
 
 def _need_target(args: argparse.Namespace) -> None:
     """An output is named, and a still can be taken (before any work is done)."""
-    from viewer import chromium_executable
+    from mace_fmu.viewer import chromium_executable
 
     if not (args.html or args.png or args.live):
         raise MaceError("say where to show the animation: --html OUT.html, --png OUT.png, --live, or several")
@@ -123,7 +124,7 @@ def cmd_view_response(args: argparse.Namespace) -> int:
     from mace_fmu.fmu.export import export_fmu
     from mace_fmu.fmu.simulate import simulate_input_response
     from mace_fmu.structure.file import structure_label
-    from viewer import animate_response, plot_response
+    from mace_fmu.viewer import animate_response, plot_response
 
     _need_target(args)
     if args.configuration == "modes":  # NASTRAN's modes: the scene from the [modes] table's geometry deck
@@ -177,7 +178,7 @@ def cmd_view(args: argparse.Namespace) -> int:
     from mace_fmu.deck.reader import read_deck
     from mace_fmu.fe.modes import compute_modes
     from mace_fmu.structure.file import structure_label
-    from viewer import animate_modes
+    from mace_fmu.viewer import animate_modes
 
     _need_target(args)
     if args.configuration == "modes":  # NASTRAN's modes: every mode of the file, drawn on the geometry deck's edges
@@ -204,7 +205,7 @@ def cmd_view(args: argparse.Namespace) -> int:
 def cmd_view_pairs(args: argparse.Namespace) -> int:
     from mace_fmu.deck.reader import read_deck
     from mace_fmu.fe.modes import compute_modes
-    from viewer import animate_pairs
+    from mace_fmu.viewer import animate_pairs
 
     _need_target(args)
     deck = read_deck(args.deck)
@@ -228,22 +229,11 @@ def _output_options(p: argparse.ArgumentParser, *, html: str) -> None:
     output_option(p, "--html", kind="file", help=html)
     output_option(p, "--png", kind="file", type=_png_path,
                   help="write a still of the page (a .png file) through headless Chromium, if installed")
-    p.add_argument("--png-size", type=int, nargs=2, default=[1200, 800], metavar=("WIDTH", "HEIGHT"),
+    p.add_argument("--png-size", type=positive_integer, nargs=2, default=[1200, 800], metavar=("WIDTH", "HEIGHT"),
                    help="size of the still [px] (default 1200 800)")
     p.add_argument("--camera", choices=CAMERA_CHOICES, default="iso",
                    help="initial view: iso (3/4 view, default), or along the x, y (from above) or z axis")
     p.add_argument("--live", action="store_true", help="also serve it on a live meshcat server until Ctrl-C")
-
-
-def _positive(text: str) -> float:
-    """argparse type: a finite number > 0."""
-    try:
-        value = float(text)
-    except ValueError:
-        value = float("nan")
-    if not (value > 0 and value < float("inf")):
-        raise argparse.ArgumentTypeError(f"expected a finite number > 0, got {text!r}")
-    return value
 
 
 def _png_path(text: str) -> str:
@@ -271,11 +261,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     deck_option(p)
     p.add_argument("--mode", action="append", help="1-based index or label (prefix); repeat for several "
                    "(default: every mode up to --max-hz)")
-    p.add_argument("--max-hz", type=float, default=None, help="highest mode computed [Hz] (default 60 without --mode)")
-    p.add_argument("--scale", type=_positive, default=None,
+    p.add_argument("--max-hz", type=positive_hz, default=None,
+                   help="highest mode computed [Hz] (default 60 without --mode)")
+    p.add_argument("--scale", type=positive_number, default=None,
                    help="metres drawn per unit mass-normalised shape (default: largest motion 8%% of the size)")
-    p.add_argument("--cycles", type=int, default=1, help="vibration cycles per mode (default 1)")
-    p.add_argument("--seconds-per-cycle", type=float, default=1.0, help="playback time of one cycle [s]")
+    p.add_argument("--cycles", type=positive_integer, default=1, help="vibration cycles per mode (default 1)")
+    p.add_argument("--seconds-per-cycle", type=positive_number, default=1.0, help="playback time of one cycle [s]")
     _output_options(p, html="write a standalone HTML file (opens in any browser, no server)")
     p.set_defaults(func=cmd_view)
 
@@ -285,10 +276,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "several (default: all 14)")
     p.add_argument("--preload", choices=["large", "linear"], default="large",
                    help="1-g gravity preload (default large, as mace-fmu build's FMUs)")
-    p.add_argument("--max-hz", type=float, default=60.0,
+    p.add_argument("--max-hz", type=positive_hz, default=60.0,
                    help="highest mode computed [Hz] (default 60: Table 5.1 ends at 54 Hz)")
-    p.add_argument("--cycles", type=int, default=1, help="vibration cycles per mode (default 1)")
-    p.add_argument("--seconds-per-cycle", type=float, default=1.0, help="playback time of one cycle [s]")
+    p.add_argument("--cycles", type=positive_integer, default=1, help="vibration cycles per mode (default 1)")
+    p.add_argument("--seconds-per-cycle", type=positive_number, default=1.0, help="playback time of one cycle [s]")
     _output_options(p, html="write a standalone HTML file (opens in any browser, no server)")
     p.set_defaults(func=cmd_view_pairs)
 
@@ -302,15 +293,16 @@ def register(sub: argparse._SubParsersAction) -> None:
                         + ", ".join(actuator_names) + ")")
     p.add_argument("--signal", choices=["step", "chirp", "impulse"], default="step",
                    help="step from t = 0, chirp (see --chirp-hz), or a pulse over the first step (default step)")
-    p.add_argument("--duration", type=float, default=2.0, help="simulated time [s] (default 2)")
-    p.add_argument("--amplitude", type=float, default=1.0,
+    p.add_argument("--duration", type=positive_number, default=2.0, help="simulated time [s] (default 2)")
+    p.add_argument("--amplitude", type=finite_number, default=1.0,
                    help="signal amplitude in the input's unit (V, or N for a force input in newtons; default 1)")
-    p.add_argument("--chirp-hz", type=float, nargs=2, default=[0.1, 10.0], metavar=("F0", "F1"),
+    p.add_argument("--chirp-hz", type=non_negative_hz, nargs=2, default=[0.1, 10.0], metavar=("F0", "F1"),
                    help="chirp start and end frequency [Hz] (default 0.1 10)")
-    p.add_argument("--step", type=float, default=0.002, help="FMU communication step [s] (default 0.002)")
-    p.add_argument("--speed", type=float, default=1.0, help="playback speed: simulated s per s (default 1, real time)")
-    p.add_argument("--fps", type=float, default=50.0, help="key frames per second of playback (default 50)")
-    p.add_argument("--scale", type=_positive, default=None,
+    p.add_argument("--step", type=positive_number, default=0.002, help="FMU communication step [s] (default 0.002)")
+    p.add_argument("--speed", type=positive_number, default=1.0,
+                   help="playback speed: simulated s per s (default 1, real time)")
+    p.add_argument("--fps", type=positive_number, default=50.0, help="key frames per second of playback (default 50)")
+    p.add_argument("--scale", type=positive_number, default=None,
                    help="magnification of the motion (default: largest motion 8%% of the size)")
     p.add_argument("--output", help="output plotted next to the input: a sensor (" + ", ".join(sensor_names)
                    + ") or grid_<id>_<tx|ty|tz|rx|ry|rz> (default: the sensor "

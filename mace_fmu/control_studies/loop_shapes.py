@@ -8,6 +8,7 @@ import control as ct
 import numpy as np
 
 from mace_fmu.control_studies.reduced_order import THESIS_COSTS, ReducedOrderStudy
+from mace_fmu.errors import MaceError
 from mace_fmu.iomodel.frf import frequency_response
 
 MODELS = ("full", "balanced", "updated")
@@ -49,7 +50,7 @@ def dereverberated_crossover_hz(response: np.ndarray, frequencies_hz: np.ndarray
     f = np.asarray(frequencies_hz, dtype=float)
     steps = np.diff(np.log10(f))
     if not np.allclose(steps, steps[0], rtol=1e-6):
-        raise ValueError("dereverberated crossover: frequencies must be log-spaced")
+        raise MaceError("dereverberated crossover: frequencies must be log-spaced")
     half = max(1, int(round(0.5 * window_decades / steps[0])))
     log_mag = np.log10(np.abs(response))
     kernel = np.ones(2 * half + 1) / (2 * half + 1)

@@ -26,7 +26,7 @@ import scipy.optimize as so
 
 from mace_fmu.control_studies.lqg import LqgWeights, closed_loop_cost, design_lqg, optimal_cost, regulator_poles
 from mace_fmu.errors import MaceError
-from mace_fmu.updating.sample.two_mass import TwoMassSystem
+from mace_fmu.updating.sample.two_mass import Mass, TwoMassSystem
 
 #: the three control authorities of Figures A.2-A.4
 AUTHORITIES: dict[str, LqgWeights] = {
@@ -36,7 +36,8 @@ AUTHORITIES: dict[str, LqgWeights] = {
 }
 
 #: Appendix A.1: force on mass 1, displacement of mass 2
-FORCE_ON, MEASURED = 1, 2
+FORCE_ON: Mass = 1
+MEASURED: Mass = 2
 
 
 @dataclass(frozen=True)

@@ -6,8 +6,8 @@ tables without importing the parsers (or each other).
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from types import MappingProxyType
-from typing import Mapping
 
 #: card name -> the Deck attribute that holds its records (a PBARL is stored as the PBAR it stands for, a
 #: CONROD beside the CRODs, and so on). SPC, SPC1 and MPC go to set tables and CELAS1 becomes a CELAS2 once

@@ -7,8 +7,8 @@ source line it came from, so that every later error can point back to ``file:lin
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Mapping
 
 # still importable from here, where it used to be defined (it is derived from the one card-to-table map now)
 from mace_fmu.deck.card_tables import ELEMENT_TABLES as ELEMENT_TABLES
@@ -425,7 +425,8 @@ class Deck:
     params: Mapping[str, Param]  #: PARAM by name
     subcases: Mapping[int, Subcase]  #: empty when the file has no case control
     global_case: Subcase | None = field(default=None)  #: selections above the first SUBCASE
-    #: cards read but not modelled because they change neither mass nor stiffness: (name, count, ``file:line`` of the first)
+    #: cards read but not modelled because they change neither mass nor stiffness: (name, count, ``file:line`` of
+    #: the first)
     skipped: tuple[tuple[str, int, str], ...] = field(default=())
     beams: Mapping[int, CBeam] = field(default_factory=dict)  #: CBEAM
     pbeams: Mapping[int, PBeam] = field(default_factory=dict)  #: PBEAM and PBEAML (as the PBEAM NASTRAN makes)

@@ -9,9 +9,9 @@ from typing import Any
 
 import numpy as np
 
-from mace_fmu.deck.cards import CBeam, Deck, Mpc
+from mace_fmu.deck.cards import CBar, CBeam, Deck, Mpc
 from mace_fmu.deck.fields import TEMPERATURE, Selections
-from mace_fmu.deck.geometry import bar_orientations, coordinate_frames, grid_positions
+from mace_fmu.deck.geometry import Frame, bar_orientations, coordinate_frames, grid_positions
 from mace_fmu.errors import DeckError
 
 
@@ -68,8 +68,8 @@ def check_deck(deck: Deck) -> None:
                 _need(t.grid, deck.grids, eq, f"MPC {sid}", f"term {k} (G{k})", *grid)
     for sid, spcs in deck.spc1s.items():
         for spc in spcs:
-            for k, g in enumerate(spc.grids, start=1):
-                _need(g, deck.grids, spc, f"SPC1 {sid}", f"grid list (G{k})", *grid)
+            for k, gid in enumerate(spc.grids, start=1):
+                _need(gid, deck.grids, spc, f"SPC1 {sid}", f"grid list (G{k})", *grid)
     for gr in deck.gravs.values():
         _need(gr.cid, frames, gr, f"GRAV {gr.sid}", "field 3 (CID)", *coord)
     for ld in deck.loads.values():
@@ -98,22 +98,22 @@ def _check_new_elements(deck: Deck, grid: tuple[str, str]) -> None:
             _need(r.mid, deck.mat1s, r, label, "field 5 (MID)", "material", "a MAT1 ID")
         _need(r.ga, deck.grids, r, label, f"field {first} (G1)", *grid)
         _need(r.gb, deck.grids, r, label, f"field {first + 1} (G2)", *grid)
-    for p in deck.prods.values():
-        _need(p.mid, deck.mat1s, p, f"PROD {p.id}", "field 3 (MID)", "material", "a MAT1 ID")
+    for prod in deck.prods.values():
+        _need(prod.mid, deck.mat1s, prod, f"PROD {prod.id}", "field 3 (MID)", "material", "a MAT1 ID")
     for m in deck.scalar_masses.values():
         label = f"{m.card} {m.id}"
         if m.pid is not None:
             _need(m.pid, deck.pmasses, m, label, "field 3 (PID)", "property", "a PMASS ID")
         _need(m.g1, deck.grids, m, label, "field 4 (G1)", *grid)
         _need(m.g2, deck.grids, m, label, "field 6 (G2)", *grid)
-    for m in deck.conm1s.values():
-        _need(m.grid, deck.grids, m, f"CONM1 {m.id}", "field 3 (G)", *grid)
-        _need(m.cid if m.cid > 0 else None, coordinate_frames(deck), m, f"CONM1 {m.id}", "field 4 (CID)",
+    for conm in deck.conm1s.values():
+        _need(conm.grid, deck.grids, conm, f"CONM1 {conm.id}", "field 3 (G)", *grid)
+        _need(conm.cid if conm.cid > 0 else None, coordinate_frames(deck), conm, f"CONM1 {conm.id}", "field 4 (CID)",
               "coordinate system", "0 or a CORD2R or CORD1R ID")
-    for r in deck.rigids.values():
-        _need(r.independent, deck.grids, r, f"{r.card} {r.id}", "independent grid", *grid)
-        for k, (g, _) in enumerate(r.dependent, start=1):
-            _need(g, deck.grids, r, f"{r.card} {r.id}", f"dependent grid {k}", *grid)
+    for rigid in deck.rigids.values():
+        _need(rigid.independent, deck.grids, rigid, f"{rigid.card} {rigid.id}", "independent grid", *grid)
+        for k, (gid, _) in enumerate(rigid.dependent, start=1):
+            _need(gid, deck.grids, rigid, f"{rigid.card} {rigid.id}", f"dependent grid {k}", *grid)
     for e in deck.interpolations.values():
         _need(e.reference, deck.grids, e, f"RBE3 {e.id}", "field 4 (REFGRID)", *grid)
         for k, (_, _, grids) in enumerate(e.groups, start=1):
@@ -141,11 +141,11 @@ def _check_mpc_dofs(deck: Deck) -> None:
                 used_in.setdefault(dof, eq)
 
 
-def _check_bars(deck: Deck, frames: dict) -> None:
+def _check_bars(deck: Deck, frames: dict[int, Frame]) -> None:
     """Bars need a length and an orientation vector off their axis (positions in basic). Checked for all
     bars at once (a 100k-DOF deck has 70k bars), then the first offender in deck order is reported."""
     pos = grid_positions(deck, frames)
-    bars = (*deck.bars.values(), *deck.beams.values())
+    bars: tuple[CBar | CBeam, ...] = (*deck.bars.values(), *deck.beams.values())
     if bars:
         axis = np.array([pos[b.gb] for b in bars]) - np.array([pos[b.ga] for b in bars])
         v = bar_orientations(deck, bars, pos, frames)

@@ -90,7 +90,7 @@ def _rbe2_legs(card: RawCard, file: str) -> list[tuple[int, int]]:
     return legs
 
 
-def bulk_cards(path: str | os.PathLike) -> list[RawCard]:
+def bulk_cards(path: str | os.PathLike[str]) -> list[RawCard]:
     """The bulk data cards of the deck ``path`` (case control skipped), its INCLUDEs expanded; DeckError
     (file, line) for a file that cannot be read or a malformed card."""
     file = os.fspath(path)
@@ -101,7 +101,7 @@ def bulk_cards(path: str | os.PathLike) -> list[RawCard]:
     return cards_with_includes(without_begin_bulk(bulk), file, stack=(os.path.abspath(file),))
 
 
-def read_connectivity(path: str | os.PathLike) -> Connectivity:
+def read_connectivity(path: str | os.PathLike[str]) -> Connectivity:
     """The edges of every element of the deck ``path`` whose outline is drawn (module docstring).
 
     Parameters

@@ -9,8 +9,9 @@ from __future__ import annotations
 
 import math
 import re
+from collections.abc import Iterable
 from dataclasses import dataclass, field
-from typing import Any, Iterable
+from typing import Any
 
 from mace_fmu.deck.cards import Source, Subcase
 from mace_fmu.errors import DeckError
@@ -283,7 +284,7 @@ class Fields:
 
     def ident(self, d: int, name: str) -> int:
         """The card's required positive ID; later errors name the card with it."""
-        value = self.integer(d, name, minimum=1)
+        value: int = self.integer(d, name, minimum=1)
         self.label = f"{self.raw.name} {value}"
         return value
 
@@ -319,7 +320,8 @@ class Fields:
         """Component list such as '123456' or '2', normalised to sorted unique digits."""
         text = self.text(d)
         if not text:
-            return self._blank(d, name, default, "components (digits 1-6)")
+            blank: str = self._blank(d, name, default, "components (digits 1-6)")
+            return blank
         if not re.fullmatch(r"[1-6]+", text):
             raise self.error(f"expected components (digits 1-6), got {text!r}", d, name)
         return "".join(sorted(set(text)))
@@ -331,7 +333,8 @@ class Fields:
             raise self.error("component 0 (scalar point) is not supported by mace-fmu "
                              "(expected a single digit 1-6)", d, name)
         if not text:
-            return self._blank(d, name, REQUIRED, "a single component digit 1-6")
+            blank: int = self._blank(d, name, REQUIRED, "a single component digit 1-6")  # raises
+            return blank
         if not re.fullmatch(r"[1-6]", text):
             raise self.error(f"expected a single component digit 1-6, got {text!r}", d, name)
         return int(text)

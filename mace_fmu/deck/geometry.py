@@ -6,8 +6,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from mace_fmu.deck.cards import CBar, Cord1R, Cord2R, Deck
-from mace_fmu.errors import DeckError
+from mace_fmu.deck.cards import CBar, CBeam, Cord1R, Cord2R, Deck
+from mace_fmu.errors import DeckError, MaceError
 
 Frame = tuple[np.ndarray, np.ndarray]  #: (origin (3,), R (3, 3) with the unit axes as columns)
 
@@ -15,13 +15,13 @@ _COLLINEAR_TOL = 1e-12  #: relative size of |AB x AC| below which C counts as ly
 
 
 def axes_from_points(a: np.ndarray, b: np.ndarray, c: np.ndarray) -> np.ndarray:
-    """CORD2R axes as columns [x y z]: z along A->B, x in the plane of A, B, C; ValueError if degenerate."""
+    """CORD2R axes as columns [x y z]: z along A->B, x in the plane of A, B, C; MaceError if degenerate."""
     z = b - a
     ac = c - a
     if np.linalg.norm(z) <= _COLLINEAR_TOL * max(np.linalg.norm(a), np.linalg.norm(b)):
-        raise ValueError("points A and B coincide (expected B on the z-axis, away from the origin A)")
+        raise MaceError("points A and B coincide (expected B on the z-axis, away from the origin A)")
     if np.linalg.norm(np.cross(z, ac)) <= _COLLINEAR_TOL * np.linalg.norm(z) * np.linalg.norm(ac):
-        raise ValueError("point C lies on the line AB (expected C off the z-axis, in the x-z plane)")
+        raise MaceError("point C lies on the line AB (expected C off the z-axis, in the x-z plane)")
     z = z / np.linalg.norm(z)
     x = ac - (ac @ z) * z
     x = x / np.linalg.norm(x)
@@ -110,7 +110,7 @@ def _unresolved(deck: Deck, waiting: list[int]) -> None:
             src = deck.coords[chain[-1]].source
             raise DeckError(f"coordinate system {cid} is not defined (expected 0 or a CORD2R or CORD1R ID)",
                             file=src.file, line=src.line, card=f"CORD2R {chain[-1]}", field="field 3 (RID)")
-    card = next(deck.coords[c] for c in waiting if isinstance(deck.coords[c], Cord1R))
+    card = next(c for c in (deck.coords[i] for i in waiting) if isinstance(c, Cord1R))
     raise DeckError("the grids G1, G2, G3 are given in coordinate systems that depend on this one (expected grids "
                     "whose CP systems do not need it)", file=card.source.file, line=card.source.line,
                     card=f"CORD1R {card.id}", field=f"fields {card.field + 1}-{card.field + 3} (G1, G2, G3)")
@@ -123,14 +123,15 @@ def grid_positions(deck: Deck, frames: dict[int, Frame] | None = None) -> dict[i
             for gid, g in deck.grids.items()}
 
 
-def bar_orientation(deck: Deck, bar: CBar, positions: dict[int, np.ndarray],
+def bar_orientation(deck: Deck, bar: CBar | CBeam, positions: dict[int, np.ndarray],
                     frames: dict[int, Frame]) -> np.ndarray:
     """Orientation vector of ``bar`` (CBAR or CBEAM) in basic: R_cd(GA) @ v (v itself for OFFT B..), or
     pos[G0] - pos[GA] (:func:`bar_orientations` of the one bar)."""
-    return bar_orientations(deck, [bar], positions, frames)[0]
+    vector: np.ndarray = bar_orientations(deck, [bar], positions, frames)[0]
+    return vector
 
 
-def bar_orientations(deck: Deck, bars: Sequence[CBar], positions: dict[int, np.ndarray],
+def bar_orientations(deck: Deck, bars: Sequence[CBar | CBeam], positions: dict[int, np.ndarray],
                      frames: dict[int, Frame]) -> np.ndarray:
     """Orientation vector in basic of every bar of ``bars`` (CBAR or CBEAM), all at once (a 100k-DOF lattice has
     78k): R_cd(GA) @ v, v itself for OFFT B.., or pos[G0] - pos[GA]; (n, 3)."""
@@ -139,14 +140,14 @@ def bar_orientations(deck: Deck, bars: Sequence[CBar], positions: dict[int, np.n
         return out
     by_grid = np.array([b.g0 is not None for b in bars])
     if by_grid.any():
-        chosen = [b for b, g in zip(bars, by_grid) if g]
-        out[by_grid] = (np.array([positions[b.g0] for b in chosen]) - np.array([positions[b.ga] for b in chosen]))
+        chosen = [(b.g0, b.ga) for b, g in zip(bars, by_grid) if g and b.g0 is not None]
+        out[by_grid] = (np.array([positions[g0] for g0, _ in chosen]) - np.array([positions[ga] for _, ga in chosen]))
     rest = np.flatnonzero(~by_grid)
     if rest.size:
-        vectors = np.array([bars[i].v for i in rest], dtype=float)
+        vectors = np.array([bars[i].v for i in rest.tolist()], dtype=float)
         # OFFT B..: the vector is in basic; otherwise in GA's displacement system, one rotation per system
         system = np.array([-1 if getattr(bars[i], "orientation_basic", False) else deck.grids[bars[i].ga].cd
-                           for i in rest])
+                           for i in rest.tolist()])
         for cd in np.unique(system):
             mine = system == cd
             out[rest[mine]] = vectors[mine] if cd == -1 else vectors[mine] @ frames[int(cd)][1].T

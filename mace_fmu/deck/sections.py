@@ -15,6 +15,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from mace_fmu.errors import MaceError
+
 
 @dataclass(frozen=True)
 class SectionProperties:
@@ -41,7 +43,7 @@ def _rod(dims: tuple[float, ...]) -> SectionProperties:
 def _tube(dims: tuple[float, ...]) -> SectionProperties:
     outer, inner = dims
     if not outer > inner:
-        raise ValueError(f"DIM2 (inner radius {inner:g}) is not below DIM1 (outer radius {outer:g})")
+        raise MaceError(f"DIM2 (inner radius {inner:g}) is not below DIM1 (outer radius {outer:g})")
     area = math.pi * (outer**2 - inner**2)
     i = math.pi * (outer**4 - inner**4) / 4.0
     # K1 = K2 = 0.5: what MSC Nastran writes for a TUBE (message 4379 of MSC's fmondsp run in the pyNastran
@@ -55,8 +57,8 @@ def _box(dims: tuple[float, ...]) -> SectionProperties:
     # flanges (top and bottom), DIM4 that of the webs (sides).
     width, height, t_flange, t_web = dims
     if not (width > 2.0 * t_web and height > 2.0 * t_flange):
-        raise ValueError(f"the walls fill the box (expected DIM1 > 2 DIM4 and DIM2 > 2 DIM3, got {width:g}, "
-                         f"{height:g}, {t_flange:g}, {t_web:g})")
+        raise MaceError(f"the walls fill the box (expected DIM1 > 2 DIM4 and DIM2 > 2 DIM3, got {width:g}, "
+                        f"{height:g}, {t_flange:g}, {t_web:g})")
     inner_w, inner_h = width - 2.0 * t_web, height - 2.0 * t_flange
     area = width * height - inner_w * inner_h
     i1 = (width * height**3 - inner_w * inner_h**3) / 12.0
@@ -81,9 +83,9 @@ SECTIONS = {"ROD": (1, _rod), "TUBE": (2, _tube), "BOX": (4, _box)}
 def section_properties(kind: str, dims: tuple[float, ...]) -> SectionProperties:
     """A, I1, I2, I12, J, K1, K2 of PBARL/PBEAML section ``kind`` with dimensions ``dims`` [m].
 
-    Raises KeyError for a type not in :data:`SECTIONS` and ValueError for a wrong number of dimensions.
+    Raises KeyError for a type not in :data:`SECTIONS` and MaceError for a wrong number of dimensions.
     """
     count, function = SECTIONS[kind]
     if len(dims) != count:
-        raise ValueError(f"{kind} has {count} dimension(s), got {len(dims)}")
+        raise MaceError(f"{kind} has {count} dimension(s), got {len(dims)}")
     return function(dims)

@@ -60,7 +60,8 @@ NON_STRUCTURAL = STATIC_LOADS | AERODYNAMIC | frozenset({
 _ELEMENTS = ("CBAR", "CELAS1", "CELAS2", "CBEAM", "CROD", "CONROD", "CMASS1", "CMASS2", "RBAR", "RBE2", "RBE3")
 
 
-def bulk_tables(raw_cards: list[RawCard], file: str) -> tuple[dict[str, dict], tuple]:
+def bulk_tables(raw_cards: list[RawCard], file: str
+                ) -> tuple[dict[str, dict[Any, Any]], tuple[tuple[str, int, str], ...]]:
     """Cards keyed by ID (MPC and SPC1 by set ID), with duplicates rejected, and the non-structural cards read past.
 
     Parameters
@@ -83,12 +84,12 @@ def bulk_tables(raw_cards: list[RawCard], file: str) -> tuple[dict[str, dict], t
         A card mace-fmu cannot model (all of them listed at once), a malformed card, an ID defined twice or
         a set or property that is not defined.
     """
-    tables: dict[str, dict] = {attr: {} for attr in CARD_TABLES.values()}
-    sets: dict[str, dict[int, list]] = {"mpcs": {}, "spc1s": {}}
+    tables: dict[str, dict[Any, Any]] = {attr: {} for attr in CARD_TABLES.values()}
+    sets: dict[str, dict[int, list[Any]]] = {"mpcs": {}, "spc1s": {}}
     elements: dict[int, tuple[str, Any]] = {}
     thru: list[tuple[int, Thru]] = []
-    unknown: dict[str, list] = {}
-    skipped: dict[str, list] = {}
+    unknown: dict[str, list[RawCard]] = {}
+    skipped: dict[str, list[RawCard]] = {}
     for raw in raw_cards:
         if raw.name not in PARSERS:
             (skipped if raw.name in NON_STRUCTURAL else unknown).setdefault(raw.name, []).append(raw)
@@ -108,7 +109,7 @@ def bulk_tables(raw_cards: list[RawCard], file: str) -> tuple[dict[str, dict], t
             continue
         parser = PARSERS[raw.name]
         src = Source(raw.file or file, raw.line)
-        card = grid(Fields(raw, file), src, defaults) if raw.name == "GRID" else parser(Fields(raw, file), src)
+        card: Any = grid(Fields(raw, file), src, defaults) if raw.name == "GRID" else parser(Fields(raw, file), src)
         if raw.name == "PELAS":
             for pid, k, where in card:
                 if pid in pelas:
@@ -144,8 +145,8 @@ def bulk_tables(raw_cards: list[RawCard], file: str) -> tuple[dict[str, dict], t
                 thru.append((len(group), card))
             group.append(card)
             continue
-        for card in card if raw.name in ("PMASS", "CORD1R") else (card,):  # several on one card
-            _store(raw, card, tables, elements, file)
+        for one in card if raw.name in ("PMASS", "CORD1R") else (card,):  # several on one card
+            _store(raw, one, tables, elements, file)
     _resolve_thru(tables, sets, thru, file)
     for (eid, pid, g1, c1, g2, c2), src in celas1s:  # CELAS1 + PELAS = CELAS2 (QRG)
         if pid not in pelas:
@@ -165,7 +166,7 @@ def bulk_tables(raw_cards: list[RawCard], file: str) -> tuple[dict[str, dict], t
 _LISTED = 6
 
 
-def _unknown_cards(unknown: dict[str, list], file: str) -> DeckError:
+def _unknown_cards(unknown: dict[str, list[RawCard]], file: str) -> DeckError:
     """One refusal for every card the reader cannot model: each name once, with its count and first line, in a
     few lines; NASTRAN's replication lines ('=', '==', '*...') named as what they are."""
     ordered = sorted(unknown.items(), key=lambda t: (t[1][0].file or file, t[1][0].line))
@@ -182,7 +183,7 @@ def _unknown_cards(unknown: dict[str, list], file: str) -> DeckError:
         return DeckError(f"unknown card {name!r} (supported: {supported})", file=first.file or file,
                          line=first.line, card=name)
 
-    def at(raw) -> str:  # the deck's own lines by number; an INCLUDE file's by file and line
+    def at(raw: RawCard) -> str:  # the deck's own lines by number; an INCLUDE file's by file and line
         return f"line {raw.line}" if (raw.file or file) == file else f"{raw.file}:{raw.line}"
 
     listed = ", ".join(f"{n} ({len(rs)}x, first at {at(rs[0])})" for n, rs in ordered[:_LISTED])
@@ -193,7 +194,7 @@ def _unknown_cards(unknown: dict[str, list], file: str) -> DeckError:
                      file=first.file or file, line=first.line, card=name, details=every)
 
 
-def _static_load_sets(skipped: dict[str, list]) -> dict[int, tuple[str, ...]]:
+def _static_load_sets(skipped: dict[str, list[RawCard]]) -> dict[int, tuple[str, ...]]:
     """Set ID -> names of the static-load cards read past (their SID is field 2), for LOAD selections."""
     out: dict[int, set[str]] = {}
     for name in STATIC_LOADS & set(skipped):
@@ -204,7 +205,8 @@ def _static_load_sets(skipped: dict[str, list]) -> dict[int, tuple[str, ...]]:
     return {sid: tuple(sorted(names)) for sid, names in sorted(out.items())}
 
 
-def _store(raw: Any, card: Any, tables: dict, elements: dict, file: str) -> None:
+def _store(raw: RawCard, card: Any, tables: dict[str, dict[Any, Any]], elements: dict[int, tuple[str, Any]],
+           file: str) -> None:
     """Put ``card`` in its table, refusing a second card with its key (or its element ID)."""
     key = card.name if raw.name == "PARAM" else card.sid if hasattr(card, "sid") else card.id
     table = tables[CARD_TABLES[raw.name]]
@@ -222,7 +224,7 @@ def _store(raw: Any, card: Any, tables: dict, elements: dict, file: str) -> None
     table[key] = card
 
 
-def _union_sets(sets: dict[str, dict[int, list]], unions: dict[str, dict]) -> None:
+def _union_sets(sets: dict[str, dict[int, list[Any]]], unions: dict[str, dict[int, SetUnion]]) -> None:
     """SPCADD / MPCADD: the set is the union of the listed SPC1/SPC (MPC) sets, which must exist and may not
     themselves be SPCADD (MPCADD) sets (QRG)."""
     for name, table, what in (("SPCADD", "spc1s", "an SPC or SPC1 set ID"), ("MPCADD", "mpcs", "an MPC set ID")):
@@ -233,7 +235,7 @@ def _union_sets(sets: dict[str, dict[int, list]], unions: dict[str, dict]) -> No
                                 f"{sets[table][sid][0].source.line})", file=card.source.file, line=card.source.line,
                                 card=f"{name} {sid}", field="field 2 (SID)")
         for sid, card in unions[name].items():
-            merged: list = []
+            merged: list[Any] = []
             for k, s in enumerate(card.sets, start=1):
                 if s not in sets[table] or s in unions[name]:
                     raise DeckError(f"set {s} is not defined (expected {what})", file=card.source.file,
@@ -242,7 +244,8 @@ def _union_sets(sets: dict[str, dict[int, list]], unions: dict[str, dict]) -> No
             sets[table][sid] = merged
 
 
-def _resolve_thru(tables: dict, sets: dict, thru: list, file: str) -> None:
+def _resolve_thru(tables: dict[str, dict[Any, Any]], sets: dict[str, dict[int, list[Any]]],
+                  thru: list[tuple[int, Thru]], file: str) -> None:
     """MSC rule: grids of a THRU range that do not exist are skipped."""
     for index, item in thru:
         group = sets["spc1s"][item.card.sid]

@@ -165,7 +165,9 @@ def assemble(deck: Deck, *, mass: MassKind = "lumped") -> FEModel:
     rows, cols, values = [np.zeros(0, int)], [np.zeros(0, int)], [np.zeros(0)]
     for row, sp in enumerate(springs):
         idx, coefficients = scalar_element_entries(dofs, cd_frames, sp.g1, sp.c1, sp.g2, sp.c2)
-        rows.append(np.full(len(idx), row)), cols.append(idx), values.append(coefficients)
+        rows.append(np.full(len(idx), row))
+        cols.append(idx)
+        values.append(coefficients)
     vectors = sparse.coo_array((np.concatenate(values), (np.concatenate(rows), np.concatenate(cols))),
                                shape=(len(springs), n)).tocsr()
     constants = np.array([sp.k for sp in springs], dtype=float)

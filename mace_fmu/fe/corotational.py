@@ -171,6 +171,7 @@ def _bar_rows(bars: Bars, rows: slice) -> Bars:
 def deformation_derivatives(bars: Bars, state: BarState) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(d, B = dd/dq, D2 = d2d/dq2) per bar: shapes (n, 7), (n, 7, 12), (n, 7, 12, 12)."""
     d, bz, d2z = _reduced_derivatives(bars, state)
+    assert d2z is not None  # second derivatives by default
     return d, _nodal_vector(bz), _nodal_matrix(d2z)
 
 
@@ -222,6 +223,7 @@ def bar_energies(bars: Bars, state: BarState | None, natural_forces: np.ndarray,
         _, bz, d2z = _reduced_derivatives(bars, state, second=stressed)
         k_z = np.swapaxes(bz, 1, 2) @ bars.k_natural @ bz
         if stressed:
+            assert d2z is not None  # asked for (second=stressed)
             k_z = k_z + np.einsum("nk,nkij->nij", natural_forces, d2z)
         k_e = _nodal_matrix(k_z)
     v = vectors[bar_dof_indices(bars)]
@@ -274,6 +276,7 @@ def tangent_parts(bars: Bars, state: BarState, n_dof: int, *, natural_forces: np
                   ) -> TangentParts:
     """Internal force, material and geometric stiffness of all bars about ``state`` (see :func:`tangent`)."""
     d, bz, d2z = _reduced_derivatives(bars, state)
+    assert d2z is not None  # second derivatives by default
     g = np.einsum("nij,nj->ni", bars.k_natural, d) if natural_forces is None else natural_forces
     return TangentParts(internal_force=_force(bars, bz, g, n_dof),
                         material=_assemble(bars, np.swapaxes(bz, 1, 2) @ bars.k_natural @ bz, n_dof),

@@ -6,6 +6,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from mace_fmu.errors import MaceError
+
 COMPONENT_NAMES = ("T1", "T2", "T3", "R1", "R2", "R3")
 
 
@@ -43,7 +45,7 @@ class DofMap:
     def index(self, grid: int, component: int) -> int:
         """Global index of component 1-6 of ``grid``."""
         if not 1 <= component <= 6:
-            raise ValueError(f"component must be 1-6, got {component}")
+            raise MaceError(f"component must be 1-6, got {component}")
         return 6 * self.grid_index(grid) + component - 1
 
     def indices(self, grid: int) -> np.ndarray:
@@ -80,5 +82,6 @@ def scalar_element_entries(dofs: DofMap, cd_frames: np.ndarray, g1: int, c1: int
     idx, coefficients = cd_component_entries(dofs, cd_frames, g1, c1)
     if g2 is None:
         return idx, coefficients
+    assert c2 is not None  # a second grid comes with its component
     idx2, coefficients2 = cd_component_entries(dofs, cd_frames, g2, c2)
     return np.concatenate([idx, idx2]), np.concatenate([coefficients, -coefficients2])

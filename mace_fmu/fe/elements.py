@@ -205,6 +205,7 @@ def add_elements(deck: Deck, dofs: DofMap, positions: dict[int, np.ndarray], fra
             prop = deck.prods[rod.pid]
             mid, area, j, nsm = prop.mid, prop.area, prop.j, prop.nsm
         else:
+            assert rod.mid is not None  # a CONROD (deck.checks: a CROD has its PID)
             mid, area, j, nsm = rod.mid, rod.area, rod.j, rod.nsm
         mat = deck.mat1s[mid]
         axis = positions[rod.gb] - positions[rod.ga]

@@ -225,7 +225,7 @@ def _cable_profile(model: FEModel, modes: Modes, spec: StructureSpec, cable: str
 def _cable_label(model: FEModel, modes: Modes, spec: StructureSpec, m: int, ke_cables: dict[str, float]) -> str:
     """'2nd in-plane violin, cable 3'; 'cables 1 and 3' when two share the energy, with
     'in-phase' or 'antiphase' before 'violin' (the two cables' lateral deflections alike or opposite)."""
-    cables = sorted(n for n, e in ke_cables.items() if e >= 0.25) or [max(ke_cables, key=ke_cables.get)]
+    cables = sorted(n for n, e in ke_cables.items() if e >= 0.25) or [max(ke_cables, key=lambda n: ke_cables[n])]
     main = max(cables, key=lambda n: ke_cables[n])
     all_cable = np.array([model.positions[model.dofs.grid_index(g)] for n in ke_cables
                           for g in spec.components[n] if g in model.dofs.grid_ids])

@@ -56,11 +56,11 @@ class Modes:
     def shape(self, grid: int, component: int, *, system: str = "basic") -> np.ndarray:
         """Component 1-6 of ``grid`` in every mode, in the basic or the grid's CD system."""
         if not 1 <= component <= 6:
-            raise ValueError(f"component must be 1-6 (T1 T2 T3 R1 R2 R3), got {component}")
+            raise MaceError(f"component must be 1-6 (T1 T2 T3 R1 R2 R3), got {component}")
         if system == "basic":
             return self.shapes[self.dofs.index(grid, component)]
         if system != "cd":
-            raise ValueError(f"system must be 'basic' or 'cd', got {system!r}")
+            raise MaceError(f"system must be 'basic' or 'cd', got {system!r}")
         idx = self.dofs.indices(grid)
         block = idx[:3] if component <= 3 else idx[3:]
         axes = self.cd_frames[self.dofs.grid_index(grid)]

@@ -5,10 +5,10 @@ from __future__ import annotations
 import contextlib
 import math
 import os
-from collections.abc import Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Iterator, Literal
+from typing import Any, Literal
 
 import numpy as np
 
@@ -132,7 +132,13 @@ class StructureModes(ModesView):
 
     def title(self, what: str) -> str:
         """"<structure> <configuration> <what>", e.g. "MACE 0g volts-volts model": hosts and ``view response
-        --fmu`` read which structure and configuration an FMU's model is."""
+        --fmu`` read which structure and configuration an FMU's model is.
+
+        Parameters
+        ----------
+        what : str
+            What of the modes is titled ("volts-volts model").
+        """
         return f"{self.name} {self.configuration} {what}"
 
     def instrument_file(self) -> StructureFile:
@@ -147,17 +153,39 @@ class StructureModes(ModesView):
 
     def bar_strain_weights(self, *, bar_id: int, position: float, fiber_y_m: float,
                            fiber_z_m: float) -> tuple[tuple[int, int, float], ...]:
-        """A bar strain gauge's DOF weights on the deck's bar (:func:`mace_fmu.fe.bar_strain.bar_strain_weights`)."""
+        """A bar strain gauge's DOF weights on the deck's bar (:func:`mace_fmu.fe.bar_strain.bar_strain_weights`).
+
+        Parameters
+        ----------
+        bar_id : int
+            The CBAR the gauge is on.
+        position : float
+            Where along it, 0 at GA to 1 at GB.
+        fiber_y_m, fiber_z_m : float
+            The gauge's offsets from the neutral axis [m], element y and z.
+        """
         return bar_strain_weights(self.model, self.deck, bar_id=bar_id, position=position, fiber_y_m=fiber_y_m,
                                   fiber_z_m=fiber_z_m)
 
     def check_parameters(self, parameters: ParameterSet | None) -> None:
-        """A MaceError when the set's moduli, springs or masses name no card of the deck."""
+        """A MaceError when the set's moduli, springs or masses name no card of the deck.
+
+        Parameters
+        ----------
+        parameters : ParameterSet or None
+            The set a model is built with (None: nothing to check).
+        """
         fe_overrides(parameters, parameter_names(self.deck, self.structure.file))
 
     def check_computed_with(self, parameters: ParameterSet) -> None:
         """A MaceError when the set's moduli, springs or masses differ from those the modes were computed with
-        (they would be ignored)."""
+        (they would be ignored).
+
+        Parameters
+        ----------
+        parameters : ParameterSet
+            The set a model of these modes is asked to be built with.
+        """
         deck = self.deck
         for (card, cid), fields in fe_overrides(parameters, parameter_names(deck, self.structure.file)).items():
             entry = {"MAT1": deck.mat1s, "CELAS2": deck.celas2s, "CONM2": deck.conm2s}[card][cid]
@@ -171,10 +199,22 @@ class StructureModes(ModesView):
                                     "(compute_modes(..., parameters=...)), whose set the model then takes by default")
 
     def check_physical(self, names: Sequence[str]) -> None:
-        """Nothing to refuse: a deck's moduli, springs and masses are checked where their sensitivities are taken."""
+        """Nothing to refuse: a deck's moduli, springs and masses are checked where their sensitivities are taken.
+
+        Parameters
+        ----------
+        names : sequence of str
+            The physical parameters an FMU is asked for.
+        """
 
     def static_correction(self, instruments: object) -> None:
-        """None: a deck's modes have no static correction (every mode up to the model's is computed)."""
+        """None: a deck's modes have no static correction (every mode up to the model's is computed).
+
+        Parameters
+        ----------
+        instruments : Instruments
+            The model's actuators and sensors (not needed here).
+        """
 
     def drawing(self) -> Drawing:
         """Each CBAR a tube, each CONM2 a sphere, framed on the test article
@@ -321,7 +361,8 @@ def check_parameters_deck(parameters: ParameterSet, deck: Deck) -> None:
 def _check_preload_elements(deck: Deck) -> None:
     """The gravity preload's tangent stiffness holds CBAR (corotational) and CELAS2 terms only: a deck with
     CBEAM or rod elements would lose their stiffness there, so it is refused rather than solved wrongly."""
-    others = [(name, table) for name, table in (("CBEAM", deck.beams), ("CROD/CONROD", deck.rods)) if table]
+    others: list[tuple[str, Mapping[int, Any]]] = [(name, table) for name, table in (("CBEAM", deck.beams),
+                                                                             ("CROD/CONROD", deck.rods)) if table]
     if others:
         listed = ", ".join(f"{len(table)} {name} (first {next(iter(table.values())).source})" for name, table in others)
         raise MaceError(f"{deck.path}: the 1-g gravity preload models CBAR and CELAS2 elements only, and this deck "
@@ -463,6 +504,7 @@ def _solved_modes(struct: Structure, *, mass: MassKind, preload: PreloadKind, ma
                                    mpc_set=struct.preload.mpc)
         if auto:  # statics: a DOF without stiffness is singular whatever its mass
             static, removed = constrain_singular_dofs(static, model.stiffness)
+        assert struct.preload.load is not None  # the preload subcase is the first with a LOAD (structure.build)
         load = gravity_load(struct.deck, model, struct.preload.load)
         if preload == "linear":
             pre = linear_preload(model, static, load)
@@ -487,7 +529,7 @@ def _solved_modes(struct: Structure, *, mass: MassKind, preload: PreloadKind, ma
     wanted_hz, wanted_count = _modes_to_find(struct.deck, struct, max_hz)
     if reference is not None:  # the continuations may have moved above the range: look further
         wanted_hz = _CONTINUATION_REACH * float(np.max(np.abs(reference.frequencies_hz)))
-        wanted_count = _CONTINUATION_REACH * len(reference.frequencies_hz)
+        wanted_count = math.ceil(_CONTINUATION_REACH * len(reference.frequencies_hz))
     modes = solve_modes(stiffness, model.mass, modal, model.dofs, model.cd_frames, wanted_hz=wanted_hz,
                         wanted_count=wanted_count)
     if reference is None:

@@ -191,7 +191,7 @@ def large_displacement_preload(model: FEModel, constraints: Constraints, load: n
         u_start = u.copy()
         u = u + last_increment
         previous, refresh = np.inf, geometric is None
-        for it in range(1, max_iterations + 1):
+        for it in range(1, max_iterations + 1):  # noqa: B007  (read after the loop: the count it took)
             # Full Newton from the unstressed state (the cables have no lateral stiffness yet) and when
             # an iteration stops contracting. Elsewhere the iteration matrix is the material stiffness
             # at the current state (first derivatives: cheap) plus the last full tangent's geometric
@@ -203,6 +203,7 @@ def large_displacement_preload(model: FEModel, constraints: Constraints, load: n
                 f_int, k_bars = parts.internal_force, parts.material + parts.geometric
                 geometric, reference_step, tangents = parts.geometric, step, tangents + 1
             else:
+                assert geometric is not None  # the first step's, or the one given
                 f_int, k_material = material_tangent(model.bars, state, n)
                 k_bars = k_material + (step / reference_step) * geometric
             solve = _factor(t.T @ (k_bars + k_springs) @ t, constraints)
@@ -331,14 +332,24 @@ def linear_tangent_sensitivity(model: FEModel, preload: Preload, *, bar_mask: np
 
 def linear_preload_solver(model: FEModel, preload: Preload) -> Callable[[np.ndarray], np.ndarray]:
     """Solve with the linear preload's reduced stiffness T^T K T (factored once): its static solution's matrix."""
-    t = preload.constraints.transform
-    return _factor(t.T @ model.stiffness @ t, preload.constraints)
+    constraints = _constraints(preload)
+    t = constraints.transform
+    return _factor(t.T @ model.stiffness @ t, constraints)
 
 
 def preload_solver(preload: Preload) -> Callable[[np.ndarray], np.ndarray]:
     """Solve with the preload's reduced tangent T^T K_T T (factored once): for :func:`tangent_sensitivity`."""
-    t = preload.constraints.transform
-    return _factor(t.T @ preload.tangent_stiffness @ t, preload.constraints)
+    constraints = _constraints(preload)
+    t = constraints.transform
+    return _factor(t.T @ preload.tangent_stiffness @ t, constraints)
+
+
+def _constraints(preload: Preload) -> Constraints:
+    """The static subcase's constraints a preload was solved with (every preload this module makes has them)."""
+    if preload.constraints is None:
+        raise MaceError("the preload carries no constraints: solve it with linear_preload or "
+                        "large_displacement_preload")
+    return preload.constraints
 
 
 def geometric_stiffness(model: FEModel, constraints: Constraints, load: np.ndarray) -> sparse.csr_array:

@@ -169,7 +169,13 @@ class ModalStructure(ModesView):
         return None
 
     def title(self, what: str) -> str:
-        """"<stem> modes <what> (NASTRAN's modes of <file>; modal parameters only)", for model summaries."""
+        """"<stem> modes <what> (NASTRAN's modes of <file>; modal parameters only)", for model summaries.
+
+        Parameters
+        ----------
+        what : str
+            What of the modes is titled ("volts-volts model").
+        """
         return f"{self.name} modes {what} (NASTRAN's modes of {self.source.name}; modal parameters only)"
 
     def instrument_file(self) -> StructureFile:
@@ -181,26 +187,58 @@ class ModalStructure(ModesView):
 
     def bar_strain_weights(self, *, bar_id: int, position: float, fiber_y_m: float,
                            fiber_z_m: float) -> tuple[tuple[int, int, float], ...]:
-        """Always a MaceError: a bar strain gauge needs the deck's bar, and NASTRAN's modes hold none."""
+        """Always a MaceError: a bar strain gauge needs the deck's bar, and NASTRAN's modes hold none.
+
+        Parameters
+        ----------
+        bar_id : int
+            The CBAR the gauge was declared on.
+        position, fiber_y_m, fiber_z_m : float
+            Where on it (unused: there is no bar).
+        """
         raise MaceError(f"a bar strain gauge (bar {bar_id}) needs the deck's bar; {self.source.name} holds NASTRAN's "
                         "modes only (give the gauge's DOF weights as a displacement sensor)")
 
     def check_parameters(self, parameters: ParameterSet | None) -> None:
-        """A MaceError when ``parameters`` hold moduli, springs or masses (:func:`check_modal_parameters`)."""
+        """A MaceError when ``parameters`` hold moduli, springs or masses (:func:`check_modal_parameters`).
+
+        Parameters
+        ----------
+        parameters : ParameterSet or None
+            The set a model is built with (None: nothing to check).
+        """
         check_modal_parameters(self, parameters)
 
     def check_computed_with(self, parameters: ParameterSet) -> None:
-        """Nothing to check: NASTRAN's modes do not depend on a parameter set."""
+        """Nothing to check: NASTRAN's modes do not depend on a parameter set.
+
+        Parameters
+        ----------
+        parameters : ParameterSet
+            The set a model of these modes is asked to be built with.
+        """
 
     def check_physical(self, names: Sequence[str]) -> None:
-        """A MaceError when ``names`` ask an FMU for physical parameters, which NASTRAN's modes cannot give."""
+        """A MaceError when ``names`` ask an FMU for physical parameters, which NASTRAN's modes cannot give.
+
+        Parameters
+        ----------
+        names : sequence of str
+            The physical parameters an FMU is asked for.
+        """
         if len(names):
             raise MaceError(f"physical parameters {list(names)}: {self.source.name} holds NASTRAN's modes, not an FE "
                             "model, so its FMUs have modal parameters only (damping_mode_<k>, "
                             "frequency_scale_mode_<k>)")
 
     def static_correction(self, instruments: Instruments) -> np.ndarray | None:
-        """The residual flexibility's feedthrough onto the displacement sensors (:func:`static_correction`)."""
+        """The residual flexibility's feedthrough onto the displacement sensors (:func:`static_correction`).
+
+        Parameters
+        ----------
+        instruments : Instruments
+            The model's actuators and sensors.
+        """
         return static_correction(self, instruments)
 
     def drawing(self) -> Drawing:

@@ -119,6 +119,6 @@ def modal_data(modes: Modes, instruments: Instruments, *, max_hz: float,
         raise MaceError(f"motion grids must be distinct, got {list(motion_grids)}")
     motion_out = {motion_output_name(grid, component): phi[index] for grid in motion_grids
                   for component, index in zip(MOTION_COMPONENTS, modes.dofs.indices(grid))}  # KeyError names a grid
-    return ModalData(frequencies_hz=modes.frequencies_hz[keep], labels=tuple(l for l, k in zip(modes.labels, keep) if k),
+    return ModalData(frequencies_hz=modes.frequencies_hz[keep], labels=tuple(lab for lab, k in zip(modes.labels, keep) if k),
                      shapes=phi, modal_b=phi.T @ b, disp_out=disp_out, rate_out=rate_out,
                      output_order=order + list(motion_out), motion_out=motion_out, acc_out=acc_out)

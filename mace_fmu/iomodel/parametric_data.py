@@ -19,6 +19,7 @@ from mace_fmu.iomodel.modal_ss import modal_data
 from mace_fmu.iomodel.motion import motion_unit, parse_motion_output
 from mace_fmu.iomodel.stiffness_route import PhysicalRoute, physical_route, stiffness_sensitivities
 from mace_fmu.iomodel.volts import VoltsModel
+from mace_fmu.parameters.frequency_bounds import relative_bound, scale_range
 from mace_fmu.parameters.kinds import (DAMPING, DELAY, FREQUENCY_SCALE, declared_range, kind_of_fmu_name, mode_number,
                                        split_loop_name)
 from mace_fmu.util.frequency import ZERO_HZ
@@ -178,12 +179,10 @@ def with_frequency_bounds(arrays: Mapping[str, np.ndarray], bounds: Mapping[int,
             scaled = [mode_number(n) for n in names if kind_of_fmu_name(n) is FREQUENCY_SCALE]
             raise MaceError(f"frequency bounds: the model has no frequency scale for mode {mode!r} (modes "
                             f"{min(scaled)}..{max(scaled)}; rigid-body and mechanism modes have none)")
-        if isinstance(bound, bool) or not isinstance(bound, (int, float, np.floating)) or not 0.0 <= bound < 1.0:
-            raise MaceError(f"frequency bounds: mode {mode}: {bound!r} is not a relative bound in [0, 1) "
-                            "(0.011 for +-1.1 %)")
+        lowest, highest = scale_range(relative_bound(bound, what=f"frequency bounds: mode {mode}"))
         k = names.index(name)
         # never below the scale's own minimum (a mode pushed into the zero-frequency cluster)
-        low[k], high[k] = max(1.0 - float(bound), low[k]), 1.0 + float(bound)
+        low[k], high[k] = max(lowest, low[k]), highest
     out.update(param_min=low, param_max=high)
     return out
 

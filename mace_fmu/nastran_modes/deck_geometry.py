@@ -17,7 +17,7 @@ from mace_fmu.deck.connectivity import bulk_cards
 from mace_fmu.deck.fields import Fields
 from mace_fmu.deck.parsers.grids import cord1r, cord2r, grdset, grid
 from mace_fmu.errors import DeckError
-from mace_fmu.nastran_modes.file_modes import CoordCard, FileGeometry
+from mace_fmu.nastran_modes.file_modes import COORD_KINDS, CoordCard, FileGeometry, xyz
 
 
 def read_deck_geometry(path: Path) -> FileGeometry:
@@ -37,14 +37,14 @@ def read_deck_geometry(path: Path) -> FileGeometry:
             if card.id in grids:
                 raise DeckError(f"GRID {card.id} is defined twice (expected one GRID per ID)", file=src.file,
                                 line=src.line, card=f"GRID {card.id}")
-            grids[card.id] = (card.cp, tuple(float(v) for v in card.xyz), card.cd)  # type: ignore[assignment]
+            grids[card.id] = (card.cp, xyz(card.xyz), card.cd)
         elif raw.name in ("CORD2R", "CORD2C", "CORD2S"):
             c2 = cord2r(Fields(raw, name), src)
-            coords[c2.id] = CoordCard(id=c2.id, kind=raw.name[-1], rid=c2.rid,  # type: ignore[arg-type]
-                                      points=(tuple(c2.a), tuple(c2.b), tuple(c2.c)), grids=None)
+            coords[c2.id] = CoordCard(id=c2.id, kind=COORD_KINDS[raw.name[-1]], rid=c2.rid,
+                                      points=(xyz(c2.a), xyz(c2.b), xyz(c2.c)), grids=None)
         elif raw.name in ("CORD1R", "CORD1C", "CORD1S"):
             for c1 in cord1r(Fields(raw, name), src):
-                coords[c1.id] = CoordCard(id=c1.id, kind=raw.name[-1], rid=None, points=None,  # type: ignore[arg-type]
+                coords[c1.id] = CoordCard(id=c1.id, kind=COORD_KINDS[raw.name[-1]], rid=None, points=None,
                                           grids=(c1.g1, c1.g2, c1.g3))
     if not grids:
         raise DeckError("no GRID cards (expected the deck of the run that wrote the modes)", file=name, line=0)

@@ -8,13 +8,24 @@ from typing import Literal
 
 import numpy as np
 
+#: a coordinate system's kind: rectangular, cylindrical or spherical
+CoordKind = Literal["R", "C", "S"]
+#: the kind of a CORD1x or CORD2x card, by its name's last letter
+COORD_KINDS: dict[str, CoordKind] = {"R": "R", "C": "C", "S": "S"}
+
+
+def xyz(values: tuple[float, ...] | list[float]) -> tuple[float, float, float]:
+    """Three coordinates as a triple of floats."""
+    x, y, z = values
+    return float(x), float(y), float(z)
+
 
 @dataclass(frozen=True)
 class CoordCard:
     """A CORD1R/C/S or CORD2R/C/S as the results file's geometry tables (GEOM1) give it."""
 
     id: int  #: coordinate system ID
-    kind: Literal["R", "C", "S"]  #: rectangular, cylindrical or spherical
+    kind: CoordKind  #: rectangular, cylindrical or spherical
     rid: int | None  #: CORD2x: the system A, B, C are given in; None for a CORD1x
     points: tuple[tuple[float, float, float], ...] | None  #: CORD2x: A, B, C in system ``rid``
     grids: tuple[int, int, int] | None  #: CORD1x: G1 (origin), G2 (on z), G3 (in the x-z plane)

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
+from typing import Literal
 from pathlib import Path
 
 from mace_fmu.errors import MaceError
@@ -53,7 +54,7 @@ class Op2Records:
         else:
             self.fail(f"the file does not start with a Fortran record of one word (found a length of {little} "
                       "bytes): not an OP2 file")
-        self.order = "little" if self.endian == "<" else "big"
+        self.order: Literal["little", "big"] = "little" if self.endian == "<" else "big"
 
     # --- errors -------------------------------------------------------------------------------------
     def fail(self, problem: str) -> None:

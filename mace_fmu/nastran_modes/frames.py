@@ -9,10 +9,12 @@ points A, B, C).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+import numpy.typing as npt
 
 from mace_fmu.deck.geometry import axes_from_points
 from mace_fmu.errors import MaceError
@@ -23,15 +25,15 @@ from mace_fmu.nastran_modes.file_modes import CoordCard, FileGeometry
 class System:
     """A coordinate system resolved in basic: origin, rectangular axes (columns) and kind."""
 
-    origin: np.ndarray  #: (3,) [deck units]
-    axes: np.ndarray  #: (3, 3) unit x, y, z axes of its rectangular frame, as columns in basic
+    origin: npt.NDArray[np.float64]  #: (3,) [deck units]
+    axes: npt.NDArray[np.float64]  #: (3, 3) unit x, y, z axes of its rectangular frame, as columns in basic
     kind: str  #: "R", "C" or "S"
 
-    def to_basic(self, coordinates: np.ndarray) -> np.ndarray:
+    def to_basic(self, coordinates: npt.ArrayLike) -> npt.NDArray[np.float64]:
         """Basic position of a point given in this system (R: x, y, z; C: r, theta [deg], z; S: r, theta, phi)."""
         return self.origin + self.axes @ _local_cartesian(self.kind, np.asarray(coordinates, dtype=float))
 
-    def axes_at(self, point: np.ndarray) -> np.ndarray:
+    def axes_at(self, point: npt.ArrayLike) -> npt.NDArray[np.float64]:
         """(3, 3) the system's component directions at the basic ``point``, as columns in basic."""
         if self.kind == "R":
             return self.axes
@@ -39,35 +41,35 @@ class System:
         theta = np.arctan2(y, x)  # NASTRAN: theta = 0 on the axis itself
         c, s = np.cos(theta), np.sin(theta)
         if self.kind == "C":
-            local = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+            local = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]], dtype=np.float64)
         else:
             polar = np.arctan2(np.hypot(x, y), z)
             cp, sp = np.cos(polar), np.sin(polar)
-            local = np.array([[sp * c, cp * c, -s], [sp * s, cp * s, c], [cp, -sp, 0.0]])
+            local = np.array([[sp * c, cp * c, -s], [sp * s, cp * s, c], [cp, -sp, 0.0]], dtype=np.float64)
         return self.axes @ local
 
 
-def _local_cartesian(kind: str, q: np.ndarray) -> np.ndarray:
+def _local_cartesian(kind: str, q: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
     if kind == "R":
         return q
     if kind == "C":
         t = np.radians(q[1])
         return np.array([q[0] * np.cos(t), q[0] * np.sin(t), q[2]])
     t, p = np.radians(q[1]), np.radians(q[2])
-    return q[0] * np.array([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t)])
+    return np.array([np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t)], dtype=np.float64) * float(q[0])
 
 
 BASIC = System(origin=np.zeros(3), axes=np.eye(3), kind="R")
 
 
 def resolve_geometry(source: Path, geometry: FileGeometry, *, where: str
-                     ) -> tuple[dict[int, np.ndarray], dict[int, tuple[int, System]]]:
+                     ) -> tuple[dict[int, npt.NDArray[np.float64]], dict[int, tuple[int, System]]]:
     """(basic position of every grid, grid -> (CD, its system)) from the grids and systems of a results file's
     GEOM1 tables or of a deck (``source`` and ``where``, "table GEOM1" or "bulk data", name them in messages)."""
     systems: dict[int, System] = {0: BASIC}
-    positions: dict[int, np.ndarray] = {}
+    positions: dict[int, npt.NDArray[np.float64]] = {}
 
-    def position(gid: int) -> np.ndarray | None:
+    def position(gid: int) -> npt.NDArray[np.float64] | None:
         if gid not in positions:
             cp, xyz, _ = geometry.grids[gid]
             if cp not in systems:
@@ -93,7 +95,8 @@ def resolve_geometry(source: Path, geometry: FileGeometry, *, where: str
     return positions, cds
 
 
-def _resolve(source: Path, where: str, card: CoordCard, systems: dict[int, System], position,
+def _resolve(source: Path, where: str, card: CoordCard, systems: dict[int, System],
+             position: Callable[[int], npt.NDArray[np.float64] | None],
              geometry: FileGeometry) -> bool:
     """Add ``card`` to ``systems`` when what it depends on is known; False while it is not."""
     if card.points is not None:

@@ -20,12 +20,13 @@ run's (9, ``CLAMA``), a static run's (1) results are said to be what they are.
 from __future__ import annotations
 
 from dataclasses import replace
+from typing import Any
 from pathlib import Path
 
 import numpy as np
 
 from mace_fmu.errors import MaceError
-from mace_fmu.nastran_modes.file_modes import CoordCard, FileGeometry, FileModes
+from mace_fmu.nastran_modes.file_modes import CoordCard, CoordKind, FileGeometry, FileModes, xyz
 from mace_fmu.nastran_modes.fortran import Op2Records
 
 IDENT_WORDS = 146
@@ -33,7 +34,9 @@ EIGENVECTOR_TABLE_CODE = 7
 REAL_EIGENVALUES_APPROACH = 2
 GRID_POINT = 1  #: word 2 of a point's entry: 1 a grid; scalar (2, 7) and extra points (3) are left out
 #: GEOM1 record keys (word 1 of the 3-word key) of the cards read
-GRID_KEY, CORD2_KEYS, CORD1_KEYS = 4501, {2101: "R", 2001: "C", 2201: "S"}, {1801: "R", 1701: "C", 1901: "S"}
+GRID_KEY = 4501
+CORD2_KEYS: dict[int, CoordKind] = {2101: "R", 2001: "C", 2201: "S"}
+CORD1_KEYS: dict[int, CoordKind] = {1801: "R", 1701: "C", 1901: "S"}
 #: DYNAMICS record keys of the real eigenvalue requests
 EIGR_KEY, EIGRL_KEY = (307, 3, 85), (308, 8, 348)
 #: what a vector table holds, by the approach code of its IDENT (word 1 // 10; pyNastran's op2_common.py)
@@ -66,13 +69,14 @@ def read_op2_modes(path: Path, *, subcase: int | None) -> FileModes:
     """
     records = Op2Records(path, path.read_bytes())
     endian = records.endian
-    blocks: dict[int, list[tuple]] = {}  # subcase -> (table, record, mode, eigenvalue, IDs, types, values) per mode
+    # subcase -> (table, record, mode, eigenvalue, IDs, types, values) per mode
+    blocks: dict[int, list[tuple[Any, ...]]] = {}
     summaries: list[np.ndarray] = []
     grids: dict[int, tuple[int, tuple[float, float, float], int]] = {}
     coords: dict[int, CoordCard] = {}
     names: list[str] = []  # every table, in file order: what the file holds, for messages
     held: dict[str, set[str]] = {}  # what the vector tables hold other than normal modes -> their tables
-    methods: list[dict] = []  # the run's EIGR/EIGRL requests
+    methods: list[dict[str, Any]] = []  # the run's EIGR/EIGRL requests
     augmented = False  # LAMA's residual vector augmentation flag
     has_geometry = False
     for table in records.tables(_wanted):
@@ -123,7 +127,7 @@ def _what_the_file_holds(names: list[str], held: dict[str, set[str]]) -> str:
 
 
 def _read_vectors(records: Op2Records, name: str, raw: tuple[bytes, ...], endian: str,
-                  blocks: dict[int, list], held: dict[str, set[str]]) -> None:
+                  blocks: dict[int, list[tuple[Any, ...]]], held: dict[str, set[str]]) -> None:
     """Append (table, mode, eigenvalue, ids, types, values) of every real eigenvector of the table; what its other
     IDENTs hold (static displacements, buckling modes ...) goes into ``held``."""
     records.table = name
@@ -183,7 +187,7 @@ def _residual_flag(raw: tuple[bytes, ...], endian: str) -> bool:
     return int(np.frombuffer(raw[0][:44], dtype=endian + "i4")[10]) != 0
 
 
-def _eigenvalue_requests(raw: tuple[bytes, ...], endian: str, *, table: str) -> list[dict]:
+def _eigenvalue_requests(raw: tuple[bytes, ...], endian: str, *, table: str) -> list[dict[str, Any]]:
     """The EIGR and EIGRL entries of a DYNAMICS table: card, SID, V2 [Hz] (None: not given), ND (0: not given),
     NORM ("MASS", "MAX" or "POINT"). EIGR: 18 words per entry; EIGRL: 13 words and its frequency segments, laid
     out in 27 words by the writers of the public files; a record of another length is read for its first entry."""
@@ -216,7 +220,7 @@ def _eigenvalue_requests(raw: tuple[bytes, ...], endian: str, *, table: str) -> 
     return found
 
 
-def _with_request(found: FileModes, methods: list[dict], *, augmented: bool) -> FileModes:
+def _with_request(found: FileModes, methods: list[dict[str, Any]], *, augmented: bool) -> FileModes:
     """``found`` with what the run's eigenvalue request says: how it normalised the vectors, and which vectors
     are residual vectors. NASTRAN returns at most ND eigenvectors, none above V2: a vector beyond them is a
     residual vector (PARAM,RESVEC) that the run appended and orthogonalised with the modes. With several
@@ -242,7 +246,8 @@ def _with_request(found: FileModes, methods: list[dict], *, augmented: bool) -> 
 
 
 def _read_geometry(records: Op2Records, raw: tuple[bytes, ...], endian: str,
-                   grids: dict, coords: dict[int, CoordCard]) -> None:
+                   grids: dict[int, tuple[int, tuple[float, float, float], int]],
+                   coords: dict[int, CoordCard]) -> None:
     """GRIDs and coordinate systems of one GEOM1 table, single precision or double (NX, MSC 2014 and later)."""
     for k, record in enumerate(raw):
         records.record = f"record {k + 3}"
@@ -256,14 +261,14 @@ def _read_geometry(records: Op2Records, raw: tuple[bytes, ...], endian: str,
         elif key in CORD2_KEYS:
             kind = CORD2_KEYS[key]
             for i, x in _entries(records, body, endian, f"CORD2{kind}", ints_before=4, reals=9, ints_after=0):
-                points = tuple(tuple(float(v) for v in x[3 * j:3 * j + 3]) for j in range(3))
-                coords[int(i[0])] = CoordCard(id=int(i[0]), kind=kind, rid=int(i[3]),  # type: ignore[arg-type]
+                points = tuple(xyz(list(x[3 * j:3 * j + 3])) for j in range(3))
+                coords[int(i[0])] = CoordCard(id=int(i[0]), kind=kind, rid=int(i[3]),
                                               points=points, grids=None)
         elif key in CORD1_KEYS:
             if len(body) % 24:
                 records.fail(f"CORD1{CORD1_KEYS[key]} entries of {len(body) // 4} words in all (expected 6 each)")
             for i in np.frombuffer(body, dtype=endian + "i4").reshape(-1, 6):
-                coords[int(i[0])] = CoordCard(id=int(i[0]), kind=CORD1_KEYS[key], rid=None,  # type: ignore[arg-type]
+                coords[int(i[0])] = CoordCard(id=int(i[0]), kind=CORD1_KEYS[key], rid=None,
                                               points=None, grids=(int(i[3]), int(i[4]), int(i[5])))
 
 
@@ -300,7 +305,7 @@ def _plausible(layouts: list[np.ndarray]) -> np.ndarray:
     return layouts[0]
 
 
-def _assemble(path: Path, subcase: int, vectors: list, summaries: list[np.ndarray],
+def _assemble(path: Path, subcase: int, vectors: list[tuple[Any, ...]], summaries: list[np.ndarray],
               geometry: FileGeometry | None) -> FileModes:
     """One subcase's vectors on the grids of its first mode, with the summary that lists its modes."""
     table, _, _, _, ids, types, _ = vectors[0]
@@ -308,7 +313,7 @@ def _assemble(path: Path, subcase: int, vectors: list, summaries: list[np.ndarra
     skipped = tuple(int(i) for i in ids[~keep])
     grid_ids = ids[keep]
     modes, eigenvalues, columns = [], [], []
-    for name, where, mode, eigenvalue, ids_m, types_m, values in vectors:
+    for name, where, mode, eigenvalue, ids_m, _, values in vectors:
         if not np.array_equal(ids_m, ids):
             raise MaceError(f"{path}: table {name}, {where}: the points of mode {mode} differ from those of the "
                             f"first mode (expected the same {len(ids)} points in every mode)")

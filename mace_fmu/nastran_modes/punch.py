@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import re
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -85,7 +86,7 @@ def read_punch_modes(path: Path, *, subcase: int | None) -> FileModes:
     return _assemble(path, modes, skipped, subcase)
 
 
-def _assemble(path: Path, modes: dict, skipped: set[int], subcase: int | None) -> FileModes:
+def _assemble(path: Path, modes: dict[int, Any], skipped: set[int], subcase: int | None) -> FileModes:
     if not modes:
         raise MaceError(f"{path}: no $EIGENVECTOR block with $REAL OUTPUT (expected the punch of a SOL 103 run: "
                         "DISPLACEMENT(PUNCH)=ALL in the case control)")

@@ -6,13 +6,14 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+import numpy.typing as npt
 
 from mace_fmu.errors import MaceError
 from mace_fmu.fe.dofs import DofMap
 from mace_fmu.fe.modal import Modes
 from mace_fmu.nastran_modes.deck_geometry import read_deck_geometry
 from mace_fmu.nastran_modes.file_modes import FileModes
-from mace_fmu.nastran_modes.frames import resolve_geometry
+from mace_fmu.nastran_modes.frames import System, resolve_geometry
 from mace_fmu.nastran_modes.normalisation import normalise
 from mace_fmu.nastran_modes.op2 import read_op2_modes
 from mace_fmu.nastran_modes.punch import read_punch_modes
@@ -126,7 +127,8 @@ def _to_basic(found: FileModes, geometry: str | Path | None, *, normalisation: s
     if found.skipped_points:
         shown = ", ".join(str(p) for p in found.skipped_points[:8]) + (" ..." if len(found.skipped_points) > 8 else "")
         notes.append(f"{len(found.skipped_points)} scalar or extra points left out (IDs {shown})")
-    positions = cds = None
+    positions: dict[int, npt.NDArray[np.float64]] | None = None
+    cds: dict[int, tuple[int, System]] | None = None
     if geometry is not None:
         positions, cds = resolve_geometry(Path(geometry), read_deck_geometry(Path(geometry)), where="bulk data")
     elif found.geometry is not None and found.geometry.grids:
@@ -135,7 +137,7 @@ def _to_basic(found: FileModes, geometry: str | Path | None, *, normalisation: s
     grid_ids = found.grid_ids[order]
     vectors = found.vectors[order]  # (n_grid, 6, n_modes)
     frames = np.repeat(np.eye(3)[None], len(grid_ids), axis=0)
-    if cds is None:
+    if cds is None or positions is None:
         if found.frame == "cd":
             notes.append("the grids' output (CD) systems are not known (no geometry in the file and no geometry= "
                          "deck): every grid's components are taken as basic")

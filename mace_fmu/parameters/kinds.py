@@ -37,10 +37,12 @@ physical limits plus the reach of the models behind them:
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
-from typing import Literal, Mapping
+from typing import Literal
 
+from mace_fmu.errors import MaceError
 from mace_fmu.util.frequency import ZERO_HZ  # the zero-frequency cluster's edge [Hz]
 
 KindName = Literal["modulus", "spring", "mass", "delay", "gain", "damping", "frequency_scale"]
@@ -68,29 +70,73 @@ class ParameterKind:
     per_actuator: bool = False
 
     def range_for(self, nominal: float) -> tuple[float, float]:
-        """[min, max] of a parameter of this kind with nominal value ``nominal`` (SI)."""
+        """[min, max] of a parameter of this kind with nominal value ``nominal`` (SI).
+
+        Parameters
+        ----------
+        nominal : float
+            The parameter's nominal value (SI).
+
+        Returns
+        -------
+        tuple of float
+            (min, max), relative to ``nominal`` for the kinds whose range is.
+        """
         if self.relative_to_nominal:
             scale = abs(nominal) if nominal != 0.0 or self.minimum >= 0.0 else 1.0  # a signed kind about 0
             return self.minimum * scale, self.maximum * scale
         return self.minimum, self.maximum
 
     def fmu_name(self, mode: int) -> str:
-        """FMU name of this per-mode kind for 1-based mode number ``mode``."""
+        """FMU name of this per-mode kind for 1-based mode number ``mode``.
+
+        Parameters
+        ----------
+        mode : int
+            The 1-based mode number.
+
+        Returns
+        -------
+        str
+            The FMU's parameter name, e.g. ``damping_mode_3``.
+        """
         if not self.per_mode:
-            raise ValueError(f"{self.name} parameters are not per mode")
+            raise MaceError(f"{self.name} parameters are not per mode")
         return f"{self.fmu_prefix}{mode}"
 
     def set_name(self, label: str) -> str:
-        """Parameter-set name of this per-mode kind for the modes labelled ``label``."""
+        """Parameter-set name of this per-mode kind for the modes labelled ``label``.
+
+        Parameters
+        ----------
+        label : str
+            The modes' label, e.g. ``"1st Z bending"``.
+
+        Returns
+        -------
+        str
+            The parameter-set name, e.g. ``damping:1st Z bending``.
+        """
         if not self.per_mode:
-            raise ValueError(f"{self.name} parameters are not per mode")
+            raise MaceError(f"{self.name} parameters are not per mode")
         return f"{self.set_prefix}{label}"
 
     def named(self, element: str) -> str:
         """The name (set's and FMU's alike) of this kind's parameter of a named element: ``MODULUS.named("lexan_end")``
-        -> ``E_lexan_end``, ``DELAY.named("gyro_bus_y")`` -> ``delay_gyro_bus_y``."""
+        -> ``E_lexan_end``, ``DELAY.named("gyro_bus_y")`` -> ``delay_gyro_bus_y``.
+
+        Parameters
+        ----------
+        element : str
+            The element's name (a material, spring, mass, sensor or actuator).
+
+        Returns
+        -------
+        str
+            The parameter's name.
+        """
         if self.per_mode or not self.set_prefix or self.set_prefix != self.fmu_prefix:
-            raise ValueError(f"{self.name} parameters are not named after an element")
+            raise MaceError(f"{self.name} parameters are not named after an element")
         return f"{self.set_prefix}{element}"
 
 
@@ -229,7 +275,7 @@ def mode_number(name: str) -> int:
     """1-based mode number of a per-mode FMU parameter name (``frequency_scale_mode_7`` -> 7)."""
     kind = kind_of_fmu_name(name)
     if kind is None or not kind.per_mode:
-        raise ValueError(f"{name!r} is not a per-mode FMU parameter name")
+        raise MaceError(f"{name!r} is not a per-mode FMU parameter name")
     return int(name[len(kind.fmu_prefix):])
 
 
@@ -237,7 +283,7 @@ def mode_label(name: str) -> str:
     """Mode label of a per-mode parameter-set name (``damping:1st Z bending`` -> ``1st Z bending``)."""
     kind = kind_of_set_name(name)
     if kind is None or not kind.per_mode:
-        raise ValueError(f"{name!r} is not a per-mode parameter-set name")
+        raise MaceError(f"{name!r} is not a per-mode parameter-set name")
     return name[len(kind.set_prefix):]
 
 

@@ -31,17 +31,24 @@ import dataclasses
 import datetime
 import hashlib
 import math
+import os
 import tomllib
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import MappingProxyType
-from typing import Any, Iterator, Mapping
+from typing import TYPE_CHECKING, Any
 
 from mace_fmu.errors import MaceError
 from mace_fmu.parameters.kinds import (DAMPING, FREQUENCY_SCALE, MASS, MODULUS, SERVO_GAINS, SPRING, KindName,
                                        kind_of_name, kind_of_set_name, unit_of)
 from mace_fmu.util.atomic import write_text_atomic
 from mace_fmu.util.textfile import read_text
+
+if TYPE_CHECKING:
+    from mace_fmu.deck.cards import Deck
+    from mace_fmu.structure.file import StructureFile
+
 
 def parameter_kind(name: str) -> KindName:
     """What a parameter-set name refers to (:mod:`mace_fmu.parameters.kinds`); a MaceError for a name of no
@@ -97,7 +104,7 @@ def tool_version() -> str:
 
 
 def now_utc() -> str:
-    return datetime.datetime.now(datetime.timezone.utc).replace(microsecond=0).isoformat()
+    return datetime.datetime.now(datetime.UTC).replace(microsecond=0).isoformat()
 
 
 @dataclass(frozen=True)
@@ -157,11 +164,35 @@ class ParameterSet:
         return h.hexdigest()
 
     def of_kind(self, *kinds: KindName) -> dict[str, float]:
-        """The values whose names are of the given kinds."""
+        """The values whose names are of the given kinds.
+
+        Parameters
+        ----------
+        *kinds : str
+            Parameter kinds (:data:`~mace_fmu.parameters.kinds.KindName`), e.g. ``"modulus"``.
+
+        Returns
+        -------
+        dict of str to float
+            Name -> value of every entry of those kinds.
+        """
         return {n: v for n, v in self.values.items() if parameter_kind(n) in kinds}
 
     def updated(self, values: Mapping[str, float], *, provenance: Provenance | None = None) -> ParameterSet:
-        """A new set with ``values`` replacing or adding entries (provenance replaced when given)."""
+        """A new set with ``values`` replacing or adding entries (provenance replaced when given).
+
+        Parameters
+        ----------
+        values : mapping of str to float
+            The entries to replace or add.
+        provenance : Provenance, optional
+            The new set's provenance (default: this set's).
+
+        Returns
+        -------
+        ParameterSet
+            The new set, read from the same source.
+        """
         return ParameterSet({**self.values, **values}, provenance if provenance is not None else self.provenance,
                             source=self.source)
 
@@ -183,7 +214,25 @@ class ParameterSet:
 
     @classmethod
     def from_toml(cls, text: str, *, source: str = "<string>") -> ParameterSet:
-        """Parse :meth:`to_toml`'s format; errors name ``source`` and the offending entry."""
+        """Parse :meth:`to_toml`'s format; errors name ``source`` and the offending entry.
+
+        Parameters
+        ----------
+        text : str
+            The TOML text.
+        source : str
+            Where the text came from, for messages.
+
+        Returns
+        -------
+        ParameterSet
+            The set.
+
+        Raises
+        ------
+        MaceError
+            Text that is no parameter set (not TOML, an unknown table or key, a value that is wrong), named.
+        """
         try:
             data = tomllib.loads(text)
         except tomllib.TOMLDecodeError as exc:
@@ -200,7 +249,8 @@ class ParameterSet:
             allowed = {f.name for f in dataclasses.fields(Provenance)}
             extra = set(data["provenance"]) - allowed
             if extra:
-                raise MaceError(f"{source}: [provenance] has unknown key(s) {sorted(extra)}; allowed: {sorted(allowed)}")
+                raise MaceError(f"{source}: [provenance] has unknown key(s) {sorted(extra)}; "
+                                f"allowed: {sorted(allowed)}")
             if "created" not in data["provenance"] or "tool" not in data["provenance"]:
                 raise MaceError(f"{source}: [provenance] needs 'created' and 'tool'")
             prov = Provenance(**data["provenance"])
@@ -210,12 +260,34 @@ class ParameterSet:
             raise MaceError(f"{source}: {exc}") from None
 
     def write(self, path: str | Path) -> Path:
-        """Write the TOML atomically (a reader never sees half a file)."""
+        """Write the TOML atomically (a reader never sees half a file).
+
+        Parameters
+        ----------
+        path : str or pathlib.Path
+            The file to write.
+
+        Returns
+        -------
+        pathlib.Path
+            The file written.
+        """
         return write_text_atomic(path, self.to_toml())
 
     @classmethod
     def read(cls, path: str | Path) -> ParameterSet:
-        """Read a parameter set written by :meth:`write` (or by hand)."""
+        """Read a parameter set written by :meth:`write` (or by hand).
+
+        Parameters
+        ----------
+        path : str or pathlib.Path
+            The TOML file.
+
+        Returns
+        -------
+        ParameterSet
+            The set, its messages naming ``path``.
+        """
         return cls.from_toml(read_text(path, what="parameter"), source=str(path))
 
 
@@ -269,7 +341,7 @@ def names_of_table(tables: Mapping[str, Any]) -> ParameterNames:
                           masses={name: int(eid) for eid, name in table.get("masses", {}).items()})
 
 
-def parameter_names(deck, structure_file=None) -> ParameterNames:
+def parameter_names(deck: Deck, structure_file: StructureFile | str | os.PathLike[str] | None = None) -> ParameterNames:
     """The ``E_``, ``k_`` and ``m_`` names of a deck: its structure file's ``[parameters]`` names, and for every MAT1
     and CELAS2 card that table does not name (or every card, without a structure file) ``mat<ID>`` and
     ``celas<ID>`` (``E_mat2``, ``k_celas138``): a name never reaches a card of another deck. Masses are
@@ -281,7 +353,7 @@ def parameter_names(deck, structure_file=None) -> ParameterNames:
     deck : Deck
         The deck.
     structure_file : StructureFile or path, optional
-        Its structure file (default: the bundled one for the bundled deck).
+        Its structure file, or the path of one (default: none, every MAT1 and CELAS2 card named by its ID).
 
     Returns
     -------
@@ -291,10 +363,16 @@ def parameter_names(deck, structure_file=None) -> ParameterNames:
     Raises
     ------
     MaceError
-        A ``masses`` entry naming no CONM2 of the deck (the file and the key named).
+        A ``masses`` entry naming no CONM2 of the deck (the file and the key named), or a structure file that
+        cannot be read.
     """
-    for key, name in (structure_file.tables.get("parameters", {}).get("masses", {}).items()
-                      if structure_file is not None else ()):  # before names_of_table's int(key)
+    if isinstance(structure_file, (str, os.PathLike)):
+        from mace_fmu.structure.file import load_structure_file
+
+        structure_file = load_structure_file(structure_file)
+    masses = structure_file.tables.get("parameters", {}).get("masses", {}) if structure_file is not None else {}
+    for key, name in masses.items():  # before names_of_table's int(key)
+        assert structure_file is not None
         if not key.strip().isdigit() or int(key) not in deck.conm2s:
             raise MaceError(f"{structure_file.path}: [parameters] masses: key {key!r} ({name!r}) is no CONM2 element "
                             f"ID of {deck.path}; expected one of {sorted(deck.conm2s)[:12]}")
@@ -309,7 +387,7 @@ def parameter_names(deck, structure_file=None) -> ParameterNames:
     return ParameterNames(materials=materials, springs=springs, masses=named.masses, mass_cards=cards)
 
 
-def deck_values(deck, names: ParameterNames | None = None) -> dict[str, float]:
+def deck_values(deck: Deck, names: ParameterNames | None = None) -> dict[str, float]:
     """The ``E_``, ``k_`` and ``m_`` values [Pa, N/m, kg] a deck has for every named material, spring and mass it
     contains."""
     names = names if names is not None else load_parameter_names()
@@ -348,12 +426,13 @@ def fe_overrides(parameters: ParameterSet | None, names: ParameterNames | None =
     what = {"MAT1": "material", "CELAS2": "spring", "CONM2": "mass"}
     for name, value in parameters.of_kind("modulus", "spring", "mass").items():
         kind = kind_of_set_name(name)
+        assert kind is not None  # of_kind returns names of those kinds only
         table, card, key = {MODULUS.name: (names.materials, "MAT1", "e"), SPRING.name: (names.springs, "CELAS2", "k"),
                             MASS.name: (names.masses, "CONM2", "mass")}[kind.name]
         short = name.removeprefix(kind.set_prefix)
         if short not in table:
-            raise MaceError(f"parameter {name!r}: no such {what[card]}; known: "
-                            f"{', '.join(kind.set_prefix + n for n in table) or 'none (name one in the structure file)'}")
+            known = ", ".join(kind.set_prefix + n for n in table) or "none (name one in the structure file)"
+            raise MaceError(f"parameter {name!r}: no such {what[card]}; known: {known}")
         if value <= 0.0:
             raise MaceError(f"parameter {name!r} must be > 0, got {value}")
         if kind is MASS:

@@ -357,7 +357,9 @@ class CholeskySolve:
                         and layout.value_type == CHOLMOD_REAL and layout.precision == CHOLMOD_DOUBLE)
         if not self._direct:
             return
-        self._library, self._address = library, layout.address
+        assert library is not None and layout is not None  # as _direct says
+        self._library: ctypes.CDLL = library
+        self._address = layout.address
         self._fields = CholmodFactor.from_address(layout.address)  # read in place: what CHOLMOD holds now
         # one cholmod_common (CHOLMOD's workspace) for each of the two threads a block is shared between
         self._commons = [CholmodCommon() for _ in range(2)]

@@ -97,7 +97,9 @@ def _cholesky(analysis: Analysis, n: int) -> Solve | None:
     done = numeric(symbolic, analysis.lower_triangle)  # False: a non-positive pivot, not positive definite
     if done is None and not isinstance(symbolic, SymbolicFactor):  # a cvxopt factor ctypes cannot take: cvxopt's
         try:
-            load_cholmod().numeric(analysis.lower, symbolic)
+            cholmod = load_cholmod()
+            assert cholmod is not None  # a cvxopt factor: cvxopt is there
+            cholmod.numeric(analysis.lower, symbolic)
             done = True
         except ArithmeticError:
             done = False

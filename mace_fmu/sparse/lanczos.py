@@ -270,6 +270,7 @@ class _SharedRows:
         """V^T Y (``basis`` V and ``vectors`` Y on the same rows)."""
         if not self._shared(basis):
             return basis.T @ vectors
+        assert self._threads is not None  # _shared says so
         return sum(self._threads.map(lambda rows: basis[rows].T @ vectors[rows], self._shares))
 
     def subtract(self, vectors: np.ndarray, basis: np.ndarray, coefficients: np.ndarray) -> None:
@@ -280,6 +281,7 @@ class _SharedRows:
 
         def share(rows: slice) -> None:
             vectors[rows] -= basis[rows] @ coefficients
+        assert self._threads is not None  # _shared says so
         list(self._threads.map(share, self._shares))
 
 
@@ -320,6 +322,7 @@ def _orthonormal(vectors: np.ndarray, mass: _MassRows, *, floor: float) -> tuple
         q, step = q @ (axes[:, keep] / root), root[:, None] * axes[:, keep].T
         r = step if r is None else step @ r
         floor = 0.5  # the second pass: columns of norm ~1, none to drop
+    assert r is not None  # two passes made it
     return q, r
 
 

@@ -23,6 +23,7 @@ import hashlib
 import threading
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from scipy import sparse
@@ -79,12 +80,12 @@ def _nested_dissection(pattern: sparse.csr_matrix, groups: np.ndarray | None) ->
     except ImportError:
         return None
     n = pattern.shape[0]
-    names, labels = np.unique(np.asarray(groups), return_inverse=True) if groups is not None else (None, None)
-    if groups is None or len(names) == n:
-        labels, weights, incidence = np.arange(n), None, None
-    else:
-        incidence = sparse.csr_matrix((np.ones(n), (np.arange(n), labels)), shape=(n, len(names)))
-        weights = np.bincount(labels)
+    labels, weights, incidence = np.arange(n), None, None
+    if groups is not None:
+        names, grouped = np.unique(np.asarray(groups), return_inverse=True)
+        if len(names) != n:
+            labels, weights = grouped, np.bincount(grouped)
+            incidence = sparse.csr_matrix((np.ones(n), (np.arange(n), labels)), shape=(n, len(names)))
     magnitude = abs(pattern).astype(float)
     magnitude = magnitude + magnitude.T  # METIS reads a symmetric graph (and crashes on one that is not)
     graph = magnitude if incidence is None else incidence.T @ magnitude @ incidence
@@ -92,9 +93,9 @@ def _nested_dissection(pattern: sparse.csr_matrix, groups: np.ndarray | None) ->
     graph.eliminate_zeros()
     if graph.nnz == 0:  # METIS needs edges; a diagonal matrix fills in no order
         return np.arange(n, dtype=np.int64)
-    order, _ = pymetis.nested_dissection(adjacency=pymetis.CSRAdjacency(graph.indptr, graph.indices),
+    found, _ = pymetis.nested_dissection(adjacency=pymetis.CSRAdjacency(graph.indptr, graph.indices),
                                          vweights=weights)  # (permutation, its inverse)
-    order = np.asarray(order, dtype=np.int64)
+    order = np.asarray(found, dtype=np.int64)
     if incidence is None:
         return order
     position = np.empty_like(order)
@@ -151,8 +152,8 @@ def analyse(matrix: sparse.sparray, *, groups: np.ndarray | None = None, with_am
     known = _CHOSEN.get(key)
     cholmod = load_cholmod()
     if cholmod is None:
-        permutations = {known[0].method: known[1]} if known else candidate_permutations(a, groups=groups)
-        return Analysis(OrderingChoice(RCM, {}), permutations[RCM], None)
+        recalled = {known[0].method: known[1]} if known else dict(candidate_permutations(a, groups=groups))
+        return Analysis(OrderingChoice(RCM, {}), recalled[RCM], None)
     lower = sparse.csc_array(sparse.tril(a))
     lower.sort_indices()
     if known:  # the choice made for this pattern before
@@ -164,7 +165,7 @@ def analyse(matrix: sparse.sparray, *, groups: np.ndarray | None = None, with_am
         permutations: dict[str, np.ndarray | None] = dict(candidate_permutations(a, groups=groups))
         analysing.update({name: threads.submit(symbolic_factor, lower, permutation)
                           for name, permutation in permutations.items()})
-        factors = {name: analysis.result() for name, analysis in analysing.items()}
+        factors: dict[str, object | None] = {name: analysis.result() for name, analysis in analysing.items()}
     if with_amd:
         permutations[AMD] = None
     if any(made is None for made in factors.values()):  # CHOLMOD not reachable through ctypes: cvxopt's
@@ -220,7 +221,7 @@ def _lower_spmatrix(a: sparse.sparray) -> object:
 _OPTIONS = threading.Lock()
 
 
-def _symbolic(cholmod: object, spmatrix: object, permutation: np.ndarray | None) -> object:
+def _symbolic(cholmod: Any, spmatrix: object, permutation: np.ndarray | None) -> object:
     """cvxopt.cholmod's symbolic factor of ``spmatrix`` in the order ``permutation`` (None: CHOLMOD's AMD)."""
     import cvxopt
 
@@ -257,7 +258,9 @@ def least_fill_permutation(matrix: sparse.sparray, *, groups: np.ndarray | None 
         known = _CHOSEN.get(_pattern_key(a, groups, with_amd))
         if known and known[1] is not None:  # AMD's choice has no permutation to give
             return known[1]
-    return analyse(a, groups=groups, with_amd=False).permutation
+    permutation = analyse(a, groups=groups, with_amd=False).permutation
+    assert permutation is not None  # only AMD's has none
+    return permutation
 
 
 #: The orderings chosen for the last few patterns: a Newton iteration or a parameter study factors

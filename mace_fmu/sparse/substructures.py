@@ -159,15 +159,17 @@ class _Substructure:
         y = self._swept(b.shape[1])
         y[:self.inner] = b[self.inner_rows]
         y[self.inner:] = 0.0
+        assert self._workspace is not None  # made with y
         self.solve.sweep(y, transpose=False, workspace=self._workspace)
         return self.coupling @ y[self.inner:]
 
     def backward(self, on_interface: np.ndarray, out: np.ndarray) -> None:
         """L^-T [y's substructure part; L_iI^T x_I]: x_i = A_ii^-1 (b_i - A_iI x_I), written into ``out``'s rows
         of this substructure (``on_interface``: x_I, in the interface's order)."""
-        y = self._y
+        y, workspace = self._y, self._workspace
+        assert y is not None and workspace is not None  # forward made them
         y[self.inner:] = self.coupling.T @ on_interface
-        self.solve.sweep(y, transpose=True, workspace=self._workspace)
+        self.solve.sweep(y, transpose=True, workspace=workspace)
         out[self.inner_rows] = y[:self.inner]
 
     def _swept(self, columns: int) -> np.ndarray:
@@ -246,7 +248,8 @@ def substructured_cholesky(matrix: sparse.sparray, analysis: Analysis, *,
     cut = bisect(a, permutation)
     if cut is None:
         return None
-    parts = tuple(_Substructure(a, rows, cut.interface) for rows in cut.substructures)
+    first, second = (_Substructure(a, rows, cut.interface) for rows in cut.substructures)
+    parts = (first, second)
     with ThreadPoolExecutor(max_workers=2) as threads:
         factored = list(threads.map(_Substructure.factor, parts))
     if any(done is False for done in factored):

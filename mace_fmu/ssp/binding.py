@@ -16,10 +16,11 @@ from dataclasses import dataclass
 from typing import Sequence
 
 from mace_fmu.errors import MaceError
+from mace_fmu.parameters.kinds import KindName
 from mace_fmu.parameters.per_mode import resolve_mode_names
 from mace_fmu.parameters.sets import ParameterSet
 
-_BUILT_IN = ("modulus", "spring", "mass", "frequency_scale")
+_BUILT_IN: tuple[KindName, ...] = ("modulus", "spring", "mass", "frequency_scale")
 
 
 @dataclass(frozen=True)

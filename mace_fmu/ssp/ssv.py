@@ -19,9 +19,10 @@ import math
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Mapping
+from typing import Any, Mapping
 
 from mace_fmu.errors import MaceError
+from mace_fmu.parameters.frequency_bounds import FrequencyBound
 from mace_fmu.parameters.sets import ParameterSet, Provenance, parameter_unit
 from mace_fmu.util.atomic import write_text_atomic
 from mace_fmu.util.textfile import read_text
@@ -59,15 +60,6 @@ BASE_UNITS: dict[str, dict[str, str]] = {
 ET.register_namespace("ssv", SSV)
 ET.register_namespace("ssc", SSC)
 ET.register_namespace("mace", MACE)
-
-
-@dataclass(frozen=True)
-class FrequencyBound:
-    """The uncertainty of one open-loop mode's frequency (Table 5.3): +-``bound_percent`` % of it."""
-
-    mode: int  #: 1-based open-loop mode number of the model
-    mode_label: str  #: its label, checked against the model the bounds are applied to
-    bound_percent: float  #: 1.1 for +-1.1 % (as Table 5.3 and table_5_3.toml give it)
 
 
 @dataclass(frozen=True)
@@ -232,7 +224,8 @@ def parameter_set_from_ssv(text: str, *, source: str = "<string>") -> SsvContent
             unknown = set(prov.attrib) - set(kinds)
             if unknown:
                 raise MaceError(f"{source}: provenance annotation: unknown attribute(s) {sorted(unknown)}")
-            provenance = Provenance(**{k: (float(v) if "float" in str(kinds[k]) else v) for k, v in prov.attrib.items()})
+            given: dict[str, Any] = {k: (float(v) if "float" in str(kinds[k]) else v) for k, v in prov.attrib.items()}
+            provenance = Provenance(**given)
         for mode in ann.iterfind(f"{{{MACE}}}ParameterSet/{{{MACE}}}FrequencyBounds/{{{MACE}}}Mode"):
             try:
                 bounds.append(FrequencyBound(mode=int(mode.get("number", "")), mode_label=mode.get("label", ""),

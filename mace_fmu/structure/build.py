@@ -10,7 +10,8 @@ from __future__ import annotations
 import dataclasses
 import os
 from dataclasses import dataclass
-from typing import Any, Mapping
+from collections.abc import Callable, Mapping
+from typing import Any
 
 import numpy as np
 
@@ -102,7 +103,8 @@ def apply_overrides(deck: Deck, overrides: Mapping[tuple[str, int], Mapping[str,
             raise MaceError(f"override of {card} {cid}: unknown field(s) {sorted(unknown)}; allowed: {sorted(allowed)}")
         values = {k: _checked_value(card, cid, k, getattr(old, k), v) for k, v in fields.items()}
         tables[card][cid] = dataclasses.replace(old, **values)
-    changed = dataclasses.replace(deck, **{attr: tables[name] for name, attr in _OVERRIDE_TABLES.items()})
+    changed_tables: dict[str, Any] = {attr: tables[name] for name, attr in _OVERRIDE_TABLES.items()}
+    changed = dataclasses.replace(deck, **changed_tables)
     try:
         check_deck(changed)
     except DeckError as exc:
@@ -128,7 +130,7 @@ def remove_suspension(deck: Deck, spec: StructureSpec) -> Deck:
     gone_g, gone_e = spec.suspension_grids, spec.suspension_elements
     if not gone_g and not gone_e:  # no suspension: the deck as it is (0.04-0.08 s on the 100k-DOF wide lattice)
         return deck
-    kept = {}
+    kept: dict[str, Any] = {}
     for table in ELEMENT_TABLES:
         what, grids_of = _CONNECTIONS[table]
         cards = {i: c for i, c in getattr(deck, table).items() if i not in gone_e}
@@ -149,7 +151,7 @@ def remove_suspension(deck: Deck, spec: StructureSpec) -> Deck:
 
 #: Deck table -> (card name of an entry, the grids an entry connects): the 0-g structure drops the suspension's
 #: elements of every kind, and refuses one left on a removed grid
-_CONNECTIONS = {
+_CONNECTIONS: dict[str, tuple[Callable[[Any], str], Callable[[Any], tuple[int, ...]]]] = {
     "bars": (lambda c: "CBAR", lambda c: (c.ga, c.gb)),
     "conm2s": (lambda c: "CONM2", lambda c: (c.grid,)),
     "celas2s": (lambda c: "CELAS2", lambda c: (c.g1, c.g2)),
@@ -174,7 +176,7 @@ def _subcases(deck: Deck) -> tuple[Subcase | None, Subcase]:
 
 def build_structure(deck: Deck, *, configuration: Configuration, spec: StructureSpec | None = None,
                     overrides: Mapping[tuple[str, int], Mapping[str, Any]] | None = None,
-                    structure_file: StructureFile | str | os.PathLike | None = None) -> Structure:
+                    structure_file: StructureFile | str | os.PathLike[str] | None = None) -> Structure:
     """The 1-g structure (deck as is, preload subcase + modal subcase) or the 0-g structure.
 
     Parameters

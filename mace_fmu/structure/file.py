@@ -15,11 +15,12 @@ import functools
 import hashlib
 import os
 import tomllib
+from collections.abc import Mapping
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
 from types import MappingProxyType
-from typing import Any, Literal, Mapping
+from typing import Any, Literal
 
 from mace_fmu.deck.card_tables import ELEMENT_TABLES
 from mace_fmu.deck.cards import Deck
@@ -95,12 +96,34 @@ class StructureSpec:
 
     @classmethod
     def empty(cls, source: str = "no structure file") -> StructureSpec:
-        """Nothing beyond the deck: no suspension, no components, no mechanisms (NASTRAN's meaning)."""
+        """Nothing beyond the deck: no suspension, no components, no mechanisms (NASTRAN's meaning).
+
+        Parameters
+        ----------
+        source : str
+            What messages name as the spec's source.
+
+        Returns
+        -------
+        StructureSpec
+            The empty spec.
+        """
         return cls(suspension_grids=frozenset(), suspension_elements=frozenset(), components={}, mechanisms=(),
                    source=source)
 
     def component_of(self, *grids: int) -> str | None:
-        """Name of the component that contains every one of ``grids`` (None when none does)."""
+        """Name of the component that contains every one of ``grids`` (None when none does).
+
+        Parameters
+        ----------
+        *grids : int
+            Grid IDs.
+
+        Returns
+        -------
+        str or None
+            The first component (in the file's order) that holds them all.
+        """
         for name, members in self.components.items():
             if all(g in members for g in grids):
                 return name
@@ -120,7 +143,18 @@ class StructureFile:
     spec: StructureSpec  #: its suspension, components and mechanisms
 
     def has(self, table: str) -> bool:
-        """Whether the file holds ``table`` (e.g. "actuators")."""
+        """Whether the file holds ``table`` (e.g. "actuators").
+
+        Parameters
+        ----------
+        table : str
+            A table's name.
+
+        Returns
+        -------
+        bool
+            True when the file has that table.
+        """
         return table in self.tables
 
 
@@ -200,7 +234,7 @@ def _load_structure_file(path: str, resolved: str, mtime_ns: int, size: int) -> 
     return StructureFile(path=file, tables=MappingProxyType(data), spec=_spec_of(file, text, data))
 
 
-def load_structure_file(path: str | os.PathLike) -> StructureFile:
+def load_structure_file(path: str | os.PathLike[str]) -> StructureFile:
     """Read and check a structure file: what a deck does not say (suspension, components, instruments).
 
     Parameters
@@ -226,7 +260,7 @@ def load_structure_file(path: str | os.PathLike) -> StructureFile:
     return _load_structure_file(str(file), str(file.resolve()), st.st_mtime_ns, st.st_size)
 
 
-def load_spec(path: str | os.PathLike | None = None) -> StructureSpec:
+def load_spec(path: str | os.PathLike[str] | None = None) -> StructureSpec:
     """The structure part of a structure file (default: the bundled ``mace_em.toml``)."""
     return load_structure_file(path if path is not None else bundled_structure_path()).spec
 
@@ -242,10 +276,12 @@ def _file_sha256(path: str, mtime_ns: int, size: int) -> str:
     return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
 
-def deck_units(deck: Deck, file: "StructureFile | None") -> tuple[str, str] | None:
+def deck_units(deck: Deck, file: StructureFile | None) -> tuple[str, str] | None:
     """(mass, length) unit labels of a deck: its structure file's ``[units]``, kg and m for the bundled deck, else
     None: a deck states no units (NASTRAN takes whatever it is written in), so they are the deck's own."""
-    units = dict(file.tables.get("units", {})) if file is not None else {}
+    if file is None:
+        return ("kg", "m") if is_bundled_deck(deck) else None
+    units = dict(file.tables.get("units", {}))
     unknown = sorted(set(units) - {"mass", "length"})
     if unknown:
         raise MaceError(f"{file.path}: [units] has unknown key(s) {unknown} (expected mass and length)")
@@ -271,7 +307,7 @@ def structure_label(deck: Deck) -> str:
     return "MACE" if is_bundled_deck(deck) else Path(deck.path).stem
 
 
-def structure_file_for(deck: Deck, structure_file: StructureFile | str | os.PathLike | None = None
+def structure_file_for(deck: Deck, structure_file: StructureFile | str | os.PathLike[str] | None = None
                        ) -> StructureFile | None:
     """The structure file that goes with ``deck``: the one given, else the bundled one for the bundled
     deck, else None (the deck's own meaning, nothing added or removed).

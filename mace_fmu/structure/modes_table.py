@@ -98,6 +98,8 @@ def modes_table(file: StructureFile) -> ModesTable | None:
             raise MaceError(f"{where}: {key} = {value!r}: no such file {path}")
         return path
 
-    return ModesTable(file=path_of("file"), subcase=subcase, geometry=path_of("geometry"),
+    modes_file = path_of("file")
+    assert modes_file is not None  # the table has a file (checked above)
+    return ModesTable(file=modes_file, subcase=subcase, geometry=path_of("geometry"),
                       residual_flexibility=path_of("residual_flexibility"), source=file.path,
                       normalisation=normalisation)

@@ -6,8 +6,9 @@ import contextlib
 import os
 import secrets
 import zipfile
+from collections.abc import Iterator
 from pathlib import Path
-from typing import TYPE_CHECKING, Iterator
+from typing import TYPE_CHECKING
 
 from mace_fmu.errors import MaceError
 

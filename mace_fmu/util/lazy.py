@@ -10,7 +10,8 @@ from __future__ import annotations
 
 import importlib
 import sys
-from typing import Any, Callable, Mapping
+from collections.abc import Callable, Mapping
+from typing import Any
 
 
 def lazy_exports(package: str, public: Mapping[str, str]
@@ -39,7 +40,8 @@ def lazy_exports(package: str, public: Mapping[str, str]
         return getattr(importlib.import_module(module_of(name)), name)
 
     names = sorted(public)
-    __getattr__.modules = {name: module_of(name) for name in names}  # where each is defined (the API reference)
+    # where each is defined (the API reference), as the function's attribute ``modules``
+    __getattr__.__dict__["modules"] = {name: module_of(name) for name in names}
 
     def __dir__() -> list[str]:
         return sorted(set(names) | set(vars(sys.modules[package])))

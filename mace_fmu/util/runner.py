@@ -19,8 +19,9 @@ import sys
 import threading
 import uuid
 import warnings
+from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
-from typing import Any, Callable, Iterable, Iterator
+from typing import Any
 
 from mace_fmu.errors import MaceError
 from mace_fmu.util.progress import ProgressCallback, Step
@@ -47,11 +48,12 @@ def _why_no_scheduler(exc: BaseException, *, timeout_s: float) -> str:
     if isinstance(exc, CommClosedError):
         return "the other end closed the connection"
     if isinstance(exc, OSError):  # refused, unreachable: the system's words, under Dask's wrappers
-        root = exc
+        root: BaseException = exc
         while root.__cause__ is not None:
             root = root.__cause__
-        if getattr(root, "strerror", None):
-            return f"cannot connect: {root.strerror}"
+        strerror = getattr(root, "strerror", None)
+        if strerror:
+            return f"cannot connect: {strerror}"
         return f"cannot connect within {timeout_s:g} s" if root is not exc else str(exc)
     # a service that speaks first (SSH, SMTP) has its greeting read as a Dask frame length: an exabyte
     # allocation (MemoryError) or a dimension beyond numpy's (ValueError); other garbage fails in msgpack
@@ -150,7 +152,7 @@ class DaskRunner:
             raise MaceError(f"the Dask runner needs dask[distributed]: {exc}") from None
         self._own_cluster = None
         self._stderr: _WorkersStderr | None = None
-        self.client = None
+        self.client: Any = None  # a distributed.Client once connected
         self._shipped: dict[str, str] = {}  # SHA-256 -> the name of the plugin that ships it
         self._id = uuid.uuid4().hex[:12]  # plugin names of this runner's own: closing it leaves other clients' alone
         self._own_client = client is None

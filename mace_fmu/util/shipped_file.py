@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from distributed.diagnostics.plugin import WorkerPlugin
 
+from mace_fmu.errors import MaceError
 from mace_fmu.util.atomic import atomic_path
 from mace_fmu.util.shipping import copy_path, sha256_of
 
@@ -32,7 +33,7 @@ class ShippedFile(WorkerPlugin):
         target = copy_path(worker.local_directory, sha256=self.sha256, name=self.name_of_file)
         if not target.is_file():
             if sha256_of(self.data) != self.sha256:  # pickled on the client, read here: a damaged copy fails now
-                raise ValueError(f"{self.name_of_file}: the bytes that reached this worker are not the client's")
+                raise MaceError(f"{self.name_of_file}: the bytes that reached this worker are not the client's")
             with atomic_path(target) as tmp:
                 tmp.write_bytes(self.data)
         self.data = b""  # the copy on disk is what tasks read; the scheduler keeps the bytes for workers to come

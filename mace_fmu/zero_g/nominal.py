@@ -240,7 +240,7 @@ def _solve_adjustment(adjuster: _Adjuster, target_hz: np.ndarray, target_zeta: n
     for _ in range(n + 1):
         free = np.concatenate([np.ones(n, dtype=bool), ~pinned])
 
-        def residual(z: np.ndarray) -> np.ndarray:
+        def residual(z: np.ndarray, free: np.ndarray = free) -> np.ndarray:
             full = x.copy()
             full[free] = z
             return (weight * misses(full))[free]

@@ -9,9 +9,9 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+from mace_fmu.parameters.frequency_bounds import mode_rows, read_bounds, relative_bounds, toml_scalar
 from mace_fmu.thesis import thesis_data
 from mace_fmu.util.atomic import output_folder, write_text_atomic
-from mace_fmu.util.textfile import read_toml
 from mace_fmu.zero_g.nominal import ZeroGPrediction, ZeroGRow
 
 CSV_COLUMNS = ("label", "nominal_hz", "damping", "bound_percent", "heavy", "adjusted", "damping_reached", "mode",
@@ -125,24 +125,14 @@ def as_csv(prediction: ZeroGPrediction) -> str:
     return buffer.getvalue()
 
 
-def _toml(value) -> str:
-    if isinstance(value, bool):
-        return "true" if value else "false"
-    if isinstance(value, str):
-        return '"' + value.replace("\\", "\\\\").replace('"', '\\"') + '"'
-    return repr(float(value)) if isinstance(value, float) else str(value)
-
-
 def as_toml(prediction: ZeroGPrediction) -> str:
     """The rule and the rows as TOML ([rule], [[mode]]; bounds in percent; a mode without an FMU mode omits it)."""
     rule = prediction.rule
     lines = ["# mace-fmu predict-0g: updated nominal 0-g model and frequency bounds (thesis 5.3, Table 5.3)",
-             f"source = {_toml(prediction.source)}", "", "[rule]",
-             f"heavy_damping = {_toml(rule.heavy_damping)}", f"minimum_bound = {_toml(rule.minimum_bound)}",
-             f"error_fraction = {_toml(rule.error_fraction)}", f"heavy_bound = {_toml(rule.heavy_bound)}",
-             f"correct_heavy = {_toml(rule.correct_heavy)}"]
-    for row in rows_as_data(prediction):
-        lines += ["", "[[mode]]"] + [f"{k} = {_toml(v)}" for k, v in row.items() if v is not None]
+             f"source = {toml_scalar(prediction.source)}", "", "[rule]",
+             f"heavy_damping = {toml_scalar(rule.heavy_damping)}", f"minimum_bound = {toml_scalar(rule.minimum_bound)}",
+             f"error_fraction = {toml_scalar(rule.error_fraction)}", f"heavy_bound = {toml_scalar(rule.heavy_bound)}",
+             f"correct_heavy = {toml_scalar(rule.correct_heavy)}"] + mode_rows(rows_as_data(prediction))
     return "\n".join(lines) + "\n"
 
 
@@ -191,24 +181,4 @@ def read_frequency_bounds(path: str | Path, *, mode_labels: Sequence[str]) -> di
     MaceError
         A malformed file, or a mode number that names another mode in this model.
     """
-    from mace_fmu.errors import MaceError
-
-    data = read_toml(path, what="frequency-bounds")
-    rows = data.get("mode")
-    if not isinstance(rows, list) or not rows:
-        raise MaceError(f"{path}: no [[mode]] rows (expected the table_5_3.toml of mace-fmu predict-0g)")
-    bounds: dict[int, float] = {}
-    for k, row in enumerate(rows, start=1):
-        if "mode" not in row:
-            continue
-        mode, percent = row.get("mode"), row.get("bound_percent")
-        if isinstance(mode, bool) or not isinstance(mode, int) or mode < 1 or isinstance(percent, bool) \
-                or not isinstance(percent, (int, float)) or not 0.0 <= percent < 100.0:
-            raise MaceError(f"{path}: [[mode]] {k}: expected a mode number >= 1 and bound_percent in [0, 100), got "
-                            f"mode = {mode!r}, bound_percent = {percent!r}")
-        if mode > len(mode_labels) or mode_labels[mode - 1] != row.get("mode_label"):
-            have = mode_labels[mode - 1] if mode <= len(mode_labels) else "no such mode"
-            raise MaceError(f"{path}: [[mode]] {k}: mode {mode} is {row.get('mode_label')!r} there but {have!r} in "
-                            "this model (made with other options or parameters?)")
-        bounds[mode] = percent / 100.0
-    return bounds
+    return relative_bounds(read_bounds(path), mode_labels=mode_labels, where=str(path))

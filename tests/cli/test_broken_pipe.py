@@ -1,4 +1,4 @@
-"""A reader that stops early (``mace-fmu params list FMU | head``) ends the command quietly (issue 48, item 5):
+"""A reader that stops early (``mace-fmu params list FMU | head``) ends the command quietly:
 no BrokenPipeError traceback, the shell's status of a process ended by SIGPIPE."""
 
 from __future__ import annotations
@@ -28,7 +28,7 @@ def test_a_closed_stdout_ends_the_command_without_a_traceback():
 
 
 def test_piping_into_head_prints_the_first_line_and_nothing_else(tmp_path):
-    """The shell pipeline the issue ran, on an output (125 kB: a lattice tower's 1000 modes as JSON) larger than
+    """The shell pipeline a user runs, on an output (125 kB: a lattice tower's 1000 modes as JSON) larger than
     the pipe holds and head reads, so that the command is still writing when head has left; with pipefail the
     command's own status shows: SIGPIPE's 141 (the old code: 1, after a BrokenPipeError traceback)."""
     from support.decks import frame_tower

@@ -1,4 +1,4 @@
-"""The command line says the same things the same way (issue 51, item 11): each finding, as it was seen.
+"""The command line says the same things the same way: each finding, as it was seen.
 
 Removed spellings refused by name, ``--version``, an FMI 3 controller beside the FMI 2 one, FMUs of two
 updates' parameter sets beside each other, the user's own paths in errors, help text without ``%%``, the
@@ -201,3 +201,60 @@ def test_a_modulus_far_outside_the_decks_is_blamed_on_the_set(tmp_path, capsys, 
     assert line.startswith("mace-fmu: error: tiny.toml: E_lexan_center = 2400 Pa is 1.03e-06 x the deck's "
                            "2.335e+09 Pa, outside the range the FMUs take (0.7-1.5 x); with it the model cannot be "
                            "solved ("), line
+
+
+# ---- one way to write a progress line -------------------------------------------------------------------------
+
+def test_every_progress_line_goes_through_progress():
+    """A progress line (two spaces, on stderr) is written by mace_fmu.cli.common.progress alone, so that every
+    command's lines look alike and change together; no command has a printer of its own beside it."""
+    import ast
+
+    found = []
+    for path in sorted((ROOT / "mace_fmu" / "cli").glob("*.py")):
+        if path.name in ("common.py", "__init__.py"):  # progress itself; an error's indented details
+            continue
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.Call) and getattr(node.func, "id", "") == "print" and node.args \
+                    and any(k.arg == "file" and ast.unparse(k.value) == "sys.stderr" for k in node.keywords):
+                first = node.args[0]
+                text = first.value if isinstance(first, ast.Constant) else \
+                    getattr(first.values[0], "value", "") if isinstance(first, ast.JoinedStr) and first.values else ""
+                if isinstance(text, str) and text.startswith("  "):
+                    found.append(f"{path.name}:{node.lineno}")
+    assert found == []
+
+
+# ---- every number an option takes is checked as it is parsed --------------------------------------------------
+
+def test_no_option_takes_a_plain_float_or_int():
+    """``type=float`` lets nan, inf and -5 through to fail later, or not at all; each option has a type that says
+    what it expects (mace_fmu.cli.common: positive_number, positive_hz, fraction, percent, ...), in one line."""
+    import ast
+
+    plain = []
+    for path in sorted((ROOT / "mace_fmu" / "cli").glob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.Call) and getattr(node.func, "attr", "") == "add_argument":
+                keywords = {k.arg: k.value for k in node.keywords}
+                kind = getattr(keywords.get("type"), "id", "")
+                if kind == "float" or (kind == "int" and "choices" not in keywords):
+                    plain.append(f"{path.name}:{node.lineno}")
+    assert plain == []
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["view", "response", "0g", "--chirp-hz", "-1", "5"], "argument --chirp-hz: expected a finite frequency >= 0 Hz, "
+                                                          "got '-1'"),
+    (["view", "response", "0g", "--duration", "nan"], "argument --duration: expected a finite number > 0, got 'nan'"),
+    (["data", "h1", "x.csv", "--segment", "0"], "argument --segment: expected an integer >= 1, got '0'"),
+    (["data", "h1", "x.csv", "--segment", "8", "--overlap", "1"], "argument --overlap: expected a fraction in [0, 1), "
+                                                                  "got '1'"),
+    (["model", "0g", "--list-max-hz", "-5"], "argument --list-max-hz: expected a finite frequency > 0 Hz, got '-5'"),
+    (["study", "robust-0g", "--seed", "-1"], "argument --seed: expected an integer >= 0, got '-1'"),
+])
+def test_a_bad_number_is_one_line_naming_the_option_and_what_it_expects(capsys, argv, message):
+    with pytest.raises(SystemExit) as stopped:
+        main(argv)
+    assert stopped.value.code == 2
+    assert _error_line(capsys).endswith(f"error: {message}")

@@ -1,4 +1,4 @@
-"""``mace-fmu modes --parameters FILE`` (and ``model``) for any deck with a structure file (issue 48, item 3): an
+"""``mace-fmu modes --parameters FILE`` (and ``model``) for any deck with a structure file: an
 update's frequencies are one command.
 
 The deck is the tip-mass cantilever of the own-deck tests, its material named ``beam`` by a structure file; a set

@@ -1,6 +1,6 @@
 """Every output a command writes, and the Dask scheduler it is sent to, are checked before the work.
 
-Issue 51, item 4: ``update fmu -o`` to a folder that cannot be made ended in a traceback after the update
+Before: ``update fmu -o`` to a folder that cannot be made ended in a traceback after the update
 (its results lost), ``update mace`` said so after 14 s of work, ``predict-0g -o`` and ``view --html``
 gave tracebacks, and a ``--scheduler`` where another service listens gave a traceback (a 3 EiB
 allocation) or hung. Each is now one line, exit 2, before anything is computed.
@@ -68,7 +68,7 @@ def _one_line(err: str) -> str:
     return lines[0]
 
 
-# -- the four the issue names: no simulation, model or mode computed, one line at once ---------------------------
+# -- the four cases above: no simulation, model or mode computed, one line at once ---------------------------
 
 def _started(monkeypatch, *targets: str) -> list[str]:
     """Replace each ``module.function`` by a refusal that records the call."""

@@ -1,4 +1,4 @@
-"""Every flow takes every parameter name every other flow writes (issue 51, item 2): a set as ``update fmu``
+"""Every flow takes every parameter name every other flow writes: a set as ``update fmu``
 writes it (the FMU's names: ``damping_mode_<k>``, ``frequency_scale_mode_<k>``, moduli and masses off their
 nominal values) and the same set by mode label (``damping:<label>``, as ``update mace`` and ``predict-0g``
 write) go into ``export --parameters`` (native and pythonfmu), ``export --ssp`` and ``update fmu --start``;

@@ -1,4 +1,4 @@
-"""Decks NASTRAN takes (issue 51, item 7): free-field lines longer than one card image, which NASTRAN continues
+"""Decks NASTRAN takes: free-field lines longer than one card image, which NASTRAN continues
 on implicit continuation images, and the aeroelastic cards, which change neither mass nor stiffness and are read
 past, so that a refusal of the cards the reader cannot model never names one of them while saying they are read
 past.

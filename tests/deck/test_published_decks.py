@@ -1,4 +1,4 @@
-"""Decks NASTRAN runs, read as published (issue 35, items 2 and 3): what the reader accepts and what it says.
+"""Decks NASTRAN runs, read as published: what the reader accepts and what it says.
 
 The decks are pyNastran's files, copied unedited into tests/data/nastran (provenance.toml gives each file's
 path and git blob id; tests/fe/test_nastran_decks.py checks the bytes). Each test names the NASTRAN feature
@@ -49,7 +49,7 @@ def test_bar1_load_selects_a_force_set_directly():
 
 def test_bar1_has_no_mass_and_the_modes_say_so(capsys):
     """bar1.dat is a static deck: its MAT1 has no RHO and it has no mass element. Its 0-g modes said "no modes in
-    the range asked for, up to 250 Hz" (issue 51, item 7): K phi = lambda M phi with M = 0 has no finite root, and
+    the range asked for, up to 250 Hz": K phi = lambda M phi with M = 0 has no finite root, and
     the message now says why."""
     path = NASTRAN / "frame_three_bars" / "bar1.dat"
     message = (f"{path}: the deck has no mass: no CONM1, CONM2, CMASS1, CMASS2 or PMASS card and no density (RHO) on "

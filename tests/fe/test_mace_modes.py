@@ -141,7 +141,7 @@ def test_1g_structural_modes_match_table_5_1_paired_by_mac(m1, m0):
 def test_every_label_is_unique_and_table_5_1_names_stay(deck, configuration):
     """Up to 250 Hz: no label repeats; each Table 5.1 name labels the lowest mode of its kind, and a repeat
     of it is the '2nd' (thesis: torsion modes at 10.3/12.4 Hz; ours also at 92.9/108.6 Hz in 0-g)."""
-    from viewer import mode_index
+    from mace_fmu.viewer import mode_index
 
     sm = compute_modes(deck, configuration=configuration, max_hz=250.0)
     labels, hz = list(sm.labels), sm.frequencies_hz

@@ -1,4 +1,4 @@
-"""An FMU whose start value lies outside its declared min/max (issue 51, item 5) can neither be written nor pass
+"""An FMU whose start value lies outside its declared min/max can neither be written nor pass
 validation: FMI 2.0 and 3.0 require min <= start <= max and every host checks it, fmpy's validation did not.
 
 The FMUs are the three-storey frame's native FMUs (FMI 2 and 3), written by the exporter and then given a

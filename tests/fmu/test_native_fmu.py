@@ -474,7 +474,7 @@ def test_fmpy_cvode_simulation_of_model_exchange_equals_the_exact_step_response(
 
 
 def test_fmpy_cvode_model_exchange_with_input_steps_is_within_1e_6_of_the_exact_response(fmus):
-    """Issue 23 section 4's accuracy on a short run: fmpy's model exchange (CVode, rtol 1e-9) with the inputs
+    """Model exchange's accuracy (docs/guide/fmus.md: 1e-6 with input steps) on a short run: fmpy's model exchange (CVode, rtol 1e-9) with the inputs
     stepping at three instants (input events: fmpy stops and restarts CVode there) against the exact
     zero-order-hold response, to 1e-6 of each output's range (benchmarks/bench_model_exchange.py has the
     10 s runs and the tolerances)."""

@@ -21,6 +21,12 @@ LAYER_OF_PREFIX = {"ml": 0, "zoh": 0, "mace": 1, "mi": 2}
 LAYER_OF_FILE = {"mace_linalg.c": 0, "mace_zoh.c": 0, "mace_data.c": 1, "mace_model.c": 1,
                  "controller/mace_discrete.c": 1, "mace_instance.c": 2, "fmi2_api.c": 3, "fmi3_api.c": 3}
 CALL = re.compile(r"\b(ml|zoh|mi|mace)_[a-z0-9_]+\s*\(")
+#: layer of each header: a file includes headers of its own layer and the layers below it only (the FMI
+#: standard's headers are the entry points')
+LAYER_OF_HEADER = {"mace_linalg.h": 0, "mace_zoh.h": 0, "mace_data.h": 1, "mace_model.h": 1, "mace_instance.h": 2,
+                   "fmi2Functions.h": 3, "fmi2FunctionTypes.h": 3, "fmi2TypesPlatform.h": 3,
+                   "fmi3Functions.h": 3, "fmi3FunctionTypes.h": 3, "fmi3PlatformTypes.h": 3}
+INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"', re.M)
 
 
 def _calls(path: Path) -> set[str]:
@@ -36,6 +42,25 @@ def test_every_source_file_has_a_layer_and_calls_no_layer_above_it():
     assert upward == []
     # and the layers are used: the instance calls the model, the model the numerics
     assert "mace" in _calls(SOURCE_DIR / "mace_instance.c") and "zoh" in _calls(SOURCE_DIR / "mace_model.c")
+
+
+def _includes(path: Path) -> list[str]:
+    """The headers of ours a file includes (``#include "..."``; comments left out)."""
+    return INCLUDE.findall(re.sub(r"/\*.*?\*/|//[^\n]*", "", path.read_text(), flags=re.S))
+
+
+def test_every_file_includes_only_headers_of_its_layer_and_below():
+    """The layers hold for the ``#include``s as for the calls: the numerics (mace_zoh.c) included mace_model.h for
+    one constant, the error buffer's length, which now lives in the lowest header, mace_linalg.h."""
+    headers = {p.relative_to(SOURCE_DIR).as_posix() for p in SOURCE_DIR.rglob("*.h")}
+    assert headers == set(LAYER_OF_HEADER)
+    layer_of = {**LAYER_OF_FILE, **LAYER_OF_HEADER}
+    found = {name: _includes(SOURCE_DIR / name) for name in layer_of}
+    assert {h for included in found.values() for h in included} <= set(LAYER_OF_HEADER)
+    upward = [(name, header) for name, included in found.items() for header in included
+              if LAYER_OF_HEADER[header] > layer_of[name]]
+    assert upward == []
+    assert "mace_model.h" not in found["mace_zoh.c"] and "mace_linalg.h" in found["mace_zoh.h"]
 
 
 @pytest.mark.skipif(shutil.which("gcc") is None, reason="needs gcc")

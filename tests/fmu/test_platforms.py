@@ -1,4 +1,4 @@
-"""Native FMUs for every desktop (issue 37): the platform folders, the universal darwin64 binary, each binary's
+"""Native FMUs for every desktop: the platform folders, the universal darwin64 binary, each binary's
 CPU and exports, the build record, ``--platforms`` and a missing toolchain.
 
 The binaries are read by tests/support/binaries.py, written from the file formats' specifications and

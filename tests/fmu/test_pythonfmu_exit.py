@@ -1,4 +1,4 @@
-"""A process that ran a pythonfmu FMU exits without touching freed memory (issue 51, item 3).
+"""A process that ran a pythonfmu FMU exits without touching freed memory.
 
 pythonfmu's wrapper frees its process-wide ``PyState`` block with a static's destructor at ``exit()`` and
 then, from its ``onLibraryUnload`` destructor, decrements a count inside the freed block; glibc aborted

@@ -1,4 +1,4 @@
-"""The native runtime's binaries on a fresh machine (issue 51, item 8): compiled when the package is built,
+"""The native runtime's binaries on a fresh machine: compiled when the package is built,
 taken from there by an export that then compiles nothing, and a compilation at first use (sources changed
 since the build) reported as it goes: its start, each platform, and a line at least every 15 s.
 

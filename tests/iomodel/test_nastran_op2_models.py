@@ -34,8 +34,8 @@ def _structure_file(tmp_path: Path, run: str) -> Path:
 def _pynastran(run: str) -> tuple[np.ndarray, dict[tuple[int, int], np.ndarray]]:
     """(eigenvalues [rad^2/s^2], (grid, component) -> that component in every mode) as pyNastran read them."""
     folder = DATA / Path(RUNS[run][0]).parent
-    rows = lambda name: [r for r in csv.DictReader(l for l in (folder / name).read_text().splitlines()  # noqa: E731
-                                                  if not l.startswith("#"))]
+    rows = lambda name: [r for r in csv.DictReader(t for t in (folder / name).read_text().splitlines()  # noqa: E731
+                                                  if not t.startswith("#"))]
     eigenvalues = np.array([float(r["eigenvalue"]) for r in rows("pynastran_eigenvalues.csv")])
     shapes: dict[tuple[int, int], np.ndarray] = {}
     for r in rows("pynastran_modes.csv"):

@@ -199,7 +199,7 @@ def test_a_cable_modulus_up_10_percent_keeps_each_mode_s_damping(nominal):
     assert _rms_error(y0, reference).max() > 0.01  # the change is seen
 
 
-#: the issue's point: the 8 kept moduli 2-6 % off nominal at once
+#: the route's hard case: the 8 kept moduli 2-6 % off nominal at once
 POINT_A = {"E_lexan_center": 1.037, "E_lexan_end": 0.978, "E_active_strut_end": 1.051, "E_active_strut_piezo": 0.982,
            "E_active_strut_center": 1.029, "E_cable_1": 1.06, "E_cable_2": 0.96, "E_cable_3": 1.025}
 
@@ -289,7 +289,7 @@ GYROS = ("gyro_payload_x", "gyro_payload_z", "gyro_bus_x", "gyro_bus_y", "gyro_b
                          ids=["gyros", "gyros and strut-2 gauges"])
 def test_an_update_on_data_of_the_fmu_exported_with_the_truth_finds_every_modulus_in_its_interval(reexported,
                                                                                                   tmp_path, outputs):
-    """The issue's check, from a full re-solve: the 8 kept moduli 2-6 % away from the nominal FMU's, built into
+    """The check, from a full re-solve: the 8 kept moduli 2-6 % away from the nominal FMU's, built into
     a re-exported FMU (nothing set through FMI), a 20 s gimbal test at 2 ms with 2 % output noise; the nominal
     FMU updated on those data converges and the model explains the data to their noise; every modulus's truth
     lies inside its reported 95 % interval; the strut's sections within 1.96 standard deviations of what the full

@@ -79,7 +79,7 @@ def _model(tmp_path, *, parameters: ParameterSet | None = None, **structure):
 def _expected_poles(gains: dict[str, dict[str, float]]) -> np.ndarray:
     """Roots of J s^2 + d s + k' per oscillator, with the gains each loop has."""
     poles = []
-    for (grid, inertia, stiffness), loop in zip(OSCILLATORS, LOOPS):
+    for (_, inertia, stiffness), loop in zip(OSCILLATORS, LOOPS):
         g = {**SHARED, **gains.get(loop, {})}
         if loop == "push_4":  # the gain loop on a rotation: a stiffness
             damping, extra = 0.0, ACTUATOR_GAIN * g["K_f"] * g["K_b"] * SENSOR_GAIN

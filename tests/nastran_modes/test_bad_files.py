@@ -88,7 +88,7 @@ def test_complex_or_sort2_vectors_are_refused(tmp_path):
 
 def test_a_static_run_is_said_to_hold_static_displacements():
     """models/plate/plate.op2 (SOL 101): asking it for DISPLACEMENT(PLOT)=ALL, as the message once did, changes
-    nothing; what the file holds does (issue 51, item 7)."""
+    nothing; what the file holds does."""
     match = _error(NASTRAN / "plate_static" / "plate.op2")
     assert match["table"] == "OUGV1" and match["record"] == "its IDENT records"
     assert match["problem"] == ("no real eigenvectors of a normal-modes run in the file: it holds static "

@@ -1,4 +1,4 @@
-"""What a NASTRAN results file says, taken at its word or refused in one line (issue 51, item 7).
+"""What a NASTRAN results file says, taken at its word or refused in one line.
 
 The files are the public OP2s of tests/data/nastran with one thing changed (tests/support/op2_files.py), each
 as a public OP2 that the tests do not hold has it: pyNastran's models/msc/sol103_test_pcompg_2021.op2 (a

@@ -97,3 +97,13 @@ def test_a_mass_that_moves_in_a_rigid_body_mode_is_refused_as_an_fmu_parameter(t
                         electronics=ModelledElectronics(servos=False, bessel="none", delays=False))
     with pytest.raises(MaceError, match=r"mass parameter\(s\) m_payload: the mass moves in a rigid-body"):
         parametric_arrays(model)
+
+
+def test_parameter_names_takes_the_path_of_a_structure_file_or_none(tmp_path):
+    from mace_fmu.parameters.sets import parameter_names
+
+    deck, spec = _oscillator(tmp_path)
+    assert parameter_names(deck, spec).masses == {"payload": 2}
+    assert parameter_names(deck, str(spec)).masses == {"payload": 2}
+    named = parameter_names(deck)  # no structure file: every card by its ID, no masses
+    assert (named.springs, named.masses) == ({"celas3": 3, "celas4": 4}, {})

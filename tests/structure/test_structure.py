@@ -267,15 +267,15 @@ def test_mode_shape_unknown_grid(m0, grid):
 
 
 def test_mode_shape_bad_system_or_component(m0):
-    with pytest.raises(ValueError, match="'basic' or 'cd'"):
+    with pytest.raises(MaceError, match="'basic' or 'cd'"):
         m0.modes.shape(16, 1, system="local")
-    with pytest.raises(ValueError, match="1-6"):
+    with pytest.raises(MaceError, match="1-6"):
         m0.modes.shape(16, 7)
 
 
 @pytest.mark.parametrize("component", [0, 7])
 def test_mode_shape_bad_component_in_cd_system(m0, component):
-    with pytest.raises(ValueError, match="1-6"):
+    with pytest.raises(MaceError, match="1-6"):
         m0.modes.shape(16, component, system="cd")
 
 

@@ -1,4 +1,4 @@
-"""A structure file's values checked when it is read (issue 51, item 5): a damping ratio outside [0, 1), a delay
+"""A structure file's values checked when it is read: a damping ratio outside [0, 1), a delay
 or a cut-off outside what the physics allows, a parameter name that cannot be one, and a [parameters] entry
 naming a card the deck lacks, each refused in one line naming the file, its line, the table and key and what was
 expected; the files that ship with the package and its examples still read."""

@@ -58,7 +58,7 @@ class Variables:
     n_states: int
 
     @classmethod
-    def read(cls, folder: str, other: str) -> "Variables":
+    def read(cls, folder: str, other: str) -> Variables:
         md = fmpy.read_model_description(folder)
         by = lambda c: [v.valueReference for v in md.modelVariables if v.causality == c]  # noqa: E731
         params = {v.valueReference: (float(v.start), None if v.min is None else float(v.min),
@@ -81,7 +81,7 @@ class Model:
     time: float = 0.0
     params: dict[int, float] = field(default_factory=dict)
 
-    def copy(self) -> "Model":
+    def copy(self) -> Model:
         return Model(self.phase, self.time, dict(self.params))
 
 

@@ -1,5 +1,5 @@
 """The three-storey frame's FMU updated on each of its three measured FRF files alone, with the intervals each
-update reports (issue 48, item 2: do the three estimates of each parameter agree within their intervals?).
+update reports (do the three estimates of each parameter agree within their intervals?).
 
 The update is the example's (``examples/three_storey_frame/update_three_storey_frame.py``: storey moduli,
 floor masses and modal damping ratios, 0.6 Hz about each resonance, log-FRF cost), one file at a time; the

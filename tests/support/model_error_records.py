@@ -1,6 +1,6 @@
 """Records of structures the two-mass model cannot reproduce, and the consistency study of their intervals.
 
-Issue 48, item 2: when the model lacks something the data hold (a sensor's dynamics, a mode, an element),
+When the model lacks something the data hold (a sensor's dynamics, a mode, an element),
 do the intervals an update reports still cover what another record of the same structure gives? Each kind of
 model-form error below is a continuous-time system driven by a white force on mass 1 and read at mass 1
 (zero-order hold, 0.5 s samples as the thesis's two-mass records), with white measurement noise of

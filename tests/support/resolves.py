@@ -20,7 +20,7 @@ from mace_fmu.iomodel.parametric_data import parametric_arrays
 from mace_fmu.iomodel.volts import volts_model
 from mace_fmu.parameters.sets import ParameterSet
 
-STEP_S = 2e-3  #: the issue's check: 10 s at 2 ms
+STEP_S = 2e-3  #: the checked record: 10 s at 2 ms
 SAMPLES = 5000
 
 

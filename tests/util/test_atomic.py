@@ -82,7 +82,7 @@ def _umask() -> int:
 def test_figures_and_pages_are_written_atomically(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     from matplotlib.figure import Figure
 
-    from viewer.html import write_html
+    from mace_fmu.viewer.html import write_html
 
     fig = Figure()
     fig.subplots().plot([0, 1], [1, 0])

@@ -101,7 +101,7 @@ def test_a_scheduler_passes_the_check_and_a_worker_is_named_for_what_it_is(runne
 @pytest.mark.slow  # a local cluster started in a subprocess
 def test_a_second_cluster_on_the_machine_prints_no_port_warning():
     """Dask's dashboard port, 8787, held (by another engineer's update, or here by a socket): the runner's local
-    cluster starts without Dask's "Port 8787 is already in use" warning reaching the user (issue 48, item 5; the
+    cluster starts without Dask's "Port 8787 is already in use" warning reaching the user (the
     dashboard is off and the scheduler's HTTP routes take a free port)."""
     import contextlib
     import os

@@ -2,7 +2,7 @@
 
 A terminal's Ctrl-C signals the whole foreground process group: the command and every worker process of its
 local cluster. Each worker printed its event loop's KeyboardInterrupt and the nannies logged the cancelled
-closes: 35-68 lines before ``mace-fmu: interrupted`` (issue 51, item 9). The command runs here in a process
+closes: 35-68 lines before ``mace-fmu: interrupted``. The command runs here in a process
 group of its own (tests/support/interrupted_dask_job.py) and the whole group is signalled, as a terminal
 does, while the workers start and while they are busy.
 """

@@ -14,7 +14,7 @@ from mace_fmu.iomodel.modal_source import modal_structure
 
 
 def test_the_viewer_draws_the_plates_quads_and_the_solids_corner_edges(tmp_path):
-    from viewer import animate_modes, write_animation_html
+    from mace_fmu.viewer import animate_modes, write_animation_html
 
     plate = modal_structure(op2_structure_file(tmp_path, "plate_py"))
     animation = animate_modes(plate, ["mode 7", "mode 8"])

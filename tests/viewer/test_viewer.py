@@ -17,12 +17,12 @@ from support.printed import printed_in
 
 from mace_fmu.errors import MaceError
 from mace_fmu.fe.modes import compute_modes
-from viewer import (animate_mode, animate_modes, animate_response, build_scene, scene_commands, standalone_html,
+from mace_fmu.viewer import (animate_mode, animate_modes, animate_response, build_scene, scene_commands, standalone_html,
                     write_animation_html)
-from viewer.frames import body_motion
-from viewer.meshcat_scene import FLOAT32_EXT
-from viewer.scene import tube_outer_radius_m
-from viewer.still import chromium_executable, render_page, write_still
+from mace_fmu.viewer.frames import body_motion
+from mace_fmu.viewer.meshcat_scene import FLOAT32_EXT
+from mace_fmu.viewer.scene import tube_outer_radius_m
+from mace_fmu.viewer.still import chromium_executable, render_page, write_still
 
 pytestmark = pytest.mark.slow  # renders pages in a browser
 
@@ -103,7 +103,7 @@ def _look_at_projection(eye: np.ndarray, points: np.ndarray) -> np.ndarray:
 def test_camera_frames_the_article_not_the_cables(modes_0g, modes_1g):
     """Each view: the article's box projects within 80 % of a 4:3 picture, touching that bound or kept
     0.45 article lengths from the camera (end-on); the iso and z views are bound by the picture."""
-    from viewer import CAMERA_VIEWS, camera_position
+    from mace_fmu.viewer import CAMERA_VIEWS, camera_position
 
     tan_v = np.tan(np.radians(75.0 / 2))
     for sm in (modes_0g, modes_1g):
@@ -128,7 +128,7 @@ def test_camera_frames_the_article_not_the_cables(modes_0g, modes_1g):
 
 def test_page_centres_the_article_and_aims_the_camera(modes_1g):
     """The page shifts the article's centre to the orbit target (origin) and hides meshcat's 20 m grid."""
-    from viewer import camera_position
+    from mace_fmu.viewer import camera_position
 
     anim = animate_mode(modes_1g, "1st Z bending", frames_per_cycle=8)
     commands = _decoded_commands(standalone_html(scene_commands(anim.scene, anim.frames, camera="z"), title="t"))
@@ -199,7 +199,7 @@ needs_chromium = pytest.mark.skipif(chromium_executable() is None and not os.env
                                     reason="Debian chromium not installed (.ci/run installs it and requires this test)")
 
 
-#: hue [deg] of each component drawn in the gimbal and wheel colours (viewer.scene.COMPONENT_COLOURS)
+#: hue [deg] of each component drawn in the gimbal and wheel colours (mace_fmu.viewer.scene.COMPONENT_COLOURS)
 _ARTICLE_HUES = {"primary_gimbal": 29.0, "secondary_gimbal": 351.0, "reaction_wheels": 127.0}
 
 
@@ -304,7 +304,7 @@ def test_cli_png_writes_a_still_from_the_chosen_camera(tmp_path, capsys):
 
     from mace_fmu.cli import main
     from mace_fmu.cli.view import CAMERA_CHOICES
-    from viewer import CAMERA_VIEWS
+    from mace_fmu.viewer import CAMERA_VIEWS
 
     assert CAMERA_CHOICES == tuple(CAMERA_VIEWS)
     spans = {}
@@ -333,7 +333,7 @@ def test_cli_png_without_chromium_says_so_before_any_work(tmp_path, monkeypatch,
 def test_live_meshcat_server_receives_the_same_animation(modes_0g):
     """The live path (a real meshcat server) stores exactly the commands the standalone page embeds."""
     meshcat = pytest.importorskip("meshcat")
-    from viewer import send_to_visualizer
+    from mace_fmu.viewer import send_to_visualizer
 
     anim = animate_modes(modes_0g, [14], frames_per_cycle=8)
     commands = scene_commands(anim.scene, anim.frames)
@@ -448,7 +448,7 @@ def modes_1g_table():
 
 @pytest.fixture(scope="module")
 def pairs_anim(modes_1g_table, modes_0g):
-    from viewer import animate_pairs
+    from mace_fmu.viewer import animate_pairs
 
     return animate_pairs(modes_1g_table, modes_0g, frames_per_cycle=8)
 
@@ -498,14 +498,14 @@ def test_pairs_move_in_phase(pairs_anim):
 def test_pair_page_places_both_copies_and_animates_every_body(pairs_anim):
     """Decoded page: the copies' article centres sit one above the other (deck Y), gap 0.25 article
     lengths; one set_animation moves both copies' masses by their own frames; the camera frames both."""
-    from viewer import pair_commands
-    from viewer.camera import framing_position
+    from mace_fmu.viewer import pair_commands
+    from mace_fmu.viewer.camera import framing_position
 
     html = standalone_html(pair_commands(pairs_anim), title="t", clips=pairs_anim.frames.clips)
     commands = _decoded_commands(html)
     transforms = {c["path"]: np.array(c["matrix"], dtype=float).reshape(4, 4).T
                   for c in commands if c["type"] == "set_transform"}
-    from viewer.meshcat_scene import Y_UP_TO_Z_UP
+    from mace_fmu.viewer.meshcat_scene import Y_UP_TO_Z_UP
 
     np.testing.assert_array_equal(transforms["/meshcat/mace"], Y_UP_TO_Z_UP)  # no shift: the pair's box centre
     centres = {}
@@ -531,7 +531,7 @@ def test_pair_page_places_both_copies_and_animates_every_body(pairs_anim):
 
 def test_pairs_stack_along_the_pictures_up(modes_1g_table, modes_0g):
     """Seen from above (--camera y) the copies stack along deck Z, so they do not hide each other."""
-    from viewer import animate_pairs
+    from mace_fmu.viewer import animate_pairs
 
     anim = animate_pairs(modes_1g_table, modes_0g, labels=["1st Y", "torsion"], view="y", frames_per_cycle=4)
     assert [p.label for p in anim.pairs] == ["1st Y bending", "torsion, secondary end", "torsion, primary end"]
@@ -546,7 +546,7 @@ def test_pair_page_shows_two_articles_and_marks_the_pair(modes_1g_table, modes_0
     legend marks the pair whose span holds the animator's time."""
     from PIL import Image
 
-    from viewer import animate_pairs
+    from mace_fmu.viewer import animate_pairs
 
     pairs_anim = animate_pairs(modes_1g_table, modes_0g, labels=["1st Z", "1st Y", "2nd Y"], frames_per_cycle=8)
     page = tmp_path / "pairs.html"
@@ -609,7 +609,7 @@ def test_a_notebook_shows_an_animation_inline_as_its_standalone_page(modes_0g):
     """``_repr_html_``: the same page write_animation_html writes, in an iframe's srcdoc (no server)."""
     import html
 
-    from viewer import animation_commands, standalone_html
+    from mace_fmu.viewer import animation_commands, standalone_html
 
     anim = animate_modes(modes_0g, [14], frames_per_cycle=12)
     shown = anim._repr_html_()

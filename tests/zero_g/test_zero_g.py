@@ -240,19 +240,29 @@ def _measured_csv(path: Path, rows: list[tuple[str, str, float, float, str]], *,
 
 
 BAD_INPUTS = [
-    (["--minimum-bound-percent", "-1"], "minimum_bound"),
-    (["--heavy-bound-percent", "150"], "heavy_bound"),
-    (["--error-fraction", "nan"], "error_fraction"),
+    (["--minimum-bound-percent", "-1"], "argument --minimum-bound-percent: expected a percentage in [0, 100), got '-1'"),
+    (["--heavy-bound-percent", "150"], "argument --heavy-bound-percent: expected a percentage in [0, 100), got '150'"),
+    (["--error-fraction", "nan"], "argument --error-fraction: expected a finite number >= 0, got 'nan'"),
+    (["--heavy-damping", "1.5"], "argument --heavy-damping: expected a fraction in [0, 1), got '1.5'"),
 ]
 
 
 @pytest.mark.parametrize("options, message", BAD_INPUTS)
 def test_negative_or_absurd_bound_rules_are_refused(options, message, tmp_path, capsys):
     out = tmp_path / "out"
-    assert main(["predict-0g", "-o", str(out), *options]) == 2
-    err = capsys.readouterr().err
-    assert err.startswith("mace-fmu: error: bound rule:") and message in err and err.count("\n") == 1
+    with pytest.raises(SystemExit) as stopped:  # by the parser, before any work
+        main(["predict-0g", "-o", str(out), *options])
+    assert stopped.value.code == 2
+    assert capsys.readouterr().err.strip().splitlines()[-1] == f"mace-fmu predict-0g: error: {message}"
     assert not out.exists()
+
+
+def test_a_bound_rule_out_of_range_is_refused_by_the_rule_itself():
+    from mace_fmu.errors import MaceError
+    from mace_fmu.zero_g.nominal import BoundRule
+
+    with pytest.raises(MaceError, match=r"^bound rule: error_fraction = 12.0 must be a number in \[0, 10\)"):
+        BoundRule(error_fraction=12.0)
 
 
 def test_an_updated_nominal_set_is_no_starting_point(run, tmp_path, capsys):

@@ -7,8 +7,9 @@ DeckError naming the card and the field. The table builder (tables.py) looks eac
 
 from __future__ import annotations
 
+from collections.abc import Callable, Mapping
 from types import MappingProxyType
-from typing import Any, Callable, Mapping
+from typing import Any
 
 from mace_fmu.deck.cards import Source
 from mace_fmu.deck.fields import Fields

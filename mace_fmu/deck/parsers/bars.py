@@ -53,7 +53,7 @@ def _offt(f: Fields, v: Any, g0: int | None, name: str) -> bool:
     return text[0] == "B" and v is not None
 
 
-def _two_node_beam(f: Fields, offt_name: str) -> dict:
+def _two_node_beam(f: Fields, offt_name: str) -> dict[str, Any]:
     """The fields CBAR and CBEAM share (EID PID GA GB orientation OFFT; PA PB W1A ... W3B), without pin
     flags or offsets (mace-fmu models neither), as keyword arguments of their records."""
     eid = f.ident(1, "EID")
@@ -72,7 +72,7 @@ def _two_node_beam(f: Fields, offt_name: str) -> dict:
     return dict(id=eid, pid=pid, ga=ga, gb=gb, v=v, g0=g0, orientation_basic=basic)
 
 
-def _plain_two_node_beam(fields: list[str]) -> dict | None:
+def _plain_two_node_beam(fields: list[str]) -> dict[str, Any] | None:
     """What :func:`_two_node_beam` returns for the usual one-line CBAR or CBEAM (EID PID GA GB, then a G0 or a vector
     of reals; OFFT and every later field blank), read without its field-by-field checks: 80,000 bars of a
     large deck took 0.5 s through them. None for any other card, which the checked route reads or refuses

@@ -112,7 +112,7 @@ def conm2(f: Fields, src: Source) -> Conm2:
     if smallest < -1e-12 * max(i11 + i22 + i33, np.finfo(float).tiny):
         raise f.error(f"the inertia matrix is not positive semi-definite (eigenvalue {smallest:.3g} kg m^2; expected "
                       "products of inertia small enough that I11 I22 >= I21^2 and so on)", 9, "I11-I33", 14)
-    return Conm2(id=eid, grid=grid, cid=cid, mass=mass, offset=offset, inertia=inertia,  # type: ignore[arg-type]
+    return Conm2(id=eid, grid=grid, cid=cid, mass=mass, offset=offset, inertia=inertia,
                  source=src)
 
 
@@ -137,4 +137,4 @@ def conm1(f: Fields, src: Source) -> Conm1:
     if smallest < -1e-12 * max(float(np.abs(matrix).max()), np.finfo(float).tiny):
         raise f.error(f"the mass matrix is not positive semi-definite (eigenvalue {smallest:.3g})", 4, "M11-M66",
                       d - 1)
-    return Conm1(id=eid, grid=grid, cid=cid, matrix=tuple(values), source=src)  # type: ignore[arg-type]
+    return Conm1(id=eid, grid=grid, cid=cid, matrix=tuple(values), source=src)

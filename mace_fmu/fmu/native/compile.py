@@ -140,6 +140,9 @@ def _cache_key(platform: Platform, c_files: tuple[str, ...], digest: str) -> str
 
 def _compile(platform: Platform, c_files: tuple[str, ...]) -> bytes:
     command = zig_command()
+    if command is None:
+        raise MaceError("compiling the native FMU runtime needs zig (the ziglang package, a dependency of mace-fmu, "
+                        "or a zig on PATH)")
     with tempfile.TemporaryDirectory(prefix="mace_fmu_cc_") as tmp:
         for path in source_files(c_files):
             shutil.copyfile(path, Path(tmp) / path.name)
@@ -296,7 +299,7 @@ def compile_runtimes(platforms: Sequence[Platform], *, c_files: tuple[str, ...] 
     return {p: binaries[p] for p in todo}
 
 
-def prebuild(folder: str | os.PathLike = PREBUILT_DIR, *, progress: ProgressCallback | None = None) -> list[Path]:
+def prebuild(folder: str | os.PathLike[str] = PREBUILT_DIR, *, progress: ProgressCallback | None = None) -> list[Path]:
     """Compile every runtime variant for every platform into ``folder`` (what the package build ships).
 
     Run by ``setup.py`` when the package is built (a wheel, or ``pip install -e .``): an export then finds

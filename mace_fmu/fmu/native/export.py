@@ -15,16 +15,18 @@ from __future__ import annotations
 import hashlib
 import re
 import uuid
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from importlib import metadata
 from pathlib import Path
 from typing import Literal
+
+import numpy as np
 
 from mace_fmu.errors import MaceError
 from mace_fmu.fmu.native import compile as runtime
 from mace_fmu.fmu.native.model_description import (fmi2_model_description, fmi3_build_description,
                                                    fmi3_model_description, fmu_variables)
-from mace_fmu.fmu.native.platforms import binary_entries, select_platforms
+from mace_fmu.fmu.native.platforms import Platform, binary_entries, select_platforms
 from mace_fmu.fmu.native.resource import count_of, resource_bytes, runtime_arrays
 from mace_fmu.fmu.parametric import ParametricModel
 from mace_fmu.util.atomic import atomic_zip
@@ -34,7 +36,7 @@ FmiVersion = Literal[2, 3]
 RESOURCE_NAME = "mace_model.bin"
 
 
-def runtime_token(data: dict, *, salt: str, sources: list[Path]) -> str:
+def runtime_token(data: Mapping[str, np.ndarray | list[str]], *, salt: str, sources: list[Path]) -> str:
     """A GUID / instantiation token that changes with the model data, ``salt`` (FMI version, FMU kind), the runtime."""
     h = hashlib.sha256(salt.encode())
     for path in sources:
@@ -43,8 +45,8 @@ def runtime_token(data: dict, *, salt: str, sources: list[Path]) -> str:
     return "{" + str(uuid.UUID(bytes=h.digest()[:16])) + "}"
 
 
-def write_native_fmu(final: Path, *, name: str, fmi_version: int, description: bytes, data: dict,
-                     binaries: dict, sources: list[Path], c_files: tuple[str, ...]) -> Path:
+def write_native_fmu(final: Path, *, name: str, fmi_version: int, description: bytes,
+                     data: Mapping[str, np.ndarray | list[str]], binaries: dict[Platform, bytes], sources: list[Path], c_files: tuple[str, ...]) -> Path:
     """Zip a native FMU atomically: its model description, runtime data, binaries and C sources.
 
     Parameters

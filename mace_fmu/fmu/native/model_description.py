@@ -15,10 +15,10 @@ from xml.etree import ElementTree as ET
 import numpy as np
 
 from mace_fmu.fmu.variables import DEFAULT_EXPERIMENT, variable_unit
+from mace_fmu.parameters.kinds import frequency_output_name
 
 if TYPE_CHECKING:  # the record imports this module's JacobianPattern
     from mace_fmu.fmu.parametric import ParametricModel
-from mace_fmu.parameters.kinds import frequency_output_name
 
 LOG_CATEGORIES = (("logStatusError", "errors (always logged)"), ("logEvents", "debug information"))
 
@@ -152,11 +152,19 @@ class JacobianPattern:
     d: np.ndarray
 
 
+def _document(root: ET.Element) -> bytes:
+    """The XML document of ``root``, indented, UTF-8 with its declaration."""
+    ET.indent(root)
+    text: bytes = ET.tostring(root, encoding="UTF-8", xml_declaration=True)
+    return text
+
+
 def _dependencies(element: ET.Element, states: Sequence[int], inputs: Sequence[int], on_states: np.ndarray,
                   on_inputs: np.ndarray) -> None:
     """The dependencies of one unknown (FMI 2.0.x section 2.2.8): the states and inputs it depends on,
     each with the factor's kind "fixed" (a linear model: a constant set at initialisation)."""
-    known = sorted([states[j] for j in np.flatnonzero(on_states)] + [inputs[j] for j in np.flatnonzero(on_inputs)])
+    known = sorted([states[j] for j in np.flatnonzero(on_states).tolist()]
+                   + [inputs[j] for j in np.flatnonzero(on_inputs).tolist()])
     element.set("dependencies", " ".join(map(str, known)))
     element.set("dependenciesKind", " ".join(["fixed"] * len(known)))
 
@@ -215,8 +223,7 @@ def fmi2_model_description(variables: Sequence[FmuVariable], *, model_identifier
     for v in variables:
         if v.causality in ("output", "calculatedParameter", "local"):
             ET.SubElement(initial, "Unknown", index=str(index[v.value_reference]))
-    ET.indent(root)
-    return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
+    return _document(root)
 
 
 def fmi3_model_description(variables: Sequence[FmuVariable], *, model_identifier: str, token: str, description: str,
@@ -242,8 +249,7 @@ def fmi3_model_description(variables: Sequence[FmuVariable], *, model_identifier
     for v in scalars:
         if v.causality in ("output", "calculatedParameter"):
             ET.SubElement(structure, "InitialUnknown", valueReference=str(v.value_reference))
-    ET.indent(root)
-    return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
+    return _document(root)
 
 
 def fmi3_build_description(*, model_identifier: str, source_files: Sequence[str]) -> bytes:
@@ -253,5 +259,4 @@ def fmi3_build_description(*, model_identifier: str, source_files: Sequence[str]
     files = ET.SubElement(configuration, "SourceFileSet", language="C99")
     for name in source_files:
         ET.SubElement(files, "SourceFile", name=name)
-    ET.indent(root)
-    return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
+    return _document(root)

@@ -90,5 +90,5 @@ def binary_entries(binaries: Mapping[Platform, bytes], *, fmi_version: int, name
     for platform, binary in binaries.items():
         grouped.setdefault(entry_path(platform, fmi_version=fmi_version, name=name), {})[platform] = binary
     return {path: next(iter(group.values())) if len(group) == 1
-            else universal_binary({p.macho_cpu: b for p, b in group.items()})
+            else universal_binary({p.macho_cpu: b for p, b in group.items() if p.macho_cpu is not None})
             for path, group in grouped.items()}

@@ -198,7 +198,9 @@ def _blocks(model: ParametricModel, *, index: Mapping[str, int]) -> tuple[np.nda
     constant blocks' matrices, and the names of the parameters that are delays."""
     cluster = model.cluster
     n_states_structure = int(cluster.keep_disp.sum() + cluster.keep_rate.sum())
-    info, blocks, delay_params = [], {}, set()
+    rows: list[list[int]] = []
+    blocks: dict[str, np.ndarray] = {}
+    delay_params: set[str] = set()
     for i, block in enumerate(model.blocks):
         p0 = p1 = -1
         if block.kind == "structure":
@@ -219,8 +221,8 @@ def _blocks(model: ParametricModel, *, index: Mapping[str, int]) -> tuple[np.nda
                 blocks[f"block{i}_{m}"] = matrix.reshape(shape)
         else:
             raise MaceError(f"native FMU: block {i} has the unknown kind {block.kind!r}")
-        info.append([BLOCK_KINDS[block.kind], n_x, n_u, n_y, p0, p1])
-    info = np.array(info, dtype=np.int64).reshape(-1, 6)
+        rows.append([BLOCK_KINDS[block.kind], n_x, n_u, n_y, p0, p1])
+    info = np.array(rows, dtype=np.int64).reshape(-1, 6)
     if info[:, 2].sum() != model.wiring.shape[0] or info[:, 3].sum() != model.wiring.shape[1]:
         raise MaceError("native FMU: block inputs/outputs do not match the wiring matrix")
     return info, blocks, delay_params
@@ -301,7 +303,7 @@ def runtime_arrays(model: ParametricModel) -> dict[str, np.ndarray | list[str]]:
     return out
 
 
-def count_of(data: Mapping[str, np.ndarray], name: str) -> int:
+def count_of(data: Mapping[str, np.ndarray | list[str]], name: str) -> int:
     """One entry of a runtime data file's ``counts`` by its name (:data:`COUNTS`), e.g. ``count_of(data, "states")``."""
     return int(np.asarray(data["counts"])[COUNTS.index(name)])
 

@@ -28,7 +28,7 @@ with M estimated from the residual e itself, its correlations included:
 Tests and files are independent of each other: their M add. M is scaled by m / (m - n) for the n fitted
 parameters (the residual is smaller than the error by that much).
 
-How well it does, measured (``benchmarks/bench_model_error_intervals.py``, benchmarks/RESULTS.md, issue 48):
+How well it does, measured (``benchmarks/bench_model_error_intervals.py``, benchmarks/RESULTS.md):
 
 - time records of structures the two-mass model lacks something of (a sensor lag or resonance, a third mode,
   an element), 40 seeded cases: the halves of a record agree within these intervals in 39 of 40 cases and

@@ -7,6 +7,7 @@ from typing import Callable, Mapping, Sequence
 
 import numpy as np
 
+from mace_fmu.errors import MaceError
 from mace_fmu.updating.engine.costs import Cost
 from mace_fmu.updating.engine.inclusion import Evaluator
 from mace_fmu.updating.engine.linear_model import LinearModel
@@ -40,7 +41,7 @@ def cost_sensitivities(cost: Cost, *, base_model: LinearModel, perturbed: Evalua
     O(step)). ``limits``: name -> [low, high] no model may be asked for (an FMU's declared range); a step that
     would leave it is taken on the other side of the base value (one-sided there)."""
     if difference not in ("forward", "central"):
-        raise ValueError(f"difference must be 'forward' or 'central', got {difference!r}")
+        raise MaceError(f"difference must be 'forward' or 'central', got {difference!r}")
     j0 = cost.residual(base_model)
     wanted = (1.0,) if difference == "forward" else (1.0, -1.0)
 

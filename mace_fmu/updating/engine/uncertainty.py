@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
-from typing import Sequence
+from typing import Mapping, Sequence
 
 import numpy as np
 
@@ -173,13 +173,16 @@ def linearised_uncertainty(*, stage: str, names, values: dict, jacobian: np.ndar
                             method=method, method_text=method_text)
 
 
-def one_sided_at_bounds(stages: tuple[StageUncertainty, ...],
-                        at_bounds: Sequence[tuple[str, str]]) -> tuple[StageUncertainty, ...]:
+def one_sided_at_bounds(stages: tuple[StageUncertainty, ...], at_bounds: Sequence[tuple[str, str]], *,
+                        ranges: Mapping[str, tuple[float, float]] | None = None) -> tuple[StageUncertainty, ...]:
     """``stages`` with the interval of each parameter that ended at a bound made one-sided, as the verdict says.
 
     The data ask for a value beyond the bound, so the value is the bound and no two-sided interval about it
     holds: at a lower bound the 95 % interval runs from the bound to value x (1 + 1.645 sd), at an upper bound
-    from value x (1 - 1.645 sd) to the bound (the one-sided 95 % quantile of the same standard deviation).
+    from value x (1 - 1.645 sd) to the bound (the one-sided 95 % quantile of the same standard deviation),
+    the far end held within the parameter's declared range where one is given (a mass at its upper bound with
+    a standard deviation of 160 % ran to -0.25 kg before; an FMU is not defined beyond its range, and the data
+    say nothing there).
 
     Parameters
     ----------
@@ -187,6 +190,9 @@ def one_sided_at_bounds(stages: tuple[StageUncertainty, ...],
         From :func:`stage_uncertainty`.
     at_bounds : sequence of (str, str)
         (parameter, "lower" or "upper"): :attr:`~mace_fmu.updating.engine.solve.UpdateResult.at_bounds`.
+    ranges : mapping of str to (float, float), optional
+        Each parameter's declared (min, max), e.g. an FMU's (:attr:`FmuInterface.ranges
+        <mace_fmu.updating.fmu.model.FmuInterface.ranges>`): the interval's far end is kept within it.
 
     Returns
     -------
@@ -203,7 +209,8 @@ def one_sided_at_bounds(stages: tuple[StageUncertainty, ...],
         interval = dict(st.interval_95)
         for n, side in here.items():
             v, reach = st.values[n], abs(st.values[n]) * Z95_ONE_SIDED * st.standard_deviation_percent[n] / 100
-            interval[n] = (v, v + reach) if side == "lower" else (v - reach, v)
+            low, high = (ranges or {}).get(n, (-np.inf, np.inf))
+            interval[n] = (v, min(v + reach, max(high, v))) if side == "lower" else (max(v - reach, min(low, v)), v)
         out.append(replace(st, interval_95=interval, at_bound={**st.at_bound, **here}))
     return tuple(out)
 

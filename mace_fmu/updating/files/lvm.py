@@ -11,7 +11,14 @@ sample time of a fast record), checked against the X column where there is one; 
 errors that name the file, the line and the channel.
 
 LabVIEW writes its units' names (DAQmx's "Volts", "Newtons"): those with an SI symbol are read as it
-(:data:`UNIT_SYMBOLS`), so that the data meet an FMU's units; any other label is kept as written.
+(:data:`UNIT_SYMBOLS`), so that the data meet an FMU's units; any other label is kept as written, unless the
+channel map states the channel in an SI unit it converts to (:data:`CONVERSIONS`: "Pounds" read as N, "g" as
+m/s^2, when the map's unit says N or m/s^2).
+
+A file resampled after LabVIEW wrote it (every n-th row kept, the header left as it was) has an X column on a
+clock of its own and a header whose ``Samples`` is not its number of rows: its times are the X column's, a
+uniform clock to a quarter of its step; an X column that disagrees with a header that may be its own is refused,
+naming both clocks.
 """
 
 from __future__ import annotations
@@ -31,6 +38,14 @@ UNIT_SYMBOLS = {"volts": "V", "volt": "V", "amps": "A", "amperes": "A", "newtons
                 "newton meters": "N m", "newton metres": "N m"}
 
 
+#: (LabVIEW's unit label, lower case; the channel map's unit) -> the factor from the first to the second: a
+#: record in pounds-force or in g read as N or m/s^2 when the map says so (exact by definition: the
+#: international pound and standard gravity)
+CONVERSIONS = {("pounds", "N"): 4.4482216152605, ("pound", "N"): 4.4482216152605, ("lbf", "N"): 4.4482216152605,
+               ("lb", "N"): 4.4482216152605, ("g", "m/s^2"): 9.80665, ("g", "m/s2"): 9.80665,
+               ("inches", "m"): 0.0254, ("in", "m"): 0.0254, ("millivolts", "V"): 1e-3, ("mv", "V"): 1e-3}
+
+
 def unit_symbol(label: str) -> str:
     """The SI symbol of a LabVIEW unit name ("Volts" -> "V"); any other label as it is, stripped."""
     text = label.strip()
@@ -44,8 +59,10 @@ def read_lvm_time_history(path: str | Path, *, channel_map: ChannelMap | None = 
     Each channel is named by the line of names over its data and has the unit of its ``Y_Unit_Label``
     (an SI symbol for LabVIEW's unit names: "Volts" is read as "V"). Without a channel map a channel's name
     carries its role, ``in:<signal>`` or ``out:<signal>``, as a CSV file's labels do; with one the map
-    gives signal, role and unit, and the header's unit, where it states one, must be the map's. Times are
-    X0 + k Delta_X of the header (the X column, where written, must agree to half a sample).
+    gives signal, role and unit, and the header's unit, where it states one, must be the map's or one that
+    converts to it (:data:`CONVERSIONS`: "Pounds" to N, "g" to m/s^2). Times are X0 + k Delta_X of the header
+    (the X column, where written, must agree to half a sample), or the X column's own uniform clock where the
+    header's ``Samples`` is not the segment's number of rows (a file resampled after LabVIEW wrote it).
 
     Parameters
     ----------
@@ -112,6 +129,8 @@ def read_lvm_time_history(path: str | Path, *, channel_map: ChannelMap | None = 
         return f"{path}:{line_of_sample[sample]}" if sample is not None and sample < len(line_of_sample) else f"{path}"
 
     labels = [_label(path, name, units[name], channel_map=channel_map, at=name_lines[0]) for name in first_names]
+    data = [values * _to_map_unit(units[name], channel_map=channel_map, name=name)
+            for name, values in zip(first_names, data)]
     try:
         return history_of_columns(path, labels, t, data, channel_map=channel_map, sample_time_s=sample_time_s,
                                   header_at=f"{path}:{name_lines[0]}", row_at=row_at)
@@ -206,16 +225,38 @@ def _segment(path: Path, segment: dict, *, at: int, layout: str):
         for j in x_columns:  # the X columns LabVIEW wrote, to their six decimals: within half a sample
             off = np.flatnonzero(~(np.abs(data[:, j] - t) <= 0.5 * dt))
             if off.size:
-                k = int(off[0])
-                raise MaceError(f"{path}:{at + 1 + k}: channel 'time': X_Value {float(data[k, j]):.9g} s, but the "
-                                f"header's X0 and Delta_X ({dt:.9g} s) put this sample at {t[k]:.9g} s: samples "
-                                "a uniform clock did not take")
+                t = _column_clock(path, data[:, j], header_dt=dt, header_samples=samples, k=int(off[0]), at=at,
+                                  header_t=t)
     elif column_of_time is not None:
         t = data[:, column_of_time]
     else:
         raise MaceError(f"{path}:{at}: neither a Delta_X in the segment header nor an X_Value column: no times")
     units = dict(zip(names, _per_channel(segment, "Y_Unit_Label", count, layout)))
     return names, t, [data[:, j] for j, _ in channels], units
+
+
+def _column_clock(path: Path, x: np.ndarray, *, header_dt: float, header_samples: list, k: int, at: int,
+                  header_t: np.ndarray) -> np.ndarray:
+    """The times of a segment whose X column is not the header's clock (``k``: its first sample off it by more
+    than half a sample): the column's own uniform clock where the header is not this segment's (its ``Samples``
+    is not the segment's number of rows: a file resampled or cut after LabVIEW wrote it, its header kept, as
+    the downsampled files of a public record are); else a MaceError that names both clocks."""
+    n = x.size
+    step = float(x[-1] - x[0]) / (n - 1) if n > 1 else math.nan
+    counts = {int(c) for c in header_samples if c is not None and not (isinstance(c, float) and math.isnan(c))}
+    uniform = (math.isfinite(step) and step > 0
+               and bool(np.all(np.abs(x - (x[0] + step * np.arange(n))) <= 0.25 * step)))
+    line = f"{path}:{at + 1 + k}: channel 'time': X_Value {float(x[k]):.9g} s, but the header's X0 and Delta_X " \
+           f"({header_dt:.9g} s) put this sample at {header_t[k]:.9g} s"
+    if not uniform:
+        raise MaceError(f"{line}: samples a uniform clock did not take")
+    if counts and counts != {n}:
+        return float(x[0]) + step * np.arange(n)
+    said = f"Samples {counts.pop()}, the rows it has" if counts else "no Samples count to tell"
+    raise MaceError(f"{line}: the X column is a uniform clock of {step:.6g} s ({1 / step:.5g} Hz), the header's "
+                    f"Delta_X {header_dt:.9g} s ({1 / header_dt:.6g} Hz), and the header ({said}) gives no sign of "
+                    "being another record's: one of them is wrong; correct Delta_X, or write the file without "
+                    "an X column if the header is right")
 
 
 def _label(path: Path, name: str, unit: str | None, *, channel_map: ChannelMap | None, at: int) -> Label:
@@ -235,9 +276,19 @@ def _label(path: Path, name: str, unit: str | None, *, channel_map: ChannelMap |
                             "channel map (--map) that states each channel's unit")
         return Label(name=bare, unit=row.unit, role=role)
     symbol = unit_symbol(unit)
-    if row is not None and unit_symbol(row.unit) == symbol:
+    if row is not None and (unit_symbol(row.unit) == symbol or (unit.strip().lower(), row.unit) in CONVERSIONS):
         symbol = row.unit
     return Label(name=bare, unit=symbol, role=role)
+
+
+def _to_map_unit(unit: str | None, *, channel_map: ChannelMap | None, name: str) -> float:
+    """The factor from a channel's unit in the header to the channel map's unit for it (:data:`CONVERSIONS`;
+    1 where they are the same or the map does not name the channel)."""
+    if unit is None or channel_map is None:
+        return 1.0
+    _, sep, rest = name.partition(":")
+    row = channel_map.find(name) or (channel_map.find(rest.strip()) if sep else None)
+    return CONVERSIONS.get((unit.strip().lower(), row.unit), 1.0) if row is not None else 1.0
 
 
 def _with_cell(exc: MaceError, lines: list[str], separator: str, line_of_sample: list[int], names: list[str],

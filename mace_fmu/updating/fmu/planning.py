@@ -150,6 +150,8 @@ def plan_tests(*, fmu: str | os.PathLike, parameters: Sequence[str], candidates:
         Seed of the excitation's white noise.
     runner : callable
         ``map``-like function the FMU runs go to (``map`` or a Dask runner).
+    progress : callable, optional
+        Called with a Step as the candidates are run.
 
     Returns
     -------

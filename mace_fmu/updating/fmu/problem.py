@@ -110,8 +110,9 @@ def fmu_problem(*, fmu: str | os.PathLike, data: Sequence[str | os.PathLike], na
         mid-stream (the structure already moving, which the FMU at rest cannot know) is compared from a START
         past that transient.
     bounds : mapping of str to (float or None, float or None), optional
-        name -> (low, high) [FMU units] replacing the default bounds (None keeps that side's);
-        ``bounds_source`` names where each came from (the option, the file) in errors.
+        name -> (low, high) [FMU units] replacing the default bounds (None keeps that side's).
+    bounds_source : mapping of str to str, optional
+        name -> where its bounds came from (the option, the file), named in errors.
 
     Returns
     -------

@@ -76,6 +76,10 @@ def select_and_update(family, cost, *, candidates: Sequence[str], rule: Selectio
         The stages to run, given the selection.
     settings : UpdateSettings
         The update's method and tests.
+    runner : callable
+        ``map``-like function the model runs go to (``map`` or a Dask runner).
+    progress : callable, optional
+        Called with a Step at each stage.
     keep_all : bool
         Report the tests but keep every candidate.
     stage_numbers : (int, int, int)

@@ -19,6 +19,7 @@ from typing import Mapping
 
 import numpy as np
 
+from mace_fmu.errors import MaceError
 from mace_fmu.thesis import thesis_data
 from mace_fmu.updating.engine.costs import Cost, FrequencyResponseCost, ModalCost, TimeResponseCost
 from mace_fmu.updating.engine.linear_model import simulate_discrete, zoh_transition
@@ -162,7 +163,7 @@ def run_case(case: str, data: SampleData, *, separate: bool = False) -> CaseResu
     """Update k1, k2 (and the damping ratios, cases 2 and 3) from the initial model; ``separate``:
     stiffnesses and damping ratios in alternating stages (Table 4.3)."""
     if case not in CASES:
-        raise ValueError(f"sample problem case must be one of {', '.join(CASES)}, got {case!r}")
+        raise MaceError(f"sample problem case must be one of {', '.join(CASES)}, got {case!r}")
     family = TwoMassFamily(masses=data.actual)
     costs, names, inclusion = _case_setup(case, data)
     start = {**INITIAL, **{f"damping:{label}": float(z) for label, z in zip(MODE_LABELS, data.measurement_model.damping)}}

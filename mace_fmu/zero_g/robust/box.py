@@ -113,7 +113,10 @@ def read_box(fmu: str | os.PathLike, *, pattern: str = DEFAULT_PATTERN,
         if not (np.isfinite(lo) and np.isfinite(hi) and lo <= start <= hi and lo < hi):
             raise MaceError(f"{os.fspath(fmu)}: parameter {name}: range [{lo:g}, {hi:g}] must be finite, "
                             f"increasing and hold its start value {start:g}")
-        names.append(name), nominal.append(start), low.append(lo), high.append(hi)
+        names.append(name)
+        nominal.append(start)
+        low.append(lo)
+        high.append(hi)
         texts.append(var.description or "")
     if not names:
         raise MaceError(f"{os.fspath(fmu)} has no real parameter matching {pattern!r} with finite, distinct min and "

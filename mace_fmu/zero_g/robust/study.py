@@ -56,7 +56,7 @@ class RobustStudy:
 def prediction_bounds(prediction) -> dict[int, float]:
     """1-based open-loop mode -> relative frequency bound of a ``zero_g.ZeroGPrediction`` (Table 5.3's rows
     that fall on a flexible mode; the gimbal pendulum rows are servo poles, not modes the FMU can scale)."""
-    return {row.mode: row.bound for row in prediction.rows if row.mode is not None}
+    return prediction.frequency_bounds
 
 
 def cross_check(model: VoltsModel, sweep: SweepResult, design: RobustDesign, *, point: int) -> CrossCheck:
@@ -114,7 +114,7 @@ def robust_0g_study(model: VoltsModel, *, frequency_bounds: Mapping[int, float],
     """
     from mace_fmu.fmu.export import export_fmu
 
-    fmu = export_fmu(model, runtime="native", out_dir=out_dir, name=FMU_NAME, frequency_bounds=dict(frequency_bounds),
+    fmu = export_fmu(model, runtime="native", out_dir=Path(out_dir), name=FMU_NAME, frequency_bounds=dict(frequency_bounds),
                      progress=progress)
     design = design_compensator(model.system, loop=loop, weights=weights, reduced_states=reduced_states)
     sweep = robust_sweep(fmu, compensator=design.compensator, loop=loop, samples=samples, seed=seed,

@@ -15,7 +15,7 @@ import sys
 
 def first_eigenvalue_table(lines: list[str]) -> tuple[int, list[tuple[int, str]]]:
     """(1-based line of the table's title, [(mode number, CYCLES text)]) of the first real eigenvalue table."""
-    for start, line in enumerate(lines):
+    for start, line in enumerate(lines):  # noqa: B007  (start: where the loop stopped)
         if "R E A L   E I G E N V A L U E S" in line:
             break
     else:

@@ -1,4 +1,4 @@
-"""Bounds (issue 48, item 3): the defaults by kind whatever the spelling of the name, and a parameter that ends at
+"""Bounds: the defaults by kind whatever the spelling of the name, and a parameter that ends at
 a bound reported one-sided in the uncertainty table and uncertainty.toml, as the verdict says it is."""
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ from mace_fmu.updating.sample.two_mass import TwoMassSystem
 
 @pytest.mark.parametrize("name", ["damping_mode_3", "damping:1st Z bending"])
 def test_a_damping_ratio_is_bounded_at_0_1_to_4_times_its_start_in_either_spelling(name):
-    """The issue's damping ratio stopped at 5x its start: an FMU's name, damping_mode_3, was read as a parameter
+    """A damping ratio that stopped at 5x its start: an FMU's name, damping_mode_3, was read as a parameter
     set's, had no kind, and took the others' x0.2-5."""
     bound = default_bounds([name], {name: 0.01})[name]
     assert (bound.lower, bound.upper) == pytest.approx((0.001, 0.04))
@@ -62,3 +62,22 @@ def test_a_parameter_at_a_bound_has_a_one_sided_interval_in_the_table_and_the_fi
     written = tomllib.loads(uncertainty_toml((stage,)))["stage"][0]
     assert written["interval_95_at_bound"] == ["", "upper"]
     assert written["interval_95_high"][1] == value
+
+
+def test_a_one_sided_interval_stays_within_the_declared_range():
+    """The shaker beam's tip mass ended at its upper bound 0.15 kg with a standard deviation of 162 %: its one-sided
+    interval ran to -0.25 kg. Held within the FMU's declared range (here 0.07-0.15 kg), it is [0.07, 0.15]; a
+    reach that stays inside the range is unchanged, and so is the other side's."""
+    from mace_fmu.updating.engine.uncertainty import StageUncertainty
+
+    stage = StageUncertainty(stage="s", names=("m_shaker", "E_beam"), values={"m_shaker": 0.15, "E_beam": 1.4e11},
+                             residuals=100, noise_variance=1.0,
+                             standard_deviation_percent={"m_shaker": 162.0, "E_beam": 10.0},
+                             correlation=None, interval_95={"m_shaker": (-0.33, 0.63), "E_beam": (1.1e11, 1.7e11)},
+                             singular_values=None, weak_directions=(), tolerance_percent=5.0)
+    ranges = {"m_shaker": (0.07, 0.15), "E_beam": (1.4e11, 3.0e11)}
+    (clipped,) = one_sided_at_bounds((stage,), (("m_shaker", "upper"), ("E_beam", "lower")), ranges=ranges)
+    assert clipped.interval_95["m_shaker"] == (0.07, 0.15)
+    assert clipped.interval_95["E_beam"] == pytest.approx((1.4e11, 1.4e11 * (1 + Z95_ONE_SIDED * 0.10)))
+    (free,) = one_sided_at_bounds((stage,), (("m_shaker", "upper"),))
+    assert free.interval_95["m_shaker"][0] == pytest.approx(0.15 * (1 - Z95_ONE_SIDED * 1.62))

@@ -1,4 +1,4 @@
-"""Intervals that stay honest when the model is not exact (issue 48, item 2).
+"""Intervals that stay honest when the model is not exact.
 
 The data come from structures the two-mass model lacks something of, each made by its own state space
 (``tests/support/model_error_records.py``): a sensor's lag or resonance, a third mode (a small mass hung on

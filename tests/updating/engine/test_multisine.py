@@ -55,7 +55,7 @@ def test_frequencies_no_period_holds_are_refused():
 
 @pytest.mark.parametrize("precision", [0.0, 5e-6])
 def test_lines_whose_smallest_gap_is_several_steps_are_a_multisine_of_the_finer_step(precision):
-    """A 10 Hz multisine's lines at 100, 120 and 150 Hz (issue 48): multiples of 10 Hz, two and three steps apart;
+    """A 10 Hz multisine's lines at 100, 120 and 150 Hz: multiples of 10 Hz, two and three steps apart;
     the old code took the smallest gap, 20 Hz, for the step and refused 150 Hz. 1.0, 1.1 and 1.25 Hz likewise
     are multiples of 0.05 Hz (a 20 s period)."""
     for lines, step in (([100.0, 120.0, 150.0], 10.0), ([1.0, 1.1, 1.25], 0.05)):

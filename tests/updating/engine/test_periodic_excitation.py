@@ -1,4 +1,4 @@
-"""A periodic excitation's H1 (issue 48, item 3): the lines found in the record, their fundamental (not their
+"""A periodic excitation's H1: the lines found in the record, their fundamental (not their
 smallest gap), segments of whole periods that put every line on a bin, and a refusal that says which segment
 lengths would do only when the one asked for cannot."""
 
@@ -27,7 +27,7 @@ def _multisine(lines_hz, *, fs: float, seconds: float, noise: float = 0.0, seed:
 
 
 def test_a_10_hz_multisine_s_lines_at_100_120_150_hz_are_found_and_put_on_bins():
-    """The issue's record: lines at 100, 120 and 150 Hz of a 10 Hz multisine, broadband force noise to Nyquist.
+    """A shaker record: lines at 100, 120 and 150 Hz of a 10 Hz multisine, broadband force noise to Nyquist.
     Their fundamental is 10 Hz (the smallest gap is 20); 100-sample segments (0.1 s, one period) put each on a
     bin, and the H1 there is the system's exact response."""
     record = _multisine([100.0, 120.0, 150.0], fs=1000.0, seconds=20.0, noise=0.02)

@@ -1,4 +1,4 @@
-"""The time cost in a band (issue 48, item 3): the measured and the model's outputs through one zero-phase band-pass,
+"""The time cost in a band: the measured and the model's outputs through one zero-phase band-pass,
 the model driven by the measured inputs as they are, and the noise floor read outside the band.
 
 The record is the thesis's two-mass system driven by white force (to Nyquist, as a shaker's broadband force noise
@@ -62,7 +62,7 @@ def test_the_errors_are_the_band_passed_outputs_with_the_model_driven_by_the_raw
 
 @pytest.mark.slow  # 40 records, each its noise read twice
 def test_white_inputs_leave_a_noise_floor_outside_the_band_at_the_known_noise():
-    """Without a band the force fills the record to Nyquist and there is no floor (the issue's shaker record);
+    """Without a band the force fills the record to Nyquist and there is no floor (a shaker record as it comes);
     with one the noise is read outside it. At the true parameters over 40 records the cost lies about the floor
     (mean within 0.5 of its standard deviation; its spread 1.0-1.6 of the stated one: the floor's own estimate
     adds to it, as the unbanded floor's does) and the floor is within 3 % of the one the known noise gives on

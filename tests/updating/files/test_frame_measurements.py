@@ -56,7 +56,7 @@ def test_reciprocity_between_the_files_at_the_second_and_third_resonances(frfs, 
         assert abs(np.angle(h_1_from_floor / h_floor_from_1, deg=True)) < 5
 
 
-#: ±0.1 Hz about each resonance: where each mode dominates and the 1 dB goal of issue 34 is measured
+#: ±0.1 Hz about each resonance: where each mode dominates and the frame's 1 dB FRF goal is measured
 NARROW_BANDS_HZ = ((6.4, 6.6), (17.35, 17.6), (26.4, 26.6))
 
 
@@ -90,7 +90,7 @@ def _modal_accelerance(p: np.ndarray, f: np.ndarray) -> np.ndarray:
 
 
 def test_what_a_reciprocal_modal_model_reaches_on_all_three_files(frfs):
-    """A second route to issue 34's 1 dB goal, independent of the FE model: one reciprocal three-mode model
+    """A second route to the 1 dB goal (FRFs within 1 dB over the half-power bands), independent of the FE model: one reciprocal three-mode model
     fitted to all nine FRFs. Modes 2 and 3 then agree within 0.45 dB over their half-power bands on every
     file, so a model can meet the goal there; mode 1 keeps 1.1 dB or more on Experimental.csv, whose peak
     heights break reciprocity (data/README.md). The stiffness matrix this lumped model implies,

@@ -1,4 +1,4 @@
-"""LabVIEW measurement files (.lvm) read as they come (issue 48, item 3): channel names and units from the header,
+"""LabVIEW measurement files (.lvm) read as they come: channel names and units from the header,
 through the channel map, times from the header's X0 and Delta_X; errors that name the file, the line and the
 channel.
 
@@ -145,3 +145,54 @@ def test_a_channel_without_a_unit_takes_the_map_s_and_without_a_map_is_refused(t
     assert _error(lambda: read_time_history(path)) == (
         f"{path}:22: channel 'force' has no unit in the header (no Y_Unit_Label): give a channel map (--map) that "
         "states each channel's unit")
+
+
+def _keep_every(path, step: int, *, samples: int | None = None):
+    """``path`` as a file resampled after LabVIEW wrote it: every ``step``-th data row kept, the header as it was
+    (or its ``Samples`` set to ``samples``)."""
+    head, _, body = path.read_text().partition("X_Value")
+    names, *rows = body.splitlines()
+    if samples is not None:
+        head = "\n".join("\t".join(["Samples"] + [str(samples)] * (len(line.split("\t")) - 2) + [""])
+                         if line.startswith("Samples") else line for line in head.splitlines()) + "\n"
+    path.write_text(head + "X_Value" + names + "\n" + "\n".join(rows[::step]) + "\n")
+    return path
+
+
+def test_a_file_resampled_after_labview_wrote_it_takes_the_time_column_s_clock(tmp_path):
+    """A public record's downsampled files keep the original header (Delta_X 1.953125e-5 s, Samples 1050000) over
+    every 128th row (X column 0.0025 s steps): read as the X column's clock, not the header's (which refused the
+    file, saying its samples were not a uniform clock's). The same disagreement under a header whose Samples is the
+    file's own row count is refused, naming both clocks."""
+    t, channels = _record(samples=400)
+    names = _map(tmp_path, ROWS)
+    path = _keep_every(write_lvm(tmp_path / "down.lvm", t, channels), 4)
+    history = read_time_history(path, channel_map=names)
+    assert history.times_s.size == 100
+    np.testing.assert_allclose(np.diff(history.times_s), 4 / 2048, rtol=1e-4)
+    np.testing.assert_allclose(history.inputs["force_floor_1"], channels["Dev1/ai0"][1][::4], rtol=1e-8)
+    own = _keep_every(write_lvm(tmp_path / "own.lvm", t, channels), 4, samples=100)
+    message = _error(lambda: read_time_history(own, channel_map=names))
+    assert message.endswith(
+        "the X column is a uniform clock of 0.00195312 s (512 Hz), the header's Delta_X 0.00048828125 s (2048 Hz), "
+        "and the header (Samples 100, the rows it has) gives no sign of being another record's: one of them is "
+        "wrong; correct Delta_X, or write the file without an X column if the header is right")
+
+
+def test_pounds_and_g_are_read_as_newtons_and_m_s2_when_the_map_says_so(tmp_path):
+    """Dataset-4's shaker record (examples/shaker_beam/data, unedited): channels Force [Pounds] and Acceleratio [g],
+    the first data row 0.000000, -0.170586, -3.399325, -0.016694 and the last 19.700000 s, read by eye. With the
+    map's N and m/s^2: x 4.4482216152605 (the international pound-force) and x 9.80665 (standard gravity); with the
+    map's own labels they are kept."""
+    from support.paths import EXAMPLES
+
+    data = EXAMPLES / "shaker_beam" / "data"
+    history = read_time_history(data / "data_set_1_downsampled_by_128.lvm", channel_map=read_channel_map(
+        data / "channels.csv"))
+    assert history.units == {"force_shaker": "N", "acc_beam": "m/s^2"}
+    assert history.times_s.size == 7881 and history.times_s[-1] == pytest.approx(19.7, abs=1e-9)
+    assert history.inputs["force_shaker"][0] == pytest.approx(-3.399325 * 4.4482216152605, rel=1e-12)
+    assert history.outputs["acc_beam"][0] == pytest.approx(-0.016694 * 9.80665, rel=1e-12)
+    kept = _map(tmp_path, "Voltage,,ignore,V\nForce,f,input,Pounds\nAcceleratio,a,output,g")
+    raw = read_time_history(data / "data_set_1_downsampled_by_128.lvm", channel_map=kept)
+    assert raw.units == {"f": "Pounds", "a": "g"} and raw.inputs["f"][0] == -3.399325

@@ -1,4 +1,4 @@
-"""A misspelt data channel is named with the closest names there are (issue 51, item 11).
+"""A misspelt data channel is named with the closest names there are.
 
 A data file's channel the FMU does not have was refused with the FMU's whole signal list (fifty names and
 more for MACE) and no hint; a channel the channel map lacks, with none at all.

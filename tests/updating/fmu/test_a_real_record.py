@@ -1,10 +1,10 @@
-"""A real record as it comes (issue 48, item 3): a LabVIEW file of a shaker test that starts mid-stream, its force a
+"""A real record as it comes: a LabVIEW file of a shaker test that starts mid-stream, its force a
 periodic multisine with broadband noise to Nyquist, updated through the command a user runs: --window, --band-hz
 for the time cost, --cost log-frf on the lines, --bounds, and an analyser's lines that are not neighbours.
 
 The data come from an independent route: the three-storey frame's FE model re-solved with other moduli and 2 %
 damping, exported as its own FMU and run from 10 s before the record starts (the structure already moving at
-its first sample, as the issue's beam was); the FMU updated is the nominal one, started at 2 % damping. The
+its first sample, as a real test's structure is); the FMU updated is the nominal one, started at 2 % damping. The
 record is written as LabVIEW writes it (tests/support/lvm_files.py): channels ai0-ai3, units Newtons and m/s^2,
 a channel map to the FMU's signals.
 """
@@ -55,7 +55,7 @@ def rig(tmp_path_factory):
     y = run.time_response(t, {"force_floor_1": force}, outputs=list(OUTPUTS))
     kept = t >= BEFORE_S - 1e-9  # the record starts mid-stream
     channels = {"Dev1/ai0": ("Newtons", force[kept])}
-    for k, name in enumerate(OUTPUTS):
+    for k in range(len(OUTPUTS)):
         clean = y[kept, k]
         noise = 0.02 * np.sqrt(np.mean(clean**2)) * rng.standard_normal(clean.size)
         channels[f"Dev1/ai{k + 1}"] = ("m/s^2", clean + noise)

@@ -1,5 +1,5 @@
 """FMU updates, test planning and the robustness sweep on a cluster whose workers do not see the client's
-files (issue 51, item 14).
+files.
 
 The scheduler and its worker are separate processes (``dask scheduler``, ``dask worker``) started in a
 folder of their own: the FMU's relative path names nothing there, as any path names nothing on the

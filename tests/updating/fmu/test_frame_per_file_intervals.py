@@ -1,5 +1,5 @@
 """The three-storey frame's measured FRFs, one update per file: do the three estimates of each parameter agree
-within the intervals each update reports (issue 48, item 2)?
+within the intervals each update reports?
 
 The frame's files carry no coherence: their lines are compared unweighted, the verdict is "untested", and the
 intervals come from the residuals, a sandwich over the files' lines whose Bartlett width the scores give

@@ -1,7 +1,7 @@
 """An FRF file made from a noise-free record, updated as a user would: the estimate's own errors must neither
 become the fit's target nor be called noise.
 
-The case of issue 51: a noise-free 64 s record of the 1-g FMU with E_lexan_end x 1.03 and E_lexan_center x
+The case: a noise-free 64 s record of the 1-g FMU with E_lexan_end x 1.03 and E_lexan_center x
 0.98, turned into an FRF file by ``mace-fmu data h1 --segment 8000 --band 1 60`` (16 s Hann segments, 7
 averages, coherence 0.7 to 1), then ``update fmu --data h1.csv --cost log-frf``. The coherence weights of
 earlier versions, sqrt(gamma^2 / (1 - gamma^2)), made the H1's leakage on its best lines the target: +11.0 % /

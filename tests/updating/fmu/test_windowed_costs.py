@@ -1,4 +1,4 @@
-"""The FMU update's costs over a window of a record (issue 48, item 3): the model driven from the record's first
+"""The FMU update's costs over a window of a record: the model driven from the record's first
 sample, compared or estimated from the window's start; a record whose time axis does not start at 0 s."""
 
 from __future__ import annotations

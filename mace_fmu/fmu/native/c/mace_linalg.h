@@ -8,6 +8,9 @@
 
 #include <stddef.h>
 
+/* Size of the error message buffer (char err[MACE_ERR_LEN]) that functions of every layer write into. */
+#define MACE_ERR_LEN 1024
+
 typedef struct MaceAlloc {
     void *(*calloc)(size_t nobj, size_t size);
     void (*free)(void *obj);

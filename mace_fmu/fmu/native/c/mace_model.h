@@ -15,7 +15,6 @@
 
 #include "mace_linalg.h"
 
-#define MACE_ERR_LEN 1024
 #define MACE_RUNTIME_VERSION "1.0"
 #define MACE_DATA_FILE "mace_model.bin"
 

@@ -6,8 +6,6 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "mace_model.h"
-
 #define ZOH_CACHE 4
 /* Largest accepted condition number of the decoupling transformation; above it the dense form
  * is used. Measured on the MACE models: 6e4 (1-norm); outputs equal the dense ZOH to 1e-12. */

@@ -4,29 +4,48 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from mace_fmu.errors import MaceError
 from mace_fmu.fe.modes import StructureModes
 from mace_fmu.util.frequency import hz_text
-from viewer.frames import Clip, Frames
-from viewer.html import ShownInline
-from viewer.scene import Scene, build_scene
+from mace_fmu.viewer.frames import Clip, Frames
+from mace_fmu.viewer.html import ShownInline
+from mace_fmu.viewer.scene import Scene, build_scene
 
 
 @dataclass(frozen=True)
 class ModeAnimation(ShownInline):
     """A scene and its key frames, plus which mode each clip shows and the scale used."""
 
-    scene: Scene
-    frames: Frames
+    scene: Scene  #: the drawn bodies
+    frames: Frames  #: key frames of every mode, one clip per mode
     mode_indices: tuple[int, ...]  #: 1-based, as ``mace-fmu modes`` prints them
     scales: tuple[float, ...]  #: metres of drawn displacement per unit of mass-normalised shape
 
 
 def mode_index(structure_modes: StructureModes, mode: int | str) -> int:
-    """1-based index of a mode given by index or by label (exact, then unique prefix)."""
+    """1-based index of a mode given by index or by label (exact, then unique prefix).
+
+    Parameters
+    ----------
+    structure_modes : StructureModes
+        The modes, with their labels.
+    mode : int or str
+        A 1-based index (or its digits), or a label or the unique start of one.
+
+    Returns
+    -------
+    int
+        The mode's 1-based index.
+
+    Raises
+    ------
+    MaceError
+        No such mode, or a label that names none or several.
+    """
     labels = structure_modes.labels
     count = structure_modes.frequencies_hz.size
     if isinstance(mode, (int, np.integer)) or (isinstance(mode, str) and mode.isdigit()):
@@ -62,6 +81,31 @@ def animate_modes(structure_modes: StructureModes, modes: Sequence[int | str], *
     the drawn displacement is shape x scale x sin(2 pi t / seconds_per_cycle). ``scale`` [m per
     unit shape] defaults to the one that makes the largest translation ``fraction_of_length`` of
     the structure's size.
+
+    Parameters
+    ----------
+    structure_modes : StructureModes
+        The computed modes and the structure they belong to.
+    modes : sequence of int or str
+        The modes to play, in order: 1-based indices or labels (see :func:`mode_index`).
+    scale : float, optional
+        Drawn displacement [m] per unit of mass-normalised shape, the same for every mode; by default
+        each mode's own, from ``fraction_of_length``.
+    fraction_of_length : float
+        Largest drawn translation of each mode, as a fraction of the structure's size.
+    cycles : int
+        Vibration cycles per mode (1 or more).
+    frames_per_cycle : int
+        Key frames per cycle (4 or more).
+    seconds_per_cycle : float
+        Playback time of one cycle [s].
+    segments_per_bar : int
+        Pieces each bar is drawn in.
+
+    Returns
+    -------
+    ModeAnimation
+        The scene, the key frames (one clip per mode) and the scales used.
     """
     if cycles < 1 or frames_per_cycle < 4 or not seconds_per_cycle > 0:
         raise MaceError(f"need cycles >= 1, frames_per_cycle >= 4 and seconds_per_cycle > 0 [s], got {cycles}, "
@@ -94,6 +138,25 @@ def animate_modes(structure_modes: StructureModes, modes: Sequence[int | str], *
 
 
 def animate_mode(structure_modes: StructureModes, mode: int | str, *, scale: float | None = None,
-                 cycles: int = 3, **options) -> ModeAnimation:
-    """Key frames of one mode (by 1-based index or label); see ``animate_modes`` for the options."""
+                 cycles: int = 3, **options: Any) -> ModeAnimation:
+    """Key frames of one mode (by 1-based index or label).
+
+    Parameters
+    ----------
+    structure_modes : StructureModes
+        The computed modes and the structure they belong to.
+    mode : int or str
+        The 1-based index or the label of the mode (see :func:`mode_index`).
+    scale : float, optional
+        Drawn displacement [m] per unit of mass-normalised shape (default: from the structure's size).
+    cycles : int
+        Vibration cycles to play.
+    **options
+        The other options of :func:`animate_modes`.
+
+    Returns
+    -------
+    ModeAnimation
+        The scene and the key frames of the mode.
+    """
     return animate_modes(structure_modes, [mode], scale=scale, cycles=cycles, **options)

@@ -6,17 +6,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from viewer.kinematics import points_along_bars
-from viewer.scene import Scene
+from mace_fmu.viewer.kinematics import points_along_bars
+from mace_fmu.viewer.scene import Scene
 
 
 @dataclass(frozen=True)
 class Clip:
     """A named stretch of the playback timeline (one mode, or one response)."""
 
-    title: str
-    start_s: float
-    end_s: float
+    title: str  #: the legend's text
+    start_s: float  #: playback time where the clip starts [s]
+    end_s: float  #: playback time where it ends [s]
     motion_scale: float = 1.0  #: drawn metres per unit of the motion (mode: per unit mass-normalised shape)
     simulated_s_per_s: float | None = None  #: responses: simulated seconds per second of playback
 
@@ -27,8 +27,8 @@ class Frames:
 
     times_s: np.ndarray  #: (n_frames,) playback time [s], uniform at ``fps``
     displacements: np.ndarray  #: (n_frames, n_grid, 6), grid rows as in Scene.grid_ids
-    fps: float
-    clips: tuple[Clip, ...]
+    fps: float  #: frames per second of playback
+    clips: tuple[Clip, ...]  #: the named stretches of the timeline, in order
 
 
 @dataclass(frozen=True)
@@ -50,11 +50,25 @@ def _quaternions_from_y(directions: np.ndarray) -> np.ndarray:
     # antiparallel: any axis normal to Y; X is one
     flipped = w < 1e-12
     q[flipped] = np.array([1.0, 0.0, 0.0, 0.0])
-    return q / np.linalg.norm(q, axis=-1, keepdims=True)
+    unit: np.ndarray = q / np.linalg.norm(q, axis=-1, keepdims=True)
+    return unit
 
 
 def body_motion(scene: Scene, frames: Frames) -> BodyMotion:
-    """Segment mid-points, orientations and stretches, and mass positions, for every frame."""
+    """Segment mid-points, orientations and stretches, and mass positions, for every frame.
+
+    Parameters
+    ----------
+    scene : Scene
+        The drawn bodies.
+    frames : Frames
+        Grid displacements at each frame.
+
+    Returns
+    -------
+    BodyMotion
+        Every body's transform at every frame.
+    """
     seg = scene.segments
     row_a = np.array([s.row_a for s in seg])
     row_b = np.array([s.row_b for s in seg])

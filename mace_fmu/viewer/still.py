@@ -16,12 +16,18 @@ CHROMIUM_NAMES = ("chromium", "chromium-browser", "google-chrome")
 
 
 def chromium_executable() -> str | None:
-    """Path of a Chromium on PATH, or None."""
+    """Path of a Chromium on PATH, or None.
+
+    Returns
+    -------
+    str or None
+        The first of ``CHROMIUM_NAMES`` found on PATH.
+    """
     return next((found for name in CHROMIUM_NAMES if (found := shutil.which(name))), None)
 
 
-def render_page(page: str | os.PathLike, *, png: str | os.PathLike, width_px: int = 1200, height_px: int = 800,
-                virtual_time_s: float = 1.0, timeout_s: float = 240.0) -> str:
+def render_page(page: str | os.PathLike[str], *, png: str | os.PathLike[str], width_px: int = 1200,
+                height_px: int = 800, virtual_time_s: float = 1.0, timeout_s: float = 240.0) -> str:
     """Render ``page`` in headless Chromium (software WebGL), write ``png`` and return the page's DOM.
 
     The picture and the DOM are taken in one Chromium run after ``virtual_time_s`` [s] of Chromium's
@@ -33,7 +39,7 @@ def render_page(page: str | os.PathLike, *, png: str | os.PathLike, width_px: in
     Parameters
     ----------
     page : path
-        The standalone HTML page (:func:`~viewer.html.write_animation_html`).
+        The standalone HTML page (:func:`~mace_fmu.viewer.html.write_animation_html`).
     png : path
         The picture to write (replaced atomically).
     width_px, height_px : int
@@ -73,8 +79,8 @@ def render_page(page: str | os.PathLike, *, png: str | os.PathLike, width_px: in
     return done.stdout
 
 
-def write_still(page: str | os.PathLike, png: str | os.PathLike, *, width_px: int = 1200, height_px: int = 800,
-                virtual_time_s: float = 1.0, timeout_s: float = 240.0) -> Path:
+def write_still(page: str | os.PathLike[str], png: str | os.PathLike[str], *, width_px: int = 1200,
+                height_px: int = 800, virtual_time_s: float = 1.0, timeout_s: float = 240.0) -> Path:
     """Render ``page`` in headless Chromium (software WebGL) and write ``png`` (see :func:`render_page`).
 
     Parameters

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from viewer.scene import Scene
+from mace_fmu.viewer.scene import Scene
 
 
 def points_along_bars(scene: Scene, displacements: np.ndarray, s: np.ndarray, row_a: np.ndarray,
@@ -26,4 +26,5 @@ def points_along_bars(scene: Scene, displacements: np.ndarray, s: np.ndarray, ro
     h3 = 3 * s**2 - 2 * s**3
     h4 = -s**2 + s**3
     u = h1[:, None] * ua + h2[:, None] * ta + h3[:, None] * ub + h4[:, None] * tb
-    return xa + s[:, None] * chord + u
+    points: np.ndarray = xa + s[:, None] * chord + u
+    return points

@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from mace_fmu.errors import MaceError
 from mace_fmu.fe.drawing import tube_outer_radius_m  # noqa: F401 (the viewer's name for it, as before)
 from mace_fmu.iomodel.source import ModalSource
 
@@ -51,19 +52,32 @@ class Scene:
     """Everything the viewer draws, with undeformed grid positions [m] (deck basic axes, Y up)."""
 
     positions_m: np.ndarray  #: (n_grid, 3)
-    grid_ids: tuple[int, ...]
-    segments: tuple[BarSegment, ...]
-    masses: tuple[MassBody, ...]
+    grid_ids: tuple[int, ...]  #: the grid of each row of ``positions_m``
+    segments: tuple[BarSegment, ...]  #: the bars, in pieces
+    masses: tuple[MassBody, ...]  #: the lumped masses
     centre_m: np.ndarray  #: (3,) centre of the test article's bounding box (bus, gimbals, wheels)
     extent_m: np.ndarray  #: (3,) size of that box along X, Y, Z
     length_m: float  #: largest extent of the test article, for scaling deflections
 
 
 def build_scene(structure_modes: ModalSource, *, segments_per_bar: int = 4) -> Scene:
-    """Bodies of a computed structure, as its modal source draws it (:meth:`ModalSource.drawing`): a deck's
-    CBARs in ``segments_per_bar`` pieces and CONM2s as spheres; NASTRAN's modes' element edges and lone grids."""
+    """Bodies of a computed structure, as its modal source draws it (:meth:`ModalSource.drawing`): a deck's CBARs
+    in ``segments_per_bar`` pieces and CONM2s as spheres; NASTRAN's modes' element edges and lone grids.
+
+    Parameters
+    ----------
+    structure_modes : ModalSource
+        Computed modes of a deck, or NASTRAN's modes with their geometry deck.
+    segments_per_bar : int
+        Pieces each bar is drawn in (1 or more; an element edge is drawn in one).
+
+    Returns
+    -------
+    Scene
+        The drawable bodies and the undeformed grid positions.
+    """
     if segments_per_bar < 1:
-        raise ValueError(f"segments_per_bar must be >= 1, got {segments_per_bar}")
+        raise MaceError(f"segments_per_bar must be >= 1, got {segments_per_bar}")
     drawing = structure_modes.drawing()
     segments = []
     for line in drawing.lines:

@@ -15,9 +15,9 @@ from mace_fmu.errors import MaceError
 from mace_fmu.fe.modes import StructureModes
 from mace_fmu.iomodel.motion import MOTION_COMPONENTS, motion_output_name
 from mace_fmu.util.atomic import save_figure_atomic
-from viewer.frames import Clip, Frames
-from viewer.html import ShownInline
-from viewer.scene import Scene, build_scene
+from mace_fmu.viewer.frames import Clip, Frames
+from mace_fmu.viewer.html import ShownInline
+from mace_fmu.viewer.scene import Scene, build_scene
 
 if TYPE_CHECKING:  # fmpy is imported only where an FMU runs
     from mace_fmu.fmu.simulate import FmuRun
@@ -27,8 +27,8 @@ if TYPE_CHECKING:  # fmpy is imported only where an FMU runs
 class ResponseAnimation(ShownInline):
     """A scene, its key frames, and which FMU samples they show at which magnification."""
 
-    scene: Scene
-    frames: Frames
+    scene: Scene  #: the drawn bodies
+    frames: Frames  #: key frames of the run, one clip
     sample_indices: np.ndarray  #: the FMU communication point behind each frame
     scale: float  #: drawn metres per metre of computed motion (and radians per radian)
     playback_speed: float  #: simulated seconds per second of playback
@@ -38,6 +38,23 @@ def grid_motion(run: FmuRun, scene: Scene) -> np.ndarray:
     """(n_samples, n_grid, 6) motion [m, rad] of the scene's grids from the ``grid_<id>_<c>`` outputs.
 
     Every grid a body is drawn from must have its six outputs; other grids stay at rest.
+
+    Parameters
+    ----------
+    run : FmuRun
+        An FMU run whose outputs include the grids' motion.
+    scene : Scene
+        The drawn structure: its grids, in its order.
+
+    Returns
+    -------
+    numpy.ndarray
+        (n_samples, n_grid, 6) translations [m] and rotations [rad], basic axes.
+
+    Raises
+    ------
+    MaceError
+        A drawn grid without its motion outputs.
     """
     drawn = sorted({r for s in scene.segments for r in (s.row_a, s.row_b)} | {m.row for m in scene.masses})
     motion = np.zeros((run.times_s.size, len(scene.grid_ids), 6))
@@ -63,6 +80,28 @@ def animate_response(structure_modes: StructureModes, run: FmuRun, *, scale: flo
     times slower). Frames are every k-th communication point, with k chosen so the frame rate is
     as close to ``fps`` as the step allows. ``scale`` defaults to the magnification that makes the
     largest translation over the run ``fraction_of_length`` of the structure's size.
+
+    Parameters
+    ----------
+    structure_modes : StructureModes
+        The structure the FMU was exported from (its scene is drawn).
+    run : FmuRun
+        The FMU run, with the grids' motion outputs.
+    scale : float, optional
+        Drawn metres per metre of computed motion (default: from ``fraction_of_length``).
+    fraction_of_length : float
+        Largest drawn translation over the run, as a fraction of the structure's size.
+    playback_speed : float
+        Simulated seconds per second of playback.
+    fps : float
+        The frame rate aimed at [frames per second of playback].
+    segments_per_bar : int
+        Pieces each bar is drawn in.
+
+    Returns
+    -------
+    ResponseAnimation
+        The scene, the key frames (one clip) and the samples they show.
     """
     if not (playback_speed > 0 and fps > 0):
         raise MaceError(f"playback_speed and fps must be > 0, got {playback_speed} and {fps}")
@@ -87,7 +126,24 @@ def animate_response(structure_modes: StructureModes, run: FmuRun, *, scale: flo
 
 
 def plot_response(run: FmuRun, *, output_name: str, path: str | Path, title: str = "") -> Path:
-    """PNG of the driven input [V] and one output over time [s], stacked."""
+    """PNG of the driven input [V] and one output over time [s], stacked.
+
+    Parameters
+    ----------
+    run : FmuRun
+        The FMU run.
+    output_name : str
+        The output to plot under the input.
+    path : str or pathlib.Path
+        The PNG to write (replaced atomically).
+    title : str
+        The figure's title.
+
+    Returns
+    -------
+    pathlib.Path
+        The PNG written.
+    """
     if output_name not in run.outputs:
         raise MaceError(f"no output {output_name!r} in this run; outputs: {', '.join(list(run.outputs)[:30])}")
     fig = Figure(figsize=(8, 5))  # no pyplot: the caller's matplotlib backend stays as it is

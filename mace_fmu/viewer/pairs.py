@@ -10,6 +10,7 @@ swing together.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from meshcat.commands import SetTransform
@@ -20,12 +21,12 @@ from mace_fmu.fe.modes import StructureModes
 from mace_fmu.fe.pairing import mac_matrix
 from mace_fmu.thesis import table_5_1_0g, table_5_1_1g
 from mace_fmu.util.frequency import hz_text
-from viewer.camera import camera_axes, framing_position
-from viewer.frames import Clip, Frames
-from viewer.html import ShownInline
-from viewer.meshcat_scene import (ROOT, Y_UP_TO_Z_UP, body_animations, body_commands, set_animation,
-                                  surroundings_commands)
-from viewer.modes import ModeAnimation, animate_modes
+from mace_fmu.viewer.camera import camera_axes, framing_position
+from mace_fmu.viewer.frames import Clip, Frames
+from mace_fmu.viewer.html import ShownInline
+from mace_fmu.viewer.meshcat_scene import (ROOT, Y_UP_TO_Z_UP, body_animations, body_commands, set_animation,
+                                           surroundings_commands)
+from mace_fmu.viewer.modes import ModeAnimation, animate_modes
 
 #: Gap between the two copies' article boxes, in article lengths.
 PAIR_GAP = 0.25
@@ -40,8 +41,8 @@ class ModePair:
     label: str  #: Table 5.1's name
     index_1g: int  #: 1-based, as ``mace-fmu modes 1g`` numbers it
     index_0g: int  #: 1-based, as ``mace-fmu modes 0g`` numbers it
-    hz_1g: float
-    hz_0g: float
+    hz_1g: float  #: the 1-g mode's frequency [Hz]
+    hz_0g: float  #: the 0-g mode's frequency [Hz]
     mac: float  #: mass-weighted MAC of the two shapes on their common grids
     sign: float  #: +1 or -1: the 0-g shape as drawn, so that it moves in phase with the 1-g one
 
@@ -64,7 +65,7 @@ class PairAnimation(ShownInline):
 
     one_g: ModeAnimation  #: 1-g copy (its clips are those of ``frames``)
     zero_g: ModeAnimation  #: 0-g copy, shapes turned by each pair's sign
-    pairs: tuple[ModePair, ...]
+    pairs: tuple[ModePair, ...]  #: the pairs shown, one clip each, in order
     frames: Frames  #: the shared timeline: times and clips (displacements: the 1-g copy's)
     offsets_m: dict[str, np.ndarray]  #: "1g"/"0g": shift [m] of that copy's article centre, deck axes
     extent_m: np.ndarray  #: (3,) size of the box holding both articles, deck axes, centred on the origin
@@ -73,7 +74,18 @@ class PairAnimation(ShownInline):
 
 
 def table_5_1_pairs(one_g: StructureModes, zero_g: StructureModes) -> tuple[ModePair, ...]:
-    """Table 5.1's rows as 1-g/0-g mode pairs, paired as ``mace-fmu build`` prints them (MAC)."""
+    """Table 5.1's rows as 1-g/0-g mode pairs, paired as ``mace-fmu build`` prints them (MAC).
+
+    Parameters
+    ----------
+    one_g, zero_g : StructureModes
+        The modes of the 1-g (suspended) and of the 0-g (free) structure.
+
+    Returns
+    -------
+    tuple of ModePair
+        One pair per row of Table 5.1, in its order.
+    """
     rows_0g = table_5_1_0g(zero_g)
     rows_1g = table_5_1_1g(one_g, zero_g)
     mac = mac_matrix(zero_g.modes, zero_g.model, one_g.modes)
@@ -104,6 +116,33 @@ def animate_pairs(one_g: StructureModes, zero_g: StructureModes, *, labels: list
 
     Each copy's shape is scaled so that its largest translation is ``fraction_of_length`` of the
     article's size; both play ``seconds_per_cycle`` per cycle whatever their frequency.
+
+    Parameters
+    ----------
+    one_g, zero_g : StructureModes
+        The modes of the 1-g (suspended) and of the 0-g (free) structure.
+    labels : list of str, optional
+        The starts of the Table 5.1 labels to show (default: every pair).
+    view : str
+        The camera view (a ``CAMERA_VIEWS`` key) the two copies are stacked for: one above the other in it.
+    fraction_of_length : float
+        Largest drawn translation of each shape, as a fraction of the article's size.
+    cycles : int
+        Vibration cycles per pair.
+    frames_per_cycle : int
+        Key frames per cycle.
+    seconds_per_cycle : float
+        Playback time of one cycle [s].
+
+    Returns
+    -------
+    PairAnimation
+        Both copies on one timeline, one clip per pair.
+
+    Raises
+    ------
+    MaceError
+        A label that starts no Table 5.1 mode.
     """
     pairs = table_5_1_pairs(one_g, zero_g)
     if labels:
@@ -112,8 +151,8 @@ def animate_pairs(one_g: StructureModes, zero_g: StructureModes, *, labels: list
             raise MaceError(f"no Table 5.1 mode starts with {', '.join(map(repr, unknown))}; the modes are "
                             + ", ".join(p.label for p in pairs))
         pairs = tuple(p for p in pairs if any(p.label.startswith(lab) for lab in labels))
-    options = dict(fraction_of_length=fraction_of_length, cycles=cycles, frames_per_cycle=frames_per_cycle,
-                   seconds_per_cycle=seconds_per_cycle)
+    options: dict[str, Any] = dict(fraction_of_length=fraction_of_length, cycles=cycles,
+                                   frames_per_cycle=frames_per_cycle, seconds_per_cycle=seconds_per_cycle)
     anim_1g = animate_modes(one_g, [p.index_1g for p in pairs], **options)
     anim_0g = animate_modes(zero_g, [p.index_0g for p in pairs], **options)
     per_mode = cycles * frames_per_cycle
@@ -147,14 +186,25 @@ def _placement(animation: ModeAnimation, offset_m: np.ndarray) -> np.ndarray:
     return t
 
 
-def pair_commands(animation: PairAnimation, *, camera: str | None = None) -> list:
+def pair_commands(animation: PairAnimation, *, camera: str | None = None) -> list[Any]:
     """Both copies, the floor under them, the camera framing both, and one animation of every body.
 
-    ``camera`` defaults to the view the copies were stacked for; another view may show them overlapping.
+    Parameters
+    ----------
+    animation : PairAnimation
+        The pairs, from :func:`animate_pairs`.
+    camera : str, optional
+        A ``CAMERA_VIEWS`` key; by default the view the copies were stacked for (another view may show them
+        overlapping).
+
+    Returns
+    -------
+    list
+        meshcat commands, in the order they are to be sent.
     """
     camera = animation.view if camera is None else camera
-    cmds: list = [SetTransform(Y_UP_TO_Z_UP, ROOT)]  # the pair's box is centred on the orbit target
-    tracks: list[dict] = []
+    cmds: list[Any] = [SetTransform(Y_UP_TO_Z_UP, ROOT)]  # the pair's box is centred on the orbit target
+    tracks: list[dict[str, Any]] = []
     for kind, anim in (("1g", animation.one_g), ("0g", animation.zero_g)):
         path: Path = COPY_PATHS[kind]
         cmds += body_commands(anim.scene, root=path, placement=_placement(anim, animation.offsets_m[kind]))

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from mace_fmu.errors import MaceError
-from viewer.scene import Scene
+from mace_fmu.viewer.scene import Scene
 
 #: Camera views: unit direction from the article's centre towards the camera, deck axes (Y up).
 #: "iso" looks from 30 deg above the X-Z plane and 30 deg round from +Z, so the bus (along X)
@@ -43,6 +43,18 @@ def camera_position(scene: Scene, view: str = "iso") -> np.ndarray:
     The distance is the smallest at which every corner of the article's bounding box projects
     within ``FRAME_FILL`` of the half-width and half-height of a ``FRAMED_ASPECT`` picture, and
     the box's nearest face is ``NEAR_CLEARANCE`` article lengths away or more.
+
+    Parameters
+    ----------
+    scene : Scene
+        The drawn structure (its test article's box).
+    view : str
+        A ``CAMERA_VIEWS`` key.
+
+    Returns
+    -------
+    numpy.ndarray
+        (3,) camera position [m].
     """
     return framing_position(scene.extent_m, length_m=scene.length_m, view=view)
 
@@ -59,4 +71,4 @@ def framing_position(extent_m: np.ndarray, *, length_m: float, view: str) -> np.
     distance = max(np.max(corners @ towards + np.abs(corners @ right) / tan_h),
                    np.max(corners @ towards + np.abs(corners @ up) / tan_v),
                    np.max(corners @ towards) + NEAR_CLEARANCE * length_m)
-    return distance * towards
+    return float(distance) * towards

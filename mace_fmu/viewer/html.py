@@ -6,12 +6,13 @@ import base64
 import html as html_text
 import os
 from pathlib import Path as FilePath
+from typing import Any
 
 import meshcat
 import umsgpack
 
 from mace_fmu.util.atomic import write_text_atomic
-from viewer.frames import Clip
+from mace_fmu.viewer.frames import Clip
 
 _VIEWER_JS = FilePath(meshcat.__file__).parent / "viewer" / "dist" / "main.min.js"
 
@@ -49,8 +50,23 @@ setInterval(markClip, 100);
 """
 
 
-def standalone_html(commands: list, *, title: str, clips: tuple[Clip, ...] = ()) -> str:
-    """The page: meshcat's viewer, each command as a base64 msgpack blob, a legend of the clips."""
+def standalone_html(commands: list[Any], *, title: str, clips: tuple[Clip, ...] = ()) -> str:
+    """The page: meshcat's viewer, each command as a base64 msgpack blob, a legend of the clips.
+
+    Parameters
+    ----------
+    commands : list
+        meshcat commands, in the order the page replays them.
+    title : str
+        The page's title.
+    clips : tuple of Clip
+        The legend's rows.
+
+    Returns
+    -------
+    str
+        The standalone HTML page (meshcat's JavaScript included).
+    """
     blobs = ",\n".join('"' + base64.b64encode(umsgpack.packb(cmd.lower())).decode("ascii") + '"'
                        for cmd in commands)
     return f"""<!DOCTYPE html>
@@ -78,15 +94,36 @@ class ShownInline:
     standalone page in an iframe, so nothing needs a server or a meshcat process."""
 
     def _repr_html_(self) -> str:
-        from viewer import animation_commands  # the package knows every animation kind
+        from mace_fmu.viewer.animation import animation_commands  # the module that knows every kind
+        from mace_fmu.viewer.modes import ModeAnimation
+        from mace_fmu.viewer.pairs import PairAnimation
+        from mace_fmu.viewer.response import ResponseAnimation
 
+        assert isinstance(self, (ModeAnimation, ResponseAnimation, PairAnimation))  # the mixin's classes
         page = standalone_html(animation_commands(self), title=type(self).__name__, clips=self.frames.clips)
         return (f'<iframe srcdoc="{html_text.escape(page, quote=True)}" '
                 'style="width: 100%; height: 480px; border: 0;"></iframe>')
 
 
-def write_html(path: str | os.PathLike, commands: list, *, title: str, clips: tuple[Clip, ...] = ()) -> int:
-    """Write the standalone page to ``path``; returns its size in bytes."""
+def write_html(path: str | os.PathLike[str], commands: list[Any], *, title: str, clips: tuple[Clip, ...] = ()) -> int:
+    """Write the standalone page to ``path``; returns its size in bytes.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The HTML file to write (replaced atomically).
+    commands : list
+        meshcat commands, in the order the page replays them.
+    title : str
+        The page's title.
+    clips : tuple of Clip
+        The legend's rows.
+
+    Returns
+    -------
+    int
+        The page's size [bytes].
+    """
     text = standalone_html(commands, title=title, clips=clips)
     write_text_atomic(path, text)  # an interrupted run leaves the previous page, not half of a new one
     return len(text.encode("utf-8"))
