@@ -174,7 +174,7 @@ class ModalStructure(ModesView):
         Parameters
         ----------
         what : str
-            What of the modes is titled ("volts-volts model").
+            The model the title names, e.g. "volts-volts model".
         """
         return f"{self.name} modes {what} (NASTRAN's modes of {self.source.name}; modal parameters only)"
 
