@@ -217,10 +217,11 @@ def _cell(value) -> str:
 
 def fmu_variables_page() -> None:
     """The variables of the MACE FMUs (both kinds carry the same), from ``fmu_variables`` itself."""
+    from dataclasses import replace
+
     from mace_fmu.fe.modes import compute_modes
     from mace_fmu.fmu.native.model_description import fmu_variables
-    from mace_fmu.iomodel.parametric import ParametricSystem
-    from mace_fmu.iomodel.parametric_data import parametric_arrays
+    from mace_fmu.fmu.parametric import parametric_model
     from mace_fmu.iomodel.volts import volts_model
 
     lines = ["# FMU variables", "",
@@ -230,8 +231,9 @@ def fmu_variables_page() -> None:
              "same names, units, descriptions and start values. How the parameters act is in the "
              "[FMU guide](../guide/fmus.md).", ""]
     for kind in ("1g", "0g"):
-        arrays = parametric_arrays(volts_model(compute_modes(configuration=kind)))
-        variables = fmu_variables(arrays, ParametricSystem(arrays).state_names)
+        # the co-simulation variables: the model-exchange states are left out
+        variables = fmu_variables(replace(parametric_model(volts_model(compute_modes(configuration=kind))),
+                                          state_names=()))
         count = {c: sum(v.causality == c for v in variables) for c in
                  ("input", "output", "parameter", "calculatedParameter", "local")}
         lines += [f"## The {kind} FMU", "",

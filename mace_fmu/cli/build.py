@@ -41,16 +41,16 @@ def cmd_build(args: argparse.Namespace) -> int:
         progress(f"{configuration} volts-volts model and its parametric arrays")
         from mace_fmu.fmu.export import export_fmu
         from mace_fmu.fmu.naming import model_fmu_name
-        from mace_fmu.iomodel.parametric_data import parametric_arrays
+        from mace_fmu.fmu.parametric import parametric_model
         from mace_fmu.iomodel.volts import volts_model
 
         model = volts_model(modes, parameters=params)
-        arrays = parametric_arrays(model)  # what every runtime's FMU carries: computed once
+        parametric = parametric_model(model)  # what every runtime's FMU carries: computed once
         for runtime, fmi_version in (("native", 2), ("native", 3), ("pythonfmu", 2)):
             name = model_fmu_name(model, runtime=runtime, fmi_version=fmi_version, variant=model_variant(args))
             progress(f"{runtime} FMU (FMI {fmi_version}) {name}.fmu")
             path = export_fmu(model, runtime=runtime, fmi_version=fmi_version, out_dir=args.out, name=name,
-                              arrays=arrays, progress=step_lines)
+                              parametric=parametric, progress=step_lines)
             print(f"wrote {path}", flush=True)  # beside the progress lines on stderr, in their order
     print()
     print(low_modes(results))

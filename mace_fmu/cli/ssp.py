@@ -37,13 +37,12 @@ def export_ssp(args: argparse.Namespace) -> int:
     with tempfile.TemporaryDirectory(prefix="mace_ssp_") as tmp:
         progress(f"{args.runtime} FMU {name}.fmu")
         from mace_fmu.fmu.export import export_fmu
+        from mace_fmu.fmu.parametric import parametric_model
 
-        fmu = export_fmu(model, runtime=args.runtime, fmi_version=2, out_dir=tmp, name=name, frequency_bounds=bounds,
+        parametric = parametric_model(model, frequency_bounds=bounds)
+        fmu = export_fmu(model, runtime=args.runtime, fmi_version=2, out_dir=tmp, name=name, parametric=parametric,
                          platforms=args.platforms, progress=step_lines)
-        import fmpy
-
-        tunable = [v.name for v in fmpy.read_model_description(str(fmu)).modelVariables
-                   if v.causality == "parameter"]
+        tunable = [p.name for p in parametric.parameters]
         start = fmu_start_values(split.start_values, mode_labels=model.plant.labels, fmu_parameters=tunable)
         plant = SspComponent(name="plant", fmu=Path(fmu), start_values=start)
         components, wires = [plant], []

@@ -5,7 +5,7 @@ from __future__ import annotations
 import contextlib
 import math
 import os
-from collections.abc import Iterator, Mapping
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, Literal
@@ -18,8 +18,10 @@ from mace_fmu.deck.reader import read_deck
 from mace_fmu.errors import MaceError
 from mace_fmu.fe.assembly import FEModel, assemble
 from mace_fmu.fe.autospc import autospc_enabled, constrain_singular_dofs
+from mace_fmu.fe.bar_strain import bar_strain_weights
 from mace_fmu.fe.beam import MassKind
 from mace_fmu.fe.constraints import Constraints, build_constraints
+from mace_fmu.fe.drawing import deck_drawing
 from mace_fmu.fe.labels import label_modes, rigid_body_vectors
 from mace_fmu.fe.modal import Modes, ModesView, solve_modes
 from mace_fmu.fe.pairing import continue_modes
@@ -28,13 +30,18 @@ from mace_fmu.parameters.kinds import MASS, MODULUS, SPRING, declared_range
 from mace_fmu.parameters.sets import (ParameterNames, ParameterSet, deck_fingerprint, deck_values, fe_overrides,
                                       naming_the_file, parameter_names, parameter_unit)
 from mace_fmu.structure.build import Structure, build_structure
-from mace_fmu.structure.file import Configuration, StructureFile, bundled_deck_path, structure_file_for
+from mace_fmu.structure.drawing import Drawing
+from mace_fmu.structure.file import (Configuration, StructureFile, bundled_deck_path, structure_file_for,
+                                     structure_label)
 from mace_fmu.util.collector import collector_paused
 from mace_fmu.util.frequency import DEFAULT_MAX_HZ, ZERO_HZ
 from mace_fmu.util.progress import ProgressCallback
 from mace_fmu.util.threads import single_blas_thread
 
 
+
+#: the parameter kinds that need the FE (moduli, springs, masses): a deck's modes offer them, NASTRAN's cannot
+FE_PARAMETER_KINDS = tuple(kind.name for kind in (MODULUS, SPRING, MASS))
 
 #: a re-solve that continues other modes looks this much further (in frequency and in count) for them
 _CONTINUATION_REACH = 1.5
@@ -90,6 +97,129 @@ class StructureModes(ModesView):
     def stiffness(self):
         """The stiffness the modes are of [N/m, N m/rad], basic DOFs: the preload's tangent (1-g) or K."""
         return self.preload.tangent_stiffness if self.preload is not None else self.model.stiffness
+
+    # the modal source a volts-volts model asks (mace_fmu.iomodel.source.ModalSource)
+
+    @property
+    def name(self) -> str:
+        """"MACE" for the bundled deck's modes, else the deck file's stem: their models and FMUs are named after it."""
+        return structure_label(self.deck)
+
+    @property
+    def source(self) -> Path:
+        """The deck the modes are of."""
+        return Path(self.deck.path)
+
+    @property
+    def grid_ids(self) -> tuple[int, ...]:
+        """Every grid of the structure (the ones whose motion can be an output)."""
+        return tuple(self.modes.dofs.grid_ids)
+
+    @property
+    def physical_kinds(self) -> tuple[str, ...]:
+        """The physical parameter kinds a deck's modes give sensitivities to: moduli, springs and masses."""
+        return FE_PARAMETER_KINDS
+
+    @property
+    def mass(self):
+        """The mass matrix on the basic DOFs [kg, kg m^2]."""
+        return self.model.mass
+
+    @property
+    def constraint_transform(self):
+        """The modal subcase's constraints' T (basic = T @ independent); None: every DOF independent."""
+        return None if self.constraints is None else self.constraints.transform
+
+    def title(self, what: str) -> str:
+        """"<structure> <configuration> <what>", e.g. "MACE 0g volts-volts model": hosts and ``view response
+        --fmu`` read which structure and configuration an FMU's model is.
+
+        Parameters
+        ----------
+        what : str
+            What of the modes is titled ("volts-volts model").
+        """
+        return f"{self.name} {self.configuration} {what}"
+
+    def instrument_file(self) -> StructureFile:
+        """The structure file declaring the deck's actuators and sensors; a MaceError when there is none."""
+        file = self.structure.file
+        if file is None or not file.has("actuators") or not file.has("sensors"):
+            raise MaceError(f"{self.deck.path}: a volts-volts model needs actuators and sensors, and this "
+                            "deck has no structure file declaring them (give one: "
+                            "compute_modes(..., structure_file=...), CLI --structure FILE; the bundled mace_em.toml "
+                            "belongs to the bundled MACE deck only)")
+        return file
+
+    def bar_strain_weights(self, *, bar_id: int, position: float, fiber_y_m: float,
+                           fiber_z_m: float) -> tuple[tuple[int, int, float], ...]:
+        """A bar strain gauge's DOF weights on the deck's bar (:func:`mace_fmu.fe.bar_strain.bar_strain_weights`).
+
+        Parameters
+        ----------
+        bar_id : int
+            The CBAR the gauge is on.
+        position : float
+            Where along it, 0 at GA to 1 at GB.
+        fiber_y_m, fiber_z_m : float
+            The gauge's offsets from the neutral axis [m], element y and z.
+        """
+        return bar_strain_weights(self.model, self.deck, bar_id=bar_id, position=position, fiber_y_m=fiber_y_m,
+                                  fiber_z_m=fiber_z_m)
+
+    def check_parameters(self, parameters: ParameterSet | None) -> None:
+        """A MaceError when the set's moduli, springs or masses name no card of the deck.
+
+        Parameters
+        ----------
+        parameters : ParameterSet or None
+            The set a model is built with (None: nothing to check).
+        """
+        fe_overrides(parameters, parameter_names(self.deck, self.structure.file))
+
+    def check_computed_with(self, parameters: ParameterSet) -> None:
+        """A MaceError when the set's moduli, springs or masses differ from those the modes were computed with
+        (they would be ignored).
+
+        Parameters
+        ----------
+        parameters : ParameterSet
+            The set a model of these modes is asked to be built with.
+        """
+        deck = self.deck
+        for (card, cid), fields in fe_overrides(parameters, parameter_names(deck, self.structure.file)).items():
+            entry = {"MAT1": deck.mat1s, "CELAS2": deck.celas2s, "CONM2": deck.conm2s}[card][cid]
+            for key, value in fields.items():
+                if key == "inertia":  # a mass's inertias follow its mass
+                    continue
+                computed = float(getattr(entry, key))
+                if abs(computed - value) > 1e-12 * abs(value):
+                    raise MaceError(f"parameters set {card} {cid} {key} = {value:.6g} but the modes were computed "
+                                    f"with {computed:.6g}; compute the modes with the same parameters "
+                                    "(compute_modes(..., parameters=...)), whose set the model then takes by default")
+
+    def check_physical(self, names: Sequence[str]) -> None:
+        """Nothing to refuse: a deck's moduli, springs and masses are checked where their sensitivities are taken.
+
+        Parameters
+        ----------
+        names : sequence of str
+            The physical parameters an FMU is asked for.
+        """
+
+    def static_correction(self, instruments: object) -> None:
+        """None: a deck's modes have no static correction (every mode up to the model's is computed).
+
+        Parameters
+        ----------
+        instruments : Instruments
+            The model's actuators and sensors (not needed here).
+        """
+
+    def drawing(self) -> Drawing:
+        """Each CBAR a tube, each CONM2 a sphere, framed on the test article
+        (:func:`mace_fmu.fe.drawing.deck_drawing`)."""
+        return deck_drawing(self)
 
 
 def mass_properties(model: FEModel, deck: Deck) -> MassProperties:

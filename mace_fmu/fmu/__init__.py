@@ -12,6 +12,7 @@ if TYPE_CHECKING:  # what editors and type checkers follow; at run time a name i
     from mace_fmu.fmu.controller import DiscreteController, export_controller_fmu
     from mace_fmu.fmu.export import export_fmu
     from mace_fmu.fmu.naming import fmu_model_name
+    from mace_fmu.fmu.parametric import ParametricModel, parametric_model
     from mace_fmu.fmu.simulate import FmuRun, simulate_input_response
     from mace_fmu.fmu.validation import validate_fmu
 
@@ -23,5 +24,7 @@ __all__, __getattr__, __dir__ = lazy_exports(__name__, {
     "simulate_input_response": "simulate",
     "FmuRun": "simulate",
     "fmu_model_name": "naming",
+    "ParametricModel": "parametric",
+    "parametric_model": "parametric",
     "validate_fmu": "validation",
 })

@@ -26,9 +26,9 @@ from pythonfmu.builder import FmuBuilder
 
 from mace_fmu.errors import MaceError
 from mace_fmu.fmu.naming import model_fmu_name
-from mace_fmu.fmu.variables import DEFAULT_EXPERIMENT, model_summary, signal_units, variable_unit
+from mace_fmu.fmu.parametric import ParametricModel, parametric_model
+from mace_fmu.fmu.variables import DEFAULT_EXPERIMENT, variable_unit
 from mace_fmu.iomodel import modal_core, parametric, reanalysis
-from mace_fmu.iomodel.parametric_data import parametric_arrays, with_frequency_bounds
 from mace_fmu.iomodel.volts import VoltsModel
 from mace_fmu.util import frequency
 from mace_fmu.util.atomic import atomic_zip, output_folder
@@ -129,7 +129,7 @@ FmuRuntime = Literal["native", "pythonfmu"]
 def export_fmu(model: VoltsModel, *, runtime: FmuRuntime = "native", fmi_version: int = 2, out_dir: str | Path = ".",
                name: str | None = None, arrays: dict[str, np.ndarray] | None = None,
                frequency_bounds: Mapping[int, float] | None = None, platforms: Sequence[str] | None = None,
-               progress: ProgressCallback | None = None) -> Path:
+               progress: ProgressCallback | None = None, parametric: ParametricModel | None = None) -> Path:
     """Write ``model`` as an FMU ``out_dir/<name>.fmu`` and return its path: the one export call.
 
     Parameters
@@ -155,11 +155,15 @@ def export_fmu(model: VoltsModel, *, runtime: FmuRuntime = "native", fmi_version
     progress
         Native runtime: told of the runtime's compilation, step by step, when it has to be compiled (not
         prebuilt or cached: see :func:`~mace_fmu.fmu.native.compile.compile_runtimes`).
+    parametric
+        What the model's FMUs carry if already built (:func:`~mace_fmu.fmu.parametric.parametric_model`:
+        one record for several FMUs of the model); then neither ``arrays`` nor ``frequency_bounds``.
 
     Raises
     ------
     MaceError
-        An unknown runtime, FMI 3 asked of pythonfmu, or a name that is not a C identifier.
+        An unknown runtime, FMI 3 asked of pythonfmu, a name that is not a C identifier, or ``parametric`` given
+        with ``arrays`` or ``frequency_bounds``.
 
     Returns
     -------
@@ -167,38 +171,38 @@ def export_fmu(model: VoltsModel, *, runtime: FmuRuntime = "native", fmi_version
         ``out_dir/<name>.fmu``.
     """
     name = name or model_fmu_name(model)
+    if runtime not in ("native", "pythonfmu"):
+        raise MaceError(f"runtime must be 'native' or 'pythonfmu', got {runtime!r}")
+    if runtime == "pythonfmu" and fmi_version != 2:
+        raise MaceError(f"pythonfmu writes FMI 2.0 FMUs only, not FMI {fmi_version}: export with runtime='native'")
+    if runtime == "pythonfmu" and platforms is not None:
+        raise MaceError("platforms: a pythonfmu FMU has no binaries of its own to choose (export with runtime='native')")
+    if parametric is None:
+        parametric = parametric_model(model, arrays=arrays, frequency_bounds=frequency_bounds)
+    elif arrays is not None or frequency_bounds:
+        raise MaceError("export_fmu: give the arrays and frequency bounds to parametric_model(...), not beside the "
+                        "record it built")
     if runtime == "native":
         from mace_fmu.fmu.native.export import export_native_fmu
 
-        return export_native_fmu(model, out_dir=out_dir, name=name, fmi_version=fmi_version, arrays=arrays,
-                                 frequency_bounds=frequency_bounds, platforms=platforms, progress=progress)
-    if runtime != "pythonfmu":
-        raise MaceError(f"runtime must be 'native' or 'pythonfmu', got {runtime!r}")
-    if fmi_version != 2:
-        raise MaceError(f"pythonfmu writes FMI 2.0 FMUs only, not FMI {fmi_version}: export with runtime='native'")
-    if platforms is not None:
-        raise MaceError("platforms: a pythonfmu FMU has no binaries of its own to choose (export with runtime='native')")
-    return _export_pythonfmu(model, out_dir=out_dir, name=name, arrays=arrays, frequency_bounds=frequency_bounds)
+        return export_native_fmu(parametric, out_dir=out_dir, name=name, fmi_version=fmi_version,
+                                 platforms=platforms, progress=progress)
+    return _export_pythonfmu(parametric, out_dir=out_dir, name=name)
 
 
-def _export_pythonfmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str | None = None,
-                      arrays: dict[str, np.ndarray] | None = None,
-                      frequency_bounds: Mapping[int, float] | None = None) -> Path:
-    """Write an FMI 2.0 co-simulation FMU of ``model`` with pythonfmu and return its path.
+def _export_pythonfmu(model: ParametricModel, *, name: str, out_dir: str | Path = ".") -> Path:
+    """Write an FMI 2.0 co-simulation FMU with pythonfmu and return its path.
 
     Parameters
     ----------
-    model : VoltsModel
-        The volts-volts model; the FMU re-analyses its physical parameters at initialisation in Python.
+    model : ParametricModel
+        What the volts-volts model's FMUs carry; the FMU re-analyses its physical parameters at initialisation
+        in Python.
+    name : str
+        The model class's name, a Python/C identifier (e.g. from :func:`fmu_model_name`: MACE_1g,
+        MACE_1g_motion, ...).
     out_dir : path
         Folder the FMU is written to.
-    name : str, optional
-        The model class's name, a Python/C identifier (default from :func:`fmu_model_name`: MACE_1g,
-        MACE_1g_motion, ...).
-    arrays : dict, optional
-        The model's parametric arrays if already computed.
-    frequency_bounds : mapping of int to float, optional
-        1-based mode -> relative bound: the declared min/max of that mode's ``frequency_scale_mode_<k>``.
 
     Returns
     -------
@@ -214,26 +218,21 @@ def _export_pythonfmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str
         raise MaceError(f"FMU name must be a Python/C identifier (it names the model class), got {name!r}")
     out = Path(out_dir)
     output_folder(out)
-    description = model_summary(model)
-    arrays = parametric_arrays(model) if arrays is None else arrays
-    if frequency_bounds:
-        arrays = with_frequency_bounds(arrays, frequency_bounds)
+    description = model.summary
     final = out / f"{name}.fmu"
     with tempfile.TemporaryDirectory(prefix="mace_fmu_") as tmp:
         tmp = Path(tmp)
         script = tmp / f"{name.lower()}_fmu.py"
         script.write_text(_entry_script(name, description))
-        np.savez(tmp / "model.npz", **arrays)
+        np.savez(tmp / "model.npz", **model.arrays)
         cached = {k for k in sys.modules if k.startswith(_CACHE_PREFIX)}
         path = FmuBuilder.build_FMU(script, dest=tmp / f"{name}.fmu", project_files=[tmp / "model.npz"],
                                     canGetAndSetFMUstate=True, canSerializeFMUstate=True)
         for key in {k for k in sys.modules if k.startswith(_CACHE_PREFIX)} - cached:
             del sys.modules[key]  # the builder ran the entry script here; loading the FMU rebuilds it
-        ranges = {str(n): (float(lo), float(hi)) for n, lo, hi in zip(arrays["param_names"], arrays["param_min"],
-                                                                       arrays["param_max"])}
         entries = _patch_model_description(Path(path), description=description,
-                                           version=metadata.version("mace-fmu"), ranges=ranges,
-                                           units=signal_units(arrays))
+                                           version=metadata.version("mace-fmu"), ranges=model.ranges,
+                                           units=model.signal_units)
     with atomic_zip(final) as z:
         for entry, data in entries.items():
             z.writestr(entry, data)

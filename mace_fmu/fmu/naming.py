@@ -94,12 +94,7 @@ def model_fmu_name(model, *, runtime: str | None = None, fmi_version: int = 2, v
 
 def model_prefix(model) -> str:
     """"MACE" for the bundled deck's models, else the deck's file stem (an FMU of another structure is not MACE's)."""
-    from mace_fmu.iomodel.modal_source import ModalStructure
-    from mace_fmu.structure.file import structure_label
-
-    if isinstance(model.structure_modes, ModalStructure):  # NASTRAN's modes: named by their file
-        return model.structure_modes.name
-    return structure_label(model.structure_modes.deck)
+    return model.structure_modes.name
 
 
 def variant_identifier(text: str) -> str:

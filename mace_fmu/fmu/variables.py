@@ -26,27 +26,10 @@ def variable_unit(name: str, causality: str, *, signal_units: Mapping[str, str] 
     return "Hz" if is_frequency_output(name) else None
 
 
-def signal_units(arrays: Mapping[str, object]) -> dict[str, str]:
-    """Input and output name -> unit at the model boundary, from a ParametricSystem's arrays
-    (:func:`~mace_fmu.iomodel.parametric_data.parametric_arrays`)."""
-    return {str(n): str(u) for key in ("input", "output") for n, u in zip(arrays[f"{key}s"], arrays[f"{key}_units"])}
-
-
 def model_summary(model: VoltsModel) -> str:
     """One-line description of a volts-volts model for an FMU's model description."""
-    from mace_fmu.iomodel.modal_source import ModalStructure
-
-    if isinstance(model.structure_modes, ModalStructure):  # NASTRAN's modes: named by their file, modal parameters
-        built = f"; parameter set {model.parameters.describe()}" if model.parameters is not None else ""
-        return (f"{model.structure_modes.name} modes volts-volts model (NASTRAN's modes of "
-                f"{model.structure_modes.source.name}; modal parameters only): {model.system.nstates} states; "
-                f"{model.electronics.describe(instruments=model.instruments)}{built}")
-    structure, sys_ = model.structure_modes.structure, model.system
-    kind = structure.configuration
-    # "<label> <kind>": hosts and `view response --fmu` read which structure and configuration it is
-    from mace_fmu.structure.file import structure_label
-
-    who = structure_label(structure.deck)
     built = f"; parameter set {model.parameters.describe()}" if model.parameters is not None else ""
     electronics = model.electronics.describe(instruments=model.instruments)
-    return f"{who} {kind} volts-volts model: {sys_.nstates} states; {electronics}{built}"
+    # "<label> <kind>": hosts and `view response --fmu` read which structure and configuration it is
+    title = model.structure_modes.title("volts-volts model")
+    return f"{title}: {model.system.nstates} states; {electronics}{built}"

@@ -10,18 +10,18 @@ import fnmatch
 import math
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any, Literal, Mapping
+from typing import TYPE_CHECKING, Any, Literal, Mapping
 
 import numpy as np
 
-from mace_fmu.deck.cards import Deck
 from mace_fmu.errors import MaceError
-from mace_fmu.fe.assembly import FEModel
-from mace_fmu.fe.bar_strain import bar_strain_weights
 from mace_fmu.fe.dofs import DofMap, cd_component_vector
 from mace_fmu.parameters.kinds import SERVO_GAINS
 from mace_fmu.structure.file import StructureFile, bundled_structure_path, load_structure_file
 from modelica_like.filters import LOWPASS_KINDS, lowpass_realization
+
+if TYPE_CHECKING:
+    from mace_fmu.iomodel.source import ModalSource
 
 SensorKind = Literal["displacement", "rate", "acceleration"]
 #: the sensor kinds a structure file may name: a bar strain gauge is a displacement sensor whose weights
@@ -284,8 +284,8 @@ def check_accelerometers_have_mass(instruments: Instruments, *, mass, transform,
     ----------
     instruments : Instruments
         The structure's actuators and sensors.
-    mass : sparse or dense matrix
-        The mass matrix on the basic DOFs [kg, kg m^2].
+    mass : sparse or dense matrix or None
+        The mass matrix on the basic DOFs [kg, kg m^2] (None: none to check against, NASTRAN's modes).
     transform : sparse matrix or None
         The constraints' T (basic = T @ independent); None: every DOF independent.
     dof_map : DofMap
@@ -294,7 +294,7 @@ def check_accelerometers_have_mass(instruments: Instruments, *, mass, transform,
         (n_grid, 3, 3) displacement-system axes (the instruments' components are in CD).
     """
     accelerometers = [s for s in instruments.sensors if s.kind == "acceleration"]
-    if not accelerometers or not instruments.actuators:
+    if not accelerometers or not instruments.actuators or mass is None:
         return
 
     def independent(dofs: tuple[Dof, ...]) -> np.ndarray:
@@ -317,16 +317,17 @@ def check_accelerometers_have_mass(instruments: Instruments, *, mass, transform,
                 "is mass")
 
 
-def resolve_bar_gauges(instruments: Instruments, model: FEModel, deck: Deck) -> Instruments:
-    """``instruments`` with every bar strain gauge's DOF weights computed from its bar in ``deck``."""
+def resolve_bar_gauges(instruments: Instruments, source: ModalSource) -> Instruments:
+    """``instruments`` with every bar strain gauge's DOF weights computed from its bar, as the modal source gives
+    them (:meth:`~mace_fmu.iomodel.source.ModalSource.bar_strain_weights`: a deck's bar, or a refusal)."""
     if not any(s.gauge is not None and not s.dofs for s in instruments.sensors):
         return instruments
     sensors = []
     for s in instruments.sensors:
         if s.gauge is not None and not s.dofs:
             try:
-                dofs = bar_strain_weights(model, deck, bar_id=s.gauge.bar, position=s.gauge.position,
-                                          fiber_y_m=s.gauge.fiber_y_m, fiber_z_m=s.gauge.fiber_z_m)
+                dofs = source.bar_strain_weights(bar_id=s.gauge.bar, position=s.gauge.position,
+                                                 fiber_y_m=s.gauge.fiber_y_m, fiber_z_m=s.gauge.fiber_z_m)
             except MaceError as exc:
                 raise MaceError(f"{instruments.source} sensor {s.name}: {exc}") from None
             s = replace(s, dofs=dofs)

@@ -15,10 +15,10 @@ from __future__ import annotations
 import csv
 import math
 import os
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Literal
 
 import numpy as np
 
@@ -26,18 +26,22 @@ from mace_fmu.deck.connectivity import Connectivity, read_connectivity
 from mace_fmu.errors import DeckError, MaceError
 from mace_fmu.fe.dofs import COMPONENT_NAMES
 from mace_fmu.fe.modal import Modes, ModesView
+from mace_fmu.fe.modes import FE_PARAMETER_KINDS
 from mace_fmu.iomodel.instruments import Instruments
+from mace_fmu.nastran_modes.reading import NastranModes
 from mace_fmu.parameters.sets import ParameterSet
-from mace_fmu.structure.file import StructureFile, load_structure_file
+from mace_fmu.structure.drawing import Drawing, DrawnLine, DrawnPoint
+from mace_fmu.structure.file import StructureFile, instrument_grids, load_structure_file
 from mace_fmu.structure.modes_table import ModesTable, modes_table
 from mace_fmu.util.textfile import read_text
 
-#: the parameter kinds that need the FE: a structure known by its modes alone cannot have them
-FE_PARAMETER_KINDS = ("modulus", "spring", "mass")
 #: the columns of a residual flexibility file
 RESIDUAL_COLUMNS = ("grid_a", "component_a", "grid_b", "component_b", "flexibility")
 
 Dof = tuple[int, int]  #: (grid, component 1-6 in the grid's CD system)
+#: edge radius and grid-sphere radius drawn, as fractions of the structure's largest extent
+EDGE_RADIUS_FRACTION = 0.002
+GRID_RADIUS_FRACTION = 0.006
 
 
 @dataclass(frozen=True)
@@ -129,8 +133,10 @@ class ModalStructure(ModesView):
     units: str = ""  #: the units the modes file states (NASTRAN's are the deck's own)
     parameters: ParameterSet | None = None  #: damping ratios and frequency scales the model takes by default
 
-    #: what NASTRAN's modes are of: the structure as its SOL 103 run constrained it (no 1-g/0-g choice here)
-    configuration = "modes"
+    @property
+    def configuration(self) -> Literal["modes"]:
+        """"modes": NASTRAN's modes are of the structure as its SOL 103 run constrained it (no 1-g/0-g choice)."""
+        return "modes"
 
     @property
     def name(self) -> str:
@@ -142,33 +148,115 @@ class ModalStructure(ModesView):
         """NASTRAN's modes file."""
         return self.table.file
 
+    @property
+    def grid_ids(self) -> tuple[int, ...]:
+        """The grids whose eigenvectors the modes file holds (the ones whose motion can be an output)."""
+        return tuple(self.modes.dofs.grid_ids)
+
+    @property
+    def physical_kinds(self) -> tuple[str, ...]:
+        """None: NASTRAN's modes carry no FE whose moduli, springs or masses could change them."""
+        return ()
+
+    @property
+    def mass(self) -> None:
+        """None: NASTRAN's modes come without a mass matrix (they are mass-normalised)."""
+        return None
+
+    @property
+    def constraint_transform(self) -> None:
+        """None: the modes file's DOFs are the vectors' own."""
+        return None
+
+    def title(self, what: str) -> str:
+        """"<stem> modes <what> (NASTRAN's modes of <file>; modal parameters only)", for model summaries.
+
+        Parameters
+        ----------
+        what : str
+            The model the title names, e.g. "volts-volts model".
+        """
+        return f"{self.name} modes {what} (NASTRAN's modes of {self.source.name}; modal parameters only)"
+
+    def instrument_file(self) -> StructureFile:
+        """The structure file, when it declares actuators and sensors; a MaceError saying to declare them."""
+        if not self.file.has("actuators") or not self.file.has("sensors"):
+            raise MaceError(f"{self.file.path}: a volts-volts model needs actuators and sensors; declare them "
+                            "([[actuators]] and [[sensors]] on grids of the modes file)")
+        return self.file
+
+    def bar_strain_weights(self, *, bar_id: int, position: float, fiber_y_m: float,
+                           fiber_z_m: float) -> tuple[tuple[int, int, float], ...]:
+        """Always a MaceError: a bar strain gauge needs the deck's bar, and NASTRAN's modes hold none.
+
+        Parameters
+        ----------
+        bar_id : int
+            The CBAR the gauge was declared on.
+        position, fiber_y_m, fiber_z_m : float
+            Where on it (unused: there is no bar).
+        """
+        raise MaceError(f"a bar strain gauge (bar {bar_id}) needs the deck's bar; {self.source.name} holds NASTRAN's "
+                        "modes only (give the gauge's DOF weights as a displacement sensor)")
+
+    def check_parameters(self, parameters: ParameterSet | None) -> None:
+        """A MaceError when ``parameters`` hold moduli, springs or masses (:func:`check_modal_parameters`).
+
+        Parameters
+        ----------
+        parameters : ParameterSet or None
+            The set a model is built with (None: nothing to check).
+        """
+        check_modal_parameters(self, parameters)
+
+    def check_computed_with(self, parameters: ParameterSet) -> None:
+        """Nothing to check: NASTRAN's modes do not depend on a parameter set.
+
+        Parameters
+        ----------
+        parameters : ParameterSet
+            The set a model of these modes is asked to be built with.
+        """
+
+    def check_physical(self, names: Sequence[str]) -> None:
+        """A MaceError when ``names`` ask an FMU for physical parameters, which NASTRAN's modes cannot give.
+
+        Parameters
+        ----------
+        names : sequence of str
+            The physical parameters an FMU is asked for.
+        """
+        if len(names):
+            raise MaceError(f"physical parameters {list(names)}: {self.source.name} holds NASTRAN's modes, not an FE "
+                            "model, so its FMUs have modal parameters only (damping_mode_<k>, "
+                            "frequency_scale_mode_<k>)")
+
+    def static_correction(self, instruments: Instruments) -> np.ndarray | None:
+        """The residual flexibility's feedthrough onto the displacement sensors (:func:`static_correction`).
+
+        Parameters
+        ----------
+        instruments : Instruments
+            The model's actuators and sensors.
+        """
+        return static_correction(self, instruments)
+
+    def drawing(self) -> Drawing:
+        """The grids and the geometry deck's element edges (:func:`outline_drawing`)."""
+        return outline_drawing(self)
+
 
 def mode_labels(count: int) -> tuple[str, ...]:
     """Labels of NASTRAN's modes in file order: "mode 1", "mode 2", ..."""
     return tuple(f"mode {k + 1}" for k in range(count))
 
 
-def _instrument_grids(file: StructureFile) -> list[tuple[str, str, int]]:
-    """(table, instrument name, grid) of every DOF row of the file's actuators and sensors."""
-    out = []
-    for table in ("actuators", "sensors"):
-        entries = file.tables.get(table, [])
-        for entry in entries if isinstance(entries, list) else []:
-            if not isinstance(entry, dict):
-                continue
-            rows = [row[0] for row in entry.get("dofs", []) if isinstance(row, list) and row]
-            rows += [g for row in entry.get("wheels", []) if isinstance(row, list) for g in row[:2]]
-            out += [(table[:-1], str(entry.get("name", "?")), g) for g in rows
-                    if isinstance(g, int) and not isinstance(g, bool)]
-    return out
-
-
 def check_instrument_grids(file: StructureFile, modes: Modes, *, source: Path) -> None:
     """A MaceError naming the instrument and the grid when an instrument sits on a grid whose eigenvectors
     are not in the modes file, and the output request that puts them there."""
     have = set(modes.dofs.grid_ids)
-    for what, name, grid in _instrument_grids(file):
-        if grid not in have:
+    for what, name, grids in instrument_grids(file):
+        for grid in (g for g in grids if g not in have):
             raise MaceError(f"{file.path}: {what} {name!r} sits on grid {grid}, whose eigenvectors are not in "
                             f"{source}: request them in the SOL 103 case control (DISPLACEMENT(PLOT) = ALL, or "
                             f"SET n = ..., {grid} with DISPLACEMENT(PLOT) = n) and run NASTRAN again")
@@ -213,7 +301,7 @@ def static_correction(structure: ModalStructure, instruments: Instruments) -> np
     return d
 
 
-def _read_modes(table: ModesTable) -> Any:
+def _read_modes(table: ModesTable) -> NastranModes:
     """NASTRAN's modes through :func:`mace_fmu.nastran_modes.read_nastran_modes`, with the geometry deck's GRID and
     CORD cards where one is given (its CD systems turn the vectors to basic; shells and solids are passed over)."""
     from mace_fmu.nastran_modes import read_nastran_modes
@@ -233,9 +321,9 @@ def _check_output_systems(table: ModesTable, connectivity: Connectivity, modes: 
                             "resolved to basic here: run NASTRAN with PARAM,OGEOM,YES (the OP2's GEOM1 tables)")
 
 
-def _positions(read: Any, connectivity: Connectivity | None) -> dict[int, np.ndarray] | None:
+def _positions(read: NastranModes, connectivity: Connectivity | None) -> dict[int, np.ndarray] | None:
     """Grid positions in basic: the modes file's where it gives them, else the geometry deck's GRIDs in CP 0."""
-    given = getattr(read, "grid_positions", None)
+    given = read.grid_positions
     if given:
         return {int(g): np.asarray(x, dtype=float) for g, x in given.items()}
     if connectivity is None:
@@ -243,7 +331,7 @@ def _positions(read: Any, connectivity: Connectivity | None) -> dict[int, np.nda
     return {g: np.array(p.xyz, dtype=float) for g, p in connectivity.grids.items() if p.cp == 0}
 
 
-def modal_structure(structure_file: StructureFile | str | os.PathLike, *, nastran_modes: Any = None,
+def modal_structure(structure_file: StructureFile | str | os.PathLike, *, nastran_modes: NastranModes | None = None,
                     parameters: ParameterSet | None = None) -> ModalStructure:
     """The structure a structure file's ``[modes]`` table describes: NASTRAN's modes, the instruments' grids
     checked against them, the residual flexibility and the drawing geometry read.
@@ -285,11 +373,58 @@ def modal_structure(structure_file: StructureFile | str | os.PathLike, *, nastra
     modes = Modes(frequencies_hz=np.asarray(modes.frequencies_hz, dtype=float), shapes=modes.shapes, dofs=modes.dofs,
                   cd_frames=modes.cd_frames, labels=tuple(modes.labels) or mode_labels(len(modes.frequencies_hz)))
     check_instrument_grids(file, modes, source=table.file)
-    if connectivity is not None and not getattr(read, "grid_positions", None):
+    if connectivity is not None and not read.grid_positions:
         _check_output_systems(table, connectivity, modes)
     residual = read_residual_flexibility(table.residual_flexibility) if table.residual_flexibility else None
     structure = ModalStructure(modes=modes, file=file, table=table, positions=_positions(read, connectivity),
-                               connectivity=connectivity, residual=residual, units=str(getattr(read, "units", "")),
+                               connectivity=connectivity, residual=residual, units=read.units,
                                parameters=parameters if parameters is not None and len(parameters) else None)
     check_modal_parameters(structure, parameters)
     return structure
+
+
+def outline_drawing(structure: ModalStructure) -> Drawing:
+    """The grids and element edges of ``structure`` (from its geometry deck) to draw.
+
+    Shells are drawn as the edges of their faces, solids as the edges of their corners, bars and rods as
+    lines (:mod:`mace_fmu.deck.connectivity`); a grid on no edge is drawn as a small sphere. Only grids
+    whose eigenvectors are in the modes file can move, so an edge to any other grid is left out.
+
+    Parameters
+    ----------
+    structure : ModalStructure
+        NASTRAN's modes with the positions and edges read for drawing.
+
+    Returns
+    -------
+    Drawing
+        Edges of radius :data:`EDGE_RADIUS_FRACTION` and lone grids of radius :data:`GRID_RADIUS_FRACTION` of
+        the largest extent, framed on every grid with a position.
+
+    Raises
+    ------
+    MaceError
+        When nothing can be drawn, naming what to add.
+    """
+    grids = structure.modes.dofs.grid_ids
+    positions = structure.positions or {}
+    known = [g for g in grids if g in positions]
+    if not known:
+        raise MaceError(f"{structure.file.path}: nothing to draw: {structure.source.name} gives no grid positions "
+                        "and [modes] names no geometry deck (add geometry = \"<the run's deck>\")")
+    row = {g: k for k, g in enumerate(grids)}
+    xyz = np.array([positions[g] if g in positions else np.full(3, np.nan) for g in grids], dtype=float)
+    low, high = np.nanmin(xyz, axis=0), np.nanmax(xyz, axis=0)
+    xyz[np.isnan(xyz[:, 0])] = 0.5 * (low + high)  # never drawn: no edge or sphere reaches a grid without position
+    length = float((high - low).max()) or 1.0
+    spec = structure.file.spec
+    edges = structure.connectivity.edges if structure.connectivity is not None else ()
+    drawn = [(a, b) for a, b in edges if a in row and b in row and a in positions and b in positions]
+    lines = tuple(DrawnLine(name=f"edges/{a}_{b}", element_id=0, row_a=row[a], row_b=row[b],
+                            radius_m=EDGE_RADIUS_FRACTION * length, component=spec.component_of(a, b) or "other",
+                            bends=False) for a, b in drawn)
+    on_edge = {g for pair in drawn for g in pair}
+    points = tuple(DrawnPoint(name=f"grids/{g}", row=row[g], radius_m=GRID_RADIUS_FRACTION * length,
+                              component=spec.component_of(g) or "other") for g in known if g not in on_edge)
+    return Drawing(positions_m=xyz, grid_ids=tuple(grids), lines=lines, points=points, centre_m=0.5 * (low + high),
+                   extent_m=high - low, length_m=length)

@@ -16,7 +16,6 @@ import numpy as np
 from mace_fmu.errors import MaceError
 from mace_fmu.iomodel.instruments import Servos, force_unit
 from mace_fmu.iomodel.modal_ss import modal_data
-from mace_fmu.iomodel.modal_source import ModalStructure
 from mace_fmu.iomodel.motion import motion_unit, parse_motion_output
 from mace_fmu.iomodel.stiffness_route import PhysicalRoute, physical_route, stiffness_sensitivities
 from mace_fmu.iomodel.volts import VoltsModel
@@ -159,11 +158,9 @@ def parametric_arrays(model: VoltsModel, *, physical: bool | Sequence[str] = Tru
         arrays = with_frequency_bounds(arrays, frequency_bounds)
     if physical is False:
         return arrays
-    if isinstance(model.structure_modes, ModalStructure):  # NASTRAN's modes: no FE, no moduli or springs
-        if physical is not True and len(physical):
-            raise MaceError(f"physical parameters {list(physical)}: {model.structure_modes.source.name} holds "
-                            "NASTRAN's modes, not an FE model, so its FMUs have modal parameters only "
-                            "(damping_mode_<k>, frequency_scale_mode_<k>)")
+    if physical is not True:
+        model.structure_modes.check_physical(physical)
+    if not model.structure_modes.physical_kinds:  # NASTRAN's modes: no FE, no moduli or springs
         return arrays
     sensitivities = stiffness_sensitivities(model, only=None if physical is True else physical)
     return with_physical(arrays, physical_route(model, data.shapes, sensitivities))

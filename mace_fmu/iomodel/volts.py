@@ -15,30 +15,31 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 from functools import cached_property
-from typing import Sequence
+from typing import Sequence, TypeVar
 
 import control as ct
 import numpy as np
 
 from mace_fmu.errors import MaceError
-from mace_fmu.fe.modes import StructureModes
 from mace_fmu.iomodel.damping import modal_damping
 from mace_fmu.iomodel.frf import frequency_response
 from mace_fmu.iomodel.instruments import (SPEED_LOOP_GAINS, Instruments, check_accelerometers_have_mass,
                                           load_instruments, resolve_bar_gauges)
 from mace_fmu.iomodel.modal_ss import ModalPlant, modal_plant
-from mace_fmu.iomodel.modal_source import ModalStructure, check_modal_parameters, static_correction
 from mace_fmu.iomodel.model_options import ModelledElectronics, SignalSelection
 from mace_fmu.iomodel.motion import motion_unit, parse_motion_output
+from mace_fmu.iomodel.source import ModalSource
 from mace_fmu.parameters.kinds import (DAMPING, DELAY, FREQUENCY_SCALE, SERVO_GAINS, ParameterKind, mode_number,
                                        split_loop_name)
 from mace_fmu.parameters.per_mode import resolve_mode_names
-from mace_fmu.parameters.sets import ParameterSet, fe_overrides, naming_the_file, parameter_names
+from mace_fmu.parameters.sets import ParameterSet, naming_the_file
+from mace_fmu.structure.file import SourceConfiguration
 from mace_fmu.util.frequency import ZERO_HZ
 from mace_fmu.util.threads import single_blas_thread
 from modelica_like import PD, Gain, LowPassFilter, PadeDelay, StateSpace, Sum, System
 
 DEG_PER_RAD = 180.0 / np.pi
+_Source = TypeVar("_Source", bound=ModalSource)  #: a modal source (each is a frozen dataclass)
 
 
 @dataclass(frozen=True)
@@ -49,14 +50,14 @@ class VoltsModel:
     diagram: System  #: the modelica_like block diagram (to_modelica() writes it as Modelica)
     plant: ModalPlant  #: the physical modal model inside
     #: the modes the model was built from: the deck route's, or NASTRAN's (a ModalStructure, no FE)
-    structure_modes: StructureModes | ModalStructure
+    structure_modes: ModalSource
     instruments: Instruments  #: actuators, sensors, electronics, loops and damping it was built with
     electronics: ModelledElectronics  #: which electronics the model contains, and how
     parameters: ParameterSet | None = None  #: the parameter set it was built with (None: the deck's and file's)
 
     @property
-    def configuration(self) -> str:
-        """"1g" or "0g": the structure the model is of."""
+    def configuration(self) -> SourceConfiguration:
+        """"1g" or "0g": the deck's structure the model is of ("modes": NASTRAN's modes)."""
         return self.structure_modes.configuration
 
     @property
@@ -75,7 +76,7 @@ class VoltsModel:
     @property
     def grid_ids(self) -> tuple[int, ...]:
         """Every grid of the model's structure (the ones whose motion can be an output)."""
-        return tuple(self.structure_modes.modes.dofs.grid_ids)
+        return self.structure_modes.grid_ids
 
     def frequency_response(self, frequencies_hz: np.ndarray) -> np.ndarray:
         """H[k, output, input] [V/V] at ``frequencies_hz`` [Hz], all channels at once.
@@ -272,7 +273,7 @@ def _gimbal_servo(s: System, drives: dict[str, _Drive], instruments: Instruments
 
 
 @single_blas_thread
-def volts_model(modes: StructureModes | ModalStructure, *, parameters: ParameterSet | None = None,
+def volts_model(modes: ModalSource, *, parameters: ParameterSet | None = None,
                 instruments: Instruments | None = None, electronics: ModelledElectronics = ModelledElectronics(),
                 signals: SignalSelection = SignalSelection(), max_hz: float | None = None) -> VoltsModel:
     """Volts-volts model of the structure whose modes are given: actuator volts in, sensor volts out.
@@ -284,7 +285,7 @@ def volts_model(modes: StructureModes | ModalStructure, *, parameters: Parameter
 
     Parameters
     ----------
-    modes : StructureModes or ModalStructure
+    modes : ModalSource
         The modes of the 1-g or 0-g structure (:func:`~mace_fmu.fe.modes.compute_modes`), or NASTRAN's modes
         (:func:`~mace_fmu.iomodel.modal_source.modal_structure`: modal parameters only, no moduli).
     parameters : ParameterSet, optional
@@ -322,7 +323,7 @@ def volts_model(modes: StructureModes | ModalStructure, *, parameters: Parameter
     >>> model.system.ninputs, model.system.noutputs
     (1, 1)
     """
-    _check(isinstance(modes, (StructureModes, ModalStructure)),
+    _check(callable(getattr(modes, "instrument_file", None)),  # a ModalSource (the protocol's members are not run)
            f"modes must be the StructureModes of compute_modes(...), got {type(modes).__name__} (or NASTRAN's modes: "
            "the ModalStructure of modal_structure(...))")
     _check(isinstance(electronics, ModelledElectronics),
@@ -331,13 +332,10 @@ def volts_model(modes: StructureModes | ModalStructure, *, parameters: Parameter
            f"signals must be a SignalSelection record, got {type(signals).__name__}")
     if parameters is None:
         parameters = modes.parameters
-    elif isinstance(modes, StructureModes):
-        _check_moduli_agree(modes, parameters)
-    configuration = modes.configuration
-    if isinstance(modes, ModalStructure):
-        instruments = _modal_instruments(modes, instruments, parameters)
     else:
-        instruments = _deck_instruments(modes, instruments, parameters)
+        modes.check_computed_with(parameters)
+    configuration = modes.configuration
+    instruments = _source_instruments(modes, instruments, parameters)
     with naming_the_file(parameters):
         instruments = apply_parameters(instruments, parameters, modes.labels, configuration=configuration)
         modes = scale_frequencies(modes, parameters, configuration=configuration)
@@ -359,8 +357,7 @@ def volts_model(modes: StructureModes | ModalStructure, *, parameters: Parameter
     _check(not unknown, f"motion_grids: grid(s) {unknown} are not in the {configuration} model; it has grids "
                         f"{grids[0]}..{grids[-1]} ({len(grids)} in all)")
     plant = modal_plant(modes.modes, instruments, zeta, max_hz=max_hz, motion_grids=list(motion_grids),
-                        static_correction=static_correction(modes, instruments)
-                        if isinstance(modes, ModalStructure) else None)
+                        static_correction=modes.static_correction(instruments))
     diagram = build_diagram(plant, instruments, electronics=electronics)
     system = diagram.compile()
     return VoltsModel(system=select_signals(system, inputs=inputs, outputs=outputs), diagram=diagram, plant=plant,
@@ -368,59 +365,19 @@ def volts_model(modes: StructureModes | ModalStructure, *, parameters: Parameter
                       parameters=parameters if parameters is not None and len(parameters) else None)
 
 
-def _deck_instruments(modes: StructureModes, instruments: Instruments | None,
-                      parameters: ParameterSet | None) -> Instruments:
-    """The instruments of a deck's structure (its structure file's unless given), bar gauges resolved on its
-    bars and accelerometers checked against its mass, after checking that the set's moduli and springs name
-    the deck's cards."""
-    file = modes.structure.file
+def _source_instruments(modes: ModalSource, instruments: Instruments | None,
+                        parameters: ParameterSet | None) -> Instruments:
+    """The instruments of the modes' structure (its structure file's unless given), bar gauges resolved as the source
+    gives them and accelerometers checked against its mass, after checking that the set's physical parameters are
+    ones the source can have."""
     if instruments is None:
-        if file is None or not file.has("actuators") or not file.has("sensors"):
-            raise MaceError(f"{modes.structure.deck.path}: a volts-volts model needs actuators and sensors, and this "
-                            "deck has no structure file declaring them (give one: "
-                            "compute_modes(..., structure_file=...), CLI --structure FILE; the bundled mace_em.toml "
-                            "belongs to the bundled MACE deck only)")
-        instruments = load_instruments(file)
-    instruments = resolve_bar_gauges(instruments, modes.model, modes.structure.deck)
-    check_accelerometers_have_mass(instruments, mass=modes.model.mass, dof_map=modes.modes.dofs,
-                                   cd_frames=modes.modes.cd_frames,
-                                   transform=None if modes.constraints is None else modes.constraints.transform)
+        instruments = load_instruments(modes.instrument_file())
+    instruments = resolve_bar_gauges(instruments, modes)
+    check_accelerometers_have_mass(instruments, mass=modes.mass, dof_map=modes.modes.dofs,
+                                   cd_frames=modes.modes.cd_frames, transform=modes.constraint_transform)
     with naming_the_file(parameters):  # the moduli and springs must name cards
-        fe_overrides(parameters, parameter_names(modes.structure.deck, file))
+        modes.check_parameters(parameters)
     return instruments
-
-
-def _modal_instruments(modes: ModalStructure, instruments: Instruments | None,
-                       parameters: ParameterSet | None) -> Instruments:
-    """The instruments of a structure known by NASTRAN's modes: no bar gauges (no bars), no moduli or springs."""
-    if instruments is None:
-        if not modes.file.has("actuators") or not modes.file.has("sensors"):
-            raise MaceError(f"{modes.file.path}: a volts-volts model needs actuators and sensors; declare them "
-                            "([[actuators]] and [[sensors]] on grids of the modes file)")
-        instruments = load_instruments(modes.file)
-    gauges = [s.name for s in instruments.sensors if s.gauge is not None and not s.dofs]
-    _check(not gauges, f"{instruments.source}: sensor {gauges[0]!r} is a bar strain gauge, which needs the deck's "
-                       f"bar; {modes.source.name} holds NASTRAN's modes only (give the gauge's DOF weights as a "
-                       "displacement sensor)" if gauges else "")
-    with naming_the_file(parameters):
-        check_modal_parameters(modes, parameters)
-    return instruments
-
-
-def _check_moduli_agree(modes: StructureModes, parameters: ParameterSet) -> None:
-    """Refuse a set whose moduli, springs or masses differ from those the modes were computed with (they would be
-    ignored)."""
-    deck = modes.structure.deck
-    for (card, cid), fields in fe_overrides(parameters, parameter_names(deck, modes.structure.file)).items():
-        entry = {"MAT1": deck.mat1s, "CELAS2": deck.celas2s, "CONM2": deck.conm2s}[card][cid]
-        for key, value in fields.items():
-            if key == "inertia":  # a mass's inertias follow its mass
-                continue
-            computed = float(getattr(entry, key))
-            _check(abs(computed - value) <= 1e-12 * abs(value),
-                   f"parameters set {card} {cid} {key} = {value:.6g} but the modes were computed with "
-                   f"{computed:.6g}; compute the modes with the same parameters (compute_modes(..., parameters=...)), "
-                   "whose set the model then takes by default")
 
 
 def apply_parameters(instruments: Instruments, parameters: ParameterSet | None, mode_labels: Sequence[str], *,
@@ -506,8 +463,7 @@ def _check_range(name: str, value: float, kind: ParameterKind) -> None:
                         f"{kind.name.replace('_', ' ')} parameter")
 
 
-def scale_frequencies(modes: StructureModes, parameters: ParameterSet | None, *,
-                      configuration: str = "") -> StructureModes:
+def scale_frequencies(modes: _Source, parameters: ParameterSet | None, *, configuration: str = "") -> _Source:
     """``modes`` with each frequency scale of the set multiplying its modes' frequencies [Hz]: ``frequency_scale:<label>``
     every mode with the label, ``frequency_scale_mode_<k>`` mode k (1-based, as the FMU names it).
 
@@ -518,8 +474,8 @@ def scale_frequencies(modes: StructureModes, parameters: ParameterSet | None, *,
 
     Parameters
     ----------
-    modes : StructureModes
-        The structure's modes.
+    modes : ModalSource
+        The structure's modes (a dataclass: a deck's or NASTRAN's).
     parameters : ParameterSet or None
         The set whose ``frequency_scale:<label>`` entries apply (None: no change).
     configuration : str
@@ -527,7 +483,7 @@ def scale_frequencies(modes: StructureModes, parameters: ParameterSet | None, *,
 
     Returns
     -------
-    StructureModes
+    ModalSource
         A copy with the scaled frequencies [Hz].
 
     Raises
@@ -544,7 +500,8 @@ def scale_frequencies(modes: StructureModes, parameters: ParameterSet | None, *,
     for name, value in resolve_mode_names(scales, mode_labels=modes.labels, model=f"{configuration} structure",
                                           source=parameters.source).items():
         frequencies[mode_number(name) - 1] *= value
-    return replace(modes, modes=replace(modes.modes, frequencies_hz=frequencies))
+    scaled = replace(modes.modes, frequencies_hz=frequencies)
+    return replace(modes, modes=scaled)  # type: ignore[type-var]  # every modal source is a dataclass
 
 
 def select_signals(system: ct.StateSpace, *, inputs: Sequence[str] | None = None,

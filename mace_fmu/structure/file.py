@@ -28,7 +28,9 @@ from mace_fmu.errors import MaceError
 from mace_fmu.structure.values import PARAMETER_KEYS, check_values, key_line
 from mace_fmu.util.textfile import read_text
 
-Configuration = Literal["1g", "0g"]
+Configuration = Literal["1g", "0g"]  #: the structures a deck is built as: suspended and preloaded, or free
+#: what a modal source's modes are of: a deck's 1-g or 0-g structure, or NASTRAN's modes as its run constrained it
+SourceConfiguration = Literal["1g", "0g", "modes"]
 
 #: the tables a structure file may hold, and what each is for (the schema, checked on loading)
 STRUCTURE_FILE_TABLES = {
@@ -340,6 +342,34 @@ def _ids_text(ids: list[int]) -> str:
     return ", ".join(parts)
 
 
+def instrument_grids(file: StructureFile) -> list[tuple[str, str, list[int]]]:
+    """The grids each actuator and sensor of ``file`` names, as written (before the instruments are read).
+
+    Parameters
+    ----------
+    file : StructureFile
+        A structure file.
+
+    Returns
+    -------
+    list of (str, str, list of int)
+        ("actuator" or "sensor", its name, the grids of its ``dofs`` rows and ``wheels`` pairs) per entry,
+        in file order; entries and grids that are not well formed are passed over (they are refused where
+        the instruments are read, :func:`mace_fmu.iomodel.instruments.load_instruments`).
+    """
+    out = []
+    for table in ("actuators", "sensors"):
+        entries = file.tables.get(table, [])
+        for entry in entries if isinstance(entries, list) else []:
+            if not isinstance(entry, dict):
+                continue
+            grids = [row[0] for row in entry.get("dofs", []) if isinstance(row, list) and row]
+            grids += [g for row in entry.get("wheels", []) if isinstance(row, list) for g in row[:2]]
+            out.append((table[:-1], str(entry.get("name", "?")),
+                        [g for g in grids if isinstance(g, int) and not isinstance(g, bool)]))
+    return out
+
+
 def check_instruments_against_deck(file: StructureFile, deck: Deck, *, configuration: str = "") -> None:
     """A MaceError naming the structure file, the actuator or sensor and the grids when an instrument's DOFs
     name a grid ``deck`` (the configuration's: 0-g lacks the suspension's grids) does not have.
@@ -347,16 +377,10 @@ def check_instruments_against_deck(file: StructureFile, deck: Deck, *, configura
     Only the grids are checked here, before any solve; the rest of each entry is checked where the
     instruments are read (:func:`mace_fmu.iomodel.instruments.load_instruments`)."""
     problems = []
-    for table in ("actuators", "sensors"):
-        for entry in file.tables.get(table, []) if isinstance(file.tables.get(table), list) else []:
-            if not isinstance(entry, dict):
-                continue
-            grids = [row[0] for row in entry.get("dofs", []) if isinstance(row, list) and row]
-            grids += [g for row in entry.get("wheels", []) if isinstance(row, list) for g in row[:2]]
-            missing = sorted({g for g in grids if isinstance(g, int) and not isinstance(g, bool)
-                              and g not in deck.grids})
-            if missing:
-                problems.append(f"{table[:-1]} {entry.get('name', '?')!r} names grid {_ids_text(missing)}")
+    for what, name, grids in instrument_grids(file):
+        missing = sorted({g for g in grids if g not in deck.grids})
+        if missing:
+            problems.append(f"{what} {name!r} names grid {_ids_text(missing)}")
     if problems:
         where = " (the 0-g structure: its suspension's grids removed)" if configuration == "0g" else ""
         raise MaceError(f"{file.path}: " + "; ".join(problems) + f", which {deck.path}{where} does not have")

@@ -185,11 +185,11 @@ def test_a_structure_row_of_unknown_kind_in_the_model_data_is_refused_at_instant
     from mace_fmu.fmu.export import export_fmu
     from mace_fmu.fmu.native.export import RESOURCE_NAME
     from mace_fmu.fmu.native.resource import resource_bytes, runtime_arrays
-    from mace_fmu.iomodel.parametric_data import parametric_arrays
+    from mace_fmu.fmu.parametric import parametric_model
 
     model = _model(tmp_path, free=False, max_hz=200.0)
     good = export_fmu(model, out_dir=tmp_path, name="beam_good")
-    data = runtime_arrays(parametric_arrays(model))
+    data = runtime_arrays(parametric_model(model))
     data["struct_row_kind"] = np.array([0, 7, 2], dtype=np.int64)
     bad = tmp_path / "beam_bad.fmu"
     with zipfile.ZipFile(good) as source, zipfile.ZipFile(bad, "w") as target:

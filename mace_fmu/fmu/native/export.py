@@ -23,16 +23,12 @@ from typing import Literal
 import numpy as np
 
 from mace_fmu.errors import MaceError
-from mace_fmu.fmu.naming import model_fmu_name
 from mace_fmu.fmu.native import compile as runtime
-from mace_fmu.fmu.native.model_description import (JacobianPattern, fmi2_model_description, fmi3_build_description,
+from mace_fmu.fmu.native.model_description import (fmi2_model_description, fmi3_build_description,
                                                    fmi3_model_description, fmu_variables)
 from mace_fmu.fmu.native.platforms import Platform, binary_entries, select_platforms
 from mace_fmu.fmu.native.resource import count_of, resource_bytes, runtime_arrays
-from mace_fmu.fmu.variables import model_summary
-from mace_fmu.iomodel.parametric import ParametricSystem
-from mace_fmu.iomodel.parametric_data import parametric_arrays, with_frequency_bounds
-from mace_fmu.iomodel.volts import VoltsModel
+from mace_fmu.fmu.parametric import ParametricModel
 from mace_fmu.util.atomic import atomic_zip
 from mace_fmu.util.progress import ProgressCallback
 
@@ -93,53 +89,22 @@ def write_native_fmu(final: Path, *, name: str, fmi_version: int, description: b
     return final
 
 
-def jacobian_pattern(system: ParametricSystem, *, samples: int = 2, seed: int = 0) -> JacobianPattern:
-    """Where (A, B, C, D) of ``system`` can be nonzero for any parameter values: the union of the
-    nonzero entries at the nominal parameters and at ``samples`` random sets (each parameter within 10 %
-    of its nominal value, or 1 % of its range from a zero nominal, inside its declared range). Entries
-    that no parameter reaches (the block structure's zeros) stay zero in every build; the random sets
-    reach those a parameter at its nominal value happens to zero (a damping or gain of 0), and the
-    physical parameters' reanalysis mixes the flexible modes as any change of them does."""
-    rng = np.random.default_rng(seed)
-    nominal, low, high = system.nominal, system.minimum, system.maximum
-    span = np.where(np.isfinite(high - low), high - low, 1.0)
-    sets = [nominal]
-    for _ in range(samples):
-        step = np.where(nominal != 0.0, 0.1 * nominal, 0.01 * span) * rng.uniform(0.5, 1.0, len(nominal))
-        sets.append(np.clip(nominal + step * rng.choice([-1.0, 1.0], len(nominal)), low, high))
-    patterns: list[np.ndarray] | None = None
-    for params in sets:
-        nonzero = [np.asarray(m) != 0.0 for m in system.build(params)]
-        patterns = nonzero if patterns is None else [p | q for p, q in zip(patterns, nonzero)]
-    system.build(nominal)  # leave the system as built at its nominal parameters
-    assert patterns is not None  # sets holds the nominal parameters at least
-    return JacobianPattern(*patterns)
-
-
-def export_native_fmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str | None = None,
-                      fmi_version: FmiVersion = 2, arrays: dict[str, np.ndarray] | None = None,
-                      frequency_bounds: Mapping[int, float] | None = None,
+def export_native_fmu(model: ParametricModel, *, name: str, out_dir: str | Path = ".", fmi_version: FmiVersion = 2,
                       platforms: Sequence[str] | None = None, progress: ProgressCallback | None = None) -> Path:
     """Write a native FMU (the C runtime, compiled here) of ``model`` and return its path.
 
     Parameters
     ----------
-    model : VoltsModel
-        The volts-volts model (:func:`~mace_fmu.iomodel.volts.volts_model`): its inputs and outputs [V]
-        become the FMU's, its physical parameters, damping ratios, frequency scales, delays [s] and servo
-        gains its tunable parameters.
+    model : ParametricModel
+        What the volts-volts model's FMUs carry (:func:`~mace_fmu.fmu.parametric.parametric_model`): its
+        inputs and outputs [V] become the FMU's, its physical parameters, damping ratios, frequency scales,
+        delays [s] and servo gains its tunable parameters.
+    name : str
+        The FMU's model identifier, a C identifier (e.g. MACE_1g, :func:`~mace_fmu.fmu.naming.model_fmu_name`).
     out_dir : path
         Folder the FMU is written to (created if needed).
-    name : str, optional
-        The FMU's model identifier, a C identifier (default: MACE_1g / MACE_0g).
     fmi_version : {2, 3}
         FMI 2.0 (co-simulation and model exchange) or FMI 3.0 (co-simulation).
-    arrays : dict, optional
-        The model's parametric arrays (:func:`~mace_fmu.iomodel.parametric_data.parametric_arrays`) if
-        already computed.
-    frequency_bounds : mapping of int to float, optional
-        1-based mode -> relative bound: the declared min/max of that mode's ``frequency_scale_mode_<k>``,
-        1 -+ bound.
     platforms : sequence of str, optional
         The platforms to carry binaries for, FMI 3 tuples (``"x86_64-linux"``, ``"aarch64-linux"``,
         ``"x86_64-windows"``, ``"x86_64-darwin"``, ``"aarch64-darwin"``); default all five. One named here
@@ -159,37 +124,31 @@ def export_native_fmu(model: VoltsModel, *, out_dir: str | Path = ".", name: str
         A name that is not a C identifier, an FMI version other than 2 or 3, an unknown platform, a
         compiler failure.
     """
-    name = name or model_fmu_name(model)
     if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", name):
         raise MaceError(f"FMU name must be a C identifier (it names the model and its binary), got {name!r}")
     if fmi_version not in (2, 3):
         raise MaceError(f"native FMUs are FMI 2 or FMI 3, got FMI version {fmi_version!r}")
     targets = select_platforms(platforms)
-    arrays = parametric_arrays(model) if arrays is None else arrays
-    if frequency_bounds:
-        arrays = with_frequency_bounds(arrays, frequency_bounds)
-    reference = ParametricSystem(arrays)
-    reference.build(reference.nominal)
-    data = runtime_arrays(arrays)
-    if count_of(data, "states") != len(reference.state_names):
+    data = runtime_arrays(model)
+    if count_of(data, "states") != len(model.state_names):
         raise MaceError(f"native FMU: the runtime data describe {count_of(data, 'states')} states, the model has "
-                        f"{len(reference.state_names)}")
+                        f"{len(model.state_names)}")
     c_files = runtime.C_FILES[fmi_version]
     sources = runtime.source_files(c_files)
     token = runtime_token(data, salt=f"fmi{fmi_version}", sources=sources)
     data["guid"] = [token]
-    variables = fmu_variables(arrays, reference.state_names)
+    variables = fmu_variables(model)
     version = metadata.version("mace-fmu")
     binaries = runtime.compile_runtimes(targets, c_files=c_files, requested=platforms is not None, progress=progress)
     if fmi_version == 2:
         description = fmi2_model_description(variables, model_identifier=name, guid=token,
-                                             description=model_summary(model), version=version,
+                                             description=model.summary, version=version,
                                              source_files=[p.name for p in sources if p.suffix == ".c"],
-                                             jacobian=jacobian_pattern(reference),
+                                             jacobian=model.jacobian,
                                              state_order=[int(k) for k in data["me_order"]])
     else:
         description = fmi3_model_description(variables, model_identifier=name, token=token,
-                                             description=model_summary(model), version=version)
+                                             description=model.summary, version=version)
     return write_native_fmu(Path(out_dir) / f"{name}.fmu", name=name, fmi_version=fmi_version,
                             description=description, data=data, binaries=binaries, sources=sources,
                             c_files=c_files)

@@ -7,15 +7,18 @@ derivatives. Names, units and descriptions are those of the pythonfmu FMU.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Literal
 from xml.etree import ElementTree as ET
 
 import numpy as np
 
-from mace_fmu.fmu.variables import DEFAULT_EXPERIMENT, signal_units, variable_unit
+from mace_fmu.fmu.variables import DEFAULT_EXPERIMENT, variable_unit
 from mace_fmu.parameters.kinds import frequency_output_name
+
+if TYPE_CHECKING:  # the record imports this module's JacobianPattern
+    from mace_fmu.fmu.parametric import ParametricModel
 
 LOG_CATEGORIES = (("logStatusError", "errors (always logged)"), ("logEvents", "debug information"))
 
@@ -24,16 +27,25 @@ LOG_CATEGORIES = (("logStatusError", "errors (always logged)"), ("logEvents", "d
 INPUT_LIMIT_V = 1e6
 
 
+#: what a variable is to the FMU's importer (FMI 2.0 2.2.7, FMI 3.0 2.4.7; FMPy's ModelVariable.causality)
+Causality = Literal["parameter", "calculatedParameter", "structuralParameter", "input", "output", "local",
+                    "independent"]
+#: when a variable's value can change (FMPy's ModelVariable.variability)
+Variability = Literal["constant", "fixed", "tunable", "discrete", "continuous"]
+#: how a variable's start value is meant (FMPy's ModelVariable.initial)
+Initial = Literal["exact", "approx", "calculated"]
+
+
 @dataclass(frozen=True)
 class FmuVariable:
     """One scalar Real/Float64 variable of a native FMU."""
 
     name: str  #: variable name in the model description
     value_reference: int  #: FMI value reference
-    causality: str  #: input, output, parameter, calculatedParameter or local
-    variability: str  #: continuous or fixed
+    causality: Causality  #: input, output, parameter, calculatedParameter, local or independent
+    variability: Variability  #: continuous or fixed
     description: str  #: what it is, with its unit
-    initial: str | None = None  #: FMI initial attribute (None: not given)
+    initial: Initial | None = None  #: FMI initial attribute (None: not given)
     start: float | None = None  #: start value (SI; None for outputs)
     unit: str | None = None  #: unit (None: dimensionless)
     minimum: float | None = None  #: declared minimum (None: none)
@@ -41,15 +53,13 @@ class FmuVariable:
     derivative_of: int | None = None  #: 1-based index (FMI 2) of the state this is the derivative of
 
 
-def fmu_variables(arrays: Mapping[str, np.ndarray], state_names: Sequence[str]) -> list[FmuVariable]:
-    """All variables in value-reference order, from a ParametricSystem's arrays and its state names.
+def fmu_variables(model: ParametricModel) -> list[FmuVariable]:
+    """All variables in value-reference order, from what the model's FMUs carry.
 
     Parameters
     ----------
-    arrays : mapping
-        A ParametricSystem's arrays (:func:`~mace_fmu.iomodel.parametric_data.parametric_arrays`).
-    state_names : sequence of str
-        The built system's state names ("block.state").
+    model : ParametricModel
+        The record the FMU writers serialise (:func:`~mace_fmu.fmu.parametric.parametric_model`).
 
     Returns
     -------
@@ -58,32 +68,34 @@ def fmu_variables(arrays: Mapping[str, np.ndarray], state_names: Sequence[str]) 
         time, in value-reference order.
     """
     out: list[FmuVariable] = []
-    units = signal_units(arrays)
+    units = model.signal_units
 
-    def add(**kw: Any) -> None:
-        name, causality = kw["name"], kw["causality"]
-        out.append(FmuVariable(value_reference=len(out), unit=variable_unit(name, causality, signal_units=units),
-                               **kw))
+    def add(*, name: str, causality: Causality, variability: Variability, description: str,
+            initial: Initial | None = None, start: float | None = None, minimum: float | None = None,
+            maximum: float | None = None, derivative_of: int | None = None) -> None:
+        out.append(FmuVariable(name=name, value_reference=len(out), causality=causality, variability=variability,
+                               description=description, initial=initial, start=start,
+                               unit=variable_unit(name, causality, signal_units=units), minimum=minimum,
+                               maximum=maximum, derivative_of=derivative_of))
 
-    for name, desc in zip(arrays["inputs"], arrays["input_descriptions"]):
-        add(name=str(name), causality="input", variability="continuous", description=str(desc), start=0.0,
-            minimum=-INPUT_LIMIT_V, maximum=INPUT_LIMIT_V)
-    for name, desc in zip(arrays["outputs"], arrays["output_descriptions"]):
-        add(name=str(name), causality="output", variability="continuous", description=str(desc))
-    for name, desc, value, lo, hi in zip(arrays["param_names"], arrays["param_descriptions"], arrays["param_values"],
-                                         arrays["param_min"], arrays["param_max"]):
-        add(name=str(name), causality="parameter", variability="fixed", description=str(desc), initial="exact",
-            start=float(value), minimum=float(lo) if np.isfinite(lo) else None,
-            maximum=float(hi) if np.isfinite(hi) else None)
-    for k, label in enumerate(arrays["mode_labels"]):
+    for signal in model.inputs:
+        add(name=signal.name, causality="input", variability="continuous", description=signal.description,
+            start=0.0, minimum=-INPUT_LIMIT_V, maximum=INPUT_LIMIT_V)
+    for signal in model.outputs:
+        add(name=signal.name, causality="output", variability="continuous", description=signal.description)
+    for p in model.parameters:
+        add(name=p.name, causality="parameter", variability="fixed", description=p.description, initial="exact",
+            start=p.nominal, minimum=p.minimum if np.isfinite(p.minimum) else None,
+            maximum=p.maximum if np.isfinite(p.maximum) else None)
+    for k, label in enumerate(model.mode_labels):
         add(name=frequency_output_name(k + 1), causality="calculatedParameter", variability="fixed",
             initial="calculated", description=f"natural frequency [Hz] of mode {k + 1} ({label}) after reanalysis and frequency scale (the "
                         "mode it continues into, not the k-th lowest)")
     first_state = len(out)
-    for name in state_names:
-        add(name=str(name), causality="local", variability="continuous", initial="calculated",
+    for name in model.state_names:
+        add(name=name, causality="local", variability="continuous", initial="calculated",
             description="continuous state (model exchange)")
-    for k, name in enumerate(state_names):
+    for k, name in enumerate(model.state_names):
         add(name=f"der({name})", causality="local", variability="continuous", initial="calculated",
             description=f"time derivative of {name}", derivative_of=first_state + k + 1)
     out.append(FmuVariable(name="time", value_reference=len(out), causality="independent", variability="continuous",

@@ -1,8 +1,9 @@
-"""The data a native FMU's C runtime reads (``resources/mace_model.bin``), made from a model's arrays.
+"""The data a native FMU's C runtime reads (``resources/mace_model.bin``), made from a model's record.
 
-The contract is the array set of :func:`mace_fmu.iomodel.parametric_data.parametric_arrays`,
-which :class:`~mace_fmu.iomodel.parametric.ParametricSystem` turns into (A, B, C, D). The runtime
-repeats that rebuild in C with one step done here, once: the zero-frequency cluster (rigid
+The record (:class:`~mace_fmu.fmu.parametric.ParametricModel`) carries the array set of
+:func:`mace_fmu.iomodel.parametric_data.parametric_arrays`, which
+:class:`~mace_fmu.iomodel.parametric.ParametricSystem` turns into (A, B, C, D). The runtime
+repeats that rebuild in C with one step done once, when the record is built: the zero-frequency cluster (rigid
 bodies, mechanisms) is rotated and reduced by the rules of :mod:`mace_fmu.iomodel.modal_core`.
 A stiffness change cannot move those modes (their sensitivities are zero in the arrays), so the
 reduction the reference recomputes at every build is the same each time.
@@ -16,6 +17,8 @@ from __future__ import annotations
 
 import struct
 from collections.abc import Mapping
+from dataclasses import dataclass, fields
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -24,6 +27,9 @@ from mace_fmu.iomodel.modal_core import reduce_zero_cluster
 from mace_fmu.iomodel.model_options import MAX_PADE_ORDER as MAX_ORDER
 from mace_fmu.parameters.kinds import kind_of_fmu_name, mode_number
 from mace_fmu.util.frequency import ZERO_HZ
+
+if TYPE_CHECKING:  # the record holds this module's ZeroCluster
+    from mace_fmu.fmu.parametric import ParametricModel
 
 MAGIC = b"MACEFMU1"
 FORMAT_VERSION = 1  #: the file layout (shared with the controller FMU's data)
@@ -42,8 +48,32 @@ _FLOAT, _INT, _TEXT = 1, 2, 3
 ROW_DISPLACEMENT, ROW_RATE, ROW_ACCELERATION = 0, 1, 2  #: struct_row_kind: what a structure output reads
 
 
-def _zero_cluster_reduced(arrays: Mapping[str, np.ndarray]) -> dict[str, np.ndarray]:
-    """Modal input rows, structure output rows and kept states after the nominal zero-cluster reduction."""
+@dataclass(frozen=True)
+class ZeroCluster:
+    """The modal inputs, structure output rows and kept states after the nominal zero-cluster reduction (the
+    runtime's entries of these names, in this order)."""
+
+    modal_b: np.ndarray  #: (n_modes, n_modal_inputs) modal input rows, the cluster rotated
+    struct_rows: np.ndarray  #: (n_structure_outputs, n_modes) what each structure output reads of the modes
+    struct_row_kind: np.ndarray  #: per structure output: ROW_DISPLACEMENT, ROW_RATE or ROW_ACCELERATION
+    keep_disp: np.ndarray  #: per mode: 1 where its displacement is a state
+    keep_rate: np.ndarray  #: per mode: 1 where its rate is a state
+    flexible: np.ndarray  #: the flexible modes' indices
+
+
+def zero_cluster_reduced(arrays: Mapping[str, np.ndarray]) -> ZeroCluster:
+    """The zero-frequency cluster of a ParametricSystem's ``arrays`` reduced at the nominal parameters.
+
+    Parameters
+    ----------
+    arrays : mapping
+        A ParametricSystem's arrays (:func:`~mace_fmu.iomodel.parametric_data.parametric_arrays`).
+
+    Returns
+    -------
+    ZeroCluster
+        Modal input rows, structure output rows and kept states after the reduction.
+    """
     freq = np.asarray(arrays["frequencies_hz"], dtype=float)
     n = len(freq)
     zero = np.flatnonzero(np.abs(freq) < ZERO_HZ)
@@ -70,25 +100,53 @@ def _zero_cluster_reduced(arrays: Mapping[str, np.ndarray]) -> dict[str, np.ndar
         else:
             rows.append(rate[name])
             row_kind.append(ROW_RATE)
-    return {"modal_b": modal_b, "struct_rows": np.array(rows).reshape(len(rows), n),
-            "struct_row_kind": np.array(row_kind, dtype=np.int64), "keep_disp": keep_disp,
-            "keep_rate": keep_rate, "flexible": np.flatnonzero(np.abs(freq) >= ZERO_HZ).astype(np.int64)}
+    return ZeroCluster(modal_b=modal_b, struct_rows=np.array(rows).reshape(len(rows), n),
+                       struct_row_kind=np.array(row_kind, dtype=np.int64), keep_disp=keep_disp, keep_rate=keep_rate,
+                       flexible=np.flatnonzero(np.abs(freq) >= ZERO_HZ).astype(np.int64))
 
 
 def _kind_of_rows(arrays: Mapping[str, np.ndarray]) -> list[tuple[str, int]]:
     """For each structure output: which row kind holds it (``acc``, ``disp``, ``motion``, ``rate``) and where."""
     where = {}
-    for kind in ("rate", "motion", "disp", "acc"):  # later kinds win, as in _zero_cluster_reduced
+    for kind in ("rate", "motion", "disp", "acc"):  # later kinds win, as in zero_cluster_reduced
         for k, name in enumerate(arrays.get(f"{kind}_names", [])):
             where[str(name)] = (kind, k)
     return [where[str(name)] for name in arrays["structure_outputs"]]
 
 
-def _corrections(arrays: Mapping[str, np.ndarray], flexible: np.ndarray) -> dict[str, np.ndarray]:
-    """The static corrections and preload shape changes over the flexible modes, rows in structure-output order
-    (zeros of the right sizes for arrays without them)."""
+@dataclass(frozen=True)
+class Corrections:
+    """The reanalysis's static-correction vectors and the 1-g preload's first-order shape changes, over every retained
+    mode, rows in structure-output order (zeros of the right sizes for a model without them)."""
+
+    stiffness: np.ndarray  #: (n_w, n_w) the correction vectors' projected stiffness
+    dk: np.ndarray  #: (n_physical, n_w, n_w) each physical parameter's change of it
+    coupling: np.ndarray  #: (n_physical, n_w, n_modes) each physical parameter's coupling of them to the modes
+    b: np.ndarray  #: (n_w, n_modal_inputs) their modal inputs
+    rows: np.ndarray  #: (n_structure_outputs, n_w) what each structure output reads of them
+    preload_rows: np.ndarray  #: (n_physical, n_structure_outputs, n_modes) the preload's change of the output rows
+    preload_b: np.ndarray  #: (n_physical, n_modes, n_modal_inputs) its change of the modal inputs
+    dm: np.ndarray  #: (n_physical, n_w, n_w) each mass parameter's change of their mass
+    mass_coupling: np.ndarray  #: (n_physical, n_w, n_modes) each mass parameter's coupling of them to the modes
+    massive: int  #: how many of the correction vectors carry mass
+
+
+def corrections_of(arrays: Mapping[str, np.ndarray]) -> Corrections:
+    """The static corrections and preload shape changes that ``arrays`` hold, read once for the record.
+
+    Parameters
+    ----------
+    arrays : mapping
+        The model's parametric arrays, :func:`~mace_fmu.iomodel.parametric_data.parametric_arrays` (the keys
+        ``correction_*``, ``<kind>_correction``, ``<kind>_preload``, ``preload_b``).
+
+    Returns
+    -------
+    Corrections
+        Over every retained mode, rows in structure-output order; zeros of the right sizes where the arrays have none.
+    """
     n_phys, n_in = len(arrays["physical_names"]), np.shape(arrays["modal_b"])[1]
-    n_flex, outputs = len(flexible), _kind_of_rows(arrays)
+    n_modes, outputs = len(arrays["frequencies_hz"]), _kind_of_rows(arrays)
     n_w = np.shape(arrays["correction_stiffness"])[0] if "correction_stiffness" in arrays else 0
 
     def table(suffix: str, width: int) -> np.ndarray:
@@ -99,58 +157,73 @@ def _corrections(arrays: Mapping[str, np.ndarray], flexible: np.ndarray) -> dict
 
     def preload(kind_k: tuple[str, int]) -> np.ndarray:
         kind, k = kind_k
-        return np.asarray(arrays[f"{kind}_preload"], dtype=float)[:, k][:, flexible]
+        return np.asarray(arrays[f"{kind}_preload"], dtype=float)[:, k]
 
-    return {
-        "correction_stiffness": np.asarray(arrays.get("correction_stiffness", np.zeros((0, 0))), dtype=float),
-        "correction_dk": np.asarray(arrays.get("correction_dk", np.zeros((n_phys, 0, 0))), dtype=float),
-        "correction_coupling": np.asarray(arrays.get("correction_coupling", np.zeros((n_phys, 0, len(
-            arrays["frequencies_hz"])))), dtype=float)[:, :, flexible].reshape(n_phys, n_w, n_flex),
-        "correction_b": np.asarray(arrays.get("correction_b", np.zeros((0, n_in))), dtype=float).reshape(n_w, n_in),
-        "correction_rows": table("correction", n_w),
-        "preload_rows": (np.stack([preload(o) for o in outputs], axis=1) if "disp_preload" in arrays and outputs
-                         else np.zeros((n_phys, len(outputs), n_flex))).reshape(n_phys, len(outputs), n_flex),
-        "preload_b": (np.asarray(arrays["preload_b"], dtype=float)[:, flexible] if "preload_b" in arrays
-                      else np.zeros((n_phys, n_flex, n_in))).reshape(n_phys, n_flex, n_in),
+    return Corrections(
+        stiffness=np.asarray(arrays.get("correction_stiffness", np.zeros((0, 0))), dtype=float),
+        dk=np.asarray(arrays.get("correction_dk", np.zeros((n_phys, 0, 0))), dtype=float),
+        coupling=np.asarray(arrays.get("correction_coupling", np.zeros((n_phys, 0, n_modes))), dtype=float),
+        b=np.asarray(arrays.get("correction_b", np.zeros((0, n_in))), dtype=float).reshape(n_w, n_in),
+        rows=table("correction", n_w),
+        preload_rows=(np.stack([preload(o) for o in outputs], axis=1) if "disp_preload" in arrays and outputs
+                      else np.zeros((n_phys, len(outputs), n_modes))).reshape(n_phys, len(outputs), n_modes),
+        preload_b=(np.asarray(arrays["preload_b"], dtype=float) if "preload_b" in arrays
+                   else np.zeros((n_phys, n_modes, n_in))),
         # the mass parameters' (zeros for a stiffness parameter, and without mass parameters)
-        "correction_dm": np.asarray(arrays.get("correction_dm", np.zeros((n_phys, n_w, n_w))),
-                                    dtype=float).reshape(n_phys, n_w, n_w),
-        "correction_mass_coupling": np.asarray(arrays.get("correction_mass_coupling", np.zeros((n_phys, n_w, len(
-            arrays["frequencies_hz"])))), dtype=float)[:, :, flexible].reshape(n_phys, n_w, n_flex),
+        dm=np.asarray(arrays.get("correction_dm", np.zeros((n_phys, n_w, n_w))), dtype=float).reshape(n_phys, n_w, n_w),
+        mass_coupling=np.asarray(arrays.get("correction_mass_coupling", np.zeros((n_phys, n_w, n_modes))), dtype=float),
+        massive=int(arrays["correction_massive"]) if "correction_massive" in arrays else 0)
+
+
+def _corrections(corrections: Corrections, flexible: np.ndarray) -> dict[str, np.ndarray]:
+    """The runtime's correction entries: ``corrections`` over the flexible modes."""
+    c = corrections
+    n_phys, n_outputs = len(c.dk), len(c.rows)
+    n_w, n_in, n_flex = len(c.stiffness), c.b.shape[1], len(flexible)
+    return {
+        "correction_stiffness": c.stiffness,
+        "correction_dk": c.dk,
+        "correction_coupling": c.coupling[:, :, flexible].reshape(n_phys, n_w, n_flex),
+        "correction_b": c.b,
+        "correction_rows": c.rows,
+        "preload_rows": c.preload_rows[:, :, flexible].reshape(n_phys, n_outputs, n_flex),
+        "preload_b": c.preload_b[:, flexible].reshape(n_phys, n_flex, n_in),
+        "correction_dm": c.dm,
+        "correction_mass_coupling": c.mass_coupling[:, :, flexible].reshape(n_phys, n_w, n_flex),
     }
 
 
-def _blocks(arrays: Mapping[str, np.ndarray], *, index: Mapping[str, int], cluster: Mapping[str, np.ndarray],
-            pade_order: int) -> tuple[np.ndarray, dict[str, np.ndarray], set[str]]:
+def _blocks(model: ParametricModel, *, index: Mapping[str, int]) -> tuple[np.ndarray, dict[str, np.ndarray], set[str]]:
     """Each block's row of ``block_info`` (kind code, states, inputs, outputs, its parameters' indices), the
     constant blocks' matrices, and the names of the parameters that are delays."""
-    n_states_structure = int(cluster["keep_disp"].sum() + cluster["keep_rate"].sum())
+    cluster = model.cluster
+    n_states_structure = int(cluster.keep_disp.sum() + cluster.keep_rate.sum())
     rows: list[list[int]] = []
     blocks: dict[str, np.ndarray] = {}
     delay_params: set[str] = set()
-    for i, (kind, param) in enumerate(zip((str(k) for k in arrays["block_kinds"]),
-                                          (str(p) for p in arrays["block_params"]))):
+    for i, block in enumerate(model.blocks):
         p0 = p1 = -1
-        if kind == "structure":
-            n_x, n_u, n_y = n_states_structure, cluster["modal_b"].shape[1], len(arrays["structure_outputs"])
-        elif kind == "delay":
-            n_x, n_u, n_y, p0 = pade_order, 1, 1, index[param]
-            delay_params.add(param)
-        elif kind == "gain":
-            n_x, n_u, n_y, p0 = 0, 1, 1, index[param]
-        elif kind == "pd":
+        if block.kind == "structure":
+            n_x, n_u, n_y = n_states_structure, cluster.modal_b.shape[1], len(model.structure_outputs)
+        elif block.kind == "delay":
+            n_x, n_u, n_y, p0 = model.pade_order, 1, 1, index[block.parameters[0]]
+            delay_params.add(block.parameters[0])
+        elif block.kind == "gain":
+            n_x, n_u, n_y, p0 = 0, 1, 1, index[block.parameters[0]]
+        elif block.kind == "pd":
             n_x, n_u, n_y = 0, 2, 1
-            p0, p1 = (index[p] for p in param.split(","))
-        elif kind == "const":
-            n_y, n_u = np.asarray(arrays[f"block{i}_D"]).shape
-            n_x = int(np.asarray(arrays[f"block{i}_A"]).shape[0])
-            for m, shape in zip("ABCD", ((n_x, n_x), (n_x, n_u), (n_y, n_x), (n_y, n_u))):
-                blocks[f"block{i}_{m}"] = np.asarray(arrays[f"block{i}_{m}"], dtype=float).reshape(shape)
+            p0, p1 = (index[p] for p in block.parameters)
+        elif block.kind == "const":
+            n_y, n_u = block.d.shape
+            n_x = int(block.a.shape[0])
+            for m, matrix, shape in zip("ABCD", (block.a, block.b, block.c, block.d),
+                                        ((n_x, n_x), (n_x, n_u), (n_y, n_x), (n_y, n_u))):
+                blocks[f"block{i}_{m}"] = matrix.reshape(shape)
         else:
-            raise MaceError(f"native FMU: block {i} has the unknown kind {kind!r}")
-        rows.append([BLOCK_KINDS[kind], n_x, n_u, n_y, p0, p1])
+            raise MaceError(f"native FMU: block {i} has the unknown kind {block.kind!r}")
+        rows.append([BLOCK_KINDS[block.kind], n_x, n_u, n_y, p0, p1])
     info = np.array(rows, dtype=np.int64).reshape(-1, 6)
-    if info[:, 2].sum() != arrays["wiring"].shape[0] or info[:, 3].sum() != arrays["wiring"].shape[1]:
+    if info[:, 2].sum() != model.wiring.shape[0] or info[:, 3].sum() != model.wiring.shape[1]:
         raise MaceError("native FMU: block inputs/outputs do not match the wiring matrix")
     return info, blocks, delay_params
 
@@ -171,45 +244,60 @@ def _parameter_codes(names: list[str], *, physical: list[str], delays: set[str])
     return table[:, 0].copy(), table[:, 1].copy()
 
 
-def runtime_arrays(arrays: Mapping[str, np.ndarray]) -> dict[str, np.ndarray | list[str]]:
-    """The C runtime's arrays (see the module docstring) from a ParametricSystem's ``arrays``."""
-    names = [str(x) for x in arrays["param_names"]]
-    physical = [str(x) for x in arrays["physical_names"]]
-    pade_order = int(arrays["pade_order"])
+def runtime_arrays(model: ParametricModel) -> dict[str, np.ndarray | list[str]]:
+    """The C runtime's arrays (see the module docstring) of what a model's FMUs carry.
+
+    Parameters
+    ----------
+    model : ParametricModel
+        The record (:func:`~mace_fmu.fmu.parametric.parametric_model`): its parameters, signals, sensitivities
+        and reduced zero-frequency cluster, and the ParametricSystem's arrays of its blocks and corrections.
+
+    Returns
+    -------
+    dict
+        Name -> float64 or int64 array, or list of strings, in the order :func:`resource_bytes` writes them.
+
+    Raises
+    ------
+    MaceError
+        A Pade order the runtime does not take, a block of unknown kind, blocks that do not match the wiring.
+    """
+    cluster = model.cluster
+    names = [p.name for p in model.parameters]
+    physical = list(model.physical_names)
+    pade_order = model.pade_order
     if not 1 <= pade_order <= MAX_PADE_ORDER:
         raise MaceError(f"native FMU: Pade order must be 1..{MAX_PADE_ORDER}, got {pade_order}")
-    cluster = _zero_cluster_reduced(arrays)
-    flexible = cluster["flexible"]
-    info, blocks, delays = _blocks(arrays, index={name: k for k, name in enumerate(names)}, cluster=cluster,
-                                   pade_order=pade_order)
+    flexible = cluster.flexible
+    info, blocks, delays = _blocks(model, index={name: k for k, name in enumerate(names)})
     par_kind, par_index = _parameter_codes(names, physical=physical, delays=delays)
-    corrections = _corrections(arrays, flexible)
-    counts = {"in": len(arrays["inputs"]), "out": len(arrays["outputs"]), "par": len(names),
-              "modes": len(arrays["frequencies_hz"]), "flex": len(flexible), "blocks": len(info), "pade": pade_order,
-              "states": int(info[:, 1].sum()), "so": len(arrays["structure_outputs"]),
-              "ms": cluster["modal_b"].shape[1], "phys": len(physical), "ub": arrays["wiring"].shape[0],
-              "yb": arrays["wiring"].shape[1], "corr": corrections["correction_stiffness"].shape[0],
-              "massive": int(arrays["correction_massive"]) if "correction_massive" in arrays else 0}
-    dk = np.asarray(arrays["physical_dk"], dtype=float)[:, flexible][:, :, flexible]
-    dm = np.asarray(arrays.get("physical_dm", np.zeros_like(arrays["physical_dk"])), dtype=float)[:, flexible][:, :,
-                                                                                                             flexible]
+    corrections = _corrections(model.corrections, flexible)
+    counts = {"in": len(model.inputs), "out": len(model.outputs), "par": len(names),
+              "modes": len(model.frequencies_hz), "flex": len(flexible), "blocks": len(info), "pade": pade_order,
+              "states": int(info[:, 1].sum()), "so": len(model.structure_outputs),
+              "ms": cluster.modal_b.shape[1], "phys": len(physical), "ub": model.wiring.shape[0],
+              "yb": model.wiring.shape[1], "corr": corrections["correction_stiffness"].shape[0],
+              "massive": model.corrections.massive}
+    dk = model.stiffness_sensitivities[:, flexible][:, :, flexible]
+    dm = (model.mass_sensitivities if model.mass_sensitivities is not None
+          else np.zeros_like(model.stiffness_sensitivities))[:, flexible][:, :, flexible]
     out: dict[str, np.ndarray | list[str]] = {
         "format_version": np.array([MODEL_FORMAT], dtype=np.int64),
         "counts": np.array([counts[name] for name in COUNTS], dtype=np.int64),
-        "param_nominal": np.asarray(arrays["param_values"], dtype=float),
-        "param_min": np.asarray(arrays["param_min"], dtype=float),
-        "param_max": np.asarray(arrays["param_max"], dtype=float),
+        "param_nominal": np.array([p.nominal for p in model.parameters], dtype=float),
+        "param_min": np.array([p.minimum for p in model.parameters], dtype=float),
+        "param_max": np.array([p.maximum for p in model.parameters], dtype=float),
         "param_kind": par_kind, "param_index": par_index,
-        "frequencies_hz": np.asarray(arrays["frequencies_hz"], dtype=float),
+        "frequencies_hz": model.frequencies_hz,
         "physical_dk": dk.reshape(len(physical), len(flexible), len(flexible)),
         "physical_dm": dm.reshape(len(physical), len(flexible), len(flexible)),
-        "block_info": info, "wiring": np.asarray(arrays["wiring"], dtype=float),
-        "entry": np.asarray(arrays["entry"], dtype=float), "exit": np.asarray(arrays["exit"], dtype=float),
-        "input_names": [str(x) for x in arrays["inputs"]], "output_names": [str(x) for x in arrays["outputs"]],
+        "block_info": info, "wiring": model.wiring, "entry": model.entry, "exit": model.exit,
+        "input_names": [s.name for s in model.inputs], "output_names": [s.name for s in model.outputs],
         "param_names": names,
     }
     out["me_order"] = model_exchange_order(info)
-    out.update(cluster)
+    out.update((f.name, getattr(cluster, f.name)) for f in fields(cluster))
     out.update(corrections)
     out.update(blocks)
     return out
