@@ -261,7 +261,8 @@ class Gain(Block):
         K = _matrix(owner, "K", K)
         if K.ndim == 0:
             sizes = {len(s) for s in (inputs, outputs) if s is not None} or {1}
-            if len(sizes) > 1:
+            if len(sizes) > 1:  # both given: the set has two sizes only then
+                assert inputs is not None and outputs is not None
                 raise ModelError(f"{owner}: scalar K needs as many inputs as outputs, got "
                                  f"{len(inputs)} inputs and {len(outputs)} outputs")
             K = float(K) * np.eye(sizes.pop())

@@ -140,6 +140,6 @@ class Reference:
 def parse_reference(text: object) -> Reference:
     """Parse ``"block.port"``, ``"block.port[3]"``, ``"block.port[name]"`` or ``"...[2:4]"``."""
     m = _REFERENCE.match(text) if isinstance(text, str) else None
-    if m is None:
+    if m is None or not isinstance(text, str):
         raise ModelError(f"malformed connector reference {text!r}; expected {REFERENCE_FORMS}")
     return Reference(text.strip(), m[1], m[2], m[3])
