@@ -227,6 +227,7 @@ def _run_fmi3(model, folder: str, start: dict[str, float], t: np.ndarray, u: np.
     """y[output, k] of an FMI 3 co-simulation FMU initialised with ``start``, u[input, k] held over each step."""
     import fmpy
     from fmpy.fmi3 import FMU3Slave
+    from support.fmu_checks import run_steps
 
     md = fmpy.read_model_description(folder)
     vr = {v.name: v.valueReference for v in md.modelVariables}
@@ -235,16 +236,10 @@ def _run_fmi3(model, folder: str, start: dict[str, float], t: np.ndarray, u: np.
     fmu.enterInitializationMode(startTime=0.0)
     fmu.setFloat64([vr[k] for k in start], list(start.values()))
     fmu.exitInitializationMode()
-    ins = [vr[n] for n in model.system.input_labels]
-    outs = [vr[n] for n in model.system.output_labels]
-    y = [fmu.getFloat64(outs)]
-    for k in range(len(t) - 1):
-        fmu.setFloat64(ins, list(u[:, k]))
-        fmu.doStep(currentCommunicationPoint=t[k], communicationStepSize=t[k + 1] - t[k])
-        y.append(fmu.getFloat64(outs))
+    y = run_steps(model, fmu, folder, t, u)
     fmu.terminate()
     fmu.freeInstance()
-    return np.array(y).T
+    return y
 
 
 @pytest.mark.parametrize("kind", ["native", "native-fmi3", "pythonfmu"])

@@ -64,14 +64,16 @@ def value_references(unzipped):
 
 
 def run_steps(model, fmu, unzipped, t, u):
+    """y[output, k] of an initialised co-simulation FMU (FMI 2 or 3), u[input, k] held over each step."""
     ins, outs = value_references(unzipped)
     in_vr = [ins[n] for n in model.system.input_labels]
     out_vr = [outs[n] for n in model.system.output_labels]
-    y = [fmu.getReal(out_vr)]
+    get, put = (fmu.getFloat64, fmu.setFloat64) if hasattr(fmu, "getFloat64") else (fmu.getReal, fmu.setReal)
+    y = [get(out_vr)]
     for k in range(len(t) - 1):
-        fmu.setReal(in_vr, list(u[:, k]))
+        put(in_vr, list(u[:, k]))
         fmu.doStep(currentCommunicationPoint=t[k], communicationStepSize=t[k + 1] - t[k])
-        y.append(fmu.getReal(out_vr))
+        y.append(get(out_vr))
     return np.array(y).T
 
 
