@@ -10,22 +10,11 @@ from scipy import sparse
 from mace_fmu.deck.cards import Deck
 from mace_fmu.deck.geometry import coordinate_frames, grid_positions
 from mace_fmu.errors import MaceError
+from mace_fmu.fe.corotational import Bars
 from mace_fmu.fe.beam import BeamSection, MassKind, local_stiffness, natural_stiffness
 from mace_fmu.fe.dofs import DofMap, scalar_element_entries
 from mace_fmu.fe.elements import add_elements, bar_mass, coupled_mass, line_elements
 from mace_fmu.fe.triplets import MatrixTriplets
-
-
-@dataclass(frozen=True)
-class Bars:
-    """All CBARs as arrays (one row per bar) for vectorised geometric work."""
-
-    ids: np.ndarray  #: element IDs
-    node_a: np.ndarray  #: grid row of GA
-    node_b: np.ndarray  #: grid row of GB
-    frames0: np.ndarray  #: (n, 3, 3) undeformed element axes, rows x, y, z in basic
-    lengths0: np.ndarray  #: undeformed lengths [m]
-    k_natural: np.ndarray  #: (n, 7, 7) natural stiffness (see fe.beam.natural_stiffness)
 
 
 @dataclass(frozen=True)

@@ -23,13 +23,24 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import sparse
 
-from mace_fmu.errors import MaceError
-from mace_fmu.fe.assembly import Bars
+from mace_fmu.errors import MaceError  # fmu: inlined
 
 _CS_STEP = 1e-30  # complex step: no cancellation, so any tiny step is exact to round-off
 _FD_RELATIVE_STEP = 1e-4  # central differences of exact first derivatives: error ~1e-9
 _MAX_LOCAL_ROTATION = 0.5  # rad; beyond this the bar is far outside small-strain beam theory
 _CHUNK_BARS = 4000  # bars per derivative batch: large enough to vectorise, its temporaries ~60 MB each
+
+
+@dataclass(frozen=True)
+class Bars:
+    """All CBARs as arrays (one row per bar) for vectorised geometric work."""
+
+    ids: np.ndarray  #: element IDs
+    node_a: np.ndarray  #: grid row of GA
+    node_b: np.ndarray  #: grid row of GB
+    frames0: np.ndarray  #: (n, 3, 3) undeformed element axes, rows x, y, z in basic
+    lengths0: np.ndarray  #: undeformed lengths [m]
+    k_natural: np.ndarray  #: (n, 7, 7) natural stiffness (see fe.beam.natural_stiffness)
 
 
 def skew(v: np.ndarray) -> np.ndarray:
@@ -105,6 +116,13 @@ class BarState:
 
     positions: np.ndarray  #: (n_grid, 3)
     rotations: np.ndarray  #: (n_grid, 3, 3), relative to the undeformed state
+
+
+def advanced(state: BarState, delta: np.ndarray) -> BarState:
+    """``state`` moved by incremental translations [m] and rotation vectors [rad] ``delta`` (n_dof,), the spins
+    applied on the left (in basic axes)."""
+    d6 = delta.reshape(-1, 6)
+    return BarState(state.positions + d6[:, :3], rotation_matrix(d6[:, 3:]) @ state.rotations)
 
 
 def _deformations(bars: Bars, state: BarState, dz: np.ndarray) -> np.ndarray:

@@ -22,7 +22,7 @@ from scipy import sparse
 from mace_fmu.errors import MaceError
 from mace_fmu.fe.assembly import FEModel
 from mace_fmu.fe.constraints import Constraints
-from mace_fmu.fe.corotational import (BarState, bar_dof_indices, deformation_jacobian, internal_force, material_tangent,
+from mace_fmu.fe.corotational import (BarState, advanced, bar_dof_indices, deformation_jacobian, internal_force, material_tangent,
                                       rotation_matrix, tangent, tangent_parts)
 from mace_fmu.fe.modal import DENSE_MAX_DOF
 from mace_fmu.sparse import factorize
@@ -182,7 +182,7 @@ def large_displacement_preload(model: FEModel, constraints: Constraints, load: n
     total_iterations = 0
     last_increment = np.zeros(n)
 
-    advance = _advance
+    advance = advanced
     geometric, reference_step, tangents = None, 0, 0
     for step in range(1, increments + 1):
         final = step == increments
@@ -231,12 +231,6 @@ def large_displacement_preload(model: FEModel, constraints: Constraints, load: n
                    state=state, constraints=constraints, full_tangents=tangents + 1)
 
 
-def _advance(state: BarState, delta: np.ndarray) -> BarState:
-    """``state`` moved by incremental translations and rotation vectors ``delta`` (n_dof,)."""
-    d6 = delta.reshape(-1, 6)
-    return BarState(state.positions + d6[:, :3], rotation_matrix(d6[:, 3:]) @ state.rotations)
-
-
 def tangent_sensitivity(model: FEModel, preload: Preload, *, bar_mask: np.ndarray | None = None,
                         dk_natural: np.ndarray | None = None, dk_springs: sparse.sparray | None = None,
                         load_change: np.ndarray | None = None, relative_step: float = 1e-2, solve: Callable[[np.ndarray], np.ndarray] | None = None
@@ -279,7 +273,7 @@ def tangent_sensitivity(model: FEModel, preload: Preload, *, bar_mask: np.ndarra
         if dk_natural is not None:
             k_nat = k_nat.copy()
             k_nat[np.asarray(bar_mask, dtype=bool)] += h * dk_natural
-        _, k_bars, _ = tangent(dataclasses.replace(bars, k_natural=k_nat), _advance(preload.state, h * du), n)
+        _, k_bars, _ = tangent(dataclasses.replace(bars, k_natural=k_nat), advanced(preload.state, h * du), n)
         out.append(sparse.csr_array(k_bars))
     dk = (out[0] - out[1]) / (2.0 * relative_step)
     return dk if dk_springs is None else sparse.csr_array(dk + sparse.csr_array(dk_springs))

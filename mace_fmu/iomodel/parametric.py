@@ -23,6 +23,7 @@ import numpy as np
 
 from mace_fmu.iomodel.modal_core import modal_matrices, signed_frequency_hz, signed_omega2  # fmu: inlined
 from mace_fmu.iomodel.reanalysis import ritz_reanalysis  # fmu: inlined
+from mace_fmu.iomodel.resolve import ExactModes  # fmu: inlined
 from modelica_like.algebra import interconnect, pade  # fmu: inlined
 
 
@@ -51,6 +52,8 @@ class ParametricSystem:
         self.state_names: list[str] = []  #: "block.state" of the last build
         #: labels of the modes behind the structure's states in the last build (zero cluster rotated)
         self.state_mode_labels: tuple[str, ...] = self.mode_labels
+        #: the physical parameters by a full re-solve (arrays with ``resolve_*``), else by reanalysis
+        self.exact = ExactModes(data) if "resolve_kind" in data else None
 
     def parameter_problems(self, params: np.ndarray) -> list[str]:
         """Why parameter values cannot be used, one sentence each (empty when all can): not finite, or
@@ -111,6 +114,14 @@ class ParametricSystem:
         rows = rows[:, :coefficients.shape[0]]  # modes given from outside: no correction vectors
         return {name: row @ coefficients for name, row in zip(names, rows)}
 
+    def _exact_rows(self, kind: str, shapes: np.ndarray) -> dict[str, np.ndarray]:
+        """Output rows of one kind over re-solved mode ``shapes`` (n_dof, n_modes): the influence rows times them."""
+        d = self.data
+        if f"{kind}_names" not in d:
+            return {}
+        rows = np.asarray(d[f"resolve_{kind}_rows"], dtype=np.float64) @ shapes
+        return {str(name): row for name, row in zip(d[f"{kind}_names"], rows)}
+
     def _modal_b(self, coefficients: np.ndarray, rel: np.ndarray | None) -> np.ndarray:
         """Modal inputs of the new modes (n_modes x n_inputs), as :meth:`_rows` for the outputs."""
         d = self.data
@@ -127,17 +138,25 @@ class ParametricSystem:
         """(A, B, C, D, state names) of the modal structure block; modes by reanalysis unless given
         (``phi_r``: new modes over the nominal ones, n x n), then scaled by the frequency scales."""
         d = self.data
-        rel = None
-        if frequencies_hz is None:
-            frequencies_hz, phi_r = self.modes(params)
-            rel = self.relative_changes(params)
+        # the structure solved again, off nominal: at the nominal values the exported modes are the solution (a
+        # second eigen-solution's round-off, 1e-6 of the pendulum frequencies, would part the nominal FMU from them)
+        if frequencies_hz is None and self.exact is not None and np.any(self.relative_changes(params) != 0.0):
+            frequencies_hz, shapes = self.exact.modes(self.relative_changes(params))
+            disp, rate, motion, acc = (self._exact_rows(kind, shapes) for kind in ("disp", "rate", "motion", "acc"))
+            modal_b = shapes.T @ np.asarray(d["resolve_inputs"], dtype=np.float64)
+        else:
+            rel = None
+            if frequencies_hz is None:
+                frequencies_hz, phi_r = self.modes(params)
+                rel = self.relative_changes(params)
+            disp, rate, motion, acc = (self._rows(kind, phi_r, rel) for kind in ("disp", "rate", "motion", "acc"))
+            modal_b = self._modal_b(phi_r, rel)
         frequencies_hz = np.array(frequencies_hz, dtype=np.float64)
         frequencies_hz[self._scaled] *= params[self._scale]
         self.frequencies_hz = frequencies_hz
         zeta = params[self._damping]
-        disp, rate, motion, acc = (self._rows(kind, phi_r, rel) for kind in ("disp", "rate", "motion", "acc"))
         a, b, c, dd, states, labels, *_ = modal_matrices(frequencies_hz, zeta, self.mode_labels,
-                                                         np.zeros((0, len(zeta))), self._modal_b(phi_r, rel), disp,
+                                                         np.zeros((0, len(zeta))), modal_b, disp,
                                                          rate, [str(x) for x in d["structure_outputs"]], motion, acc)
         self.state_mode_labels = labels
         return a, b, c, dd, states

@@ -17,6 +17,7 @@ from mace_fmu.errors import MaceError
 from mace_fmu.iomodel.instruments import Servos, force_unit
 from mace_fmu.iomodel.modal_ss import modal_data
 from mace_fmu.iomodel.motion import motion_unit, parse_motion_output
+from mace_fmu.iomodel.resolve_data import resolve_arrays
 from mace_fmu.iomodel.stiffness_route import PhysicalRoute, physical_route, stiffness_sensitivities
 from mace_fmu.iomodel.volts import VoltsModel
 from mace_fmu.parameters.frequency_bounds import relative_bound, scale_range
@@ -118,7 +119,8 @@ def _loop_gain_parameters(servos: Servos, names: list[str]) -> list[tuple[str, f
 
 
 def parametric_arrays(model: VoltsModel, *, physical: bool | Sequence[str] = True,
-                      frequency_bounds: Mapping[int, float] | None = None) -> dict[str, np.ndarray]:
+                      frequency_bounds: Mapping[int, float] | None = None, resolve: bool = False
+                      ) -> dict[str, np.ndarray]:
     """Everything a ParametricSystem (and an FMU) needs to rebuild ``model`` for new parameter values.
 
     ``physical=False`` leaves out the moduli and springs and their stiffness sensitivities (the
@@ -126,6 +128,9 @@ def parametric_arrays(model: VoltsModel, *, physical: bool | Sequence[str] = Tru
     gains only; a list of names keeps just those (see also :func:`with_physical`).
     ``frequency_bounds`` (1-based mode number -> relative bound, 0.011 for +-1.1 %) declares the
     range [1 - b, 1 + b] of those modes' ``frequency_scale_mode_<k>`` (:func:`with_frequency_bounds`).
+    ``resolve``: the physical parameters take effect by a full re-solve of the structure
+    (:mod:`mace_fmu.iomodel.resolve`, exact) where :func:`~mace_fmu.iomodel.resolve_data.resolve_supported`
+    allows, else by reanalysis.
     """
     sys_ = model.system
     ins, outs = signal_descriptions(model)
@@ -163,7 +168,10 @@ def parametric_arrays(model: VoltsModel, *, physical: bool | Sequence[str] = Tru
     if not model.structure_modes.physical_kinds:  # NASTRAN's modes: no FE, no moduli or springs
         return arrays
     sensitivities = stiffness_sensitivities(model, only=None if physical is True else physical)
-    return with_physical(arrays, physical_route(model, data.shapes, sensitivities))
+    arrays = with_physical(arrays, physical_route(model, data.shapes, sensitivities))
+    if resolve:
+        arrays.update(resolve_arrays(model, [str(n) for n in arrays["physical_names"]]))
+    return arrays
 
 
 def with_frequency_bounds(arrays: Mapping[str, np.ndarray], bounds: Mapping[int, float]) -> dict[str, np.ndarray]:

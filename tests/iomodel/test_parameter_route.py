@@ -59,7 +59,10 @@ def nominal():
     out = {}
     for configuration in ("1g", "0g"):
         model = volts_model(compute_modes(configuration=configuration))
-        out[configuration] = (model, ParametricSystem(parametric_arrays(model)), values)
+        arrays = parametric_arrays(model, resolve=True)
+        out[configuration] = (model, ParametricSystem({k: v for k, v in arrays.items() if not k.startswith("resolve_")}),
+                              values)
+        out[f"{configuration}-resolve"] = (model, ParametricSystem(arrays), values)
     return out
 
 
@@ -129,8 +132,8 @@ def _random_point(system, rng, *, within: float | None) -> dict[str, float]:
     return point
 
 
-def _route_and_resolve(nominal_entry, configuration: str, point: dict[str, float], u: np.ndarray):
-    """(route's response, re-solve's response) to inputs u, the re-solve continuing the nominal modes."""
+def _route_and_resolve_systems(nominal_entry, configuration: str, point: dict[str, float]):
+    """((A, B, C, D) of the route, of the re-solve) at ``point``, the re-solve continuing the nominal modes."""
     model, system, _ = nominal_entry
     params = system.nominal.copy()
     for name, value in point.items():
@@ -138,18 +141,27 @@ def _route_and_resolve(nominal_entry, configuration: str, point: dict[str, float
     resolved = volts_model(compute_modes(configuration=configuration, parameters=ParameterSet(point),
                                          continue_from=model.structure_modes))
     reference = ParametricSystem(parametric_arrays(resolved, physical=False))
-    return zoh_response(system.build(params), u), zoh_response(reference.build(reference.nominal), u)
+    return system.build(params), reference.build(reference.nominal)
 
 
-#: (configuration, half-width of the box about nominal (None: the declared ranges), limit of every output's RMS
-#: difference over its RMS, measured worst of the 20 points): the 1-g route carries the preload's redistribution
-#: to first order, exact within +-10 % of nominal; over the declared 0.7-1.5 it is not (up to 7.8 % of an
-#: output's RMS at these points, benchmarks/bench_parameter_route.py and RESULTS.md)
-RANDOM = [("1g", 0.10, 0.001, "0.062 %"), ("0g", None, 0.002, "0.132 %")]
+def _route_and_resolve(nominal_entry, configuration: str, point: dict[str, float], u: np.ndarray):
+    """(route's response, re-solve's response) to inputs u, the re-solve continuing the nominal modes."""
+    route, reference = _route_and_resolve_systems(nominal_entry, configuration, point)
+    return zoh_response(route, u), zoh_response(reference, u)
+
+
+#: (configuration (``-resolve``: the structure solved again, mace_fmu.iomodel.resolve), half-width of the box
+#: about nominal (None: the declared ranges), limit of every output's RMS difference over its RMS, measured worst
+#: of the 20 points): the 1-g reanalysis carries the preload's redistribution to first order, within 0.1 % in
+#: +-10 % of nominal; over the declared 0.7-1.5 it is not (up to 7.8 % of an output's RMS at these points,
+#: benchmarks/bench_parameter_route.py and RESULTS.md). Solved again, the 1-g model is exact over them.
+RANDOM = [("1g", 0.10, 0.001, "0.062 %"), ("1g-resolve", None, 0.001, "0.0015 %"), ("0g", None, 0.002, "0.132 %"),
+          ("0g-resolve", None, 0.001, "0.0017 %")]
 
 
 @pytest.mark.parametrize("configuration, within, limit, measured", RANDOM,
-                         ids=["1g-within-10-percent", "0g-declared-range"])
+                         ids=["1g-within-10-percent", "1g-resolved-declared-range", "0g-declared-range",
+                              "0g-resolved-declared-range"])
 def test_the_route_follows_the_re_solve_at_20_random_points_all_parameters_at_once(nominal, configuration, within,
                                                                                     limit, measured):
     """20 seeded points, every physical parameter (10 moduli, 3 springs) drawn at once; every input driven by
@@ -157,14 +169,17 @@ def test_the_route_follows_the_re_solve_at_20_random_points_all_parameters_at_on
     its RMS. The first five points also drive each input alone (every output that input moves by 1 % of its
     RMS under all inputs)."""
     model, system, _ = nominal[configuration]
+    solved = configuration.removesuffix("-resolve")
     u = _all_inputs(system)
     rng = np.random.default_rng(50)
-    worst = 0.0
+    worst, moved_most = 0.0, 0.0
+    y_nominal = zoh_response(system.build(system.nominal), u)
     for k in range(20):
         point = _random_point(system, rng, within=within)
-        y, reference = _route_and_resolve(nominal[configuration], configuration, point, u)
+        route, resolved = _route_and_resolve_systems(nominal[configuration], solved, point)
+        y, reference = zoh_response(route, u), zoh_response(resolved, u)
         errors = _rms_error(y, reference)
-        worst = max(worst, float(errors.max()))
+        worst, moved_most = max(worst, float(errors.max())), max(moved_most, float(_rms_error(y_nominal, reference).max()))
         assert errors.max() <= limit, (f"point {k}: {system.outputs[int(errors.argmax())]} {errors.max():.3%} off "
                                        f"the re-solve (measured worst {measured})")
         if k < 5:
@@ -172,11 +187,11 @@ def test_the_route_follows_the_re_solve_at_20_random_points_all_parameters_at_on
             for j in range(len(system.inputs)):
                 alone = np.zeros_like(u)
                 alone[:, j] = u[:, j]
-                y, reference = _route_and_resolve(nominal[configuration], configuration, point, alone)
+                y, reference = zoh_response(route, alone), zoh_response(resolved, alone)
                 moved = np.sqrt(np.mean(reference**2, axis=0)) >= 0.1 * everything
                 errors = _rms_error(y, reference)[moved]
                 assert errors.max(initial=0.0) <= limit, (f"point {k}, {system.inputs[j]} alone: {errors.max():.3%}")
-    assert worst > limit / 100, "the points must move the outputs, or this proves nothing"
+    assert moved_most > 30 * max(worst, limit / 10), "the points must move the outputs far more, or this proves nothing"
 
 
 def test_a_cable_modulus_up_10_percent_keeps_each_mode_s_damping(nominal):
@@ -275,6 +290,50 @@ def test_an_fmu_with_moduli_set_equals_the_fmu_exported_with_them(reexported, ki
     assert errors.max() <= 0.001, f"{outputs[int(errors.argmax())]}: {errors.max():.3%} of its RMS"
     moved = _rms_error(y_nominal.T, y_ref.T)  # the change is seen, far above the tolerance
     assert moved.max() > 30 * errors.max() and moved.max() > 0.01
+
+
+#: the issue's second point, inside the declared ranges: the reanalysis was 36 % (of strain_strut2_y's RMS) off
+POINT_B = {"E_lexan_center": 0.79, "E_lexan_end": 1.17, "E_active_strut_end": 0.88, "E_active_strut_piezo": 1.26,
+           "E_active_strut_center": 0.82, "E_cable_1": 0.85, "E_cable_2": 1.22, "E_cable_3": 1.09}
+
+
+def test_the_pythonfmu_fmu_solves_the_structure_again_far_from_nominal(nominal, tmp_path):
+    """The pythonfmu FMU with the 8 moduli at POINT_B set through FMI (fmpy, 10 s at 2 ms, every input driven by
+    0.5-60 Hz noise at once) against the native FMU exported from the re-solve with them built in: every
+    output's RMS difference within 0.1 % of its RMS. The FMU solves the preload and the modes again at
+    initialisation (mace_fmu.iomodel.resolve). On the reanalysis this test fails: the same model re-analysed
+    is 0.81 % off (strain_strut4_y; the issue measured 36 % before the re-solve continued the nominal modes)."""
+    import fmpy
+    from support.fmu_checks import initialised_slave, run_steps
+    from support.resolves import SAMPLES, STEP_S
+
+    from mace_fmu.fmu.export import export_fmu
+
+    model, route_system, values = nominal["1g"]
+    start = {n: values[n] * f for n, f in POINT_B.items()}
+    resolved = volts_model(compute_modes(configuration="1g", parameters=ParameterSet(start)))
+    folders = {name: fmpy.extract(str(export_fmu(m, out_dir=tmp_path, name=name, runtime=runtime)),
+                                  unzipdir=str(tmp_path / name))
+               for name, m, runtime in (("MACE_1g_python", model, "pythonfmu"),
+                                        ("MACE_1g_resolved", resolved, "native"))}
+    t = np.arange(SAMPLES) * STEP_S
+    u = _all_inputs(route_system).T
+    slave = initialised_slave(model, folders["MACE_1g_python"], start)
+    y = run_steps(model, slave, folders["MACE_1g_python"], t, u)
+    slave.terminate()
+    slave.freeInstance()
+    reference = initialised_slave(resolved, folders["MACE_1g_resolved"], {})
+    y_ref = run_steps(resolved, reference, folders["MACE_1g_resolved"], t, u)
+    reference.terminate()
+    reference.freeInstance()
+    errors = _rms_error(y.T, y_ref.T)
+    outputs = list(model.system.output_labels)
+    assert errors.max() <= 0.001, f"{outputs[int(errors.argmax())]}: {errors.max():.3%} of its RMS"
+    params = route_system.nominal.copy()
+    for name, value in start.items():
+        params[route_system.index(name)] = value
+    reanalysed = _rms_error(zoh_response(route_system.build(params), u.T), y_ref.T)
+    assert reanalysed.max() > 0.005 and reanalysed.max() > 30 * errors.max(), f"{errors.max():.2e}, {reanalysed.max():.2e}"
 
 
 GYROS = ("gyro_payload_x", "gyro_payload_z", "gyro_bus_x", "gyro_bus_y", "gyro_bus_z")
