@@ -32,6 +32,7 @@ import scipy.linalg as sla
 from scipy import sparse
 from scipy.optimize import linear_sum_assignment
 
+from mace_fmu.errors import MaceError  # fmu: inlined
 from mace_fmu.fe.corotational import Bars, BarState, advanced, material_tangent, tangent_parts  # fmu: inlined
 
 #: Newton's work tolerance |du . r| / |u . F|, the re-solve's final one (mace_fmu.fe.preload)
@@ -130,7 +131,7 @@ class ExactModes:
                 self.iterations = iteration
                 parts = tangent_parts(bars, state, self.n_dof)
                 return sparse.csr_array(parts.material + parts.geometric + k_springs)
-        raise ValueError(f"the gravity preload did not converge in {MAX_ITERATIONS} Newton iterations from the "
+        raise MaceError(f"the gravity preload did not converge in {MAX_ITERATIONS} Newton iterations from the "
                          "nominal equilibrium: the parameters are too far from nominal for this structure")
 
     def _continued_modes(self, stiffness: sparse.csr_array, mass: sparse.csr_array) -> tuple[np.ndarray, np.ndarray]:
@@ -149,7 +150,7 @@ class ExactModes:
         """Index of the new mode each nominal mode became (mace_fmu.fe.pairing.continue_modes)."""
         zero = np.abs(frequencies) < self.zero_hz
         if zero.sum() != self.reference_zero.sum():
-            raise ValueError(f"the re-solve has {int(zero.sum())} zero-frequency modes, the nominal structure "
+            raise MaceError(f"the re-solve has {int(zero.sum())} zero-frequency modes, the nominal structure "
                              f"{int(self.reference_zero.sum())}: a parameter value that frees or holds a rigid-body "
                              "motion or a mechanism")
         weighted = self.mass @ self.reference
