@@ -31,7 +31,6 @@ from mace_fmu.fmu.naming import model_fmu_name
 from mace_fmu.fmu.parametric import ParametricModel, parametric_model
 from mace_fmu.fmu.variables import DEFAULT_EXPERIMENT, variable_unit
 from mace_fmu.iomodel import modal_core, parametric, reanalysis, resolve
-from mace_fmu.iomodel.resolve_data import resolve_arrays
 from mace_fmu.iomodel.volts import VoltsModel
 from mace_fmu.util import frequency
 from mace_fmu.util.atomic import atomic_zip, output_folder
@@ -191,12 +190,10 @@ def export_fmu(model: VoltsModel, *, runtime: FmuRuntime = "native", fmi_version
 
         return export_native_fmu(parametric, out_dir=out_dir, name=name, fmi_version=fmi_version,
                                  platforms=platforms, progress=progress)
-    return _export_pythonfmu(parametric, out_dir=out_dir, name=name,
-                             resolve=resolve_arrays(model, parametric.physical_names))
+    return _export_pythonfmu(parametric, out_dir=out_dir, name=name)
 
 
-def _export_pythonfmu(model: ParametricModel, *, name: str, out_dir: str | Path = ".",
-                      resolve: Mapping[str, np.ndarray] | None = None) -> Path:
+def _export_pythonfmu(model: ParametricModel, *, name: str, out_dir: str | Path = ".") -> Path:
     """Write an FMI 2.0 co-simulation FMU with pythonfmu and return its path.
 
     Parameters
@@ -204,9 +201,6 @@ def _export_pythonfmu(model: ParametricModel, *, name: str, out_dir: str | Path 
     model : ParametricModel
         What the volts-volts model's FMUs carry; the FMU re-analyses its physical parameters at initialisation
         in Python.
-    resolve : mapping, optional
-        The arrays with which the FMU solves the structure again for its physical parameters at initialisation
-        (:func:`~mace_fmu.iomodel.resolve_data.resolve_arrays`, exact); without them it re-analyses.
     name : str
         The model class's name, a Python/C identifier (e.g. from :func:`fmu_model_name`: MACE_1g,
         MACE_1g_motion, ...).
@@ -233,7 +227,7 @@ def _export_pythonfmu(model: ParametricModel, *, name: str, out_dir: str | Path 
         tmp = Path(tmp)
         script = tmp / f"{name.lower()}_fmu.py"
         script.write_text(_entry_script(name, description))
-        np.savez(tmp / "model.npz", **model.arrays, **(resolve or {}))
+        np.savez(tmp / "model.npz", **model.arrays)
         cached = {k for k in sys.modules if k.startswith(_CACHE_PREFIX)}
         path = FmuBuilder.build_FMU(script, dest=tmp / f"{name}.fmu", project_files=[tmp / "model.npz"],
                                     canGetAndSetFMUstate=True, canSerializeFMUstate=True)

@@ -22,6 +22,7 @@ from mace_fmu.fmu.native.model_description import JacobianPattern
 from mace_fmu.fmu.native.resource import Corrections, ZeroCluster, corrections_of, zero_cluster_reduced
 from mace_fmu.fmu.variables import model_summary
 from mace_fmu.iomodel.parametric import ParametricSystem
+from mace_fmu.iomodel.resolve_data import resolve_arrays
 from mace_fmu.iomodel.parametric_data import parametric_arrays, with_frequency_bounds
 from mace_fmu.iomodel.volts import VoltsModel
 
@@ -134,7 +135,9 @@ def parametric_model(model: VoltsModel, *, arrays: Mapping[str, np.ndarray] | No
     MaceError
         A frequency bound for a mode the model lacks or out of [0, 1); a parameter outside its range.
     """
-    arrays = parametric_arrays(model) if arrays is None else dict(arrays)
+    arrays = parametric_arrays(model, resolve=True) if arrays is None else dict(arrays)
+    if len(arrays["physical_names"]) and "resolve_kind" not in arrays:  # the FMU solves its structure again
+        arrays.update(resolve_arrays(model, [str(n) for n in arrays["physical_names"]]))
     if frequency_bounds:
         arrays = with_frequency_bounds(arrays, frequency_bounds)
     system = ParametricSystem(arrays)

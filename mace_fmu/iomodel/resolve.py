@@ -166,21 +166,30 @@ class ExactModes:
 
 
 def _lowest_modes(k: np.ndarray, m: np.ndarray, count: int) -> tuple[np.ndarray, np.ndarray]:
-    """The ``count`` lowest eigenvalues [rad^2/s^2] and M-normalised vectors of K x = w^2 M x, by shift and invert.
+    """The ``count`` lowest eigenvalues [rad^2/s^2] and M-normalised vectors of K x = w^2 M x.
 
-    The largest eigenvalues mu of L^-1 M L^-T, K - sigma M = L L^T, are 1 / (w^2 - sigma): computed to a
-    relative precision of round-off, so are the low modes, whose w^2 (a pendulum's 2 rad^2/s^2) lie ten decades
-    below the stiff links' ones; solved directly, they came out 1e-5 off the nominal modes. The massless DOFs
-    need no condensation: their mu is zero. The shift, a millionth of a typical K_ii / M_ii below zero, lies
-    under every mode of a stable structure, its rigid-body zeros included (mace_fmu.fe.modal)."""
-    kd, md = np.diag(k), np.diag(m)
-    sigma = -1e-6 * float(np.median(kd[kd > 0]) / np.median(md[md > 0]))
-    factor = sla.cholesky(k - sigma * m, lower=True)
-    half = sla.solve_triangular(factor, m, lower=True)  # L^-1 M
+    The massless DOFs (a zero on M's diagonal) condensed statically, then shift and invert: the largest
+    eigenvalues mu of L^-1 M L^-T, K - sigma M = L L^T, are 1 / (w^2 - sigma), computed to a relative precision of
+    round-off, so are the low modes, whose w^2 (a pendulum's 2 rad^2/s^2) lie ten decades below the stiff links'
+    ones; solved directly, they came out 1e-5 off the nominal modes. The shift, a millionth of a typical
+    K_ii / M_ii below zero, lies under every mode of a stable structure, its rigid-body zeros included
+    (mace_fmu.fe.modal). The native runtime does the same (mace_resolve.c, lowest_modes)."""
+    md = np.diag(m)
+    massless = md <= MASSLESS_FRACTION * float(md.max())
+    a, o = np.flatnonzero(~massless), np.flatnonzero(massless)
+    coupling = sla.cho_solve(sla.cho_factor(k[np.ix_(o, o)]), k[np.ix_(o, a)]) if len(o) else np.zeros((0, len(a)))
+    k_c = k[np.ix_(a, a)] - k[np.ix_(a, o)] @ coupling
+    k_c, m_c = 0.5 * (k_c + k_c.T), m[np.ix_(a, a)]
+    kd, mdc = np.diag(k_c), np.diag(m_c)
+    sigma = -1e-6 * float(np.median(kd[kd > 0]) / np.median(mdc[mdc > 0]))
+    factor = sla.cholesky(k_c - sigma * m_c, lower=True)
+    half = sla.solve_triangular(factor, m_c, lower=True)  # L^-1 M
     inverse = sla.solve_triangular(factor, half.T, lower=True)  # L^-1 M L^-T (M symmetric)
-    n = k.shape[0]
-    count = min(count, int(np.count_nonzero(md > MASSLESS_FRACTION * float(md.max()))))
-    mu, y = sla.eigh(0.5 * (inverse + inverse.T), subset_by_index=[n - count, n - 1])
+    count = min(count, len(a))
+    mu, y = sla.eigh(0.5 * (inverse + inverse.T), subset_by_index=[len(a) - count, len(a) - 1])
     vectors = sla.solve_triangular(factor, y, lower=True, trans="T")
-    vectors /= np.sqrt(np.einsum("im,ij,jm->m", vectors, m, vectors))
-    return (sigma + 1.0 / mu)[::-1], vectors[:, ::-1]
+    vectors /= np.sqrt(np.einsum("im,ij,jm->m", vectors, m_c, vectors))
+    out = np.zeros((len(md), count))
+    out[a] = vectors[:, ::-1]
+    out[o] = -coupling @ out[a]
+    return (sigma + 1.0 / mu)[::-1], out

@@ -16,14 +16,14 @@ from mace_fmu.fmu.native.compile import SOURCE_DIR
 from mace_fmu.fmu.native.platforms import PLATFORMS
 
 #: layer of each call prefix, from the bottom (numerics) up
-LAYER_OF_PREFIX = {"ml": 0, "zoh": 0, "mace": 1, "mi": 2}
+LAYER_OF_PREFIX = {"ml": 0, "zoh": 0, "rs": 0, "mace": 1, "mi": 2}
 #: layer of each source file
-LAYER_OF_FILE = {"mace_linalg.c": 0, "mace_zoh.c": 0, "mace_data.c": 1, "mace_model.c": 1,
+LAYER_OF_FILE = {"mace_linalg.c": 0, "mace_zoh.c": 0, "mace_resolve.c": 0, "mace_data.c": 1, "mace_model.c": 1,
                  "controller/mace_discrete.c": 1, "mace_instance.c": 2, "fmi2_api.c": 3, "fmi3_api.c": 3}
-CALL = re.compile(r"\b(ml|zoh|mi|mace)_[a-z0-9_]+\s*\(")
+CALL = re.compile(r"\b(ml|zoh|rs|mi|mace)_[a-z0-9_]+\s*\(")
 #: layer of each header: a file includes headers of its own layer and the layers below it only (the FMI
 #: standard's headers are the entry points')
-LAYER_OF_HEADER = {"mace_linalg.h": 0, "mace_zoh.h": 0, "mace_data.h": 1, "mace_model.h": 1, "mace_instance.h": 2,
+LAYER_OF_HEADER = {"mace_linalg.h": 0, "mace_zoh.h": 0, "mace_resolve.h": 0, "mace_data.h": 1, "mace_model.h": 1, "mace_instance.h": 2,
                    "fmi2Functions.h": 3, "fmi2FunctionTypes.h": 3, "fmi2TypesPlatform.h": 3,
                    "fmi3Functions.h": 3, "fmi3FunctionTypes.h": 3, "fmi3PlatformTypes.h": 3}
 INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"', re.M)

@@ -45,7 +45,7 @@ from mace_fmu.util.progress import ProgressCallback, Step
 SOURCE_DIR = Path(__file__).with_name("c")
 #: the FMI entry points of each FMI version; fmi2_api.c also holds maceRunRecord, the updating engine's call
 API_C_FILES = {2: "fmi2_api.c", 3: "fmi3_api.c"}
-_PLANT_LAYERS = ("mace_linalg.c", "mace_data.c", "mace_zoh.c", "mace_model.c", "mace_instance.c")
+_PLANT_LAYERS = ("mace_linalg.c", "mace_data.c", "mace_zoh.c", "mace_resolve.c", "mace_model.c", "mace_instance.c")
 #: the sampled-data controller's layers: another implementation of mace_model.h under the same FMI layers
 _CONTROLLER_LAYERS = ("mace_linalg.c", "mace_data.c", "controller/mace_discrete.c", "mace_instance.c")
 #: FMI version -> the plant runtime's C files, in link order; its headers and their licence go into sources/ too

@@ -300,6 +300,66 @@ def runtime_arrays(model: ParametricModel) -> dict[str, np.ndarray | list[str]]:
     out.update((f.name, getattr(cluster, f.name)) for f in fields(cluster))
     out.update(corrections)
     out.update(blocks)
+    out.update(_resolve(model.arrays, flexible))
+    return out
+
+
+#: the entries of the ``resolve_counts`` array, in order (mace_model.c RS_LARGE, RS_DOF, ...)
+RESOLVE_COUNTS = ("large", "dof", "grid", "bar", "spring", "static", "modal", "zero", "count", "mass_nnz", "dm_nnz",
+                  "other_nnz", "static_t_nnz", "modal_t_nnz")
+
+
+def _resolve(arrays: Mapping[str, np.ndarray], flexible: np.ndarray) -> dict[str, np.ndarray]:
+    """The runtime's re-solve entries (mace_resolve.h) from the ``resolve_*`` arrays
+    (:func:`~mace_fmu.iomodel.resolve_data.resolve_arrays`); none without them (the runtime then re-analyses)."""
+    if "resolve_kind" not in arrays:
+        return {}
+    a = {k: np.asarray(v) for k, v in arrays.items() if k.startswith("resolve_")}
+    n = int(a["resolve_n_dof"])
+    n_static, n_modal = (int(x) for x in a["resolve_independent"])
+    zero = a["resolve_reference_zero"].astype(bool)
+    reference_shapes = a["resolve_reference_shapes"][:, flexible]
+    mass = np.zeros((n, n))
+    np.add.at(mass, (a["resolve_mass_rows"], a["resolve_mass_cols"]), a["resolve_mass_data"])
+    weighted = mass @ reference_shapes
+    kinds = {kind: dict(zip((str(x) for x in arrays.get(f"{kind}_names", [])), a[f"resolve_{kind}_rows"]))
+             for kind in ("disp", "rate", "motion", "acc")}
+    rows = []  # each structure output's influence row, by the rules of zero_cluster_reduced
+    for name in (str(x) for x in arrays["structure_outputs"]):
+        for kind in ("acc", "disp", "motion", "rate"):
+            if name in kinds[kind]:
+                rows.append(kinds[kind][name])
+                break
+    counts = {"large": int(str(a["resolve_kind"]) == "large"), "dof": n, "grid": n // 6,
+              "bar": len(a["resolve_bar_lengths0"]), "spring": len(a["resolve_spring_constants"]),
+              "static": n_static, "modal": n_modal, "zero": int(zero.sum()),
+              "count": int(np.ceil(1.5 * len(zero))), "mass_nnz": len(a["resolve_mass_data"]),
+              "dm_nnz": len(a["resolve_dm_data"]), "other_nnz": len(a["resolve_other_data"]),
+              "static_t_nnz": len(a["resolve_static_t_data"]), "modal_t_nnz": len(a["resolve_modal_t_data"])}
+    out: dict[str, np.ndarray] = {
+        "resolve_counts": np.array([counts[k] for k in RESOLVE_COUNTS], dtype=np.int64),
+        "resolve_bar_nodes": a["resolve_bar_nodes"].astype(np.int64),
+        "resolve_frames0": a["resolve_bar_frames0"].reshape(-1, 9).astype(float),
+        "resolve_lengths0": a["resolve_bar_lengths0"].astype(float),
+        "resolve_k_natural": a["resolve_bar_k_natural"].reshape(-1, 49).astype(float),
+        "resolve_bar_param": a["resolve_bar_parameter"].astype(np.int64),
+        "resolve_spring_vectors": a["resolve_spring_vectors"].reshape(-1, n).astype(float),
+        "resolve_spring_k": a["resolve_spring_constants"].astype(float),
+        "resolve_spring_param": a["resolve_spring_parameter"].astype(np.int64),
+        "resolve_dm_part": a["resolve_dm_part"].astype(np.int64),
+        "resolve_gravity": a["resolve_gravity"].astype(float), "resolve_load": a["resolve_load"].astype(float),
+        "resolve_displacements": a["resolve_displacements"].astype(float),
+        "resolve_positions": a["resolve_state_positions"].astype(float),
+        "resolve_rotations": a["resolve_state_rotations"].reshape(-1, 9).astype(float),
+        "resolve_reference": np.ascontiguousarray(weighted),
+        "resolve_reference_norm": np.einsum("im,im->m", reference_shapes, weighted),
+        "resolve_struct_rows": np.array(rows, dtype=float).reshape(len(rows), n),
+        "resolve_inputs": a["resolve_inputs"].astype(float),
+    }
+    for key in ("mass", "dm", "other", "static_t", "modal_t"):
+        out.update({f"resolve_{key}_rows": a[f"resolve_{key}_rows"].astype(np.int64),
+                    f"resolve_{key}_cols": a[f"resolve_{key}_cols"].astype(np.int64),
+                    f"resolve_{key}_vals": a[f"resolve_{key}_data"].astype(float)})
     return out
 
 

@@ -143,6 +143,8 @@ static const MaceEntry *find(const MaceFile *f, const char *name) {
     return NULL;
 }
 
+int mace_file_has(const MaceFile *f, const char *name) { return find(f, name) != NULL; }
+
 const void *mace_file_get(const MaceFile *f, const char *name, unsigned type, size_t ndim, const size_t *dims,
                           char *err) {
     const MaceEntry *e = find(f, name);

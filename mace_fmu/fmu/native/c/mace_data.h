@@ -31,6 +31,8 @@ int mace_file_read(MaceFile *f, const char *path, const MaceAlloc *al, char *err
 int mace_resource_read(MaceFile *f, const char *resource_dir, const MaceAlloc *al, char *path, size_t path_size,
                        char *err);
 void mace_file_free(MaceFile *f, const MaceAlloc *al);
+/* 1 if the file has an entry `name` (an optional part of the data), else 0. */
+int mace_file_has(const MaceFile *f, const char *name);
 /* The entry `name` with this type and shape (ndim dims), or NULL and a message. */
 const void *mace_file_get(const MaceFile *f, const char *name, unsigned type, size_t ndim, const size_t *dims,
                           char *err);

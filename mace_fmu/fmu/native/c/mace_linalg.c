@@ -778,3 +778,179 @@ int ml_solve_small(double *a, size_t n, double *b) {
     }
     return 0;
 }
+
+/* Householder tridiagonalisation (EISPACK tred2, as in the public-domain JAMA package): v holds a on entry and
+ * the orthogonal transformation on exit (row-major), d the diagonal, e the subdiagonal in e[1..n-1]. */
+static void tridiagonalise(double *v, size_t n, double *d, double *e) {
+    size_t i, j, k;
+    for (j = 0; j < n; j++) d[j] = v[(n - 1) * n + j];
+    for (i = n - 1; i > 0; i--) {
+        double scale = 0.0, h = 0.0;
+        for (k = 0; k < i; k++) scale += fabs(d[k]);
+        if (scale == 0.0) {
+            e[i] = d[i - 1];
+            for (j = 0; j < i; j++) {
+                d[j] = v[(i - 1) * n + j];
+                v[i * n + j] = 0.0;
+                v[j * n + i] = 0.0;
+            }
+        } else {
+            double f, g, hh;
+            for (k = 0; k < i; k++) {
+                d[k] /= scale;
+                h += d[k] * d[k];
+            }
+            f = d[i - 1];
+            g = sqrt(h);
+            if (f > 0) g = -g;
+            e[i] = scale * g;
+            h -= f * g;
+            d[i - 1] = f - g;
+            for (j = 0; j < i; j++) e[j] = 0.0;
+            for (j = 0; j < i; j++) {
+                f = d[j];
+                v[j * n + i] = f;
+                g = e[j] + v[j * n + j] * f;
+                for (k = j + 1; k <= i - 1; k++) {
+                    g += v[k * n + j] * d[k];
+                    e[k] += v[k * n + j] * f;
+                }
+                e[j] = g;
+            }
+            f = 0.0;
+            for (j = 0; j < i; j++) {
+                e[j] /= h;
+                f += e[j] * d[j];
+            }
+            hh = f / (h + h);
+            for (j = 0; j < i; j++) e[j] -= hh * d[j];
+            for (j = 0; j < i; j++) {
+                f = d[j];
+                g = e[j];
+                for (k = j; k <= i - 1; k++) v[k * n + j] -= (f * e[k] + g * d[k]);
+                d[j] = v[(i - 1) * n + j];
+                v[i * n + j] = 0.0;
+            }
+        }
+        d[i] = h;
+    }
+    for (i = 0; i + 1 < n; i++) { /* accumulate the transformations */
+        double h;
+        v[(n - 1) * n + i] = v[i * n + i];
+        v[i * n + i] = 1.0;
+        h = d[i + 1];
+        if (h != 0.0) {
+            for (k = 0; k <= i; k++) d[k] = v[k * n + i + 1] / h;
+            for (j = 0; j <= i; j++) {
+                double g = 0.0;
+                for (k = 0; k <= i; k++) g += v[k * n + i + 1] * v[k * n + j];
+                for (k = 0; k <= i; k++) v[k * n + j] -= g * d[k];
+            }
+        }
+        for (k = 0; k <= i; k++) v[k * n + i + 1] = 0.0;
+    }
+    for (j = 0; j < n; j++) {
+        d[j] = v[(n - 1) * n + j];
+        v[(n - 1) * n + j] = 0.0;
+    }
+    v[(n - 1) * n + n - 1] = 1.0;
+    e[0] = 0.0;
+}
+
+/* Implicit QL iterations of the tridiagonal (d, e) (EISPACK tql2, JAMA), the rotations applied to the rows of
+ * z (z[i * n + k]: component k of vector i, so that each rotation runs along memory). -1 if one eigenvalue
+ * takes more than 60 iterations. */
+static int tridiagonal_ql(double *z, size_t n, double *d, double *e) {
+    size_t i, k, l, m;
+    double f = 0.0, tst1 = 0.0;
+    const double eps = DBL_EPSILON;
+    for (i = 1; i < n; i++) e[i - 1] = e[i];
+    e[n - 1] = 0.0;
+    for (l = 0; l < n; l++) {
+        int iterations = 0;
+        tst1 = fmax(tst1, fabs(d[l]) + fabs(e[l]));
+        m = l;
+        while (m < n - 1 && fabs(e[m]) > eps * tst1) m++;
+        if (m > l) {
+            do {
+                double g = d[l], p = (d[l + 1] - g) / (2.0 * e[l]), r = hypot(p, 1.0), dl1, h, c, c2, c3, el1, s, s2;
+                if (++iterations > 60) return -1;
+                if (p < 0) r = -r;
+                d[l] = e[l] / (p + r);
+                d[l + 1] = e[l] * (p + r);
+                dl1 = d[l + 1];
+                h = g - d[l];
+                for (i = l + 2; i < n; i++) d[i] -= h;
+                f += h;
+                p = d[m];
+                c = 1.0;
+                c2 = c3 = c;
+                el1 = e[l + 1];
+                s = s2 = 0.0;
+                for (i = m; i-- > l;) {
+                    double *zi = z + i * n, *zi1 = z + (i + 1) * n;
+                    c3 = c2;
+                    c2 = c;
+                    s2 = s;
+                    g = c * e[i];
+                    h = c * p;
+                    r = hypot(p, e[i]);
+                    e[i + 1] = s * r;
+                    s = e[i] / r;
+                    c = p / r;
+                    p = c * d[i] - s * g;
+                    d[i + 1] = h + s * (c * g + s * d[i]);
+                    for (k = 0; k < n; k++) {
+                        h = zi1[k];
+                        zi1[k] = s * zi[k] + c * h;
+                        zi[k] = c * zi[k] - s * h;
+                    }
+                }
+                p = -s * s2 * c3 * el1 * e[l] / dl1;
+                e[l] = s * p;
+                d[l] = c * p;
+            } while (fabs(e[l]) > eps * tst1);
+        }
+        d[l] += f;
+        e[l] = 0.0;
+    }
+    return 0;
+}
+
+int ml_sym_eigh(const MaceAlloc *al, double *a, size_t n, double *w, double *v) {
+    double *e = ml_zeros(al, n), *z = ml_zeros(al, n * n);
+    size_t i, j;
+    int status = -1;
+    if (!e || !z) goto done;
+    if (n == 0) {
+        status = 0;
+        goto done;
+    }
+    memcpy(v, a, n * n * sizeof(double));
+    tridiagonalise(v, n, w, e);
+    for (i = 0; i < n; i++) /* vectors as rows for the QL rotations */
+        for (j = 0; j < n; j++) z[j * n + i] = v[i * n + j];
+    if (tridiagonal_ql(z, n, w, e) != 0) goto done;
+    for (i = 0; i < n; i++) { /* ascending, by selection: n swaps of rows at most */
+        size_t lowest = i;
+        for (j = i + 1; j < n; j++)
+            if (w[j] < w[lowest]) lowest = j;
+        if (lowest != i) {
+            const double t = w[i];
+            w[i] = w[lowest];
+            w[lowest] = t;
+            for (j = 0; j < n; j++) {
+                const double s = z[i * n + j];
+                z[i * n + j] = z[lowest * n + j];
+                z[lowest * n + j] = s;
+            }
+        }
+    }
+    for (i = 0; i < n; i++)
+        for (j = 0; j < n; j++) v[i * n + j] = z[j * n + i];
+    status = 0;
+done:
+    al->free(e);
+    al->free(z);
+    return status;
+}

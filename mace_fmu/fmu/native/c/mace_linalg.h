@@ -38,6 +38,12 @@ double ml_norm1(const double *a, size_t r, size_t c);
  * of v the orthonormal eigenvectors. Returns 0, or -1 if 100 sweeps did not converge. */
 int ml_jacobi_eigh(double *a, size_t n, double *w, double *v);
 
+/* Symmetric eigen-solution by Householder tridiagonalisation and implicit QL (EISPACK tred2/tql2, as in the
+ * public-domain JAMA package): O(n^3) with a small constant, for the matrices too large for Jacobi rotations.
+ * a (n x n, symmetric) is read only; w gets the eigenvalues in ascending order, the columns of v the
+ * orthonormal eigenvectors. Returns 0, or -1 (allocation, or QL not converging). */
+int ml_sym_eigh(const MaceAlloc *al, double *a, size_t n, double *w, double *v);
+
 /* Cholesky factor of a symmetric positive definite a (n x n): a = L L^T, L lower triangular, in place (the
  * upper triangle is zeroed). Returns 0, or -1 when a pivot is not positive (a not positive definite). */
 int ml_cholesky(double *a, size_t n);

@@ -13,6 +13,7 @@
 #include <string.h>
 
 #include "mace_data.h"
+#include "mace_resolve.h"
 #include "mace_zoh.h"
 
 #define ZERO_HZ 0.01 /* mace_fmu.iomodel.modal_core.ZERO_HZ */
@@ -63,6 +64,13 @@ struct MaceModel {
     size_t *scale_of;     /* parameter index of each mode's frequency scale (n_par: none) */
     double *params, *built_params, *freq, *u;
     double *rel; /* relative change of each physical parameter in the last reanalysis */
+    /* the structure solved again for the physical parameters (mace_resolve.h), when the data carry it: the FE
+       data, each structure output's influence row and the actuators' load vectors on every DOF; the last
+       re-solve's flexible modes projected on them */
+    int resolvable, resolved;
+    RsStructure rs;
+    const double *rs_struct_rows, *rs_inputs;
+    double *rs_freq, *rs_shapes, *rs_rows, *rs_b;
     int built, y_valid, x_valid;
     int params_changed; /* set since the last build */
     double time;
@@ -252,6 +260,111 @@ static int load_arrays(MaceModel *m, char *err) {
     return 0;
 }
 
+/* The optional re-solve data (mace_fmu/fmu/native/resource.py, resolve_*): absent, the reanalysis serves. */
+enum {
+    RS_LARGE = 0, RS_DOF, RS_GRID, RS_BAR, RS_SPRING, RS_STATIC, RS_MODAL, RS_ZERO, RS_COUNT, RS_MASS_NNZ, RS_DM_NNZ,
+    RS_OTHER_NNZ, RS_STATIC_NNZ, RS_MODAL_NNZ, N_RS_COUNTS
+};
+
+static int load_triplets(MaceModel *m, const char *key, size_t nnz, RsTriplets *t, char *err) {
+    char name[64];
+    t->nnz = nnz;
+    snprintf(name, sizeof(name), "resolve_%s_rows", key);
+    if (!(t->rows = (const int64_t *)entry_1d(m, name, MACE_I64, nnz, err))) return -1;
+    snprintf(name, sizeof(name), "resolve_%s_cols", key);
+    if (!(t->cols = (const int64_t *)entry_1d(m, name, MACE_I64, nnz, err))) return -1;
+    snprintf(name, sizeof(name), "resolve_%s_vals", key);
+    if (!(t->vals = (const double *)entry_1d(m, name, MACE_F64, nnz, err))) return -1;
+    return 0;
+}
+
+/* Every index of the re-solve data inside its bounds, so that a damaged file cannot make the runtime read or
+   write outside its arrays. */
+static int check_triplets(const RsTriplets *t, size_t rows, size_t cols) {
+    size_t e;
+    for (e = 0; e < t->nnz; e++)
+        if (t->rows[e] < 0 || (size_t)t->rows[e] >= rows || t->cols[e] < 0 || (size_t)t->cols[e] >= cols) return -1;
+    return 0;
+}
+
+static int load_resolve(MaceModel *m, char *err) {
+    size_t dims = N_RS_COUNTS, k, n;
+    const int64_t *c;
+    RsStructure *s = &m->rs;
+    if (!mace_file_has(&m->file, "resolve_counts")) return 0;
+    if (!(c = (const int64_t *)mace_file_get(&m->file, "resolve_counts", MACE_I64, 1, &dims, err))) return -1;
+    for (k = 0; k < N_RS_COUNTS; k++)
+        if (c[k] < 0 || c[k] > 100000000) {
+            snprintf(err, MACE_ERR_LEN, "model data: re-solve count %lu out of range", (unsigned long)k);
+            return -1;
+        }
+    s->large_preload = c[RS_LARGE] != 0;
+    n = s->n_dof = (size_t)c[RS_DOF];
+    s->n_grid = (size_t)c[RS_GRID];
+    s->n_bar = (size_t)c[RS_BAR];
+    s->n_spring = (size_t)c[RS_SPRING];
+    s->n_static = (size_t)c[RS_STATIC];
+    s->n_modal = (size_t)c[RS_MODAL];
+    s->n_zero = (size_t)c[RS_ZERO];
+    s->count = (size_t)c[RS_COUNT];
+    s->n_flex = m->n_flex;
+    s->n_phys = m->n_phys;
+    s->zero_hz = ZERO_HZ;
+    if (n != 6 * s->n_grid || s->count < s->n_flex + s->n_zero || s->n_static > n || s->n_modal > n) {
+        snprintf(err, MACE_ERR_LEN, "model data: inconsistent re-solve counts");
+        return -1;
+    }
+    if (!(s->bar_nodes = (const int64_t *)entry_2d(m, "resolve_bar_nodes", MACE_I64, s->n_bar, 2, err)) ||
+        !(s->frames0 = (const double *)entry_2d(m, "resolve_frames0", MACE_F64, s->n_bar, 9, err)) ||
+        !(s->lengths0 = (const double *)entry_1d(m, "resolve_lengths0", MACE_F64, s->n_bar, err)) ||
+        !(s->k_natural = (const double *)entry_2d(m, "resolve_k_natural", MACE_F64, s->n_bar, 49, err)) ||
+        !(s->bar_param = (const int64_t *)entry_1d(m, "resolve_bar_param", MACE_I64, s->n_bar, err)) ||
+        !(s->spring_vectors = (const double *)entry_2d(m, "resolve_spring_vectors", MACE_F64, s->n_spring, n, err)) ||
+        !(s->spring_k = (const double *)entry_1d(m, "resolve_spring_k", MACE_F64, s->n_spring, err)) ||
+        !(s->spring_param = (const int64_t *)entry_1d(m, "resolve_spring_param", MACE_I64, s->n_spring, err)) ||
+        load_triplets(m, "mass", (size_t)c[RS_MASS_NNZ], &s->mass, err) ||
+        load_triplets(m, "dm", (size_t)c[RS_DM_NNZ], &s->dm, err) ||
+        !(s->dm_part = (const int64_t *)entry_1d(m, "resolve_dm_part", MACE_I64, (size_t)c[RS_DM_NNZ], err)) ||
+        load_triplets(m, "other", (size_t)c[RS_OTHER_NNZ], &s->other, err) ||
+        load_triplets(m, "static_t", (size_t)c[RS_STATIC_NNZ], &s->static_t, err) ||
+        load_triplets(m, "modal_t", (size_t)c[RS_MODAL_NNZ], &s->modal_t, err) ||
+        !(s->gravity = (const double *)entry_1d(m, "resolve_gravity", MACE_F64, n, err)) ||
+        !(s->load = (const double *)entry_1d(m, "resolve_load", MACE_F64, n, err)) ||
+        !(s->displacements = (const double *)entry_1d(m, "resolve_displacements", MACE_F64, n, err)) ||
+        !(s->positions = (const double *)entry_2d(m, "resolve_positions", MACE_F64, s->n_grid, 3, err)) ||
+        !(s->rotations = (const double *)entry_2d(m, "resolve_rotations", MACE_F64, s->n_grid, 9, err)) ||
+        !(s->reference = (const double *)entry_2d(m, "resolve_reference", MACE_F64, n, m->n_flex, err)) ||
+        !(s->reference_norm = (const double *)entry_1d(m, "resolve_reference_norm", MACE_F64, m->n_flex, err)) ||
+        !(m->rs_struct_rows = (const double *)entry_2d(m, "resolve_struct_rows", MACE_F64, m->n_structure_outputs, n,
+                                                       err)) ||
+        !(m->rs_inputs = (const double *)entry_2d(m, "resolve_inputs", MACE_F64, n, m->n_structure_inputs, err)))
+        return -1;
+    for (k = 0; k < s->n_bar; k++)
+        if (s->bar_nodes[2 * k] < 0 || (size_t)s->bar_nodes[2 * k] >= s->n_grid || s->bar_nodes[2 * k + 1] < 0 ||
+            (size_t)s->bar_nodes[2 * k + 1] >= s->n_grid || s->bar_param[k] < -1 || s->bar_param[k] >= (int64_t)m->n_phys)
+            goto bad;
+    for (k = 0; k < s->n_spring; k++)
+        if (s->spring_param[k] < -1 || s->spring_param[k] >= (int64_t)m->n_phys) goto bad;
+    for (k = 0; k < s->dm.nnz; k++)
+        if (s->dm_part[k] < 0 || s->dm_part[k] >= (int64_t)m->n_phys) goto bad;
+    if (check_triplets(&s->mass, n, n) || check_triplets(&s->dm, n, n) || check_triplets(&s->other, n, n) ||
+        check_triplets(&s->static_t, n, s->n_static) || check_triplets(&s->modal_t, n, s->n_modal))
+        goto bad;
+    m->rs_freq = ml_zeros(&m->al, m->n_flex);
+    m->rs_shapes = ml_zeros(&m->al, n * m->n_flex);
+    m->rs_rows = ml_zeros(&m->al, m->n_structure_outputs * m->n_flex);
+    m->rs_b = ml_zeros(&m->al, m->n_flex * m->n_structure_inputs);
+    if (!m->rs_freq || !m->rs_shapes || !m->rs_rows || !m->rs_b) {
+        snprintf(err, MACE_ERR_LEN, "out of memory loading the re-solve data");
+        return -1;
+    }
+    m->resolvable = 1;
+    return 0;
+bad:
+    snprintf(err, MACE_ERR_LEN, "model data: a re-solve index out of range");
+    return -1;
+}
+
 /* The state order: model exchange s[i] = x[perm[i]], co-simulation the identity. */
 static int load_state_order(MaceModel *m, char *err) {
     size_t k;
@@ -375,7 +488,7 @@ static int load_blocks(MaceModel *m, char *err) {
 
 static int load(MaceModel *m, const char *resource_dir, char *err) {
     if (load_counts(m, resource_dir, err) || load_arrays(m, err) || load_state_order(m, err) ||
-        load_parameters(m, err) || load_blocks(m, err))
+        load_parameters(m, err) || load_blocks(m, err) || load_resolve(m, err))
         return -1;
     return 0;
 }
@@ -436,6 +549,10 @@ void mace_destroy(MaceModel *m) {
     m->al.free(m->built_params);
     m->al.free(m->freq);
     m->al.free(m->rel);
+    m->al.free(m->rs_freq);
+    m->al.free(m->rs_shapes);
+    m->al.free(m->rs_rows);
+    m->al.free(m->rs_b);
     m->al.free(m->u);
     m->al.free(m->a);
     m->al.free(m->b);
@@ -651,7 +768,26 @@ static int reanalyse(MaceModel *m, double *coef, int *changed, char *err) {
         }
     }
     for (i = 0; i < m->n_modes; i++) m->freq[i] = signed_frequency_hz(signed_omega2(m->freq0[i]));
-    if (*changed) {
+    m->resolved = 0;
+    if (*changed && m->resolvable) { /* the structure solved again; its modes projected on the instruments */
+        const size_t nd = m->rs.n_dof, so = m->n_structure_outputs, si = m->n_structure_inputs;
+        int iterations;
+        if (rs_flexible_modes(&m->al, &m->rs, m->rel, m->rs_freq, m->rs_shapes, &iterations, err) != 0) goto done;
+        for (i = 0; i < nf; i++) m->freq[m->flex[i]] = m->rs_freq[i];
+        for (i = 0; i < so; i++)
+            for (j = 0; j < nf; j++) {
+                double acc = 0.0;
+                for (q = 0; q < nd; q++) acc += m->rs_struct_rows[i * nd + q] * m->rs_shapes[q * nf + j];
+                m->rs_rows[i * nf + j] = acc;
+            }
+        for (j = 0; j < nf; j++)
+            for (i = 0; i < si; i++) {
+                double acc = 0.0;
+                for (q = 0; q < nd; q++) acc += m->rs_shapes[q * nf + j] * m->rs_inputs[q * si + i];
+                m->rs_b[j * si + i] = acc;
+            }
+        m->resolved = 1;
+    } else if (*changed) {
         k = ml_zeros(&m->al, nt * nt);
         kc = ml_zeros(&m->al, na * na);
         g = ml_zeros(&m->al, nz * na);
@@ -796,7 +932,13 @@ static int structure_block(MaceModel *m, const double *coef, int changed, double
     if (!dpos || !rpos || !mb || !rows) goto done;
     memcpy(mb, m->modal_b, nm * m->n_structure_inputs * sizeof(double));
     memcpy(rows, m->rows, m->n_structure_outputs * nm * sizeof(double));
-    if (changed) { /* the new flexible modes' inputs and rows: coef^T [b + preload; b_W], [rows + preload, rows_W] coef */
+    if (changed && m->resolved) { /* the re-solved flexible modes' inputs and rows */
+        const size_t ni = m->n_structure_inputs, no = m->n_structure_outputs;
+        for (k = 0; k < nf; k++) {
+            for (q = 0; q < ni; q++) mb[m->flex[k] * ni + q] = m->rs_b[k * ni + q];
+            for (o = 0; o < no; o++) rows[o * nm + m->flex[k]] = m->rs_rows[o * nf + k];
+        }
+    } else if (changed) { /* the new flexible modes' inputs and rows: coef^T [b + preload; b_W], [rows + preload, rows_W] coef */
         const size_t ni = m->n_structure_inputs, no = m->n_structure_outputs, nc = m->n_corr;
         for (k = 0; k < nf; k++) {
             for (q = 0; q < ni; q++) {

@@ -1,0 +1,581 @@
+/* The structure solved again for new physical parameters (see mace_resolve.h). */
+#include "mace_resolve.h"
+
+#include <complex.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+typedef double complex cx;
+
+#define TWO_PI (2.0 * 3.14159265358979323846)
+#define CS_STEP 1e-30          /* complex step (mace_fmu/fe/corotational.py) */
+#define FD_RELATIVE_STEP 1e-4  /* central differences of the complex-step derivatives */
+#define MAX_LOCAL_ROTATION 0.5 /* rad */
+#define WORK_TOLERANCE 1e-14   /* Newton's |du . r| / |u . F| (mace_fmu/iomodel/resolve.py) */
+#define MAX_ITERATIONS 30
+#define MASSLESS_FRACTION 1e-12
+
+/* q-coordinate a of a bar (translations and spins of A, then of B) is +- reduced coordinate ZMAP[a] */
+static const int ZMAP[12] = {0, 1, 2, 3, 4, 5, 0, 1, 2, 6, 7, 8};
+static const double ZSIGN[12] = {-1, -1, -1, 1, 1, 1, 1, 1, 1, 1, 1, 1};
+
+/* ---- the corotational bar ---------------------------------------------------------------------- */
+
+/* Rodrigues' formula, complex-safe (a series below 1e-6 rad^2). */
+static void rotation_matrix(const cx th[3], cx r[9]) {
+    const cx phi2 = th[0] * th[0] + th[1] * th[1] + th[2] * th[2];
+    cx a, b;
+    int i, j;
+    if (cabs(phi2) < 1e-6) {
+        a = 1.0 - phi2 / 6.0 + phi2 * phi2 / 120.0;
+        b = 0.5 - phi2 / 24.0 + phi2 * phi2 / 720.0;
+    } else {
+        const cx phi = csqrt(phi2);
+        a = csin(phi) / phi;
+        b = (1.0 - ccos(phi)) / phi2;
+    }
+    for (i = 0; i < 3; i++)
+        for (j = 0; j < 3; j++) r[i * 3 + j] = (i == j ? 1.0 - b * phi2 : 0.0) + b * th[i] * th[j];
+    r[1] -= a * th[2];
+    r[2] += a * th[1];
+    r[3] += a * th[2];
+    r[5] -= a * th[0];
+    r[6] -= a * th[1];
+    r[7] += a * th[0];
+}
+
+/* Rotation vector of a rotation near the identity; -1 beyond MAX_LOCAL_ROTATION. */
+static int rotation_vector_small(const cx r[9], cx w[3]) {
+    cx s2, ratio;
+    if (creal(r[0] + r[4] + r[8]) < 1.0 + 2.0 * cos(MAX_LOCAL_ROTATION)) return -1;
+    w[0] = 0.5 * (r[7] - r[5]);
+    w[1] = 0.5 * (r[2] - r[6]);
+    w[2] = 0.5 * (r[3] - r[1]);
+    s2 = w[0] * w[0] + w[1] * w[1] + w[2] * w[2];
+    ratio = 1.0 + s2 * (1.0 / 6 + s2 * (3.0 / 40 + s2 * (5.0 / 112 + s2 * (35.0 / 1152 + s2 * 63.0 / 2816))));
+    w[0] *= ratio;
+    w[1] *= ratio;
+    w[2] *= ratio;
+    return 0;
+}
+
+static void cross(const cx a[3], const cx b[3], cx out[3]) {
+    out[0] = a[1] * b[2] - a[2] * b[1];
+    out[1] = a[2] * b[0] - a[0] * b[2];
+    out[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+/* One bar's natural deformations d (stretch, local end rotations) with its ends at xa (fixed), xb + dz[0:3],
+ * rotations R(dz[3:6]) ra and R(dz[6:9]) rb. */
+static int deformations(const double *xa, const double *xb, const double *ra, const double *rb, const double *frame0,
+                        double length0, const cx dz[9], cx d[7]) {
+    cx chord[3], e1[3], e2[3], e3[3], q[3], rot_a[9], rot_b[9], ra1[9], rb1[9], rel[9], th_a[3], th_b[3], norm, length;
+    const cx *rows[3];
+    int i, j, k, l;
+    rotation_matrix(dz + 3, rot_a);
+    rotation_matrix(dz + 6, rot_b);
+    for (i = 0; i < 3; i++)
+        for (j = 0; j < 3; j++) {
+            cx sa = 0.0, sb = 0.0;
+            for (k = 0; k < 3; k++) {
+                sa += rot_a[i * 3 + k] * ra[k * 3 + j];
+                sb += rot_b[i * 3 + k] * rb[k * 3 + j];
+            }
+            ra1[i * 3 + j] = sa;
+            rb1[i * 3 + j] = sb;
+        }
+    for (i = 0; i < 3; i++) chord[i] = xb[i] + dz[i] - xa[i];
+    length = csqrt(chord[0] * chord[0] + chord[1] * chord[1] + chord[2] * chord[2]);
+    for (i = 0; i < 3; i++) e1[i] = chord[i] / length;
+    for (i = 0; i < 3; i++) { /* the mean of the rotated ends' y axes */
+        cx s = 0.0;
+        for (k = 0; k < 3; k++) s += (ra1[i * 3 + k] + rb1[i * 3 + k]) * frame0[3 + k];
+        q[i] = 0.5 * s;
+    }
+    cross(e1, q, e3);
+    norm = csqrt(e3[0] * e3[0] + e3[1] * e3[1] + e3[2] * e3[2]);
+    for (i = 0; i < 3; i++) e3[i] /= norm;
+    cross(e3, e1, e2);
+    rows[0] = e1;
+    rows[1] = e2;
+    rows[2] = e3;
+    for (l = 0; l < 2; l++) { /* rows @ R @ frame0^T for each end */
+        const cx *rr = l ? rb1 : ra1;
+        for (i = 0; i < 3; i++)
+            for (j = 0; j < 3; j++) {
+                cx s = 0.0;
+                for (k = 0; k < 3; k++) {
+                    cx t = 0.0;
+                    int m;
+                    for (m = 0; m < 3; m++) t += rr[k * 3 + m] * frame0[j * 3 + m];
+                    s += rows[i][k] * t;
+                }
+                rel[i * 3 + j] = s;
+            }
+        if (rotation_vector_small(rel, l ? th_b : th_a) != 0) return -1;
+    }
+    d[0] = length - length0;
+    for (i = 1; i < 3; i++)
+        d[0] += length0 / 60.0 * (4.0 * th_a[i] * th_a[i] - 2.0 * th_a[i] * th_b[i] + 4.0 * th_b[i] * th_b[i]);
+    for (i = 0; i < 3; i++) {
+        d[1 + i] = th_a[i];
+        d[4 + i] = th_b[i];
+    }
+    return 0;
+}
+
+/* One bar about the state (positions, rotations): its internal force f_e (12) and, with second derivatives,
+ * its tangent k_e (12 x 12, symmetric); without, the material part B^T Kn B only. kn: its natural stiffness. */
+static int bar_tangent(const RsStructure *s, size_t bar, const double *positions, const double *rotations,
+                       const double *kn, int second, double *f_e, double *k_e) {
+    const size_t ga = (size_t)s->bar_nodes[2 * bar], gb = (size_t)s->bar_nodes[2 * bar + 1];
+    const double *xa = positions + 3 * ga, *xb = positions + 3 * gb, *ra = rotations + 9 * ga, *rb = rotations + 9 * gb;
+    const double *frame0 = s->frames0 + 9 * bar, length0 = s->lengths0[bar];
+    double d0[7], bz[7][9], g[7], b[7][12];
+    cx dz[9], d[7];
+    int i, j, k, l, a, c;
+    for (j = 0; j < 9; j++) { /* dd/dz by complex steps */
+        for (i = 0; i < 9; i++) dz[i] = 0.0;
+        dz[j] = CS_STEP * I;
+        if (deformations(xa, xb, ra, rb, frame0, length0, dz, d) != 0) return -1;
+        for (k = 0; k < 7; k++) {
+            bz[k][j] = cimag(d[k]) / CS_STEP;
+            d0[k] = creal(d[k]);
+        }
+    }
+    for (k = 0; k < 7; k++) {
+        g[k] = 0.0;
+        for (l = 0; l < 7; l++) g[k] += kn[k * 7 + l] * d0[l];
+    }
+    for (k = 0; k < 7; k++)
+        for (a = 0; a < 12; a++) b[k][a] = bz[k][ZMAP[a]] * ZSIGN[a];
+    for (a = 0; a < 12; a++) {
+        f_e[a] = 0.0;
+        for (k = 0; k < 7; k++) f_e[a] += b[k][a] * g[k];
+    }
+    for (a = 0; a < 12; a++)
+        for (c = 0; c < 12; c++) {
+            double acc = 0.0;
+            for (k = 0; k < 7; k++) {
+                double t = 0.0;
+                for (l = 0; l < 7; l++) t += kn[k * 7 + l] * b[l][c];
+                acc += b[k][a] * t;
+            }
+            k_e[a * 12 + c] = acc;
+        }
+    if (second) { /* sum_k g_k d2 d_k / dz2: central differences of complex-step first derivatives */
+        double gz[9][9];
+        for (i = 0; i < 9; i++) {
+            const double h = FD_RELATIVE_STEP * (i < 3 ? length0 : 1.0);
+            for (j = i; j < 9; j++) {
+                double up[7], down[7], acc = 0.0;
+                int sign;
+                for (sign = 0; sign < 2; sign++) {
+                    for (l = 0; l < 9; l++) dz[l] = 0.0;
+                    dz[i] = sign ? -h : h;
+                    dz[j] += CS_STEP * I;
+                    if (deformations(xa, xb, ra, rb, frame0, length0, dz, d) != 0) return -1;
+                    for (k = 0; k < 7; k++) (sign ? down : up)[k] = cimag(d[k]);
+                }
+                for (k = 0; k < 7; k++) acc += g[k] * (up[k] - down[k]) / (CS_STEP * 2.0 * h);
+                gz[i][j] = gz[j][i] = acc;
+            }
+        }
+        for (a = 0; a < 12; a++)
+            for (c = 0; c < 12; c++) k_e[a * 12 + c] += gz[ZMAP[a]][ZMAP[c]] * ZSIGN[a] * ZSIGN[c];
+    }
+    for (a = 0; a < 12; a++)
+        for (c = 0; c < a; c++) k_e[a * 12 + c] = k_e[c * 12 + a] = 0.5 * (k_e[a * 12 + c] + k_e[c * 12 + a]);
+    return 0;
+}
+
+/* ---- assembly ----------------------------------------------------------------------------------- */
+
+/* k (n x n) = the bars' tangent (or material stiffness) + springs + other; f: the bars' internal force. */
+static int assemble(const RsStructure *s, const double *factor, const double *positions, const double *rotations,
+                    int second, const double *k_springs, double *k, double *f) {
+    const size_t n = s->n_dof;
+    size_t bar, i, a, c;
+    double kn[49], f_e[12], k_e[144];
+    memcpy(k, k_springs, n * n * sizeof(double));
+    memset(f, 0, n * sizeof(double));
+    for (i = 0; i < s->other.nnz; i++) k[s->other.rows[i] * n + s->other.cols[i]] += s->other.vals[i];
+    for (bar = 0; bar < s->n_bar; bar++) {
+        const double scale = s->bar_param[bar] >= 0 ? factor[s->bar_param[bar]] : 1.0;
+        size_t dof[12];
+        for (i = 0; i < 49; i++) kn[i] = scale * s->k_natural[bar * 49 + i];
+        if (bar_tangent(s, bar, positions, rotations, kn, second, f_e, k_e) != 0) return -1;
+        for (a = 0; a < 12; a++) dof[a] = 6 * (size_t)s->bar_nodes[2 * bar + (a < 6 ? 0 : 1)] + a % 6;
+        for (a = 0; a < 12; a++) {
+            f[dof[a]] += f_e[a];
+            for (c = 0; c < 12; c++) k[dof[a] * n + dof[c]] += k_e[a * 12 + c];
+        }
+    }
+    return 0;
+}
+
+/* out (nt x nt) = T^T a T for a dense a (n x n) and T as triplets (n x nt); work: n x nt. */
+static void reduce(const double *a, size_t n, const RsTriplets *t, size_t nt, double *work, double *out) {
+    size_t i, e;
+    memset(work, 0, n * nt * sizeof(double));
+    memset(out, 0, nt * nt * sizeof(double));
+    for (e = 0; e < t->nnz; e++) { /* work = a T */
+        const size_t row = (size_t)t->rows[e], col = (size_t)t->cols[e];
+        const double v = t->vals[e];
+        for (i = 0; i < n; i++) work[i * nt + col] += a[i * n + row] * v;
+    }
+    for (e = 0; e < t->nnz; e++) { /* out = T^T work */
+        const size_t row = (size_t)t->rows[e], col = (size_t)t->cols[e];
+        const double v = t->vals[e];
+        for (i = 0; i < nt; i++) out[col * nt + i] += v * work[row * nt + i];
+    }
+}
+
+/* y (n x m) = T x (x: nt x m) */
+static void expand(const RsTriplets *t, const double *x, size_t m, double *y, size_t n) {
+    size_t e, j;
+    memset(y, 0, n * m * sizeof(double));
+    for (e = 0; e < t->nnz; e++)
+        for (j = 0; j < m; j++) y[t->rows[e] * m + j] += t->vals[e] * x[t->cols[e] * m + j];
+}
+
+/* x (nt) = T^T y (y: n) */
+static void restrict_vector(const RsTriplets *t, const double *y, double *x, size_t nt) {
+    size_t e;
+    memset(x, 0, nt * sizeof(double));
+    for (e = 0; e < t->nnz; e++) x[t->cols[e]] += t->vals[e] * y[t->rows[e]];
+}
+
+static void advance(size_t n_grid, const double *delta, double *positions, double *rotations) {
+    size_t g;
+    int i, j, k;
+    for (g = 0; g < n_grid; g++) {
+        cx th[3], r[9];
+        double old[9];
+        for (i = 0; i < 3; i++) {
+            positions[3 * g + i] += delta[6 * g + i];
+            th[i] = delta[6 * g + 3 + i];
+        }
+        rotation_matrix(th, r);
+        memcpy(old, rotations + 9 * g, sizeof(old));
+        for (i = 0; i < 3; i++)
+            for (j = 0; j < 3; j++) {
+                double acc = 0.0;
+                for (k = 0; k < 3; k++) acc += creal(r[i * 3 + k]) * old[k * 3 + j];
+                rotations[9 * g + i * 3 + j] = acc;
+            }
+    }
+}
+
+/* ---- the preload -------------------------------------------------------------------------------- */
+
+/* Newton iterations from the nominal equilibrium; k: the tangent at the new one. */
+static int equilibrium(const MaceAlloc *al, const RsStructure *s, const double *factor, const double *k_springs,
+                       const double *load, double *k, int *iterations, char *err) {
+    const size_t n = s->n_dof, ns = s->n_static;
+    double *pos = ml_zeros(al, s->n_grid * 3), *rot = ml_zeros(al, s->n_grid * 9), *u = ml_zeros(al, n);
+    double *f = ml_zeros(al, n), *r = ml_zeros(al, n), *rs = ml_zeros(al, ns), *kr = ml_zeros(al, ns * ns);
+    double *work = ml_zeros(al, n * ns), *delta = ml_zeros(al, n), *tr = ml_zeros(al, n);
+    size_t i, j;
+    int it, status = -1;
+    if (!pos || !rot || !u || !f || !r || !rs || !kr || !work || !delta || !tr) {
+        snprintf(err, MACE_ERR_LEN, "out of memory in the preload's re-solve");
+        goto done;
+    }
+    memcpy(pos, s->positions, s->n_grid * 3 * sizeof(double));
+    memcpy(rot, s->rotations, s->n_grid * 9 * sizeof(double));
+    memcpy(u, s->displacements, n * sizeof(double));
+    for (it = 1; it <= MAX_ITERATIONS; it++) {
+        double work_done = 0.0, scale = 0.0;
+        if (assemble(s, factor, pos, rot, 1, k_springs, k, f) != 0) goto rotation;
+        for (i = 0; i < n; i++) {
+            double spring = 0.0;
+            for (j = 0; j < n; j++) spring += k_springs[i * n + j] * u[j];
+            r[i] = load[i] - f[i] - spring;
+        }
+        restrict_vector(&s->static_t, r, rs, ns);
+        reduce(k, n, &s->static_t, ns, work, kr);
+        if (ml_cholesky(kr, ns) != 0) {
+            snprintf(err, MACE_ERR_LEN, "the gravity preload's tangent stiffness is not positive definite for "
+                     "these parameters (the structure buckles or hangs unstably)");
+            goto done;
+        }
+        memcpy(delta, rs, ns * sizeof(double));
+        ml_cholesky_solve(kr, ns, 1, delta, 1);
+        ml_cholesky_solve(kr, ns, 0, delta, 1);
+        expand(&s->static_t, delta, 1, tr, n); /* tr = T x, then delta = T x and tr = T r */
+        memcpy(delta, tr, n * sizeof(double));
+        expand(&s->static_t, rs, 1, tr, n);
+        advance(s->n_grid, delta, pos, rot);
+        for (i = 0; i < n; i++) {
+            u[i] += delta[i];
+            work_done += delta[i] * tr[i];
+            scale += u[i] * load[i];
+        }
+        if (fabs(work_done) <= WORK_TOLERANCE * fmax(fabs(scale), 1e-300)) {
+            *iterations = it;
+            if (assemble(s, factor, pos, rot, 1, k_springs, k, f) != 0) goto rotation;
+            status = 0;
+            goto done;
+        }
+    }
+    snprintf(err, MACE_ERR_LEN, "the gravity preload did not converge in %d Newton iterations from the nominal "
+             "equilibrium: the parameters are too far from nominal for this structure", MAX_ITERATIONS);
+    goto done;
+rotation:
+    snprintf(err, MACE_ERR_LEN, "a bar's local rotation exceeds %g rad in the preload's re-solve: the structure "
+             "deforms beyond small-strain beam theory for these parameters", MAX_LOCAL_ROTATION);
+done:
+    al->free(pos);
+    al->free(rot);
+    al->free(u);
+    al->free(f);
+    al->free(r);
+    al->free(rs);
+    al->free(kr);
+    al->free(work);
+    al->free(delta);
+    al->free(tr);
+    return status;
+}
+
+/* ---- the modes ---------------------------------------------------------------------------------- */
+
+static int compare_doubles(const void *a, const void *b) {
+    const double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+/* Median of the positive entries of the diagonal of a (n x n); 1 if there are none. */
+static double positive_diagonal_median(const MaceAlloc *al, const double *a, size_t n) {
+    double *v = ml_zeros(al, n), out = 1.0;
+    size_t i, count = 0;
+    if (!v) return 1.0;
+    for (i = 0; i < n; i++)
+        if (a[i * n + i] > 0.0) v[count++] = a[i * n + i];
+    if (count) {
+        qsort(v, count, sizeof(double), compare_doubles);
+        out = count % 2 ? v[count / 2] : 0.5 * (v[count / 2 - 1] + v[count / 2]);
+    }
+    al->free(v);
+    return out;
+}
+
+/* The `count` lowest modes of (k, m) on the modal DOFs (n x n each): eigenvalues [rad^2/s^2] ascending in
+ * w2 and M-normalised vectors in x (n x count), the massless DOFs condensed statically, then shift and invert
+ * (mace_fmu/iomodel/resolve.py: the low modes to round-off relative to themselves). */
+static int lowest_modes(const MaceAlloc *al, const double *k, const double *m, size_t n, size_t count, double *w2,
+                        double *x, char *err) {
+    size_t *a_idx = (size_t *)al->calloc(n + 1, sizeof(size_t)), *o_idx = (size_t *)al->calloc(n + 1, sizeof(size_t));
+    size_t na = 0, no = 0, i, j, q;
+    double biggest = 0.0, sigma;
+    double *koo = NULL, *g = NULL, *kc = NULL, *mc = NULL, *c = NULL, *mu = NULL, *v = NULL, *y = NULL;
+    int status = -1;
+    if (!a_idx || !o_idx) goto oom;
+    for (i = 0; i < n; i++) biggest = fmax(biggest, m[i * n + i]);
+    for (i = 0; i < n; i++) {
+        if (m[i * n + i] <= MASSLESS_FRACTION * biggest)
+            o_idx[no++] = i;
+        else
+            a_idx[na++] = i;
+    }
+    if (count > na) count = na;
+    koo = ml_zeros(al, no * no);
+    g = ml_zeros(al, no * na);
+    kc = ml_zeros(al, na * na);
+    mc = ml_zeros(al, na * na);
+    c = ml_zeros(al, na * na);
+    mu = ml_zeros(al, na);
+    v = ml_zeros(al, na * na);
+    y = ml_zeros(al, na * count);
+    if (!koo || !g || !kc || !mc || !c || !mu || !v || !y) goto oom;
+    for (i = 0; i < no; i++) {
+        for (j = 0; j < no; j++) koo[i * no + j] = k[o_idx[i] * n + o_idx[j]];
+        for (j = 0; j < na; j++) g[i * na + j] = k[o_idx[i] * n + a_idx[j]];
+    }
+    if (no && ml_cholesky(koo, no) != 0) {
+        snprintf(err, MACE_ERR_LEN, "the re-solve: the massless DOFs' stiffness is not positive definite");
+        goto done;
+    }
+    if (no) { /* g = K_oo^-1 K_oa */
+        ml_cholesky_solve(koo, no, 1, g, na);
+        ml_cholesky_solve(koo, no, 0, g, na);
+    }
+    for (i = 0; i < na; i++)
+        for (j = 0; j < na; j++) {
+            double acc = k[a_idx[i] * n + a_idx[j]];
+            for (q = 0; q < no; q++) acc -= k[a_idx[i] * n + o_idx[q]] * g[q * na + j];
+            kc[i * na + j] = acc;
+            mc[i * na + j] = m[a_idx[i] * n + a_idx[j]];
+        }
+    for (i = 0; i < na; i++)
+        for (j = 0; j < i; j++) {
+            kc[i * na + j] = kc[j * na + i] = 0.5 * (kc[i * na + j] + kc[j * na + i]);
+            mc[i * na + j] = mc[j * na + i] = 0.5 * (mc[i * na + j] + mc[j * na + i]);
+        }
+    sigma = -1e-6 * positive_diagonal_median(al, kc, na) / positive_diagonal_median(al, mc, na);
+    for (i = 0; i < na * na; i++) kc[i] -= sigma * mc[i];
+    if (ml_cholesky(kc, na) != 0) {
+        snprintf(err, MACE_ERR_LEN, "the re-solve: the stiffness is not positive definite (an unstable structure)");
+        goto done;
+    }
+    memcpy(c, mc, na * na * sizeof(double)); /* L^-1 M, its transpose M L^-T, then L^-1 M L^-T */
+    ml_cholesky_solve(kc, na, 1, c, na);
+    for (i = 0; i < na; i++)
+        for (j = 0; j < i; j++) {
+            const double t = c[i * na + j];
+            c[i * na + j] = c[j * na + i];
+            c[j * na + i] = t;
+        }
+    ml_cholesky_solve(kc, na, 1, c, na);
+    for (i = 0; i < na; i++)
+        for (j = 0; j < i; j++) c[i * na + j] = c[j * na + i] = 0.5 * (c[i * na + j] + c[j * na + i]);
+    if (ml_sym_eigh(al, c, na, mu, v) != 0) {
+        snprintf(err, MACE_ERR_LEN, "the re-solve's eigen-solution did not converge");
+        goto done;
+    }
+    for (j = 0; j < count; j++) { /* the largest mu first: the lowest modes */
+        const size_t col = na - 1 - j;
+        w2[j] = sigma + 1.0 / mu[col];
+        for (i = 0; i < na; i++) y[i * count + j] = v[i * na + col];
+    }
+    ml_cholesky_solve(kc, na, 0, y, count); /* x_a = L^-T y */
+    for (j = 0; j < count; j++) {
+        double norm = 0.0;
+        for (i = 0; i < na; i++)
+            for (q = 0; q < na; q++) norm += y[i * count + j] * mc[i * na + q] * y[q * count + j];
+        norm = 1.0 / sqrt(norm);
+        for (i = 0; i < na; i++) y[i * count + j] *= norm;
+    }
+    memset(x, 0, n * count * sizeof(double));
+    for (i = 0; i < na; i++) memcpy(x + a_idx[i] * count, y + i * count, count * sizeof(double));
+    for (i = 0; i < no; i++) /* x_o = -g x_a */
+        for (j = 0; j < count; j++) {
+            double acc = 0.0;
+            for (q = 0; q < na; q++) acc += g[i * na + q] * y[q * count + j];
+            x[o_idx[i] * count + j] = -acc;
+        }
+    status = 0;
+    goto done;
+oom:
+    snprintf(err, MACE_ERR_LEN, "out of memory in the re-solve's eigen-solution");
+done:
+    al->free(a_idx);
+    al->free(o_idx);
+    al->free(koo);
+    al->free(g);
+    al->free(kc);
+    al->free(mc);
+    al->free(c);
+    al->free(mu);
+    al->free(v);
+    al->free(y);
+    return status;
+}
+
+/* ---- the whole re-solve ------------------------------------------------------------------------- */
+
+int rs_flexible_modes(const MaceAlloc *al, const RsStructure *s, const double *rel, double *freq_hz,
+                      double *shapes, int *iterations, char *err) {
+    const size_t n = s->n_dof, nm = s->n_modal, count = s->count;
+    double *factor = ml_zeros(al, s->n_phys), *ks = ml_zeros(al, n * n), *k = ml_zeros(al, n * n);
+    double *mass = ml_zeros(al, n * n), *load = ml_zeros(al, n), *f = ml_zeros(al, n);
+    double *work = ml_zeros(al, n * nm), *km = ml_zeros(al, nm * nm), *mm = ml_zeros(al, nm * nm);
+    double *w2 = ml_zeros(al, count), *xm = ml_zeros(al, nm * count), *x = ml_zeros(al, n * count);
+    double *freq = ml_zeros(al, count), *score = NULL, *norm = ml_zeros(al, count);
+    size_t *flex_new = (size_t *)al->calloc(count + 1, sizeof(size_t)), *col = NULL;
+    size_t i, j, e, p, n_new = 0, zeros = 0, square;
+    int status = -1;
+    *iterations = 0;
+    if (!factor || !ks || !k || !mass || !load || !f || !work || !km || !mm || !w2 || !xm || !x || !freq || !norm ||
+        !flex_new)
+        goto oom;
+    for (p = 0; p < s->n_phys; p++) factor[p] = 1.0 + rel[p];
+    for (i = 0; i < s->n_spring; i++) { /* K_s = sum k e e^T */
+        const double kk = s->spring_k[i] * (s->spring_param[i] >= 0 ? factor[s->spring_param[i]] : 1.0);
+        const double *vec = s->spring_vectors + i * n;
+        for (j = 0; j < n; j++) {
+            if (vec[j] == 0.0) continue;
+            for (e = 0; e < n; e++) ks[j * n + e] += kk * vec[j] * vec[e];
+        }
+    }
+    for (e = 0; e < s->mass.nnz; e++) mass[s->mass.rows[e] * n + s->mass.cols[e]] += s->mass.vals[e];
+    memcpy(load, s->load, n * sizeof(double));
+    for (e = 0; e < s->dm.nnz; e++) {
+        const double change = factor[s->dm_part[e]] - 1.0, v = change * s->dm.vals[e];
+        mass[s->dm.rows[e] * n + s->dm.cols[e]] += v;
+        load[s->dm.rows[e]] += v * s->gravity[s->dm.cols[e]];
+    }
+    if (s->large_preload) {
+        if (equilibrium(al, s, factor, ks, load, k, iterations, err) != 0) goto done;
+    } else if (assemble(s, factor, s->positions, s->rotations, 0, ks, k, f) != 0) {
+        snprintf(err, MACE_ERR_LEN, "the re-solve: a bar's local rotation exceeds %g rad", MAX_LOCAL_ROTATION);
+        goto done;
+    }
+    reduce(k, n, &s->modal_t, nm, work, km);
+    reduce(mass, n, &s->modal_t, nm, work, mm);
+    if (lowest_modes(al, km, mm, nm, count, w2, xm, err) != 0) goto done;
+    expand(&s->modal_t, xm, count, x, n);
+    for (j = 0; j < count; j++) {
+        freq[j] = (w2[j] < 0 ? -1.0 : 1.0) * sqrt(fabs(w2[j])) / TWO_PI;
+        if (fabs(freq[j]) < s->zero_hz)
+            zeros++;
+        else
+            flex_new[n_new++] = j;
+    }
+    if (zeros != s->n_zero || n_new < s->n_flex) {
+        snprintf(err, MACE_ERR_LEN, "the re-solve has %lu zero-frequency and %lu flexible modes, the nominal "
+                 "structure %lu and %lu: a parameter value that frees or holds a rigid-body motion or a mechanism",
+                 (unsigned long)zeros, (unsigned long)n_new, (unsigned long)s->n_zero, (unsigned long)s->n_flex);
+        goto done;
+    }
+    square = n_new;
+    score = ml_zeros(al, square * square);
+    col = (size_t *)al->calloc(square + 1, sizeof(size_t));
+    if (!score || !col) goto oom;
+    for (j = 0; j < n_new; j++) { /* x^T M0 x of each new mode, the nominal mass weighting the MAC */
+        const size_t c = flex_new[j];
+        double acc = 0.0;
+        for (e = 0; e < s->mass.nnz; e++) acc += x[s->mass.rows[e] * count + c] * s->mass.vals[e] *
+                                                 x[s->mass.cols[e] * count + c];
+        norm[j] = acc;
+    }
+    for (i = 0; i < s->n_flex; i++)
+        for (j = 0; j < n_new; j++) {
+            const size_t c = flex_new[j];
+            double cross_mass = 0.0;
+            for (e = 0; e < n; e++) cross_mass += s->reference[e * s->n_flex + i] * x[e * count + c];
+            score[i * square + j] = cross_mass * cross_mass / (s->reference_norm[i] * norm[j]);
+        }
+    if (ml_assign_max(al, score, square, col) != 0) goto oom;
+    for (i = 0; i < s->n_flex; i++) {
+        const size_t c = flex_new[col[i]];
+        freq_hz[i] = freq[c];
+        for (e = 0; e < n; e++) shapes[e * s->n_flex + i] = x[e * count + c];
+    }
+    status = 0;
+    goto done;
+oom:
+    snprintf(err, MACE_ERR_LEN, "out of memory in the structure's re-solve");
+done:
+    al->free(factor);
+    al->free(ks);
+    al->free(k);
+    al->free(mass);
+    al->free(load);
+    al->free(f);
+    al->free(work);
+    al->free(km);
+    al->free(mm);
+    al->free(w2);
+    al->free(xm);
+    al->free(x);
+    al->free(freq);
+    al->free(score);
+    al->free(norm);
+    al->free(flex_new);
+    al->free(col);
+    return status;
+}
