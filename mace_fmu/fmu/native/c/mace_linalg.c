@@ -136,20 +136,28 @@ int ml_cholesky(double *a, size_t n) {
 }
 
 void ml_cholesky_solve(const double *l, size_t n, int lower, double *b, size_t nrhs) {
+    /* row by row, every right-hand side at once (contiguous in memory); each entry sees the same operations in
+       the same order as a column-by-column substitution, so the results are those of one */
     size_t i, k, c;
-    for (c = 0; c < nrhs; c++) {
-        if (lower) {
-            for (i = 0; i < n; i++) {
-                double s = b[i * nrhs + c];
-                for (k = 0; k < i; k++) s -= l[i * n + k] * b[k * nrhs + c];
-                b[i * nrhs + c] = s / l[i * n + i];
+    if (lower) {
+        for (i = 0; i < n; i++) {
+            double *row = b + i * nrhs;
+            for (k = 0; k < i; k++) {
+                const double f = l[i * n + k];
+                const double *other = b + k * nrhs;
+                for (c = 0; c < nrhs; c++) row[c] -= f * other[c];
             }
-        } else {
-            for (i = n; i-- > 0;) {
-                double s = b[i * nrhs + c];
-                for (k = i + 1; k < n; k++) s -= l[k * n + i] * b[k * nrhs + c];
-                b[i * nrhs + c] = s / l[i * n + i];
+            for (c = 0; c < nrhs; c++) row[c] /= l[i * n + i];
+        }
+    } else {
+        for (i = n; i-- > 0;) {
+            double *row = b + i * nrhs;
+            for (k = i + 1; k < n; k++) {
+                const double f = l[k * n + i];
+                const double *other = b + k * nrhs;
+                for (c = 0; c < nrhs; c++) row[c] -= f * other[c];
             }
+            for (c = 0; c < nrhs; c++) row[c] /= l[i * n + i];
         }
     }
 }

@@ -15,6 +15,7 @@ typedef double complex cx;
 #define MAX_LOCAL_ROTATION 0.5 /* rad */
 #define WORK_TOLERANCE 1e-14   /* Newton's |du . r| / |u . F| (mace_fmu/iomodel/resolve.py) */
 #define MAX_ITERATIONS 30
+#define FRESH_TANGENT_WORK 1e-8 /* above this work ratio Newton takes the tangent of the current state */
 #define MASSLESS_FRACTION 1e-12
 
 /* q-coordinate a of a bar (translations and spins of A, then of B) is +- reduced coordinate ZMAP[a] */
@@ -127,7 +128,8 @@ static int deformations(const double *xa, const double *xb, const double *ra, co
 }
 
 /* One bar about the state (positions, rotations): its internal force f_e (12) and, with second derivatives,
- * its tangent k_e (12 x 12, symmetric); without, the material part B^T Kn B only. kn: its natural stiffness. */
+ * its tangent k_e (12 x 12, symmetric); without, the material part B^T Kn B only; k_e NULL: the force alone.
+ * kn: its natural stiffness. */
 static int bar_tangent(const RsStructure *s, size_t bar, const double *positions, const double *rotations,
                        const double *kn, int second, double *f_e, double *k_e) {
     const size_t ga = (size_t)s->bar_nodes[2 * bar], gb = (size_t)s->bar_nodes[2 * bar + 1];
@@ -155,6 +157,7 @@ static int bar_tangent(const RsStructure *s, size_t bar, const double *positions
         f_e[a] = 0.0;
         for (k = 0; k < 7; k++) f_e[a] += b[k][a] * g[k];
     }
+    if (!k_e) return 0;
     for (a = 0; a < 12; a++)
         for (c = 0; c < 12; c++) {
             double acc = 0.0;
@@ -193,24 +196,28 @@ static int bar_tangent(const RsStructure *s, size_t bar, const double *positions
 
 /* ---- assembly ----------------------------------------------------------------------------------- */
 
-/* k (n x n) = the bars' tangent (or material stiffness) + springs + other; f: the bars' internal force. */
+/* k (n x n) = the bars' tangent (or material stiffness) + springs + other; f: the bars' internal force; k NULL:
+ * the force alone (first derivatives only). */
 static int assemble(const RsStructure *s, const double *factor, const double *positions, const double *rotations,
                     int second, const double *k_springs, double *k, double *f) {
     const size_t n = s->n_dof;
     size_t bar, i, a, c;
     double kn[49], f_e[12], k_e[144];
-    memcpy(k, k_springs, n * n * sizeof(double));
     memset(f, 0, n * sizeof(double));
-    for (i = 0; i < s->other.nnz; i++) k[s->other.rows[i] * n + s->other.cols[i]] += s->other.vals[i];
+    if (k) {
+        memcpy(k, k_springs, n * n * sizeof(double));
+        for (i = 0; i < s->other.nnz; i++) k[s->other.rows[i] * n + s->other.cols[i]] += s->other.vals[i];
+    }
     for (bar = 0; bar < s->n_bar; bar++) {
         const double scale = s->bar_param[bar] >= 0 ? factor[s->bar_param[bar]] : 1.0;
         size_t dof[12];
         for (i = 0; i < 49; i++) kn[i] = scale * s->k_natural[bar * 49 + i];
-        if (bar_tangent(s, bar, positions, rotations, kn, second, f_e, k_e) != 0) return -1;
+        if (bar_tangent(s, bar, positions, rotations, kn, second, f_e, k ? k_e : NULL) != 0) return -1;
         for (a = 0; a < 12; a++) dof[a] = 6 * (size_t)s->bar_nodes[2 * bar + (a < 6 ? 0 : 1)] + a % 6;
         for (a = 0; a < 12; a++) {
             f[dof[a]] += f_e[a];
-            for (c = 0; c < 12; c++) k[dof[a] * n + dof[c]] += k_e[a * 12 + c];
+            if (k)
+                for (c = 0; c < 12; c++) k[dof[a] * n + dof[c]] += k_e[a * 12 + c];
         }
     }
     return 0;
@@ -271,15 +278,19 @@ static void advance(size_t n_grid, const double *delta, double *positions, doubl
 
 /* ---- the preload -------------------------------------------------------------------------------- */
 
-/* Newton iterations from the nominal equilibrium; k: the tangent at the new one. */
+/* Newton iterations from the nominal equilibrium; k: the tangent at the new one. Modified Newton: the tangent
+ * of the current state until the work ratio falls below FRESH_TANGENT_WORK, then kept while each iteration's work
+ * falls below a quarter of the last one's (as the preload's own iterations do, mace_fmu/fe/preload.py); the
+ * tangent of the equilibrium reached. */
 static int equilibrium(const MaceAlloc *al, const RsStructure *s, const double *factor, const double *k_springs,
                        const double *load, double *k, int *iterations, char *err) {
     const size_t n = s->n_dof, ns = s->n_static;
     double *pos = ml_zeros(al, s->n_grid * 3), *rot = ml_zeros(al, s->n_grid * 9), *u = ml_zeros(al, n);
     double *f = ml_zeros(al, n), *r = ml_zeros(al, n), *rs = ml_zeros(al, ns), *kr = ml_zeros(al, ns * ns);
     double *work = ml_zeros(al, n * ns), *delta = ml_zeros(al, n), *tr = ml_zeros(al, n);
+    double previous = HUGE_VAL;
     size_t i, j;
-    int it, status = -1;
+    int it, factored = 0, status = -1;
     if (!pos || !rot || !u || !f || !r || !rs || !kr || !work || !delta || !tr) {
         snprintf(err, MACE_ERR_LEN, "out of memory in the preload's re-solve");
         goto done;
@@ -288,19 +299,22 @@ static int equilibrium(const MaceAlloc *al, const RsStructure *s, const double *
     memcpy(rot, s->rotations, s->n_grid * 9 * sizeof(double));
     memcpy(u, s->displacements, n * sizeof(double));
     for (it = 1; it <= MAX_ITERATIONS; it++) {
-        double work_done = 0.0, scale = 0.0;
-        if (assemble(s, factor, pos, rot, 1, k_springs, k, f) != 0) goto rotation;
+        double work_done = 0.0, scale = 0.0, ratio;
+        if (assemble(s, factor, pos, rot, 1, k_springs, factored ? NULL : k, f) != 0) goto rotation;
         for (i = 0; i < n; i++) {
             double spring = 0.0;
             for (j = 0; j < n; j++) spring += k_springs[i * n + j] * u[j];
             r[i] = load[i] - f[i] - spring;
         }
         restrict_vector(&s->static_t, r, rs, ns);
-        reduce(k, n, &s->static_t, ns, work, kr);
-        if (ml_cholesky(kr, ns) != 0) {
-            snprintf(err, MACE_ERR_LEN, "the gravity preload's tangent stiffness is not positive definite for "
-                     "these parameters (the structure buckles or hangs unstably)");
-            goto done;
+        if (!factored) {
+            reduce(k, n, &s->static_t, ns, work, kr);
+            if (ml_cholesky(kr, ns) != 0) {
+                snprintf(err, MACE_ERR_LEN, "the gravity preload's tangent stiffness is not positive definite for "
+                         "these parameters (the structure buckles or hangs unstably)");
+                goto done;
+            }
+            factored = 1;
         }
         memcpy(delta, rs, ns * sizeof(double));
         ml_cholesky_solve(kr, ns, 1, delta, 1);
@@ -314,12 +328,17 @@ static int equilibrium(const MaceAlloc *al, const RsStructure *s, const double *
             work_done += delta[i] * tr[i];
             scale += u[i] * load[i];
         }
-        if (fabs(work_done) <= WORK_TOLERANCE * fmax(fabs(scale), 1e-300)) {
+        ratio = fabs(work_done) / fmax(fabs(scale), 1e-300);
+        if (ratio <= WORK_TOLERANCE) {
             *iterations = it;
             if (assemble(s, factor, pos, rot, 1, k_springs, k, f) != 0) goto rotation;
             status = 0;
             goto done;
         }
+        /* a fresh tangent until the work is small (a first step with a stale one diverged: the cables' geometric
+           stiffness moves with their forces) and whenever an iteration stops contracting */
+        if (ratio > FRESH_TANGENT_WORK || ratio > 0.25 * previous) factored = 0;
+        previous = ratio;
     }
     snprintf(err, MACE_ERR_LEN, "the gravity preload did not converge in %d Newton iterations from the nominal "
              "equilibrium: the parameters are too far from nominal for this structure", MAX_ITERATIONS);
