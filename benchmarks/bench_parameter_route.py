@@ -130,7 +130,7 @@ def random_points(configuration: str, preload: str, width: float | None, *, seed
     box = "declared range" if width is None else f"+-{100 * width:g} %"
     model_name = configuration if not resolve else f"{configuration}, solved again ({1e3 * np.median(builds):.0f} ms)"
     return (f"| {model_name} | {preload if configuration == '1g' else '-'} | {box} | {values.max():.3g} "
-            f"({max(worst)[1]}) | {np.median(values):.3f} | {np.percentile(values, 90):.3f} |")
+            f"({max(worst)[1]}) | {np.median(values):.3g} | {np.percentile(values, 90):.3g} |")
 
 
 def costs(configuration: str, runs: int, folder: Path) -> str:
