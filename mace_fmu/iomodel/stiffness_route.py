@@ -73,6 +73,9 @@ SHIFT_FRACTION = 1e-3
 RIGID_SHARE = 1e-6
 #: kinds of output rows (ParametricSystem) that the corrections are projected on
 ROW_KINDS = ("disp", "rate", "motion", "acc")
+#: how a physical parameter acts, for the FMU's parameter description
+_TAKES_EFFECT = ("takes effect at initialisation: the structure solved again (mace_fmu.iomodel.resolve), or re-analysed "
+                 "on the retained modes and static corrections where the FMU cannot solve it")
 
 
 
@@ -166,7 +169,7 @@ def stiffness_sensitivities(model: VoltsModel, *, only: Sequence[str] | None = N
         total = material_sensitivity(fe, deck, pre, mid, solve=solve) if _redistributes(pre) else held
         out.append(StiffnessSensitivity(
             name, deck.mat1s[mid].youngs_modulus, f"Young's modulus of {material_name[mid]} (MAT1 {mid}) [Pa]; "
-            "takes effect by reanalysis on the retained modes and static corrections", total, held))
+            f"{_TAKES_EFFECT}", total, held))
     for row, (sid, k) in enumerate(zip(fe.spring_ids, fe.spring_constants)):
         name = SPRING.named(spring_name[sid])
         if only is not None and name not in only:
@@ -176,14 +179,14 @@ def stiffness_sensitivities(model: VoltsModel, *, only: Sequence[str] | None = N
         total = sparse.csr_array(_preload_sensitivity(fe, pre)(fe, pre, dk_springs=held, solve=solve)) \
             if _redistributes(pre) else held
         out.append(StiffnessSensitivity(name, float(k), f"stiffness of {spring_name[sid]} (CELAS2 {sid}) [N/m]; "
-                                        "reanalysis", total, held))
+                                        f"{_TAKES_EFFECT}", total, held))
     for short, eid in names.masses.items():
         name = MASS.named(short)
         if only is not None and name not in only:
             continue
         dm = conm2_mass(deck, fe.dofs, eid)
         out.append(StiffnessSensitivity(name, float(deck.conm2s[eid].mass),
-                                        f"mass of {short} (CONM2 {eid}) [kg], its inertias scaled with it; reanalysis",
+                                        f"mass of {short} (CONM2 {eid}) [kg], its inertias scaled with it; {_TAKES_EFFECT}",
                                         _weight_stiffness(modes, dm, solve), sparse.csr_array(dm.shape), dm))
     return out
 
