@@ -29,18 +29,15 @@ FACTORS = {"E_lexan_end": 1.03, "E_lexan_center": 0.98}
 
 
 @pytest.fixture(scope="module")
-def case(tmp_path_factory):
+def case(tmp_path_factory, native_fmu_1g):
     """(folder, nominal 1-g FMU, the noise-free record's CSV, the truth's values)."""
-    from mace_fmu.fe.modes import compute_modes
-    from mace_fmu.fmu.export import export_fmu
-    from mace_fmu.iomodel.volts import volts_model
     from mace_fmu.updating.engine.measured import TimeHistory
     from mace_fmu.updating.files import write_time_history
     from mace_fmu.updating.fmu.model import fmu_family
     from mace_fmu.updating.fmu.truth import band_limited_noise
 
     folder = tmp_path_factory.mktemp("frf_noise")
-    fmu = export_fmu(volts_model(compute_modes(configuration="1g")), out_dir=folder, name="MACE_1g_native")
+    fmu = native_fmu_1g
     family = fmu_family(fmu)
     truth = {n: f * family.interface.parameters[n] for n, f in FACTORS.items()}
     t = np.arange(32000) * STEP_S  # 64 s
