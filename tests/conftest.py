@@ -52,3 +52,15 @@ def motion_fmu_0g(tmp_path_factory):
     model = volts_model(compute_modes(configuration="0g"), signals=SignalSelection(motion_grids="all"))
     fmu = export_fmu(model, out_dir=tmp_path_factory.mktemp("motion_fmu"), name="MACE_0g_motion", runtime="pythonfmu")
     return model, fmu, fmpy.extract(str(fmu), unzipdir=str(tmp_path_factory.mktemp("motion_unzipped")))
+
+
+@pytest.fixture(scope="session")
+def native_fmu_1g(tmp_path_factory):
+    """The 1-g native FMU of the bundled deck at its nominal values (MACE_1g_native.fmu), exported once per process
+    for the modules that only read it (the updates' truth and model, the plans' FMU)."""
+    from mace_fmu.fe.modes import compute_modes
+    from mace_fmu.fmu.export import export_fmu
+    from mace_fmu.iomodel.volts import volts_model
+
+    return export_fmu(volts_model(compute_modes(configuration="1g")), out_dir=tmp_path_factory.mktemp("native_1g"),
+                      name="MACE_1g_native")

@@ -9,6 +9,7 @@ way round (the FMU started off its own nominal and brought back, where the route
 
 from __future__ import annotations
 
+import shutil
 from pathlib import Path
 from typing import Mapping
 
@@ -26,10 +27,25 @@ def deck_moduli(names) -> dict[str, float]:
     return {n: values[n] for n in names}
 
 
+#: (factors, name, configuration, runtime) -> the FMU exported first in this process
+_EXPORTED: dict[tuple, Path] = {}
+
+
 def fmu_with(folder: Path, *, factors: Mapping[str, float], name: str, configuration: str = "1g",
              runtime: str = "native") -> Path:
     """The bundled deck's FMU with each of ``factors``' moduli [or springs] times its factor built in (a full
-    re-solve continuing the nominal modes), written into ``folder``."""
+    re-solve continuing the nominal modes), written into ``folder``. The same FMU asked for again in this process
+    (the same factors, name, configuration and runtime) is a copy of the first export."""
+    key = (tuple(sorted((n, float(f)) for n, f in factors.items())), name, configuration, runtime)
+    first = _EXPORTED.get(key)
+    if first is not None and first.is_file():
+        target = Path(folder) / first.name
+        if target.resolve() == first.resolve():
+            return first
+        Path(folder).mkdir(parents=True, exist_ok=True)
+        return Path(shutil.copyfile(first, target))
     point = {n: v * factors[n] for n, v in deck_moduli(factors).items()}
     modes = compute_modes(configuration=configuration, parameters=ParameterSet(point) if point else None)
-    return export_fmu(volts_model(modes), out_dir=folder, name=name, runtime=runtime)
+    path = Path(export_fmu(volts_model(modes), out_dir=folder, name=name, runtime=runtime))
+    _EXPORTED[key] = path
+    return path

@@ -101,8 +101,17 @@ class MultisineProbe:
         lines = np.exp(-1j * np.pi * k * (k + 1) / max(len(k), 1))
         w = 2 * np.pi * self.frequencies_hz
         amplitude = lines / self._hold_gain  # the staircase's component at each line is then ``lines``
-        middle = (np.arange(self.samples_per_period) + 0.5) * self.sample_time_s
-        values = np.zeros(self.samples_per_period)
+        n = self.samples_per_period
+        bins = self.frequencies_hz * self.period_s
+        if np.allclose(bins, np.rint(bins), rtol=0.0, atol=1e-9):
+            # every line on the period's DFT grid: the sum over lines at the samples' middles, (m + 1/2) T, is
+            # one inverse FFT of the amplitudes, each turned by its half-sample phase exp(i pi b / n)
+            b = np.rint(bins).astype(np.int64)
+            spectrum = np.zeros(n, dtype=complex)
+            np.add.at(spectrum, b % n, amplitude * np.exp(1j * np.pi * b / n))
+            return n * np.real(np.fft.ifft(spectrum)), lines
+        middle = (np.arange(n) + 0.5) * self.sample_time_s
+        values = np.zeros(n)
         for start in range(0, len(w), 64):  # a block of lines at a time: the (n x lines) table stays small
             block = slice(start, start + 64)
             values += np.real(np.exp(1j * np.outer(middle, w[block])) @ amplitude[block])

@@ -25,14 +25,9 @@ STEP = 0.002
 
 
 @pytest.fixture(scope="module")
-def fmu(tmp_path_factory):
+def fmu(native_fmu_1g):
     """The 1-g native FMU of the bundled deck (the truth and, with other start values, the model)."""
-    from mace_fmu.fe.modes import compute_modes
-    from mace_fmu.fmu.export import export_fmu
-    from mace_fmu.iomodel.volts import volts_model
-
-    return export_fmu(volts_model(compute_modes(configuration="1g")),
-                      out_dir=tmp_path_factory.mktemp("fmu_update"), name="MACE_1g_native")
+    return native_fmu_1g
 
 
 def _noise_inputs(seconds: float, seed: int = 1) -> tuple[np.ndarray, dict[str, np.ndarray]]:

@@ -13,14 +13,17 @@ up to 9.1 standard deviations apart.
 from __future__ import annotations
 
 import pytest
-from support.frame_per_file import pairwise_gaps, per_file_fits
+from support.frame_per_file import example_run, pairwise_gaps, per_file_fits
 
-pytestmark = pytest.mark.slow  # an FMU export and three updates of nine parameters on real data (about 60 s)
+pytestmark = pytest.mark.slow  # an FMU export and three updates of nine parameters on real data (about 25 s)
 
 
 @pytest.fixture(scope="module")
 def fits(tmp_path_factory):
-    return per_file_fits(tmp_path_factory.mktemp("frame_per_file"))
+    """The three updates are the frame example's own (run once per process: its test in test_frf_file_update.py
+    reads the same run)."""
+    _, _, updates = example_run(tmp_path_factory.mktemp("frame_example"))
+    return per_file_fits(tmp_path_factory.mktemp("frame_per_file"), updates)
 
 
 def test_each_file_s_intervals_come_from_its_residuals(fits):

@@ -79,17 +79,37 @@ def _update(lab, tmp_path, data_files, capsys):
     return {n: 100 * (values[n] / truth[n] - 1) for n in STRUT}, sd, uncertainty, out.out
 
 
+@pytest.fixture(scope="module")
+def both(lab, tmp_path_factory):
+    """The update on both tests (the gimbal test and the strut test), run once for the tests that read it:
+    (errors, sd, uncertainty, stdout, its folder)."""
+    import contextlib
+    import io
+    from types import SimpleNamespace
+
+    folder = tmp_path_factory.mktemp("both")
+    out, err = io.StringIO(), io.StringIO()
+
+    class Captured:  # capsys's readouterr over the redirected streams
+        @staticmethod
+        def readouterr():
+            return SimpleNamespace(out=out.getvalue(), err=err.getvalue())
+
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        return (*_update(lab, folder, [lab[2], lab[3]], Captured), folder)
+
+
 def test_the_gimbal_test_alone_flags_the_strut_combination(lab, tmp_path, capsys):
     _, sd, uncertainty, out = _update(lab, tmp_path, [lab[2]], capsys)
     assert max(sd.values()) > 5.0 and uncertainty["weak_directions"]
     assert "not identifiable from these data" in out
 
 
-def test_two_tests_converge_to_the_noise_floor_with_the_truth_inside_the_reported_intervals(lab, tmp_path, capsys):
+def test_two_tests_converge_to_the_noise_floor_with_the_truth_inside_the_reported_intervals(both):
     import tomllib
 
-    errors, sd, uncertainty, out = _update(lab, tmp_path, [lab[2], lab[3]], capsys)
-    report = tomllib.loads((tmp_path / "out" / "convergence.toml").read_text())
+    errors, sd, uncertainty, out, folder = both
+    report = tomllib.loads((folder / "out" / "convergence.toml").read_text())
     assert report["verdict"] == "explained" and abs(report["noise_floor"]["sigmas_above"]) < 3.0, report
     for n, e in errors.items():  # the truth inside the reported 95 % interval
         assert abs(e) <= 1.96 * sd[n], (n, e, sd[n])
@@ -98,9 +118,9 @@ def test_two_tests_converge_to_the_noise_floor_with_the_truth_inside_the_reporte
     assert max(sd[n] for n in STRUT) < 0.2 and not uncertainty["weak_directions"]
 
 
-def test_a_second_test_adds_information(lab, tmp_path, capsys):
+def test_a_second_test_adds_information(lab, both, tmp_path, capsys):
     _, alone, _, _ = _update(lab, tmp_path / "alone", [lab[3]], capsys)
-    _, both, _, _ = _update(lab, tmp_path / "both", [lab[2], lab[3]], capsys)
+    both = both[1]  # the update on both tests, as in the test above
     assert all(both[n] < alone[n] for n in STRUT), (both, alone)
 
 

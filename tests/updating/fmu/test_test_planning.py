@@ -46,15 +46,10 @@ gain_uncertainty_percent = { strain_strut2_y = 1, strain_strut2_z = 1 }
 
 
 @pytest.fixture(scope="module")
-def family(tmp_path_factory):
-    from mace_fmu.fe.modes import compute_modes
-    from mace_fmu.fmu.export import export_fmu
-    from mace_fmu.iomodel.volts import volts_model
+def family(native_fmu_1g):
     from mace_fmu.updating.fmu.model import fmu_family
 
-    return fmu_family(export_fmu(volts_model(compute_modes(configuration="1g")),
-                                        out_dir=tmp_path_factory.mktemp("plan"),
-                                        name="MACE_1g_native"))
+    return fmu_family(native_fmu_1g)
 
 
 def _measure(family, test: TestDesign, *, seed: int) -> TimeHistory:
