@@ -12,6 +12,7 @@ from typing import Sequence
 
 import numpy as np
 from scipy import sparse
+from scipy.sparse.csgraph import reverse_cuthill_mckee
 
 from mace_fmu.fe.assembly import conm2_mass
 from mace_fmu.fe.corotational import BarState, material_tangent
@@ -31,6 +32,17 @@ def _coo(key: str, matrix: sparse.sparray) -> dict[str, np.ndarray]:
     m = sparse.coo_array(matrix)
     return {f"{key}_data": m.data.astype(np.float64), f"{key}_rows": m.row.astype(np.int64),
             f"{key}_cols": m.col.astype(np.int64)}
+
+
+def _profile_ordered(transform: sparse.sparray, matrix: sparse.sparray) -> sparse.csr_array:
+    """``transform``'s columns in reverse Cuthill-McKee order of T^T A T: the reduced matrices become bands, whose
+    Cholesky factors the runtime computes within their envelope (570 static DOFs of MACE: 76,000 multiply-adds
+    instead of 31 million)."""
+    if transform.shape[1] == 0:
+        return sparse.csr_array(transform)
+    reduced = sparse.csr_array(transform.T @ matrix @ transform)
+    order = reverse_cuthill_mckee(reduced, symmetric_mode=True)
+    return sparse.csr_array(sparse.csc_array(transform)[:, order])
 
 
 def resolve_supported(model: VoltsModel) -> bool:
@@ -76,6 +88,9 @@ def resolve_arrays(model: VoltsModel, physical_names: Sequence[str]) -> dict[str
         state, displacements = pre.state, pre.displacements
         gravity = gravity_field(deck, fe, struct.preload.load)
         static_t, other = pre.constraints.transform, sparse.csr_array((n, n))
+    stiffness = fe.stiffness if pre is None else pre.tangent_stiffness
+    static_t = _profile_ordered(static_t, stiffness)
+    modal_t = _profile_ordered(modes.constraints.transform, abs(stiffness) + abs(fe.mass))
     identity = dataclasses.replace(modes.modes, frequencies_hz=np.zeros(n), shapes=np.eye(n), labels=("",) * n)
     influence = modal_data(identity, model.instruments, max_hz=np.inf, motion_grids=list(model.plant.motion_grids))
     rows = {"disp": influence.disp_out, "rate": influence.rate_out, "motion": influence.motion_out,
@@ -90,7 +105,7 @@ def resolve_arrays(model: VoltsModel, physical_names: Sequence[str]) -> dict[str
         "resolve_spring_parameter": spring_parameter,
         "resolve_dm_part": np.concatenate([np.full(dm.nnz, p) for p, dm in dm_parts] or [np.zeros(0)]).astype(np.int64),
         "resolve_gravity": gravity, "resolve_load": fe.mass @ gravity,
-        "resolve_independent": np.array([static_t.shape[1], modes.constraints.transform.shape[1]]),
+        "resolve_independent": np.array([static_t.shape[1], modal_t.shape[1]]),
         "resolve_state_positions": state.positions, "resolve_state_rotations": np.array(state.rotations),
         "resolve_displacements": displacements,
         "resolve_reference_shapes": modes.modes.shapes,
@@ -98,7 +113,7 @@ def resolve_arrays(model: VoltsModel, physical_names: Sequence[str]) -> dict[str
         "resolve_zero_hz": np.array(ZERO_HZ),
         "resolve_inputs": influence.modal_b,
         **_coo("resolve_mass", fe.mass), **_coo("resolve_other", other),
-        **_coo("resolve_static_t", static_t), **_coo("resolve_modal_t", modes.constraints.transform),
+        **_coo("resolve_static_t", static_t), **_coo("resolve_modal_t", modal_t),
     }
     dm_all = sparse.coo_array((n, n)) if not dm_parts else sparse.coo_array(
         (np.concatenate([dm.data for _, dm in dm_parts]),

@@ -117,21 +117,41 @@ double ml_norm1(const double *a, size_t r, size_t c) {
 
 /* ---- Cholesky ------------------------------------------------------------------------------ */
 
+/* First nonzero column of row i's lower triangle (i if none). */
+static size_t envelope_start(const double *a, size_t n, size_t i) {
+    size_t j;
+    for (j = 0; j < i; j++)
+        if (a[i * n + j] != 0.0) return j;
+    return i;
+}
+
 int ml_cholesky(double *a, size_t n) {
-    size_t i, j, k;
+    /* Within each row's envelope (its first nonzero on): a band or a profile ordering (reverse Cuthill-McKee)
+       costs its width squared per row instead of n^2. Only exact zeros are skipped, so the result is the dense
+       algorithm's to the bit. Row i's envelope start is kept in a[i][i + 1] (upper triangle, zeroed at the end),
+       the last row's in a local. */
+    size_t i, j, k, last_start;
+    if (n == 0) return 0;
+    for (i = 0; i + 1 < n; i++) a[i * n + i + 1] = (double)envelope_start(a, n, i);
+    last_start = envelope_start(a, n, n - 1);
     for (j = 0; j < n; j++) {
+        const size_t fj = j + 1 < n ? (size_t)a[j * n + j + 1] : last_start;
         double d = a[j * n + j];
-        for (k = 0; k < j; k++) d -= a[j * n + k] * a[j * n + k];
+        for (k = fj; k < j; k++) d -= a[j * n + k] * a[j * n + k];
         if (!(d > 0.0)) return -1;
         d = sqrt(d);
         a[j * n + j] = d;
         for (i = j + 1; i < n; i++) {
-            double s = a[i * n + j];
-            for (k = 0; k < j; k++) s -= a[i * n + k] * a[j * n + k];
+            const size_t fi = i + 1 < n ? (size_t)a[i * n + i + 1] : last_start;
+            double s;
+            if (fi > j) continue; /* outside row i's envelope: stays zero */
+            s = a[i * n + j];
+            for (k = fi > fj ? fi : fj; k < j; k++) s -= a[i * n + k] * a[j * n + k];
             a[i * n + j] = s / d;
         }
-        for (i = j + 1; i < n; i++) a[j * n + i] = 0.0;
     }
+    for (i = 0; i < n; i++)
+        for (j = i + 1; j < n; j++) a[i * n + j] = 0.0;
     return 0;
 }
 
@@ -145,6 +165,7 @@ void ml_cholesky_solve(const double *l, size_t n, int lower, double *b, size_t n
             for (k = 0; k < i; k++) {
                 const double f = l[i * n + k];
                 const double *other = b + k * nrhs;
+                if (f == 0.0) continue; /* a band or profile factor: most of the row */
                 for (c = 0; c < nrhs; c++) row[c] -= f * other[c];
             }
             for (c = 0; c < nrhs; c++) row[c] /= l[i * n + i];
@@ -155,6 +176,7 @@ void ml_cholesky_solve(const double *l, size_t n, int lower, double *b, size_t n
             for (k = i + 1; k < n; k++) {
                 const double f = l[k * n + i];
                 const double *other = b + k * nrhs;
+                if (f == 0.0) continue;
                 for (c = 0; c < nrhs; c++) row[c] -= f * other[c];
             }
             for (c = 0; c < nrhs; c++) row[c] /= l[i * n + i];

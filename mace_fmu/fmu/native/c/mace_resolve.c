@@ -422,13 +422,17 @@ static int lowest_modes(const MaceAlloc *al, const double *k, const double *m, s
         ml_cholesky_solve(koo, no, 1, g, na);
         ml_cholesky_solve(koo, no, 0, g, na);
     }
-    for (i = 0; i < na; i++)
+    for (i = 0; i < na; i++) { /* K_c = K_aa - K_ao g, K_ao's zeros skipped (a band: most of it) */
         for (j = 0; j < na; j++) {
-            double acc = k[a_idx[i] * n + a_idx[j]];
-            for (q = 0; q < no; q++) acc -= k[a_idx[i] * n + o_idx[q]] * g[q * na + j];
-            kc[i * na + j] = acc;
+            kc[i * na + j] = k[a_idx[i] * n + a_idx[j]];
             mc[i * na + j] = m[a_idx[i] * n + a_idx[j]];
         }
+        for (q = 0; q < no; q++) {
+            const double f = k[a_idx[i] * n + o_idx[q]];
+            if (f == 0.0) continue;
+            for (j = 0; j < na; j++) kc[i * na + j] -= f * g[q * na + j];
+        }
+    }
     for (i = 0; i < na; i++)
         for (j = 0; j < i; j++) {
             kc[i * na + j] = kc[j * na + i] = 0.5 * (kc[i * na + j] + kc[j * na + i]);
