@@ -13,8 +13,8 @@ equilibrium instead of from the unloaded structure:
    (:mod:`mace_fmu.fe.corotational`, the same element as the re-solve) from the nominal equilibrium to the
    new one, to the re-solve's work tolerance; the tangent there (material and geometric stiffness);
    0-g: the linear stiffness with the bars' material part scaled;
-3. the modes: one dense eigen-solution of the modal constraints' reduced problem, the massless DOFs
-   condensed statically;
+3. the modes: the modal constraints' reduced problem, the massless DOFs condensed statically, then shift and
+   invert (:func:`_lowest_modes`);
 4. each nominal mode continued by the new mode it became (largest total mass-weighted MAC, the zero
    cluster paired within itself), as ``export --parameters`` keys them.
 
@@ -117,7 +117,8 @@ class ExactModes:
         return sparse.csr_array(e.T @ sparse.diags_array(k) @ e)
 
     def _equilibrium_tangent(self, bars: Bars, k_springs: sparse.csr_array, load: np.ndarray) -> sparse.csr_array:
-        """Full Newton from the nominal equilibrium to the new one; the tangent stiffness there."""
+        """Full Newton from the nominal equilibrium to the new one; the tangent stiffness there (the native runtime
+        keeps a tangent once the work ratio is below 1e-8: the same equilibrium to the same tolerance)."""
         t = self.static_t
         state, u = self.state, self.displacements.copy()
         for iteration in range(1, MAX_ITERATIONS + 1):
@@ -125,7 +126,12 @@ class ExactModes:
             k_t = parts.material + parts.geometric + k_springs
             residual = t.T @ (load - parts.internal_force - k_springs @ u)
             reduced = (t.T @ k_t @ t).toarray()
-            delta = t @ sla.cho_solve(sla.cho_factor(0.5 * (reduced + reduced.T)), residual)
+            try:
+                factor = sla.cho_factor(0.5 * (reduced + reduced.T))
+            except (np.linalg.LinAlgError, sla.LinAlgError):
+                raise MaceError("the gravity preload's tangent stiffness is not positive definite for these "
+                                "parameters (the structure buckles or hangs unstably)") from None
+            delta = t @ sla.cho_solve(factor, residual)
             state, u = advanced(state, delta), u + delta
             if abs(delta @ (t @ residual)) <= WORK_TOLERANCE * max(abs(u @ load), 1e-300):
                 self.iterations = iteration
