@@ -130,6 +130,11 @@ class StructureModes(ModesView):
         """The modal subcase's constraints' T (basic = T @ independent); None: every DOF independent."""
         return None if self.constraints is None else self.constraints.transform
 
+    @property
+    def solved_structure(self) -> StructureModes:
+        """This FE solution: the modes' structure can be solved again for new physical parameters."""
+        return self
+
     def title(self, what: str) -> str:
         """"<structure> <configuration> <what>", e.g. "MACE 0g volts-volts model": hosts and ``view response
         --fmu`` read which structure and configuration an FMU's model is.

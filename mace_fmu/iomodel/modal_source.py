@@ -168,6 +168,11 @@ class ModalStructure(ModesView):
         """None: the modes file's DOFs are the vectors' own."""
         return None
 
+    @property
+    def solved_structure(self) -> None:
+        """None: NASTRAN's modes, no FE model to solve again."""
+        return None
+
     def title(self, what: str) -> str:
         """"<stem> modes <what> (NASTRAN's modes of <file>; modal parameters only)", for model summaries.
 

@@ -17,7 +17,7 @@ from scipy.sparse.csgraph import reverse_cuthill_mckee
 from mace_fmu.fe.assembly import conm2_mass
 from mace_fmu.fe.corotational import BarState, material_tangent
 from mace_fmu.fe.modal import DENSE_MAX_DOF
-from mace_fmu.fe.modes import StructureModes, gravity_field
+from mace_fmu.fe.modes import gravity_field
 from mace_fmu.iomodel.modal_ss import modal_data
 from mace_fmu.iomodel.volts import VoltsModel
 from mace_fmu.parameters.kinds import MASS, MODULUS, SPRING
@@ -48,8 +48,8 @@ def _profile_ordered(transform: sparse.sparray, matrix: sparse.sparray) -> spars
 def resolve_supported(model: VoltsModel) -> bool:
     """Whether ``model``'s structure can be solved again at initialisation: an FE model (not NASTRAN's modes)
     in 0-g or with the large-displacement 1-g preload, small enough for a dense eigen-solution."""
-    modes = model.structure_modes
-    if not isinstance(modes, StructureModes):  # NASTRAN's modes: no FE to solve
+    modes = model.structure_modes.solved_structure
+    if modes is None:  # NASTRAN's modes: no FE to solve
         return False
     pre = modes.preload
     return (bool(modes.physical_kinds) and modes.constraints is not None and (pre is None or pre.kind == "large")
@@ -59,8 +59,8 @@ def resolve_supported(model: VoltsModel) -> bool:
 def resolve_arrays(model: VoltsModel, physical_names: Sequence[str]) -> dict[str, np.ndarray]:
     """The ``resolve_*`` arrays of ``model`` for the physical parameters ``physical_names`` (their order in the
     parameter vector's physical part); empty when :func:`resolve_supported` says no."""
-    modes = model.structure_modes
-    if not resolve_supported(model) or not isinstance(modes, StructureModes):
+    modes = model.structure_modes.solved_structure
+    if not resolve_supported(model) or modes is None:
         return {}
     fe, pre, deck = modes.model, modes.preload, modes.structure.deck
     assert modes.constraints is not None  # resolve_supported

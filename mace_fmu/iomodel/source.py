@@ -22,6 +22,7 @@ from mace_fmu.structure.drawing import Drawing
 from mace_fmu.structure.file import SourceConfiguration, StructureFile
 
 if TYPE_CHECKING:
+    from mace_fmu.fe.modes import StructureModes
     from mace_fmu.iomodel.instruments import Instruments
 
 Dof = tuple[int, int, float]  #: (grid, component 1-6 in the grid's CD system, weight)
@@ -77,6 +78,11 @@ class ModalSource(Protocol):
     @property
     def constraint_transform(self) -> Any | None:
         """The constraints' T (basic = T @ independent); None: every DOF independent."""
+
+    @property
+    def solved_structure(self) -> StructureModes | None:
+        """The FE solution behind the modes, which an FMU solves again for new physical parameters
+        (:mod:`mace_fmu.iomodel.resolve`); None: modes read from a file, nothing to solve."""
 
     def title(self, what: str) -> str:
         """``what`` of this source as model summaries say it, e.g. "MACE 0g volts-volts model"."""
