@@ -106,14 +106,14 @@ def test_the_verdict_is_model_error_and_the_intervals_hold_on_the_other_half(run
 
 def test_the_how_to_s_tables_are_what_the_commands_print(run):
     """The parameter table, the verdict and the intervals the how-to shows are the first half's, within their last
-    digit (each part of a line the page shortens with "..."); the second half's modulus is 2.379e11 Pa and test 2's
+    digit (each part of a line the page shortens with "..."); the second half's modulus is 2.378e11 Pa and test 2's
     2.394e11 Pa."""
     printed = run[1]
     for block in _blocks("text")[2:]:
         for line in block.strip().splitlines():  # each line on its own: the table's indentation is the terminal's
             for part in filter(None, (text.strip() for text in line.split("..."))):  # "...": shortened there
                 assert printed_in(part, printed), part
-    assert run[0]["second_half"]["stage"]["values"][0] == pytest.approx(2.379e11, abs=0.001e11)
+    assert run[0]["second_half"]["stage"]["values"][0] == pytest.approx(2.378e11, abs=0.001e11)
     assert run[0]["test_2"]["stage"]["values"][0] == pytest.approx(2.394e11, abs=0.001e11)
 
 
@@ -132,7 +132,7 @@ def test_test_2_s_channel_name_is_refused_with_test_1_s_map_naming_the_close_one
 def test_the_updated_frequencies_move_away_from_the_owners(run, capsys):
     """The owners' impact test: 6.62, 41.4, 117.5 Hz. The stated beam is within 10 % of each (4.1, 9.2, 3.8 %: the
     deck from the stated dimensions and handbook steel, the clamp's length unknown); the parameters fitted through
-    the model error move every one of them further away (10.8, 19.0, 11.4 %), as the how-to's table says."""
+    the model error move every one of them further away (10.7, 19.0, 11.3 %), as the how-to's table says."""
     deck, structure = str(BEAM / "shaker_beam.bdf"), str(BEAM / "shaker_beam.toml")
     code, out, _ = run_cli(capsys, ["modes", "0g", "--deck", deck, "--structure", structure])
     stated = _frequencies(out)[:3]
