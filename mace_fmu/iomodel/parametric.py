@@ -4,9 +4,11 @@ The arrays (see :func:`mace_fmu.iomodel.parametric_data.parametric_arrays`) hold
 the diagram, the 0/1 wiring matrices, the retained modes projected on the instruments and the
 projected stiffness sensitivities of the physical parameters. ``build`` turns a parameter vector
 into (A, B, C, D):
-- physical parameters (Young's moduli, spring stiffnesses, concentrated masses) by Ritz reanalysis on the retained
-  modes and static-correction vectors (mace_fmu.iomodel.reanalysis), the sensor rows and modal
-  inputs carried by the same coefficients, plus each parameter's first-order change of the mode
+- physical parameters (Young's moduli, spring stiffnesses, concentrated masses): with ``resolve_*`` arrays (what
+  every FMU carries where its structure allows) by solving the structure again (mace_fmu.iomodel.resolve: the 1-g
+  preload's equilibrium, the modes, the instruments' influence rows times the new shapes); without them by Ritz
+  reanalysis on the retained modes and static-correction vectors (mace_fmu.iomodel.reanalysis), the sensor rows
+  and modal inputs carried by the same coefficients, plus each parameter's first-order change of the mode
   shapes through the 1-g preload (mace_fmu.iomodel.stiffness_route);
 - modal frequency scales: each mode's frequency after the reanalysis times its scale;
 - modal damping ratios, time delays (Pade), servo gains: the blocks they belong to.
@@ -80,7 +82,7 @@ class ParametricSystem:
         return params[self._physical] / self.nominal[self._physical] - 1.0
 
     def modes(self, params: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(frequencies [Hz], coefficients) of the retained modes after reanalysis of the physical
+        """(frequencies [Hz], coefficients) of the retained modes after *reanalysis* of the physical
         parameters: new mode k is Phi0 c[:n, k] + W c[n:, k], W the static-correction vectors (none in
         arrays written before they existed: c is then n x n, Phi_R of eq. 4.9)."""
         d = self.data
