@@ -90,11 +90,19 @@ class ExactModes:
         self.reference_zero = np.asarray(data["resolve_reference_zero"], dtype=bool)
         self.zero_hz = float(data["resolve_zero_hz"])
         self.iterations = 0  #: Newton iterations of the last solve
+        self._last: tuple[bytes, np.ndarray, np.ndarray] | None = None  #: (key, frequencies, shapes) of the last
 
     def modes(self, relative_change: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(signed frequencies [Hz], mass-normalised shapes (n_dof, n_modes)) of the modes continuing the
         nominal ones, the physical parameters at (1 + ``relative_change``) times nominal."""
-        factor = 1.0 + np.asarray(relative_change, dtype=np.float64)
+        key = np.asarray(relative_change, dtype=np.float64).tobytes()
+        if self._last is not None and self._last[0] == key:  # a function of the parameters alone: the last result
+            return self._last[1].copy(), self._last[2].copy()
+        frequencies, shapes = self._solve(1.0 + np.asarray(relative_change, dtype=np.float64))
+        self._last = (key, frequencies, shapes)
+        return frequencies.copy(), shapes.copy()
+
+    def _solve(self, factor: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         scale = np.where(self.bar_parameter >= 0, factor[np.maximum(self.bar_parameter, 0)], 1.0)
         bars = Bars(ids=self.bars.ids, node_a=self.bars.node_a, node_b=self.bars.node_b, frames0=self.bars.frames0,
                     lengths0=self.bars.lengths0, k_natural=self.bars.k_natural * scale[:, None, None])

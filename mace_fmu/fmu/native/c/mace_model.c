@@ -67,10 +67,11 @@ struct MaceModel {
     /* the structure solved again for the physical parameters (mace_resolve.h), when the data carry it: the FE
        data, each structure output's influence row and the actuators' load vectors on every DOF; the last
        re-solve's flexible modes projected on them */
-    int resolvable, resolved;
+    int resolvable, resolved, rs_cached;
     RsStructure rs;
     const double *rs_struct_rows, *rs_inputs;
     double *rs_freq, *rs_shapes, *rs_rows, *rs_b;
+    double *rs_rel; /* the relative changes the last re-solve was of (rs_cached: its results are in rs_*) */
     int built, y_valid, x_valid;
     int params_changed; /* set since the last build */
     double time;
@@ -354,7 +355,8 @@ static int load_resolve(MaceModel *m, char *err) {
     m->rs_shapes = ml_zeros(&m->al, n * m->n_flex);
     m->rs_rows = ml_zeros(&m->al, m->n_structure_outputs * m->n_flex);
     m->rs_b = ml_zeros(&m->al, m->n_flex * m->n_structure_inputs);
-    if (!m->rs_freq || !m->rs_shapes || !m->rs_rows || !m->rs_b) {
+    m->rs_rel = ml_zeros(&m->al, m->n_phys);
+    if (!m->rs_freq || !m->rs_shapes || !m->rs_rows || !m->rs_b || !m->rs_rel) {
         snprintf(err, MACE_ERR_LEN, "out of memory loading the re-solve data");
         return -1;
     }
@@ -553,6 +555,7 @@ void mace_destroy(MaceModel *m) {
     m->al.free(m->rs_shapes);
     m->al.free(m->rs_rows);
     m->al.free(m->rs_b);
+    m->al.free(m->rs_rel);
     m->al.free(m->u);
     m->al.free(m->a);
     m->al.free(m->b);
@@ -772,20 +775,27 @@ static int reanalyse(MaceModel *m, double *coef, int *changed, char *err) {
     if (*changed && m->resolvable) { /* the structure solved again; its modes projected on the instruments */
         const size_t nd = m->rs.n_dof, so = m->n_structure_outputs, si = m->n_structure_inputs;
         int iterations;
-        if (rs_flexible_modes(&m->al, &m->rs, m->rel, m->rs_freq, m->rs_shapes, &iterations, err) != 0) goto done;
+        /* the re-solve is a function of the physical parameters alone: the same values (an update's several
+           tests, a run repeated after a reset) take the last one's result, which is what solving again gives */
+        if (!m->rs_cached || memcmp(m->rs_rel, m->rel, m->n_phys * sizeof(double)) != 0) {
+            m->rs_cached = 0;
+            if (rs_flexible_modes(&m->al, &m->rs, m->rel, m->rs_freq, m->rs_shapes, &iterations, err) != 0) goto done;
+            for (i = 0; i < so; i++)
+                for (j = 0; j < nf; j++) {
+                    double acc = 0.0;
+                    for (q = 0; q < nd; q++) acc += m->rs_struct_rows[i * nd + q] * m->rs_shapes[q * nf + j];
+                    m->rs_rows[i * nf + j] = acc;
+                }
+            for (j = 0; j < nf; j++)
+                for (i = 0; i < si; i++) {
+                    double acc = 0.0;
+                    for (q = 0; q < nd; q++) acc += m->rs_shapes[q * nf + j] * m->rs_inputs[q * si + i];
+                    m->rs_b[j * si + i] = acc;
+                }
+            memcpy(m->rs_rel, m->rel, m->n_phys * sizeof(double));
+            m->rs_cached = 1;
+        }
         for (i = 0; i < nf; i++) m->freq[m->flex[i]] = m->rs_freq[i];
-        for (i = 0; i < so; i++)
-            for (j = 0; j < nf; j++) {
-                double acc = 0.0;
-                for (q = 0; q < nd; q++) acc += m->rs_struct_rows[i * nd + q] * m->rs_shapes[q * nf + j];
-                m->rs_rows[i * nf + j] = acc;
-            }
-        for (j = 0; j < nf; j++)
-            for (i = 0; i < si; i++) {
-                double acc = 0.0;
-                for (q = 0; q < nd; q++) acc += m->rs_shapes[q * nf + j] * m->rs_inputs[q * si + i];
-                m->rs_b[j * si + i] = acc;
-            }
         m->resolved = 1;
     } else if (*changed) {
         k = ml_zeros(&m->al, nt * nt);
