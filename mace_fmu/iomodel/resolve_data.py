@@ -19,13 +19,12 @@ from mace_fmu.fe.corotational import BarState, material_tangent
 from mace_fmu.fe.modal import DENSE_MAX_DOF
 from mace_fmu.fe.modes import gravity_field
 from mace_fmu.iomodel.modal_ss import modal_data
+from mace_fmu.iomodel.stiffness_route import ROW_KINDS
 from mace_fmu.iomodel.volts import VoltsModel
 from mace_fmu.parameters.kinds import MASS, MODULUS, SPRING
 from mace_fmu.parameters.sets import parameter_names
 from mace_fmu.util.frequency import ZERO_HZ
 
-#: kinds of output rows the shapes project on (mace_fmu.iomodel.parametric.ROW_KINDS)
-ROW_KINDS = ("disp", "rate", "motion", "acc")
 
 
 def _coo(key: str, matrix: sparse.sparray) -> dict[str, np.ndarray]:

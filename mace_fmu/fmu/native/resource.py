@@ -21,6 +21,7 @@ from dataclasses import dataclass, fields
 from typing import TYPE_CHECKING
 
 import numpy as np
+from scipy import sparse
 
 from mace_fmu.errors import MaceError
 from mace_fmu.iomodel.modal_core import reduce_zero_cluster
@@ -319,17 +320,10 @@ def _resolve(arrays: Mapping[str, np.ndarray], flexible: np.ndarray) -> dict[str
     n_static, n_modal = (int(x) for x in a["resolve_independent"])
     zero = a["resolve_reference_zero"].astype(bool)
     reference_shapes = a["resolve_reference_shapes"][:, flexible]
-    mass = np.zeros((n, n))
-    np.add.at(mass, (a["resolve_mass_rows"], a["resolve_mass_cols"]), a["resolve_mass_data"])
-    weighted = mass @ reference_shapes
-    kinds = {kind: dict(zip((str(x) for x in arrays.get(f"{kind}_names", [])), a[f"resolve_{kind}_rows"]))
-             for kind in ("disp", "rate", "motion", "acc")}
-    rows = []  # each structure output's influence row, by the rules of zero_cluster_reduced
-    for name in (str(x) for x in arrays["structure_outputs"]):
-        for kind in ("acc", "disp", "motion", "rate"):
-            if name in kinds[kind]:
-                rows.append(kinds[kind][name])
-                break
+    mass = sparse.coo_array((a["resolve_mass_data"], (a["resolve_mass_rows"], a["resolve_mass_cols"])), shape=(n, n))
+    weighted = mass.tocsr() @ reference_shapes
+    # each structure output's influence row, by the rules of zero_cluster_reduced
+    rows = [a[f"resolve_{kind}_rows"][k] for kind, k in _kind_of_rows(arrays)]
     counts = {"large": int(str(a["resolve_kind"]) == "large"), "dof": n, "grid": n // 6,
               "bar": len(a["resolve_bar_lengths0"]), "spring": len(a["resolve_spring_constants"]),
               "static": n_static, "modal": n_modal, "zero": int(zero.sum()),
