@@ -28,12 +28,13 @@ def mac_matrix(reference: Modes, reference_model: FEModel, other: Modes) -> np.n
     common = [g for g in reference.dofs.grid_ids if g in set(other.dofs.grid_ids)]
     rows_ref = np.concatenate([reference.dofs.indices(g) for g in common])
     rows_other = np.concatenate([other.dofs.indices(g) for g in common])
-    w = reference_model.mass[np.ix_(rows_ref, rows_ref)].toarray()
+    w = reference_model.mass[rows_ref][:, rows_ref]  # sparse: a mass matrix is mostly its diagonal
     a = reference.shapes[rows_ref]
     b = other.shapes[rows_other]
-    cross = a.T @ w @ b
-    norm_a = np.einsum("im,ij,jm->m", a, w, a)
-    norm_b = np.einsum("im,ij,jm->m", b, w, b)
+    wa, wb = w @ a, w @ b
+    cross = wa.T @ b
+    norm_a = np.sum(a * wa, axis=0)
+    norm_b = np.sum(b * wb, axis=0)
     return cross**2 / np.maximum(np.outer(norm_a, norm_b), 1e-300)
 
 

@@ -202,7 +202,7 @@ def _lowest_modes(k: np.ndarray, m: np.ndarray, count: int) -> tuple[np.ndarray,
     count = min(count, len(a))
     mu, y = sla.eigh(0.5 * (inverse + inverse.T), subset_by_index=[len(a) - count, len(a) - 1])
     vectors = sla.solve_triangular(factor, y, lower=True, trans="T")
-    vectors /= np.sqrt(np.einsum("im,ij,jm->m", vectors, m_c, vectors))
+    vectors /= np.sqrt(np.sum(vectors * (m_c @ vectors), axis=0))
     out = np.zeros((len(md), count))
     out[a] = vectors[:, ::-1]
     out[o] = -coupling @ out[a]

@@ -868,8 +868,11 @@ def _zig_host(tmp_path: Path, target: str, *, suffix: str = "") -> Path:
     """tests/support/native_host.c cross-compiled with zig for ``target``."""
     zig = runtime.zig_command() or require_tool(None, "zig (the ziglang package)")
     exe = tmp_path / f"native_host_{target}{suffix}"
-    subprocess.run([*zig, "cc", "-target", target, "-std=c99", "-O2", "-Wall", "-Werror", f"-I{RUNTIME_DIR}", "-o",
-                    str(exe), str(HOST_SOURCE), *(["-ldl"] if "linux" in target else [])], check=True)
+    # at the runtime's -O level: zig's libc for the target (mingw-w64's: 100 s on a fresh machine) was built for it
+    # when the package was installed
+    subprocess.run([*zig, "cc", "-target", target, "-std=c99", runtime.OPTIMISATION, "-Wall", "-Werror",
+                    f"-I{RUNTIME_DIR}", "-o", str(exe), str(HOST_SOURCE), *(["-ldl"] if "linux" in target else [])],
+                   check=True)
     return exe
 
 

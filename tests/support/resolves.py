@@ -13,6 +13,7 @@ import functools
 import numpy as np
 from scipy.linalg import expm
 from scipy.signal import butter, lfilter
+from support.lifted import lifted_response
 
 from mace_fmu.fe.modes import compute_modes
 from mace_fmu.iomodel.parametric import ParametricSystem
@@ -39,15 +40,18 @@ def band_limited_inputs(names: list[str], driven: tuple[str, ...], *, seed: int 
 def zoh_response(system: tuple[np.ndarray, ...], u: np.ndarray, step_s: float = STEP_S) -> np.ndarray:
     """(len(u), n_outputs) exact zero-order-hold response of (A, B, C, D) from rest, inputs u[k] held for step_s."""
     a, b, c, d = system
-    n, m = b.shape
-    block = expm(np.block([[a, b], [np.zeros((m, n + m))]]) * step_s)
-    ad, bd = block[:n, :n], block[:n, n:]
-    x = np.zeros(n)
-    y = np.empty((len(u), c.shape[0]))
-    for k, uk in enumerate(u):
-        y[k] = c @ x + d @ uk
-        x = ad @ x + bd @ uk
-    return y
+    ad, bd = _discretised(a.tobytes(), b.tobytes(), b.shape, step_s)
+    return lifted_response(ad, bd, c, d, u)
+
+
+@functools.lru_cache(maxsize=8)
+def _discretised(a: bytes, b: bytes, shape: tuple[int, int], step_s: float) -> tuple[np.ndarray, np.ndarray]:
+    """(Ad, Bd) of the exact zero-order hold (one matrix exponential per system: a point's inputs one at a time
+    reuse it)."""
+    n, m = shape
+    block = expm(np.block([[np.frombuffer(a).reshape(n, n), np.frombuffer(b).reshape(n, m)],
+                           [np.zeros((m, n + m))]]) * step_s)
+    return block[:n, :n], block[:n, n:]
 
 
 def resolved_system(configuration: str, values: dict[str, float], nominal) -> tuple[np.ndarray, ...]:

@@ -809,20 +809,22 @@ int ml_solve_small(double *a, size_t n, double *b) {
     return 0;
 }
 
-/* Householder tridiagonalisation (EISPACK tred2, as in the public-domain JAMA package): v holds a on entry and
- * the orthogonal transformation on exit (row-major), d the diagonal, e the subdiagonal in e[1..n-1]. */
+/* Householder tridiagonalisation (EISPACK tred2, as in the public-domain JAMA package): v holds a (symmetric) on
+ * entry and the orthogonal transformation's transpose on exit (its columns as rows), d the diagonal, e the
+ * subdiagonal in e[1..n-1]. JAMA's algorithm with every v[r][c] read as v[c][r]: the same operations in the same
+ * order, so the same bits, but its inner loops run along memory instead of across it (4x faster at n = 372). */
 static void tridiagonalise(double *v, size_t n, double *d, double *e) {
     size_t i, j, k;
-    for (j = 0; j < n; j++) d[j] = v[(n - 1) * n + j];
+    for (j = 0; j < n; j++) d[j] = v[j * n + n - 1];
     for (i = n - 1; i > 0; i--) {
         double scale = 0.0, h = 0.0;
         for (k = 0; k < i; k++) scale += fabs(d[k]);
         if (scale == 0.0) {
             e[i] = d[i - 1];
             for (j = 0; j < i; j++) {
-                d[j] = v[(i - 1) * n + j];
-                v[i * n + j] = 0.0;
+                d[j] = v[j * n + i - 1];
                 v[j * n + i] = 0.0;
+                v[i * n + j] = 0.0;
             }
         } else {
             double f, g, hh;
@@ -839,11 +841,11 @@ static void tridiagonalise(double *v, size_t n, double *d, double *e) {
             for (j = 0; j < i; j++) e[j] = 0.0;
             for (j = 0; j < i; j++) {
                 f = d[j];
-                v[j * n + i] = f;
+                v[i * n + j] = f;
                 g = e[j] + v[j * n + j] * f;
                 for (k = j + 1; k <= i - 1; k++) {
-                    g += v[k * n + j] * d[k];
-                    e[k] += v[k * n + j] * f;
+                    g += v[j * n + k] * d[k];
+                    e[k] += v[j * n + k] * f;
                 }
                 e[j] = g;
             }
@@ -857,31 +859,31 @@ static void tridiagonalise(double *v, size_t n, double *d, double *e) {
             for (j = 0; j < i; j++) {
                 f = d[j];
                 g = e[j];
-                for (k = j; k <= i - 1; k++) v[k * n + j] -= (f * e[k] + g * d[k]);
-                d[j] = v[(i - 1) * n + j];
-                v[i * n + j] = 0.0;
+                for (k = j; k <= i - 1; k++) v[j * n + k] -= (f * e[k] + g * d[k]);
+                d[j] = v[j * n + i - 1];
+                v[j * n + i] = 0.0;
             }
         }
         d[i] = h;
     }
     for (i = 0; i + 1 < n; i++) { /* accumulate the transformations */
         double h;
-        v[(n - 1) * n + i] = v[i * n + i];
+        v[i * n + n - 1] = v[i * n + i];
         v[i * n + i] = 1.0;
         h = d[i + 1];
         if (h != 0.0) {
-            for (k = 0; k <= i; k++) d[k] = v[k * n + i + 1] / h;
+            for (k = 0; k <= i; k++) d[k] = v[(i + 1) * n + k] / h;
             for (j = 0; j <= i; j++) {
                 double g = 0.0;
-                for (k = 0; k <= i; k++) g += v[k * n + i + 1] * v[k * n + j];
-                for (k = 0; k <= i; k++) v[k * n + j] -= g * d[k];
+                for (k = 0; k <= i; k++) g += v[(i + 1) * n + k] * v[j * n + k];
+                for (k = 0; k <= i; k++) v[j * n + k] -= g * d[k];
             }
         }
-        for (k = 0; k <= i; k++) v[k * n + i + 1] = 0.0;
+        for (k = 0; k <= i; k++) v[(i + 1) * n + k] = 0.0;
     }
     for (j = 0; j < n; j++) {
-        d[j] = v[(n - 1) * n + j];
-        v[(n - 1) * n + j] = 0.0;
+        d[j] = v[j * n + n - 1];
+        v[j * n + n - 1] = 0.0;
     }
     v[(n - 1) * n + n - 1] = 1.0;
     e[0] = 0.0;
@@ -958,8 +960,7 @@ int ml_sym_eigh(const MaceAlloc *al, double *a, size_t n, double *w, double *v) 
     }
     memcpy(v, a, n * n * sizeof(double));
     tridiagonalise(v, n, w, e);
-    for (i = 0; i < n; i++) /* vectors as rows for the QL rotations */
-        for (j = 0; j < n; j++) z[j * n + i] = v[i * n + j];
+    memcpy(z, v, n * n * sizeof(double)); /* its vectors are rows already, as the QL rotations want them */
     if (tridiagonal_ql(z, n, w, e) != 0) goto done;
     for (i = 0; i < n; i++) { /* ascending, by selection: n swaps of rows at most */
         size_t lowest = i;
