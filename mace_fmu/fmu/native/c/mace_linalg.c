@@ -809,11 +809,13 @@ int ml_solve_small(double *a, size_t n, double *b) {
     return 0;
 }
 
-/* Householder tridiagonalisation (EISPACK tred2, as in the public-domain JAMA package): v holds a (symmetric) on
- * entry and the orthogonal transformation's transpose on exit (its columns as rows), d the diagonal, e the
- * subdiagonal in e[1..n-1]. JAMA's algorithm with every v[r][c] read as v[c][r]: the same operations in the same
- * order, so the same bits, but its inner loops run along memory instead of across it (4x faster at n = 372). */
-static void tridiagonalise(double *v, size_t n, double *d, double *e) {
+/* Householder tridiagonalisation (EISPACK tred2's reduction, as in the public-domain JAMA package) of a symmetric
+ * matrix in v: d gets the diagonal, e the subdiagonal in e[1..n-1], and v and hs the reflectors, A = P_n-1 ... P_1
+ * T P_1 ... P_n-1 with P_s = I - u u^T / hs[s], u the first s entries of row s of v (hs[s] = 0: P_s = I). JAMA's
+ * algorithm with every v[r][c] read as v[c][r] (the same operations in the same order), its inner loops along
+ * memory instead of across it; the transformation is not accumulated (ml_sym_eigh_largest applies it to the wanted
+ * vectors only, a third of the work when they are a third). */
+static void tridiagonalise(double *v, size_t n, double *d, double *e, double *hs) {
     size_t i, j, k;
     for (j = 0; j < n; j++) d[j] = v[j * n + n - 1];
     for (i = n - 1; i > 0; i--) {
@@ -866,34 +868,56 @@ static void tridiagonalise(double *v, size_t n, double *d, double *e) {
         }
         d[i] = h;
     }
-    for (i = 0; i + 1 < n; i++) { /* accumulate the transformations */
-        double h;
-        v[i * n + n - 1] = v[i * n + i];
-        v[i * n + i] = 1.0;
-        h = d[i + 1];
-        if (h != 0.0) {
-            for (k = 0; k <= i; k++) d[k] = v[(i + 1) * n + k] / h;
-            for (j = 0; j <= i; j++) {
-                double g = 0.0;
-                for (k = 0; k <= i; k++) g += v[(i + 1) * n + k] * v[j * n + k];
-                for (k = 0; k <= i; k++) v[j * n + k] -= g * d[k];
-            }
-        }
-        for (k = 0; k <= i; k++) v[(i + 1) * n + k] = 0.0;
+    for (i = 0; i < n; i++) { /* the reflectors' h, then the diagonal */
+        hs[i] = i ? d[i] : 0.0;
+        d[i] = v[i * n + i];
     }
-    for (j = 0; j < n; j++) {
-        d[j] = v[j * n + n - 1];
-        v[j * n + n - 1] = 0.0;
-    }
-    v[(n - 1) * n + n - 1] = 1.0;
     e[0] = 0.0;
 }
 
-/* Implicit QL iterations of the tridiagonal (d, e) (EISPACK tql2, JAMA), the rotations applied to the rows of
- * z (z[i * n + k]: component k of vector i, so that each rotation runs along memory). -1 if one eigenvalue
- * takes more than 60 iterations. */
-static int tridiagonal_ql(double *z, size_t n, double *d, double *e) {
-    size_t i, k, l, m;
+/* QL's plane rotations, in the order made: rotation t mixes rows i[t] and i[t] + 1 of the vectors by (c, s). */
+typedef struct Rotations {
+    const MaceAlloc *al;
+    size_t count, capacity;
+    size_t *i;
+    double *c, *s;
+} Rotations;
+
+static int rotations_add(Rotations *r, size_t i, double c, double s) {
+    if (r->count == r->capacity) {
+        const size_t capacity = r->capacity ? 2 * r->capacity : 1024;
+        size_t *ni = (size_t *)r->al->calloc(capacity, sizeof(size_t));
+        double *nc = ml_zeros(r->al, capacity), *ns = ml_zeros(r->al, capacity);
+        if (!ni || !nc || !ns) {
+            r->al->free(ni);
+            r->al->free(nc);
+            r->al->free(ns);
+            return -1;
+        }
+        if (r->count) {
+            memcpy(ni, r->i, r->count * sizeof(size_t));
+            memcpy(nc, r->c, r->count * sizeof(double));
+            memcpy(ns, r->s, r->count * sizeof(double));
+        }
+        r->al->free(r->i);
+        r->al->free(r->c);
+        r->al->free(r->s);
+        r->i = ni;
+        r->c = nc;
+        r->s = ns;
+        r->capacity = capacity;
+    }
+    r->i[r->count] = i;
+    r->c[r->count] = c;
+    r->s[r->count++] = s;
+    return 0;
+}
+
+/* Implicit QL iterations of the tridiagonal (d, e) (EISPACK tql2, JAMA): d gets the eigenvalues (unordered) and
+ * rot every rotation that tql2 applies to the rows of its vectors (row i' = c row i - s row i+1, row i+1' = s row
+ * i + c row i+1), in order. -1 if one eigenvalue takes more than 60 iterations or memory runs out. */
+static int tridiagonal_ql(Rotations *rot, size_t n, double *d, double *e) {
+    size_t i, l, m;
     double f = 0.0, tst1 = 0.0;
     const double eps = DBL_EPSILON;
     for (i = 1; i < n; i++) e[i - 1] = e[i];
@@ -920,7 +944,6 @@ static int tridiagonal_ql(double *z, size_t n, double *d, double *e) {
                 el1 = e[l + 1];
                 s = s2 = 0.0;
                 for (i = m; i-- > l;) {
-                    double *zi = z + i * n, *zi1 = z + (i + 1) * n;
                     c3 = c2;
                     c2 = c;
                     s2 = s;
@@ -932,11 +955,7 @@ static int tridiagonal_ql(double *z, size_t n, double *d, double *e) {
                     c = p / r;
                     p = c * d[i] - s * g;
                     d[i + 1] = h + s * (c * g + s * d[i]);
-                    for (k = 0; k < n; k++) {
-                        h = zi1[k];
-                        zi1[k] = s * zi[k] + c * h;
-                        zi[k] = c * zi[k] - s * h;
-                    }
+                    if (rotations_add(rot, i, c, s) != 0) return -1;
                 }
                 p = -s * s2 * c3 * el1 * e[l] / dl1;
                 e[l] = s * p;
@@ -949,39 +968,63 @@ static int tridiagonal_ql(double *z, size_t n, double *d, double *e) {
     return 0;
 }
 
-int ml_sym_eigh(const MaceAlloc *al, double *a, size_t n, double *w, double *v) {
-    double *e = ml_zeros(al, n), *z = ml_zeros(al, n * n);
-    size_t i, j;
+int ml_sym_eigh_largest(const MaceAlloc *al, const double *a, size_t n, size_t k, double *w, double *v) {
+    double *d = ml_zeros(al, n), *e = ml_zeros(al, n > k ? n : k), *hh = ml_zeros(al, n), *q = ml_zeros(al, n * n);
+    double *y = ml_zeros(al, n * k);
+    unsigned char *taken = (unsigned char *)al->calloc(n + 1, 1);
+    Rotations rot = {0};
+    size_t i, j, t;
     int status = -1;
-    if (!e || !z) goto done;
-    if (n == 0) {
+    rot.al = al;
+    if (!d || !e || !hh || !q || !y || !taken || k > n) goto done;
+    if (k == 0) {
         status = 0;
         goto done;
     }
-    memcpy(v, a, n * n * sizeof(double));
-    tridiagonalise(v, n, w, e);
-    memcpy(z, v, n * n * sizeof(double)); /* its vectors are rows already, as the QL rotations want them */
-    if (tridiagonal_ql(z, n, w, e) != 0) goto done;
-    for (i = 0; i < n; i++) { /* ascending, by selection: n swaps of rows at most */
-        size_t lowest = i;
-        for (j = i + 1; j < n; j++)
-            if (w[j] < w[lowest]) lowest = j;
-        if (lowest != i) {
-            const double t = w[i];
-            w[i] = w[lowest];
-            w[lowest] = t;
-            for (j = 0; j < n; j++) {
-                const double s = z[i * n + j];
-                z[i * n + j] = z[lowest * n + j];
-                z[lowest * n + j] = s;
-            }
+    memcpy(q, a, n * n * sizeof(double));
+    tridiagonalise(q, n, d, e, hh);
+    if (tridiagonal_ql(&rot, n, d, e) != 0) goto done;
+    for (j = 0; j < k; j++) { /* the k largest, by selection (ties: the lower index first) */
+        size_t best = n;
+        for (i = 0; i < n; i++)
+            if (!taken[i] && (best == n || d[i] > d[best])) best = i;
+        taken[best] = 1;
+        w[j] = d[best];
+        y[best * k + j] = 1.0;
+    }
+    /* vector j of the tridiagonal: the transposed rotations applied to its unit vector, last first; y
+       row i holds component i of every wanted vector, so each rotation runs along two rows */
+    for (t = rot.count; t-- > 0;) {
+        const double c = rot.c[t], s = rot.s[t];
+        double *yi = y + rot.i[t] * k, *yi1 = yi + k;
+        for (j = 0; j < k; j++) {
+            const double h = yi1[j];
+            yi1[j] = c * h - s * yi[j];
+            yi[j] = c * yi[j] + s * h;
         }
     }
-    for (i = 0; i < n; i++)
-        for (j = 0; j < n; j++) v[i * n + j] = z[j * n + i];
+    for (t = 1; t < n; t++) { /* v = P_n-1 ... P_1 y: P_1 first */
+        const double *u = q + t * n;
+        if (hh[t] == 0.0) continue;
+        memset(e, 0, k * sizeof(double)); /* e: u^T y, every wanted vector at once */
+        for (i = 0; i < t; i++)
+            for (j = 0; j < k; j++) e[j] += u[i] * y[i * k + j];
+        for (i = 0; i < t; i++) {
+            const double f = u[i] / hh[t];
+            for (j = 0; j < k; j++) y[i * k + j] -= f * e[j];
+        }
+    }
+    memcpy(v, y, n * k * sizeof(double));
     status = 0;
 done:
+    al->free(d);
     al->free(e);
-    al->free(z);
+    al->free(hh);
+    al->free(q);
+    al->free(y);
+    al->free(taken);
+    al->free(rot.i);
+    al->free(rot.c);
+    al->free(rot.s);
     return status;
 }

@@ -38,11 +38,14 @@ double ml_norm1(const double *a, size_t r, size_t c);
  * of v the orthonormal eigenvectors. Returns 0, or -1 if 100 sweeps did not converge. */
 int ml_jacobi_eigh(double *a, size_t n, double *w, double *v);
 
-/* Symmetric eigen-solution by Householder tridiagonalisation and implicit QL (EISPACK tred2/tql2, as in the
- * public-domain JAMA package): O(n^3) with a small constant, for the matrices too large for Jacobi rotations.
- * a (n x n, symmetric) is read only; w gets the eigenvalues in ascending order, the columns of v the
- * orthonormal eigenvectors. Returns 0, or -1 (allocation, or QL not converging). */
-int ml_sym_eigh(const MaceAlloc *al, double *a, size_t n, double *w, double *v);
+/* The k largest eigenvalues of a symmetric a (n x n, read only) and their eigenvectors: Householder
+ * tridiagonalisation and implicit QL (EISPACK tred2/tql2, as in the public-domain JAMA package), O(n^3) with a
+ * small constant, for the matrices too large for Jacobi rotations. QL's rotations are recorded and applied to
+ * the k wanted vectors only, last first (each wanted vector of the tridiagonal is the rotations' product times
+ * a unit vector): the same orthogonal transformations as tql2's, a third of its work for k = n / 3. w gets the
+ * eigenvalues in descending order, the columns of v (n x k) the orthonormal eigenvectors. Returns 0, or -1
+ * (allocation, or QL not converging). */
+int ml_sym_eigh_largest(const MaceAlloc *al, const double *a, size_t n, size_t k, double *w, double *v);
 
 /* Cholesky factor of a symmetric positive definite a (n x n): a = L L^T, L lower triangular, in place (the
  * upper triangle is zeroed). Returns 0, or -1 when a pivot is not positive (a not positive definite). */

@@ -223,21 +223,30 @@ static int assemble(const RsStructure *s, const double *factor, const double *po
     return 0;
 }
 
-/* out (nt x nt) = T^T a T for a dense a (n x n) and T as triplets (n x nt); work: n x nt. */
+/* out (nt x nt) = T^T a T for a dense a (n x n) and T as triplets (n x nt); work: n x nt. The rows of a are read
+ * along memory (W = T^T a, nt x n), then W's columns (out^T = T^T W^T), then out transposed in place: a's columns
+ * first read every entry across memory. */
 static void reduce(const double *a, size_t n, const RsTriplets *t, size_t nt, double *work, double *out) {
-    size_t i, e;
+    size_t i, j, e;
     memset(work, 0, n * nt * sizeof(double));
     memset(out, 0, nt * nt * sizeof(double));
-    for (e = 0; e < t->nnz; e++) { /* work = a T */
-        const size_t row = (size_t)t->rows[e], col = (size_t)t->cols[e];
-        const double v = t->vals[e];
-        for (i = 0; i < n; i++) work[i * nt + col] += a[i * n + row] * v;
+    for (e = 0; e < t->nnz; e++) { /* W[col] += v a[row] */
+        const double v = t->vals[e], *arow = a + (size_t)t->rows[e] * n;
+        double *wrow = work + (size_t)t->cols[e] * n;
+        for (i = 0; i < n; i++) wrow[i] += v * arow[i];
     }
-    for (e = 0; e < t->nnz; e++) { /* out = T^T work */
-        const size_t row = (size_t)t->rows[e], col = (size_t)t->cols[e];
+    for (e = 0; e < t->nnz; e++) { /* out^T[col] += v W[:, row] */
+        const size_t row = (size_t)t->rows[e];
         const double v = t->vals[e];
-        for (i = 0; i < nt; i++) out[col * nt + i] += v * work[row * nt + i];
+        double *orow = out + (size_t)t->cols[e] * nt;
+        for (i = 0; i < nt; i++) orow[i] += v * work[i * n + row];
     }
+    for (i = 0; i < nt; i++)
+        for (j = 0; j < i; j++) {
+            const double x = out[i * nt + j];
+            out[i * nt + j] = out[j * nt + i];
+            out[j * nt + i] = x;
+        }
 }
 
 /* y (n x m) = T x (x: nt x m) */
@@ -390,7 +399,7 @@ static int lowest_modes(const MaceAlloc *al, const double *k, const double *m, s
     size_t *a_idx = (size_t *)al->calloc(n + 1, sizeof(size_t)), *o_idx = (size_t *)al->calloc(n + 1, sizeof(size_t));
     size_t na = 0, no = 0, i, j, q;
     double biggest = 0.0, sigma;
-    double *koo = NULL, *g = NULL, *kc = NULL, *mc = NULL, *c = NULL, *mu = NULL, *v = NULL, *y = NULL;
+    double *koo = NULL, *g = NULL, *kc = NULL, *mc = NULL, *c = NULL, *mu = NULL, *y = NULL;
     int status = -1;
     if (!a_idx || !o_idx) goto oom;
     for (i = 0; i < n; i++) biggest = fmax(biggest, m[i * n + i]);
@@ -407,9 +416,8 @@ static int lowest_modes(const MaceAlloc *al, const double *k, const double *m, s
     mc = ml_zeros(al, na * na);
     c = ml_zeros(al, na * na);
     mu = ml_zeros(al, na);
-    v = ml_zeros(al, na * na);
     y = ml_zeros(al, na * count);
-    if (!koo || !g || !kc || !mc || !c || !mu || !v || !y) goto oom;
+    if (!koo || !g || !kc || !mc || !c || !mu || !y) goto oom;
     for (i = 0; i < no; i++) {
         for (j = 0; j < no; j++) koo[i * no + j] = k[o_idx[i] * n + o_idx[j]];
         for (j = 0; j < na; j++) g[i * na + j] = k[o_idx[i] * n + a_idx[j]];
@@ -455,31 +463,32 @@ static int lowest_modes(const MaceAlloc *al, const double *k, const double *m, s
     ml_cholesky_solve(kc, na, 1, c, na);
     for (i = 0; i < na; i++)
         for (j = 0; j < i; j++) c[i * na + j] = c[j * na + i] = 0.5 * (c[i * na + j] + c[j * na + i]);
-    if (ml_sym_eigh(al, c, na, mu, v) != 0) {
+    if (ml_sym_eigh_largest(al, c, na, count, mu, y) != 0) { /* the largest mu first: the lowest modes */
         snprintf(err, MACE_ERR_LEN, "the re-solve's eigen-solution did not converge");
         goto done;
     }
-    for (j = 0; j < count; j++) { /* the largest mu first: the lowest modes */
-        const size_t col = na - 1 - j;
-        w2[j] = sigma + 1.0 / mu[col];
-        for (i = 0; i < na; i++) y[i * count + j] = v[i * na + col];
-    }
+    for (j = 0; j < count; j++) w2[j] = sigma + 1.0 / mu[j];
     ml_cholesky_solve(kc, na, 0, y, count); /* x_a = L^-T y */
-    for (j = 0; j < count; j++) {
-        double norm = 0.0;
-        for (i = 0; i < na; i++)
-            for (q = 0; q < na; q++) norm += y[i * count + j] * mc[i * na + q] * y[q * count + j];
-        norm = 1.0 / sqrt(norm);
-        for (i = 0; i < na; i++) y[i * count + j] *= norm;
-    }
+    memset(mu, 0, count * sizeof(double)); /* x^T M x of each vector, M's zeros skipped (it is nearly diagonal) */
+    for (i = 0; i < na; i++)
+        for (q = 0; q < na; q++) {
+            const double f = mc[i * na + q];
+            if (f == 0.0) continue;
+            for (j = 0; j < count; j++) mu[j] += y[i * count + j] * f * y[q * count + j];
+        }
+    for (j = 0; j < count; j++) mu[j] = 1.0 / sqrt(mu[j]);
+    for (i = 0; i < na; i++)
+        for (j = 0; j < count; j++) y[i * count + j] *= mu[j];
     memset(x, 0, n * count * sizeof(double));
     for (i = 0; i < na; i++) memcpy(x + a_idx[i] * count, y + i * count, count * sizeof(double));
-    for (i = 0; i < no; i++) /* x_o = -g x_a */
-        for (j = 0; j < count; j++) {
-            double acc = 0.0;
-            for (q = 0; q < na; q++) acc += g[i * na + q] * y[q * count + j];
-            x[o_idx[i] * count + j] = -acc;
+    for (i = 0; i < no; i++) { /* x_o = -g x_a, along the rows of x_a */
+        double *row = x + o_idx[i] * count;
+        for (q = 0; q < na; q++) {
+            const double f = g[i * na + q];
+            if (f == 0.0) continue;
+            for (j = 0; j < count; j++) row[j] -= f * y[q * count + j];
         }
+    }
     status = 0;
     goto done;
 oom:
@@ -493,7 +502,6 @@ done:
     al->free(mc);
     al->free(c);
     al->free(mu);
-    al->free(v);
     al->free(y);
     return status;
 }
@@ -507,7 +515,7 @@ int rs_flexible_modes(const MaceAlloc *al, const RsStructure *s, const double *r
     double *mass = ml_zeros(al, n * n), *load = ml_zeros(al, n), *f = ml_zeros(al, n);
     double *work = ml_zeros(al, n * nm), *km = ml_zeros(al, nm * nm), *mm = ml_zeros(al, nm * nm);
     double *w2 = ml_zeros(al, count), *xm = ml_zeros(al, nm * count), *x = ml_zeros(al, n * count);
-    double *freq = ml_zeros(al, count), *score = NULL, *norm = ml_zeros(al, count);
+    double *freq = ml_zeros(al, count), *score = NULL, *overlap = NULL, *norm = ml_zeros(al, count);
     size_t *flex_new = (size_t *)al->calloc(count + 1, sizeof(size_t)), *col = NULL;
     size_t i, j, e, p, n_new = 0, zeros = 0, square;
     int status = -1;
@@ -556,8 +564,9 @@ int rs_flexible_modes(const MaceAlloc *al, const RsStructure *s, const double *r
     }
     square = n_new;
     score = ml_zeros(al, square * square);
+    overlap = ml_zeros(al, s->n_flex * count);
     col = (size_t *)al->calloc(square + 1, sizeof(size_t));
-    if (!score || !col) goto oom;
+    if (!score || !overlap || !col) goto oom;
     for (j = 0; j < n_new; j++) { /* x^T M0 x of each new mode, the nominal mass weighting the MAC */
         const size_t c = flex_new[j];
         double acc = 0.0;
@@ -565,11 +574,17 @@ int rs_flexible_modes(const MaceAlloc *al, const RsStructure *s, const double *r
                                                  x[s->mass.cols[e] * count + c];
         norm[j] = acc;
     }
+    for (e = 0; e < n; e++) /* overlap[i][c]: reference mode i (mass-weighted) times new mode c, along the rows */
+        for (i = 0; i < s->n_flex; i++) {
+            const double weight = s->reference[e * s->n_flex + i];
+            double *row = overlap + i * count;
+            const double *xe = x + e * count;
+            if (weight == 0.0) continue;
+            for (j = 0; j < count; j++) row[j] += weight * xe[j];
+        }
     for (i = 0; i < s->n_flex; i++)
         for (j = 0; j < n_new; j++) {
-            const size_t c = flex_new[j];
-            double cross_mass = 0.0;
-            for (e = 0; e < n; e++) cross_mass += s->reference[e * s->n_flex + i] * x[e * count + c];
+            const double cross_mass = overlap[i * count + flex_new[j]];
             score[i * square + j] = cross_mass * cross_mass / (s->reference_norm[i] * norm[j]);
         }
     if (ml_assign_max(al, score, square, col) != 0) goto oom;
@@ -597,6 +612,7 @@ done:
     al->free(x);
     al->free(freq);
     al->free(score);
+    al->free(overlap);
     al->free(norm);
     al->free(flex_new);
     al->free(col);
