@@ -315,7 +315,9 @@ static int fast_form(MaceZoh *z, const double *a_in, const double *b_in, const d
                     for (k = 0; k < si; k++) ap[r * n + pj + j] += ap[r * n + pi + k] * x[k * sj + j];
             for (i = 0; i < si; i++)
                 for (j = 0; j < sj; j++) ap[(pi + i) * n + pj + j] = 0.0;
-            for (r = 0; r < n; r++)
+            /* t's column block i is still v's (pairs before this one changed earlier column blocks only): nonzero
+               in its own component's rows alone, so only those change column block j */
+            for (r = start[bcomp[bi]]; r < start[bcomp[bi] + 1]; r++)
                 for (j = 0; j < sj; j++)
                     for (k = 0; k < si; k++) t[r * n + pj + j] += t[r * n + pi + k] * x[k * sj + j];
             for (i = 0; i < si; i++)
