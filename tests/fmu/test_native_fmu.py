@@ -868,8 +868,8 @@ def _zig_host(tmp_path: Path, target: str, *, suffix: str = "") -> Path:
     """tests/support/native_host.c cross-compiled with zig for ``target``."""
     zig = runtime.zig_command() or require_tool(None, "zig (the ziglang package)")
     exe = tmp_path / f"native_host_{target}{suffix}"
-    # at the runtime's -O level: zig's libc for the target (mingw-w64's: 100 s on a fresh machine) was built for it
-    # when the package was installed
+    # at the runtime's -O level: zig builds the target's C library once per installation and level (mingw-w64's:
+    # 90 s on a fresh machine), and the runtime's own compilations at first use share it
     subprocess.run([*zig, "cc", "-target", target, "-std=c99", runtime.OPTIMISATION, "-Wall", "-Werror",
                     f"-I{RUNTIME_DIR}", "-o", str(exe), str(HOST_SOURCE), *(["-ldl"] if "linux" in target else [])],
                    check=True)

@@ -59,8 +59,8 @@ VARIANTS = {"plant, FMI 2": C_FILES[2], "plant, FMI 3": C_FILES[3],
 PREBUILT_DIR = Path(__file__).with_name("prebuilt")
 #: while a compilation runs, a progress step at least this often [s]: the first one on a machine takes minutes
 HEARTBEAT_S = 15.0
-#: the runtime's optimisation level (zig builds a target's C library once per level: a host built at this one
-#: reuses what the runtime's build made)
+#: the runtime's optimisation level (zig builds a target's C library once per installation and level: the tests'
+#: hosts use this one, so that they share it with the runtime's compilations)
 OPTIMISATION = "-O3"
 #: every target gets these (the C standard, optimisation, exports only what the FMI headers mark)
 CFLAGS = ("-std=c99", OPTIMISATION, "-fPIC", "-shared", "-fvisibility=hidden", "-ffp-contract=off", "-g0")
