@@ -26,7 +26,6 @@ from mace_fmu.parameters.sets import parameter_names
 from mace_fmu.util.frequency import ZERO_HZ
 
 
-
 def _coo(key: str, matrix: sparse.sparray) -> dict[str, np.ndarray]:
     m = sparse.coo_array(matrix)
     return {f"{key}_data": m.data.astype(np.float64), f"{key}_rows": m.row.astype(np.int64),

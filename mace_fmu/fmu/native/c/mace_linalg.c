@@ -969,59 +969,59 @@ static int tridiagonal_ql(Rotations *rot, size_t n, double *d, double *e) {
 }
 
 int ml_sym_eigh_largest(const MaceAlloc *al, const double *a, size_t n, size_t k, double *w, double *v) {
-    double *d = ml_zeros(al, n), *e = ml_zeros(al, n > k ? n : k), *hh = ml_zeros(al, n), *q = ml_zeros(al, n * n);
-    double *y = ml_zeros(al, n * k);
+    double *d = ml_zeros(al, n), *e = ml_zeros(al, n), *hs = ml_zeros(al, n), *q = ml_zeros(al, n * n);
+    double *uv = ml_zeros(al, k);
     unsigned char *taken = (unsigned char *)al->calloc(n + 1, 1);
     Rotations rot = {0};
     size_t i, j, t;
     int status = -1;
     rot.al = al;
-    if (!d || !e || !hh || !q || !y || !taken || k > n) goto done;
+    if (!d || !e || !hs || !q || !uv || !taken || k > n) goto done;
     if (k == 0) {
         status = 0;
         goto done;
     }
     memcpy(q, a, n * n * sizeof(double));
-    tridiagonalise(q, n, d, e, hh);
+    tridiagonalise(q, n, d, e, hs);
     if (tridiagonal_ql(&rot, n, d, e) != 0) goto done;
+    memset(v, 0, n * k * sizeof(double));
     for (j = 0; j < k; j++) { /* the k largest, by selection (ties: the lower index first) */
         size_t best = n;
         for (i = 0; i < n; i++)
             if (!taken[i] && (best == n || d[i] > d[best])) best = i;
         taken[best] = 1;
         w[j] = d[best];
-        y[best * k + j] = 1.0;
+        v[best * k + j] = 1.0;
     }
-    /* vector j of the tridiagonal: the transposed rotations applied to its unit vector, last first; y
-       row i holds component i of every wanted vector, so each rotation runs along two rows */
+    /* vector j of the tridiagonal: the transposed rotations applied to its unit vector, last first; v's row i
+       holds component i of every wanted vector, so each rotation runs along two rows */
     for (t = rot.count; t-- > 0;) {
         const double c = rot.c[t], s = rot.s[t];
-        double *yi = y + rot.i[t] * k, *yi1 = yi + k;
+        double *vi = v + rot.i[t] * k, *vi1 = vi + k;
         for (j = 0; j < k; j++) {
-            const double h = yi1[j];
-            yi1[j] = c * h - s * yi[j];
-            yi[j] = c * yi[j] + s * h;
+            const double h = vi1[j];
+            vi1[j] = c * h - s * vi[j];
+            vi[j] = c * vi[j] + s * h;
         }
     }
-    for (t = 1; t < n; t++) { /* v = P_n-1 ... P_1 y: P_1 first */
+    for (t = 1; t < n; t++) { /* then v = P_n-1 ... P_1 v: P_1 first */
         const double *u = q + t * n;
-        if (hh[t] == 0.0) continue;
-        memset(e, 0, k * sizeof(double)); /* e: u^T y, every wanted vector at once */
+        if (hs[t] == 0.0) continue;
+        memset(uv, 0, k * sizeof(double)); /* u^T v, every wanted vector at once */
         for (i = 0; i < t; i++)
-            for (j = 0; j < k; j++) e[j] += u[i] * y[i * k + j];
+            for (j = 0; j < k; j++) uv[j] += u[i] * v[i * k + j];
         for (i = 0; i < t; i++) {
-            const double f = u[i] / hh[t];
-            for (j = 0; j < k; j++) y[i * k + j] -= f * e[j];
+            const double f = u[i] / hs[t];
+            for (j = 0; j < k; j++) v[i * k + j] -= f * uv[j];
         }
     }
-    memcpy(v, y, n * k * sizeof(double));
     status = 0;
 done:
     al->free(d);
     al->free(e);
-    al->free(hh);
+    al->free(hs);
     al->free(q);
-    al->free(y);
+    al->free(uv);
     al->free(taken);
     al->free(rot.i);
     al->free(rot.c);
