@@ -1,6 +1,7 @@
 """The FMUs' parameter route against full re-solves, and what it costs (issue 32: FMU parameters exact on every channel).
 
-Run by hand: ``python benchmarks/bench_parameter_route.py [--runs 21] [--skip-accuracy] [--random]``; results go
+Run by hand: ``python benchmarks/bench_parameter_route.py [--runs 21] [--skip-accuracy] [--random [--resolved-only]
+[--native]]``; results go
 into benchmarks/RESULTS.md.
 
 ``--random`` (issue 50): the error as a user meets it, every physical parameter changed at once: 20 seeded
@@ -89,11 +90,46 @@ def accuracy(configuration: str) -> list[str]:
     return rows
 
 
-def random_points(configuration: str, preload: str, width: float | None, *, seed: int = 50, resolve: bool = False
-                  ) -> str:
+def _native_responses(model, folder: Path):
+    """``response(point, u)``: outputs (samples, n_outputs) of ``model``'s native FMU (its C runtime, through FMI 2)
+    initialised with ``point`` (name -> value), u[k] held over each 2 ms step."""
+    import fmpy
+    from fmpy.fmi2 import FMU2Slave
+
+    from mace_fmu.fmu.export import export_fmu
+
+    unzipped = fmpy.extract(str(export_fmu(model, out_dir=folder, name="MACE_native")), unzipdir=str(folder / "x"))
+    md = fmpy.read_model_description(unzipped)
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    ins = [vr[n] for n in model.system.input_labels]
+    outs = [vr[n] for n in model.system.output_labels]
+
+    def response(point: dict[str, float], u: np.ndarray) -> np.ndarray:
+        slave = FMU2Slave(guid=md.guid, unzipDirectory=unzipped, modelIdentifier=md.coSimulation.modelIdentifier,
+                          instanceName="bench")
+        slave.instantiate()
+        slave.setupExperiment(startTime=0.0)
+        slave.enterInitializationMode()
+        slave.setReal([vr[k] for k in point], list(point.values()))
+        slave.exitInitializationMode()
+        y = []
+        for k, uk in enumerate(u):
+            slave.setReal(ins, list(uk))
+            y.append(slave.getReal(outs))
+            slave.doStep(currentCommunicationPoint=2e-3 * k, communicationStepSize=2e-3)
+        slave.terminate()
+        slave.freeInstance()
+        return np.array(y)
+
+    return response
+
+
+def random_points(configuration: str, preload: str, width: float | None, *, seed: int = 50, resolve: bool = False,
+                  native_folder: Path | None = None) -> str:
     """One table row: the worst output's RMS difference over its RMS at 20 seeded points (module docstring);
     ``resolve``: the structure solved again at each point (mace_fmu.iomodel.resolve, the pythonfmu FMU's way), the
-    median time of that build [ms] in the row's model column."""
+    median time of that build [ms] in the row's model column; ``native_folder``: the native FMU (its C re-solve)
+    exported there and run through FMI at the same points instead."""
     from mace_fmu.fe.modes import compute_modes
     from mace_fmu.iomodel.parametric import ParametricSystem
     from mace_fmu.iomodel.parametric_data import parametric_arrays
@@ -106,6 +142,7 @@ def random_points(configuration: str, preload: str, width: float | None, *, seed
     builds = []
     u = np.column_stack([band_limited_noise(samples=5000, step_s=2e-3, band_hz=(0.5, 60.0), seed=1 + k)
                          for k in range(len(system.inputs))])
+    native = _native_responses(model, native_folder) if native_folder is not None else None
     rng = np.random.default_rng(seed)
     worst = []
     for _ in range(20):
@@ -122,13 +159,16 @@ def random_points(configuration: str, preload: str, width: float | None, *, seed
         started = time.perf_counter()
         built = system.build(params)
         builds.append(time.perf_counter() - started)
-        y, y_ref = zoh_response(built, u), zoh_response(reference.build(reference.nominal), u)
+        y = zoh_response(built, u) if native is None else native(point, u)
+        y_ref = zoh_response(reference.build(reference.nominal), u)
         rms = np.sqrt(np.mean(y_ref**2, axis=0))
         errors = np.sqrt(np.mean((y - y_ref) ** 2, axis=0)) / np.where(rms > 0, rms, 1.0)
         worst.append((float(errors.max()), system.outputs[int(errors.argmax())]))
     values = 100 * np.array([w for w, _ in worst])
     box = "declared range" if width is None else f"+-{100 * width:g} %"
     model_name = configuration if not resolve else f"{configuration}, solved again ({1e3 * np.median(builds):.0f} ms)"
+    if native is not None:
+        model_name = f"{configuration}, the native FMU solving again"
     return (f"| {model_name} | {preload if configuration == '1g' else '-'} | {box} | {values.max():.3g} "
             f"({max(worst)[1]}) | {np.median(values):.3g} | {np.percentile(values, 90):.3g} |")
 
@@ -197,6 +237,7 @@ def main() -> None:
     parser.add_argument("--skip-accuracy", action="store_true")
     parser.add_argument("--random", action="store_true", help="only the all-at-once random points")
     parser.add_argument("--resolved-only", action="store_true", help="with --random: only the models solved again")
+    parser.add_argument("--native", action="store_true", help="with --random: the native FMUs' own re-solve too")
     args = parser.parse_args()
     import os
 
@@ -213,6 +254,10 @@ def main() -> None:
                 print(random_points(configuration, preload, width), flush=True)
         for configuration in ("1g", "0g"):
             print(random_points(configuration, "large", None, resolve=True), flush=True)
+            if args.native:
+                with tempfile.TemporaryDirectory() as folder:
+                    print(random_points(configuration, "large", None, resolve=True, native_folder=Path(folder)),
+                          flush=True)
         print(f"- load average after: {os.getloadavg()[0]:.1f}")
         return
     print("\n| model | physical parameters | static corrections | arrays at export [s] | initialise, nominal [ms] "

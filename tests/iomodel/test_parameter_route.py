@@ -105,6 +105,31 @@ def test_each_channel_follows_the_resolve_at_the_nominal_point_and_at_20_percent
                                         f"{errors[j]:.3%} of its RMS off the re-solve")
 
 
+def test_the_references_zero_order_hold_is_its_step_by_step_definition_and_a_closed_form():
+    """The reference every route test compares with (tests/support/lifted.py: 20 samples per matrix product)
+    against x[k+1] = Ad x[k] + Bd u[k], y[k] = C x[k] + D u[k] stepped one sample at a time on a random stable
+    system with 7 inputs over 1003 samples (not a whole number of blocks), and a first-order lag's step response
+    in closed form: y[k] = c b (1 - a^k) / (1 - a) + d."""
+    from support.lifted import lifted_response
+
+    rng = np.random.default_rng(3)
+    n, m, p, samples = 12, 7, 5, 1003
+    ad = rng.standard_normal((n, n))
+    ad *= 0.97 / np.max(np.abs(np.linalg.eigvals(ad)))
+    bd, c, d = rng.standard_normal((n, m)), rng.standard_normal((p, n)), rng.standard_normal((p, m))
+    u = rng.standard_normal((samples, m))
+    x, stepped = np.zeros(n), np.empty((samples, p))
+    for k in range(samples):
+        stepped[k] = c @ x + d @ u[k]
+        x = ad @ x + bd @ u[k]
+    lifted = lifted_response(ad, bd, c, d, u)
+    assert np.max(np.abs(lifted - stepped)) <= 1e-12 * np.max(np.abs(stepped))
+    a, b, cc, dd = 0.99, 0.5, 2.0, 0.25
+    k = np.arange(300)
+    y = lifted_response(np.array([[a]]), np.array([[b]]), np.array([[cc]]), np.array([[dd]]), np.ones((300, 1)))
+    np.testing.assert_allclose(y[:, 0], cc * b * (1 - a**k) / (1 - a) + dd, rtol=1e-13, atol=1e-13)
+
+
 def _all_inputs(system, *, seed: int = 1) -> np.ndarray:
     """(SAMPLES, n_inputs) independent 0.5-60 Hz noise [V] on every input."""
     from mace_fmu.updating.fmu.truth import band_limited_noise
