@@ -68,6 +68,7 @@ struct MaceModel {
        data, each structure output's influence row and the actuators' load vectors on every DOF; the last
        re-solve's flexible modes projected on them */
     int resolvable, resolved, rs_cached;
+    RsNominalBars rs_nominal; /* the re-solve's bars at the nominal state (mace_resolve.h) */
     RsStructure rs;
     const double *rs_struct_rows, *rs_inputs;
     double *rs_freq, *rs_shapes, *rs_rows, *rs_b;
@@ -356,7 +357,9 @@ static int load_resolve(MaceModel *m, char *err) {
     m->rs_rows = ml_zeros(&m->al, m->n_structure_outputs * m->n_flex);
     m->rs_b = ml_zeros(&m->al, m->n_flex * m->n_structure_inputs);
     m->rs_rel = ml_zeros(&m->al, m->n_phys);
-    if (!m->rs_freq || !m->rs_shapes || !m->rs_rows || !m->rs_b || !m->rs_rel) {
+    m->rs_nominal.bars = ml_zeros(&m->al, s->n_bar * RS_BAR_TERMS);
+    s->nominal = &m->rs_nominal;
+    if (!m->rs_freq || !m->rs_shapes || !m->rs_rows || !m->rs_b || !m->rs_rel || !m->rs_nominal.bars) {
         snprintf(err, MACE_ERR_LEN, "out of memory loading the re-solve data");
         return -1;
     }
@@ -556,6 +559,7 @@ void mace_destroy(MaceModel *m) {
     m->al.free(m->rs_rows);
     m->al.free(m->rs_b);
     m->al.free(m->rs_rel);
+    m->al.free(m->rs_nominal.bars);
     m->al.free(m->u);
     m->al.free(m->a);
     m->al.free(m->b);

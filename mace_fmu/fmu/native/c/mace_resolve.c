@@ -127,11 +127,17 @@ static int deformations(const double *xa, const double *xb, const double *ra, co
     return 0;
 }
 
-/* One bar about the state (positions, rotations): its internal force f_e (12) and, with second derivatives,
- * its tangent k_e (12 x 12, symmetric); without, the material part B^T Kn B only; k_e NULL: the force alone.
- * kn: its natural stiffness. */
+/* How a bar's tangent is formed: its material part B^T Kn B only; with the geometric part sum_k g_k d2 d_k / dz2
+ * from second derivatives at the state (central differences of complex steps); or with the second derivatives
+ * of the nominal state (an approximate tangent for Newton's intermediate iterations: it changes how fast they
+ * converge, not where to). */
+enum { TANGENT_MATERIAL = 0, TANGENT_EXACT = 1, TANGENT_NOMINAL_CURVATURE = 2 };
+
+/* One bar about the state (positions, rotations): its internal force f_e (12) and tangent k_e (12 x 12, symmetric)
+ * as `tangent` says; k_e NULL: the force alone. kn: its natural stiffness. curvature (7 x 9 x 9, d2 d_k / dz_i dz_j):
+ * TANGENT_EXACT fills it if not NULL, TANGENT_NOMINAL_CURVATURE takes it. */
 static int bar_tangent(const RsStructure *s, size_t bar, const double *positions, const double *rotations,
-                       const double *kn, int second, double *f_e, double *k_e) {
+                       const double *kn, int tangent, double *f_e, double *k_e, double *curvature) {
     const size_t ga = (size_t)s->bar_nodes[2 * bar], gb = (size_t)s->bar_nodes[2 * bar + 1];
     const double *xa = positions + 3 * ga, *xb = positions + 3 * gb, *ra = rotations + 9 * ga, *rb = rotations + 9 * gb;
     const double *frame0 = s->frames0 + 9 * bar, length0 = s->lengths0[bar];
@@ -168,7 +174,7 @@ static int bar_tangent(const RsStructure *s, size_t bar, const double *positions
             }
             k_e[a * 12 + c] = acc;
         }
-    if (second) { /* sum_k g_k d2 d_k / dz2: central differences of complex-step first derivatives */
+    if (tangent == TANGENT_EXACT) { /* sum_k g_k d2 d_k / dz2: central differences of complex-step first derivatives */
         double gz[9][9];
         for (i = 0; i < 9; i++) {
             const double h = FD_RELATIVE_STEP * (i < 3 ? length0 : 1.0);
@@ -182,10 +188,25 @@ static int bar_tangent(const RsStructure *s, size_t bar, const double *positions
                     if (deformations(xa, xb, ra, rb, frame0, length0, dz, d) != 0) return -1;
                     for (k = 0; k < 7; k++) (sign ? down : up)[k] = cimag(d[k]);
                 }
-                for (k = 0; k < 7; k++) acc += g[k] * (up[k] - down[k]) / (CS_STEP * 2.0 * h);
+                for (k = 0; k < 7; k++) {
+                    acc += g[k] * (up[k] - down[k]) / (CS_STEP * 2.0 * h);
+                    if (curvature)
+                        curvature[k * 81 + i * 9 + j] = curvature[k * 81 + j * 9 + i] =
+                            (up[k] - down[k]) / (CS_STEP * 2.0 * h);
+                }
                 gz[i][j] = gz[j][i] = acc;
             }
         }
+        for (a = 0; a < 12; a++)
+            for (c = 0; c < 12; c++) k_e[a * 12 + c] += gz[ZMAP[a]][ZMAP[c]] * ZSIGN[a] * ZSIGN[c];
+    } else if (tangent == TANGENT_NOMINAL_CURVATURE) {
+        double gz[9][9];
+        for (i = 0; i < 9; i++)
+            for (j = 0; j < 9; j++) {
+                double acc = 0.0;
+                for (k = 0; k < 7; k++) acc += g[k] * curvature[k * 81 + i * 9 + j];
+                gz[i][j] = acc;
+            }
         for (a = 0; a < 12; a++)
             for (c = 0; c < 12; c++) k_e[a * 12 + c] += gz[ZMAP[a]][ZMAP[c]] * ZSIGN[a] * ZSIGN[c];
     }
@@ -196,13 +217,35 @@ static int bar_tangent(const RsStructure *s, size_t bar, const double *positions
 
 /* ---- assembly ----------------------------------------------------------------------------------- */
 
-/* k (n x n) = the bars' tangent (or material stiffness) + springs + other; f: the bars' internal force; k NULL:
- * the force alone (first derivatives only). */
+/* The bars' forces, tangents (`tangent`: TANGENT_MATERIAL or TANGENT_EXACT) and curvatures at the nominal state
+ * with their nominal natural stiffness, computed once per model: at a given state a bar's force and tangent are
+ * linear in its natural stiffness (f = B^T Kn d, k = B^T Kn B + sum (Kn d)_k d2 d_k / dz2), so Newton's first
+ * iteration and the 0-g re-solve scale these instead. */
+static int nominal_bars(const RsStructure *s, int tangent) {
+    RsNominalBars *c = s->nominal;
+    size_t bar;
+    if (c->ready == 1 + tangent) return 0;
+    c->ready = 0;
+    for (bar = 0; bar < s->n_bar; bar++) {
+        double *terms = c->bars + bar * RS_BAR_TERMS;
+        if (bar_tangent(s, bar, s->positions, s->rotations, s->k_natural + bar * 49, tangent, terms, terms + 12,
+                        tangent == TANGENT_EXACT ? terms + 156 : NULL) != 0)
+            return -1;
+    }
+    c->ready = 1 + tangent;
+    return 0;
+}
+
+/* k (n x n) = the bars' tangent (as `tangent` says) + springs + other; f: the bars' internal force; k NULL: the
+ * force alone (first derivatives only). at_nominal: positions and rotations are the nominal state's. */
 static int assemble(const RsStructure *s, const double *factor, const double *positions, const double *rotations,
-                    int second, const double *k_springs, double *k, double *f) {
+                    int at_nominal, int tangent, const double *k_springs, double *k, double *f) {
     const size_t n = s->n_dof;
     size_t bar, i, a, c;
     double kn[49], f_e[12], k_e[144];
+    if ((at_nominal || tangent == TANGENT_NOMINAL_CURVATURE) &&
+        nominal_bars(s, tangent == TANGENT_MATERIAL ? TANGENT_MATERIAL : TANGENT_EXACT) != 0)
+        return -1;
     memset(f, 0, n * sizeof(double));
     if (k) {
         memcpy(k, k_springs, n * n * sizeof(double));
@@ -210,9 +253,18 @@ static int assemble(const RsStructure *s, const double *factor, const double *po
     }
     for (bar = 0; bar < s->n_bar; bar++) {
         const double scale = s->bar_param[bar] >= 0 ? factor[s->bar_param[bar]] : 1.0;
+        double *terms = s->nominal->bars + bar * RS_BAR_TERMS;
         size_t dof[12];
-        for (i = 0; i < 49; i++) kn[i] = scale * s->k_natural[bar * 49 + i];
-        if (bar_tangent(s, bar, positions, rotations, kn, second, f_e, k ? k_e : NULL) != 0) return -1;
+        if (at_nominal) {
+            for (i = 0; i < 12; i++) f_e[i] = scale * terms[i];
+            if (k)
+                for (i = 0; i < 144; i++) k_e[i] = scale * terms[12 + i];
+        } else {
+            for (i = 0; i < 49; i++) kn[i] = scale * s->k_natural[bar * 49 + i];
+            if (bar_tangent(s, bar, positions, rotations, kn, tangent, f_e, k ? k_e : NULL,
+                            tangent == TANGENT_NOMINAL_CURVATURE ? terms + 156 : NULL) != 0)
+                return -1;
+        }
         for (a = 0; a < 12; a++) dof[a] = 6 * (size_t)s->bar_nodes[2 * bar + (a < 6 ? 0 : 1)] + a % 6;
         for (a = 0; a < 12; a++) {
             f[dof[a]] += f_e[a];
@@ -223,30 +275,32 @@ static int assemble(const RsStructure *s, const double *factor, const double *po
     return 0;
 }
 
-/* out (nt x nt) = T^T a T for a dense a (n x n) and T as triplets (n x nt); work: n x nt. The rows of a are read
- * along memory (W = T^T a, nt x n), then W's columns (out^T = T^T W^T), then out transposed in place: a's columns
- * first read every entry across memory. */
-static void reduce(const double *a, size_t n, const RsTriplets *t, size_t nt, double *work, double *out) {
-    size_t i, j, e;
-    memset(work, 0, n * nt * sizeof(double));
+/* T's entries grouped by `keys` (its rows or its columns, n of them): group g's are order[start[g]] ..
+ * order[start[g + 1] - 1] (start: n + 1 entries, order: t->nnz). */
+static void group_entries(const RsTriplets *t, const int64_t *keys, size_t n, size_t *start, size_t *order) {
+    size_t e, g;
+    memset(start, 0, (n + 1) * sizeof(size_t));
+    for (e = 0; e < t->nnz; e++) start[keys[e] + 1]++;
+    for (g = 0; g < n; g++) start[g + 1] += start[g];
+    for (e = 0; e < t->nnz; e++) order[start[keys[e]]++] = e;
+    for (g = n; g > 0; g--) start[g] = start[g - 1];
+    start[0] = 0;
+}
+
+/* out (nt x nt) = T^T a T for a dense a (n x n) and T as triplets (n x nt) grouped by column (group_entries):
+ * row c of out is the sum over T's entries (r, c, v) of v T^T a[r]; T selects and combines a few DOFs per column,
+ * so this reads only the rows of a that T touches, each once. */
+static void reduce(const double *a, size_t n, const RsTriplets *t, size_t nt, const size_t *col_start,
+                   const size_t *col_order, double *out) {
+    size_t c, x, e;
     memset(out, 0, nt * nt * sizeof(double));
-    for (e = 0; e < t->nnz; e++) { /* W[col] += v a[row] */
-        const double v = t->vals[e], *arow = a + (size_t)t->rows[e] * n;
-        double *wrow = work + (size_t)t->cols[e] * n;
-        for (i = 0; i < n; i++) wrow[i] += v * arow[i];
-    }
-    for (e = 0; e < t->nnz; e++) { /* out^T[col] += v W[:, row] */
-        const size_t row = (size_t)t->rows[e];
-        const double v = t->vals[e];
-        double *orow = out + (size_t)t->cols[e] * nt;
-        for (i = 0; i < nt; i++) orow[i] += v * work[i * n + row];
-    }
-    for (i = 0; i < nt; i++)
-        for (j = 0; j < i; j++) {
-            const double x = out[i * nt + j];
-            out[i * nt + j] = out[j * nt + i];
-            out[j * nt + i] = x;
+    for (c = 0; c < nt; c++) {
+        double *orow = out + c * nt;
+        for (x = col_start[c]; x < col_start[c + 1]; x++) {
+            const double v = t->vals[col_order[x]], *arow = a + (size_t)t->rows[col_order[x]] * n;
+            for (e = 0; e < t->nnz; e++) orow[t->cols[e]] += v * (t->vals[e] * arow[t->rows[e]]);
         }
+    }
 }
 
 /* y (n x m) = T x (x: nt x m) */
@@ -262,6 +316,23 @@ static void restrict_vector(const RsTriplets *t, const double *y, double *x, siz
     size_t e;
     memset(x, 0, nt * sizeof(double));
     for (e = 0; e < t->nnz; e++) x[t->cols[e]] += t->vals[e] * y[t->rows[e]];
+}
+
+/* out (nt x nt) += v T[r, :]^T T[c, :] for each entry (r, c, v) of a sparse matrix (scale[e] times, if scale):
+ * T^T M T without M dense (a mass is nearly diagonal; T grouped by row: group_entries). */
+static void reduce_sparse(const RsTriplets *m, const double *scale, const RsTriplets *t, const size_t *start,
+                          const size_t *order, size_t nt, double *out) {
+    size_t e, a, b;
+    for (e = 0; e < m->nnz; e++) {
+        const size_t r = (size_t)m->rows[e], c = (size_t)m->cols[e];
+        const double v = scale ? scale[e] * m->vals[e] : m->vals[e];
+        if (v == 0.0) continue;
+        for (a = start[r]; a < start[r + 1]; a++) {
+            const double va = v * t->vals[order[a]];
+            double *row = out + (size_t)t->cols[order[a]] * nt;
+            for (b = start[c]; b < start[c + 1]; b++) row[t->cols[order[b]]] += va * t->vals[order[b]];
+        }
+    }
 }
 
 static void advance(size_t n_grid, const double *delta, double *positions, double *rotations) {
@@ -296,20 +367,26 @@ static int equilibrium(const MaceAlloc *al, const RsStructure *s, const double *
     const size_t n = s->n_dof, ns = s->n_static;
     double *pos = ml_zeros(al, s->n_grid * 3), *rot = ml_zeros(al, s->n_grid * 9), *u = ml_zeros(al, n);
     double *f = ml_zeros(al, n), *r = ml_zeros(al, n), *rs = ml_zeros(al, ns), *kr = ml_zeros(al, ns * ns);
-    double *work = ml_zeros(al, n * ns), *delta = ml_zeros(al, n), *tr = ml_zeros(al, n);
+    double *delta = ml_zeros(al, n), *tr = ml_zeros(al, n);
+    size_t *col_start = (size_t *)al->calloc(ns + 1, sizeof(size_t));
+    size_t *col_order = (size_t *)al->calloc(s->static_t.nnz + 1, sizeof(size_t));
     double previous = HUGE_VAL;
     size_t i, j;
     int it, factored = 0, status = -1;
-    if (!pos || !rot || !u || !f || !r || !rs || !kr || !work || !delta || !tr) {
+    if (!pos || !rot || !u || !f || !r || !rs || !kr || !delta || !tr || !col_start || !col_order) {
         snprintf(err, MACE_ERR_LEN, "out of memory in the preload's re-solve");
         goto done;
     }
+    group_entries(&s->static_t, s->static_t.cols, ns, col_start, col_order);
     memcpy(pos, s->positions, s->n_grid * 3 * sizeof(double));
     memcpy(rot, s->rotations, s->n_grid * 9 * sizeof(double));
     memcpy(u, s->displacements, n * sizeof(double));
     for (it = 1; it <= MAX_ITERATIONS; it++) {
         double work_done = 0.0, scale = 0.0, ratio;
-        if (assemble(s, factor, pos, rot, 1, k_springs, factored ? NULL : k, f) != 0) goto rotation;
+        /* the first iteration is at the nominal state */
+        if (assemble(s, factor, pos, rot, it == 1, it == 1 ? TANGENT_EXACT : TANGENT_NOMINAL_CURVATURE, k_springs,
+                     factored ? NULL : k, f) != 0)
+            goto rotation;
         for (i = 0; i < n; i++) {
             double spring = 0.0;
             for (j = 0; j < n; j++) spring += k_springs[i * n + j] * u[j];
@@ -317,7 +394,7 @@ static int equilibrium(const MaceAlloc *al, const RsStructure *s, const double *
         }
         restrict_vector(&s->static_t, r, rs, ns);
         if (!factored) {
-            reduce(k, n, &s->static_t, ns, work, kr);
+            reduce(k, n, &s->static_t, ns, col_start, col_order, kr);
             if (ml_cholesky(kr, ns) != 0) {
                 snprintf(err, MACE_ERR_LEN, "the gravity preload's tangent stiffness is not positive definite for "
                          "these parameters (the structure buckles or hangs unstably)");
@@ -340,7 +417,7 @@ static int equilibrium(const MaceAlloc *al, const RsStructure *s, const double *
         ratio = fabs(work_done) / fmax(fabs(scale), 1e-300);
         if (ratio <= WORK_TOLERANCE) {
             *iterations = it;
-            if (assemble(s, factor, pos, rot, 1, k_springs, k, f) != 0) goto rotation;
+            if (assemble(s, factor, pos, rot, 0, TANGENT_EXACT, k_springs, k, f) != 0) goto rotation;
             status = 0;
             goto done;
         }
@@ -363,7 +440,8 @@ done:
     al->free(r);
     al->free(rs);
     al->free(kr);
-    al->free(work);
+    al->free(col_start);
+    al->free(col_order);
     al->free(delta);
     al->free(tr);
     return status;
@@ -512,16 +590,19 @@ int rs_flexible_modes(const MaceAlloc *al, const RsStructure *s, const double *r
                       double *shapes, int *iterations, char *err) {
     const size_t n = s->n_dof, nm = s->n_modal, count = s->count;
     double *factor = ml_zeros(al, s->n_phys), *ks = ml_zeros(al, n * n), *k = ml_zeros(al, n * n);
-    double *mass = ml_zeros(al, n * n), *load = ml_zeros(al, n), *f = ml_zeros(al, n);
-    double *work = ml_zeros(al, n * nm), *km = ml_zeros(al, nm * nm), *mm = ml_zeros(al, nm * nm);
+    double *change = ml_zeros(al, s->dm.nnz), *load = ml_zeros(al, n), *f = ml_zeros(al, n);
+    double *km = ml_zeros(al, nm * nm), *mm = ml_zeros(al, nm * nm);
     double *w2 = ml_zeros(al, count), *xm = ml_zeros(al, nm * count), *x = ml_zeros(al, n * count);
     double *freq = ml_zeros(al, count), *score = NULL, *overlap = NULL, *norm = ml_zeros(al, count);
     size_t *flex_new = (size_t *)al->calloc(count + 1, sizeof(size_t)), *col = NULL;
+    size_t *row_start = (size_t *)al->calloc(n + 1, sizeof(size_t)), *col_start = (size_t *)al->calloc(nm + 1, sizeof(size_t));
+    size_t *row_order = (size_t *)al->calloc(s->modal_t.nnz + 1, sizeof(size_t));
+    size_t *col_order = (size_t *)al->calloc(s->modal_t.nnz + 1, sizeof(size_t));
     size_t i, j, e, p, n_new = 0, zeros = 0, square;
     int status = -1;
     *iterations = 0;
-    if (!factor || !ks || !k || !mass || !load || !f || !work || !km || !mm || !w2 || !xm || !x || !freq || !norm ||
-        !flex_new)
+    if (!factor || !ks || !k || !change || !load || !f || !km || !mm || !w2 || !xm || !x || !freq || !norm ||
+        !flex_new || !row_start || !col_start || !row_order || !col_order)
         goto oom;
     for (p = 0; p < s->n_phys; p++) factor[p] = 1.0 + rel[p];
     for (i = 0; i < s->n_spring; i++) { /* K_s = sum k e e^T */
@@ -532,21 +613,22 @@ int rs_flexible_modes(const MaceAlloc *al, const RsStructure *s, const double *r
             for (e = 0; e < n; e++) ks[j * n + e] += kk * vec[j] * vec[e];
         }
     }
-    for (e = 0; e < s->mass.nnz; e++) mass[s->mass.rows[e] * n + s->mass.cols[e]] += s->mass.vals[e];
     memcpy(load, s->load, n * sizeof(double));
     for (e = 0; e < s->dm.nnz; e++) {
-        const double change = factor[s->dm_part[e]] - 1.0, v = change * s->dm.vals[e];
-        mass[s->dm.rows[e] * n + s->dm.cols[e]] += v;
-        load[s->dm.rows[e]] += v * s->gravity[s->dm.cols[e]];
+        change[e] = factor[s->dm_part[e]] - 1.0;
+        load[s->dm.rows[e]] += change[e] * s->dm.vals[e] * s->gravity[s->dm.cols[e]];
     }
     if (s->large_preload) {
         if (equilibrium(al, s, factor, ks, load, k, iterations, err) != 0) goto done;
-    } else if (assemble(s, factor, s->positions, s->rotations, 0, ks, k, f) != 0) {
+    } else if (assemble(s, factor, s->positions, s->rotations, 1, TANGENT_MATERIAL, ks, k, f) != 0) {
         snprintf(err, MACE_ERR_LEN, "the re-solve: a bar's local rotation exceeds %g rad", MAX_LOCAL_ROTATION);
         goto done;
     }
-    reduce(k, n, &s->modal_t, nm, work, km);
-    reduce(mass, n, &s->modal_t, nm, work, mm);
+    group_entries(&s->modal_t, s->modal_t.rows, n, row_start, row_order);
+    group_entries(&s->modal_t, s->modal_t.cols, nm, col_start, col_order);
+    reduce(k, n, &s->modal_t, nm, col_start, col_order, km);
+    reduce_sparse(&s->mass, NULL, &s->modal_t, row_start, row_order, nm, mm); /* mm: zeros from ml_zeros */
+    reduce_sparse(&s->dm, change, &s->modal_t, row_start, row_order, nm, mm);
     if (lowest_modes(al, km, mm, nm, count, w2, xm, err) != 0) goto done;
     expand(&s->modal_t, xm, count, x, n);
     for (j = 0; j < count; j++) {
@@ -601,10 +683,13 @@ done:
     al->free(factor);
     al->free(ks);
     al->free(k);
-    al->free(mass);
+    al->free(change);
+    al->free(row_start);
+    al->free(col_start);
+    al->free(row_order);
+    al->free(col_order);
     al->free(load);
     al->free(f);
-    al->free(work);
     al->free(km);
     al->free(mm);
     al->free(w2);

@@ -21,6 +21,16 @@ typedef struct RsTriplets {
     const double *vals;
 } RsTriplets;
 
+#define RS_BAR_TERMS 723 /* a bar's internal force (12), tangent (12 x 12) and curvature (7 x 9 x 9) */
+
+/* Each bar's internal force, tangent and the second derivatives of its natural deformations (d2 d_k / dz_i dz_j)
+ * at the nominal state with its nominal natural stiffness (n_bar x RS_BAR_TERMS), filled by the first re-solve
+ * that needs them (ready: 0; 1, the material tangent; 2, the whole tangent and the curvature). */
+typedef struct RsNominalBars {
+    int ready;
+    double *bars;
+} RsNominalBars;
+
 typedef struct RsStructure {
     int large_preload;        /* 1: 1-g, the large-displacement gravity preload; 0: no preload (0-g) */
     size_t n_dof, n_grid, n_bar, n_spring, n_static, n_modal, n_flex, n_zero, n_phys, count;
@@ -42,6 +52,7 @@ typedef struct RsStructure {
     const double *reference;      /* n_dof x n_flex: M0 phi0 of the nominal flexible modes */
     const double *reference_norm; /* n_flex: phi0^T M0 phi0 */
     double zero_hz;               /* modes below this [Hz] form the zero-frequency cluster */
+    RsNominalBars *nominal;       /* the model's own (mutable) cache of the bars at the nominal state */
 } RsStructure;
 
 /* The n_flex flexible modes continuing the nominal ones, the physical parameters at (1 + rel[p]) times nominal:

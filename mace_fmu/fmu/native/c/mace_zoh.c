@@ -184,6 +184,45 @@ static int sylvester(const double li[4], size_t si, const double lj[4], size_t s
 }
 
 /* 0: the fast form is ready; 1: no well-conditioned fast form (use the dense one); -1: memory. */
+/* x = t^-1 for t (n x n) block lower triangular by component (component c: states start[c] .. start[c + 1] - 1)
+ * whose diagonal blocks' inverses are x's diagonal blocks already (x zero elsewhere): block row by block row,
+ * x_ij = -x_ii sum_{j <= k < i} t_ik x_kj, t's zeros skipped. work: n x n. Against a dense inverse: the same
+ * matrix, at the cost of the couplings between components instead of n^3. */
+static void block_lower_inverse(const double *t, size_t n, const size_t *start, size_t ncomp, double *x, double *work) {
+    size_t ci, cj, r, q, k, col;
+    for (ci = 1; ci < ncomp; ci++) {
+        const size_t oi = start[ci], si = start[ci + 1] - oi;
+        for (cj = 0; cj < ci; cj++) {
+            const size_t oj = start[cj], sj = start[cj + 1] - oj;
+            int nonzero = 0;
+            for (r = 0; r < si; r++) { /* work (si x sj) = sum_k t_ik x_kj */
+                double *wrow = work + r * sj;
+                const double *trow = t + (oi + r) * n;
+                memset(wrow, 0, sj * sizeof(double));
+                for (k = oj; k < oi; k++) {
+                    const double f = trow[k];
+                    const double *xrow = x + k * n + oj;
+                    if (f == 0.0) continue;
+                    nonzero = 1;
+                    for (col = 0; col < sj; col++) wrow[col] += f * xrow[col];
+                }
+            }
+            if (!nonzero) continue;
+            for (r = 0; r < si; r++) {
+                double *xrow = x + (oi + r) * n + oj;
+                const double *xii = x + (oi + r) * n + oi;
+                for (col = 0; col < sj; col++) xrow[col] = 0.0;
+                for (q = 0; q < si; q++) {
+                    const double f = xii[q];
+                    const double *wrow = work + q * sj;
+                    if (f == 0.0) continue;
+                    for (col = 0; col < sj; col++) xrow[col] -= f * wrow[col];
+                }
+            }
+        }
+    }
+}
+
 static int fast_form(MaceZoh *z, const double *a_in, const double *b_in, const double *c_in) {
     const MaceAlloc *al = &z->al;
     const size_t n = z->n, m = z->m, p = z->p;
@@ -328,7 +367,7 @@ static int fast_form(MaceZoh *z, const double *a_in, const double *b_in, const d
                     for (k = 0; k < si; k++) cf[r * n + pj + j] += cf[r * n + pi + k] * x[k * sj + j];
         }
     }
-    if (ml_inverse(al, t, n, vinv) != 0) goto done;
+    block_lower_inverse(t, n, start, (size_t)ncomp, vinv, blk);
     z->condition = ml_norm1(t, n, n) * ml_norm1(vinv, n, n);
     if (!(z->condition <= ZOH_MAX_COND)) goto done;
     /* back to the model's state order and scaling */
