@@ -56,6 +56,7 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
     (void)visible;
     al.calloc = (functions && functions->allocateMemory) ? functions->allocateMemory : calloc;
     al.free = (functions && functions->freeMemory) ? functions->freeMemory : free;
+    al.work = NULL;
     host.logger = functions ? functions->logger : NULL;
     host.env = functions ? functions->componentEnvironment : NULL;
     if (fmuType != fmi2CoSimulation && fmuType != fmi2ModelExchange) {

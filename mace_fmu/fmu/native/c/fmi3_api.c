@@ -22,7 +22,7 @@ static void host_log(void *host, const char *instance, MiStatus status, const ch
     if (h->log) h->log(h->env, (fmi3Status)status, category, message);
 }
 
-static const MaceAlloc ALLOC = {calloc, free};
+static const MaceAlloc ALLOC = {calloc, free, NULL};
 
 #define INST(c) (((Fmi3Instance *)(c))->inst)
 #define CHECK(c) \

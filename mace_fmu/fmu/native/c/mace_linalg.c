@@ -9,6 +9,68 @@ double *ml_zeros(const MaceAlloc *al, size_t n) {
     return (double *)al->calloc(n ? n : 1, sizeof(double));
 }
 
+/* ---- kept work arrays ------------------------------------------------------------------------ */
+
+#define WORK_SLOTS 64
+#define WORK_MIN_BYTES 65536 /* smaller blocks come from the allocator's own free lists */
+
+struct MaceWork {
+    void *block[WORK_SLOTS];
+    size_t bytes[WORK_SLOTS];
+    unsigned char used[WORK_SLOTS];
+};
+
+MaceWork *ml_work_create(const MaceAlloc *al) { return (MaceWork *)al->calloc(1, sizeof(MaceWork)); }
+
+void ml_work_destroy(const MaceAlloc *al, MaceWork *work) {
+    size_t k;
+    if (!work) return;
+    for (k = 0; k < WORK_SLOTS; k++) al->free(work->block[k]);
+    al->free(work);
+}
+
+double *ml_work(const MaceAlloc *al, size_t n) {
+    MaceWork *w = al->work;
+    const size_t bytes = (n ? n : 1) * sizeof(double);
+    size_t k, slot = WORK_SLOTS;
+    double *p;
+    if (!w || bytes < WORK_MIN_BYTES) return ml_zeros(al, n);
+    for (k = 0; k < WORK_SLOTS; k++) {
+        if (w->block[k] && !w->used[k] && w->bytes[k] == bytes) {
+            w->used[k] = 1;
+            memset(w->block[k], 0, bytes);
+            return (double *)w->block[k];
+        }
+        if (slot == WORK_SLOTS && !w->block[k]) slot = k;
+    }
+    for (k = 0; slot == WORK_SLOTS && k < WORK_SLOTS; k++) /* all slots taken: give up a free block of another size */
+        if (!w->used[k]) {
+            al->free(w->block[k]);
+            w->block[k] = NULL;
+            slot = k;
+        }
+    p = ml_zeros(al, n);
+    if (p && slot < WORK_SLOTS) {
+        w->block[slot] = p;
+        w->bytes[slot] = bytes;
+        w->used[slot] = 1;
+    }
+    return p;
+}
+
+void ml_release(const MaceAlloc *al, void *p) {
+    MaceWork *w = al->work;
+    size_t k;
+    if (!p) return;
+    if (w)
+        for (k = 0; k < WORK_SLOTS; k++)
+            if (w->block[k] == p) {
+                w->used[k] = 0;
+                return;
+            }
+    al->free(p);
+}
+
 void ml_matmul_acc(size_t r, size_t k, size_t c, const double *a, const double *b, double *out) {
     size_t i, l, j;
     for (i = 0; i < r; i++) {
@@ -86,7 +148,7 @@ void ml_lu_solve(const double *lu, size_t n, const size_t *piv, double *b, size_
 }
 
 int ml_inverse(const MaceAlloc *al, const double *a, size_t n, double *out) {
-    double *lu = ml_zeros(al, n * n);
+    double *lu = ml_work(al, n * n);
     size_t *piv = (size_t *)al->calloc(n ? n : 1, sizeof(size_t));
     size_t i;
     int status = -1;
@@ -99,8 +161,8 @@ int ml_inverse(const MaceAlloc *al, const double *a, size_t n, double *out) {
             status = 0;
         }
     }
-    al->free(lu);
-    al->free(piv);
+    ml_release(al, lu);
+    ml_release(al, piv);
     return status;
 }
 
@@ -243,7 +305,7 @@ int ml_jacobi_eigh(double *a, size_t n, double *w, double *v) {
 int ml_assign_max(const MaceAlloc *al, const double *score, size_t n, size_t *col) {
     /* minimum-cost assignment of cost = -score, shortest augmenting paths with potentials;
        index 0 of the column arrays is a virtual column */
-    double *u = ml_zeros(al, n + 1), *v = ml_zeros(al, n + 1), *minv = ml_zeros(al, n + 1);
+    double *u = ml_work(al, n + 1), *v = ml_work(al, n + 1), *minv = ml_work(al, n + 1);
     size_t *row_of = (size_t *)al->calloc(n + 1, sizeof(size_t));
     size_t *way = (size_t *)al->calloc(n + 1, sizeof(size_t));
     char *used = (char *)al->calloc(n + 1, 1);
@@ -293,12 +355,12 @@ int ml_assign_max(const MaceAlloc *al, const double *score, size_t n, size_t *co
         for (j = 1; j <= n; j++) col[row_of[j] - 1] = j - 1;
         status = 0;
     }
-    al->free(u);
-    al->free(v);
-    al->free(minv);
-    al->free(row_of);
-    al->free(way);
-    al->free(used);
+    ml_release(al, u);
+    ml_release(al, v);
+    ml_release(al, minv);
+    ml_release(al, row_of);
+    ml_release(al, way);
+    ml_release(al, used);
     return status;
 }
 
@@ -700,7 +762,7 @@ static int hqr2(double *H, size_t nn_, double *d, double *e, double *V) {
 }
 
 int ml_eig(const MaceAlloc *al, double *h, size_t n, double *wr, double *wi, double *v) {
-    double *ort = ml_zeros(al, n);
+    double *ort = ml_work(al, n);
     int status = -1;
     if (ort) {
         if (n == 1) {
@@ -713,7 +775,7 @@ int ml_eig(const MaceAlloc *al, double *h, size_t n, double *wr, double *wi, dou
             status = hqr2(h, n, wr, wi, v);
         }
     }
-    al->free(ort);
+    ml_release(al, ort);
     return status;
 }
 
@@ -887,11 +949,11 @@ static int rotations_add(Rotations *r, size_t i, double c, double s) {
     if (r->count == r->capacity) {
         const size_t capacity = r->capacity ? 2 * r->capacity : 1024;
         size_t *ni = (size_t *)r->al->calloc(capacity, sizeof(size_t));
-        double *nc = ml_zeros(r->al, capacity), *ns = ml_zeros(r->al, capacity);
+        double *nc = ml_work(r->al, capacity), *ns = ml_work(r->al, capacity);
         if (!ni || !nc || !ns) {
-            r->al->free(ni);
-            r->al->free(nc);
-            r->al->free(ns);
+            ml_release(r->al, ni);
+            ml_release(r->al, nc);
+            ml_release(r->al, ns);
             return -1;
         }
         if (r->count) {
@@ -899,9 +961,9 @@ static int rotations_add(Rotations *r, size_t i, double c, double s) {
             memcpy(nc, r->c, r->count * sizeof(double));
             memcpy(ns, r->s, r->count * sizeof(double));
         }
-        r->al->free(r->i);
-        r->al->free(r->c);
-        r->al->free(r->s);
+        ml_release(r->al, r->i);
+        ml_release(r->al, r->c);
+        ml_release(r->al, r->s);
         r->i = ni;
         r->c = nc;
         r->s = ns;
@@ -969,8 +1031,8 @@ static int tridiagonal_ql(Rotations *rot, size_t n, double *d, double *e) {
 }
 
 int ml_sym_eigh_largest(const MaceAlloc *al, const double *a, size_t n, size_t k, double *w, double *v) {
-    double *d = ml_zeros(al, n), *e = ml_zeros(al, n), *hs = ml_zeros(al, n), *q = ml_zeros(al, n * n);
-    double *uv = ml_zeros(al, k);
+    double *d = ml_work(al, n), *e = ml_work(al, n), *hs = ml_work(al, n), *q = ml_work(al, n * n);
+    double *uv = ml_work(al, k);
     unsigned char *taken = (unsigned char *)al->calloc(n + 1, 1);
     Rotations rot = {0};
     size_t i, j, t;
@@ -1017,14 +1079,14 @@ int ml_sym_eigh_largest(const MaceAlloc *al, const double *a, size_t n, size_t k
     }
     status = 0;
 done:
-    al->free(d);
-    al->free(e);
-    al->free(hs);
-    al->free(q);
-    al->free(uv);
-    al->free(taken);
-    al->free(rot.i);
-    al->free(rot.c);
-    al->free(rot.s);
+    ml_release(al, d);
+    ml_release(al, e);
+    ml_release(al, hs);
+    ml_release(al, q);
+    ml_release(al, uv);
+    ml_release(al, taken);
+    ml_release(al, rot.i);
+    ml_release(al, rot.c);
+    ml_release(al, rot.s);
     return status;
 }

@@ -11,13 +11,26 @@
 /* Size of the error message buffer (char err[MACE_ERR_LEN]) that functions of every layer write into. */
 #define MACE_ERR_LEN 1024
 
+typedef struct MaceWork MaceWork;
+
 typedef struct MaceAlloc {
     void *(*calloc)(size_t nobj, size_t size);
     void (*free)(void *obj);
+    MaceWork *work; /* large work arrays kept between uses (ml_work), or NULL */
 } MaceAlloc;
 
 /* n zeroed doubles from the allocator (NULL if it fails; n == 0 gives a valid 1-element block). */
 double *ml_zeros(const MaceAlloc *al, size_t n);
+
+/* Work arrays kept from one use to the next. Every initialisation off nominal allocates the same large
+ * temporaries; glibc maps blocks this large afresh and unmaps them when freed, and the kernel's zeroed pages cost
+ * a sixth of an initialisation. ml_work: n zeroed doubles, a kept block of exactly that size if one is free
+ * (large arrays only, the rest as ml_zeros); ml_release: the end of an ml_work (or ml_zeros) array's use. The
+ * kept blocks are freed by ml_work_destroy. One MaceWork serves one thread at a time (an FMU instance's). */
+MaceWork *ml_work_create(const MaceAlloc *al);
+void ml_work_destroy(const MaceAlloc *al, MaceWork *work);
+double *ml_work(const MaceAlloc *al, size_t n);
+void ml_release(const MaceAlloc *al, void *p);
 
 /* out (r x c) = a (r x k) b (k x c); out must not alias a or b. Zero entries of a are skipped. */
 void ml_matmul(size_t r, size_t k, size_t c, const double *a, const double *b, double *out);

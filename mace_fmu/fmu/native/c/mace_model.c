@@ -505,6 +505,7 @@ MaceModel *mace_create(const char *resource_dir, MaceKind kind, const MaceAlloc 
         return NULL;
     }
     m->al = *al;
+    m->al.work = ml_work_create(al);
     m->kind = kind;
     if (load(m, resource_dir, err) != 0) {
         mace_destroy(m);
@@ -529,9 +530,10 @@ MaceModel *mace_create(const char *resource_dir, MaceKind kind, const MaceAlloc 
     m->dir_u = ml_zeros(al, m->n_in);
     m->dir_dx = ml_zeros(al, m->n);
     m->dir_dy = ml_zeros(al, m->n_out);
-    m->zoh = zoh_create(al, m->n, m->n_in, m->n_out);
+    m->zoh = zoh_create(&m->al, m->n, m->n_in, m->n_out); /* its work arrays are the model's */
     if (!m->params || !m->built_params || !m->freq || !m->rel || !m->u || !m->a || !m->b || !m->c || !m->d || !m->s || !m->x ||
-        !m->y || !m->nominal || !m->zb || !m->ub || !m->dir_x || !m->dir_u || !m->dir_dx || !m->dir_dy || !m->zoh) {
+        !m->y || !m->nominal || !m->zb || !m->ub || !m->dir_x || !m->dir_u || !m->dir_dx || !m->dir_dy || !m->zoh ||
+        !m->al.work) {
         snprintf(err, MACE_ERR_LEN, "out of memory");
         mace_destroy(m);
         return NULL;
@@ -579,6 +581,7 @@ void mace_destroy(MaceModel *m) {
     csr_free(&m->al, &m->bb);
     csr_free(&m->al, &m->cb);
     csr_free(&m->al, &m->wq);
+    ml_work_destroy(&m->al, m->al.work);
     m->al.free(m);
 }
 
@@ -802,19 +805,19 @@ static int reanalyse(MaceModel *m, double *coef, int *changed, char *err) {
         for (i = 0; i < nf; i++) m->freq[m->flex[i]] = m->rs_freq[i];
         m->resolved = 1;
     } else if (*changed) {
-        k = ml_zeros(&m->al, nt * nt);
-        kc = ml_zeros(&m->al, na * na);
-        g = ml_zeros(&m->al, nz * na);
-        lu = ml_zeros(&m->al, nz * nz);
-        w = ml_zeros(&m->al, na);
-        v = ml_zeros(&m->al, na * na);
-        score = ml_zeros(&m->al, na * na);
+        k = ml_work(&m->al, nt * nt);
+        kc = ml_work(&m->al, na * na);
+        g = ml_work(&m->al, nz * na);
+        lu = ml_work(&m->al, nz * nz);
+        w = ml_work(&m->al, na);
+        v = ml_work(&m->al, na * na);
+        score = ml_work(&m->al, na * na);
         col = (size_t *)m->al.calloc(na + 1, sizeof(size_t));
         piv = (size_t *)m->al.calloc(nz + 1, sizeof(size_t));
-        mm = ml_zeros(&m->al, nt * nt);
-        mc = ml_zeros(&m->al, na * na);
-        kc0 = ml_zeros(&m->al, na * na);
-        h = ml_zeros(&m->al, nz * na);
+        mm = ml_work(&m->al, nt * nt);
+        mc = ml_work(&m->al, na * na);
+        kc0 = ml_work(&m->al, na * na);
+        h = ml_work(&m->al, nz * na);
         if (!k || !kc || !g || !lu || !w || !v || !score || !col || !piv || !mm || !mc || !kc0 || !h) goto oom;
         reduced_stiffness(m, k);
         for (i = 0; i < na; i++) memcpy(kc + i * na, k + i * nt, na * sizeof(double));
@@ -905,19 +908,19 @@ static int reanalyse(MaceModel *m, double *coef, int *changed, char *err) {
 oom:
     snprintf(err, MACE_ERR_LEN, "out of memory in the reanalysis");
 done:
-    m->al.free(k);
-    m->al.free(kc);
-    m->al.free(g);
-    m->al.free(lu);
-    m->al.free(w);
-    m->al.free(v);
-    m->al.free(score);
-    m->al.free(col);
-    m->al.free(piv);
-    m->al.free(mm);
-    m->al.free(mc);
-    m->al.free(kc0);
-    m->al.free(h);
+    ml_release(&m->al, k);
+    ml_release(&m->al, kc);
+    ml_release(&m->al, g);
+    ml_release(&m->al, lu);
+    ml_release(&m->al, w);
+    ml_release(&m->al, v);
+    ml_release(&m->al, score);
+    ml_release(&m->al, col);
+    ml_release(&m->al, piv);
+    ml_release(&m->al, mm);
+    ml_release(&m->al, mc);
+    ml_release(&m->al, kc0);
+    ml_release(&m->al, h);
     return status;
 }
 
@@ -1071,9 +1074,9 @@ static int pade_block(size_t n, double delay, double *a, double *b, double *c, d
 
 static int assemble(MaceModel *m, const double *coef, int changed, char *err) {
     const size_t N = m->n, NU = m->n_block_inputs, NY = m->n_block_outputs, ni = m->n_in, no = m->n_out;
-    double *ab = ml_zeros(&m->al, N * N), *bb = ml_zeros(&m->al, N * NU), *cb = ml_zeros(&m->al, NY * N);
-    double *db = ml_zeros(&m->al, NY * NU), *w = ml_zeros(&m->al, NU * NU), *rhs = ml_zeros(&m->al, NU * (N + ni));
-    double *t = ml_zeros(&m->al, (NY > NU ? NY : NU) * (N + ni)), *wq = ml_zeros(&m->al, NU * (NY + ni));
+    double *ab = ml_work(&m->al, N * N), *bb = ml_work(&m->al, N * NU), *cb = ml_work(&m->al, NY * N);
+    double *db = ml_work(&m->al, NY * NU), *w = ml_work(&m->al, NU * NU), *rhs = ml_work(&m->al, NU * (N + ni));
+    double *t = ml_work(&m->al, (NY > NU ? NY : NU) * (N + ni)), *wq = ml_work(&m->al, NU * (NY + ni));
     size_t *piv = (size_t *)m->al.calloc(NU + 1, sizeof(size_t));
     size_t k, i, j, ox = 0, ou = 0, oy = 0;
     int status = -1;
@@ -1180,15 +1183,15 @@ static int assemble(MaceModel *m, const double *coef, int changed, char *err) {
     }
     status = 0;
 done:
-    m->al.free(ab);
-    m->al.free(bb);
-    m->al.free(cb);
-    m->al.free(db);
-    m->al.free(w);
-    m->al.free(rhs);
-    m->al.free(t);
-    m->al.free(wq);
-    m->al.free(piv);
+    ml_release(&m->al, ab);
+    ml_release(&m->al, bb);
+    ml_release(&m->al, cb);
+    ml_release(&m->al, db);
+    ml_release(&m->al, w);
+    ml_release(&m->al, rhs);
+    ml_release(&m->al, t);
+    ml_release(&m->al, wq);
+    ml_release(&m->al, piv);
     return status;
 }
 
@@ -1200,7 +1203,7 @@ int mace_build(MaceModel *m, char *err) {
     m->params_changed = 0;
     if (m->built && memcmp(m->params, m->built_params, m->n_par * sizeof(double)) == 0) return 0;
     m->built = 0;
-    coef = ml_zeros(&m->al, (m->n_flex + m->n_corr) * m->n_flex);
+    coef = ml_work(&m->al, (m->n_flex + m->n_corr) * m->n_flex);
     if (!coef) {
         snprintf(err, MACE_ERR_LEN, "out of memory");
         return -1;
@@ -1219,7 +1222,7 @@ int mace_build(MaceModel *m, char *err) {
         m->y_valid = m->x_valid = 0;
         status = 0;
     }
-    m->al.free(coef);
+    ml_release(&m->al, coef);
     return status;
 }
 

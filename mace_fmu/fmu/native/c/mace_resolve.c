@@ -365,9 +365,9 @@ static void advance(size_t n_grid, const double *delta, double *positions, doubl
 static int equilibrium(const MaceAlloc *al, const RsStructure *s, const double *factor, const double *k_springs,
                        const double *load, double *k, int *iterations, char *err) {
     const size_t n = s->n_dof, ns = s->n_static;
-    double *pos = ml_zeros(al, s->n_grid * 3), *rot = ml_zeros(al, s->n_grid * 9), *u = ml_zeros(al, n);
-    double *f = ml_zeros(al, n), *r = ml_zeros(al, n), *rs = ml_zeros(al, ns), *kr = ml_zeros(al, ns * ns);
-    double *delta = ml_zeros(al, n), *tr = ml_zeros(al, n);
+    double *pos = ml_work(al, s->n_grid * 3), *rot = ml_work(al, s->n_grid * 9), *u = ml_work(al, n);
+    double *f = ml_work(al, n), *r = ml_work(al, n), *rs = ml_work(al, ns), *kr = ml_work(al, ns * ns);
+    double *delta = ml_work(al, n), *tr = ml_work(al, n);
     size_t *col_start = (size_t *)al->calloc(ns + 1, sizeof(size_t));
     size_t *col_order = (size_t *)al->calloc(s->static_t.nnz + 1, sizeof(size_t));
     double previous = HUGE_VAL;
@@ -433,17 +433,17 @@ rotation:
     snprintf(err, MACE_ERR_LEN, "a bar's local rotation exceeds %g rad in the preload's re-solve: the structure "
              "deforms beyond small-strain beam theory for these parameters", MAX_LOCAL_ROTATION);
 done:
-    al->free(pos);
-    al->free(rot);
-    al->free(u);
-    al->free(f);
-    al->free(r);
-    al->free(rs);
-    al->free(kr);
-    al->free(col_start);
-    al->free(col_order);
-    al->free(delta);
-    al->free(tr);
+    ml_release(al, pos);
+    ml_release(al, rot);
+    ml_release(al, u);
+    ml_release(al, f);
+    ml_release(al, r);
+    ml_release(al, rs);
+    ml_release(al, kr);
+    ml_release(al, col_start);
+    ml_release(al, col_order);
+    ml_release(al, delta);
+    ml_release(al, tr);
     return status;
 }
 
@@ -488,13 +488,13 @@ static int lowest_modes(const MaceAlloc *al, const double *k, const double *m, s
             a_idx[na++] = i;
     }
     if (count > na) count = na;
-    koo = ml_zeros(al, no * no);
-    g = ml_zeros(al, no * na);
-    kc = ml_zeros(al, na * na);
-    mc = ml_zeros(al, na * na);
-    c = ml_zeros(al, na * na);
-    mu = ml_zeros(al, na);
-    y = ml_zeros(al, na * count);
+    koo = ml_work(al, no * no);
+    g = ml_work(al, no * na);
+    kc = ml_work(al, na * na);
+    mc = ml_work(al, na * na);
+    c = ml_work(al, na * na);
+    mu = ml_work(al, na);
+    y = ml_work(al, na * count);
     if (!koo || !g || !kc || !mc || !c || !mu || !y) goto oom;
     for (i = 0; i < no; i++) {
         for (j = 0; j < no; j++) koo[i * no + j] = k[o_idx[i] * n + o_idx[j]];
@@ -572,15 +572,15 @@ static int lowest_modes(const MaceAlloc *al, const double *k, const double *m, s
 oom:
     snprintf(err, MACE_ERR_LEN, "out of memory in the re-solve's eigen-solution");
 done:
-    al->free(a_idx);
-    al->free(o_idx);
-    al->free(koo);
-    al->free(g);
-    al->free(kc);
-    al->free(mc);
-    al->free(c);
-    al->free(mu);
-    al->free(y);
+    ml_release(al, a_idx);
+    ml_release(al, o_idx);
+    ml_release(al, koo);
+    ml_release(al, g);
+    ml_release(al, kc);
+    ml_release(al, mc);
+    ml_release(al, c);
+    ml_release(al, mu);
+    ml_release(al, y);
     return status;
 }
 
@@ -589,11 +589,11 @@ done:
 int rs_flexible_modes(const MaceAlloc *al, const RsStructure *s, const double *rel, double *freq_hz,
                       double *shapes, int *iterations, char *err) {
     const size_t n = s->n_dof, nm = s->n_modal, count = s->count;
-    double *factor = ml_zeros(al, s->n_phys), *ks = ml_zeros(al, n * n), *k = ml_zeros(al, n * n);
-    double *change = ml_zeros(al, s->dm.nnz), *load = ml_zeros(al, n), *f = ml_zeros(al, n);
-    double *km = ml_zeros(al, nm * nm), *mm = ml_zeros(al, nm * nm);
-    double *w2 = ml_zeros(al, count), *xm = ml_zeros(al, nm * count), *x = ml_zeros(al, n * count);
-    double *freq = ml_zeros(al, count), *score = NULL, *overlap = NULL, *norm = ml_zeros(al, count);
+    double *factor = ml_work(al, s->n_phys), *ks = ml_work(al, n * n), *k = ml_work(al, n * n);
+    double *change = ml_work(al, s->dm.nnz), *load = ml_work(al, n), *f = ml_work(al, n);
+    double *km = ml_work(al, nm * nm), *mm = ml_work(al, nm * nm);
+    double *w2 = ml_work(al, count), *xm = ml_work(al, nm * count), *x = ml_work(al, n * count);
+    double *freq = ml_work(al, count), *score = NULL, *overlap = NULL, *norm = ml_work(al, count);
     size_t *flex_new = (size_t *)al->calloc(count + 1, sizeof(size_t)), *col = NULL;
     size_t *row_start = (size_t *)al->calloc(n + 1, sizeof(size_t)), *col_start = (size_t *)al->calloc(nm + 1, sizeof(size_t));
     size_t *row_order = (size_t *)al->calloc(s->modal_t.nnz + 1, sizeof(size_t));
@@ -645,8 +645,8 @@ int rs_flexible_modes(const MaceAlloc *al, const RsStructure *s, const double *r
         goto done;
     }
     square = n_new;
-    score = ml_zeros(al, square * square);
-    overlap = ml_zeros(al, s->n_flex * count);
+    score = ml_work(al, square * square);
+    overlap = ml_work(al, s->n_flex * count);
     col = (size_t *)al->calloc(square + 1, sizeof(size_t));
     if (!score || !overlap || !col) goto oom;
     for (j = 0; j < n_new; j++) { /* x^T M0 x of each new mode, the nominal mass weighting the MAC */
@@ -680,26 +680,26 @@ int rs_flexible_modes(const MaceAlloc *al, const RsStructure *s, const double *r
 oom:
     snprintf(err, MACE_ERR_LEN, "out of memory in the structure's re-solve");
 done:
-    al->free(factor);
-    al->free(ks);
-    al->free(k);
-    al->free(change);
-    al->free(row_start);
-    al->free(col_start);
-    al->free(row_order);
-    al->free(col_order);
-    al->free(load);
-    al->free(f);
-    al->free(km);
-    al->free(mm);
-    al->free(w2);
-    al->free(xm);
-    al->free(x);
-    al->free(freq);
-    al->free(score);
-    al->free(overlap);
-    al->free(norm);
-    al->free(flex_new);
-    al->free(col);
+    ml_release(al, factor);
+    ml_release(al, ks);
+    ml_release(al, k);
+    ml_release(al, change);
+    ml_release(al, row_start);
+    ml_release(al, col_start);
+    ml_release(al, row_order);
+    ml_release(al, col_order);
+    ml_release(al, load);
+    ml_release(al, f);
+    ml_release(al, km);
+    ml_release(al, mm);
+    ml_release(al, w2);
+    ml_release(al, xm);
+    ml_release(al, x);
+    ml_release(al, freq);
+    ml_release(al, score);
+    ml_release(al, overlap);
+    ml_release(al, norm);
+    ml_release(al, flex_new);
+    ml_release(al, col);
     return status;
 }

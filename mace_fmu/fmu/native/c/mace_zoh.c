@@ -226,10 +226,10 @@ static void block_lower_inverse(const double *t, size_t n, const size_t *start, 
 static int fast_form(MaceZoh *z, const double *a_in, const double *b_in, const double *c_in) {
     const MaceAlloc *al = &z->al;
     const size_t n = z->n, m = z->m, p = z->p;
-    double *ab = ml_zeros(al, n * n), *scale = ml_zeros(al, n), *ap = ml_zeros(al, n * n);
-    double *v = ml_zeros(al, n * n), *vinv = ml_zeros(al, n * n), *t = ml_zeros(al, n * n);
-    double *cf = ml_zeros(al, p * n), *bp = ml_zeros(al, n * m), *cp = ml_zeros(al, p * n);
-    double *blk = ml_zeros(al, n * n), *vk = ml_zeros(al, n * n), *wr = ml_zeros(al, n), *wi = ml_zeros(al, n);
+    double *ab = ml_work(al, n * n), *scale = ml_work(al, n), *ap = ml_work(al, n * n);
+    double *v = ml_work(al, n * n), *vinv = ml_work(al, n * n), *t = ml_work(al, n * n);
+    double *cf = ml_work(al, p * n), *bp = ml_work(al, n * m), *cp = ml_work(al, p * n);
+    double *blk = ml_work(al, n * n), *vk = ml_work(al, n * n), *wr = ml_work(al, n), *wi = ml_work(al, n);
     size_t *comp = (size_t *)al->calloc(n + 1, sizeof(size_t)), *perm = (size_t *)al->calloc(n + 1, sizeof(size_t));
     size_t *start = (size_t *)al->calloc(n + 2, sizeof(size_t)), *bcomp = (size_t *)al->calloc(n + 1, sizeof(size_t));
     size_t i, j, k, r, cc, bi, bj, nblk = 0;
@@ -257,7 +257,7 @@ static int fast_form(MaceZoh *z, const double *a_in, const double *b_in, const d
             goto done;
         }
         for (k = 0; k < n; k++) perm[start[comp[k]] + fill[comp[k]]++] = k;
-        al->free(fill);
+        ml_release(al, fill);
     }
     for (i = 0; i < n; i++) {
         for (j = 0; j < n; j++) ap[i * n + j] = ab[perm[i] * n + perm[j]];
@@ -383,23 +383,23 @@ static int fast_form(MaceZoh *z, const double *a_in, const double *b_in, const d
     z->nblk = nblk;
     status = 0;
 done:
-    al->free(ab);
-    al->free(scale);
-    al->free(ap);
-    al->free(v);
-    al->free(vinv);
-    al->free(t);
-    al->free(cf);
-    al->free(bp);
-    al->free(cp);
-    al->free(blk);
-    al->free(vk);
-    al->free(wr);
-    al->free(wi);
-    al->free(comp);
-    al->free(perm);
-    al->free(start);
-    al->free(bcomp);
+    ml_release(al, ab);
+    ml_release(al, scale);
+    ml_release(al, ap);
+    ml_release(al, v);
+    ml_release(al, vinv);
+    ml_release(al, t);
+    ml_release(al, cf);
+    ml_release(al, bp);
+    ml_release(al, cp);
+    ml_release(al, blk);
+    ml_release(al, vk);
+    ml_release(al, wr);
+    ml_release(al, wi);
+    ml_release(al, comp);
+    ml_release(al, perm);
+    ml_release(al, start);
+    ml_release(al, bcomp);
     return status;
 }
 
