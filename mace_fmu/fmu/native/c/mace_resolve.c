@@ -360,8 +360,10 @@ static void advance(size_t n_grid, const double *delta, double *positions, doubl
 
 /* Newton iterations from the nominal equilibrium; k: the tangent at the new one. Modified Newton: the tangent
  * of the current state until the work ratio falls below FRESH_TANGENT_WORK, then kept while each iteration's work
- * falls below a quarter of the last one's (as the preload's own iterations do, mace_fmu/fe/preload.py); the
- * tangent of the equilibrium reached. */
+ * falls below a quarter of the last one's (as the preload's own iterations do, mace_fmu/fe/preload.py). The
+ * first iteration's tangent is the nominal state's, scaled bar by bar; the later ones take the nominal
+ * curvatures with the current forces (TANGENT_NOMINAL_CURVATURE: as fast as exact tangents here, three
+ * iterations); the tangent of the equilibrium reached, the modes' stiffness, is exact. */
 static int equilibrium(const MaceAlloc *al, const RsStructure *s, const double *factor, const double *k_springs,
                        const double *load, double *k, int *iterations, char *err) {
     const size_t n = s->n_dof, ns = s->n_static;
