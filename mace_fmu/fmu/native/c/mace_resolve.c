@@ -597,7 +597,8 @@ int rs_flexible_modes(const MaceAlloc *al, const RsStructure *s, const double *r
     double *w2 = ml_work(al, count), *xm = ml_work(al, nm * count), *x = ml_work(al, n * count);
     double *freq = ml_work(al, count), *score = NULL, *overlap = NULL, *norm = ml_work(al, count);
     size_t *flex_new = (size_t *)al->calloc(count + 1, sizeof(size_t)), *col = NULL;
-    size_t *row_start = (size_t *)al->calloc(n + 1, sizeof(size_t)), *col_start = (size_t *)al->calloc(nm + 1, sizeof(size_t));
+    size_t *row_start = (size_t *)al->calloc(n + 1, sizeof(size_t));
+    size_t *col_start = (size_t *)al->calloc(nm + 1, sizeof(size_t));
     size_t *row_order = (size_t *)al->calloc(s->modal_t.nnz + 1, sizeof(size_t));
     size_t *col_order = (size_t *)al->calloc(s->modal_t.nnz + 1, sizeof(size_t));
     size_t i, j, e, p, n_new = 0, zeros = 0, square;
@@ -629,7 +630,7 @@ int rs_flexible_modes(const MaceAlloc *al, const RsStructure *s, const double *r
     group_entries(&s->modal_t, s->modal_t.rows, n, row_start, row_order);
     group_entries(&s->modal_t, s->modal_t.cols, nm, col_start, col_order);
     reduce(k, n, &s->modal_t, nm, col_start, col_order, km);
-    reduce_sparse(&s->mass, NULL, &s->modal_t, row_start, row_order, nm, mm); /* mm: zeros from ml_zeros */
+    reduce_sparse(&s->mass, NULL, &s->modal_t, row_start, row_order, nm, mm); /* mm: zeroed by ml_work */
     reduce_sparse(&s->dm, change, &s->modal_t, row_start, row_order, nm, mm);
     if (lowest_modes(al, km, mm, nm, count, w2, xm, err) != 0) goto done;
     expand(&s->modal_t, xm, count, x, n);
