@@ -141,7 +141,7 @@ static int bar_tangent(const RsStructure *s, size_t bar, const double *positions
     const size_t ga = (size_t)s->bar_nodes[2 * bar], gb = (size_t)s->bar_nodes[2 * bar + 1];
     const double *xa = positions + 3 * ga, *xb = positions + 3 * gb, *ra = rotations + 9 * ga, *rb = rotations + 9 * gb;
     const double *frame0 = s->frames0 + 9 * bar, length0 = s->lengths0[bar];
-    double d0[7], bz[7][9], g[7], b[7][12];
+    double d0[7], bz[7][9], g[7], b[7][12], gz[9][9]; /* gz: the geometric part, sum_k g_k d2 d_k / dz2 */
     cx dz[9], d[7];
     int i, j, k, l, a, c;
     for (j = 0; j < 9; j++) { /* dd/dz by complex steps */
@@ -175,7 +175,6 @@ static int bar_tangent(const RsStructure *s, size_t bar, const double *positions
             k_e[a * 12 + c] = acc;
         }
     if (tangent == TANGENT_EXACT) { /* sum_k g_k d2 d_k / dz2: central differences of complex-step first derivatives */
-        double gz[9][9];
         for (i = 0; i < 9; i++) {
             const double h = FD_RELATIVE_STEP * (i < 3 ? length0 : 1.0);
             for (j = i; j < 9; j++) {
@@ -197,19 +196,17 @@ static int bar_tangent(const RsStructure *s, size_t bar, const double *positions
                 gz[i][j] = gz[j][i] = acc;
             }
         }
-        for (a = 0; a < 12; a++)
-            for (c = 0; c < 12; c++) k_e[a * 12 + c] += gz[ZMAP[a]][ZMAP[c]] * ZSIGN[a] * ZSIGN[c];
     } else if (tangent == TANGENT_NOMINAL_CURVATURE) {
-        double gz[9][9];
         for (i = 0; i < 9; i++)
             for (j = 0; j < 9; j++) {
                 double acc = 0.0;
                 for (k = 0; k < 7; k++) acc += g[k] * curvature[k * 81 + i * 9 + j];
                 gz[i][j] = acc;
             }
+    }
+    if (tangent != TANGENT_MATERIAL)
         for (a = 0; a < 12; a++)
             for (c = 0; c < 12; c++) k_e[a * 12 + c] += gz[ZMAP[a]][ZMAP[c]] * ZSIGN[a] * ZSIGN[c];
-    }
     for (a = 0; a < 12; a++)
         for (c = 0; c < a; c++) k_e[a * 12 + c] = k_e[c * 12 + a] = 0.5 * (k_e[a * 12 + c] + k_e[c * 12 + a]);
     return 0;
