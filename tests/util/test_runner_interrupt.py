@@ -27,8 +27,11 @@ pytestmark = pytest.mark.slow  # a local cluster started and interrupted in a su
                                           ("running", 2.0)])
 def test_ctrl_c_ends_a_dask_run_in_one_line(when, wait_s):
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
+    # SIGINT's disposition as a terminal's shell gives a foreground job (default): one inherited as ignored from
+    # the process running the tests would leave Python without its KeyboardInterrupt handler
     job = subprocess.Popen([sys.executable, str(SUPPORT / "interrupted_dask_job.py"), "2"], stderr=subprocess.PIPE,
-                           text=True, start_new_session=True, env=env, cwd=ROOT)
+                           text=True, start_new_session=True, env=env, cwd=ROOT,
+                           preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     try:
         before = []
         while (line := job.stderr.readline()) and line.strip() != when:
@@ -36,8 +39,11 @@ def test_ctrl_c_ends_a_dask_run_in_one_line(when, wait_s):
         assert line.strip() == when, "".join(before)
         time.sleep(wait_s)  # the cluster starting (its workers importing) or the tasks running
         os.killpg(job.pid, signal.SIGINT)
-        rest = job.stderr.read()
-        status = job.wait(timeout=60)
+        try:  # the tasks take minutes: an interruption that was lost fails here, not after them
+            _, rest = job.communicate(timeout=60)
+        except subprocess.TimeoutExpired:
+            pytest.fail(f"Ctrl-C {wait_s} s after {when!r} did not end the command within 60 s")
+        status = job.returncode
     finally:
         if job.poll() is None:
             os.killpg(job.pid, signal.SIGKILL)
