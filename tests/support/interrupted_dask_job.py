@@ -50,6 +50,12 @@ def _with_the_job(build_parser):
 
 
 if __name__ == "__main__":  # the workers import this file as their __mp_main__: nothing runs there
+    import signal
+
+    # Ctrl-C as a terminal's foreground job receives it: a test process started with SIGINT ignored (a shell's
+    # background job) passes that on, and Python then installs no KeyboardInterrupt handler of its own
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+
     from mace_fmu import cli
 
     cli.build_parser = _with_the_job(cli.build_parser)  # main() builds its parser through this name

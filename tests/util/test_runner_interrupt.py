@@ -27,11 +27,8 @@ pytestmark = pytest.mark.slow  # a local cluster started and interrupted in a su
                                           ("running", 2.0)])
 def test_ctrl_c_ends_a_dask_run_in_one_line(when, wait_s):
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
-    # SIGINT's disposition as a terminal's shell gives a foreground job (default): one inherited as ignored from
-    # the process running the tests would leave Python without its KeyboardInterrupt handler
     job = subprocess.Popen([sys.executable, str(SUPPORT / "interrupted_dask_job.py"), "2"], stderr=subprocess.PIPE,
-                           text=True, start_new_session=True, env=env, cwd=ROOT,
-                           preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+                           text=True, start_new_session=True, env=env, cwd=ROOT)
     try:
         before = []
         while (line := job.stderr.readline()) and line.strip() != when:
