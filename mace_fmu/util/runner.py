@@ -292,7 +292,7 @@ class DaskRunner:
                 _started_clusters().discard(self._own_cluster)
 
     def _loop_errors_dropped(self) -> None:
-        """The event loop of this runner's own cluster drops the errors nobody retrieved from then on.
+        """The event loop of this runner's own cluster (or client) drops the errors nobody retrieved from then on.
 
         A start interrupted while a worker was still importing leaves the nanny's start task failed
         ("Nanny failed to start"); asyncio reports such a task when it is collected, which may be after
