@@ -292,17 +292,16 @@ class DaskRunner:
                 _started_clusters().discard(self._own_cluster)
 
     def _loop_errors_dropped(self) -> None:
-        """The event loop of this runner's own cluster (or client) drops the errors nobody retrieved from then on.
+        """The event loop of this runner's own cluster drops the errors nobody retrieved from then on.
 
         A start interrupted while a worker was still importing leaves the nanny's start task failed
         ("Nanny failed to start"); asyncio reports such a task when it is collected, which may be after
         the command's own line, as the process exits. Only this loop's reports are dropped: another
         loop of the process reports as before.
         """
-        for owner in (self._own_cluster, self.client if self._own_client else None):
-            loop = getattr(getattr(owner, "loop", None), "asyncio_loop", None)
-            if loop is not None:
-                loop.set_exception_handler(_dropped)
+        loop = getattr(getattr(self._own_cluster, "loop", None), "asyncio_loop", None)
+        if loop is not None:
+            loop.set_exception_handler(lambda _loop, _context: None)
 
     def _close(self, *, timeout_s: float | None = None) -> None:
         for name in self._shipped.values():
@@ -322,11 +321,6 @@ class DaskRunner:
 
     def __exit__(self, exc_type, exc, traceback) -> None:
         self.close(quiet=exc_type is not None and issubclass(exc_type, (KeyboardInterrupt, SystemExit)))
-
-
-def _dropped(loop: Any, context: dict) -> None:
-    """An event loop's exception handler that drops what it is given (see :meth:`DaskRunner._loop_errors_dropped`)."""
-    del loop, context
 
 
 def _started_clusters():
